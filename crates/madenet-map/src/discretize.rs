@@ -1,0 +1,170 @@
+//! The paper's discretization rule (Sec. V.B.1).
+//!
+//! A fine occupancy image (one occupancy probability per pixel) is turned into robot-sized
+//! cells: each output cell covers a `factor × factor` block of pixels and is an obstacle when
+//! *more than* [`DiscretizeParams::obstacle_fraction`] of its pixels have an occupancy
+//! probability *above* [`DiscretizeParams::occupied_prob`] ("a cell is considered occupied when
+//! more than 25 % of its pixels have an occupancy probability > 65 %"). Every other cell is
+//! free: the output of [`discretize`] never contains [`Occupancy::Unknown`].
+
+use crate::{OccGrid, Occupancy};
+use serde::{Deserialize, Serialize};
+
+/// Parameters of the discretization rule. The defaults are the paper's values.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DiscretizeParams {
+    /// A pixel counts as occupied when its occupancy probability is strictly above this
+    /// (default 0.65).
+    pub occupied_prob: f64,
+    /// A cell is an obstacle when strictly more than this fraction of its pixels are occupied
+    /// (default 0.25).
+    pub obstacle_fraction: f64,
+}
+
+impl Default for DiscretizeParams {
+    fn default() -> Self {
+        DiscretizeParams {
+            occupied_prob: 0.65,
+            obstacle_fraction: 0.25,
+        }
+    }
+}
+
+/// Discretizes a row-major image of per-pixel occupancy probabilities (`px_height` rows of
+/// `px_width` pixels, row 0 at the top) into cells of `factor × factor` pixels.
+///
+/// The output has `ceil(px_height / factor)` rows and `ceil(px_width / factor)` columns; the
+/// partial blocks at the right and bottom edges use the pixels they have (the fraction is taken
+/// over the pixels actually present). A cell is [`Occupancy::Obstacle`] when strictly more than
+/// `params.obstacle_fraction` of its pixels have probability strictly above
+/// `params.occupied_prob`, otherwise [`Occupancy::Free`]. `NaN` probabilities count as not
+/// occupied.
+///
+/// The returned grid has resolution 1.0 and a zero origin; callers that know the pixel size set
+/// them (e.g. [`crate::io::load`] sets the resolution to `factor × pixel resolution`).
+///
+/// # Panics
+///
+/// Panics if `factor == 0` or `probs.len() != px_height * px_width` (programming errors, not
+/// input errors: the loaders in [`crate::io`] check both before calling).
+pub fn discretize(
+    probs: &[f64],
+    px_height: usize,
+    px_width: usize,
+    factor: usize,
+    params: &DiscretizeParams,
+) -> OccGrid {
+    assert!(factor > 0, "discretize: factor must be at least 1");
+    assert_eq!(
+        probs.len(),
+        px_height * px_width,
+        "discretize: probs.len() must be px_height * px_width"
+    );
+    let height = px_height.div_ceil(factor);
+    let width = px_width.div_ceil(factor);
+    // Occupied-pixel and total-pixel counts per output cell.
+    let mut occupied = vec![0usize; height * width];
+    let mut total = vec![0usize; height * width];
+    for (r, row) in probs.chunks(px_width.max(1)).enumerate().take(px_height) {
+        let cell_row = (r / factor) * width;
+        for (c, &p) in row.iter().enumerate() {
+            let i = cell_row + c / factor;
+            total[i] += 1;
+            if p > params.occupied_prob {
+                occupied[i] += 1;
+            }
+        }
+    }
+    let cells = occupied
+        .iter()
+        .zip(&total)
+        .map(|(&occ, &n)| {
+            if occ as f64 > params.obstacle_fraction * n as f64 {
+                Occupancy::Obstacle
+            } else {
+                Occupancy::Free
+            }
+        })
+        .collect();
+    OccGrid::from_cells(height, width, cells)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Pos;
+    use proptest::prelude::*;
+
+    /// A 4×4 block with the first `k` pixels (row-major) at probability 0.9, the rest 0.
+    fn block(k: usize) -> Vec<f64> {
+        (0..16).map(|i| if i < k { 0.9 } else { 0.0 }).collect()
+    }
+
+    #[test]
+    fn exactly_a_quarter_is_free_one_more_is_obstacle() {
+        let p = DiscretizeParams::default();
+        let g = discretize(&block(4), 4, 4, 4, &p);
+        assert_eq!((g.height(), g.width()), (1, 1));
+        assert_eq!(g.cells(), &[Occupancy::Free]);
+        let g = discretize(&block(5), 4, 4, 4, &p);
+        assert_eq!(g.cells(), &[Occupancy::Obstacle]);
+    }
+
+    #[test]
+    fn probability_threshold_is_strict() {
+        let p = DiscretizeParams::default();
+        // All pixels exactly at 0.65: none is "> 0.65".
+        let g = discretize(&[0.65; 16], 4, 4, 4, &p);
+        assert_eq!(g.cells(), &[Occupancy::Free]);
+        let g = discretize(&[0.651; 16], 4, 4, 4, &p);
+        assert_eq!(g.cells(), &[Occupancy::Obstacle]);
+        let g = discretize(&[f64::NAN; 16], 4, 4, 4, &p);
+        assert_eq!(g.cells(), &[Occupancy::Free]);
+    }
+
+    #[test]
+    fn partial_blocks_use_the_pixels_they_have() {
+        // 5×5 pixels, factor 4: cells (0,1), (1,0), (1,1) are partial (4, 4 and 1 pixels).
+        let mut probs = vec![0.0; 25];
+        probs[4] = 1.0; // row 0, col 4 → cell (0,1): 1 of 4 pixels = 25 % → free
+        probs[24] = 1.0; // row 4, col 4 → cell (1,1): 1 of 1 pixel → obstacle
+        probs[20] = 1.0; // row 4, col 0 → cell (1,0)
+        probs[21] = 1.0; // row 4, col 1 → cell (1,0): 2 of 4 → obstacle
+        let g = discretize(&probs, 5, 5, 4, &DiscretizeParams::default());
+        assert_eq!((g.height(), g.width()), (2, 2));
+        assert_eq!(g.get(Pos::new(0, 0)), Occupancy::Free);
+        assert_eq!(g.get(Pos::new(0, 1)), Occupancy::Free);
+        assert_eq!(g.get(Pos::new(1, 0)), Occupancy::Obstacle);
+        assert_eq!(g.get(Pos::new(1, 1)), Occupancy::Obstacle);
+    }
+
+    #[test]
+    fn empty_image_gives_empty_grid() {
+        let g = discretize(&[], 0, 0, 3, &DiscretizeParams::default());
+        assert!(g.is_empty());
+    }
+
+    proptest! {
+        #[test]
+        fn factor_one_is_a_plain_threshold(
+            (h, w, probs) in (1usize..12, 1usize..12).prop_flat_map(|(h, w)| {
+                (Just(h), Just(w), proptest::collection::vec(0.0f64..=1.0, h * w))
+            })
+        ) {
+            let params = DiscretizeParams::default();
+            let g = discretize(&probs, h, w, 1, &params);
+            prop_assert_eq!((g.height(), g.width()), (h, w));
+            for (cell, p) in g.cells().iter().zip(&probs) {
+                let want = if *p > 0.65 { Occupancy::Obstacle } else { Occupancy::Free };
+                prop_assert_eq!(*cell, want);
+            }
+        }
+
+        #[test]
+        fn output_shape_is_the_ceiling(h in 0usize..20, w in 0usize..20, f in 1usize..6) {
+            let g = discretize(&vec![0.0; h * w], h, w, f, &DiscretizeParams::default());
+            prop_assert_eq!((g.height(), g.width()), (h.div_ceil(f), w.div_ceil(f)));
+        }
+    }
+}

@@ -1,0 +1,642 @@
+//! Seeded random map generator for training and tests, plus the free-space connectivity
+//! helpers the simulator reuses.
+//!
+//! The generated maps mimic the paper's evaluation maps (see [`crate::paper`]): thin,
+//! irregular obstacles made of straight and diagonal wall strokes (often branching off
+//! each other, sometimes bending by 45°) and a few small ragged blobs, with all free space in
+//! one connected component.
+//!
+//! # Movement and connectivity
+//!
+//! Robots move to any of the 8 neighbouring cells. By default ([`Movement::CornerCutting`],
+//! the rule of the paper's evaluation code) any free neighbour can be entered, so
+//! connectivity is plain 8-connectivity. Under [`Movement::NoCornerCutting`] a diagonal step
+//! also needs both orthogonal cells free, so the cells reachable from a start are exactly its
+//! 4-connected free component. The functions without a suffix use the default rule; the
+//! `_with` / `_with_movement` variants take it as a parameter. Unknown cells are not
+//! traversable.
+//!
+//! Note: the paper's 10 maps are each one 8-connected component, but under
+//! [`Movement::NoCornerCutting`] most of them fall apart into several components (their thin
+//! diagonal walls close off pockets), e.g. `test_9`'s four corners lie in four different ones.
+
+use crate::paper::Corner;
+use crate::{MapError, Movement, OccGrid, Occupancy, Pos};
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+/// Parameters of [`generate`].
+///
+/// With serde, missing fields take their [`Default`] values; note that the default
+/// `keep_free` is the 12 corner start cells *of a 20×20 grid*, so a configuration that changes
+/// `height`/`width` should also list `keep_free` (or be built with [`GeneratorConfig::for_size`]),
+/// otherwise [`GeneratorConfig::validate`] reports the out-of-bounds cells.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GeneratorConfig {
+    /// Rows (default 20, at least 3).
+    pub height: usize,
+    /// Columns (default 20, at least 3).
+    pub width: usize,
+    /// Lower bound of the target obstacle density (default 0.15).
+    pub density_min: f64,
+    /// Upper bound of the target obstacle density (default 0.40, below 0.9).
+    pub density_max: f64,
+    /// Cells that must stay free, e.g. the robots' start cells (default: the three start cells
+    /// of each of the four corners, [`Corner::start_cells`], of a 20×20 grid).
+    pub keep_free: Vec<Pos>,
+}
+
+impl Default for GeneratorConfig {
+    fn default() -> Self {
+        GeneratorConfig::for_size(20, 20)
+    }
+}
+
+impl GeneratorConfig {
+    /// The default densities for a `height × width` grid, keeping the 12 corner start cells
+    /// of that size free.
+    pub fn for_size(height: usize, width: usize) -> Self {
+        GeneratorConfig {
+            height,
+            width,
+            density_min: 0.15,
+            density_max: 0.40,
+            keep_free: Corner::ALL
+                .iter()
+                .flat_map(|c| c.start_cells(height, width))
+                .collect(),
+        }
+    }
+
+    /// Checks the configuration: `height, width >= 3`, `0 <= density_min <= density_max < 0.9`,
+    /// every `keep_free` cell inside the grid. Errors are [`MapError::Invalid`] naming the field.
+    pub fn validate(&self) -> Result<(), MapError> {
+        let bad = |field: &str, msg: String| {
+            Err(MapError::Invalid(format!(
+                "generator config: field `{field}`: {msg}"
+            )))
+        };
+        if self.height < 3 {
+            return bad("height", format!("must be at least 3, got {}", self.height));
+        }
+        if self.width < 3 {
+            return bad("width", format!("must be at least 3, got {}", self.width));
+        }
+        if self
+            .height
+            .checked_mul(self.width)
+            .is_none_or(|n| n > i32::MAX as usize)
+        {
+            return bad(
+                "height",
+                format!("{}×{} cells is too large", self.height, self.width),
+            );
+        }
+        if !(self.density_min >= 0.0 && self.density_min < 0.9) {
+            return bad(
+                "density_min",
+                format!("must lie in [0, 0.9), got {}", self.density_min),
+            );
+        }
+        if self.density_max.is_nan() || self.density_max >= 0.9 {
+            return bad(
+                "density_max",
+                format!("must be below 0.9, got {}", self.density_max),
+            );
+        }
+        if self.density_min > self.density_max {
+            return bad(
+                "density_min",
+                format!(
+                    "must not exceed density_max ({}), got {}",
+                    self.density_max, self.density_min
+                ),
+            );
+        }
+        let probe = OccGrid::new(self.height, self.width, Occupancy::Free);
+        if let Some(p) = self.keep_free.iter().find(|p| !probe.in_bounds(**p)) {
+            return bad(
+                "keep_free",
+                format!(
+                    "cell {p} is outside the {}×{} grid (when changing height/width, list keep_free too \
+                     or use GeneratorConfig::for_size)",
+                    self.height, self.width
+                ),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The 8 unit steps, orthogonal first.
+const DIRS: [(i32, i32); 8] = [
+    (-1, 0),
+    (0, 1),
+    (1, 0),
+    (0, -1),
+    (-1, 1),
+    (1, 1),
+    (1, -1),
+    (-1, -1),
+];
+/// The 8 unit steps in ring order (each neighbour is 45° from the next).
+const RING: [(i32, i32); 8] = [
+    (-1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+    (1, 0),
+    (1, -1),
+    (0, -1),
+    (-1, -1),
+];
+
+/// Consecutive rejected additions after which shapes shrink to one or two cells.
+const SHRINK_AFTER: usize = 30;
+/// Probability of keeping a shape that touches an existing obstacle (8-neighbourhood).
+const TOUCH_ACCEPT: f64 = 0.35;
+/// Consecutive rejected additions after which touching shapes are always considered.
+const TOUCH_RELAX_AFTER: usize = 20;
+/// Consecutive rejected additions after which the generator gives up.
+const GIVE_UP_AFTER: usize = 150;
+
+/// Generates a random map from `cfg` and `seed` (same inputs ⇒ identical map).
+///
+/// A target density is drawn uniformly from `[density_min, density_max]`; random wall
+/// strokes (length 2–6 in one of 8 directions, thickness 1, sometimes bending by 45° or
+/// branching off an existing obstacle) and ragged 2×2 to 3×3 blobs are added until the target
+/// is reached. An addition is rejected when it would cover a `keep_free` cell or split the free
+/// space (see the [module docs](self) for the movement rule), so the result's free cells form
+/// one connected component containing every `keep_free` cell. The last addition is truncated
+/// so the density never overshoots the target (the target is rounded to whole cells, so the
+/// density is at most `density_max + 0.5 / cells`). After a bounded number of consecutive
+/// rejections the generator stops with the densest map reached, which can then fall short of
+/// the target (rarely, for dense targets on small grids). The cost is
+/// O(additions × cells).
+///
+/// The grid has 1 m cells and a zero origin. Errors come from [`GeneratorConfig::validate`].
+pub fn generate(cfg: &GeneratorConfig, seed: u64) -> Result<OccGrid, MapError> {
+    generate_with_movement(cfg, seed, Movement::default())
+}
+
+/// [`generate`] with free-space connectivity judged under `movement` instead of the default
+/// rule. With [`Movement::CornerCutting`] thin diagonal walls may close off pockets, as in the
+/// paper's maps.
+pub fn generate_with_movement(
+    cfg: &GeneratorConfig,
+    seed: u64,
+    movement: Movement,
+) -> Result<OccGrid, MapError> {
+    cfg.validate()?;
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let (h, w) = (cfg.height, cfg.width);
+    let n = h * w;
+    let density = if cfg.density_min < cfg.density_max {
+        rng.random_range(cfg.density_min..=cfg.density_max)
+    } else {
+        cfg.density_min
+    };
+    let target = ((density * n as f64).round() as usize).min(n);
+
+    let mut grid = OccGrid::new(h, w, Occupancy::Free);
+    let mut protected = vec![false; n];
+    for p in &cfg.keep_free {
+        protected[grid.index(*p)] = true;
+    }
+    let mut obstacles: Vec<Pos> = Vec::with_capacity(target);
+    let mut scratch = Bfs::default();
+    let mut shape = Vec::with_capacity(16);
+    let mut failures = 0;
+
+    while obstacles.len() < target && failures < GIVE_UP_AFTER {
+        random_shape(
+            &mut rng,
+            &grid,
+            &obstacles,
+            failures >= SHRINK_AFTER,
+            &mut shape,
+        );
+        // Keep the new cells, in shape order, up to the target.
+        let remaining = target - obstacles.len();
+        let mut seen = Vec::with_capacity(shape.len());
+        for &p in &shape {
+            if grid.is_free(p) && !seen.contains(&p) && seen.len() < remaining {
+                seen.push(p);
+            }
+        }
+        // Shapes touching existing walls are mostly turned down (while additions succeed), so
+        // obstacles stay thin and scattered instead of growing into clumps.
+        let touches = || {
+            seen.iter().any(|p| {
+                DIRS.iter().any(|(dr, dc)| {
+                    grid.get(Pos::new(p.row + dr, p.col + dc)) == Occupancy::Obstacle
+                        && grid.in_bounds(Pos::new(p.row + dr, p.col + dc))
+                })
+            })
+        };
+        let accepted = !seen.is_empty()
+            && !seen.iter().any(|&p| protected[grid.index(p)])
+            && (failures >= TOUCH_RELAX_AFTER || !touches() || rng.random_bool(TOUCH_ACCEPT))
+            && {
+                for &p in &seen {
+                    grid.set(p, Occupancy::Obstacle);
+                }
+                let free_left = n - obstacles.len() - seen.len();
+                // Count from a cell that is certainly free: a kept cell, else the first free one.
+                let anchor = cfg.keep_free.first().copied().or_else(|| {
+                    grid.cells()
+                        .iter()
+                        .position(|&c| c == Occupancy::Free)
+                        .map(|i| grid.pos(i))
+                });
+                let ok = anchor.map_or(free_left == 0, |a| {
+                    scratch.reach_count(&grid, a, movement) == free_left
+                });
+                if !ok {
+                    for &p in &seen {
+                        grid.set(p, Occupancy::Free);
+                    }
+                }
+                ok
+            };
+        if accepted {
+            obstacles.extend_from_slice(&seen);
+            failures = 0;
+        } else {
+            failures += 1;
+        }
+    }
+    Ok(grid)
+}
+
+/// Fills `out` with the cells of one random shape, in drawing order, clipped to the grid.
+fn random_shape(
+    rng: &mut Pcg64Mcg,
+    grid: &OccGrid,
+    obstacles: &[Pos],
+    small: bool,
+    out: &mut Vec<Pos>,
+) {
+    out.clear();
+    let (h, w) = (grid.height() as i32, grid.width() as i32);
+    // Start next to an existing obstacle (branching walls) or anywhere.
+    let start = if !obstacles.is_empty() && rng.random_bool(0.35) {
+        let base = obstacles[rng.random_range(0..obstacles.len())];
+        let (dr, dc) = DIRS[rng.random_range(0..8)];
+        Pos::new(base.row + dr, base.col + dc)
+    } else {
+        Pos::new(rng.random_range(0..h), rng.random_range(0..w))
+    };
+    let kind = rng.random_range(0..100);
+    if small || kind < 85 {
+        // A stroke: 45 % diagonal, 40 % straight (of all shapes).
+        let diagonal = if small {
+            rng.random_bool(0.5)
+        } else {
+            kind < 45
+        };
+        let mut dir = (if diagonal { 1 } else { 0 }) + 2 * rng.random_range(0..4usize);
+        let len = if small {
+            rng.random_range(1..=2)
+        } else {
+            rng.random_range(2..=6)
+        };
+        let bend_at = if !small && rng.random_bool(0.25) {
+            rng.random_range(1..len)
+        } else {
+            len
+        };
+        let mut p = start;
+        for k in 0..len {
+            if k == bend_at {
+                dir = if rng.random_bool(0.5) {
+                    (dir + 1) % 8
+                } else {
+                    (dir + 7) % 8
+                };
+            }
+            if !grid.in_bounds(p) {
+                break;
+            }
+            out.push(p);
+            let (dr, dc) = RING[dir];
+            p = Pos::new(p.row + dr, p.col + dc);
+        }
+    } else {
+        // A ragged blob of 2×2 to 3×3: corners often missing, the middle always present.
+        let bh = rng.random_range(2..=3);
+        let bw = rng.random_range(2..=3);
+        for r in 0..bh {
+            for c in 0..bw {
+                let edge_r = r == 0 || r == bh - 1;
+                let edge_c = c == 0 || c == bw - 1;
+                let keep = match (edge_r, edge_c) {
+                    (true, true) => rng.random_bool(0.45),
+                    (true, false) | (false, true) => rng.random_bool(0.85),
+                    (false, false) => true,
+                };
+                let p = Pos::new(start.row + r, start.col + c);
+                if keep && grid.in_bounds(p) {
+                    out.push(p);
+                }
+            }
+        }
+    }
+}
+
+/// Reusable breadth-first search buffers.
+#[derive(Default)]
+struct Bfs {
+    seen: Vec<bool>,
+    queue: VecDeque<Pos>,
+}
+
+impl Bfs {
+    /// Marks (in `self.seen`) the free cells reachable from `start`; returns how many.
+    fn reach_count(&mut self, grid: &OccGrid, start: Pos, movement: Movement) -> usize {
+        // Without corner cutting, reachability is exactly 4-connectivity (see module docs).
+        let dirs = match movement {
+            Movement::NoCornerCutting => &DIRS[..4],
+            Movement::CornerCutting => &DIRS[..],
+        };
+        self.seen.clear();
+        self.seen.resize(grid.len(), false);
+        self.queue.clear();
+        if !grid.is_free(start) {
+            return 0;
+        }
+        self.seen[grid.index(start)] = true;
+        self.queue.push_back(start);
+        let mut count = 0;
+        while let Some(p) = self.queue.pop_front() {
+            count += 1;
+            for (dr, dc) in dirs {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if grid.is_free(q) {
+                    let i = grid.index(q);
+                    if !self.seen[i] {
+                        self.seen[i] = true;
+                        self.queue.push_back(q);
+                    }
+                }
+            }
+        }
+        count
+    }
+}
+
+/// Which cells a robot starting at `start` can reach (a flat mask in the grid's row-major
+/// order), moving by king steps under the default [`Movement`] (see the module docs).
+/// Only free cells are traversable; if `start` is not a free cell the mask is all `false`.
+pub fn reachable_from(grid: &OccGrid, start: Pos) -> Vec<bool> {
+    reachable_from_with(grid, start, Movement::default())
+}
+
+/// [`reachable_from`] under the given movement rule.
+pub fn reachable_from_with(grid: &OccGrid, start: Pos, movement: Movement) -> Vec<bool> {
+    let mut bfs = Bfs::default();
+    bfs.reach_count(grid, start, movement);
+    bfs.seen
+}
+
+/// Whether all free cells of `grid` form one connected component under the default movement
+/// rule (true for a grid without free cells).
+pub fn is_connected(grid: &OccGrid) -> bool {
+    is_connected_with(grid, Movement::default())
+}
+
+/// [`is_connected`] under the given movement rule.
+pub fn is_connected_with(grid: &OccGrid, movement: Movement) -> bool {
+    match grid.cells().iter().position(|&c| c == Occupancy::Free) {
+        None => true,
+        Some(i) => {
+            Bfs::default().reach_count(grid, grid.pos(i), movement) == grid.count(Occupancy::Free)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::to_text;
+    use crate::paper::{paper_map, paper_map_name, PAPER_MAP_COUNT};
+    use proptest::prelude::*;
+
+    /// Reference implementation: breadth-first search with the literal 8-move rule.
+    fn reachable_literal(grid: &OccGrid, start: Pos) -> Vec<bool> {
+        let mut seen = vec![false; grid.len()];
+        if !grid.is_free(start) {
+            return seen;
+        }
+        seen[grid.index(start)] = true;
+        let mut queue = VecDeque::from([start]);
+        while let Some(p) = queue.pop_front() {
+            for (dr, dc) in DIRS {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if grid.can_step(p, q) && !seen[grid.index(q)] {
+                    seen[grid.index(q)] = true;
+                    queue.push_back(q);
+                }
+            }
+        }
+        seen
+    }
+
+    fn check_map(cfg: &GeneratorConfig, g: &OccGrid) -> Result<(), TestCaseError> {
+        prop_assert_eq!((g.height(), g.width()), (cfg.height, cfg.width));
+        prop_assert_eq!(g.count(Occupancy::Unknown), 0);
+        prop_assert!(is_connected(g), "free space split:\n{}", to_text(g));
+        for p in &cfg.keep_free {
+            prop_assert!(g.is_free(*p), "keep_free {} covered", p);
+        }
+        let d = g.obstacle_density();
+        prop_assert!(
+            d <= cfg.density_max + 0.5 / g.len() as f64 + 1e-12,
+            "density {} above max",
+            d
+        );
+        // The target is rounded to whole cells (0.5 / cells); the extra 0.02 allows for an early
+        // give-up, which was never observed on 8 000 maps of 8..40 × 8..40 cells.
+        let tolerance = 0.5 / g.len() as f64 + 0.02;
+        prop_assert!(
+            d >= cfg.density_min - tolerance,
+            "density {} far below min:\n{}",
+            d,
+            to_text(g)
+        );
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+
+        #[test]
+        fn generated_maps_are_valid(seed in any::<u64>(), h in 8usize..40, w in 8usize..40) {
+            let cfg = GeneratorConfig::for_size(h, w);
+            let g = generate(&cfg, seed).expect("generate");
+            check_map(&cfg, &g)?;
+            prop_assert_eq!(generate(&cfg, seed).expect("again"), g);
+        }
+
+        #[test]
+        fn dense_targets_stay_valid(seed in any::<u64>(), h in 3usize..16, w in 3usize..16) {
+            let mut cfg = GeneratorConfig::for_size(h, w);
+            cfg.density_min = 0.5;
+            cfg.density_max = 0.85;
+            let g = generate(&cfg, seed).expect("generate");
+            prop_assert!(is_connected(&g));
+            for p in &cfg.keep_free {
+                prop_assert!(g.is_free(*p));
+            }
+            prop_assert!(g.obstacle_density() <= cfg.density_max + 0.5 / g.len() as f64 + 1e-12);
+        }
+
+        #[test]
+        fn reachability_matches_the_literal_movement_rule(
+            cells in proptest::collection::vec(prop_oneof![
+                3 => Just(Occupancy::Free), 2 => Just(Occupancy::Obstacle), 1 => Just(Occupancy::Unknown)
+            ], 64),
+            start in 0usize..64,
+        ) {
+            let g = OccGrid::from_cells(8, 8, cells);
+            let s = g.pos(start);
+            prop_assert_eq!(reachable_from(&g, s), reachable_literal(&g, s));
+        }
+    }
+
+    #[test]
+    fn default_config_density_distribution() {
+        let cfg = GeneratorConfig::default();
+        let mut hits = 0;
+        let mut hist = [0usize; 10];
+        for seed in 0..200 {
+            let g = generate(&cfg, seed).expect("generate");
+            let d = g.obstacle_density();
+            hist[((d * 20.0) as usize).min(9)] += 1;
+            if d >= cfg.density_min {
+                hits += 1;
+            }
+            assert!(is_connected(&g));
+        }
+        println!(
+            "density histogram (bins of 0.05 from 0): {hist:?}; {hits}/200 at or above density_min"
+        );
+        assert!(hits >= 190, "only {hits}/200 maps reached density_min");
+    }
+
+    #[test]
+    fn same_seed_same_map_and_seeds_differ() {
+        let cfg = GeneratorConfig::default();
+        assert_eq!(generate(&cfg, 7).expect("a"), generate(&cfg, 7).expect("b"));
+        assert_ne!(generate(&cfg, 7).expect("a"), generate(&cfg, 8).expect("b"));
+    }
+
+    #[test]
+    fn show_generated_next_to_paper_maps() {
+        let cfg = GeneratorConfig::default();
+        let mut columns: Vec<(String, Vec<String>)> = Vec::new();
+        for seed in 1..=3 {
+            let g = generate(&cfg, seed).expect("generate");
+            columns.push((
+                format!("seed {seed} ({:.2})", g.obstacle_density()),
+                to_text(&g).lines().map(String::from).collect(),
+            ));
+        }
+        for seed in 1..=3 {
+            let g = generate_with_movement(&cfg, seed, Movement::CornerCutting).expect("generate");
+            columns.push((
+                format!("cut {seed} ({:.2})", g.obstacle_density()),
+                to_text(&g).lines().map(String::from).collect(),
+            ));
+        }
+        for n in [1, 5] {
+            let g = paper_map(n).expect("paper");
+            columns.push((
+                format!("{} ({:.2})", paper_map_name(n), g.obstacle_density()),
+                to_text(&g).lines().map(String::from).collect(),
+            ));
+        }
+        let header: Vec<String> = columns.iter().map(|(t, _)| format!("{t:<22}")).collect();
+        println!("{}", header.join(" "));
+        for r in 0..20 {
+            let row: Vec<String> = columns
+                .iter()
+                .map(|(_, l)| format!("{:<22}", l[r]))
+                .collect();
+            println!("{}", row.join(" "));
+        }
+    }
+
+    #[test]
+    fn connectivity_helpers() {
+        let g = crate::io::parse_text("..#\n.#.\n#..\n", std::path::Path::new("t")).expect("parse");
+        // The diagonal wall blocks all movement between the two sides without corner cutting;
+        // with it (the default) robots squeeze through.
+        let strict = Movement::NoCornerCutting;
+        assert!(!is_connected_with(&g, strict));
+        assert!(is_connected(&g));
+        let m = reachable_from_with(&g, Pos::new(0, 0), strict);
+        assert_eq!(m.iter().filter(|&&b| b).count(), 3);
+        assert!(reachable_from(&g, Pos::new(0, 2)).iter().all(|&b| !b));
+        assert!(is_connected(&OccGrid::new(3, 3, Occupancy::Obstacle)));
+        for n in 1..=PAPER_MAP_COUNT {
+            let g = paper_map(n).expect("paper");
+            let free = g.count(Occupancy::Free);
+            let biggest = (0..g.len())
+                .filter(|&i| g.cells()[i] == Occupancy::Free)
+                .map(|i| reachable_from(&g, g.pos(i)).iter().filter(|&&b| b).count())
+                .max()
+                .unwrap_or(0);
+            println!(
+                "{}: {free} free cells, largest component {biggest}",
+                paper_map_name(n)
+            );
+        }
+    }
+
+    #[test]
+    fn config_validation() {
+        assert!(GeneratorConfig::default().validate().is_ok());
+        assert_eq!(GeneratorConfig::default().keep_free.len(), 12);
+        let bad = |f: fn(&mut GeneratorConfig), field: &str| {
+            let mut c = GeneratorConfig::default();
+            f(&mut c);
+            let e = c.validate().unwrap_err();
+            assert!(matches!(e, MapError::Invalid(_)));
+            assert!(e.to_string().contains(field), "{e}");
+            assert!(generate(&c, 0).is_err());
+        };
+        bad(|c| c.height = 2, "height");
+        bad(|c| c.width = 0, "width");
+        bad(|c| c.density_min = -0.1, "density_min");
+        bad(|c| c.density_max = 0.9, "density_max");
+        bad(|c| c.density_max = f64::NAN, "density_max");
+        bad(|c| c.density_min = 0.5, "density_min");
+        bad(|c| c.keep_free.push(Pos::new(20, 0)), "keep_free");
+        bad(|c| (c.height, c.width) = (10, 10), "keep_free");
+        // Zero density is allowed and gives an empty map.
+        let mut c = GeneratorConfig::default();
+        (c.density_min, c.density_max) = (0.0, 0.0);
+        assert_eq!(
+            generate(&c, 3).expect("empty").count(Occupancy::Obstacle),
+            0
+        );
+    }
+
+    #[test]
+    fn config_serde() {
+        let c: GeneratorConfig =
+            serde_saphyr::from_str("density_max: 0.3\n").expect("partial config");
+        assert_eq!(
+            c,
+            GeneratorConfig {
+                density_max: 0.3,
+                ..GeneratorConfig::default()
+            }
+        );
+        assert!(serde_saphyr::from_str::<GeneratorConfig>("densty_max: 0.3\n").is_err());
+    }
+}
