@@ -1,0 +1,754 @@
+//! Pictures of madenet simulator frames.
+//!
+//! This crate draws simulator frames as pictures — PNG snapshots and animated GIFs — from
+//! plain data ([`Frame`]). It knows nothing of the simulator: whoever runs an episode fills in
+//! a [`Frame`] per step (ground truth, the team's merged map, robots with their paths, goals
+//! and goal candidates, comm links, explored fraction) and hands it to [`render`],
+//! [`save_png`], [`save_gif`] or the streaming [`GifWriter`].
+//!
+//! The picture has a status bar on top ("step 42  explored 87.5%" plus a progress bar) and
+//! two panels side by side (the left one can be switched off with
+//! [`RenderOptions::show_truth`]):
+//!
+//! * **truth** — the ground truth map, free cells white, obstacles near-black; cells the team
+//!   has not seen yet are dimmed (blue-gray) so progress is visible;
+//! * **team map** — the merged knowledge: unknown mid-gray, free white, obstacles black.
+//!
+//! Both panels show the robots as filled discs (robot 0 blue, 1 orange, 2 green as in the
+//! paper's Fig. 1, then further distinct colours, see [`robot_color`]), each robot's planned
+//! path as a line through cell centres, its goal as an X, its goal candidates as small hollow
+//! squares in a lighter shade, its field of view as a faint tint, and comm links as thin
+//! dashed lines between robots, over light grid lines between cells.
+//!
+//! Text uses a tiny bitmap font embedded in the source and all drawing primitives are
+//! hand-written, so the only dependency is `image` for PNG/GIF encoding. The image size is a
+//! deterministic function of the grid size and the options ([`Layout`]). Files are written
+//! atomically (temporary file in the target directory, then rename), and every error names
+//! the target file.
+
+mod canvas;
+pub mod font;
+
+use canvas::{mix, Canvas, Rgb};
+use image::codecs::gif::{GifEncoder, Repeat};
+use image::{Delay, Rgba, RgbaImage};
+use madenet_map::{OccGrid, Occupancy, Pos};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// Everything one picture shows; plain data filled in by the simulator.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub step: usize,
+    /// Ground truth (no Unknown cells).
+    pub truth: OccGrid,
+    /// The team's merged knowledge, same size as truth (Unknown/Free/Obstacle). The panels
+    /// are sized by this grid; `truth` is read cell by cell at the same positions.
+    pub team_map: OccGrid,
+    pub robots: Vec<RobotFrame>,
+    /// Explored fraction 0..=1, shown in the status bar.
+    pub explored: f64,
+    /// Pairs of robot indices currently exchanging information (drawn as thin lines between
+    /// them). Pairs naming a robot that does not exist are ignored.
+    pub links: Vec<(usize, usize)>,
+}
+
+impl Default for Frame {
+    /// Step 0, 1 × 1 free grids, no robots.
+    fn default() -> Self {
+        Frame {
+            step: 0,
+            truth: OccGrid::new(1, 1, Occupancy::Free),
+            team_map: OccGrid::new(1, 1, Occupancy::Free),
+            robots: Vec::new(),
+            explored: 0.0,
+            links: Vec::new(),
+        }
+    }
+}
+
+/// One robot as drawn in a [`Frame`]. Positions outside the grid are simply not drawn.
+#[derive(Clone, Debug, Default)]
+pub struct RobotFrame {
+    pub pos: Pos,
+    pub goal: Option<Pos>,
+    /// Planned path from the robot to its goal (cells, first = next cell).
+    pub path: Vec<Pos>,
+    /// The robot's current goal candidates (the paper's G_i), drawn as small hollow markers.
+    pub candidates: Vec<Pos>,
+    /// The robot's own sensed cells this step (optional highlight of the field of view).
+    pub in_view: Vec<Pos>,
+}
+
+/// How to draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Pixels per grid cell (grid lines included); values below 1 count as 1. Default 16.
+    pub cell_px: u32,
+    /// Draw the ground-truth panel left of the team map. Default true.
+    pub show_truth: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            cell_px: 16,
+            show_truth: true,
+        }
+    }
+}
+
+/// Which panel of the picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Panel {
+    Truth,
+    Team,
+}
+
+/// Where things go in the picture; a pure function of the grid size and the options.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Picture size in pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Grid size in cells.
+    pub grid_width: usize,
+    pub grid_height: usize,
+    /// Effective pixels per cell (≥ 1).
+    pub cell_px: u32,
+    /// Top-left pixel of the truth panel (its outer grid line), if shown.
+    pub truth_origin: Option<(u32, u32)>,
+    /// Top-left pixel of the team-map panel.
+    pub team_origin: (u32, u32),
+    /// Font scale of the status bar and titles (1 to 3).
+    pub text_scale: u32,
+    /// Height of the status bar on top.
+    pub status_height: u32,
+}
+
+const MARGIN: u32 = 8;
+const GAP: u32 = 16;
+/// The longest status text the layout plans room for.
+const STATUS_TEMPLATE: &str = "step 9999  explored 100.0%";
+
+impl Layout {
+    /// Layout for a grid of `grid_width` × `grid_height` cells.
+    pub fn new(grid_width: usize, grid_height: usize, opts: &RenderOptions) -> Layout {
+        let cell_px = opts.cell_px.max(1);
+        let pw = grid_width as u32 * cell_px + 1;
+        let ph = grid_height as u32 * cell_px + 1;
+        let width = if opts.show_truth {
+            2 * MARGIN + 2 * pw + GAP
+        } else {
+            2 * MARGIN + pw
+        };
+        // Text grows with the cells (16 px cells: scale 2, at most 3) but shrinks to scale 1
+        // when the longest status text would not fit.
+        let mut text_scale = (cell_px / 8).clamp(1, 3);
+        while text_scale > 1 && width < 2 * MARGIN + font::text_width(STATUS_TEMPLATE, text_scale) {
+            text_scale -= 1;
+        }
+        let status_height = 15 * text_scale;
+        let title_height = 15 * text_scale;
+        let top = status_height + title_height;
+        let height = top + ph + MARGIN;
+        let (truth_origin, team_origin) = if opts.show_truth {
+            (Some((MARGIN, top)), (MARGIN + pw + GAP, top))
+        } else {
+            (None, (MARGIN, top))
+        };
+        Layout {
+            width,
+            height,
+            grid_width,
+            grid_height,
+            cell_px,
+            truth_origin,
+            team_origin,
+            text_scale,
+            status_height,
+        }
+    }
+
+    /// Layout for `frame` (sized by its team map).
+    pub fn for_frame(frame: &Frame, opts: &RenderOptions) -> Layout {
+        Layout::new(frame.team_map.width(), frame.team_map.height(), opts)
+    }
+
+    /// Panel size in pixels (both panels are the same size).
+    pub fn panel_size(&self) -> (u32, u32) {
+        (
+            self.grid_width as u32 * self.cell_px + 1,
+            self.grid_height as u32 * self.cell_px + 1,
+        )
+    }
+
+    /// Top-left pixel of `panel`, `None` for a panel not shown.
+    pub fn origin(&self, panel: Panel) -> Option<(u32, u32)> {
+        match panel {
+            Panel::Truth => self.truth_origin,
+            Panel::Team => Some(self.team_origin),
+        }
+    }
+
+    /// Centre pixel of cell `p` in `panel`; `None` if the panel is not shown or `p` is
+    /// outside the grid.
+    pub fn cell_center(&self, panel: Panel, p: Pos) -> Option<(u32, u32)> {
+        let in_grid = p.row >= 0
+            && p.col >= 0
+            && (p.row as usize) < self.grid_height
+            && (p.col as usize) < self.grid_width;
+        if !in_grid {
+            return None;
+        }
+        let (ox, oy) = self.origin(panel)?;
+        let half = self.cell_px / 2;
+        Some((
+            ox + p.col as u32 * self.cell_px + half,
+            oy + p.row as u32 * self.cell_px + half,
+        ))
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Colours
+
+const BACKGROUND: Rgb = [246, 246, 244];
+const STATUS_BG: Rgb = [36, 40, 48];
+const STATUS_FG: Rgb = [238, 238, 238];
+const BAR_BORDER: Rgb = [150, 156, 166];
+const BAR_FILL: Rgb = [110, 190, 120];
+const TITLE_FG: Rgb = [50, 50, 50];
+const PANEL_BORDER: Rgb = [90, 90, 90];
+const GRID_INK: Rgb = [0, 0, 0];
+const GRID_ALPHA: f32 = 0.12;
+const FREE: Rgb = [255, 255, 255];
+const UNKNOWN: Rgb = [128, 128, 128];
+const TEAM_OBSTACLE: Rgb = [0, 0, 0];
+const TRUTH_OBSTACLE: Rgb = [40, 40, 40];
+const TRUTH_FREE_UNSEEN: Rgb = [192, 201, 216];
+const TRUTH_OBSTACLE_UNSEEN: Rgb = [88, 94, 108];
+const LINK: Rgb = [60, 60, 60];
+const VIEW_ALPHA: f32 = 0.2;
+
+/// Fixed robot colours: the paper's blue, orange, green, then the rest of a
+/// colour-blind-friendly qualitative palette (gray left out: it is the unknown colour).
+const ROBOT_PALETTE: [Rgb; 9] = [
+    [31, 119, 180],  // blue
+    [255, 127, 14],  // orange
+    [44, 160, 44],   // green
+    [214, 39, 40],   // red
+    [148, 103, 189], // purple
+    [140, 86, 75],   // brown
+    [227, 119, 194], // pink
+    [188, 189, 34],  // olive
+    [23, 190, 207],  // cyan
+];
+
+fn robot_rgb(i: usize) -> Rgb {
+    if let Some(&c) = ROBOT_PALETTE.get(i) {
+        return c;
+    }
+    // Beyond the palette: hues spread by the golden angle, fairly saturated.
+    let h = ((i - ROBOT_PALETTE.len()) as f32 * 137.507_77 + 15.0) % 360.0;
+    hsv(h, 0.75, 0.85)
+}
+
+fn hsv(h: f32, s: f32, v: f32) -> Rgb {
+    let c = v * s;
+    let x = c * (1.0 - ((h / 60.0) % 2.0 - 1.0).abs());
+    let m = v - c;
+    let (r, g, b) = match (h / 60.0) as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let f = |u: f32| ((u + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    [f(r), f(g), f(b)]
+}
+
+/// The colour robot `i` is drawn in: 0 blue, 1 orange, 2 green (the paper's Fig. 1), then
+/// red, purple, brown, pink, olive, cyan, then golden-angle hues.
+pub fn robot_color(i: usize) -> Rgba<u8> {
+    let [r, g, b] = robot_rgb(i);
+    Rgba([r, g, b, 255])
+}
+
+// ---------------------------------------------------------------------------------------
+// Rendering
+
+/// Draws `frame` as an opaque RGBA picture of size [`Layout::for_frame`].
+pub fn render(frame: &Frame, opts: &RenderOptions) -> RgbaImage {
+    let layout = Layout::for_frame(frame, opts);
+    let [r, g, b] = BACKGROUND;
+    let mut img = RgbaImage::from_pixel(layout.width, layout.height, Rgba([r, g, b, 255]));
+    draw_status(&mut img, &layout, frame);
+    let s = layout.text_scale;
+    let (pw, _) = layout.panel_size();
+    for (panel, title) in [(Panel::Truth, "truth"), (Panel::Team, "team map")] {
+        let Some((ox, _)) = layout.origin(panel) else {
+            continue;
+        };
+        let tw = font::text_width(title, s);
+        let tx = ox as i32 + (pw as i32 - tw as i32) / 2;
+        let ty = (layout.status_height + 5 * s) as i32;
+        Canvas::new(&mut img).text(tx.max(0), ty, title, s, TITLE_FG);
+        draw_panel(&mut img, &layout, frame, panel);
+    }
+    img
+}
+
+fn draw_status(img: &mut RgbaImage, layout: &Layout, frame: &Frame) {
+    let s = layout.text_scale;
+    let mut c = Canvas::new(img);
+    c.fill_rect(
+        0,
+        0,
+        layout.width as i32,
+        layout.status_height as i32,
+        STATUS_BG,
+    );
+    let text = format!(
+        "step {}  explored {:.1}%",
+        frame.step,
+        frame.explored * 100.0
+    );
+    let cap_top = ((layout.status_height - 7 * s) / 2) as i32;
+    c.text(MARGIN as i32, cap_top, &text, s, STATUS_FG);
+
+    // Progress bar at the right end, where there is room beside the longest status text.
+    let bar_w = 100 * s;
+    let text_room = font::text_width(STATUS_TEMPLATE, s) + 8 * s;
+    if layout.width >= 2 * MARGIN + text_room + bar_w {
+        let x = (layout.width - MARGIN - bar_w) as i32;
+        let h = (7 * s) as i32;
+        let fill = if frame.explored.is_finite() {
+            frame.explored.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let inner = ((bar_w - 2) as f64 * fill).round() as i32;
+        c.rect_outline(x, cap_top, bar_w as i32, h, BAR_BORDER);
+        c.fill_rect(x + 1, cap_top + 1, inner, h - 2, BAR_FILL);
+    }
+}
+
+fn cell_color(frame: &Frame, panel: Panel, p: Pos) -> Rgb {
+    let team = frame.team_map.get(p);
+    match panel {
+        Panel::Team => match team {
+            Occupancy::Unknown => UNKNOWN,
+            Occupancy::Free => FREE,
+            Occupancy::Obstacle => TEAM_OBSTACLE,
+        },
+        Panel::Truth => match (frame.truth.get(p), team.is_known()) {
+            (Occupancy::Obstacle, true) => TRUTH_OBSTACLE,
+            (Occupancy::Obstacle, false) => TRUTH_OBSTACLE_UNSEEN,
+            (_, true) => FREE,
+            (_, false) => TRUTH_FREE_UNSEEN,
+        },
+    }
+}
+
+fn draw_panel(img: &mut RgbaImage, layout: &Layout, frame: &Frame, panel: Panel) {
+    let Some((ox, oy)) = layout.origin(panel) else {
+        return;
+    };
+    let (pw, ph) = layout.panel_size();
+    let (ox, oy) = (ox as i32, oy as i32);
+    let cp = layout.cell_px as i32;
+    let mut c = Canvas::clipped(img, ox, oy, pw as i32, ph as i32);
+
+    // Cells (each drawn one pixel larger so the shared grid-line pixels get a colour).
+    for row in 0..layout.grid_height as i32 {
+        for col in 0..layout.grid_width as i32 {
+            let color = cell_color(frame, panel, Pos::new(row, col));
+            c.fill_rect(ox + col * cp, oy + row * cp, cp + 1, cp + 1, color);
+        }
+    }
+    // Field of view: a faint tint of each robot's colour on its sensed cells' interiors.
+    for (i, r) in frame.robots.iter().enumerate() {
+        for p in &r.in_view {
+            if let Some((x, y)) = cell_origin(layout, p, ox, oy) {
+                c.blend_rect(x + 1, y + 1, cp - 1, cp - 1, robot_rgb(i), VIEW_ALPHA);
+            }
+        }
+    }
+    // Grid lines, darkening whatever is below a little; skipped when cells are tiny.
+    if cp >= 4 {
+        for col in 1..layout.grid_width as i32 {
+            c.blend_rect(ox + col * cp, oy, 1, ph as i32, GRID_INK, GRID_ALPHA);
+        }
+        for row in 1..layout.grid_height as i32 {
+            c.blend_rect(ox, oy + row * cp, pw as i32, 1, GRID_INK, GRID_ALPHA);
+        }
+    }
+    c.rect_outline(ox, oy, pw as i32, ph as i32, PANEL_BORDER);
+
+    let center = |p: Pos| (ox + p.col * cp + cp / 2, oy + p.row * cp + cp / 2);
+    let thick = (layout.cell_px / 8).max(1);
+    let link_thick = (layout.cell_px / 16).max(1);
+
+    // Comm links under everything robot-specific.
+    for &(a, b) in &frame.links {
+        if let (Some(ra), Some(rb)) = (frame.robots.get(a), frame.robots.get(b)) {
+            c.line(
+                center(ra.pos),
+                center(rb.pos),
+                link_thick,
+                LINK,
+                Some((4 * link_thick, 3 * link_thick)),
+            );
+        }
+    }
+    // Paths.
+    for (i, r) in frame.robots.iter().enumerate() {
+        let color = robot_rgb(i);
+        let mut prev = center(r.pos);
+        for &p in &r.path {
+            let next = center(p);
+            c.line(prev, next, thick, color, None);
+            prev = next;
+        }
+    }
+    // Candidates: hollow squares, half a cell wide, in a lighter shade.
+    let half = cp / 4;
+    for (i, r) in frame.robots.iter().enumerate() {
+        let color = mix(robot_rgb(i), FREE, 0.35);
+        for &p in &r.candidates {
+            let (x, y) = center(p);
+            c.rect_outline(x - half, y - half, 2 * half + 1, 2 * half + 1, color);
+            if cp >= 12 {
+                c.rect_outline(
+                    x - half + 1,
+                    y - half + 1,
+                    2 * half - 1,
+                    2 * half - 1,
+                    color,
+                );
+            }
+        }
+    }
+    // Goals: an X across most of the cell.
+    let arm = ((cp as f32) * 0.32).round() as i32;
+    for (i, r) in frame.robots.iter().enumerate() {
+        if let Some(g) = r.goal {
+            let (x, y) = center(g);
+            let color = robot_rgb(i);
+            c.line((x - arm, y - arm), (x + arm, y + arm), thick, color, None);
+            c.line((x - arm, y + arm), (x + arm, y - arm), thick, color, None);
+        }
+    }
+    // Robots: discs with a thin darker rim, on top of everything.
+    let radius = (cp as f32 * 0.42).max(1.0);
+    for (i, r) in frame.robots.iter().enumerate() {
+        let (x, y) = center(r.pos);
+        let color = robot_rgb(i);
+        if radius >= 3.0 {
+            c.fill_circle(x, y, radius, mix(color, [0, 0, 0], 0.45));
+            c.fill_circle(x, y, radius - 1.0, color);
+        } else {
+            c.fill_circle(x, y, radius, color);
+        }
+    }
+}
+
+/// Top-left pixel of cell `p` (its grid line), `None` outside the grid.
+fn cell_origin(layout: &Layout, p: &Pos, ox: i32, oy: i32) -> Option<(i32, i32)> {
+    let inside = p.row >= 0
+        && p.col >= 0
+        && (p.row as usize) < layout.grid_height
+        && (p.col as usize) < layout.grid_width;
+    let cp = layout.cell_px as i32;
+    inside.then(|| (ox + p.col * cp, oy + p.row * cp))
+}
+
+// ---------------------------------------------------------------------------------------
+// Files
+
+/// Everything that can go wrong writing a picture; each message starts with the target file.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Creating, writing or renaming the file failed.
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: io::Error },
+    /// The image encoder refused the picture (e.g. a GIF wider than 65535 pixels).
+    #[error("{}: cannot encode picture: {source}", path.display())]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    /// A GIF frame whose picture size differs from the first frame's.
+    #[error(
+        "{}: frame {index} is {got_width}x{got_height} px but the animation is \
+         {width}x{height} px (all frames need the same grid size and options)",
+        path.display()
+    )]
+    FrameSize {
+        path: PathBuf,
+        index: usize,
+        width: u32,
+        height: u32,
+        got_width: u32,
+        got_height: u32,
+    },
+    /// A GIF with no frames was requested.
+    #[error("{}: no frames to write", path.display())]
+    NoFrames { path: PathBuf },
+    /// The path has no file name to write to.
+    #[error("{}: not a file path", path.display())]
+    BadPath { path: PathBuf },
+}
+
+/// A temporary file next to `path`, renamed onto it on success and removed otherwise.
+struct TempFile {
+    path: PathBuf,
+    tmp: PathBuf,
+    done: bool,
+}
+
+impl TempFile {
+    fn create(path: &Path) -> Result<(TempFile, File), RenderError> {
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let name = path.file_name().ok_or_else(|| RenderError::BadPath {
+            path: path.to_path_buf(),
+        })?;
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp_name = format!(".{}.tmp-{}-{n}", name.to_string_lossy(), std::process::id());
+        let tmp = path.with_file_name(tmp_name);
+        let file = File::create(&tmp).map_err(|source| RenderError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok((
+            TempFile {
+                path: path.to_path_buf(),
+                tmp,
+                done: false,
+            },
+            file,
+        ))
+    }
+
+    fn io_err(&self, source: io::Error) -> RenderError {
+        RenderError::Io {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    /// Syncs `file` and renames the temporary file onto the target.
+    fn commit(mut self, file: File) -> Result<(), RenderError> {
+        file.sync_all().map_err(|e| self.io_err(e))?;
+        drop(file);
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| self.io_err(e))?;
+        self.done = true;
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Renders `frame` and writes it as a PNG to `path` (atomically).
+pub fn save_png(frame: &Frame, opts: &RenderOptions, path: &Path) -> Result<(), RenderError> {
+    let img = render(frame, opts);
+    let (tmp, file) = TempFile::create(path)?;
+    let mut w = BufWriter::new(file);
+    img.write_to(&mut w, image::ImageFormat::Png)
+        .map_err(|source| RenderError::Encode {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let file = w.into_inner().map_err(|e| tmp.io_err(e.into_error()))?;
+    tmp.commit(file)
+}
+
+/// Renders `frames` and writes them as an endlessly looping animated GIF to `path`
+/// (atomically), `delay_ms` per frame (GIF stores hundredths of a second). All frames must
+/// have the same grid size. Uses [`GifWriter`].
+pub fn save_gif(
+    frames: &[Frame],
+    opts: &RenderOptions,
+    delay_ms: u32,
+    path: &Path,
+) -> Result<(), RenderError> {
+    if frames.is_empty() {
+        return Err(RenderError::NoFrames {
+            path: path.to_path_buf(),
+        });
+    }
+    let mut w = GifWriter::new(path, opts, delay_ms)?;
+    for f in frames {
+        w.push(f)?;
+    }
+    w.finish()
+}
+
+/// The file behind the GIF encoder. The encoder owns its writer and writes the GIF trailer
+/// when dropped, so the writer is shared: after the encoder is gone we still hold the file
+/// to flush, sync and rename it. Write errors are recorded rather than returned so the
+/// encoder never sees (or panics on) them; [`GifWriter`] reports them after each frame.
+#[derive(Clone)]
+struct SharedSink(Arc<Mutex<Sink>>);
+
+struct Sink {
+    out: Option<BufWriter<File>>,
+    error: Option<io::Error>,
+}
+
+impl Write for SharedSink {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let mut s = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if s.error.is_none() {
+            if let Some(out) = s.out.as_mut() {
+                if let Err(e) = out.write_all(buf) {
+                    s.error = Some(e);
+                }
+            }
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        let mut s = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if s.error.is_none() {
+            if let Some(out) = s.out.as_mut() {
+                if let Err(e) = out.flush() {
+                    s.error = Some(e);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl SharedSink {
+    fn take_error(&self) -> Option<io::Error> {
+        self.0
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .error
+            .take()
+    }
+}
+
+/// Writes an animated GIF one frame at a time, so long episodes need not keep every frame
+/// in memory. Frames go to a temporary file next to the target; [`GifWriter::finish`]
+/// renames it into place. Dropping the writer without finishing removes the temporary file.
+/// The animation loops forever.
+pub struct GifWriter {
+    encoder: Option<GifEncoder<SharedSink>>,
+    sink: SharedSink,
+    tmp: Option<TempFile>,
+    path: PathBuf,
+    opts: RenderOptions,
+    delay: Delay,
+    size: Option<(u32, u32)>,
+    frames: usize,
+}
+
+impl GifWriter {
+    /// Starts a GIF at `path` with `delay_ms` per frame.
+    pub fn new(path: &Path, opts: &RenderOptions, delay_ms: u32) -> Result<GifWriter, RenderError> {
+        let (tmp, file) = TempFile::create(path)?;
+        let sink = SharedSink(Arc::new(Mutex::new(Sink {
+            out: Some(BufWriter::new(file)),
+            error: None,
+        })));
+        // Frames normally have far fewer than 256 colours and are stored exactly; the
+        // speed only matters for the quantizer fallback.
+        let mut encoder = GifEncoder::new_with_speed(sink.clone(), 10);
+        encoder
+            .set_repeat(Repeat::Infinite)
+            .map_err(|source| RenderError::Encode {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        Ok(GifWriter {
+            encoder: Some(encoder),
+            sink,
+            tmp: Some(tmp),
+            path: path.to_path_buf(),
+            opts: *opts,
+            delay: Delay::from_numer_denom_ms(delay_ms, 1),
+            size: None,
+            frames: 0,
+        })
+    }
+
+    /// Renders `frame` and appends it.
+    pub fn push(&mut self, frame: &Frame) -> Result<(), RenderError> {
+        self.push_image(render(frame, &self.opts))
+    }
+
+    /// Appends an already rendered picture (e.g. from [`render`], possibly annotated).
+    pub fn push_image(&mut self, img: RgbaImage) -> Result<(), RenderError> {
+        let got = img.dimensions();
+        let (width, height) = *self.size.get_or_insert(got);
+        if got != (width, height) {
+            return Err(RenderError::FrameSize {
+                path: self.path.clone(),
+                index: self.frames,
+                width,
+                height,
+                got_width: got.0,
+                got_height: got.1,
+            });
+        }
+        let encoder = self.encoder.as_mut().expect("encoder present until finish");
+        encoder
+            .encode_frame(image::Frame::from_parts(img, 0, 0, self.delay))
+            .map_err(|source| RenderError::Encode {
+                path: self.path.clone(),
+                source,
+            })?;
+        if let Some(source) = self.sink.take_error() {
+            return Err(RenderError::Io {
+                path: self.path.clone(),
+                source,
+            });
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// Number of frames written so far.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// Writes the GIF trailer and moves the file into place.
+    pub fn finish(mut self) -> Result<(), RenderError> {
+        if self.frames == 0 {
+            return Err(RenderError::NoFrames {
+                path: self.path.clone(),
+            });
+        }
+        drop(self.encoder.take()); // writes the trailer through the sink
+        let out = {
+            let mut s = self.sink.0.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some(source) = s.error.take() {
+                return Err(RenderError::Io {
+                    path: self.path.clone(),
+                    source,
+                });
+            }
+            s.out.take().expect("sink open until finish")
+        };
+        let tmp = self.tmp.take().expect("temp file present until finish");
+        let file = out.into_inner().map_err(|e| tmp.io_err(e.into_error()))?;
+        tmp.commit(file)
+    }
+}
