@@ -1,0 +1,384 @@
+//! [`Agent`]: one robot, self-contained. It sees the world only through [`Observation`]s,
+//! hears teammates only through [`Beta`] and [`PlanMessage`]s, and acts only through a
+//! [`Move`].
+
+use crate::belief::Belief;
+use crate::goals::{extract_goals, GoalCandidates};
+use crate::messages::{Beta, PlanMessage, TeammateRecord};
+use crate::policy::{Decision, DecisionMode, Policy};
+use crate::view::AgentView;
+use madenet_map::Pos;
+use madenet_nav::{astar, space_time_astar, Dijkstra, Reservations};
+use madenet_world::{ConfigError, Move, Observation, ScenarioConfig};
+use std::time::{Duration, Instant};
+
+/// The per-robot parameters an agent needs, derived from the [`ScenarioConfig`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct AgentConfig {
+    pub id: usize,
+    pub num_robots: usize,
+    pub height: usize,
+    pub width: usize,
+    /// |G| (Eq. 3 unless configured).
+    pub goal_count: usize,
+    pub prioritized_planning: bool,
+    pub plan_horizon: usize,
+    pub movement: madenet_map::Movement,
+}
+
+impl AgentConfig {
+    pub fn from_scenario(cfg: &ScenarioConfig, id: usize, height: usize, width: usize) -> Result<Self, ConfigError> {
+        Ok(AgentConfig {
+            id,
+            num_robots: cfg.num_robots,
+            height,
+            width,
+            goal_count: cfg.goal_count_for(height * width)?,
+            prioritized_planning: cfg.prioritized_planning,
+            plan_horizon: cfg.plan_horizon,
+            movement: cfg.movement,
+        })
+    }
+}
+
+/// Why the current macro action ended (Sec. III.C.2: β^m), for logs and learning.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    NoGoal,
+    Reached,
+    TeammateDetected,
+    NotFrontier,
+    Unreachable,
+    /// The robot had a goal elsewhere and stayed put (blocked or waiting) for
+    /// [`BLOCKED_STEPS`] timesteps in a row: it re-decides rather than deadlock.
+    Blocked,
+    /// Primitive-level policies re-decide every timestep.
+    EveryStep,
+}
+
+/// Consecutive timesteps without moving, despite a goal elsewhere, that end a macro action.
+pub const BLOCKED_STEPS: usize = 3;
+
+/// Per-agent timing and counters.
+#[derive(Clone, Debug, Default)]
+pub struct AgentStats {
+    pub decisions: usize,
+    pub decision_time: Duration,
+    pub plan_time: Duration,
+    pub space_time_plans: usize,
+}
+
+/// One robot.
+pub struct Agent {
+    cfg: AgentConfig,
+    t: usize,
+    pos: Pos,
+    belief: Belief,
+    teammates: Vec<TeammateRecord>,
+    detected_any: bool,
+    newly_detected: bool,
+    exchanged: Vec<usize>,
+    goal: Option<Pos>,
+    prev_goal: Option<Pos>,
+    candidates: GoalCandidates,
+    dijkstra: Dijkstra,
+    dijkstra_fresh: bool,
+    reservations: Reservations,
+    path: Vec<Pos>,
+    path_ready: bool,
+    policy: Box<dyn Policy>,
+    termination: Option<Termination>,
+    /// Timesteps in a row the robot intended to move and did not.
+    blocked_for: usize,
+    stats: AgentStats,
+}
+
+impl Agent {
+    pub fn new(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>) -> Self {
+        let (h, w) = (cfg.height, cfg.width);
+        Agent {
+            t: 0,
+            pos: start,
+            belief: Belief::new(h, w, cfg.movement),
+            teammates: vec![TeammateRecord::default(); cfg.num_robots],
+            detected_any: false,
+            newly_detected: false,
+            exchanged: Vec::new(),
+            goal: None,
+            prev_goal: None,
+            candidates: GoalCandidates { slots: cfg.goal_count, cells: Vec::new() },
+            dijkstra: Dijkstra::new(h, w),
+            dijkstra_fresh: false,
+            reservations: Reservations::new(h, w, cfg.plan_horizon),
+            path: Vec::new(),
+            path_ready: false,
+            policy,
+            termination: None,
+            blocked_for: 0,
+            stats: AgentStats::default(),
+            cfg,
+        }
+    }
+
+    pub fn id(&self) -> usize {
+        self.cfg.id
+    }
+    pub fn config(&self) -> &AgentConfig {
+        &self.cfg
+    }
+    pub fn pos(&self) -> Pos {
+        self.pos
+    }
+    pub fn belief(&self) -> &Belief {
+        &self.belief
+    }
+    pub fn teammates(&self) -> &[TeammateRecord] {
+        &self.teammates
+    }
+    pub fn goal(&self) -> Option<Pos> {
+        self.goal
+    }
+    pub fn candidates(&self) -> &GoalCandidates {
+        &self.candidates
+    }
+    /// The planned cells, first = next cell.
+    pub fn path(&self) -> &[Pos] {
+        &self.path
+    }
+    pub fn policy_name(&self) -> &str {
+        self.policy.name()
+    }
+    pub fn stats(&self) -> &AgentStats {
+        &self.stats
+    }
+    /// Why the macro action ended this timestep (None: it goes on).
+    pub fn termination(&self) -> Option<Termination> {
+        self.termination
+    }
+
+    /// Stage 1: take in this timestep's primitive observation o_i.
+    pub fn observe(&mut self, obs: &Observation) {
+        debug_assert_eq!(obs.robot, self.cfg.id);
+        let trying = self.goal.is_some_and(|g| g != self.pos);
+        if obs.t > 0 && trying && obs.pos == self.pos {
+            self.blocked_for += 1;
+        } else {
+            self.blocked_for = 0;
+        }
+        self.t = obs.t;
+        self.pos = obs.pos;
+        for &(p, occ) in &obs.seen {
+            self.belief.observe(p, occ);
+        }
+        let mut newly = false;
+        for rec in &mut self.teammates {
+            rec.detected = false;
+        }
+        for &(j, p) in &obs.teammates {
+            let rec = &mut self.teammates[j];
+            rec.detected = true;
+            rec.seen_pos = Some(p);
+            newly |= rec.seen_at != Some(obs.t.wrapping_sub(1)) || obs.t == 0;
+            rec.seen_at = Some(obs.t);
+        }
+        self.newly_detected = newly;
+        self.detected_any = !obs.teammates.is_empty();
+        self.exchanged.clear();
+        self.exchanged.extend_from_slice(&obs.exchanged_with);
+        self.reservations.clear();
+        self.dijkstra_fresh = false;
+        self.path_ready = false;
+        self.termination = None;
+    }
+
+    /// β_i to send to a teammate this timestep.
+    pub fn beta(&self) -> Beta {
+        Beta {
+            from: self.cfg.id,
+            t: self.t,
+            prev_goal: self.prev_goal,
+            pos: self.pos,
+            goal: self.goal,
+            map: self.belief.map().to_vec(),
+            explored: self.belief.known_count(),
+        }
+    }
+
+    /// Stage 2: take in a teammate's β: merge its map, remember its goals and position.
+    pub fn receive_beta(&mut self, b: &Beta) {
+        self.belief.merge(&b.map);
+        let rec = &mut self.teammates[b.from];
+        rec.heard_at = Some(b.t);
+        rec.prev_goal = b.prev_goal;
+        rec.goal = b.goal;
+        rec.beta_pos = Some(b.pos);
+        rec.explored = b.explored;
+        self.dijkstra_fresh = false;
+    }
+
+    /// Stage 3: does this robot decide now? Every timestep for primitive-level policies;
+    /// otherwise when its macro action terminated: no goal, goal reached, a teammate newly
+    /// detected, or the goal is no longer a frontier or no longer reachable.
+    pub fn needs_decision(&mut self) -> bool {
+        self.termination = self.check_termination();
+        self.termination.is_some()
+    }
+
+    fn check_termination(&mut self) -> Option<Termination> {
+        if self.policy.mode() == DecisionMode::EveryStep {
+            return Some(Termination::EveryStep);
+        }
+        let Some(goal) = self.goal else { return Some(Termination::NoGoal) };
+        if goal == self.pos {
+            return Some(Termination::Reached);
+        }
+        if self.newly_detected {
+            return Some(Termination::TeammateDetected);
+        }
+        if self.blocked_for >= BLOCKED_STEPS {
+            self.blocked_for = 0;
+            return Some(Termination::Blocked);
+        }
+        if !self.belief.is_frontier(goal) {
+            return Some(Termination::NotFrontier);
+        }
+        let belief = &self.belief;
+        match astar(self.pos, goal, |p| belief.is_free(p), belief.movement()) {
+            Some((path, _)) => {
+                self.path = path;
+                self.path_ready = true;
+                None
+            }
+            None => Some(Termination::Unreachable),
+        }
+    }
+
+    /// The robot's view for a policy; candidates are extracted first when `with_candidates`.
+    pub fn view(&mut self, with_candidates: bool) -> AgentView<'_> {
+        if with_candidates {
+            self.candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra);
+            self.dijkstra_fresh = true;
+        } else {
+            self.candidates.cells.clear();
+        }
+        AgentView {
+            id: self.cfg.id,
+            t: self.t,
+            pos: self.pos,
+            teammate_detected: self.detected_any,
+            belief: &self.belief,
+            teammates: &self.teammates,
+            goal: self.goal,
+            prev_goal: self.prev_goal,
+            candidates: &self.candidates,
+            dijkstra: &mut self.dijkstra,
+            dijkstra_fresh: &mut self.dijkstra_fresh,
+        }
+    }
+
+    /// Stage 4: ask the robot's own policy (call when [`Agent::needs_decision`] is true).
+    pub fn decide(&mut self) {
+        let start = Instant::now();
+        let needs = self.policy.needs_candidates();
+        // Temporarily take the policy out so the view can borrow the rest of the agent.
+        let mut policy = std::mem::replace(&mut self.policy, Box::new(crate::policy::NearestFrontier));
+        let decision = {
+            let mut view = self.view(needs);
+            policy.decide(&mut view)
+        };
+        self.policy = policy;
+        self.apply_decision(decision);
+        self.stats.decision_time += start.elapsed();
+    }
+
+    /// Sets the goal from a decision (own policy or a joint policy).
+    pub fn apply_decision(&mut self, d: Decision) {
+        self.stats.decisions += 1;
+        let new_goal = match d {
+            Decision::Candidate(k) => self.candidates.get(k),
+            Decision::Goal(p) => Some(p),
+            Decision::Idle => None,
+        };
+        if new_goal != self.goal {
+            self.prev_goal = self.goal;
+            self.goal = new_goal;
+            self.path_ready = false;
+        }
+    }
+
+    /// Stage 5: a teammate of higher priority announced its plan.
+    pub fn receive_plan(&mut self, m: &PlanMessage) {
+        if self.cfg.prioritized_planning {
+            self.reservations.reserve_path(m.start, &m.path);
+        }
+    }
+
+    /// Stage 6: plan the path to the goal. Plain A* on known free cells; when the plan
+    /// collides with a reservation of a higher-priority communicating teammate, or with a
+    /// detected teammate this robot cannot talk to (a static obstacle to it), space-time A*
+    /// plans around them, waiting where needed.
+    pub fn plan(&mut self) {
+        let start = Instant::now();
+        let Some(goal) = self.goal else {
+            self.path.clear();
+            return;
+        };
+        if goal == self.pos {
+            self.path.clear();
+            return;
+        }
+        if !self.path_ready {
+            let ok = self.dijkstra_fresh && self.dijkstra.source() == Some(self.pos) && self.dijkstra.path_to(goal, &mut self.path);
+            if !ok {
+                let belief = &self.belief;
+                self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+            }
+            self.path_ready = true;
+        }
+        // Detected teammates this robot cannot talk to are obstacles to it; the cells of
+        // those it talks to cannot be entered in the first step (the world's rule), and
+        // their announced plans are already reserved.
+        let mut obstacles = [Pos::new(-1, -1); 8];
+        let mut n_obs = 0;
+        for (j, rec) in self.teammates.iter().enumerate() {
+            if let (true, Some(p)) = (rec.detected, rec.seen_pos) {
+                if self.exchanged.contains(&j) {
+                    self.reservations.reserve(p, 0);
+                } else if n_obs < obstacles.len() {
+                    obstacles[n_obs] = p;
+                    n_obs += 1;
+                }
+            }
+        }
+        let obstacles = &obstacles[..n_obs];
+        let belief = &self.belief;
+        let passable = |q: Pos| belief.is_free(q) && !obstacles.contains(&q);
+        if self.path.iter().any(|p| obstacles.contains(p)) {
+            if let Some((p, _)) = astar(self.pos, goal, passable, belief.movement()) {
+                self.path = p;
+            }
+        }
+        if !self.path.is_empty() && !self.reservations.is_empty() && self.reservations.conflicts(self.pos, &self.path) {
+            if let Some(p) = space_time_astar(self.pos, goal, passable, belief.movement(), &self.reservations) {
+                self.path = p;
+                self.stats.space_time_plans += 1;
+            }
+        }
+        self.stats.plan_time += start.elapsed();
+    }
+
+    /// This robot's plan, for lower-priority teammates it communicates with.
+    pub fn plan_message(&self) -> PlanMessage {
+        PlanMessage { from: self.cfg.id, t: self.t, start: self.pos, path: self.path.clone() }
+    }
+
+    /// Teammates this robot exchanged with this timestep.
+    pub fn exchanged_with(&self) -> &[usize] {
+        &self.exchanged
+    }
+
+    /// Stage 7: the primitive action a_i.
+    pub fn next_move(&self) -> Move {
+        self.path.first().and_then(|&n| Move::between(self.pos, n)).unwrap_or(Move::Stay)
+    }
+}

@@ -1,0 +1,210 @@
+//! A robot's local map m_i with an incrementally maintained frontier set.
+
+use madenet_map::{Movement, Occupancy, Pos};
+use madenet_world::squeezed;
+
+/// The robot's own knowledge of the grid: unknown / free / obstacle per cell, plus the
+/// frontier flag of every cell (a known free cell with an unknown 8-neighbour, Yamauchi
+/// 1997 — under [`Movement::NoCornerCutting`] a diagonal neighbour squeezed between two
+/// known obstacles excepted, since it can be neither seen nor entered from there), kept up
+/// to date cell by cell as knowledge arrives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Belief {
+    width: usize,
+    height: usize,
+    map: Vec<Occupancy>,
+    known: usize,
+    frontier: Vec<bool>,
+    frontier_count: usize,
+    movement: Movement,
+}
+
+impl Belief {
+    pub fn new(height: usize, width: usize, movement: Movement) -> Self {
+        Belief {
+            width,
+            height,
+            map: vec![Occupancy::Unknown; width * height],
+            known: 0,
+            frontier: vec![false; width * height],
+            frontier_count: 0,
+            movement,
+        }
+    }
+
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    /// Flat, row-major cells.
+    pub fn map(&self) -> &[Occupancy] {
+        &self.map
+    }
+    /// |E_i|: cells this robot knows (obstacles included).
+    pub fn known_count(&self) -> usize {
+        self.known
+    }
+    /// The movement rule the robot navigates by.
+    pub fn movement(&self) -> Movement {
+        self.movement
+    }
+    pub fn frontier_count(&self) -> usize {
+        self.frontier_count
+    }
+
+    #[inline]
+    pub fn in_bounds(&self, p: Pos) -> bool {
+        p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width
+    }
+    #[inline]
+    pub fn index(&self, p: Pos) -> usize {
+        p.row as usize * self.width + p.col as usize
+    }
+    #[inline]
+    pub fn pos(&self, i: usize) -> Pos {
+        Pos::new((i / self.width) as i32, (i % self.width) as i32)
+    }
+    /// Occupancy of `p`; out of bounds reads as obstacle.
+    #[inline]
+    pub fn get(&self, p: Pos) -> Occupancy {
+        if self.in_bounds(p) {
+            self.map[self.index(p)]
+        } else {
+            Occupancy::Obstacle
+        }
+    }
+    #[inline]
+    pub fn is_free(&self, p: Pos) -> bool {
+        self.get(p) == Occupancy::Free
+    }
+    #[inline]
+    pub fn is_frontier(&self, p: Pos) -> bool {
+        self.in_bounds(p) && self.frontier[self.index(p)]
+    }
+    /// All frontier cells in row-major order.
+    pub fn frontier_cells(&self) -> impl Iterator<Item = Pos> + '_ {
+        self.frontier.iter().enumerate().filter(|(_, &f)| f).map(|(i, _)| self.pos(i))
+    }
+
+    /// Records an observation of `p`. Knowledge is never lost: a known cell keeps its value
+    /// (the world is static and sensing exact). Returns true if the cell was new.
+    #[inline]
+    pub fn observe(&mut self, p: Pos, occ: Occupancy) -> bool {
+        let i = self.index(p);
+        if self.map[i] != Occupancy::Unknown || occ == Occupancy::Unknown {
+            return false;
+        }
+        self.map[i] = occ;
+        self.known += 1;
+        self.refresh_frontier(p);
+        for (dr, dc) in NEIGHBOURS {
+            let q = Pos::new(p.row + dr, p.col + dc);
+            if self.in_bounds(q) {
+                self.refresh_frontier(q);
+            }
+        }
+        true
+    }
+
+    /// Merges a teammate's local map (Sec. III.C.1, *Mapping*): every cell unknown here and
+    /// known there is copied. Returns the number of new cells.
+    pub fn merge(&mut self, other: &[Occupancy]) -> usize {
+        assert_eq!(other.len(), self.map.len(), "merging maps of different sizes");
+        let mut added = 0;
+        for i in 0..other.len() {
+            if self.map[i] == Occupancy::Unknown && other[i] != Occupancy::Unknown {
+                let p = self.pos(i);
+                self.observe(p, other[i]);
+                added += 1;
+            }
+        }
+        added
+    }
+
+    /// An unknown 8-neighbour that can be seen from `p`: under
+    /// [`Movement::NoCornerCutting`] a diagonal neighbour squeezed between two known
+    /// obstacles is closed to sight and motion alike, so it does not count.
+    fn has_unknown_neighbour(&self, p: Pos) -> bool {
+        NEIGHBOURS.iter().any(|&(dr, dc)| {
+            let q = Pos::new(p.row + dr, p.col + dc);
+            self.in_bounds(q)
+                && self.map[self.index(q)] == Occupancy::Unknown
+                && !(self.movement == Movement::NoCornerCutting
+                    && squeezed(|c| self.get(c) == Occupancy::Obstacle, p, q))
+        })
+    }
+
+    fn refresh_frontier(&mut self, p: Pos) {
+        let i = self.index(p);
+        let f = self.map[i] == Occupancy::Free && self.has_unknown_neighbour(p);
+        if f != self.frontier[i] {
+            self.frontier[i] = f;
+            if f {
+                self.frontier_count += 1;
+            } else {
+                self.frontier_count -= 1;
+            }
+        }
+    }
+}
+
+/// The 8-neighbourhood offsets.
+pub const NEIGHBOURS: [(i32, i32); 8] = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn recompute(b: &Belief) -> Vec<bool> {
+        (0..b.map().len())
+            .map(|i| {
+                let p = b.pos(i);
+                b.get(p) == Occupancy::Free
+                    && NEIGHBOURS.iter().any(|&(dr, dc)| {
+                        let q = Pos::new(p.row + dr, p.col + dc);
+                        let squeeze = b.movement() == Movement::NoCornerCutting && dr != 0 && dc != 0
+                            && b.get(Pos::new(p.row, q.col)) == Occupancy::Obstacle
+                            && b.get(Pos::new(q.row, p.col)) == Occupancy::Obstacle;
+                        b.in_bounds(q) && b.get(q) == Occupancy::Unknown && !squeeze
+                    })
+            })
+            .collect()
+    }
+
+    proptest! {
+        /// The incremental frontier equals a from-scratch recomputation, and merging never
+        /// loses knowledge (monotone: known cells stay known with the same value).
+        #[test]
+        fn incremental_frontier_and_monotone_merge(
+            obs in proptest::collection::vec((0i32..8, 0i32..9, 1u8..3), 0..80),
+            other in proptest::collection::vec(0u8..3, 72),
+            strict in proptest::bool::ANY,
+        ) {
+            let movement = if strict { Movement::NoCornerCutting } else { Movement::CornerCutting };
+            let mut b = Belief::new(8, 9, movement);
+            for (r, c, o) in obs {
+                let occ = if o == 1 { Occupancy::Free } else { Occupancy::Obstacle };
+                b.observe(Pos::new(r, c), occ);
+                let expect = recompute(&b);
+                prop_assert_eq!(b.frontier.clone(), expect.clone());
+                prop_assert_eq!(b.frontier_count, expect.iter().filter(|&&f| f).count());
+            }
+            let before = b.clone();
+            let other: Vec<Occupancy> = other.into_iter().map(|v| match v { 0 => Occupancy::Unknown, 1 => Occupancy::Free, _ => Occupancy::Obstacle }).collect();
+            b.merge(&other);
+            for i in 0..before.map().len() {
+                if before.map()[i] != Occupancy::Unknown {
+                    prop_assert_eq!(b.map()[i], before.map()[i]);
+                } else {
+                    prop_assert_eq!(b.map()[i], other[i]);
+                }
+            }
+            prop_assert!(b.known_count() >= before.known_count());
+            prop_assert_eq!(b.known_count(), b.map().iter().filter(|o| o.is_known()).count());
+            prop_assert_eq!(b.frontier.clone(), recompute(&b));
+        }
+    }
+}

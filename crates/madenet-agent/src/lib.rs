@@ -1,0 +1,27 @@
+//! One robot of MADE-Net, self-contained (paper Sec. III.C): its belief (local map m_i with
+//! an incrementally maintained frontier), its teammate records (the β it last heard), goal
+//! extraction (𝒢_i), its policy and its navigation controller.
+//!
+//! An [`Agent`] sees the world only through a [`madenet_world::Observation`], hears teammates
+//! only through [`Beta`] and [`PlanMessage`], and acts only through a [`madenet_world::Move`],
+//! so the same code can later run as its own process over a real transport. Per timestep the
+//! runner calls, in order: [`Agent::observe`], [`Agent::receive_beta`] for each exchange,
+//! [`Agent::needs_decision`] / [`Agent::decide`], [`Agent::receive_plan`] from higher-priority
+//! teammates, [`Agent::plan`], [`Agent::next_move`].
+//!
+//! Policies implement [`Policy`] (one per robot) or [`JointPolicy`] (centralized). The
+//! nearest-frontier baseline [`NearestFrontier`] ships here.
+
+pub mod agent;
+pub mod belief;
+pub mod goals;
+pub mod messages;
+pub mod policy;
+pub mod view;
+
+pub use agent::{Agent, AgentConfig, AgentStats, Termination, BLOCKED_STEPS};
+pub use belief::Belief;
+pub use goals::{extract_goals, GoalCandidates};
+pub use messages::{Beta, PlanMessage, TeammateRecord};
+pub use policy::{Decision, DecisionMode, JointPolicy, NearestFrontier, Policy, RandomCandidate};
+pub use view::AgentView;

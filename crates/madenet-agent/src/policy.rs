@@ -1,0 +1,102 @@
+//! The policy interface, and the policies that ship with the simulator core.
+
+use crate::view::AgentView;
+use madenet_map::{Occupancy, Pos};
+use rand::RngExt;
+
+/// When a policy is asked for a goal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DecisionMode {
+    /// Every timestep: the paper's primitive-level baselines (NF, UB, PB).
+    EveryStep,
+    /// Only when the robot's macro action terminated (reached, teammate newly detected, goal
+    /// no longer a reachable frontier): macro-action policies such as MADE-Net.
+    OnTermination,
+}
+
+/// What a policy returns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decision {
+    /// Macro action k: go to goal candidate k (must be valid).
+    Candidate(usize),
+    /// Go to any cell (classical policies pick any frontier cell).
+    Goal(Pos),
+    /// Nothing left to do: stay in place.
+    Idle,
+}
+
+/// A decentralized policy: one instance per robot, seeing only that robot's view.
+pub trait Policy: Send {
+    /// Registry name (e.g. `"nf"`).
+    fn name(&self) -> &str;
+    fn mode(&self) -> DecisionMode;
+    /// Whether the view must carry goal candidates (their extraction costs a full Dijkstra).
+    fn needs_candidates(&self) -> bool {
+        true
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision;
+}
+
+/// A centralized policy choosing for the whole team from the joint observation (the CEP of
+/// centralized training). `needs[i]` tells which robots' macro actions terminated; the
+/// decisions of the others are ignored.
+pub trait JointPolicy: Send {
+    fn name(&self) -> &str;
+    fn decide(&mut self, views: &mut [AgentView<'_>], needs: &[bool], team_map: &[Occupancy]) -> Vec<Decision>;
+}
+
+/// Nearest frontier (NF; Yamauchi, "A frontier-based approach for autonomous exploration",
+/// 1997): the frontier cell with the shortest path from the robot through its known free
+/// cells, re-decided every timestep as in the authors' code. Ties go to the lower row-major
+/// index. The robot's own cell is never its goal. Coordination happens only through the maps
+/// teammates share.
+#[derive(Clone, Debug, Default)]
+pub struct NearestFrontier;
+
+impl Policy for NearestFrontier {
+    fn name(&self) -> &str {
+        "nf"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::EveryStep
+    }
+    fn needs_candidates(&self) -> bool {
+        false
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        match view.nearest_frontier() {
+            Some(p) => Decision::Goal(p),
+            None => Decision::Idle,
+        }
+    }
+}
+
+/// A uniformly random valid goal candidate at each macro termination: the floor any learned
+/// macro policy must beat, and a driver for testing macro actions.
+#[derive(Clone, Debug)]
+pub struct RandomCandidate {
+    rng: madenet_world::rng::Rng,
+}
+
+impl RandomCandidate {
+    pub fn new(seed: u64, robot: usize) -> Self {
+        RandomCandidate { rng: madenet_world::rng::stream(seed, "policy/random", robot as u64) }
+    }
+}
+
+impl Policy for RandomCandidate {
+    fn name(&self) -> &str {
+        "random"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        let n = view.candidates().cells.len();
+        if n == 0 {
+            Decision::Idle
+        } else {
+            Decision::Candidate(self.rng.random_range(0..n))
+        }
+    }
+}

@@ -1,0 +1,83 @@
+//! [`AgentView`]: what a policy may look at — one robot's own macro observation z_i.
+
+use crate::belief::Belief;
+use crate::goals::GoalCandidates;
+use crate::messages::TeammateRecord;
+use madenet_map::{Occupancy, Pos};
+use madenet_nav::Dijkstra;
+
+/// One robot's macro observation z_i = ⟨x_i, ϱ_i, β_i, m_i, |E_i|, 𝒢_i⟩ (Sec. III.C.1), lent
+/// to its policy. It borrows the robot's navigator scratch so that distance queries are
+/// cheap and can be reused for the path.
+pub struct AgentView<'a> {
+    /// Robot index i.
+    pub id: usize,
+    /// Current timestep.
+    pub t: usize,
+    /// x_i
+    pub pos: Pos,
+    /// ϱ_i: a teammate is detected within d_s this timestep.
+    pub teammate_detected: bool,
+    /// m_i and |E_i| (`belief.known_count()`).
+    pub belief: &'a Belief,
+    /// β_i: the last information heard from (or seen of) each teammate; own index included
+    /// as an empty record.
+    pub teammates: &'a [TeammateRecord],
+    /// The robot's current and previous goal.
+    pub goal: Option<Pos>,
+    pub prev_goal: Option<Pos>,
+    pub(crate) candidates: &'a GoalCandidates,
+    pub(crate) dijkstra: &'a mut Dijkstra,
+    pub(crate) dijkstra_fresh: &'a mut bool,
+}
+
+impl<'a> AgentView<'a> {
+    /// 𝒢_i, the goal candidates (empty if the policy declared it does not need them).
+    pub fn candidates(&self) -> &GoalCandidates {
+        self.candidates
+    }
+
+    /// The frontier cell with the shortest path from the robot through known free cells not
+    /// held by a teammate detected now (the robot's own cell excluded; ties to the lower
+    /// row-major index).
+    pub fn nearest_frontier(&mut self) -> Option<Pos> {
+        let (belief, from, mates) = (self.belief, self.pos, self.teammates);
+        let held = |p: Pos| mates.iter().any(|r| r.detected && r.seen_pos == Some(p));
+        *self.dijkstra_fresh = true;
+        self.dijkstra.run(from, |p| belief.is_free(p) && !held(p), belief.movement(), |p| p != from && belief.is_frontier(p))
+    }
+
+    /// Path cost in cells from the robot to every known-free cell, computed once (full
+    /// Dijkstra) and reused by the navigator. `None` if unreachable.
+    pub fn path_cost(&mut self, to: Pos) -> Option<f64> {
+        if !*self.dijkstra_fresh || self.dijkstra.settled_cost(to).is_none() {
+            let (belief, from) = (self.belief, self.pos);
+            self.dijkstra.run(from, |p| belief.is_free(p), belief.movement(), |_| false);
+            *self.dijkstra_fresh = true;
+        }
+        self.dijkstra.settled_cost(to).map(madenet_nav::cost_to_cells)
+    }
+
+    /// The paper's 4-channel binary map image of this robot, channel-major
+    /// `[4][height][width]`: explored space, obstacles, observed robot positions (own and
+    /// teammates' last known), goal candidates.
+    pub fn map_image(&self) -> Vec<u8> {
+        let b = self.belief;
+        let n = b.width() * b.height();
+        let mut img = vec![0u8; 4 * n];
+        for (i, &o) in b.map().iter().enumerate() {
+            img[i] = (o != Occupancy::Unknown) as u8;
+            img[n + i] = (o == Occupancy::Obstacle) as u8;
+        }
+        img[2 * n + b.index(self.pos)] = 1;
+        for rec in self.teammates {
+            if let Some(p) = rec.last_pos() {
+                img[2 * n + b.index(p)] = 1;
+            }
+        }
+        for &c in &self.candidates.cells {
+            img[3 * n + b.index(c)] = 1;
+        }
+        img
+    }
+}

@@ -1,0 +1,175 @@
+//! Per-trial metrics of the comparison study (paper Sec. V.A).
+//!
+//! A [`MetricsRecorder`] is fed one sample per timestep (explored fraction, team distance,
+//! robot pairs in contact) and produces [`TrialMetrics`]:
+//!
+//! * **TNS** — timesteps to completion (the step cap if the trial did not complete);
+//! * **TTD** — total travel distance, the sum of the robots' path lengths in metres;
+//! * **NOLI** — number of local interactions: over timesteps t ≥ 1, the robot pairs within
+//!   d_s and in line of sight (unordered pairs);
+//! * the **exploration curve** — explored fraction (known cells, obstacles included, over
+//!   explorable cells) against team distance, one point per timestep;
+//! * **OFV** — the objective of Eq. (1) as the paper evaluates it: Σ over coverage levels
+//!   p = 0.1, 0.1001, …, 1.0 of p / D(p), D(p) the team distance at which coverage p was
+//!   reached (linear interpolation along the curve), see [`ofv`];
+//! * **CT** — wall-clock time of the trial and per decision (kept apart from everything else,
+//!   since it is the only non-deterministic number).
+
+use serde::{Deserialize, Serialize};
+
+/// Coverage levels (percent) reported as "timesteps to N %", like the authors' `to_N`.
+pub const COVERAGE_LEVELS: [u32; 9] = [20, 30, 40, 50, 60, 70, 80, 90, 100];
+
+/// Deterministic metrics of one trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrialMetrics {
+    /// The team explored every explorable cell before the step cap.
+    pub completed: bool,
+    /// TNS: timesteps to completion, or the step cap.
+    pub tns: usize,
+    /// TTD: team travel distance, metres.
+    pub ttd: f64,
+    /// NOLI: robot pairs in contact, summed over timesteps.
+    pub noli: usize,
+    /// OFV: Eq. (1) over coverage levels, see [`ofv`].
+    pub ofv: f64,
+    /// Final explored fraction.
+    pub explored: f64,
+    /// Timesteps until coverage first reached 20 %, 30 %, …, 100 % (None: never).
+    pub steps_to: Vec<Option<usize>>,
+    /// Explored fraction after each timestep, index 0 = before the first move.
+    pub explored_per_step: Vec<f64>,
+    /// Team distance after each timestep, metres, aligned with `explored_per_step`.
+    pub distance_per_step: Vec<f64>,
+}
+
+/// Wall-clock timings of one trial (not deterministic; reported as CT).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// Whole trial, seconds.
+    pub trial_s: f64,
+    /// Decisions taken by all robots.
+    pub decisions: usize,
+    /// Mean wall time of one decision, seconds.
+    pub per_decision_s: f64,
+}
+
+/// Collects one sample per timestep.
+#[derive(Clone, Debug, Default)]
+pub struct MetricsRecorder {
+    explored: Vec<f64>,
+    distance: Vec<f64>,
+    noli: usize,
+}
+
+impl MetricsRecorder {
+    /// Starts with the state before the first move (distance 0).
+    pub fn new(initial_explored: f64) -> Self {
+        MetricsRecorder { explored: vec![initial_explored], distance: vec![0.0], noli: 0 }
+    }
+
+    /// Records the state after a timestep.
+    pub fn record(&mut self, explored: f64, team_distance: f64, pairs_in_contact: usize) {
+        self.explored.push(explored);
+        self.distance.push(team_distance);
+        self.noli += pairs_in_contact;
+    }
+
+    pub fn finish(self, completed: bool) -> TrialMetrics {
+        let tns = self.explored.len() - 1;
+        let steps_to = COVERAGE_LEVELS
+            .iter()
+            .map(|&n| {
+                let p = n as f64 / 100.0;
+                self.explored.iter().position(|&e| e >= p - 1e-12)
+            })
+            .collect();
+        TrialMetrics {
+            completed,
+            tns,
+            ttd: *self.distance.last().unwrap_or(&0.0),
+            noli: self.noli,
+            ofv: ofv(&self.explored, &self.distance),
+            explored: *self.explored.last().unwrap_or(&0.0),
+            steps_to,
+            explored_per_step: self.explored,
+            distance_per_step: self.distance,
+        }
+    }
+}
+
+/// Team distance at which coverage `p` was first reached, linearly interpolated between the
+/// two timesteps that bracket it; `None` if never reached. Levels reached during the team's
+/// first moving step get that step's distance (no interpolation from zero distance).
+pub fn distance_at(p: f64, explored: &[f64], distance: &[f64]) -> Option<f64> {
+    let k = explored.iter().position(|&e| e >= p)?;
+    if k == 0 {
+        return Some(distance[0]);
+    }
+    let (e0, e1) = (explored[k - 1], explored[k]);
+    let (d0, d1) = (distance[k - 1], distance[k]);
+    if d0 <= 0.0 {
+        // The first moving step: interpolating from zero distance would make p / D(p)
+        // arbitrarily large for levels just above the initial coverage.
+        return Some(d1);
+    }
+    let f = if e1 > e0 { (p - e0) / (e1 - e0) } else { 1.0 };
+    Some(d0 + f * (d1 - d0))
+}
+
+/// OFV, Eq. (1) as evaluated in the paper: Σ_{p = 0.1, 0.1001, …, 1.0} p / D(p).
+///
+/// Levels never reached contribute 0 (an incomplete trial scores lower), and levels reached
+/// at zero distance (already covered by the first observation) are skipped, since p / 0 is
+/// undefined.
+pub fn ofv(explored: &[f64], distance: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for k in 0..=9000u32 {
+        let p = 0.1 + k as f64 * 1e-4;
+        if let Some(d) = distance_at(p, explored, distance) {
+            if d > 0.0 {
+                sum += p / d;
+            }
+        }
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hand_computed_trial() {
+        let mut r = MetricsRecorder::new(0.1);
+        r.record(0.5, 10.0, 2);
+        r.record(1.0, 20.0, 1);
+        let m = r.finish(true);
+        assert_eq!(m.tns, 2);
+        assert_eq!(m.noli, 3);
+        assert_eq!(m.ttd, 20.0);
+        assert_eq!(m.steps_to[0], Some(1)); // 20 % reached at step 1
+        assert_eq!(m.steps_to[8], Some(2));
+        // D(p): 0.1 -> 0 (skipped); p in (0.1, 0.5]: 10 (first moving step); p in (0.5, 1]:
+        // 10 + 10·(p−0.5)/0.5.
+        assert_eq!(distance_at(0.3, &m.explored_per_step, &m.distance_per_step), Some(10.0));
+        assert!((distance_at(0.75, &m.explored_per_step, &m.distance_per_step).unwrap() - 15.0).abs() < 1e-12);
+        // OFV by a direct sum with the closed-form D(p).
+        let mut want = 0.0;
+        for k in 1..=9000 {
+            let p = 0.1 + k as f64 * 1e-4;
+            let d = if p <= 0.5 { 10.0 } else { 10.0 + 20.0 * (p - 0.5) };
+            want += p / d;
+        }
+        assert!((m.ofv - want).abs() < 1e-6 * want, "{} vs {want}", m.ofv);
+    }
+
+    #[test]
+    fn unreached_levels_contribute_nothing() {
+        let full = ofv(&[0.0, 0.5, 1.0], &[0.0, 10.0, 20.0]);
+        let half = ofv(&[0.0, 0.5], &[0.0, 10.0]);
+        assert!(half < full);
+        assert!(half > 0.0);
+        assert_eq!(ofv(&[0.05], &[0.0]), 0.0);
+    }
+}

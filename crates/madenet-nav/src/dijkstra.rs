@@ -1,0 +1,134 @@
+//! Flat-array Dijkstra with early exit and reusable buffers.
+
+use crate::neighbours;
+use madenet_map::{Movement, Pos};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// Reusable single-source Dijkstra over a `height × width` grid. Buffers are kept between
+/// runs (a generation counter marks stale entries), so a run allocates nothing.
+#[derive(Clone, Debug)]
+pub struct Dijkstra {
+    width: usize,
+    height: usize,
+    dist: Vec<u32>,
+    parent: Vec<u32>,
+    seen: Vec<u32>,
+    settled: Vec<u32>,
+    generation: u32,
+    heap: BinaryHeap<Reverse<(u32, u32)>>,
+    source: Option<Pos>,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Dijkstra {
+    pub fn new(height: usize, width: usize) -> Self {
+        let n = width * height;
+        Dijkstra {
+            width,
+            height,
+            dist: vec![NONE; n],
+            parent: vec![NONE; n],
+            seen: vec![0; n],
+            settled: vec![0; n],
+            generation: 0,
+            heap: BinaryHeap::with_capacity(n),
+            source: None,
+        }
+    }
+
+    #[inline]
+    fn idx(&self, p: Pos) -> usize {
+        p.row as usize * self.width + p.col as usize
+    }
+
+    #[inline]
+    fn pos(&self, i: usize) -> Pos {
+        Pos::new((i / self.width) as i32, (i % self.width) as i32)
+    }
+
+    fn in_bounds(&self, p: Pos) -> bool {
+        p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width
+    }
+
+    /// Runs Dijkstra from `source` over `passable` cells, settling cells in order of cost
+    /// (ties by cell index) until `stop(cell)` is true for a settled cell, which is returned,
+    /// or every reachable cell is settled (returns `None`).
+    pub fn run(
+        &mut self,
+        source: Pos,
+        passable: impl Fn(Pos) -> bool + Copy,
+        movement: Movement,
+        mut stop: impl FnMut(Pos) -> bool,
+    ) -> Option<Pos> {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.seen.fill(0);
+            self.settled.fill(0);
+            self.generation = 1;
+        }
+        let g = self.generation;
+        self.heap.clear();
+        self.source = Some(source);
+        let s = self.idx(source);
+        self.dist[s] = 0;
+        self.parent[s] = NONE;
+        self.seen[s] = g;
+        self.heap.push(Reverse((0, s as u32)));
+        let inb = |p: Pos| p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width;
+        let pass = move |p: Pos| inb(p) && passable(p);
+        while let Some(Reverse((d, u))) = self.heap.pop() {
+            let u = u as usize;
+            if self.settled[u] == g || d > self.dist[u] {
+                continue;
+            }
+            self.settled[u] = g;
+            let p = self.pos(u);
+            if stop(p) {
+                return Some(p);
+            }
+            for (q, c) in neighbours(p, pass, movement) {
+                let v = self.idx(q);
+                let nd = d + c;
+                if self.seen[v] != g || nd < self.dist[v] {
+                    self.seen[v] = g;
+                    self.dist[v] = nd;
+                    self.parent[v] = u as u32;
+                    self.heap.push(Reverse((nd, v as u32)));
+                }
+            }
+        }
+        None
+    }
+
+    /// The source of the last run.
+    pub fn source(&self) -> Option<Pos> {
+        self.source
+    }
+
+    /// Cost to `p` if the last run settled it.
+    pub fn settled_cost(&self, p: Pos) -> Option<u32> {
+        if !self.in_bounds(p) {
+            return None;
+        }
+        let i = self.idx(p);
+        (self.settled[i] == self.generation).then(|| self.dist[i])
+    }
+
+    /// The path from the last run's source to a settled `p` (source excluded, `p`
+    /// included), written into `out`. Returns false if `p` was not settled.
+    pub fn path_to(&self, p: Pos, out: &mut Vec<Pos>) -> bool {
+        out.clear();
+        if self.settled_cost(p).is_none() {
+            return false;
+        }
+        let mut i = self.idx(p);
+        while self.parent[i] != NONE {
+            out.push(self.pos(i));
+            i = self.parent[i] as usize;
+        }
+        out.reverse();
+        true
+    }
+}

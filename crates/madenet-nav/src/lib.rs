@@ -1,0 +1,96 @@
+//! The navigation controller of MADE-Net (paper Sec. III.C.5): turns a goal cell into moves.
+//!
+//! * [`Dijkstra`] — a flat-array, allocation-free Dijkstra over an 8-connected grid that can
+//!   stop as soon as a condition holds (the nearest frontier) and hand back the path. Written
+//!   by hand because the `pathfinding` crate's variants allocate hash maps on every call, and
+//!   this runs for every robot at every timestep in the classical baselines.
+//! * [`astar`] — A* on a robot's known-free cells with the admissible octile heuristic, on the
+//!   `pathfinding` crate's generic A*.
+//! * [`Reservations`] and [`space_time_astar`] — spatial-temporal A* for prioritized planning:
+//!   higher-priority robots' plans are reserved as (cell, time) and a later robot plans around
+//!   them, waiting being an action. This resolves the corridor and head-on deadlocks that
+//!   plain A* leaves.
+//!
+//! Costs are integers: a straight step costs [`STRAIGHT`], a diagonal [`DIAGONAL`]
+//! (≈ √2·STRAIGHT), so path lengths in metres are `cost / STRAIGHT` times the cell size.
+//! The movement rule is the world's ([`madenet_world::step_allowed`] under a [`Movement`]).
+
+mod dijkstra;
+mod spacetime;
+
+pub use dijkstra::Dijkstra;
+pub use spacetime::{space_time_astar, Reservations, WAIT_COST};
+
+pub use madenet_map::Movement;
+use madenet_map::Pos;
+use madenet_world::{step_allowed, Move};
+
+/// Cost of a straight step.
+pub const STRAIGHT: u32 = 10_000;
+/// Cost of a diagonal step, √2 · [`STRAIGHT`] rounded down.
+pub const DIAGONAL: u32 = 14_142;
+
+/// Integer cost of a move.
+#[inline]
+pub fn move_cost(m: Move) -> u32 {
+    match m {
+        Move::Stay => 0,
+        m if m.is_diagonal() => DIAGONAL,
+        _ => STRAIGHT,
+    }
+}
+
+/// The octile distance: the exact cost between two cells on an obstacle-free grid, hence an
+/// admissible and consistent A* heuristic.
+#[inline]
+pub fn octile(a: Pos, b: Pos) -> u32 {
+    let dr = (a.row - b.row).unsigned_abs();
+    let dc = (a.col - b.col).unsigned_abs();
+    let (lo, hi) = if dr < dc { (dr, dc) } else { (dc, dr) };
+    lo * DIAGONAL + (hi - lo) * STRAIGHT
+}
+
+/// Convert an integer path cost to cells of distance.
+pub fn cost_to_cells(cost: u32) -> f64 {
+    cost as f64 / STRAIGHT as f64
+}
+
+/// Moves allowed from `p` under the world's movement rule on `passable` cells (no `Stay`).
+#[inline]
+pub fn neighbours(p: Pos, passable: impl Fn(Pos) -> bool + Copy, movement: Movement) -> impl Iterator<Item = (Pos, u32)> {
+    Move::ALL[1..]
+        .iter()
+        .filter_map(move |&m| step_allowed(passable, p, m, movement).then(|| (m.apply(p), move_cost(m))))
+}
+
+/// A* from `start` to `goal` over `passable` cells (8-connected under `movement`, octile
+/// heuristic). Returns the cells after `start` up to and including `goal`, and the cost.
+pub fn astar(
+    start: Pos,
+    goal: Pos,
+    passable: impl Fn(Pos) -> bool + Copy,
+    movement: Movement,
+) -> Option<(Vec<Pos>, u32)> {
+    if start == goal {
+        return Some((Vec::new(), 0));
+    }
+    let (mut path, cost) = pathfinding::directed::astar::astar(
+        &start,
+        |&p| neighbours(p, passable, movement),
+        |&p| octile(p, goal),
+        |&p| p == goal,
+    )?;
+    path.remove(0);
+    Some((path, cost))
+}
+
+/// The path's length in cells (1 per straight step, √2 per diagonal).
+pub fn path_length(start: Pos, path: &[Pos]) -> f64 {
+    let mut prev = start;
+    let mut len = 0.0;
+    for &p in path {
+        len += Move::between(prev, p).map(|m| m.length()).unwrap_or(f64::NAN);
+        prev = p;
+    }
+    len
+}

@@ -1,0 +1,34 @@
+//! Runs MADE-Net trials (paper Sec. V.A): wires a [`madenet_world::World`] to one
+//! [`madenet_agent::Agent`] per robot, carries their messages along the world's successful
+//! exchanges, and records the trajectory and [`madenet_metrics::TrialMetrics`].
+//!
+//! One timestep of [`Trial::step`] is the paper's data flow as explicit stages:
+//!
+//! 1. **observe** — each agent takes its [`madenet_world::Observation`];
+//! 2. **exchange** — for every pair whose exchange succeeded, each side's β (sent as it was
+//!    before this step's exchanges, so nothing is relayed within a step) is delivered;
+//! 3. **decide** — agents whose macro action terminated (or every agent, for primitive-level
+//!    policies) ask their policy for a goal;
+//! 4. **plan** — in priority order (robot index), each agent plans and sends its plan to the
+//!    lower-priority teammates it exchanged with, who plan around it (space-time A*);
+//! 5. **act** — the agents' moves go to [`madenet_world::World::step`] (motion, sensing,
+//!    contact & communication).
+//!
+//! The same seed gives byte-identical trajectories and metrics.
+
+mod registry;
+mod trial;
+
+pub use registry::{PolicyContext, PolicyRegistry};
+pub use trial::{StepRecord, Trial, TrialResult, TrialSpec};
+
+/// Errors setting up a trial; messages name the field at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("unknown policy `{name}` (field `policy`); known policies: {known}")]
+    UnknownPolicy { name: String, known: String },
+    #[error(transparent)]
+    Scenario(#[from] madenet_world::ScenarioError),
+    #[error(transparent)]
+    Config(#[from] madenet_world::ConfigError),
+}

@@ -1,0 +1,63 @@
+//! Policies by name, so studies and the CLI have no special case per method.
+
+use madenet_agent::{NearestFrontier, Policy, RandomCandidate};
+use madenet_world::ScenarioConfig;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// What a policy factory gets to build one robot's policy.
+#[derive(Clone, Debug)]
+pub struct PolicyContext<'a> {
+    pub seed: u64,
+    pub robot: usize,
+    pub config: &'a ScenarioConfig,
+    pub height: usize,
+    pub width: usize,
+}
+
+type Factory = Arc<dyn Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync>;
+
+/// Named policy factories. [`PolicyRegistry::builtin`] holds the policies of the simulator
+/// core; later crates register theirs with [`PolicyRegistry::register`].
+#[derive(Clone, Default)]
+pub struct PolicyRegistry {
+    factories: BTreeMap<String, (String, Factory)>,
+}
+
+impl PolicyRegistry {
+    /// `nf` (nearest frontier) and `random` (uniform random goal candidate).
+    pub fn builtin() -> Self {
+        let mut r = PolicyRegistry::default();
+        r.register("nf", "nearest frontier (Yamauchi 1997), re-decided every timestep", |_| Box::new(NearestFrontier));
+        r.register("random", "uniformly random goal candidate at each macro termination", |c| {
+            Box::new(RandomCandidate::new(c.seed, c.robot))
+        });
+        r
+    }
+
+    pub fn register(
+        &mut self,
+        name: &str,
+        about: &str,
+        f: impl Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync + 'static,
+    ) {
+        self.factories.insert(name.to_string(), (about.to_string(), Arc::new(f)));
+    }
+
+    /// Builds robot `ctx.robot`'s policy, or an error listing the known names.
+    pub fn make(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<Box<dyn Policy>, crate::SimError> {
+        match self.factories.get(name) {
+            Some((_, f)) => Ok(f(ctx)),
+            None => Err(crate::SimError::UnknownPolicy { name: name.to_string(), known: self.names().join(", ") }),
+        }
+    }
+
+    pub fn names(&self) -> Vec<String> {
+        self.factories.keys().cloned().collect()
+    }
+
+    /// (name, description) pairs.
+    pub fn describe(&self) -> Vec<(String, String)> {
+        self.factories.iter().map(|(k, (a, _))| (k.clone(), a.clone())).collect()
+    }
+}

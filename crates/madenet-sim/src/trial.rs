@@ -1,0 +1,206 @@
+//! One trial: world + agents + recorder.
+
+use crate::registry::{PolicyContext, PolicyRegistry};
+use crate::SimError;
+use madenet_agent::{Agent, AgentConfig, Beta};
+use madenet_map::{OccGrid, Pos};
+use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
+use madenet_world::{Move, ScenarioConfig, World};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Everything that defines a trial.
+#[derive(Clone, Debug)]
+pub struct TrialSpec {
+    pub map: OccGrid,
+    /// A label for outputs (e.g. `test_3`).
+    pub map_name: String,
+    pub starts: Vec<Pos>,
+    pub config: ScenarioConfig,
+    pub policy: String,
+    pub seed: u64,
+}
+
+/// One timestep of a trajectory (state after the step).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepRecord {
+    pub t: usize,
+    pub positions: Vec<Pos>,
+    pub moves: Vec<Move>,
+    pub goals: Vec<Option<Pos>>,
+    /// Robots that took a decision in this step.
+    pub decided: Vec<bool>,
+    pub exchanges: Vec<(usize, usize)>,
+    pub explored: f64,
+}
+
+/// The outcome of a trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrialResult {
+    pub map: String,
+    pub policy: String,
+    pub seed: u64,
+    pub comm_success_prob: f64,
+    pub starts: Vec<Pos>,
+    pub metrics: TrialMetrics,
+    /// Empty unless recording was requested.
+    pub trajectory: Vec<StepRecord>,
+    pub timing: Timing,
+}
+
+/// A trial in progress.
+pub struct Trial {
+    spec_map: String,
+    policy: String,
+    starts: Vec<Pos>,
+    seed: u64,
+    world: World,
+    agents: Vec<Agent>,
+    recorder: MetricsRecorder,
+    trajectory: Vec<StepRecord>,
+    record: bool,
+    started: Instant,
+    decided: Vec<bool>,
+    moves: Vec<Move>,
+}
+
+impl Trial {
+    /// Builds the world and the agents with the built-in policies.
+    pub fn new(spec: TrialSpec) -> Result<Self, SimError> {
+        Self::with_registry(spec, &PolicyRegistry::builtin())
+    }
+
+    pub fn with_registry(spec: TrialSpec, registry: &PolicyRegistry) -> Result<Self, SimError> {
+        let (h, w) = (spec.map.height(), spec.map.width());
+        let cfg = spec.config.clone();
+        let mut agents = Vec::with_capacity(cfg.num_robots);
+        for i in 0..cfg.num_robots.min(spec.starts.len()) {
+            let ctx = PolicyContext { seed: spec.seed, robot: i, config: &cfg, height: h, width: w };
+            let policy = registry.make(&spec.policy, &ctx)?;
+            agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w)?, spec.starts[i], policy));
+        }
+        let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
+        let n = agents.len();
+        Ok(Trial {
+            recorder: MetricsRecorder::new(world.explored_fraction()),
+            starts: spec.starts[..n].to_vec(),
+            spec_map: spec.map_name,
+            policy: spec.policy,
+            seed: spec.seed,
+            world,
+            agents,
+            trajectory: Vec::new(),
+            record: false,
+            started: Instant::now(),
+            decided: vec![false; n],
+            moves: vec![Move::Stay; n],
+        })
+    }
+
+    /// Keep a [`StepRecord`] per timestep in the result.
+    pub fn record_trajectory(mut self, on: bool) -> Self {
+        self.record = on;
+        self
+    }
+
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+    pub fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+    pub fn is_done(&self) -> bool {
+        self.world.is_done()
+    }
+
+    /// Runs one timestep (stages 1–5 of the crate docs). Returns false once done.
+    pub fn step(&mut self) -> bool {
+        if self.world.is_done() {
+            return false;
+        }
+        let n = self.agents.len();
+        // 1. observe
+        for (i, a) in self.agents.iter_mut().enumerate() {
+            a.observe(self.world.observation(i));
+        }
+        // 2. exchange β along successful links; messages are composed before delivery.
+        let exchanges = self.world.exchanges();
+        if !exchanges.is_empty() {
+            let mut outbox: Vec<Option<Beta>> = vec![None; n];
+            for &(i, j) in exchanges {
+                for k in [i, j] {
+                    if outbox[k].is_none() {
+                        outbox[k] = Some(self.agents[k].beta());
+                    }
+                }
+            }
+            for &(i, j) in exchanges {
+                self.agents[j].receive_beta(outbox[i].as_ref().expect("composed above"));
+                self.agents[i].receive_beta(outbox[j].as_ref().expect("composed above"));
+            }
+        }
+        // 3. decide
+        for (i, a) in self.agents.iter_mut().enumerate() {
+            self.decided[i] = a.needs_decision();
+            if self.decided[i] {
+                a.decide();
+            }
+        }
+        // 4. plan in priority order; plans go to lower-priority robots this one exchanged with.
+        for i in 0..n {
+            self.agents[i].plan();
+            let lower: Vec<usize> = self.agents[i].exchanged_with().iter().copied().filter(|&j| j > i).collect();
+            if !lower.is_empty() {
+                let msg = self.agents[i].plan_message();
+                for j in lower {
+                    self.agents[j].receive_plan(&msg);
+                }
+            }
+        }
+        // 5. act
+        for (i, a) in self.agents.iter().enumerate() {
+            self.moves[i] = a.next_move();
+        }
+        self.world.step(&self.moves);
+        let team_distance: f64 = self.world.distances().iter().sum();
+        self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len());
+        if self.record {
+            self.trajectory.push(StepRecord {
+                t: self.world.t(),
+                positions: self.world.positions().to_vec(),
+                moves: self.world.executed_moves().to_vec(),
+                goals: self.agents.iter().map(|a| a.goal()).collect(),
+                decided: self.decided.clone(),
+                exchanges: self.world.exchanges().to_vec(),
+                explored: self.world.explored_fraction(),
+            });
+        }
+        true
+    }
+
+    /// Runs to completion or the step cap.
+    pub fn run(mut self) -> TrialResult {
+        while self.step() {}
+        self.finish()
+    }
+
+    /// The result so far.
+    pub fn finish(self) -> TrialResult {
+        let decisions: usize = self.agents.iter().map(|a| a.stats().decisions).sum();
+        let decision_s: f64 = self.agents.iter().map(|a| a.stats().decision_time.as_secs_f64()).sum();
+        TrialResult {
+            map: self.spec_map,
+            policy: self.policy,
+            seed: self.seed,
+            comm_success_prob: self.world.config().comm_success_prob,
+            starts: self.starts,
+            metrics: self.recorder.finish(self.world.is_complete()),
+            trajectory: self.trajectory,
+            timing: Timing {
+                trial_s: self.started.elapsed().as_secs_f64(),
+                decisions,
+                per_decision_s: if decisions > 0 { decision_s / decisions as f64 } else { 0.0 },
+            },
+        }
+    }
+}

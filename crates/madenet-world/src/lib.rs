@@ -1,0 +1,27 @@
+//! The multi-robot exploration world of MADE-Net (Tan et al., RA-L 2023, Sec. III and V.A).
+//!
+//! The world owns what no robot may see directly: the ground-truth grid, every robot's true
+//! pose, the random streams, the communication dropouts and the team's merged knowledge (used
+//! for termination, metrics and centralized training). One timestep is an explicit pipeline
+//! of plain stages — see [`World::step`]:
+//!
+//! 1. **motion** — simultaneous 8-connected moves with slip (`motion_success_prob`), the
+//!    corner-cutting rule and deterministic conflict resolution;
+//! 2. **sensing** — a (2·d_s+1)² window of Bresenham rays with per-cell misses
+//!    (`sensor_miss_prob`);
+//! 3. **contact & communication** — robots within d_s and in line of sight detect each other and
+//!    exchange β with probability `comm_success_prob` (CSP), a failure starting a dropout of
+//!    `dropout_steps` for that pair.
+//!
+//! Robots see the world only through [`Observation`]s and act only through [`Move`]s; the
+//! messages they exchange are delivered by the trial runner along [`World::exchanges`].
+//! All parameters live in [`ScenarioConfig`], whose defaults are the paper's values.
+
+pub mod config;
+pub mod geometry;
+pub mod rng;
+pub mod world;
+
+pub use config::{goal_count_eq3, ConfigError, ScenarioConfig};
+pub use geometry::{bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern};
+pub use world::{Observation, ScenarioError, World};

@@ -1,0 +1,364 @@
+//! The world: ground truth, robot poses, and the per-timestep pipeline
+//! motion → sensing → contact & communication.
+
+use crate::config::{ConfigError, ScenarioConfig};
+use crate::geometry::{line_of_sight, step_allowed, Move, ViewPattern};
+use crate::rng::{stream, Rng};
+use madenet_map::{OccGrid, Occupancy, Pos};
+use rand::RngExt;
+
+/// Why a scenario cannot start.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    #[error("start cell {pos} of robot {robot} is {what}")]
+    BadStart { robot: usize, pos: Pos, what: &'static str },
+    #[error("{robots} robots but {starts} start cells (config field `num_robots`)")]
+    StartCount { robots: usize, starts: usize },
+}
+
+/// What one robot perceives in one timestep (its primitive observation o_i).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Observation {
+    pub robot: usize,
+    /// Timestep of the observation.
+    pub t: usize,
+    /// The robot's own position (localization).
+    pub pos: Pos,
+    /// Cells observed this step (own cell included), with their true occupancy.
+    pub seen: Vec<(Pos, Occupancy)>,
+    /// Teammates detected: within d_s (Chebyshev) and in line of sight.
+    pub teammates: Vec<(usize, Pos)>,
+    /// Teammates this robot exchanged β with this step (comm succeeded).
+    pub exchanged_with: Vec<usize>,
+}
+
+/// The world of one trial.
+#[derive(Clone, Debug)]
+pub struct World {
+    cfg: ScenarioConfig,
+    truth: OccGrid,
+    blocked: Vec<bool>,
+    view: ViewPattern,
+    positions: Vec<Pos>,
+    t: usize,
+    rng_motion: Vec<Rng>,
+    rng_sensor: Vec<Rng>,
+    rng_comm: Rng,
+    /// Remaining dropout steps per robot pair (i < j), indexed i·n + j.
+    dropout: Vec<u32>,
+    team_map: Vec<Occupancy>,
+    known: usize,
+    explorable: Vec<bool>,
+    explorable_count: usize,
+    obs: Vec<Observation>,
+    contacts: Vec<(usize, usize)>,
+    exchanges: Vec<(usize, usize)>,
+    executed: Vec<Move>,
+    distance: Vec<f64>,
+    targets: Vec<Pos>,
+}
+
+impl World {
+    /// Builds the world and performs the initial sensing and contact stage (t = 0).
+    pub fn new(truth: OccGrid, starts: &[Pos], cfg: ScenarioConfig, seed: u64) -> Result<Self, ScenarioError> {
+        cfg.validate()?;
+        let n = cfg.num_robots;
+        if starts.len() < n {
+            return Err(ScenarioError::StartCount { robots: n, starts: starts.len() });
+        }
+        let starts = &starts[..n];
+        for (i, &p) in starts.iter().enumerate() {
+            if !truth.in_bounds(p) {
+                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "outside the map" });
+            }
+            if truth.get(p) != Occupancy::Free {
+                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "not free" });
+            }
+            if starts[..i].contains(&p) {
+                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "shared with another robot" });
+            }
+        }
+        let blocked: Vec<bool> = truth.cells().iter().map(|&c| c != Occupancy::Free).collect();
+        let view = ViewPattern::new(cfg.sensing_range, cfg.movement);
+        let cells = truth.len();
+        let mut w = World {
+            rng_motion: (0..n).map(|i| stream(seed, "motion", i as u64)).collect(),
+            rng_sensor: (0..n).map(|i| stream(seed, "sensor", i as u64)).collect(),
+            rng_comm: stream(seed, "comm", 0),
+            dropout: vec![0; n * n],
+            team_map: vec![Occupancy::Unknown; cells],
+            known: 0,
+            explorable: vec![false; cells],
+            explorable_count: 0,
+            obs: (0..n).map(|i| Observation { robot: i, ..Default::default() }).collect(),
+            contacts: Vec::new(),
+            exchanges: Vec::new(),
+            executed: vec![Move::Stay; n],
+            distance: vec![0.0; n],
+            targets: Vec::with_capacity(n),
+            positions: starts.to_vec(),
+            t: 0,
+            view,
+            blocked,
+            truth,
+            cfg,
+        };
+        w.compute_explorable();
+        w.sense();
+        w.contact_and_communicate();
+        Ok(w)
+    }
+
+    /// Cells visible (ignoring misses) from any free cell reachable from a start.
+    fn compute_explorable(&mut self) {
+        let cells = self.truth.len();
+        let mut reach = vec![false; cells];
+        let mut stack: Vec<Pos> = self.positions.clone();
+        for &p in &stack {
+            reach[self.truth.index(p)] = true;
+        }
+        while let Some(p) = stack.pop() {
+            for m in &Move::ALL[1..] {
+                if step_allowed(|q| self.passable(q), p, *m, self.cfg.movement) {
+                    let q = m.apply(p);
+                    let qi = self.truth.index(q);
+                    if !reach[qi] {
+                        reach[qi] = true;
+                        stack.push(q);
+                    }
+                }
+            }
+        }
+        let mut explorable = vec![false; cells];
+        for (i, &r) in reach.iter().enumerate() {
+            if r {
+                let p = self.truth.pos(i);
+                explorable[i] = true;
+                self.view.for_each_visible(p, |q| self.truth.in_bounds(q), |q| self.is_blocked(q), |q| {
+                    explorable[self.truth.index(q)] = true;
+                });
+            }
+        }
+        self.explorable_count = explorable.iter().filter(|&&e| e).count();
+        self.explorable = explorable;
+    }
+
+    #[inline]
+    fn is_blocked(&self, p: Pos) -> bool {
+        self.blocked[self.truth.index(p)]
+    }
+
+    #[inline]
+    fn passable(&self, p: Pos) -> bool {
+        self.truth.in_bounds(p) && !self.is_blocked(p)
+    }
+
+    /// Advances one timestep: every robot executes its move simultaneously, then all sense,
+    /// then contacts and exchanges are resolved. `intents[i]` is robot i's desired move.
+    pub fn step(&mut self, intents: &[Move]) {
+        assert_eq!(intents.len(), self.positions.len(), "one move per robot");
+        self.apply_motion(intents);
+        self.t += 1;
+        self.sense();
+        self.contact_and_communicate();
+    }
+
+    /// Motion stage. A move is legal when [`step_allowed`] holds on the obstacles and its
+    /// target is not held by another robot at the start of the step (so swaps and trains
+    /// cannot happen; robots are not corners); an illegal intent becomes `Stay`. With probability 1 − `motion_success_prob`
+    /// a uniformly random other legal move (staying included) is executed instead. Two robots
+    /// heading for the same cell: the lower index moves, the other stays.
+    fn apply_motion(&mut self, intents: &[Move]) {
+        let n = self.positions.len();
+        let mut targets = std::mem::take(&mut self.targets);
+        targets.clear();
+        targets.extend_from_slice(&self.positions);
+        for i in 0..n {
+            let at = self.positions[i];
+            let (positions, blocked, truth, movement) = (&self.positions, &self.blocked, &self.truth, self.cfg.movement);
+            // Obstacles make corners; robots only block the cell they hold.
+            let legal = |m: Move| {
+                let to = m.apply(at);
+                step_allowed(|q| truth.in_bounds(q) && !blocked[truth.index(q)], at, m, movement)
+                    && (m == Move::Stay || !positions.iter().enumerate().any(|(j, &pj)| j != i && pj == to))
+            };
+            let intent = if legal(intents[i]) { intents[i] } else { Move::Stay };
+            // Always two draws per robot and step, so streams stay aligned across policies.
+            let slip = self.rng_motion[i].random::<f64>() >= self.cfg.motion_success_prob;
+            let pick = self.rng_motion[i].random::<f64>();
+            let mut executed = intent;
+            if slip && (intent != Move::Stay || self.cfg.slip_when_staying) {
+                let mut options = [Move::Stay; 9];
+                let mut k = 0;
+                for m in Move::ALL {
+                    if m != intent && legal(m) {
+                        options[k] = m;
+                        k += 1;
+                    }
+                }
+                if k > 0 {
+                    executed = options[((pick * k as f64) as usize).min(k - 1)];
+                }
+            }
+            targets[i] = executed.apply(at);
+            self.executed[i] = executed;
+        }
+        for i in 0..n {
+            if self.executed[i] != Move::Stay && targets[..i].contains(&targets[i]) {
+                self.executed[i] = Move::Stay;
+                targets[i] = self.positions[i];
+            }
+        }
+        for i in 0..n {
+            self.distance[i] += self.executed[i].length() * self.cfg.cell_size;
+            self.positions[i] = targets[i];
+        }
+        self.targets = targets;
+    }
+
+    /// Sensing stage: every visible cell of the (2·d_s+1)² window is observed unless missed
+    /// (probability `sensor_miss_prob`, independently per cell and step). The robot's own
+    /// cell is always observed.
+    fn sense(&mut self) {
+        let miss = self.cfg.sensor_miss_prob;
+        for i in 0..self.positions.len() {
+            let at = self.positions[i];
+            let mut obs = std::mem::take(&mut self.obs[i]);
+            obs.t = self.t;
+            obs.pos = at;
+            obs.seen.clear();
+            obs.seen.push((at, Occupancy::Free));
+            let rng = &mut self.rng_sensor[i];
+            let truth = &self.truth;
+            let blocked = &self.blocked;
+            let w = truth.width();
+            self.view.for_each_visible(
+                at,
+                |q| truth.in_bounds(q),
+                |q| blocked[q.row as usize * w + q.col as usize],
+                |q| {
+                    if rng.random::<f64>() >= miss {
+                        obs.seen.push((q, truth.get(q)));
+                    }
+                },
+            );
+            for &(q, occ) in &obs.seen {
+                let k = self.truth.index(q);
+                if self.team_map[k] == Occupancy::Unknown {
+                    self.team_map[k] = occ;
+                    self.known += 1;
+                }
+            }
+            self.obs[i] = obs;
+        }
+    }
+
+    /// Contact and communication stage. Robots within Chebyshev distance d_s and in line of
+    /// sight are in contact and detect each other. A pair in contact and not in dropout
+    /// exchanges β with probability CSP; a failure starts a dropout of `dropout_steps`
+    /// timesteps for that pair. Dropout timers count down every step, in contact or not.
+    fn contact_and_communicate(&mut self) {
+        let n = self.positions.len();
+        self.contacts.clear();
+        self.exchanges.clear();
+        for o in &mut self.obs {
+            o.teammates.clear();
+            o.exchanged_with.clear();
+        }
+        let ds = self.cfg.sensing_range;
+        for i in 0..n {
+            for j in i + 1..n {
+                let k = i * n + j;
+                let in_dropout = self.dropout[k] > 0;
+                if in_dropout {
+                    self.dropout[k] -= 1;
+                }
+                let (a, b) = (self.positions[i], self.positions[j]);
+                if a.chebyshev(b) > ds || !line_of_sight(|q| self.is_blocked(q), a, b, self.cfg.movement) {
+                    continue;
+                }
+                self.contacts.push((i, j));
+                self.obs[i].teammates.push((j, b));
+                self.obs[j].teammates.push((i, a));
+                if in_dropout {
+                    continue;
+                }
+                if self.rng_comm.random::<f64>() < self.cfg.comm_success_prob {
+                    self.exchanges.push((i, j));
+                    self.obs[i].exchanged_with.push(j);
+                    self.obs[j].exchanged_with.push(i);
+                } else {
+                    self.dropout[k] = self.cfg.dropout_steps;
+                }
+            }
+        }
+    }
+
+    pub fn config(&self) -> &ScenarioConfig {
+        &self.cfg
+    }
+    pub fn truth(&self) -> &OccGrid {
+        &self.truth
+    }
+    /// Current timestep (0 before the first move).
+    pub fn t(&self) -> usize {
+        self.t
+    }
+    pub fn positions(&self) -> &[Pos] {
+        &self.positions
+    }
+    /// Robot i's observation of the current timestep.
+    pub fn observation(&self, i: usize) -> &Observation {
+        &self.obs[i]
+    }
+    /// Pairs (i < j) in contact this step: within d_s and in line of sight (for NOLI).
+    pub fn contacts(&self) -> &[(usize, usize)] {
+        &self.contacts
+    }
+    /// Pairs (i < j) that exchanged β this step.
+    pub fn exchanges(&self) -> &[(usize, usize)] {
+        &self.exchanges
+    }
+    /// The moves executed in the last step.
+    pub fn executed_moves(&self) -> &[Move] {
+        &self.executed
+    }
+    /// Distance each robot has travelled, metres.
+    pub fn distances(&self) -> &[f64] {
+        &self.distance
+    }
+    /// The team's merged map 𝓜 (union of everything any robot observed).
+    pub fn team_map(&self) -> &[Occupancy] {
+        &self.team_map
+    }
+    /// Cells the team knows (obstacles included).
+    pub fn known_count(&self) -> usize {
+        self.known
+    }
+    /// Cells visible from some reachable free cell: what "fully explored" means.
+    pub fn explorable_count(&self) -> usize {
+        self.explorable_count
+    }
+    pub fn explorable(&self) -> &[bool] {
+        &self.explorable
+    }
+    /// Known cells over explorable cells, 0..=1.
+    pub fn explored_fraction(&self) -> f64 {
+        self.known as f64 / self.explorable_count.max(1) as f64
+    }
+    /// The team knows every explorable cell.
+    pub fn is_complete(&self) -> bool {
+        self.known >= self.explorable_count
+    }
+    /// Complete or at the step cap.
+    pub fn is_done(&self) -> bool {
+        self.is_complete() || self.t >= self.cfg.step_cap
+    }
+    /// Remaining dropout steps of pair (i, j).
+    pub fn dropout_remaining(&self, i: usize, j: usize) -> u32 {
+        let (a, b) = if i < j { (i, j) } else { (j, i) };
+        self.dropout[a * self.positions.len() + b]
+    }
+}
