@@ -46,7 +46,7 @@ pub struct TrialMetrics {
 /// Wall-clock timings of one trial (not deterministic; reported as CT).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Timing {
-    /// Whole trial, seconds.
+    /// Simulation time of the whole trial (world, agents, policies; no rendering), seconds.
     pub trial_s: f64,
     /// Decisions taken by all robots.
     pub decisions: usize,

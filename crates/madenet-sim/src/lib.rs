@@ -17,9 +17,11 @@
 //! The same seed gives byte-identical trajectories and metrics.
 
 mod registry;
+pub mod scenario;
 mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};
+pub use scenario::{MapSource, StartSpec};
 pub use trial::{StepRecord, Trial, TrialResult, TrialSpec};
 
 /// Errors setting up a trial; messages name the field at fault.

@@ -59,7 +59,8 @@ pub struct Trial {
     recorder: MetricsRecorder,
     trajectory: Vec<StepRecord>,
     record: bool,
-    started: Instant,
+    /// Wall time spent inside `step`.
+    elapsed: std::time::Duration,
     decided: Vec<bool>,
     moves: Vec<Move>,
 }
@@ -91,7 +92,7 @@ impl Trial {
             agents,
             trajectory: Vec::new(),
             record: false,
-            started: Instant::now(),
+            elapsed: std::time::Duration::ZERO,
             decided: vec![false; n],
             moves: vec![Move::Stay; n],
         })
@@ -118,6 +119,7 @@ impl Trial {
         if self.world.is_done() {
             return false;
         }
+        let started = Instant::now();
         let n = self.agents.len();
         // 1. observe
         for (i, a) in self.agents.iter_mut().enumerate() {
@@ -164,6 +166,7 @@ impl Trial {
         self.world.step(&self.moves);
         let team_distance: f64 = self.world.distances().iter().sum();
         self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len());
+        self.elapsed += started.elapsed();
         if self.record {
             self.trajectory.push(StepRecord {
                 t: self.world.t(),
@@ -197,7 +200,7 @@ impl Trial {
             metrics: self.recorder.finish(self.world.is_complete()),
             trajectory: self.trajectory,
             timing: Timing {
-                trial_s: self.started.elapsed().as_secs_f64(),
+                trial_s: self.elapsed.as_secs_f64(),
                 decisions,
                 per_decision_s: if decisions > 0 { decision_s / decisions as f64 } else { 0.0 },
             },

@@ -1,0 +1,159 @@
+//! `madenet batch`: many trials in parallel, one CSV row each.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
+use madenet_metrics::COVERAGE_LEVELS;
+use madenet_sim::{MapSource, PolicyRegistry, StartSpec, Trial, TrialResult, TrialSpec};
+use rayon::prelude::*;
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct BatchArgs {
+    /// Maps (comma-separated): `paper` for all 10 paper maps, `paper:N`, `generate:SEED`, or files.
+    #[arg(long, value_delimiter = ',', default_value = "paper")]
+    maps: Vec<String>,
+    /// Starts (comma-separated): `all` for the four corners, or corner names.
+    #[arg(long, value_delimiter = ',', default_value = "all")]
+    starts: Vec<String>,
+    /// Policy name.
+    #[arg(long, default_value = "nf")]
+    policy: String,
+    /// Communication success probabilities (comma-separated).
+    #[arg(long, value_delimiter = ',', default_value = "1.0")]
+    csp: Vec<f64>,
+    /// Seeds per (map, start, CSP): `seed-base`, `seed-base + 1`, …
+    #[arg(long, default_value_t = 1)]
+    seeds: u64,
+    #[arg(long, default_value_t = 1)]
+    seed_base: u64,
+    /// Scenario config (TOML).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Output CSV (written atomically).
+    #[arg(long, default_value = "batch.csv")]
+    out: PathBuf,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+pub fn run(a: BatchArgs) -> Result<()> {
+    let base = crate::load_config(a.config.as_deref())?;
+    let registry = PolicyRegistry::builtin();
+    if !registry.names().contains(&a.policy) {
+        bail!("unknown policy `{}` (field `--policy`); known policies: {}", a.policy, registry.names().join(", "));
+    }
+    let mut maps = Vec::new();
+    for m in &a.maps {
+        if m == "paper" {
+            maps.extend((1..=PAPER_MAP_COUNT).map(MapSource::Paper));
+        } else {
+            maps.push(m.parse::<MapSource>().map_err(anyhow::Error::msg).context("--maps")?);
+        }
+    }
+    let mut starts = Vec::new();
+    for s in &a.starts {
+        if s == "all" {
+            starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
+        } else {
+            starts.push(s.parse::<StartSpec>().map_err(anyhow::Error::msg).context("--starts")?);
+        }
+    }
+    let mut specs = Vec::new();
+    for source in &maps {
+        let map = source.load(&base)?;
+        for start in &starts {
+            for &csp in &a.csp {
+                let mut cfg = base.clone();
+                cfg.comm_success_prob = csp;
+                cfg.validate().context("--csp")?;
+                for k in 0..a.seeds {
+                    specs.push((
+                        start.name(),
+                        TrialSpec {
+                            map: map.clone(),
+                            map_name: source.name(),
+                            starts: start.cells(map.height(), map.width()),
+                            config: cfg.clone(),
+                            policy: a.policy.clone(),
+                            seed: a.seed_base + k,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    let bar = ProgressBar::new(specs.len() as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}").expect("valid template"));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build()?;
+    let started = std::time::Instant::now();
+    let results: Vec<Result<(String, TrialResult)>> = pool.install(|| {
+        specs
+            .into_par_iter()
+            .map(|(start, spec)| {
+                let label = format!("map {}, start {start}", spec.map_name);
+                let r = Trial::with_registry(spec, &registry).with_context(|| label)?.run();
+                bar.inc(1);
+                Ok((start, r))
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let elapsed = started.elapsed();
+    let results: Vec<(String, TrialResult)> = results.into_iter().collect::<Result<_>>()?;
+    write_csv(&a.out, &results)?;
+    println!("{} trials in {:.2} s → {}", results.len(), elapsed.as_secs_f64(), a.out.display());
+    for &csp in &a.csp {
+        let sel: Vec<&TrialResult> = results.iter().map(|(_, r)| r).filter(|r| r.comm_success_prob == csp).collect();
+        let n = sel.len().max(1) as f64;
+        let mean = |f: &dyn Fn(&TrialResult) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
+        println!(
+            "csp {csp:.2}: completed {}/{}  TNS {:.1}  TTD {:.1} m  NOLI {:.1}  OFV {:.2}",
+            sel.iter().filter(|r| r.metrics.completed).count(),
+            sel.len(),
+            mean(&|r| r.metrics.tns as f64),
+            mean(&|r| r.metrics.ttd),
+            mean(&|r| r.metrics.noli as f64),
+            mean(&|r| r.metrics.ofv),
+        );
+    }
+    Ok(())
+}
+
+fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> Result<()> {
+    let tmp = path.with_extension("csv.tmp");
+    let file = std::fs::File::create(&tmp).with_context(|| format!("{}", tmp.display()))?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
+    let mut header: Vec<String> =
+        ["map", "start", "policy", "csp", "seed", "completed", "tns", "ttd", "noli", "ofv", "explored"].map(String::from).to_vec();
+    header.extend(COVERAGE_LEVELS.iter().map(|n| format!("to_{n}")));
+    header.extend(["trial_s", "decisions", "per_decision_s"].map(String::from));
+    w.write_record(&header)?;
+    for (start, r) in results {
+        let m = &r.metrics;
+        let mut row = vec![
+            r.map.clone(),
+            start.clone(),
+            r.policy.clone(),
+            r.comm_success_prob.to_string(),
+            r.seed.to_string(),
+            m.completed.to_string(),
+            m.tns.to_string(),
+            format!("{:.6}", m.ttd),
+            m.noli.to_string(),
+            format!("{:.6}", m.ofv),
+            format!("{:.6}", m.explored),
+        ];
+        row.extend(m.steps_to.iter().map(|s| s.map(|v| v.to_string()).unwrap_or_default()));
+        row.extend([format!("{:.6}", r.timing.trial_s), r.timing.decisions.to_string(), format!("{:.9}", r.timing.per_decision_s)]);
+        w.write_record(&row)?;
+    }
+    let mut inner = w.into_inner().map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
+    inner.flush()?;
+    drop(inner);
+    std::fs::rename(&tmp, path).with_context(|| format!("{}", path.display()))?;
+    Ok(())
+}

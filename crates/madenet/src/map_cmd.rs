@@ -1,0 +1,83 @@
+//! `madenet map`: convert, generate and show maps.
+
+use anyhow::{Context, Result};
+use clap::Subcommand;
+use madenet_map::generate::{generate, is_connected, GeneratorConfig};
+use madenet_map::io::{save, to_text};
+use madenet_map::Occupancy;
+use madenet_sim::MapSource;
+use std::path::PathBuf;
+
+#[derive(Subcommand, Debug)]
+pub enum MapCommand {
+    /// Convert a map between formats (by extension: .yaml/.yml, .pgm, .png, .txt/.map).
+    Convert {
+        /// Input map: a file, `paper:N` or `generate:SEED`.
+        input: MapSource,
+        output: PathBuf,
+        /// Scenario config whose `cell_size` and `discretize` rule apply when reading.
+        #[arg(long)]
+        config: Option<PathBuf>,
+    },
+    /// Generate a random map.
+    Generate {
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Rows.
+        #[arg(long, default_value_t = 20)]
+        height: usize,
+        /// Columns.
+        #[arg(long, default_value_t = 20)]
+        width: usize,
+        /// Minimum obstacle density.
+        #[arg(long, default_value_t = 0.15)]
+        density_min: f64,
+        /// Maximum obstacle density.
+        #[arg(long, default_value_t = 0.40)]
+        density_max: f64,
+        /// Output file (format by extension).
+        output: PathBuf,
+    },
+    /// Print a map as text with its statistics.
+    Show {
+        /// A file, `paper:N` or `generate:SEED`.
+        input: MapSource,
+        #[arg(long)]
+        config: Option<PathBuf>,
+    },
+}
+
+pub fn run(c: MapCommand) -> Result<()> {
+    match c {
+        MapCommand::Convert { input, output, config } => {
+            let cfg = crate::load_config(config.as_deref())?;
+            let grid = input.load(&cfg)?;
+            save(&grid, &output)?;
+            println!("wrote {} ({}×{})", output.display(), grid.height(), grid.width());
+        }
+        MapCommand::Generate { seed, height, width, density_min, density_max, output } => {
+            let cfg = GeneratorConfig { density_min, density_max, ..GeneratorConfig::for_size(height, width) };
+            let grid = generate(&cfg, seed).context("map generate")?;
+            save(&grid, &output)?;
+            println!("wrote {} ({}×{}, obstacle density {:.2})", output.display(), height, width, grid.obstacle_density());
+        }
+        MapCommand::Show { input, config } => {
+            let cfg = crate::load_config(config.as_deref())?;
+            let grid = input.load(&cfg)?;
+            print!("{}", to_text(&grid));
+            println!(
+                "{}: {}×{} cells of {} m, {} free, {} obstacle, {} unknown, density {:.3}, free space connected: {}",
+                input.name(),
+                grid.height(),
+                grid.width(),
+                grid.resolution,
+                grid.count(Occupancy::Free),
+                grid.count(Occupancy::Obstacle),
+                grid.count(Occupancy::Unknown),
+                grid.obstacle_density(),
+                is_connected(&grid)
+            );
+        }
+    }
+    Ok(())
+}

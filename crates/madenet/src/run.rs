@@ -1,0 +1,109 @@
+//! `madenet run`: one trial.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use madenet_render::{GifWriter, RenderOptions};
+use madenet_sim::{MapSource, PolicyRegistry, StartSpec, Trial, TrialSpec};
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), or `generate:SEED`.
+    #[arg(long, default_value = "paper:1", conflicts_with = "generate")]
+    map: MapSource,
+    /// Use a generated map with this seed (same as `--map generate:SEED`).
+    #[arg(long, value_name = "SEED")]
+    generate: Option<u64>,
+    /// Start: top-left, top-right, bottom-left, bottom-right, or cells `r,c;r,c;r,c`.
+    #[arg(long, default_value = "top-left")]
+    start: StartSpec,
+    /// Policy name (see `madenet policies`).
+    #[arg(long, default_value = "nf")]
+    policy: String,
+    /// Communication success probability (overrides the config).
+    #[arg(long)]
+    csp: Option<f64>,
+    /// Trial seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Scenario config (TOML); defaults are the paper's values.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Print the result as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Include the per-step trajectory in the JSON output.
+    #[arg(long, requires = "json")]
+    trajectory: bool,
+    /// Write an animated GIF of the trial.
+    #[arg(long, value_name = "GIF")]
+    render: Option<PathBuf>,
+    /// Write a PNG of the final state.
+    #[arg(long, value_name = "PNG")]
+    snapshot: Option<PathBuf>,
+    /// Pixels per cell in pictures.
+    #[arg(long, default_value_t = 16)]
+    cell_px: u32,
+    /// GIF frame delay in milliseconds.
+    #[arg(long, default_value_t = 150)]
+    delay_ms: u32,
+}
+
+pub fn run(a: RunArgs) -> Result<()> {
+    let mut cfg = crate::load_config(a.config.as_deref())?;
+    if let Some(csp) = a.csp {
+        cfg.comm_success_prob = csp;
+        cfg.validate().context("--csp")?;
+    }
+    let source = a.generate.map(MapSource::Generated).unwrap_or(a.map);
+    let map = source.load(&cfg)?;
+    let starts = a.start.cells(map.height(), map.width());
+    let spec = TrialSpec {
+        starts,
+        map_name: source.name(),
+        map,
+        config: cfg,
+        policy: a.policy.clone(),
+        seed: a.seed,
+    };
+    let mut trial = Trial::with_registry(spec, &PolicyRegistry::builtin())
+        .with_context(|| format!("map {}, start {}", source.name(), a.start.name()))?
+        .record_trajectory(a.trajectory);
+    let opts = RenderOptions { cell_px: a.cell_px, ..Default::default() };
+    let mut gif = match &a.render {
+        Some(p) => Some(GifWriter::new(p, &opts, a.delay_ms)?),
+        None => None,
+    };
+    if let Some(g) = gif.as_mut() {
+        g.push(&crate::frames::frame(&trial))?;
+    }
+    while trial.step() {
+        if let Some(g) = gif.as_mut() {
+            g.push(&crate::frames::frame(&trial))?;
+        }
+    }
+    if let Some(p) = &a.snapshot {
+        madenet_render::save_png(&crate::frames::frame(&trial), &opts, p)?;
+    }
+    if let Some(g) = gif {
+        g.finish()?;
+    }
+    let result = trial.finish();
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&result)?);
+    } else {
+        let m = &result.metrics;
+        println!("map {}  start {}  policy {}  csp {}  seed {}", result.map, a.start.name(), result.policy, result.comm_success_prob, result.seed);
+        println!("completed  {}", m.completed);
+        println!("TNS        {} steps", m.tns);
+        println!("TTD        {:.2} m", m.ttd);
+        println!("NOLI       {}", m.noli);
+        println!("OFV        {:.3}", m.ofv);
+        println!("explored   {:.1} %", 100.0 * m.explored);
+        println!("CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)", 1e3 * result.timing.trial_s, 1e6 * result.timing.per_decision_s, result.timing.decisions);
+        for p in a.render.iter().chain(a.snapshot.iter()) {
+            println!("wrote      {}", p.display());
+        }
+    }
+    Ok(())
+}
