@@ -8,7 +8,7 @@ use crate::messages::{Beta, PlanMessage, TeammateRecord};
 use crate::policy::{Decision, DecisionMode, Policy};
 use crate::view::AgentView;
 use madenet_map::Pos;
-use madenet_nav::{astar, space_time_astar, Dijkstra, Reservations};
+use madenet_nav::{astar, Dijkstra, Reservations, SpaceTimePlanner};
 use madenet_world::{ConfigError, Move, Observation, ScenarioConfig};
 use std::time::{Duration, Instant};
 
@@ -65,7 +65,9 @@ pub struct AgentStats {
     pub decisions: usize,
     pub decision_time: Duration,
     pub plan_time: Duration,
+    /// Space-time searches run, and how many found no plan.
     pub space_time_plans: usize,
+    pub space_time_failures: usize,
 }
 
 /// One robot.
@@ -84,6 +86,8 @@ pub struct Agent {
     dijkstra: Dijkstra,
     dijkstra_fresh: bool,
     reservations: Reservations,
+    space_time: SpaceTimePlanner,
+    scratch: Vec<Pos>,
     path: Vec<Pos>,
     path_ready: bool,
     policy: Box<dyn Policy>,
@@ -110,6 +114,8 @@ impl Agent {
             dijkstra: Dijkstra::new(h, w),
             dijkstra_fresh: false,
             reservations: Reservations::new(h, w, cfg.plan_horizon),
+            space_time: SpaceTimePlanner::new(h, w, cfg.plan_horizon),
+            scratch: Vec::new(),
             path: Vec::new(),
             path_ready: false,
             policy,
@@ -150,6 +156,10 @@ impl Agent {
     }
     pub fn stats(&self) -> &AgentStats {
         &self.stats
+    }
+    /// States expanded by this agent's space-time searches so far.
+    pub fn space_time_expanded(&self) -> u64 {
+        self.space_time.expanded
     }
     /// Why the macro action ended this timestep (None: it goes on).
     pub fn termination(&self) -> Option<Termination> {
@@ -359,10 +369,12 @@ impl Agent {
             }
         }
         if !self.path.is_empty() && !self.reservations.is_empty() && self.reservations.conflicts(self.pos, &self.path) {
-            if let Some(p) = space_time_astar(self.pos, goal, passable, belief.movement(), &self.reservations) {
-                self.path = p;
-                self.stats.space_time_plans += 1;
+            if self.space_time.plan(self.pos, goal, passable, belief.movement(), &self.reservations, &mut self.scratch) {
+                std::mem::swap(&mut self.path, &mut self.scratch);
+            } else {
+                self.stats.space_time_failures += 1;
             }
+            self.stats.space_time_plans += 1;
         }
         self.stats.plan_time += start.elapsed();
     }

@@ -16,6 +16,9 @@ pub struct Belief {
     known: usize,
     frontier: Vec<bool>,
     frontier_count: usize,
+    /// Unknown in-bounds 8-neighbours of each cell (kept for the default movement rule, where
+    /// a free cell is a frontier exactly when this is non-zero).
+    unknown_neighbours: Vec<u8>,
     movement: Movement,
 }
 
@@ -28,6 +31,18 @@ impl Belief {
             known: 0,
             frontier: vec![false; width * height],
             frontier_count: 0,
+            unknown_neighbours: (0..width * height)
+                .map(|i| {
+                    let (r, c) = ((i / width) as i32, (i % width) as i32);
+                    NEIGHBOURS
+                        .iter()
+                        .filter(|&&(dr, dc)| {
+                            let (nr, nc) = (r + dr, c + dc);
+                            nr >= 0 && nc >= 0 && (nr as usize) < height && (nc as usize) < width
+                        })
+                        .count() as u8
+                })
+                .collect(),
             movement,
         }
     }
@@ -83,6 +98,11 @@ impl Belief {
     pub fn is_frontier(&self, p: Pos) -> bool {
         self.in_bounds(p) && self.frontier[self.index(p)]
     }
+    /// Frontier flag by row-major index.
+    #[inline]
+    pub fn is_frontier_index(&self, i: usize) -> bool {
+        self.frontier[i]
+    }
     /// All frontier cells in row-major order.
     pub fn frontier_cells(&self) -> impl Iterator<Item = Pos> + '_ {
         self.frontier.iter().enumerate().filter(|(_, &f)| f).map(|(i, _)| self.pos(i))
@@ -98,12 +118,25 @@ impl Belief {
         }
         self.map[i] = occ;
         self.known += 1;
-        self.refresh_frontier(p);
+        let strict = self.movement == Movement::NoCornerCutting;
         for (dr, dc) in NEIGHBOURS {
             let q = Pos::new(p.row + dr, p.col + dc);
             if self.in_bounds(q) {
-                self.refresh_frontier(q);
+                let j = self.index(q);
+                self.unknown_neighbours[j] -= 1;
+                if strict {
+                    self.refresh_frontier(q);
+                } else if self.unknown_neighbours[j] == 0 && self.frontier[j] {
+                    self.frontier[j] = false;
+                    self.frontier_count -= 1;
+                }
             }
+        }
+        if strict {
+            self.refresh_frontier(p);
+        } else if occ == Occupancy::Free && self.unknown_neighbours[i] > 0 {
+            self.frontier[i] = true;
+            self.frontier_count += 1;
         }
         true
     }

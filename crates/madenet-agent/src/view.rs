@@ -41,10 +41,21 @@ impl<'a> AgentView<'a> {
     /// held by a teammate detected now (the robot's own cell excluded; ties to the lower
     /// row-major index).
     pub fn nearest_frontier(&mut self) -> Option<Pos> {
-        let (belief, from, mates) = (self.belief, self.pos, self.teammates);
-        let held = |p: Pos| mates.iter().any(|r| r.detected && r.seen_pos == Some(p));
+        let (belief, from) = (self.belief, self.pos);
+        let mut held = [usize::MAX; 8];
+        let mut n_held = 0;
+        for p in self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).take(8) {
+            held[n_held] = belief.index(p);
+            n_held += 1;
+        }
+        let held = &held[..n_held];
+        let (map, own) = (belief.map(), belief.index(from));
         *self.dijkstra_fresh = true;
-        self.dijkstra.run(from, |p| belief.is_free(p) && !held(p), belief.movement(), |p| p != from && belief.is_frontier(p))
+        self.dijkstra
+            .run_indexed(from, |i| map[i] == Occupancy::Free && !held.contains(&i), belief.movement(), |i| {
+                i != own && belief.is_frontier_index(i)
+            })
+            .map(|i| belief.pos(i))
     }
 
     /// Path cost in cells from the robot to every known-free cell, computed once (full

@@ -103,6 +103,11 @@ impl MetricsRecorder {
 /// first moving step get that step's distance (no interpolation from zero distance).
 pub fn distance_at(p: f64, explored: &[f64], distance: &[f64]) -> Option<f64> {
     let k = explored.iter().position(|&e| e >= p)?;
+    distance_at_step(p, k, explored, distance)
+}
+
+/// [`distance_at`] given `k`, the first step whose coverage reaches `p`.
+fn distance_at_step(p: f64, k: usize, explored: &[f64], distance: &[f64]) -> Option<f64> {
     if k == 0 {
         return Some(distance[0]);
     }
@@ -123,14 +128,43 @@ pub fn distance_at(p: f64, explored: &[f64], distance: &[f64]) -> Option<f64> {
 /// at zero distance (already covered by the first observation) are skipped, since p / 0 is
 /// undefined.
 pub fn ofv(explored: &[f64], distance: &[f64]) -> f64 {
+    // Levels ascend, so the first step reaching each level only moves forward: one pass
+    // over the levels, with D(p) = d0 + (p − e0)·slope inside each step's segment.
     let mut sum = 0.0;
-    for k in 0..=9000u32 {
-        let p = 0.1 + k as f64 * 1e-4;
-        if let Some(d) = distance_at(p, explored, distance) {
+    let mut k = 0;
+    let mut level = 0u32;
+    while level <= 9000 && k < explored.len() {
+        let p = 0.1 + level as f64 * 1e-4;
+        if explored[k] < p {
+            k += 1;
+            continue;
+        }
+        // Levels up to explored[k] are first reached at step k.
+        let (base, slope) = match k {
+            0 => (distance[0], 0.0),
+            _ if distance[k - 1] <= 0.0 => (distance[k], 0.0),
+            _ => {
+                let (e0, e1, d0, d1) = (explored[k - 1], explored[k], distance[k - 1], distance[k]);
+                if e1 > e0 {
+                    let s = (d1 - d0) / (e1 - e0);
+                    (d0 - e0 * s, s)
+                } else {
+                    (d1, 0.0)
+                }
+            }
+        };
+        while level <= 9000 {
+            let p = 0.1 + level as f64 * 1e-4;
+            if p > explored[k] {
+                break;
+            }
+            let d = base + p * slope;
             if d > 0.0 {
                 sum += p / d;
             }
+            level += 1;
         }
+        k += 1;
     }
     sum
 }

@@ -1,6 +1,6 @@
 //! Flat-array Dijkstra with early exit and reusable buffers.
 
-use crate::neighbours;
+use crate::{DIAGONAL, STRAIGHT};
 use madenet_map::{Movement, Pos};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -16,11 +16,24 @@ pub struct Dijkstra {
     seen: Vec<u32>,
     settled: Vec<u32>,
     generation: u32,
-    heap: BinaryHeap<Reverse<(u32, u32)>>,
+    /// Min-heap of `cost << 32 | cell` (one integer compare per sift).
+    heap: BinaryHeap<Reverse<u64>>,
     source: Option<Pos>,
 }
 
 const NONE: u32 = u32::MAX;
+
+/// The 8 moves as (Δrow, Δcol, cost).
+const STEPS: [(isize, isize, u32); 8] = [
+    (-1, 0, STRAIGHT),
+    (0, 1, STRAIGHT),
+    (1, 0, STRAIGHT),
+    (0, -1, STRAIGHT),
+    (-1, 1, DIAGONAL),
+    (1, 1, DIAGONAL),
+    (1, -1, DIAGONAL),
+    (-1, -1, DIAGONAL),
+];
 
 impl Dijkstra {
     pub fn new(height: usize, width: usize) -> Self {
@@ -62,6 +75,20 @@ impl Dijkstra {
         movement: Movement,
         mut stop: impl FnMut(Pos) -> bool,
     ) -> Option<Pos> {
+        let w = self.width;
+        let at = move |i: usize| Pos::new((i / w) as i32, (i % w) as i32);
+        self.run_indexed(source, move |i| passable(at(i)), movement, |i| stop(at(i))).map(at)
+    }
+
+    /// [`Dijkstra::run`] with cells as row-major indices: the hot loop of the classical
+    /// baselines, on index arithmetic only. `passable` is only asked about in-bounds cells.
+    pub fn run_indexed(
+        &mut self,
+        source: Pos,
+        passable: impl Fn(usize) -> bool + Copy,
+        movement: Movement,
+        mut stop: impl FnMut(usize) -> bool,
+    ) -> Option<usize> {
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
             self.seen.fill(0);
@@ -75,27 +102,37 @@ impl Dijkstra {
         self.dist[s] = 0;
         self.parent[s] = NONE;
         self.seen[s] = g;
-        self.heap.push(Reverse((0, s as u32)));
-        let inb = |p: Pos| p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width;
-        let pass = move |p: Pos| inb(p) && passable(p);
-        while let Some(Reverse((d, u))) = self.heap.pop() {
-            let u = u as usize;
+        self.heap.push(Reverse(s as u64));
+        let (w, h) = (self.width as isize, self.height as isize);
+        let strict = movement == Movement::NoCornerCutting;
+        while let Some(Reverse(key)) = self.heap.pop() {
+            let (d, u) = ((key >> 32) as u32, (key & 0xffff_ffff) as usize);
             if self.settled[u] == g || d > self.dist[u] {
                 continue;
             }
             self.settled[u] = g;
-            let p = self.pos(u);
-            if stop(p) {
-                return Some(p);
+            if stop(u) {
+                return Some(u);
             }
-            for (q, c) in neighbours(p, pass, movement) {
-                let v = self.idx(q);
-                let nd = d + c;
+            let (r, c) = ((u as isize) / w, (u as isize) % w);
+            for &(dr, dc, cost) in &STEPS {
+                let (nr, nc) = (r + dr, c + dc);
+                if nr < 0 || nc < 0 || nr >= h || nc >= w {
+                    continue;
+                }
+                let v = (nr * w + nc) as usize;
+                if !passable(v) {
+                    continue;
+                }
+                if strict && dr != 0 && dc != 0 && !(passable((r * w + nc) as usize) && passable((nr * w + c) as usize)) {
+                    continue;
+                }
+                let nd = d + cost;
                 if self.seen[v] != g || nd < self.dist[v] {
                     self.seen[v] = g;
                     self.dist[v] = nd;
                     self.parent[v] = u as u32;
-                    self.heap.push(Reverse((nd, v as u32)));
+                    self.heap.push(Reverse(((nd as u64) << 32) | v as u64));
                 }
             }
         }

@@ -6,7 +6,8 @@
 //!   this runs for every robot at every timestep in the classical baselines.
 //! * [`astar`] — A* on a robot's known-free cells with the admissible octile heuristic, on the
 //!   `pathfinding` crate's generic A*.
-//! * [`Reservations`] and [`space_time_astar`] — spatial-temporal A* for prioritized planning:
+//! * [`Reservations`] and [`space_time_astar`] / [`SpaceTimePlanner`] — spatial-temporal A*
+//!   (on flat arrays, see [`SpaceTimePlanner`] for why) for prioritized planning:
 //!   higher-priority robots' plans are reserved as (cell, time) and a later robot plans around
 //!   them, waiting being an action. This resolves the corridor and head-on deadlocks that
 //!   plain A* leaves.
@@ -19,7 +20,7 @@ mod dijkstra;
 mod spacetime;
 
 pub use dijkstra::Dijkstra;
-pub use spacetime::{space_time_astar, Reservations, WAIT_COST};
+pub use spacetime::{space_time_astar, Reservations, SpaceTimePlanner, WAIT_COST};
 
 pub use madenet_map::Movement;
 use madenet_map::Pos;
