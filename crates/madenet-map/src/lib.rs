@@ -199,9 +199,9 @@ impl OccGrid {
         self.get(p) == Occupancy::Free
     }
     /// Whether a robot may move from `from` to `to` in one step under the default rule
-    /// ([`Movement::NoCornerCutting`]): `to` must be one of the 8 neighbours of `from` and
-    /// free, and a diagonal step additionally needs both orthogonal cells it passes to be free.
-    /// `from` itself is not checked.
+    /// ([`Movement::CornerCutting`]): `to` must be one of the 8 neighbours of `from` and free
+    /// (under [`Movement::NoCornerCutting`] a diagonal step also needs both orthogonal cells
+    /// it passes to be free). `from` itself is not checked.
     pub fn can_step(&self, from: Pos, to: Pos) -> bool {
         self.can_step_with(from, to, Movement::default())
     }

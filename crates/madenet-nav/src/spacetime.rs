@@ -147,6 +147,8 @@ pub struct SpaceTimePlanner {
     heap: BinaryHeap<Reverse<(u32, u32, u32)>>,
     /// Exact distances to the goal ignoring reservations: the A* heuristic.
     to_goal: Dijkstra,
+    /// `goal_free_from[t]`: the goal is unreserved from t to the horizon.
+    goal_free_from: Vec<bool>,
     /// States expanded over all searches so far (a cost counter for benchmarks).
     pub expanded: u64,
 }
@@ -165,6 +167,7 @@ impl SpaceTimePlanner {
             generation: 0,
             heap: BinaryHeap::new(),
             to_goal: Dijkstra::new(height, width),
+            goal_free_from: Vec::new(),
             expanded: 0,
         }
     }
@@ -218,6 +221,13 @@ impl SpaceTimePlanner {
         self.parent[s0 as usize] = u32::MAX;
         self.seen[s0 as usize] = gen;
         self.heap.clear();
+        self.goal_free_from.clear();
+        self.goal_free_from.resize(h + 1, true);
+        let mut free = true;
+        for t in (0..=h).rev() {
+            free &= !res.is_reserved(goal, t);
+            self.goal_free_from[t] = free;
+        }
         let h0 = self.to_goal.settled_cost(start).unwrap_or(0);
         self.heap.push(Reverse((h0, h0, s0)));
         let mut found = None;
@@ -230,7 +240,9 @@ impl SpaceTimePlanner {
             self.expanded += 1;
             let (t, c) = (si / cells, si % cells);
             let p = Pos::new((c / w) as i32, (c % w) as i32);
-            if p == goal {
+            // The robot parks at its goal: arriving counts only if nobody of higher priority
+            // passes through the goal afterwards, up to the horizon.
+            if p == goal && self.goal_free_from[t] {
                 found = Some(s);
                 break;
             }

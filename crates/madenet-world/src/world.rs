@@ -58,7 +58,13 @@ pub struct World {
     executed: Vec<Move>,
     distance: Vec<f64>,
     targets: Vec<Pos>,
+    /// Per cell, the range of `visible` holding the cells visible from it (ignoring misses),
+    /// cast on first use: robots revisit cells, and rays are the costly part of sensing.
+    visible_range: Vec<(u32, u32)>,
+    visible: Vec<u32>,
 }
+
+const NOT_CAST: (u32, u32) = (u32::MAX, 0);
 
 impl World {
     /// Builds the world and performs the initial sensing and contact stage (t = 0).
@@ -98,6 +104,8 @@ impl World {
             executed: vec![Move::Stay; n],
             distance: vec![0.0; n],
             targets: Vec::with_capacity(n),
+            visible_range: vec![NOT_CAST; cells],
+            visible: Vec::new(),
             positions: starts.to_vec(),
             t: 0,
             view,
@@ -235,25 +243,19 @@ impl World {
         let miss = self.cfg.sensor_miss_prob;
         for i in 0..self.positions.len() {
             let at = self.positions[i];
+            let (start, end) = self.visible_from(at);
             let mut obs = std::mem::take(&mut self.obs[i]);
             obs.t = self.t;
             obs.pos = at;
             obs.seen.clear();
             obs.seen.push((at, Occupancy::Free));
             let rng = &mut self.rng_sensor[i];
-            let truth = &self.truth;
-            let blocked = &self.blocked;
-            let w = truth.width();
-            self.view.for_each_visible(
-                at,
-                |q| truth.in_bounds(q),
-                |q| blocked[q.row as usize * w + q.col as usize],
-                |q| {
-                    if rng.random::<f64>() >= miss {
-                        obs.seen.push((q, truth.get(q)));
-                    }
-                },
-            );
+            for &k in &self.visible[start as usize..end as usize] {
+                if rng.random::<f64>() >= miss {
+                    let k = k as usize;
+                    obs.seen.push((self.truth.pos(k), self.truth.cells()[k]));
+                }
+            }
             for &(q, occ) in &obs.seen {
                 let k = self.truth.index(q);
                 if self.team_map[k] == Occupancy::Unknown {
@@ -263,6 +265,20 @@ impl World {
             }
             self.obs[i] = obs;
         }
+    }
+
+    /// The range of `self.visible` listing the cells visible from `at`, cast on first use.
+    fn visible_from(&mut self, at: Pos) -> (u32, u32) {
+        let i = self.truth.index(at);
+        if self.visible_range[i] == NOT_CAST {
+            let start = self.visible.len() as u32;
+            let (truth, blocked, visible) = (&self.truth, &self.blocked, &mut self.visible);
+            self.view.for_each_visible(at, |q| truth.in_bounds(q), |q| blocked[truth.index(q)], |q| {
+                visible.push(truth.index(q) as u32)
+            });
+            self.visible_range[i] = (start, self.visible.len() as u32);
+        }
+        self.visible_range[i]
     }
 
     /// Contact and communication stage. Robots within Chebyshev distance d_s and in line of
