@@ -223,3 +223,16 @@ mod tests {
         assert!(e.contains("line 1"), "{e}");
     }
 }
+
+#[cfg(test)]
+mod shipped_config {
+    use super::*;
+
+    /// The documented example config in `configs/scenario.toml` lists exactly the defaults.
+    #[test]
+    fn shipped_example_equals_defaults() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/scenario.toml");
+        let cfg = ScenarioConfig::from_toml_file(&path).expect("shipped config parses");
+        assert_eq!(cfg, ScenarioConfig::default());
+    }
+}

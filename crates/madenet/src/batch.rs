@@ -105,12 +105,12 @@ pub fn run(a: BatchArgs) -> Result<()> {
     let elapsed = started.elapsed();
     let results: Vec<(String, TrialResult)> = results.into_iter().collect::<Result<_>>()?;
     write_csv(&a.out, &results)?;
-    println!("{} trials in {:.2} s → {}", results.len(), elapsed.as_secs_f64(), a.out.display());
+    out!("{} trials in {:.2} s → {}", results.len(), elapsed.as_secs_f64(), a.out.display())?;
     for &csp in &a.csp {
         let sel: Vec<&TrialResult> = results.iter().map(|(_, r)| r).filter(|r| r.comm_success_prob == csp).collect();
         let n = sel.len().max(1) as f64;
         let mean = |f: &dyn Fn(&TrialResult) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
-        println!(
+        out!(
             "csp {csp:.2}: completed {}/{}  TNS {:.1}  TTD {:.1} m  NOLI {:.1}  OFV {:.2}",
             sel.iter().filter(|r| r.metrics.completed).count(),
             sel.len(),
@@ -118,7 +118,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
             mean(&|r| r.metrics.ttd),
             mean(&|r| r.metrics.noli as f64),
             mean(&|r| r.metrics.ofv),
-        );
+        )?;
     }
     Ok(())
 }

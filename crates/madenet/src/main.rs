@@ -2,6 +2,13 @@
 //! few calls into the library crates (`madenet-sim` for trials, `madenet-map` for maps,
 //! `madenet-render` for pictures).
 
+/// `println!` that returns the write error instead of panicking (e.g. on a closed pipe).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        crate::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod batch;
 mod frames;
 mod map_cmd;
@@ -36,20 +43,28 @@ fn main() -> ExitCode {
         Command::Run(a) => run::run(a),
         Command::Batch(a) => batch::run(a),
         Command::Map(c) => map_cmd::run(c),
-        Command::Policies => {
-            for (name, about) in madenet_sim::PolicyRegistry::builtin().describe() {
-                println!("{name:<10} {about}");
-            }
-            Ok(())
-        }
+        Command::Policies => madenet_sim::PolicyRegistry::builtin()
+            .describe()
+            .into_iter()
+            .try_for_each(|(name, about)| out!("{name:<10} {about}").map_err(anyhow::Error::from)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // A closed pipe (`madenet … | head`) is a normal end, not an error.
+        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) => {
+            ExitCode::SUCCESS
+        }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
             ExitCode::from(2)
         }
     }
+}
+
+/// Writes to stdout, reporting failures as errors.
+pub fn write_out(args: std::fmt::Arguments<'_>) -> std::io::Result<()> {
+    use std::io::Write;
+    std::io::stdout().lock().write_fmt(args)
 }
 
 /// The error and its causes on one line, skipping causes the message already quotes.

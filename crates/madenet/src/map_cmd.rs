@@ -53,19 +53,19 @@ pub fn run(c: MapCommand) -> Result<()> {
             let cfg = crate::load_config(config.as_deref())?;
             let grid = input.load(&cfg)?;
             save(&grid, &output)?;
-            println!("wrote {} ({}×{})", output.display(), grid.height(), grid.width());
+            out!("wrote {} ({}×{})", output.display(), grid.height(), grid.width())?;
         }
         MapCommand::Generate { seed, height, width, density_min, density_max, output } => {
             let cfg = GeneratorConfig { density_min, density_max, ..GeneratorConfig::for_size(height, width) };
             let grid = generate(&cfg, seed).context("map generate")?;
             save(&grid, &output)?;
-            println!("wrote {} ({}×{}, obstacle density {:.2})", output.display(), height, width, grid.obstacle_density());
+            out!("wrote {} ({}×{}, obstacle density {:.2})", output.display(), height, width, grid.obstacle_density())?;
         }
         MapCommand::Show { input, config } => {
             let cfg = crate::load_config(config.as_deref())?;
             let grid = input.load(&cfg)?;
-            print!("{}", to_text(&grid));
-            println!(
+            crate::write_out(format_args!("{}", to_text(&grid)))?;
+            out!(
                 "{}: {}×{} cells of {} m, {} free, {} obstacle, {} unknown, density {:.3}, free space connected: {}",
                 input.name(),
                 grid.height(),
@@ -76,7 +76,7 @@ pub fn run(c: MapCommand) -> Result<()> {
                 grid.count(Occupancy::Unknown),
                 grid.obstacle_density(),
                 is_connected(&grid)
-            );
+            )?;
         }
     }
     Ok(())

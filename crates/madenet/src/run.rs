@@ -90,19 +90,19 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let result = trial.finish();
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&result)?);
+        out!("{}", serde_json::to_string_pretty(&result)?)?;
     } else {
         let m = &result.metrics;
-        println!("map {}  start {}  policy {}  csp {}  seed {}", result.map, a.start.name(), result.policy, result.comm_success_prob, result.seed);
-        println!("completed  {}", m.completed);
-        println!("TNS        {} steps", m.tns);
-        println!("TTD        {:.2} m", m.ttd);
-        println!("NOLI       {}", m.noli);
-        println!("OFV        {:.3}", m.ofv);
-        println!("explored   {:.1} %", 100.0 * m.explored);
-        println!("CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)", 1e3 * result.timing.trial_s, 1e6 * result.timing.per_decision_s, result.timing.decisions);
+        out!("map {}  start {}  policy {}  csp {}  seed {}", result.map, a.start.name(), result.policy, result.comm_success_prob, result.seed)?;
+        out!("completed  {}", m.completed)?;
+        out!("TNS        {} steps", m.tns)?;
+        out!("TTD        {:.2} m", m.ttd)?;
+        out!("NOLI       {}", m.noli)?;
+        out!("OFV        {:.3}", m.ofv)?;
+        out!("explored   {:.1} %", 100.0 * m.explored)?;
+        out!("CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)", 1e3 * result.timing.trial_s, 1e6 * result.timing.per_decision_s, result.timing.decisions)?;
         for p in a.render.iter().chain(a.snapshot.iter()) {
-            println!("wrote      {}", p.display());
+            out!("wrote      {}", p.display())?;
         }
     }
     Ok(())
