@@ -23,5 +23,5 @@ pub use agent::{Agent, AgentConfig, AgentStats, Termination, BLOCKED_STEPS};
 pub use belief::Belief;
 pub use goals::{extract_goals, GoalCandidates};
 pub use messages::{Beta, PlanMessage, TeammateRecord};
-pub use policy::{Decision, DecisionMode, JointPolicy, NearestFrontier, Policy, RandomCandidate};
+pub use policy::{Decision, DecisionMode, External, JointPolicy, NearestFrontier, Policy, RandomCandidate};
 pub use view::AgentView;

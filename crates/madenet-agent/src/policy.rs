@@ -45,6 +45,23 @@ pub trait JointPolicy: Send {
     fn decide(&mut self, views: &mut [AgentView<'_>], needs: &[bool], team_map: &[Occupancy]) -> Vec<Decision>;
 }
 
+/// The stand-in policy of a robot whose decisions come from outside, from a [`JointPolicy`]:
+/// it decides at macro terminations, and asked itself it idles.
+#[derive(Clone, Debug, Default)]
+pub struct External;
+
+impl Policy for External {
+    fn name(&self) -> &str {
+        "external"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, _view: &mut AgentView<'_>) -> Decision {
+        Decision::Idle
+    }
+}
+
 /// Nearest frontier (NF; Yamauchi, "A frontier-based approach for autonomous exploration",
 /// 1997): the frontier cell with the shortest path from the robot through its known free
 /// cells, re-decided every timestep as in the authors' code. Ties go to the lower row-major

@@ -92,3 +92,46 @@ impl<'a> AgentView<'a> {
         img
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::messages::TeammateRecord;
+    use madenet_map::Movement;
+
+    #[test]
+    fn map_image_channels() {
+        let mut b = Belief::new(3, 4, Movement::default());
+        b.observe(Pos::new(0, 0), Occupancy::Free);
+        b.observe(Pos::new(0, 1), Occupancy::Obstacle);
+        b.observe(Pos::new(1, 0), Occupancy::Free);
+        let teammates = vec![
+            TeammateRecord::default(),
+            TeammateRecord { seen_pos: Some(Pos::new(2, 3)), seen_at: Some(5), ..Default::default() },
+        ];
+        let candidates = GoalCandidates { slots: 4, cells: vec![Pos::new(1, 0)] };
+        let mut d = Dijkstra::new(3, 4);
+        let mut fresh = false;
+        let view = AgentView {
+            id: 0,
+            t: 5,
+            pos: Pos::new(0, 0),
+            teammate_detected: false,
+            belief: &b,
+            teammates: &teammates,
+            goal: None,
+            prev_goal: None,
+            candidates: &candidates,
+            dijkstra: &mut d,
+            dijkstra_fresh: &mut fresh,
+        };
+        let img = view.map_image();
+        let n = 12;
+        let ones = |c: usize| (0..n).filter(|&i| img[c * n + i] == 1).collect::<Vec<_>>();
+        assert_eq!(ones(0), vec![0, 1, 4]); // explored: the three known cells
+        assert_eq!(ones(1), vec![1]); // obstacles
+        assert_eq!(ones(2), vec![0, 11]); // own position and the teammate's last known one
+        assert_eq!(ones(3), vec![4]); // goal candidates
+        assert!(img.iter().all(|&v| v <= 1));
+    }
+}

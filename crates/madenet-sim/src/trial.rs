@@ -2,7 +2,7 @@
 
 use crate::registry::{PolicyContext, PolicyRegistry};
 use crate::SimError;
-use madenet_agent::{Agent, AgentConfig, Beta};
+use madenet_agent::{Agent, AgentConfig, Beta, External, JointPolicy};
 use madenet_map::{OccGrid, Pos};
 use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
 use madenet_world::{Move, ScenarioConfig, World};
@@ -63,6 +63,8 @@ pub struct Trial {
     elapsed: std::time::Duration,
     decided: Vec<bool>,
     moves: Vec<Move>,
+    /// A centralized policy deciding for every robot, if any (else each agent's own).
+    joint: Option<Box<dyn JointPolicy>>,
 }
 
 impl Trial {
@@ -95,7 +97,21 @@ impl Trial {
             elapsed: std::time::Duration::ZERO,
             decided: vec![false; n],
             moves: vec![Move::Stay; n],
+            joint: None,
         })
+    }
+
+    /// A trial whose robots are driven by one centralized policy (e.g. the CEP of centralized
+    /// training): at each step the robots whose macro action terminated get their decision
+    /// from `joint`, which sees every robot's view and the team's merged map.
+    pub fn with_joint_policy(spec: TrialSpec, joint: Box<dyn JointPolicy>) -> Result<Self, SimError> {
+        let mut registry = PolicyRegistry::default();
+        registry.register("external", "decisions from a joint policy", |_| Box::new(External));
+        let name = joint.name().to_string();
+        let mut trial = Self::with_registry(TrialSpec { policy: "external".into(), ..spec }, &registry)?;
+        trial.policy = name;
+        trial.joint = Some(joint);
+        Ok(trial)
     }
 
     /// Keep a [`StepRecord`] per timestep in the result.
@@ -144,8 +160,18 @@ impl Trial {
         // 3. decide
         for (i, a) in self.agents.iter_mut().enumerate() {
             self.decided[i] = a.needs_decision();
-            if self.decided[i] {
+            if self.decided[i] && self.joint.is_none() {
                 a.decide();
+            }
+        }
+        if let Some(joint) = self.joint.as_mut().filter(|_| self.decided.contains(&true)) {
+            let mut views: Vec<_> = self.agents.iter_mut().map(|a| a.view(true)).collect();
+            let decisions = joint.decide(&mut views, &self.decided, self.world.team_map());
+            drop(views);
+            for (i, d) in decisions.into_iter().enumerate().take(n) {
+                if self.decided[i] {
+                    self.agents[i].apply_decision(d);
+                }
             }
         }
         // 4. plan in priority order; plans go to lower-priority robots this one exchanged with.
