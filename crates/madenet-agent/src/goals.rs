@@ -49,11 +49,13 @@ pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Di
         }
         false
     });
+    // Nearest first (ties: row-major index), whatever order the search settled them in.
+    reachable.sort_by_key(|&p| (dijkstra.settled_cost(p), belief.index(p)));
     let mut out = GoalCandidates { slots, cells: Vec::with_capacity(slots) };
     if reachable.is_empty() || slots == 0 {
         return out;
     }
-    // Clusters: flood fill over reachable frontier cells. `reachable` is in settle order
+    // Clusters: flood fill over reachable frontier cells. `reachable` is sorted by path cost
     // (nearest first), so cluster 0 holds the nearest frontier cell.
     let mut label = vec![usize::MAX; belief.width() * belief.height()];
     let mut is_reach = vec![false; label.len()];

@@ -2,11 +2,15 @@
 
 use crate::{DIAGONAL, STRAIGHT};
 use madenet_map::{Movement, Pos};
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 /// Reusable single-source Dijkstra over a `height × width` grid. Buffers are kept between
 /// runs (a generation counter marks stale entries), so a run allocates nothing.
+///
+/// The priority queue is a ring of three buckets of width [`STRAIGHT`], the cheapest step
+/// (Dial's algorithm generalised): a cell can only be improved from a cell at least one
+/// bucket earlier, so when the lowest bucket comes up every cell in it has its final cost,
+/// in whatever order they are taken; and a step reaches at most two buckets ahead. This
+/// replaced a binary heap that took a third of an NF trial's time.
 #[derive(Clone, Debug)]
 pub struct Dijkstra {
     width: usize,
@@ -16,8 +20,7 @@ pub struct Dijkstra {
     seen: Vec<u32>,
     settled: Vec<u32>,
     generation: u32,
-    /// Min-heap of `cost << 32 | cell` (one integer compare per sift).
-    heap: BinaryHeap<Reverse<u64>>,
+    buckets: [Vec<u32>; 3],
     source: Option<Pos>,
 }
 
@@ -46,7 +49,7 @@ impl Dijkstra {
             seen: vec![0; n],
             settled: vec![0; n],
             generation: 0,
-            heap: BinaryHeap::with_capacity(n),
+            buckets: [Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n)],
             source: None,
         }
     }
@@ -65,9 +68,9 @@ impl Dijkstra {
         p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width
     }
 
-    /// Runs Dijkstra from `source` over `passable` cells, settling cells in order of cost
-    /// (ties by cell index) until `stop(cell)` is true for a settled cell, which is returned,
-    /// or every reachable cell is settled (returns `None`).
+    /// Runs Dijkstra from `source` over `passable` cells until a cell with `stop(cell)` is
+    /// settled — then the stopping cell of least cost (ties: lowest row-major index) is
+    /// returned — or every reachable cell is settled (returns `None`).
     pub fn run(
         &mut self,
         source: Pos,
@@ -96,47 +99,68 @@ impl Dijkstra {
             self.generation = 1;
         }
         let g = self.generation;
-        self.heap.clear();
+        for b in &mut self.buckets {
+            b.clear();
+        }
         self.source = Some(source);
         let s = self.idx(source);
         self.dist[s] = 0;
         self.parent[s] = NONE;
         self.seen[s] = g;
-        self.heap.push(Reverse(s as u64));
+        self.buckets[0].push(s as u32);
         let (w, h) = (self.width as isize, self.height as isize);
         let strict = movement == Movement::NoCornerCutting;
-        while let Some(Reverse(key)) = self.heap.pop() {
-            let (d, u) = ((key >> 32) as u32, (key & 0xffff_ffff) as usize);
-            if self.settled[u] == g || d > self.dist[u] {
-                continue;
-            }
-            self.settled[u] = g;
-            if stop(u) {
-                return Some(u);
-            }
-            let (r, c) = ((u as isize) / w, (u as isize) % w);
-            for &(dr, dc, cost) in &STEPS {
-                let (nr, nc) = (r + dr, c + dc);
-                if nr < 0 || nc < 0 || nr >= h || nc >= w {
+        let mut best: Option<(u32, usize)> = None;
+        let mut current = 0usize; // the lowest non-empty bucket, as an absolute number
+        let mut pending = 1usize; // entries in all buckets
+        while pending > 0 {
+            let slot = current % 3;
+            while let Some(u) = self.buckets[slot].pop() {
+                pending -= 1;
+                let u = u as usize;
+                if self.settled[u] == g {
+                    continue; // a stale duplicate
+                }
+                self.settled[u] = g;
+                let d = self.dist[u];
+                if stop(u) {
+                    if best.is_none_or(|(bd, bu)| (d, u) < (bd, bu)) {
+                        best = Some((d, u));
+                    }
                     continue;
                 }
-                let v = (nr * w + nc) as usize;
-                if !passable(v) {
-                    continue;
+                if best.is_some() {
+                    continue; // finishing this bucket only to find the least stopping cell
                 }
-                if strict && dr != 0 && dc != 0 && !(passable((r * w + nc) as usize) && passable((nr * w + c) as usize)) {
-                    continue;
-                }
-                let nd = d + cost;
-                if self.seen[v] != g || nd < self.dist[v] {
-                    self.seen[v] = g;
-                    self.dist[v] = nd;
-                    self.parent[v] = u as u32;
-                    self.heap.push(Reverse(((nd as u64) << 32) | v as u64));
+                let (r, c) = ((u as isize) / w, (u as isize) % w);
+                for &(dr, dc, cost) in &STEPS {
+                    let (nr, nc) = (r + dr, c + dc);
+                    if nr < 0 || nc < 0 || nr >= h || nc >= w {
+                        continue;
+                    }
+                    let v = (nr * w + nc) as usize;
+                    if !passable(v) {
+                        continue;
+                    }
+                    if strict && dr != 0 && dc != 0 && !(passable((r * w + nc) as usize) && passable((nr * w + c) as usize)) {
+                        continue;
+                    }
+                    let nd = d + cost;
+                    if self.seen[v] != g || nd < self.dist[v] {
+                        self.seen[v] = g;
+                        self.dist[v] = nd;
+                        self.parent[v] = u as u32;
+                        self.buckets[(nd / STRAIGHT) as usize % 3].push(v as u32);
+                        pending += 1;
+                    }
                 }
             }
+            if best.is_some() {
+                break;
+            }
+            current += 1;
         }
-        None
+        best.map(|(_, u)| u)
     }
 
     /// The source of the last run.

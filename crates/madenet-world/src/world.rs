@@ -5,7 +5,7 @@ use crate::config::{ConfigError, ScenarioConfig};
 use crate::geometry::{line_of_sight, step_allowed, Move, ViewPattern};
 use crate::rng::{stream, Rng};
 use madenet_map::{OccGrid, Occupancy, Pos};
-use rand::RngExt;
+use rand::{Rng as _, RngExt};
 
 /// Why a scenario cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -61,7 +61,7 @@ pub struct World {
     /// Per cell, the range of `visible` holding the cells visible from it (ignoring misses),
     /// cast on first use: robots revisit cells, and rays are the costly part of sensing.
     visible_range: Vec<(u32, u32)>,
-    visible: Vec<u32>,
+    visible: Vec<(Pos, Occupancy, u32)>,
 }
 
 const NOT_CAST: (u32, u32) = (u32::MAX, 0);
@@ -240,7 +240,11 @@ impl World {
     /// (probability `sensor_miss_prob`, independently per cell and step). The robot's own
     /// cell is always observed.
     fn sense(&mut self) {
+        // A cell is missed when a uniform u64 falls below miss · 2^64 (integer compare; a
+        // probability of 1 misses everything).
         let miss = self.cfg.sensor_miss_prob;
+        let always_miss = miss >= 1.0;
+        let threshold = (miss * 18_446_744_073_709_551_616.0) as u64;
         for i in 0..self.positions.len() {
             let at = self.positions[i];
             let (start, end) = self.visible_from(at);
@@ -250,14 +254,17 @@ impl World {
             obs.seen.clear();
             obs.seen.push((at, Occupancy::Free));
             let rng = &mut self.rng_sensor[i];
-            for &k in &self.visible[start as usize..end as usize] {
-                if rng.random::<f64>() >= miss {
-                    let k = k as usize;
-                    obs.seen.push((self.truth.pos(k), self.truth.cells()[k]));
-                }
+            let own = self.truth.index(at);
+            if self.team_map[own] == Occupancy::Unknown {
+                self.team_map[own] = Occupancy::Free;
+                self.known += 1;
             }
-            for &(q, occ) in &obs.seen {
-                let k = self.truth.index(q);
+            for &(q, occ, k) in &self.visible[start as usize..end as usize] {
+                if always_miss || rng.next_u64() < threshold {
+                    continue;
+                }
+                obs.seen.push((q, occ));
+                let k = k as usize;
                 if self.team_map[k] == Occupancy::Unknown {
                     self.team_map[k] = occ;
                     self.known += 1;
@@ -274,7 +281,7 @@ impl World {
             let start = self.visible.len() as u32;
             let (truth, blocked, visible) = (&self.truth, &self.blocked, &mut self.visible);
             self.view.for_each_visible(at, |q| truth.in_bounds(q), |q| blocked[truth.index(q)], |q| {
-                visible.push(truth.index(q) as u32)
+                visible.push((q, truth.get(q), truth.index(q) as u32))
             });
             self.visible_range[i] = (start, self.visible.len() as u32);
         }
