@@ -9,7 +9,7 @@ use crate::policy::{Decision, DecisionMode, Policy};
 use crate::view::AgentView;
 use madenet_map::Pos;
 use madenet_nav::{astar, Dijkstra, Reservations, SpaceTimePlanner};
-use madenet_world::{ConfigError, Move, Observation, ScenarioConfig};
+use madenet_world::{Move, Observation, ScenarioConfig};
 use std::time::{Duration, Instant};
 
 /// The per-robot parameters an agent needs, derived from the [`ScenarioConfig`].
@@ -27,17 +27,17 @@ pub struct AgentConfig {
 }
 
 impl AgentConfig {
-    pub fn from_scenario(cfg: &ScenarioConfig, id: usize, height: usize, width: usize) -> Result<Self, ConfigError> {
-        Ok(AgentConfig {
+    pub fn from_scenario(cfg: &ScenarioConfig, id: usize, height: usize, width: usize) -> Self {
+        AgentConfig {
             id,
             num_robots: cfg.num_robots,
             height,
             width,
-            goal_count: cfg.goal_count_for(height * width)?,
+            goal_count: cfg.goal_count_for(height * width),
             prioritized_planning: cfg.prioritized_planning,
             plan_horizon: cfg.plan_horizon,
             movement: cfg.movement,
-        })
+        }
     }
 }
 

@@ -1,6 +1,6 @@
 //! A robot's local map m_i with an incrementally maintained frontier set.
 
-use madenet_map::{Movement, Occupancy, Pos};
+use madenet_map::{Movement, OccGrid, Occupancy, Pos};
 use madenet_world::squeezed;
 
 /// The robot's own knowledge of the grid: unknown / free / obstacle per cell, plus the
@@ -10,9 +10,7 @@ use madenet_world::squeezed;
 /// to date cell by cell as knowledge arrives.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Belief {
-    width: usize,
-    height: usize,
-    map: Vec<Occupancy>,
+    map: OccGrid,
     known: usize,
     frontier: Vec<bool>,
     frontier_count: usize,
@@ -25,9 +23,7 @@ pub struct Belief {
 impl Belief {
     pub fn new(height: usize, width: usize, movement: Movement) -> Self {
         Belief {
-            width,
-            height,
-            map: vec![Occupancy::Unknown; width * height],
+            map: OccGrid::new(height, width, Occupancy::Unknown),
             known: 0,
             frontier: vec![false; width * height],
             frontier_count: 0,
@@ -48,13 +44,17 @@ impl Belief {
     }
 
     pub fn width(&self) -> usize {
-        self.width
+        self.map.width()
     }
     pub fn height(&self) -> usize {
-        self.height
+        self.map.height()
     }
     /// Flat, row-major cells.
     pub fn map(&self) -> &[Occupancy] {
+        self.map.cells()
+    }
+    /// The local map as a grid (e.g. to save or draw it).
+    pub fn grid(&self) -> &OccGrid {
         &self.map
     }
     /// |E_i|: cells this robot knows (obstacles included).
@@ -71,24 +71,20 @@ impl Belief {
 
     #[inline]
     pub fn in_bounds(&self, p: Pos) -> bool {
-        p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width
+        self.map.in_bounds(p)
     }
     #[inline]
     pub fn index(&self, p: Pos) -> usize {
-        p.row as usize * self.width + p.col as usize
+        self.map.index(p)
     }
     #[inline]
     pub fn pos(&self, i: usize) -> Pos {
-        Pos::new((i / self.width) as i32, (i % self.width) as i32)
+        self.map.pos(i)
     }
     /// Occupancy of `p`; out of bounds reads as obstacle.
     #[inline]
     pub fn get(&self, p: Pos) -> Occupancy {
-        if self.in_bounds(p) {
-            self.map[self.index(p)]
-        } else {
-            Occupancy::Obstacle
-        }
+        self.map.get(p)
     }
     #[inline]
     pub fn is_free(&self, p: Pos) -> bool {
@@ -113,10 +109,10 @@ impl Belief {
     #[inline]
     pub fn observe(&mut self, p: Pos, occ: Occupancy) -> bool {
         let i = self.index(p);
-        if self.map[i] != Occupancy::Unknown || occ == Occupancy::Unknown {
+        if self.map.cells()[i] != Occupancy::Unknown || occ == Occupancy::Unknown {
             return false;
         }
-        self.map[i] = occ;
+        self.map.cells_mut()[i] = occ;
         self.known += 1;
         let strict = self.movement == Movement::NoCornerCutting;
         for (dr, dc) in NEIGHBOURS {
@@ -147,7 +143,7 @@ impl Belief {
         assert_eq!(other.len(), self.map.len(), "merging maps of different sizes");
         let mut added = 0;
         for i in 0..other.len() {
-            if self.map[i] == Occupancy::Unknown && other[i] != Occupancy::Unknown {
+            if self.map.cells()[i] == Occupancy::Unknown && other[i] != Occupancy::Unknown {
                 let p = self.pos(i);
                 self.observe(p, other[i]);
                 added += 1;
@@ -163,7 +159,7 @@ impl Belief {
         NEIGHBOURS.iter().any(|&(dr, dc)| {
             let q = Pos::new(p.row + dr, p.col + dc);
             self.in_bounds(q)
-                && self.map[self.index(q)] == Occupancy::Unknown
+                && self.map.cells()[self.index(q)] == Occupancy::Unknown
                 && !(self.movement == Movement::NoCornerCutting
                     && squeezed(|c| self.get(c) == Occupancy::Obstacle, p, q))
         })
@@ -171,7 +167,7 @@ impl Belief {
 
     fn refresh_frontier(&mut self, p: Pos) {
         let i = self.index(p);
-        let f = self.map[i] == Occupancy::Free && self.has_unknown_neighbour(p);
+        let f = self.map.cells()[i] == Occupancy::Free && self.has_unknown_neighbour(p);
         if f != self.frontier[i] {
             self.frontier[i] = f;
             if f {

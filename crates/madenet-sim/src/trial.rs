@@ -80,7 +80,7 @@ impl Trial {
         for i in 0..cfg.num_robots.min(spec.starts.len()) {
             let ctx = PolicyContext { seed: spec.seed, robot: i, config: &cfg, height: h, width: w };
             let policy = registry.make(&spec.policy, &ctx)?;
-            agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w)?, spec.starts[i], policy));
+            agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w), spec.starts[i], policy));
         }
         let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
         let n = agents.len();

@@ -145,20 +145,12 @@ impl ScenarioConfig {
         Ok(())
     }
 
-    /// |G| for a map of `cells` cells: the configured value, or Eq. (3).
-    pub fn goal_count_for(&self, cells: usize) -> Result<usize, ConfigError> {
-        if let Some(g) = self.goal_count {
-            return Ok(g);
-        }
-        goal_count_eq3(cells, self.sensing_range, self.num_robots).ok_or_else(|| {
-            field(
-                "sensing_range",
-                format!(
-                    "Eq. (3) needs 2·d_s+1 ≤ √|X|: d_s = {} is too large for a map of {cells} cells (set goal_count)",
-                    self.sensing_range
-                ),
-            )
-        })
+    /// |G| for a map of `cells` cells: the configured value, or Eq. (3). Eq. (3) is defined
+    /// only when the sensor window fits the map (2·d_s+1 ≤ √|X|); on smaller maps |G| is its
+    /// minimum, |I| ("to provide each robot with a unique location to explore").
+    pub fn goal_count_for(&self, cells: usize) -> usize {
+        self.goal_count
+            .unwrap_or_else(|| goal_count_eq3(cells, self.sensing_range, self.num_robots).unwrap_or(self.num_robots))
     }
 }
 
