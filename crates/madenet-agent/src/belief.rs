@@ -94,6 +94,12 @@ impl Belief {
     pub fn is_frontier(&self, p: Pos) -> bool {
         self.in_bounds(p) && self.frontier[self.index(p)]
     }
+    /// Unknown in-bounds 8-neighbours of the cell at row-major index `i` (the authors'
+    /// per-cell exploration reward).
+    #[inline]
+    pub fn unknown_neighbour_count(&self, i: usize) -> u8 {
+        self.unknown_neighbours[i]
+    }
     /// Frontier flag by row-major index.
     #[inline]
     pub fn is_frontier_index(&self, i: usize) -> bool {

@@ -41,7 +41,16 @@ impl<'a> AgentView<'a> {
     /// held by a teammate detected now (the robot's own cell excluded; ties to the lower
     /// row-major index).
     pub fn nearest_frontier(&mut self) -> Option<Pos> {
-        let (belief, from) = (self.belief, self.pos);
+        let (belief, own) = (self.belief, self.belief.index(self.pos));
+        self.search(|i, _| i != own && belief.is_frontier_index(i)).map(|i| belief.pos(i))
+    }
+
+    /// Dijkstra from the robot through known free cells not held by a teammate detected now,
+    /// settling cells (row-major index, cost in units of [`madenet_nav::STRAIGHT`] per cell)
+    /// in order of cost until `stop` returns true; see [`Dijkstra::run_indexed`]. The search
+    /// tree is kept, so the navigator's path to a settled goal is free.
+    pub fn search(&mut self, stop: impl FnMut(usize, u32) -> bool) -> Option<usize> {
+        let belief = self.belief;
         let mut held = [usize::MAX; 8];
         let mut n_held = 0;
         for p in self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).take(8) {
@@ -49,13 +58,14 @@ impl<'a> AgentView<'a> {
             n_held += 1;
         }
         let held = &held[..n_held];
-        let (map, own) = (belief.map(), belief.index(from));
+        let map = belief.map();
         *self.dijkstra_fresh = true;
-        self.dijkstra
-            .run_indexed(from, |i| map[i] == Occupancy::Free && !held.contains(&i), belief.movement(), |i| {
-                i != own && belief.is_frontier_index(i)
-            })
-            .map(|i| belief.pos(i))
+        self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && !held.contains(&i), belief.movement(), stop)
+    }
+
+    /// The cost to a cell settled by the last [`AgentView::search`], in cells.
+    pub fn searched_cost(&self, p: Pos) -> Option<f64> {
+        self.dijkstra.settled_cost(p).map(madenet_nav::cost_to_cells)
     }
 
     /// Path cost in cells from the robot to every known-free cell, computed once (full

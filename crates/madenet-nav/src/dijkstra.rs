@@ -80,17 +80,18 @@ impl Dijkstra {
     ) -> Option<Pos> {
         let w = self.width;
         let at = move |i: usize| Pos::new((i / w) as i32, (i % w) as i32);
-        self.run_indexed(source, move |i| passable(at(i)), movement, |i| stop(at(i))).map(at)
+        self.run_indexed(source, move |i| passable(at(i)), movement, |i, _| stop(at(i))).map(at)
     }
 
     /// [`Dijkstra::run`] with cells as row-major indices: the hot loop of the classical
-    /// baselines, on index arithmetic only. `passable` is only asked about in-bounds cells.
+    /// baselines, on index arithmetic only. `passable` is only asked about in-bounds cells;
+    /// `stop(cell, cost)` sees each settled cell with its final cost.
     pub fn run_indexed(
         &mut self,
         source: Pos,
         passable: impl Fn(usize) -> bool + Copy,
         movement: Movement,
-        mut stop: impl FnMut(usize) -> bool,
+        mut stop: impl FnMut(usize, u32) -> bool,
     ) -> Option<usize> {
         self.generation = self.generation.wrapping_add(1);
         if self.generation == 0 {
@@ -123,7 +124,7 @@ impl Dijkstra {
                 }
                 self.settled[u] = g;
                 let d = self.dist[u];
-                if stop(u) {
+                if stop(u, d) {
                     if best.is_none_or(|(bd, bu)| (d, u) < (bd, bu)) {
                         best = Some((d, u));
                     }

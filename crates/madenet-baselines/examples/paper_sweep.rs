@@ -2,11 +2,12 @@
 //! wall time — the quickest way to profile a change (`valgrind --tool=callgrind`):
 //!
 //! ```sh
-//! cargo run --release -p madenet-sim --example paper_sweep -- [CSP] [POLICY] [SEED]
+//! cargo run --release -p madenet-baselines --example paper_sweep -- [CSP] [POLICY] [SEED]
 //! ```
 
 use madenet_map::paper::{paper_map, Corner, PAPER_MAP_COUNT};
 use madenet_sim::{Trial, TrialSpec};
+use madenet_baselines::registry;
 use madenet_world::ScenarioConfig;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -23,8 +24,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             specs.push(TrialSpec { map: map.clone(), map_name: format!("test_{n}"), starts, config: config.clone(), policy: policy.clone(), seed });
         }
     }
+    let registry = registry();
     let started = std::time::Instant::now();
-    let results = specs.into_iter().map(|s| Ok(Trial::new(s)?.run())).collect::<Result<Vec<_>, madenet_sim::SimError>>()?;
+    let results = specs.into_iter().map(|s| Ok(Trial::with_registry(s, &registry)?.run())).collect::<Result<Vec<_>, madenet_sim::SimError>>()?;
     let elapsed = started.elapsed();
     let n = results.len() as f64;
     let mean = |f: &dyn Fn(&madenet_metrics::TrialMetrics) -> f64| results.iter().map(|r| f(&r.metrics)).sum::<f64>() / n;

@@ -1,0 +1,336 @@
+//! PB: the Dec-MDP with distributed value functions (Matignon, Jeanpierre, Mouaddib, AAAI 2012),
+//! solved online by value iteration, as the paper adapted it to square grids.
+
+use madenet_agent::{AgentView, Belief, Decision, DecisionMode, Policy};
+use madenet_map::{Movement, Occupancy, Pos};
+use madenet_world::ScenarioConfig;
+use serde::{Deserialize, Serialize};
+
+/// PB's constants. Defaults are the values of the paper's evaluation code (`RobotMDP.py`),
+/// which follows Matignon et al.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PbParams {
+    /// Planning horizon: only cells within this Chebyshev distance of the robot are states
+    /// (default 20).
+    pub horizon: usize,
+    /// Maximum value-iteration sweeps (default 50).
+    pub iterations: usize,
+    /// Sweeps stop early once no value changes by more than this (default 1e-3).
+    pub tolerance: f32,
+    /// Discount γ (default 0.8: the authors' 1 − 80 / horizon²).
+    pub discount: f32,
+    /// f_ij: weight of a teammate's expected value in the distributed value function
+    /// (default 4, the authors' `weighing_factor`).
+    pub teammate_weight: f32,
+    /// Extra repulsion c · Pr_j(s)² from where a teammate probably is (default 64 = the
+    /// authors' `weighing_factor`³).
+    pub crowding_weight: f32,
+    /// Radius, in steps, of the cells a teammate is assumed able to reach right after contact;
+    /// it grows by one step every two timesteps without contact (default 4, the authors'
+    /// `exploration_horizon`).
+    pub reach_radius: usize,
+    /// A best next value within this of the current one means the MDP is stuck on a plateau:
+    /// the robot then heads for the nearest frontier (default 1e-3, as the authors).
+    pub stuck_threshold: f32,
+}
+
+impl Default for PbParams {
+    fn default() -> Self {
+        PbParams {
+            horizon: 20,
+            iterations: 50,
+            tolerance: 1e-3,
+            discount: 0.8,
+            teammate_weight: 4.0,
+            crowding_weight: 64.0,
+            reach_radius: 4,
+            stuck_threshold: 1e-3,
+        }
+    }
+}
+
+/// The PB policy of one robot.
+///
+/// Each timestep, on the robot's own map:
+///
+/// 1. **Rewards.** R(s) = the unknown 8-neighbours of a known free cell s (the authors' cell
+///    reward), 0 at the robot's own cell.
+/// 2. **Teammates.** For each teammate whose last known position (detection or β) is within
+///    the horizon: Pr_j(s), a probability spread over the free cells within
+///    `reach_radius` + Δt/2 steps of that position, Δt the timesteps since it was last heard
+///    or seen — 1 / (N · max(1, √d)) for a cell at Chebyshev distance d, N the number of such
+///    cells (the authors' `compute_probability`); and V_j, its value function, estimated by
+///    value iteration on the same rewards (on this map it is independent of j).
+/// 3. **Distributed value function.** DVF(s) = Σ_j f · Pr_j(s) · |V_j(s)| + c · Pr_j(s)².
+/// 4. **Value iteration** (Jacobi sweeps, deterministic moves to free 8-neighbours under the
+///    movement rule): V(s) = R(s) + γ · max_{s'} (V(s') − DVF(s')).
+/// 5. **Action.** The neighbouring free cell not held by a detected teammate with the highest
+///    V (ties: the first in clockwise order from north); if its value is within
+///    `stuck_threshold` of V(here), the MDP is stuck on a plateau and the robot heads for the
+///    nearest frontier instead (as the authors' code).
+///
+/// Value iteration runs on flat `f32` arrays over a padded grid with precomputed neighbour
+/// masks, which is what makes it fast.
+pub struct DistributedValueFunctions {
+    p: PbParams,
+    movement: Movement,
+    /// Padded grid: (h + 2) × (w + 2), row-major.
+    pw: usize,
+    reward: Vec<f32>,
+    value: Vec<f32>,
+    next: Vec<f32>,
+    dvf: Vec<f32>,
+    team_value: Vec<f32>,
+    /// Bit k set: move k of `OFFSETS` is allowed from this padded cell.
+    moves: Vec<u8>,
+    /// State mask: known free and within the horizon.
+    active: Vec<bool>,
+    prob: Vec<f32>,
+    bfs: Vec<u32>,
+    queue: std::collections::VecDeque<usize>,
+}
+
+const DIRS: [(isize, isize); 8] = [(-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1)];
+
+impl DistributedValueFunctions {
+    pub fn new(p: PbParams, cfg: &ScenarioConfig, height: usize, width: usize) -> Self {
+        let pw = width + 2;
+        let n = (height + 2) * pw;
+        DistributedValueFunctions {
+            p,
+            movement: cfg.movement,
+            pw,
+            reward: vec![0.0; n],
+            value: vec![0.0; n],
+            next: vec![0.0; n],
+            dvf: vec![0.0; n],
+            team_value: vec![0.0; n],
+            moves: vec![0; n],
+            active: vec![false; n],
+            prob: vec![0.0; n],
+            bfs: vec![u32::MAX; n],
+            queue: std::collections::VecDeque::new(),
+        }
+    }
+
+    #[inline]
+    fn padded(&self, p: Pos) -> usize {
+        (p.row as usize + 1) * self.pw + p.col as usize + 1
+    }
+
+    #[inline]
+    fn offset(&self, k: usize) -> isize {
+        DIRS[k].0 * self.pw as isize + DIRS[k].1
+    }
+
+    /// Rewards, states within the horizon, and the allowed moves of every state.
+    fn prepare(&mut self, belief: &Belief, at: Pos) {
+        let (h, w) = (belief.height(), belief.width());
+        self.reward.fill(0.0);
+        self.active.fill(false);
+        let hz = self.p.horizon as i32;
+        for r in 0..h {
+            for c in 0..w {
+                let i = r * w + c;
+                if belief.map()[i] != Occupancy::Free {
+                    continue;
+                }
+                let pos = Pos::new(r as i32, c as i32);
+                if pos.chebyshev(at) > hz {
+                    continue;
+                }
+                let k = self.padded(pos);
+                self.active[k] = true;
+                self.reward[k] = belief.unknown_neighbour_count(i) as f32;
+            }
+        }
+        let own = self.padded(at);
+        self.reward[own] = 0.0;
+        let strict = self.movement == Movement::NoCornerCutting;
+        for r in 0..h {
+            for c in 0..w {
+                let k = (r + 1) * self.pw + c + 1;
+                let mut bits = 0u8;
+                if self.active[k] {
+                    for (d, &(dr, dc)) in DIRS.iter().enumerate() {
+                        let n = (k as isize + self.offset(d)) as usize;
+                        if !self.active[n] {
+                            continue;
+                        }
+                        if strict && dr != 0 && dc != 0 {
+                            let a = (k as isize + dr * self.pw as isize) as usize;
+                            let b = (k as isize + dc) as usize;
+                            if !(self.active[a] && self.active[b]) {
+                                continue;
+                            }
+                        }
+                        bits |= 1 << d;
+                    }
+                }
+                self.moves[k] = bits;
+            }
+        }
+    }
+
+    /// Value iteration into `out`: out(s) = R(s) + γ · max over moves (out(s') − penalty(s')).
+    fn value_iteration(&mut self, with_dvf: bool) -> Vec<f32> {
+        let mut v = std::mem::take(&mut self.next);
+        v.clone_from(&self.reward);
+        let mut buf = std::mem::take(&mut self.value);
+        buf.clone_from(&self.reward);
+        let offsets: [isize; 8] = std::array::from_fn(|d| self.offset(d));
+        let gamma = self.p.discount;
+        for _ in 0..self.p.iterations {
+            let mut change = 0.0f32;
+            for k in 0..v.len() {
+                let bits = self.moves[k];
+                if bits == 0 {
+                    continue;
+                }
+                let mut best = f32::NEG_INFINITY;
+                for (d, off) in offsets.iter().enumerate() {
+                    if bits & (1 << d) != 0 {
+                        let n = (k as isize + off) as usize;
+                        let x = if with_dvf { v[n] - self.dvf[n] } else { v[n] };
+                        best = best.max(x);
+                    }
+                }
+                let nv = self.reward[k] + gamma * best;
+                change = change.max((nv - v[k]).abs());
+                buf[k] = nv;
+            }
+            std::mem::swap(&mut v, &mut buf);
+            if change < self.p.tolerance {
+                break;
+            }
+        }
+        self.value = buf;
+        v
+    }
+
+    /// Pr_j over free cells reachable within `radius` steps of `from` (breadth-first on the
+    /// robot's map), 1 / (N · max(1, √d)) with d the Chebyshev distance to `from`.
+    fn spread(&mut self, belief: &Belief, from: Pos, radius: usize) {
+        self.prob.fill(0.0);
+        let (h, w) = (belief.height(), belief.width());
+        self.bfs.fill(u32::MAX);
+        self.queue.clear();
+        let start = from.row as usize * w + from.col as usize;
+        self.bfs[start] = 0;
+        self.queue.push_back(start);
+        let mut cells = Vec::new();
+        while let Some(i) = self.queue.pop_front() {
+            cells.push(i);
+            let d = self.bfs[i];
+            if d as usize >= radius {
+                continue;
+            }
+            let (r, c) = ((i / w) as isize, (i % w) as isize);
+            for &(dr, dc) in &DIRS {
+                let (nr, nc) = (r + dr, c + dc);
+                if nr < 0 || nc < 0 || nr >= h as isize || nc >= w as isize {
+                    continue;
+                }
+                let j = nr as usize * w + nc as usize;
+                if self.bfs[j] == u32::MAX && belief.map()[j] == Occupancy::Free {
+                    self.bfs[j] = d + 1;
+                    self.queue.push_back(j);
+                }
+            }
+        }
+        let n = cells.len() as f32;
+        for i in cells {
+            let p = belief.pos(i);
+            let d = p.chebyshev(from) as f32;
+            let k = self.padded(p);
+            self.prob[k] = 1.0 / (n * d.sqrt().max(1.0));
+        }
+    }
+}
+
+impl Policy for DistributedValueFunctions {
+    fn name(&self) -> &str {
+        "pb"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::EveryStep
+    }
+    fn needs_candidates(&self) -> bool {
+        false
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        let belief = view.belief;
+        let at = view.pos;
+        self.prepare(belief, at);
+        // Teammates within the horizon, where they probably are.
+        let mates: Vec<(Pos, usize)> = view
+            .teammates
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != view.id)
+            .filter_map(|(_, r)| {
+                let pos = r.last_pos()?;
+                let last = r.heard_at.into_iter().chain(r.seen_at).max()?;
+                Some((pos, view.t.saturating_sub(last)))
+            })
+            .filter(|(pos, _)| pos.chebyshev(at) < self.p.horizon as i32)
+            .collect();
+        self.dvf.fill(0.0);
+        if !mates.is_empty() {
+            self.team_value = self.value_iteration(false);
+            for (pos, dt) in mates {
+                if belief.get(pos) != Occupancy::Free {
+                    continue;
+                }
+                self.spread(belief, pos, self.p.reach_radius + dt / 2);
+                for k in 0..self.dvf.len() {
+                    let pr = self.prob[k];
+                    if pr > 0.0 {
+                        self.dvf[k] += self.p.teammate_weight * pr * self.team_value[k].abs() + self.p.crowding_weight * pr * pr;
+                    }
+                }
+            }
+        }
+        let v = self.value_iteration(true);
+        // The best move from here, avoiding teammates it can see.
+        let here = self.padded(at);
+        let held: Vec<usize> = view.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| self.padded(p)).collect();
+        let mut best: Option<(f32, usize)> = None;
+        for d in 0..8 {
+            if self.moves[here] & (1 << d) == 0 {
+                continue;
+            }
+            let n = (here as isize + self.offset(d)) as usize;
+            if held.contains(&n) {
+                continue;
+            }
+            if best.is_none_or(|(bv, _)| v[n] > bv) {
+                best = Some((v[n], d));
+            }
+        }
+        self.next = v;
+        match best {
+            Some((bv, d)) if (bv - self.next[here]).abs() >= self.p.stuck_threshold => {
+                Decision::Goal(Pos::new(at.row + DIRS[d].0 as i32, at.col + DIRS[d].1 as i32))
+            }
+            _ => match view.nearest_frontier() {
+                Some(p) => Decision::Goal(p),
+                None => Decision::Idle,
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn padded_layout_round_trips() {
+        let pb = DistributedValueFunctions::new(PbParams::default(), &ScenarioConfig::default(), 5, 7);
+        assert_eq!(pb.padded(Pos::new(0, 0)), 9 + 1);
+        assert_eq!(pb.value.len(), 7 * 9);
+        assert_eq!(pb.offset(0), -9);
+    }
+}

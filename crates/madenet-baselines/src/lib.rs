@@ -1,0 +1,55 @@
+//! The classical baselines of the MADE-Net comparison study (paper Sec. V.A.5), as
+//! [`madenet_agent::Policy`] implementations that re-decide every timestep (they are the
+//! paper's primitive-level methods):
+//!
+//! * [`UtilityBased`] (**UB**) — coordinated exploration after Burgard, Moors, Stachniss and
+//!   Schneider, "Coordinated multi-robot exploration", IEEE T-RO 2005: frontier targets are
+//!   scored by expected information gain minus β · path cost, and targets near the goals the
+//!   teammates announced are discounted.
+//! * [`DistributedValueFunctions`] (**PB**) — the planning-based Dec-MDP of Matignon,
+//!   Jeanpierre and Mouaddib, "Coordinated multi-robot exploration under communication
+//!   constraints using decentralized Markov decision processes", AAAI 2012: each robot solves
+//!   its MDP over grid cells by value iteration, minus the expected value of the cells its
+//!   teammates are likely to reach, their positions predicted from the last contact.
+//!
+//! Every constant is a documented field of [`BaselineParams`] (serde, with the defaults named
+//! after their source). [`register`] adds `ub` and `pb` to a
+//! [`madenet_sim::PolicyRegistry`].
+
+mod dvf;
+mod utility;
+
+pub use dvf::{DistributedValueFunctions, PbParams};
+pub use utility::{UbParams, UtilityBased};
+
+use madenet_sim::PolicyRegistry;
+use serde::{Deserialize, Serialize};
+
+/// The parameters of both baselines.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BaselineParams {
+    pub ub: UbParams,
+    pub pb: PbParams,
+}
+
+/// Registers `ub` and `pb` with these parameters.
+pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
+    let ub = params.ub.clone();
+    registry.register("ub", "utility-based coordinated exploration (Burgard et al. 2005), re-decided every timestep", move |ctx| {
+        Box::new(UtilityBased::new(ub.clone(), ctx.config, ctx.height, ctx.width))
+    });
+    let pb = params.pb.clone();
+    registry.register(
+        "pb",
+        "planning-based Dec-MDP with distributed value functions (Matignon et al. 2012), re-decided every timestep",
+        move |ctx| Box::new(DistributedValueFunctions::new(pb.clone(), ctx.config, ctx.height, ctx.width)),
+    );
+}
+
+/// The built-in policies plus the baselines at their defaults.
+pub fn registry() -> PolicyRegistry {
+    let mut r = PolicyRegistry::builtin();
+    register(&mut r, &BaselineParams::default());
+    r
+}
