@@ -31,6 +31,10 @@ pub struct TrialMetrics {
     pub ttd: f64,
     /// NOLI: robot pairs in contact, summed over timesteps.
     pub noli: usize,
+    /// NOLI as the authors' code counts it (`local_int`), for calibration: pairs at Chebyshev
+    /// distance < d_s (strictly) with line of sight, over timesteps (their `RobotTeam` lists
+    /// ordered pairs and `data_cleaning.create_data_entry` halves the count).
+    pub noli_authors: usize,
     /// OFV: Eq. (1) over coverage levels, see [`ofv`].
     pub ofv: f64,
     /// Final explored fraction.
@@ -60,19 +64,22 @@ pub struct MetricsRecorder {
     explored: Vec<f64>,
     distance: Vec<f64>,
     noli: usize,
+    noli_authors: usize,
 }
 
 impl MetricsRecorder {
     /// Starts with the state before the first move (distance 0).
     pub fn new(initial_explored: f64) -> Self {
-        MetricsRecorder { explored: vec![initial_explored], distance: vec![0.0], noli: 0 }
+        MetricsRecorder { explored: vec![initial_explored], distance: vec![0.0], noli: 0, noli_authors: 0 }
     }
 
-    /// Records the state after a timestep.
-    pub fn record(&mut self, explored: f64, team_distance: f64, pairs_in_contact: usize) {
+    /// Records the state after a timestep: `pairs_in_contact` within d_s with line of sight,
+    /// of which `pairs_closer` strictly closer than d_s.
+    pub fn record(&mut self, explored: f64, team_distance: f64, pairs_in_contact: usize, pairs_closer: usize) {
         self.explored.push(explored);
         self.distance.push(team_distance);
         self.noli += pairs_in_contact;
+        self.noli_authors += pairs_closer;
     }
 
     pub fn finish(self, completed: bool) -> TrialMetrics {
@@ -89,6 +96,7 @@ impl MetricsRecorder {
             tns,
             ttd: *self.distance.last().unwrap_or(&0.0),
             noli: self.noli,
+            noli_authors: self.noli_authors,
             ofv: ofv(&self.explored, &self.distance),
             explored: *self.explored.last().unwrap_or(&0.0),
             steps_to,
@@ -176,11 +184,12 @@ mod tests {
     #[test]
     fn hand_computed_trial() {
         let mut r = MetricsRecorder::new(0.1);
-        r.record(0.5, 10.0, 2);
-        r.record(1.0, 20.0, 1);
+        r.record(0.5, 10.0, 2, 1);
+        r.record(1.0, 20.0, 1, 0);
         let m = r.finish(true);
         assert_eq!(m.tns, 2);
         assert_eq!(m.noli, 3);
+        assert_eq!(m.noli_authors, 1);
         assert_eq!(m.ttd, 20.0);
         assert_eq!(m.steps_to[0], Some(1)); // 20 % reached at step 1
         assert_eq!(m.steps_to[8], Some(2));

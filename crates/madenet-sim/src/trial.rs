@@ -191,7 +191,9 @@ impl Trial {
         }
         self.world.step(&self.moves);
         let team_distance: f64 = self.world.distances().iter().sum();
-        self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len());
+        let (pos, ds) = (self.world.positions(), self.world.config().sensing_range);
+        let closer = self.world.contacts().iter().filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds).count();
+        self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len(), closer);
         self.elapsed += started.elapsed();
         if self.record {
             self.trajectory.push(StepRecord {

@@ -5,7 +5,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
 use madenet_metrics::COVERAGE_LEVELS;
-use madenet_sim::{MapSource, PolicyRegistry, StartSpec, Trial, TrialResult, TrialSpec};
+use madenet_sim::{MapSource, StartSpec, Trial, TrialResult, TrialSpec};
 use rayon::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
@@ -42,7 +42,7 @@ pub struct BatchArgs {
 
 pub fn run(a: BatchArgs) -> Result<()> {
     let base = crate::load_config(a.config.as_deref())?;
-    let registry = PolicyRegistry::builtin();
+    let registry = madenet_baselines::registry();
     if !registry.names().contains(&a.policy) {
         bail!("unknown policy `{}` (field `--policy`); known policies: {}", a.policy, registry.names().join(", "));
     }

@@ -10,6 +10,7 @@ macro_rules! out {
 }
 
 mod batch;
+mod compare;
 mod frames;
 mod map_cmd;
 mod run;
@@ -30,6 +31,8 @@ enum Command {
     Run(run::RunArgs),
     /// Run many trials (maps × starts × CSPs × seeds) in parallel and write a CSV.
     Batch(batch::BatchArgs),
+    /// Run the paper's comparison study: trials, summary, statistics, figures, report.
+    Compare(compare::CompareArgs),
     /// Convert, generate and show maps.
     #[command(subcommand)]
     Map(map_cmd::MapCommand),
@@ -42,8 +45,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(a) => run::run(a),
         Command::Batch(a) => batch::run(a),
+        Command::Compare(a) => compare::run(a),
         Command::Map(c) => map_cmd::run(c),
-        Command::Policies => madenet_sim::PolicyRegistry::builtin()
+        Command::Policies => madenet_baselines::registry()
             .describe()
             .into_iter()
             .try_for_each(|(name, about)| out!("{name:<10} {about}").map_err(anyhow::Error::from)),

@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use madenet_render::{GifWriter, RenderOptions};
-use madenet_sim::{MapSource, PolicyRegistry, StartSpec, Trial, TrialSpec};
+use madenet_sim::{MapSource, StartSpec, Trial, TrialSpec};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -66,7 +66,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         policy: a.policy.clone(),
         seed: a.seed,
     };
-    let mut trial = Trial::with_registry(spec, &PolicyRegistry::builtin())
+    let mut trial = Trial::with_registry(spec, &madenet_baselines::registry())
         .with_context(|| format!("map {}, start {}", source.name(), a.start.name()))?
         .record_trajectory(a.trajectory);
     let opts = RenderOptions { cell_px: a.cell_px, ..Default::default() };

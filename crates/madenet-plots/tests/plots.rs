@@ -1,0 +1,397 @@
+//! Output files, input validation and the EWMA of madenet-plots.
+
+use std::path::{Path, PathBuf};
+
+use madenet_plots::{
+    bar_panels, ewma, line_panels, BarPanel, BarSeries, LinePanel, LineSeries, PlotError,
+};
+
+/// A fresh, empty directory for one test.
+fn dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("madenet-plots-tests")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const METHODS: [&str; 5] = ["NF", "UB", "PB", "MADE-Net-DT", "MADE-Net"];
+
+fn bar_panel(title: &str) -> BarPanel {
+    BarPanel {
+        title: title.into(),
+        y_label: format!("{title} value"),
+        categories: ["CSP 0 %", "CSP 50 %", "CSP 80 %", "CSP 100 %"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+        series: METHODS
+            .iter()
+            .enumerate()
+            .map(|(i, m)| BarSeries {
+                name: m.to_string(),
+                means: vec![50.0 + i as f64, 60.0, 70.0, 80.0 - i as f64],
+                errors: vec![5.0, 4.0, 3.0, 2.0],
+            })
+            .collect(),
+    }
+}
+
+fn line_panel(title: &str) -> LinePanel {
+    LinePanel {
+        title: title.into(),
+        x_label: "Distance travelled (m)".into(),
+        y_label: "Explored area (%)".into(),
+        series: METHODS
+            .iter()
+            .enumerate()
+            .map(|(i, m)| LineSeries {
+                name: m.to_string(),
+                points: (0..=40)
+                    .map(|k| {
+                        let d = k as f64 * 10.0;
+                        (d, 100.0 * (1.0 - (-d / (100.0 + 20.0 * i as f64)).exp()))
+                    })
+                    .collect(),
+            })
+            .collect(),
+    }
+}
+
+fn files_in(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Pixels of exactly this colour in the image.
+fn count_colour(img: &image::RgbImage, rgb: [u8; 3]) -> usize {
+    img.pixels().filter(|p| p.0 == rgb).count()
+}
+
+#[test]
+fn bar_panels_write_valid_png_and_svg() {
+    let d = dir("bars");
+    let panels = [
+        bar_panel("TNS"),
+        bar_panel("TTD"),
+        bar_panel("NOLI"),
+        bar_panel("OFV"),
+    ];
+    let paths = bar_panels(&d.join("fig4"), &panels, 2).unwrap();
+    assert_eq!(paths, vec![d.join("fig4.png"), d.join("fig4.svg")]);
+    // Only the two outputs: no temporary file is left behind.
+    assert_eq!(files_in(&d), vec!["fig4.png", "fig4.svg"]);
+
+    let img = image::open(&paths[0]).unwrap().to_rgb8();
+    assert_eq!(img.width(), 1600);
+    assert!(
+        img.height() >= 1000 && img.height() <= 1120,
+        "height {}",
+        img.height()
+    );
+    // Series i gets Okabe–Ito colour i: first and fifth series are there.
+    assert!(count_colour(&img, [0x00, 0x72, 0xB2]) > 1000);
+    assert!(count_colour(&img, [0xCC, 0x79, 0xA7]) > 1000);
+    // The legend strip holds text: dark pixels right of the first swatch.
+    let dark = (0..img.width())
+        .flat_map(|x| (0..50).map(move |y| (x, y)))
+        .filter(|&(x, y)| img.get_pixel(x, y).0.iter().all(|&c| c < 80))
+        .count();
+    assert!(dark > 100, "legend has {dark} dark pixels");
+
+    let svg = std::fs::read_to_string(&paths[1]).unwrap();
+    assert!(svg.starts_with("<svg"));
+    assert!(svg.trim_end().ends_with("</svg>"));
+    for text in [
+        "TNS",
+        "TTD",
+        "NOLI",
+        "OFV",
+        "CSP 50 %",
+        "MADE-Net-DT",
+        "OFV value",
+    ] {
+        assert!(svg.contains(text), "SVG lacks {text:?}");
+    }
+    assert!(svg.contains("font-family=\"sans-serif\""));
+}
+
+#[test]
+fn line_panels_write_valid_png_and_svg() {
+    let d = dir("lines");
+    let panels = [line_panel("CSP 100 %"), line_panel("CSP 0 %")];
+    let paths = line_panels(&d.join("fig5"), &panels, 2).unwrap();
+    assert_eq!(files_in(&d), vec!["fig5.png", "fig5.svg"]);
+    let img = image::open(&paths[0]).unwrap().to_rgb8();
+    assert_eq!(img.width(), 1600);
+    assert!(
+        img.height() >= 500 && img.height() <= 620,
+        "height {}",
+        img.height()
+    );
+    assert!(count_colour(&img, [0xD5, 0x5E, 0x00]) > 500);
+    let svg = std::fs::read_to_string(&paths[1]).unwrap();
+    for text in [
+        "CSP 100 %",
+        "CSP 0 %",
+        "Distance travelled (m)",
+        "Explored area (%)",
+        "MADE-Net",
+    ] {
+        assert!(svg.contains(text), "SVG lacks {text:?}");
+    }
+}
+
+#[test]
+fn grid_grows_with_rows_and_tolerates_a_partial_last_row() {
+    let d = dir("grid");
+    let panels = [line_panel("a"), line_panel("b"), line_panel("c")];
+    let paths = line_panels(&d.join("three"), &panels, 2).unwrap();
+    let img = image::open(&paths[0]).unwrap();
+    assert_eq!(img.width(), 1600);
+    assert!(img.height() >= 1000);
+    // More columns than panels: the figure is as wide as the panels.
+    let paths = line_panels(&d.join("one"), &panels[..1], 4).unwrap();
+    assert_eq!(image::open(&paths[0]).unwrap().width(), 800);
+}
+
+#[test]
+fn stem_keeps_dots_and_missing_directories_are_created() {
+    let d = dir("stem");
+    let stem = d.join("a").join("b").join("fig4.v2");
+    let paths = bar_panels(&stem, &[bar_panel("x")], 1).unwrap();
+    assert_eq!(paths[0], d.join("a/b/fig4.v2.png"));
+    assert_eq!(paths[1], d.join("a/b/fig4.v2.svg"));
+    assert!(paths.iter().all(|p| p.is_file()));
+}
+
+#[test]
+fn overwriting_replaces_the_files() {
+    let d = dir("overwrite");
+    let stem = d.join("fig");
+    bar_panels(&stem, &[bar_panel("first title")], 1).unwrap();
+    bar_panels(&stem, &[bar_panel("second title")], 1).unwrap();
+    let svg = std::fs::read_to_string(d.join("fig.svg")).unwrap();
+    assert!(svg.contains("second title") && !svg.contains("first title"));
+    assert_eq!(files_in(&d), vec!["fig.png", "fig.svg"]);
+}
+
+#[test]
+fn unusual_but_valid_data_is_drawn() {
+    let d = dir("unusual");
+    // Negative bars, no error bars, zero everywhere, ten series (colours cycle).
+    let mut neg = bar_panel("negative");
+    for s in &mut neg.series {
+        s.means = vec![-10.0, 5.0, -3.0, 0.0];
+        s.errors.clear();
+    }
+    let mut zero = bar_panel("zero");
+    for s in &mut zero.series {
+        s.means = vec![0.0; 4];
+        s.errors = vec![0.0; 4];
+    }
+    bar_panels(&d.join("neg"), &[neg, zero], 2).unwrap();
+    let mut many = bar_panel("many");
+    many.series = (0..10)
+        .map(|i| BarSeries {
+            name: format!("s{i}"),
+            means: vec![1.0 + i as f64; 4],
+            errors: vec![],
+        })
+        .collect();
+    bar_panels(&d.join("many"), &[many], 1).unwrap();
+
+    // A single point, a constant line, a panel with fewer series, long names.
+    let single = LinePanel {
+        title: "single point".into(),
+        x_label: "x".into(),
+        y_label: "y".into(),
+        series: vec![LineSeries {
+            name: "a very long series name that needs room in the legend".into(),
+            points: vec![(3.0, 3.0)],
+        }],
+    };
+    let constant = LinePanel {
+        title: "constant".into(),
+        x_label: "x".into(),
+        y_label: "y".into(),
+        series: vec![
+            LineSeries {
+                name: "a very long series name that needs room in the legend".into(),
+                points: vec![(0.0, 0.0), (1.0, 0.0)],
+            },
+            LineSeries {
+                name: "another long series name to force a second legend row".into(),
+                points: vec![(0.0, 0.0), (0.0, 0.0)],
+            },
+        ],
+    };
+    line_panels(&d.join("degenerate"), &[single, constant], 2).unwrap();
+
+    // Noisy data with its EWMA (Fig. 2 style).
+    let noisy: Vec<f64> = (0..2000)
+        .map(|i| ((i * 7919) % 101) as f64 - 50.0 + i as f64 / 40.0)
+        .collect();
+    let curve = |name: &str, v: &[f64]| LineSeries {
+        name: name.into(),
+        points: v.iter().enumerate().map(|(e, &y)| (e as f64, y)).collect(),
+    };
+    let panel = LinePanel {
+        title: "Team reward".into(),
+        x_label: "Episode".into(),
+        y_label: "Reward".into(),
+        series: vec![curve("raw", &noisy), curve("EWMA", &ewma(&noisy, 0.9))],
+    };
+    line_panels(&d.join("fig2"), &[panel], 1).unwrap();
+}
+
+/// Asserts `r` is an input error naming `png` and that nothing was written.
+fn assert_invalid(r: Result<Vec<PathBuf>, PlotError>, png: &Path, needle: &str) {
+    match r {
+        Err(e @ PlotError::InvalidInput { .. }) => {
+            let msg = e.to_string();
+            assert!(msg.contains(&png.display().to_string()), "{msg}");
+            assert!(msg.contains(needle), "{msg:?} lacks {needle:?}");
+        }
+        other => panic!("expected InvalidInput, got {other:?}"),
+    }
+    assert!(!png.exists());
+    assert!(!png.with_extension("svg").exists());
+}
+
+#[test]
+fn bad_bar_input_is_an_error() {
+    let d = dir("bad-bars");
+    let stem = d.join("bad");
+    let png = d.join("bad.png");
+    assert_invalid(bar_panels(&stem, &[], 2), &png, "no panels");
+    assert_invalid(bar_panels(&stem, &[bar_panel("a")], 0), &png, "cols");
+
+    let mut p = bar_panel("a");
+    p.categories.clear();
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "no categories");
+    let mut p = bar_panel("a");
+    p.series.clear();
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "no series");
+    let mut p = bar_panel("a");
+    p.series[2].means.pop();
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "3 means for 4 categories");
+    let mut p = bar_panel("a");
+    p.series[1].errors.push(1.0);
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "5 errors for 4 means");
+    let mut p = bar_panel("a");
+    p.series[0].means[1] = f64::NAN;
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "non-finite mean");
+    let mut p = bar_panel("a");
+    p.series[0].means[1] = f64::INFINITY;
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "non-finite mean");
+    let mut p = bar_panel("a");
+    p.series[3].errors[0] = -1.0;
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "negative or not finite");
+    let mut p = bar_panel("a");
+    p.series[3].errors[0] = f64::NAN;
+    assert_invalid(bar_panels(&stem, &[p], 1), &png, "negative or not finite");
+    // Series order must agree across panels (shared legend).
+    let a = bar_panel("a");
+    let mut b = bar_panel("b");
+    b.series.swap(0, 1);
+    assert_invalid(bar_panels(&stem, &[a, b], 2), &png, "same order");
+    assert!(files_in(&d).is_empty());
+}
+
+#[test]
+fn bad_line_input_is_an_error() {
+    let d = dir("bad-lines");
+    let stem = d.join("bad");
+    let png = d.join("bad.png");
+    assert_invalid(line_panels(&stem, &[], 1), &png, "no panels");
+    assert_invalid(line_panels(&stem, &[line_panel("a")], 0), &png, "cols");
+    let mut p = line_panel("a");
+    p.series.clear();
+    assert_invalid(line_panels(&stem, &[p], 1), &png, "no series");
+    let mut p = line_panel("a");
+    p.series[4].points.clear();
+    assert_invalid(line_panels(&stem, &[p], 1), &png, "no points");
+    let mut p = line_panel("a");
+    p.series[2].points[7].1 = f64::NAN;
+    assert_invalid(line_panels(&stem, &[p], 1), &png, "non-finite point");
+    let mut p = line_panel("a");
+    p.series[2].points[0].0 = f64::NEG_INFINITY;
+    assert_invalid(line_panels(&stem, &[p], 1), &png, "non-finite point");
+    let a = line_panel("a");
+    let mut b = line_panel("b");
+    b.series[4].name = "other".into();
+    assert_invalid(line_panels(&stem, &[a, b], 2), &png, "same order");
+    assert!(files_in(&d).is_empty());
+}
+
+#[test]
+fn unwritable_target_is_an_io_error_naming_the_path() {
+    let d = dir("unwritable");
+    let file = d.join("not-a-dir");
+    std::fs::write(&file, b"x").unwrap();
+    let err = bar_panels(&file.join("fig"), &[bar_panel("a")], 1).unwrap_err();
+    assert!(matches!(err, PlotError::Io { .. }), "{err:?}");
+    assert!(err.to_string().contains("not-a-dir"), "{err}");
+}
+
+#[test]
+fn ewma_matches_hand_computed_values() {
+    assert!(ewma(&[], 0.9).is_empty());
+    assert_eq!(ewma(&[4.0], 0.9), vec![4.0]);
+    // s0 = 10, s1 = 0.9·10 + 0.1·0 = 9, s2 = 0.9·9 = 8.1, s3 = 0.9·8.1 + 0.1·20 = 9.29
+    let s = ewma(&[10.0, 0.0, 0.0, 20.0], 0.9);
+    let want = [10.0, 9.0, 8.1, 9.29];
+    assert_eq!(s.len(), want.len());
+    for (a, b) in s.iter().zip(want) {
+        assert!((a - b).abs() < 1e-12, "{s:?}");
+    }
+    // alpha 0.5: 1, 1.5, 2.25
+    assert_eq!(ewma(&[1.0, 2.0, 3.0], 0.5), vec![1.0, 1.5, 2.25]);
+    // alpha 0 is the identity, alpha 1 holds the first value.
+    assert_eq!(ewma(&[1.0, 5.0, -2.0], 0.0), vec![1.0, 5.0, -2.0]);
+    assert_eq!(ewma(&[1.0, 5.0, -2.0], 1.0), vec![1.0, 1.0, 1.0]);
+    // A constant stays constant.
+    assert!(ewma(&[3.0; 50], 0.9)
+        .iter()
+        .all(|&v| (v - 3.0).abs() < 1e-12));
+}
+
+#[test]
+fn extreme_values_do_not_panic() {
+    let d = dir("extreme");
+    let mut p = bar_panel("huge");
+    p.series[0].means = vec![1e308, -1e308, 1e-300, 0.0];
+    p.series[0].errors = vec![1e308, 0.0, 0.0, 0.0];
+    let r = bar_panels(&d.join("huge-bars"), &[p], 1);
+    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+    let panel = LinePanel {
+        title: "huge".into(),
+        x_label: "x".into(),
+        y_label: "y".into(),
+        series: vec![LineSeries { name: "a".into(), points: vec![(-1e308, -1e308), (1e308, 1e308)] }],
+    };
+    let r = line_panels(&d.join("huge-lines"), &[panel], 1);
+    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+    let tiny = LinePanel {
+        title: "tiny".into(),
+        x_label: "x".into(),
+        y_label: "y".into(),
+        series: vec![LineSeries { name: "a".into(), points: vec![(0.0, 1e-300), (1e-300, 2e-300)] }],
+    };
+    let r = line_panels(&d.join("tiny-lines"), &[tiny], 1);
+    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+}
+
+#[test]
+fn too_many_panels_is_an_error_not_a_huge_image() {
+    let d = dir("too-many");
+    let panels: Vec<LinePanel> = (0..200).map(|i| line_panel(&format!("p{i}"))).collect();
+    let r = line_panels(&d.join("big"), &panels, 1);
+    assert!(matches!(r, Err(PlotError::InvalidInput { .. })), "{r:?}");
+}

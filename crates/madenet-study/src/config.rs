@@ -1,0 +1,171 @@
+//! [`StudyConfig`]: what the study runs, in one TOML file.
+
+use madenet_baselines::BaselineParams;
+use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
+use madenet_sim::{MapSource, PolicyRegistry, StartSpec};
+use madenet_world::ScenarioConfig;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The study's design. Defaults are the paper's comparison study (Sec. V.A.4) with 5 seeds per
+/// trial instead of the paper's 1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StudyConfig {
+    /// Methods by policy name (`madenet policies`), in the order tables and figures show them.
+    pub methods: Vec<String>,
+    /// Maps: `paper` (the paper's 10, embedded), `paper:N`, `generate:SEED`, a map file, or a
+    /// folder whose `.yaml` maps are all used (sorted by name).
+    pub maps: Vec<String>,
+    /// Starts: corner names (`top-left`, …) or explicit cells `r,c;r,c;r,c`.
+    pub starts: Vec<String>,
+    /// Communication success probabilities (paper: 0, 0.5, 0.8, 1).
+    pub csp: Vec<f64>,
+    /// Seeds per (method, map, start, CSP): `seed_base`, `seed_base + 1`, …
+    pub seeds: u64,
+    pub seed_base: u64,
+    /// The scenario of every trial (its `comm_success_prob` is replaced by each CSP).
+    pub scenario: ScenarioConfig,
+    /// Parameters of the classical baselines.
+    pub baselines: BaselineParams,
+}
+
+impl Default for StudyConfig {
+    fn default() -> Self {
+        StudyConfig {
+            methods: ["nf", "ub", "pb"].map(String::from).to_vec(),
+            maps: vec!["paper".into()],
+            starts: Corner::ALL.iter().map(|c| c.name().to_string()).collect(),
+            csp: vec![0.0, 0.5, 0.8, 1.0],
+            seeds: 5,
+            seed_base: 1,
+            scenario: ScenarioConfig::default(),
+            baselines: BaselineParams::default(),
+        }
+    }
+}
+
+/// A study that cannot start; the message names the file and field.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error("{path}: {message}")]
+    File { path: String, message: String },
+    #[error("study field `{field}`: {message}")]
+    Field { field: &'static str, message: String },
+    #[error("{0}")]
+    Other(String),
+}
+
+fn field(field: &'static str, message: impl Into<String>) -> StudyError {
+    StudyError::Field { field, message: message.into() }
+}
+
+/// A map of the study, loaded.
+#[derive(Clone, Debug)]
+pub struct StudyMap {
+    pub name: String,
+    pub grid: madenet_map::OccGrid,
+}
+
+impl StudyConfig {
+    pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| StudyError::File { path: path.display().to_string(), message: e.to_string() })?;
+        toml::from_str(&text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            StudyError::File {
+                path: path.display().to_string(),
+                message: match line {
+                    Some(l) => format!("{} (line {l})", e.message().trim()),
+                    None => e.message().trim().to_string(),
+                },
+            }
+        })
+    }
+
+    /// The policy registry of the study: built-ins plus the baselines with this config's
+    /// parameters.
+    pub fn registry(&self) -> PolicyRegistry {
+        let mut r = PolicyRegistry::builtin();
+        madenet_baselines::register(&mut r, &self.baselines);
+        r
+    }
+
+    /// Checks everything that can be checked before a trial runs, and loads the maps.
+    pub fn validate(&self, registry: &PolicyRegistry) -> Result<(Vec<StudyMap>, Vec<StartSpec>), StudyError> {
+        if self.methods.is_empty() {
+            return Err(field("methods", "is empty"));
+        }
+        let known = registry.names();
+        for m in &self.methods {
+            if !known.contains(m) {
+                return Err(field("methods", format!("unknown method `{m}`; known: {}", known.join(", "))));
+            }
+        }
+        if let Some(d) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
+            return Err(field("methods", format!("`{}` is listed twice", d.1)));
+        }
+        if self.csp.is_empty() {
+            return Err(field("csp", "is empty: list at least one communication success probability"));
+        }
+        for &c in &self.csp {
+            if !(0.0..=1.0).contains(&c) {
+                return Err(field("csp", format!("{c} is not a probability")));
+            }
+        }
+        if self.seeds == 0 {
+            return Err(field("seeds", "must be at least 1"));
+        }
+        self.scenario.validate().map_err(|e| field("scenario", e.to_string()))?;
+        let maps = self.load_maps()?;
+        if self.starts.is_empty() {
+            return Err(field("starts", "is empty"));
+        }
+        let starts = self
+            .starts
+            .iter()
+            .map(|s| s.parse::<StartSpec>().map_err(|e| field("starts", e)))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((maps, starts))
+    }
+
+    fn load_maps(&self) -> Result<Vec<StudyMap>, StudyError> {
+        if self.maps.is_empty() {
+            return Err(field("maps", "is empty"));
+        }
+        let mut out = Vec::new();
+        for m in &self.maps {
+            let sources: Vec<MapSource> = if m == "paper" {
+                (1..=PAPER_MAP_COUNT).map(MapSource::Paper).collect()
+            } else if !m.contains(':') && Path::new(m).is_dir() {
+                let mut files: Vec<PathBuf> = std::fs::read_dir(m)
+                    .map_err(|e| StudyError::File { path: m.clone(), message: e.to_string() })?
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .filter(|p| p.extension().is_some_and(|x| x == "yaml" || x == "yml"))
+                    .collect();
+                files.sort();
+                if files.is_empty() {
+                    return Err(StudyError::File { path: m.clone(), message: "folder holds no .yaml maps (field `maps`)".into() });
+                }
+                files.into_iter().map(MapSource::File).collect()
+            } else {
+                let src = m.parse::<MapSource>().map_err(|e| field("maps", e))?;
+                if let MapSource::File(p) = &src {
+                    if !p.exists() {
+                        return Err(StudyError::File { path: p.display().to_string(), message: "no such map file or folder (field `maps`)".into() });
+                    }
+                }
+                vec![src]
+            };
+            for src in sources {
+                let grid = src.load(&self.scenario).map_err(|e| StudyError::Other(format!("{e} (field `maps`)")))?;
+                let name = src.name();
+                if out.iter().any(|x: &StudyMap| x.name == name) {
+                    return Err(field("maps", format!("two maps are named `{name}`")));
+                }
+                out.push(StudyMap { name, grid });
+            }
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,60 @@
+//! The comparison study of MADE-Net (paper Sec. V.A), reproducible with one command
+//! (`madenet compare`): methods × maps × starts × CSPs × seeds, run in parallel over cores,
+//! each finished trial appended as a whole line (so an interrupted study resumes where it
+//! stopped), then
+//!
+//! * `trials.csv` — one row per trial with every metric; `curves.jsonl` — exploration curves;
+//! * `summary.md` / `summary.csv` — mean ± sd per method × CSP;
+//! * `statistics.md` / `statistics.csv` — Friedman tests across methods and Bonferroni-corrected
+//!   pairwise Wilcoxon signed-rank tests per metric per CSP, paired by (map, start, seed);
+//! * `fig4_metrics.{png,svg}` and `fig5_exploration.{png,svg}` — the paper's Fig. 4 and 5;
+//! * `report.md` — all of it, plus the calibration against the authors' published baseline
+//!   results.
+//!
+//! Methods are policy names: the study has no special case per method.
+
+pub mod analysis;
+pub mod calibration;
+pub mod config;
+pub mod report;
+pub mod runner;
+
+pub use config::{StudyConfig, StudyError};
+pub use runner::{TrialKey, TrialOutcome};
+
+use std::path::{Path, PathBuf};
+
+/// Runs the study into `out` (created if needed). With `fresh`, earlier results there are
+/// discarded; otherwise trials already recorded for the same configuration are kept and only
+/// the rest run. Returns the path of `report.md`.
+pub fn run_study(
+    cfg: &StudyConfig,
+    out: &Path,
+    fresh: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(PathBuf, Vec<TrialOutcome>), StudyError> {
+    let registry = cfg.registry();
+    let (maps, starts) = cfg.validate(&registry)?;
+    let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };
+    std::fs::create_dir_all(out).map_err(io)?;
+    let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
+    let cfg_path = out.join("study.toml");
+    if fresh {
+        for f in ["trials.csv", "curves.jsonl"] {
+            let _ = std::fs::remove_file(out.join(f));
+        }
+    } else if let Ok(old) = std::fs::read_to_string(&cfg_path) {
+        if old != cfg_text && (out.join("trials.csv").exists()) {
+            return Err(StudyError::File {
+                path: out.display().to_string(),
+                message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
+            });
+        }
+    }
+    runner::write_atomic(&cfg_path, cfg_text.as_bytes())?;
+    let started = std::time::Instant::now();
+    let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
+    let wall = started.elapsed().as_secs_f64();
+    let report = report::write_all(cfg, &outcomes, out, wall)?;
+    Ok((report, outcomes))
+}

@@ -1,0 +1,207 @@
+//! Writing the study's outputs: summary tables, statistics, figures and `report.md`.
+
+use crate::analysis::{csps, mean_curve, select, statistics, summary, Metric, MetricStats, SummaryRow};
+use crate::calibration::{compare, conventions, Comparison};
+use crate::config::{StudyConfig, StudyError};
+use crate::runner::{write_atomic, TrialOutcome};
+use madenet_plots::{bar_panels, line_panels, BarPanel, BarSeries, LinePanel, LineSeries};
+use std::fmt::Write as _;
+use std::path::Path;
+
+fn pct(csp: &str) -> String {
+    csp.parse::<f64>().map(|c| format!("{:.0} %", 100.0 * c)).unwrap_or_else(|_| csp.to_string())
+}
+
+fn summary_md(rows: &[SummaryRow]) -> String {
+    let mut s = String::from("| method | CSP | trials | completed | TNS | TTD (m) | NOLI | OFV | CT per trial (ms) | CT per decision (µs) |\n|---|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows {
+        let _ = write!(s, "| {} | {} | {} | {} |", r.method, pct(&r.csp), r.trials, r.completed);
+        for (m, sd) in &r.metrics {
+            let _ = write!(s, " {m:.1} ± {sd:.1} |");
+        }
+        let _ = writeln!(s, " {:.3} | {:.1} |", r.trial_s * 1e3, r.per_decision_s * 1e6);
+    }
+    s
+}
+
+fn summary_csv(rows: &[SummaryRow]) -> String {
+    let mut s = String::from("method,csp,trials,completed,tns_mean,tns_sd,ttd_mean,ttd_sd,noli_mean,noli_sd,ofv_mean,ofv_sd,trial_s,per_decision_s\n");
+    for r in rows {
+        let _ = write!(s, "{},{},{},{}", r.method, r.csp, r.trials, r.completed);
+        for (m, sd) in &r.metrics {
+            let _ = write!(s, ",{m:.6},{sd:.6}");
+        }
+        let _ = writeln!(s, ",{:.9},{:.9}", r.trial_s, r.per_decision_s);
+    }
+    s
+}
+
+fn fmt_p(p: f64) -> String {
+    if p < 1e-4 {
+        format!("{p:.1e}")
+    } else {
+        format!("{p:.4}")
+    }
+}
+
+fn statistics_md(stats: &[MetricStats], alpha: f64) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "Friedman test across methods, then two-sided Wilcoxon signed-rank tests between every pair of methods, Bonferroni-corrected over the pairs; blocks are (map, start, seed). Significant: corrected p < {alpha}.\n");
+    let _ = writeln!(s, "| CSP | metric | blocks | Friedman χ² | p |\n|---|---|---|---|---|");
+    for st in stats {
+        match &st.friedman {
+            Ok(f) => {
+                let _ = writeln!(s, "| {} | {} | {} | {:.2} | {} |", pct(&st.csp), st.metric.name(), st.blocks, f.statistic, fmt_p(f.p_value));
+            }
+            Err(e) => {
+                let _ = writeln!(s, "| {} | {} | {} | — | {e} |", pct(&st.csp), st.metric.name(), st.blocks);
+            }
+        }
+    }
+    let _ = writeln!(s, "\n| CSP | metric | pair | W | n | p | corrected p | significant |\n|---|---|---|---|---|---|---|---|");
+    for st in stats {
+        if let Ok(pairs) = &st.pairs {
+            for p in pairs {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} vs {} | {:.1} | {} | {} | {} | {} |",
+                    pct(&st.csp),
+                    st.metric.name(),
+                    p.a,
+                    p.b,
+                    p.test.statistic,
+                    p.test.n,
+                    fmt_p(p.test.p_value),
+                    fmt_p(p.p_corrected),
+                    if p.p_corrected < alpha { "yes" } else { "no" }
+                );
+            }
+        }
+    }
+    s
+}
+
+fn statistics_csv(stats: &[MetricStats]) -> String {
+    let mut s = String::from("csp,metric,test,a,b,statistic,n,p,p_corrected\n");
+    for st in stats {
+        if let Ok(f) = &st.friedman {
+            let _ = writeln!(s, "{},{},friedman,,,{:.9},{},{:.9e},", st.csp, st.metric.name(), f.statistic, st.blocks, f.p_value);
+        }
+        if let Ok(pairs) = &st.pairs {
+            for p in pairs {
+                let _ = writeln!(s, "{},{},wilcoxon,{},{},{:.3},{},{:.9e},{:.9e}", st.csp, st.metric.name(), p.a, p.b, p.test.statistic, p.test.n, p.test.p_value, p.p_corrected);
+            }
+        }
+    }
+    s
+}
+
+fn calibration_md(cmp: &[Comparison]) -> String {
+    if cmp.is_empty() {
+        return "No method of this study has published results of the authors to compare with (NF, UB, PB on the paper's maps).\n".into();
+    }
+    let mut s = String::from("Our means against the authors' published per-run results for the same maps and starts (`reference/`; failure probability 0/20/50/100 % = CSP 1.0/0.8/0.5/0.0). Their steps are steps to 100 % of the map known, capped at 100 as their runs were; ours are TNS capped at 100. Their local interactions count robot pairs at Chebyshev distance < 4 with line of sight per timestep (their `data_cleaning.py` halves a list of ordered pairs); ours are counted the same way here (`noli_authors`). Differences above 15 % are marked and attributed below.\n\n| method | CSP | metric | ours | theirs | difference |\n|---|---|---|---|---|---|\n");
+    for c in cmp {
+        let rel = c.relative();
+        let flag = if rel.abs() > 0.15 { " **>15 %**" } else { "" };
+        let _ = writeln!(s, "| {} | {:.0} % | {} | {:.1} | {:.1} | {:+.0} %{flag} |", c.method, 100.0 * c.csp, c.metric, c.ours, c.theirs, 100.0 * rel);
+    }
+    let flagged: Vec<&Comparison> = cmp.iter().filter(|c| c.relative().abs() > 0.15).collect();
+    if !flagged.is_empty() {
+        s.push_str("\nEach difference above 15 % and the convention differences that act on it (described below the list):\n\n");
+        for c in &flagged {
+            let names: Vec<&str> = conventions(&c.method, c.metric, c.csp).iter().map(|v| v.name()).collect();
+            let _ = writeln!(s, "- {} at CSP {:.0} %, {} ({:+.0} %): {}.", c.method, 100.0 * c.csp, c.metric, 100.0 * c.relative(), names.join(", "));
+        }
+        let mut all: Vec<crate::calibration::Convention> = flagged.iter().flat_map(|c| conventions(&c.method, c.metric, c.csp)).collect();
+        all.dedup();
+        let mut seen = Vec::new();
+        s.push('\n');
+        for v in all {
+            if !seen.contains(&v) {
+                seen.push(v);
+                let _ = writeln!(s, "- **{}**: {}.", v.name(), v.explain());
+            }
+        }
+    }
+    s
+}
+
+/// Writes every output of the study into `out`; returns the report's path.
+pub fn write_all(cfg: &StudyConfig, outcomes: &[TrialOutcome], out: &Path, wall_s: f64) -> Result<std::path::PathBuf, StudyError> {
+    let alpha = 0.001;
+    let rows = summary(outcomes, &cfg.methods);
+    write_atomic(&out.join("summary.md"), summary_md(&rows).as_bytes())?;
+    write_atomic(&out.join("summary.csv"), summary_csv(&rows).as_bytes())?;
+    let stats = statistics(outcomes, &cfg.methods);
+    write_atomic(&out.join("statistics.md"), statistics_md(&stats, alpha).as_bytes())?;
+    write_atomic(&out.join("statistics.csv"), statistics_csv(&stats).as_bytes())?;
+    let plot_err = |e: madenet_plots::PlotError| StudyError::Other(e.to_string());
+    // Fig. 4: grouped bars per metric, methods × CSP, error bars one standard deviation.
+    let cs = csps(outcomes);
+    let panels: Vec<BarPanel> = Metric::ALL
+        .iter()
+        .enumerate()
+        .map(|(k, m)| BarPanel {
+            title: format!("({}) {}", ["a", "b", "c", "d"][k], m.name()),
+            y_label: m.label().to_string(),
+            categories: cs.iter().map(|(_, c)| format!("CSP {}", pct(c))).collect(),
+            series: cfg
+                .methods
+                .iter()
+                .map(|method| {
+                    let (means, errors) = cs
+                        .iter()
+                        .map(|(_, c)| rows.iter().find(|r| &r.method == method && &r.csp == c).map(|r| r.metrics[k]).unwrap_or((0.0, 0.0)))
+                        .unzip();
+                    BarSeries { name: method.to_uppercase(), means, errors }
+                })
+                .collect(),
+        })
+        .collect();
+    bar_panels(&out.join("fig4_metrics"), &panels, 2).map_err(plot_err)?;
+    // Fig. 5: mean explored % vs distance at full and no communication.
+    let curve_panels: Vec<LinePanel> = cs
+        .iter()
+        .rev()
+        .filter(|(c, _)| *c == 1.0 || *c == 0.0)
+        .map(|(_, c)| LinePanel {
+            title: format!("CSP {}", pct(c)),
+            x_label: "team distance travelled (m)".into(),
+            y_label: "explored (%)".into(),
+            series: cfg.methods.iter().map(|m| LineSeries { name: m.to_uppercase(), points: mean_curve(&select(outcomes, m, c), 2.0) }).collect(),
+        })
+        .collect();
+    let mut fig5 = false;
+    if !curve_panels.is_empty() {
+        line_panels(&out.join("fig5_exploration"), &curve_panels, curve_panels.len()).map_err(plot_err)?;
+        fig5 = true;
+    }
+    let cmp = compare(outcomes);
+    let mut r = String::new();
+    let _ = writeln!(r, "# madenet comparison study\n");
+    let _ = writeln!(
+        r,
+        "Methods {} on {} maps × {} starts × CSP {{{}}} × {} seeds (seed {}…): {} trials, step cap {}, simulated in {:.1} s on this machine. Configuration: `study.toml`; every trial: `trials.csv` (exploration curves: `curves.jsonl`).\n",
+        cfg.methods.join(", "),
+        outcomes.iter().map(|o| &o.row.key.map).collect::<std::collections::BTreeSet<_>>().len(),
+        cfg.starts.len(),
+        cfg.csp.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", "),
+        cfg.seeds,
+        cfg.seed_base,
+        outcomes.len(),
+        cfg.scenario.step_cap,
+        wall_s
+    );
+    let _ = writeln!(r, "## Summary (mean ± sd)\n\n{}", summary_md(&rows));
+    let _ = writeln!(r, "TNS: timesteps to completion (the cap if not completed); TTD: team travel distance; NOLI: robot pairs within d_s in line of sight, over timesteps; OFV: Eq. (1), Σ_p p / D(p); CT: simulation wall time.\n");
+    let _ = writeln!(r, "## Figures\n\n![Fig. 4](fig4_metrics.png)\n\n*Fig. 4 — means across trials per method and CSP, error bars one standard deviation (`fig4_metrics.svg`).*\n");
+    if fig5 {
+        let _ = writeln!(r, "![Fig. 5](fig5_exploration.png)\n\n*Fig. 5 — mean explored % against team distance travelled (`fig5_exploration.svg`).*\n");
+    }
+    let _ = writeln!(r, "## Statistics\n\n{}", statistics_md(&stats, alpha));
+    let _ = writeln!(r, "## Calibration against the authors' code\n\n{}", calibration_md(&cmp));
+    let path = out.join("report.md");
+    write_atomic(&path, r.as_bytes())?;
+    Ok(path)
+}

@@ -1,0 +1,296 @@
+//! Running the trials: in parallel, appended as whole lines as they finish, resumable.
+
+use crate::config::{StudyConfig, StudyError, StudyMap};
+use madenet_metrics::COVERAGE_LEVELS;
+use madenet_sim::{PolicyRegistry, StartSpec, Trial, TrialSpec};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Mutex;
+
+/// Identifies a trial: (method, map, start, CSP, seed).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct TrialKey {
+    pub method: String,
+    pub map: String,
+    pub start: String,
+    /// CSP as written in outputs (shortest round-trip decimal).
+    pub csp: String,
+    pub seed: u64,
+}
+
+/// One row of `trials.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrialRow {
+    pub key: TrialKey,
+    pub completed: bool,
+    pub tns: usize,
+    pub ttd: f64,
+    pub noli: usize,
+    pub noli_authors: usize,
+    pub ofv: f64,
+    pub explored: f64,
+    pub steps_to: Vec<Option<usize>>,
+    pub trial_s: f64,
+    pub decisions: usize,
+    pub per_decision_s: f64,
+}
+
+/// One line of `curves.jsonl`: the exploration curve of a trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Curve {
+    pub key: TrialKey,
+    /// Explored fraction after each timestep (index 0: before the first move).
+    pub explored: Vec<f64>,
+    /// Team distance in metres, aligned with `explored`.
+    pub distance: Vec<f64>,
+}
+
+/// A finished trial.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrialOutcome {
+    pub row: TrialRow,
+    pub curve: Curve,
+}
+
+const FIXED_HEADER: [&str; 15] = [
+    "method", "map", "start", "csp", "seed", "completed", "tns", "ttd_m", "noli", "noli_authors", "ofv", "explored",
+    "trial_s", "decisions", "per_decision_s",
+];
+
+fn header() -> Vec<String> {
+    let mut h: Vec<String> = FIXED_HEADER.iter().map(|s| s.to_string()).collect();
+    h.extend(COVERAGE_LEVELS.iter().map(|n| format!("to_{n}")));
+    h
+}
+
+impl TrialRow {
+    fn to_line(&self) -> String {
+        let k = &self.key;
+        let mut f = vec![
+            k.method.clone(),
+            k.map.clone(),
+            k.start.clone(),
+            k.csp.clone(),
+            k.seed.to_string(),
+            self.completed.to_string(),
+            self.tns.to_string(),
+            format!("{:.6}", self.ttd),
+            self.noli.to_string(),
+            self.noli_authors.to_string(),
+            format!("{:.6}", self.ofv),
+            format!("{:.6}", self.explored),
+            format!("{:.6}", self.trial_s),
+            self.decisions.to_string(),
+            format!("{:.9}", self.per_decision_s),
+        ];
+        f.extend(self.steps_to.iter().map(|s| s.map(|v| v.to_string()).unwrap_or_default()));
+        let mut w = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+        w.write_record(&f).expect("writing to memory");
+        String::from_utf8(w.into_inner().expect("writing to memory")).expect("utf-8")
+    }
+
+    fn from_record(r: &csv::StringRecord) -> Option<TrialRow> {
+        if r.len() != FIXED_HEADER.len() + COVERAGE_LEVELS.len() {
+            return None;
+        }
+        let g = |i: usize| r.get(i);
+        Some(TrialRow {
+            key: TrialKey {
+                method: g(0)?.to_string(),
+                map: g(1)?.to_string(),
+                start: g(2)?.to_string(),
+                csp: g(3)?.to_string(),
+                seed: g(4)?.parse().ok()?,
+            },
+            completed: g(5)?.parse().ok()?,
+            tns: g(6)?.parse().ok()?,
+            ttd: g(7)?.parse().ok()?,
+            noli: g(8)?.parse().ok()?,
+            noli_authors: g(9)?.parse().ok()?,
+            ofv: g(10)?.parse().ok()?,
+            explored: g(11)?.parse().ok()?,
+            trial_s: g(12)?.parse().ok()?,
+            decisions: g(13)?.parse().ok()?,
+            per_decision_s: g(14)?.parse().ok()?,
+            steps_to: (0..COVERAGE_LEVELS.len())
+                .map(|k| {
+                    let s = g(15 + k)?;
+                    if s.is_empty() {
+                        Some(None)
+                    } else {
+                        s.parse().ok().map(Some)
+                    }
+                })
+                .collect::<Option<Vec<_>>>()?,
+        })
+    }
+}
+
+/// Writes `contents` to `path` atomically (temp file in the same folder, then rename).
+pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), StudyError> {
+    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
+    let io = |e: std::io::Error| StudyError::File { path: path.display().to_string(), message: e.to_string() };
+    let mut f = std::fs::File::create(&tmp).map_err(io)?;
+    f.write_all(contents).map_err(io)?;
+    f.sync_all().map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(io)
+}
+
+/// Trials already recorded in `out` (complete rows with their curves); a torn last line from
+/// an interrupted run is dropped.
+fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
+    let mut rows = HashMap::new();
+    if let Ok(text) = std::fs::read_to_string(out.join("trials.csv")) {
+        let mut rdr = csv::ReaderBuilder::new().flexible(true).from_reader(text.as_bytes());
+        for rec in rdr.records().flatten() {
+            if let Some(row) = TrialRow::from_record(&rec) {
+                rows.insert(row.key.clone(), row);
+            }
+        }
+    }
+    let mut curves = HashMap::new();
+    if let Ok(text) = std::fs::read_to_string(out.join("curves.jsonl")) {
+        for line in text.lines() {
+            if let Ok(c) = serde_json::from_str::<Curve>(line) {
+                curves.insert(c.key.clone(), c);
+            }
+        }
+    }
+    rows.into_iter()
+        .filter_map(|(k, row)| curves.remove(&k).map(|curve| (k, TrialOutcome { row, curve })))
+        .collect()
+}
+
+fn csp_label(c: f64) -> String {
+    format!("{c}")
+}
+
+/// Everything the study runs, in output order.
+pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(TrialKey, TrialSpec)> {
+    let mut v = Vec::new();
+    for method in &cfg.methods {
+        for m in maps {
+            for s in starts {
+                for &csp in &cfg.csp {
+                    for k in 0..cfg.seeds {
+                        let seed = cfg.seed_base + k;
+                        let key = TrialKey { method: method.clone(), map: m.name.clone(), start: s.name(), csp: csp_label(csp), seed };
+                        let config = madenet_world::ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() };
+                        let spec = TrialSpec {
+                            map: m.grid.clone(),
+                            map_name: m.name.clone(),
+                            starts: s.cells(m.grid.height(), m.grid.width()),
+                            config,
+                            policy: method.clone(),
+                            seed,
+                        };
+                        v.push((key, spec));
+                    }
+                }
+            }
+        }
+    }
+    v
+}
+
+/// Runs every planned trial not yet recorded in `out`, appending each as it finishes, and
+/// returns all outcomes in plan order. `progress(done, total)` is called as trials finish.
+pub fn run(
+    cfg: &StudyConfig,
+    registry: &PolicyRegistry,
+    maps: &[StudyMap],
+    starts: &[StartSpec],
+    out: &Path,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<TrialOutcome>, StudyError> {
+    let planned = plan(cfg, maps, starts);
+    // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
+    for (key, spec) in &planned {
+        if key.seed == cfg.seed_base {
+            Trial::with_registry(spec.clone(), registry)
+                .map_err(|e| StudyError::Other(format!("map {}, start {}: {e}", key.map, key.start)))?;
+        }
+    }
+    let mut done = load_done(out);
+    done.retain(|k, _| planned.iter().any(|(p, _)| p == k));
+    // Rewrite the record files with exactly the complete trials, then append.
+    let mut kept: Vec<&TrialOutcome> = done.values().collect();
+    kept.sort_by(|a, b| a.row.key.cmp(&b.row.key));
+    write_records(out, &kept)?;
+    let open = |name: &str| {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(out.join(name))
+            .map_err(|e| StudyError::File { path: out.join(name).display().to_string(), message: e.to_string() })
+    };
+    let files = Mutex::new((open("trials.csv")?, open("curves.jsonl")?));
+    let todo: Vec<&(TrialKey, TrialSpec)> = planned.iter().filter(|(k, _)| !done.contains_key(k)).collect();
+    let total = planned.len();
+    let counter = std::sync::atomic::AtomicUsize::new(done.len());
+    progress(done.len(), total);
+    let fresh: Vec<Result<TrialOutcome, StudyError>> = todo
+        .par_iter()
+        .map(|(key, spec)| {
+            let result = Trial::with_registry(spec.clone(), registry)
+                .map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?
+                .run();
+            let m = &result.metrics;
+            let outcome = TrialOutcome {
+                row: TrialRow {
+                    key: key.clone(),
+                    completed: m.completed,
+                    tns: m.tns,
+                    ttd: m.ttd,
+                    noli: m.noli,
+                    noli_authors: m.noli_authors,
+                    ofv: m.ofv,
+                    explored: m.explored,
+                    steps_to: m.steps_to.clone(),
+                    trial_s: result.timing.trial_s,
+                    decisions: result.timing.decisions,
+                    per_decision_s: result.timing.per_decision_s,
+                },
+                curve: Curve { key: key.clone(), explored: m.explored_per_step.clone(), distance: m.distance_per_step.clone() },
+            };
+            {
+                let mut f = files.lock().expect("no panics while holding the lock");
+                let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };
+                let mut line = serde_json::to_string(&outcome.curve).expect("curve serializes");
+                line.push('\n');
+                f.1.write_all(line.as_bytes()).map_err(io)?;
+                f.1.flush().map_err(io)?;
+                f.0.write_all(outcome.row.to_line().as_bytes()).map_err(io)?;
+                f.0.flush().map_err(io)?;
+            }
+            let n = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(n, total);
+            Ok(outcome)
+        })
+        .collect();
+    for r in fresh {
+        let o = r?;
+        done.insert(o.row.key.clone(), o);
+    }
+    let all: Vec<TrialOutcome> = planned.iter().map(|(k, _)| done.remove(k).expect("every planned trial ran")).collect();
+    // Final files in plan order: the same bytes whatever the thread count or interruptions
+    // (but for the wall-clock columns).
+    write_records(out, &all.iter().collect::<Vec<_>>())?;
+    Ok(all)
+}
+
+fn write_records(out: &Path, outcomes: &[&TrialOutcome]) -> Result<(), StudyError> {
+    let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
+    w.write_record(header()).expect("writing to memory");
+    let mut csv_bytes = w.into_inner().expect("writing to memory");
+    let mut curves = Vec::new();
+    for o in outcomes {
+        csv_bytes.extend_from_slice(o.row.to_line().as_bytes());
+        curves.extend_from_slice(serde_json::to_string(&o.curve).expect("curve serializes").as_bytes());
+        curves.push(b'\n');
+    }
+    write_atomic(&out.join("curves.jsonl"), &curves)?;
+    write_atomic(&out.join("trials.csv"), &csv_bytes)
+}

@@ -1,0 +1,55 @@
+//! `madenet compare`: the paper's comparison study in one command.
+
+use anyhow::Result;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use madenet_study::{run_study, StudyConfig};
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// Study config (TOML, see configs/study.toml); defaults: nf, ub, pb × the 10 paper maps ×
+    /// 4 corners × CSP {0, 0.5, 0.8, 1} × 5 seeds.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Output folder (created; an interrupted study there resumes).
+    #[arg(long, default_value = "study")]
+    out: PathBuf,
+    /// Discard earlier results in the output folder.
+    #[arg(long)]
+    fresh: bool,
+    /// Methods, overriding the config (comma-separated policy names).
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Seeds per trial, overriding the config.
+    #[arg(long)]
+    seeds: Option<u64>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+pub fn run(a: CompareArgs) -> Result<()> {
+    let mut cfg = match &a.config {
+        Some(p) => StudyConfig::from_toml_file(p)?,
+        None => StudyConfig::default(),
+    };
+    if let Some(m) = a.methods {
+        cfg.methods = m;
+    }
+    if let Some(s) = a.seeds {
+        cfg.seeds = s;
+    }
+    let bar = ProgressBar::new(0);
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}").expect("valid template"));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build()?;
+    let (report, outcomes) = pool.install(|| {
+        run_study(&cfg, &a.out, a.fresh, &|done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })
+    })?;
+    bar.finish_and_clear();
+    out!("{} trials → {}", outcomes.len(), report.display())?;
+    Ok(())
+}
