@@ -51,16 +51,17 @@ impl<'a> AgentView<'a> {
     /// tree is kept, so the navigator's path to a settled goal is free.
     pub fn search(&mut self, stop: impl FnMut(usize, u32) -> bool) -> Option<usize> {
         let belief = self.belief;
-        let mut held = [usize::MAX; 8];
-        let mut n_held = 0;
-        for p in self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).take(8) {
-            held[n_held] = belief.index(p);
-            n_held += 1;
-        }
-        let held = &held[..n_held];
         let map = belief.map();
+        let mut held = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p));
+        let (a, b) = (held.next().unwrap_or(usize::MAX), held.next().unwrap_or(usize::MAX));
         *self.dijkstra_fresh = true;
-        self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && !held.contains(&i), belief.movement(), stop)
+        if held.next().is_none() {
+            // Up to two teammates in view (the paper's team of three): two compares per cell.
+            self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && i != a && i != b, belief.movement(), stop)
+        } else {
+            let cells: Vec<usize> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p)).collect();
+            self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && !cells.contains(&i), belief.movement(), stop)
+        }
     }
 
     /// The cost to a cell settled by the last [`AgentView::search`], in cells.

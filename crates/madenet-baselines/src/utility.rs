@@ -40,7 +40,8 @@ impl Default for UbParams {
 /// * choice: the target maximizing U(t) − β · V(t); ties go to the cheaper, then the lower
 ///   row-major index.
 ///
-/// Since U ≤ 1, no target costing more than (1 − best)/β can win, and the search stops there.
+/// No target costing more than (max U − best)/β can win (max U over all frontier cells), and
+/// the search stops there.
 pub struct UtilityBased {
     beta: f64,
     radius: f64,
@@ -109,22 +110,27 @@ impl Policy for UtilityBased {
             .collect();
         let own = belief.index(view.pos);
         let (beta, radius, cell_size) = (self.beta, self.radius, self.cell_size);
-        let mut best: Option<(f64, u32, usize)> = None; // (score, cost, cell)
+        // Utility per frontier cell (reachable or not): the largest bounds what any target
+        // can score, so the search can stop once distance alone rules the rest out.
         let this = &*self;
+        let utility = |p: Pos| {
+            let gain = this.unknown_around(p.row as usize, p.col as usize, h, w) as f64 / window;
+            let overlap: f64 = goals.iter().map(|g| (1.0 - p.euclid(*g) / radius).max(0.0)).sum();
+            gain - overlap
+        };
+        let max_utility = belief.frontier_cells().map(utility).fold(f64::NEG_INFINITY, f64::max);
+        let mut best: Option<(f64, u32, usize)> = None; // (score, cost, cell)
         view.search(|i, cost| {
             let metres = madenet_nav::cost_to_cells(cost) * cell_size;
             if let Some((score, _, _)) = best {
-                if 1.0 - beta * metres < score {
+                if max_utility - beta * metres < score {
                     return true; // nothing this far away can beat the best any more
                 }
             }
             if i == own || !belief.is_frontier_index(i) {
                 return false;
             }
-            let p = belief.pos(i);
-            let gain = this.unknown_around(p.row as usize, p.col as usize, h, w) as f64 / window;
-            let overlap: f64 = goals.iter().map(|g| (1.0 - p.euclid(*g) / radius).max(0.0)).sum();
-            let score = gain - overlap - beta * metres;
+            let score = utility(belief.pos(i)) - beta * metres;
             let better = match best {
                 None => true,
                 Some((s, c, j)) => score > s || (score == s && (cost, i) < (c, j)),

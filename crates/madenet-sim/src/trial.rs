@@ -126,6 +126,10 @@ impl Trial {
     pub fn agents(&self) -> &[Agent] {
         &self.agents
     }
+    /// Robot `i`'s agent, e.g. to ask its policy again (benchmarks, debugging).
+    pub fn agent_mut(&mut self, i: usize) -> &mut Agent {
+        &mut self.agents[i]
+    }
     pub fn is_done(&self) -> bool {
         self.world.is_done()
     }

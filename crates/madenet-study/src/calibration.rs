@@ -53,7 +53,7 @@ impl Convention {
             Convention::Completion => "their run ends when their team map has no frontier left; ours when every explorable cell (visible from some reachable cell) is known",
             Convention::Navigation => "our robots plan paths with A* and prioritized space-time A* around teammates they talk to, and treat teammates they see as obstacles; theirs take one greedy step at a time and only avoid occupied cells",
             Convention::UbDesign => "their UB scores cells by a normalized cell reward plus a beta-shaped distance term and repels robots by breadth-first distance from teammates in sight; ours is Burgard et al.'s information gain − β·path cost with targets discounted near the goals teammates announced, as the study specifies",
-            Convention::PbDesign => "their PB multiplies the initial values by a reward multiplier, solves each teammate's value function with repulsive rewards around its neighbours, and iterates a fixed 21–50 sweeps; ours converges value iteration to 1e-3 on the plain rewards",
+            Convention::PbDesign => "their PB multiplies the initial values by a reward multiplier, solves each teammate's value function with repulsive rewards around its neighbours, ; ours solves every teammate's value function on the plain rewards (on these maps one function serves all teammates) and sweeps as they do (at least 21, then until values move by less than 1, at most 50)",
         }
     }
 }
