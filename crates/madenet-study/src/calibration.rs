@@ -119,17 +119,18 @@ fn reference_means(algorithm: &str, fp: u32) -> Option<(f64, f64, f64, usize)> {
     (acc.3 > 0).then(|| (acc.0 / acc.3 as f64, acc.1 / acc.3 as f64, acc.2 / acc.3 as f64, acc.3))
 }
 
-/// Our NF/UB/PB means against theirs wherever the study has the same method and CSP (on the
-/// paper's maps only). Our steps are capped at 100 like theirs; our local interactions are
-/// counted their way (`noli_authors`).
-pub fn compare(outcomes: &[TrialOutcome]) -> Vec<Comparison> {
+/// Our NF/UB/PB means against theirs wherever the study has the same method and CSP, on the
+/// paper's maps only (`paper_maps`: the names of the embedded paper maps the study used). Our
+/// steps are capped at 100 like theirs; our local interactions are counted their way
+/// (`noli_authors`).
+pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparison> {
     let mut out = Vec::new();
     for (ours, theirs) in METHODS {
         for (fp, _) in REFERENCE {
             let csp = csp_of_failure(fp);
             let sel: Vec<&TrialOutcome> = outcomes
                 .iter()
-                .filter(|o| o.row.key.method == ours && o.row.key.map.starts_with("test_"))
+                .filter(|o| o.row.key.method == ours && paper_maps.contains(&o.row.key.map))
                 .filter(|o| o.row.key.csp.parse::<f64>().is_ok_and(|c| (c - csp).abs() < 1e-9))
                 .collect();
             let Some((t_steps, t_dist, t_int, runs)) = reference_means(theirs, fp) else { continue };

@@ -65,6 +65,9 @@ fn field(field: &'static str, message: impl Into<String>) -> StudyError {
 pub struct StudyMap {
     pub name: String,
     pub grid: madenet_map::OccGrid,
+    /// One of the paper's 10 evaluation maps (the embedded copy), which the calibration
+    /// compares with the authors' results.
+    pub paper: bool,
 }
 
 impl StudyConfig {
@@ -163,9 +166,22 @@ impl StudyConfig {
                 if out.iter().any(|x: &StudyMap| x.name == name) {
                     return Err(field("maps", format!("two maps are named `{name}`")));
                 }
-                out.push(StudyMap { name, grid });
+                let paper = matches!(src, MapSource::Paper(_));
+                out.push(StudyMap { name, grid, paper });
             }
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented example in `configs/study.toml` lists exactly the defaults.
+    #[test]
+    fn shipped_example_equals_defaults() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/study.toml");
+        assert_eq!(StudyConfig::from_toml_file(&path).expect("parses"), StudyConfig::default());
     }
 }

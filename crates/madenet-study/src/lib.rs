@@ -55,6 +55,7 @@ pub fn run_study(
     let started = std::time::Instant::now();
     let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
-    let report = report::write_all(cfg, &outcomes, out, wall)?;
+    let paper_maps: Vec<String> = maps.iter().filter(|m| m.paper).map(|m| m.name.clone()).collect();
+    let report = report::write_all(cfg, &outcomes, &paper_maps, out, wall)?;
     Ok((report, outcomes))
 }

@@ -128,7 +128,13 @@ fn calibration_md(cmp: &[Comparison]) -> String {
 }
 
 /// Writes every output of the study into `out`; returns the report's path.
-pub fn write_all(cfg: &StudyConfig, outcomes: &[TrialOutcome], out: &Path, wall_s: f64) -> Result<std::path::PathBuf, StudyError> {
+pub fn write_all(
+    cfg: &StudyConfig,
+    outcomes: &[TrialOutcome],
+    paper_maps: &[String],
+    out: &Path,
+    wall_s: f64,
+) -> Result<std::path::PathBuf, StudyError> {
     let alpha = 0.001;
     let rows = summary(outcomes, &cfg.methods);
     write_atomic(&out.join("summary.md"), summary_md(&rows).as_bytes())?;
@@ -177,7 +183,7 @@ pub fn write_all(cfg: &StudyConfig, outcomes: &[TrialOutcome], out: &Path, wall_
         line_panels(&out.join("fig5_exploration"), &curve_panels, curve_panels.len()).map_err(plot_err)?;
         fig5 = true;
     }
-    let cmp = compare(outcomes);
+    let cmp = compare(outcomes, paper_maps);
     let mut r = String::new();
     let _ = writeln!(r, "# madenet comparison study\n");
     let _ = writeln!(

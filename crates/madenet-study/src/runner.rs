@@ -139,11 +139,18 @@ pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), StudyError> {
     std::fs::rename(&tmp, path).map_err(io)
 }
 
+/// The text up to and including its last newline: a line torn by an interruption is dropped
+/// even when what remains of it still parses.
+fn whole_lines(text: &str) -> &str {
+    text.rfind('\n').map_or("", |i| &text[..=i])
+}
+
 /// Trials already recorded in `out` (complete rows with their curves); a torn last line from
 /// an interrupted run is dropped.
 fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
     let mut rows = HashMap::new();
     if let Ok(text) = std::fs::read_to_string(out.join("trials.csv")) {
+        let text = whole_lines(&text);
         let mut rdr = csv::ReaderBuilder::new().flexible(true).from_reader(text.as_bytes());
         for rec in rdr.records().flatten() {
             if let Some(row) = TrialRow::from_record(&rec) {
@@ -153,7 +160,7 @@ fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
     }
     let mut curves = HashMap::new();
     if let Ok(text) = std::fs::read_to_string(out.join("curves.jsonl")) {
-        for line in text.lines() {
+        for line in whole_lines(&text).lines() {
             if let Ok(c) = serde_json::from_str::<Curve>(line) {
                 curves.insert(c.key.clone(), c);
             }
