@@ -29,10 +29,41 @@
 //! no system font or font library is needed. SVG files name the generic
 //! family `sans-serif` and leave font choice to the viewer.
 //!
+//! Each panel is 800 × 500 px in the PNG, under a legend strip of about
+//! 60–100 px: a 2 × 2 grid (Fig. 4) is 1600 × 1064 px, a 1 × 2 grid
+//! (Fig. 5, Fig. 2) 1600 × 564 px. The SVG has the same size in user units.
+//! Titles are 26 px, axis labels 22 px, tick labels 19 px and legend
+//! names 22 px (font scale: ascent to descent).
+//!
+//! Line series that are noise-like next to the other series of their panel
+//! (raw per-episode values drawn with their EWMA, say) are drawn thin and
+//! translucent without markers, so the smoothed curve stays readable; see
+//! [`line_panels`].
+//!
 //! Files are written atomically (a temporary file in the same directory,
 //! then a rename); missing parent directories are created. Bad input
-//! (nothing to draw, mismatched lengths, non-finite numbers, …) is reported
-//! as a [`PlotError`], never a panic.
+//! (nothing to draw, mismatched lengths, non-finite numbers or numbers
+//! beyond [`MAX_ABS_VALUE`], series named differently in different panels,
+//! a figure of more than 16 384 px a side) is reported as a [`PlotError`],
+//! never a panic.
+//!
+//! ```no_run
+//! use madenet_plots::{bar_panels, BarPanel, BarSeries};
+//! let panel = BarPanel {
+//!     title: "Total number of steps".into(),
+//!     y_label: "TNS".into(),
+//!     categories: vec!["CSP 0 %".into(), "CSP 100 %".into()],
+//!     series: vec![
+//!         BarSeries { name: "NF".into(), means: vec![104.0, 99.0], errors: vec![10.0, 9.0] },
+//!         BarSeries { name: "MADE-Net".into(), means: vec![61.0, 47.0], errors: vec![8.0, 6.0] },
+//!     ],
+//! };
+//! let written = bar_panels(std::path::Path::new("out/fig4"), &[panel], 2)?;
+//! assert_eq!(written.len(), 2); // out/fig4.png, out/fig4.svg
+//! # Ok::<(), madenet_plots::PlotError>(())
+//! ```
+
+#![warn(missing_docs)]
 
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -78,6 +109,13 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(0xF0, 0xE4, 0x42), // yellow
     RGBColor(0x00, 0x00, 0x00), // black
 ];
+
+/// Largest magnitude of a value that can be plotted; larger values (and
+/// bar tops `mean ± error` beyond it) are rejected as input errors.
+pub const MAX_ABS_VALUE: f64 = 1e15;
+
+/// Largest width or height of a figure in pixels.
+const MAX_SIDE_PX: u32 = 16_384;
 
 /// Number of markers drawn along each line series (at most).
 const MARKERS_PER_LINE: usize = 10;
@@ -173,7 +211,17 @@ pub struct LinePanel {
 /// colour `i`). Returns the paths written, PNG first.
 ///
 /// Each panel's y axis starts at 0 (or below, if a bar or error bar is
-/// negative) and reaches 8 % above the highest error bar.
+/// negative) and reaches 8 % above the highest error bar, rounded up to a
+/// round number. Error bars (with caps) are drawn on top of all bars.
+///
+/// # Errors
+///
+/// [`PlotError::InvalidInput`] if `panels` is empty, `cols` is 0, a panel
+/// has no categories or no series, a series' `means` (or non-empty
+/// `errors`) do not match the categories in number, a value is not finite
+/// or beyond [`MAX_ABS_VALUE`], an error is negative, or series `i` has
+/// different names in different panels; [`PlotError::Io`] or
+/// [`PlotError::Draw`] if the files cannot be written.
 pub fn bar_panels(
     stem: &Path,
     panels: &[BarPanel],
@@ -200,6 +248,10 @@ pub fn bar_panels(
         n_panels: panels.len(),
         cols,
     };
+    fig.check_size().map_err(|reason| PlotError::InvalidInput {
+        path: png.clone(),
+        reason,
+    })?;
     write_figure(stem, &fig, &Bars(panels))
 }
 
@@ -209,7 +261,20 @@ pub fn bar_panels(
 /// gets colour `i`). Returns the paths written, PNG first.
 ///
 /// Each panel's x axis spans the data; the y axis spans the data padded by
-/// 5 % on both sides.
+/// 5 % on both sides. Lines are 3 px wide with up to ten markers each
+/// (shape `i` for series `i`, staggered between series). A series whose
+/// path is far rougher than the smoothest series of its panel (more than
+/// three times as long as its bounding box's half-perimeter, and at least
+/// four times as rough as the smoothest) is drawn 1 px wide and translucent,
+/// without markers — as for raw training values under their EWMA (Fig. 2).
+///
+/// # Errors
+///
+/// [`PlotError::InvalidInput`] if `panels` is empty, `cols` is 0, a panel
+/// has no series, a series has no points, a coordinate is not finite or
+/// beyond [`MAX_ABS_VALUE`], or series `i` has different names in different
+/// panels; [`PlotError::Io`] or [`PlotError::Draw`] if the files cannot be
+/// written.
 pub fn line_panels(
     stem: &Path,
     panels: &[LinePanel],
@@ -236,6 +301,10 @@ pub fn line_panels(
         n_panels: panels.len(),
         cols,
     };
+    fig.check_size().map_err(|reason| PlotError::InvalidInput {
+        path: png.clone(),
+        reason,
+    })?;
     write_figure(stem, &fig, &Lines(panels))
 }
 
@@ -244,6 +313,7 @@ pub fn line_panels(
 /// `s_0 = x_0` — for Fig. 2. `alpha = 0` returns the input, values of
 /// `alpha` near 1 smooth strongly. The output has the input's length (empty
 /// for empty input). Non-finite inputs propagate; `alpha` is not checked.
+#[must_use]
 pub fn ewma(values: &[f64], alpha: f64) -> Vec<f64> {
     let mut out = Vec::with_capacity(values.len());
     let mut prev: Option<f64> = None;
@@ -310,6 +380,16 @@ fn validate_bars(panels: &[BarPanel], cols: usize) -> Result<(), String> {
                     s.name
                 )));
             }
+            let too_big =
+                s.means.iter().enumerate().find(|&(j, m)| {
+                    m.abs() + s.errors.get(j).copied().unwrap_or(0.0) > MAX_ABS_VALUE
+                });
+            if let Some((_, v)) = too_big {
+                return Err(at(format!(
+                    "series {:?} has a bar beyond ±{MAX_ABS_VALUE:e} ({v:e} with its error)",
+                    s.name
+                )));
+            }
         }
     }
     Ok(())
@@ -336,6 +416,16 @@ fn validate_lines(panels: &[LinePanel], cols: usize) -> Result<(), String> {
                     s.name
                 )));
             }
+            let too_big = s
+                .points
+                .iter()
+                .find(|(x, y)| x.abs() > MAX_ABS_VALUE || y.abs() > MAX_ABS_VALUE);
+            if let Some((x, y)) = too_big {
+                return Err(at(format!(
+                    "series {:?} has a point beyond ±{MAX_ABS_VALUE:e} ({x:e}, {y:e})",
+                    s.name
+                )));
+            }
         }
     }
     Ok(())
@@ -352,10 +442,12 @@ where
     for (pi, series) in panels.enumerate() {
         for (si, name) in series.enumerate() {
             match names.get(si) {
-                Some(n) if n != name => return Err(format!(
+                Some(n) if n != name => {
+                    return Err(format!(
                     "series {si} is named {n:?} in an earlier panel but {name:?} in panel {pi}; \
                          series must come in the same order in every panel"
-                )),
+                ))
+                }
                 Some(_) => {}
                 None => names.push(name.to_string()),
             }
@@ -435,24 +527,27 @@ impl Figure<'_> {
     }
 
     fn width(&self) -> u32 {
-        PANEL_W * self.grid().1 as u32
+        PANEL_W.saturating_mul(u32::try_from(self.grid().1).unwrap_or(u32::MAX))
     }
 
     /// Lays the legend entries out in rows that fit the figure width:
     /// returns, per row, the entries' indices and widths.
     fn legend_rows(&self) -> Vec<Vec<(usize, i32)>> {
-        let max_w = self.width() as i32 - 2 * LEGEND_PAD as i32;
+        let max_w = i32::try_from(self.width()).unwrap_or(i32::MAX) - 2 * LEGEND_PAD as i32;
         let mut rows: Vec<Vec<(usize, i32)>> = vec![Vec::new()];
-        let mut used = 0;
+        let mut used: i32 = 0;
         for (i, name) in self.names.iter().enumerate() {
-            let w = LEGEND_SWATCH_W + 10 + text_width(name, LEGEND_PX);
-            let extra = if used == 0 { w } else { w + LEGEND_ENTRY_GAP };
-            if used > 0 && used + extra > max_w {
-                rows.push(Vec::new());
-                used = 0;
-                used += w;
+            let w = (LEGEND_SWATCH_W + 10).saturating_add(text_width(name, LEGEND_PX));
+            let extra = if used == 0 {
+                w
             } else {
-                used += extra;
+                w.saturating_add(LEGEND_ENTRY_GAP)
+            };
+            if used > 0 && used.saturating_add(extra) > max_w {
+                rows.push(Vec::new());
+                used = w;
+            } else {
+                used = used.saturating_add(extra);
             }
             rows.last_mut().expect("rows is never empty").push((i, w));
         }
@@ -460,11 +555,35 @@ impl Figure<'_> {
     }
 
     fn legend_height(&self) -> u32 {
-        2 * LEGEND_PAD + LEGEND_ROW_H * self.legend_rows().len() as u32
+        let rows = u32::try_from(self.legend_rows().len()).unwrap_or(u32::MAX);
+        (2 * LEGEND_PAD).saturating_add(LEGEND_ROW_H.saturating_mul(rows))
     }
 
     fn height(&self) -> u32 {
-        self.legend_height() + PANEL_H * self.grid().0 as u32
+        let rows = u32::try_from(self.grid().0).unwrap_or(u32::MAX);
+        self.legend_height()
+            .saturating_add(PANEL_H.saturating_mul(rows))
+    }
+
+    /// Refuses figures too large to render sensibly.
+    fn check_size(&self) -> Result<(), String> {
+        let (rows, cols) = self.grid();
+        let legend_rows = self.legend_rows().len();
+        let max_panels = (MAX_SIDE_PX / PANEL_W) as usize;
+        if cols > max_panels || rows > (MAX_SIDE_PX / PANEL_H) as usize || legend_rows > 50 {
+            return Err(format!(
+                "a grid of {rows} × {cols} panels with {legend_rows} legend rows exceeds \
+                 {MAX_SIDE_PX} px per side"
+            ));
+        }
+        if self.width() > MAX_SIDE_PX || self.height() > MAX_SIDE_PX {
+            return Err(format!(
+                "the figure would be {} × {} px, more than {MAX_SIDE_PX} px per side",
+                self.width(),
+                self.height()
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -612,9 +731,10 @@ fn draw_legend<DB: DrawingBackend>(
     let width = fig.width() as i32;
     let style = font(LEGEND_PX).pos(Pos::new(HPos::Left, VPos::Center));
     for (r, row) in fig.legend_rows().iter().enumerate() {
-        let total: i32 =
-            row.iter().map(|(_, w)| w).sum::<i32>() + LEGEND_ENTRY_GAP * (row.len() as i32 - 1);
-        let mut x = (width - total) / 2;
+        let total = row.iter().fold(-LEGEND_ENTRY_GAP, |acc: i32, (_, w)| {
+            acc.saturating_add(*w).saturating_add(LEGEND_ENTRY_GAP)
+        });
+        let mut x = (width.saturating_sub(total) / 2).max(LEGEND_PAD as i32);
         let cy = (LEGEND_PAD + LEGEND_ROW_H * r as u32 + LEGEND_ROW_H / 2) as i32;
         for &(i, w) in row {
             let colour = colour(i);
@@ -654,7 +774,7 @@ fn draw_legend<DB: DrawingBackend>(
                 style.clone(),
             ))
             .map_err(s)?;
-            x += w + LEGEND_ENTRY_GAP;
+            x = x.saturating_add(w).saturating_add(LEGEND_ENTRY_GAP);
         }
     }
     Ok(())
@@ -1151,4 +1271,80 @@ fn draw_line_panel<DB: DrawingBackend>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick_label(&140.0), "140");
+        assert_eq!(tick_label(&0.0), "0");
+        assert_eq!(tick_label(&-0.0), "0");
+        assert_eq!(tick_label(&-20.0), "-20");
+        assert_eq!(tick_label(&(0.1 + 0.2)), "0.3");
+        assert_eq!(tick_label(&2.5), "2.5");
+        assert_eq!(tick_label(&0.125), "0.125");
+    }
+
+    #[test]
+    fn nice_rounds_away_from_zero() {
+        assert_eq!(nice(132.0), 150.0);
+        assert_eq!(nice(100.0), 100.0);
+        assert_eq!(nice(0.0), 0.0);
+        assert_eq!(nice(-13.0), -15.0);
+        assert!((nice(0.042) - 0.05).abs() < 1e-12);
+    }
+
+    #[test]
+    fn thin_path_keeps_ends_and_drops_close_points() {
+        let p = [(0, 0), (1, 0), (2, 0), (5, 0), (6, 0)];
+        assert_eq!(thin_path(&p, 3.0), vec![(0, 0), (6, 0)]);
+        assert_eq!(thin_path(&[(0, 0), (1, 0)], 3.0), vec![(0, 0)]);
+        assert_eq!(thin_path(&[], 3.0), Vec::<(i32, i32)>::new());
+    }
+
+    #[test]
+    fn only_noise_next_to_smooth_series_is_faint() {
+        let noisy: Vec<f64> = (0..1000)
+            .map(|i| ((i * 7919) % 101) as f64 - 50.0 + i as f64 / 20.0)
+            .collect();
+        let series = |name: &str, v: &[f64]| LineSeries {
+            name: name.into(),
+            points: v.iter().enumerate().map(|(e, &y)| (e as f64, y)).collect(),
+        };
+        let panel = |series: Vec<LineSeries>| LinePanel {
+            title: "t".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            series,
+        };
+        let both = panel(vec![
+            series("raw", &noisy),
+            series("ewma", &ewma(&noisy, 0.9)),
+        ]);
+        assert_eq!(jagged_series(&both), vec![true, false]);
+        let alone = panel(vec![series("raw", &noisy)]);
+        assert_eq!(jagged_series(&alone), vec![false]);
+        let smooth: Vec<f64> = (0..100).map(|i| (i as f64 / 10.0).sin()).collect();
+        let calm = panel(vec![series("a", &smooth), series("b", &smooth[..50])]);
+        assert_eq!(jagged_series(&calm), vec![false, false]);
+    }
+
+    #[test]
+    fn category_axis_ticks_sit_on_categories() {
+        let axis = CategoryAxis(4);
+        assert_eq!(axis.key_points(10usize), vec![0.0, 1.0, 2.0, 3.0]);
+        assert_eq!(axis.map(&-0.5, (0, 400)), 0);
+        assert_eq!(axis.map(&3.5, (0, 400)), 400);
+        assert_eq!(axis.map(&1.0, (0, 400)), 150);
+    }
+
+    #[test]
+    fn the_bundled_font_registers_and_measures_text() {
+        ensure_font(Path::new("x.png")).unwrap();
+        let w = text_width("MADE-Net", LEGEND_PX);
+        assert!((60..200).contains(&w), "width {w}");
+    }
 }

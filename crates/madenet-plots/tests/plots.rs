@@ -369,23 +369,48 @@ fn extreme_values_do_not_panic() {
     p.series[0].means = vec![1e308, -1e308, 1e-300, 0.0];
     p.series[0].errors = vec![1e308, 0.0, 0.0, 0.0];
     let r = bar_panels(&d.join("huge-bars"), &[p], 1);
-    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+    assert!(
+        matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })),
+        "{r:?}"
+    );
+}
+
+#[test]
+fn extreme_lines_do_not_panic() {
+    let d = dir("extreme-lines");
     let panel = LinePanel {
         title: "huge".into(),
         x_label: "x".into(),
         y_label: "y".into(),
-        series: vec![LineSeries { name: "a".into(), points: vec![(-1e308, -1e308), (1e308, 1e308)] }],
+        series: vec![LineSeries {
+            name: "a".into(),
+            points: vec![(-1e308, -1e308), (1e308, 1e308)],
+        }],
     };
     let r = line_panels(&d.join("huge-lines"), &[panel], 1);
-    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+    assert!(
+        matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })),
+        "{r:?}"
+    );
+}
+
+#[test]
+fn extreme_tiny_do_not_panic() {
+    let d = dir("extreme-tiny");
     let tiny = LinePanel {
         title: "tiny".into(),
         x_label: "x".into(),
         y_label: "y".into(),
-        series: vec![LineSeries { name: "a".into(), points: vec![(0.0, 1e-300), (1e-300, 2e-300)] }],
+        series: vec![LineSeries {
+            name: "a".into(),
+            points: vec![(0.0, 1e-300), (1e-300, 2e-300)],
+        }],
     };
     let r = line_panels(&d.join("tiny-lines"), &[tiny], 1);
-    assert!(matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })), "{r:?}");
+    assert!(
+        matches!(r, Ok(_) | Err(PlotError::InvalidInput { .. })),
+        "{r:?}"
+    );
 }
 
 #[test]
