@@ -17,10 +17,12 @@
 //! The same seed gives byte-identical trajectories and metrics.
 
 mod registry;
+pub mod rewards;
 pub mod scenario;
 mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};
+pub use rewards::{RewardConfig, StepRewards};
 pub use scenario::{MapSource, StartSpec};
 pub use trial::{StepRecord, Trial, TrialResult, TrialSpec};
 

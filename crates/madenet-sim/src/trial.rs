@@ -1,6 +1,7 @@
 //! One trial: world + agents + recorder.
 
 use crate::registry::{PolicyContext, PolicyRegistry};
+use crate::rewards::{RewardConfig, StepRewards};
 use crate::SimError;
 use madenet_agent::{Agent, AgentConfig, Beta, External, JointPolicy};
 use madenet_map::{OccGrid, Pos};
@@ -32,6 +33,8 @@ pub struct StepRecord {
     pub decided: Vec<bool>,
     pub exchanges: Vec<(usize, usize)>,
     pub explored: f64,
+    /// Rewards of the step (Eq. 7 per robot, Eq. 8 for the team).
+    pub rewards: StepRewards,
 }
 
 /// The outcome of a trial.
@@ -65,6 +68,10 @@ pub struct Trial {
     moves: Vec<Move>,
     /// A centralized policy deciding for every robot, if any (else each agent's own).
     joint: Option<Box<dyn JointPolicy>>,
+    reward_config: RewardConfig,
+    /// Consecutive timesteps each robot has been in local interaction (ρ of Eq. 7).
+    interaction_run: Vec<u32>,
+    rewards: StepRewards,
 }
 
 impl Trial {
@@ -98,6 +105,9 @@ impl Trial {
             decided: vec![false; n],
             moves: vec![Move::Stay; n],
             joint: None,
+            reward_config: RewardConfig::default(),
+            interaction_run: vec![0; n],
+            rewards: StepRewards { robots: vec![0.0; n], team: 0.0 },
         })
     }
 
@@ -112,6 +122,17 @@ impl Trial {
         trial.policy = name;
         trial.joint = Some(joint);
         Ok(trial)
+    }
+
+    /// Use these reward constants (default: the paper's).
+    pub fn reward_config(mut self, cfg: RewardConfig) -> Self {
+        self.reward_config = cfg;
+        self
+    }
+
+    /// The rewards of the last timestep (Eq. 7 and 8).
+    pub fn rewards(&self) -> &StepRewards {
+        &self.rewards
     }
 
     /// Keep a [`StepRecord`] per timestep in the result.
@@ -198,6 +219,7 @@ impl Trial {
         let (pos, ds) = (self.world.positions(), self.world.config().sensing_range);
         let closer = self.world.contacts().iter().filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds).count();
         self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len(), closer);
+        self.compute_rewards();
         self.elapsed += started.elapsed();
         if self.record {
             self.trajectory.push(StepRecord {
@@ -208,9 +230,28 @@ impl Trial {
                 decided: self.decided.clone(),
                 exchanges: self.world.exchanges().to_vec(),
                 explored: self.world.explored_fraction(),
+                rewards: self.rewards.clone(),
             });
         }
         true
+    }
+
+    /// Eq. (7) and (8) for the step just taken: what each robot observed against what it had
+    /// explored before (its belief has not taken the observation in yet), its run of
+    /// consecutive local interactions, and the team's observations against the team map.
+    fn compute_rewards(&mut self) {
+        let n = self.agents.len();
+        for i in 0..n {
+            let belief = self.agents[i].belief();
+            let seen = &self.world.observation(i).seen;
+            let new = seen.iter().filter(|(p, _)| belief.get(*p) == madenet_map::Occupancy::Unknown).count();
+            let interacting = self.world.contacts().iter().any(|&(a, b)| a == i || b == i);
+            self.interaction_run[i] = if interacting { self.interaction_run[i] + 1 } else { 0 };
+            self.rewards.robots[i] = self.reward_config.robot(new, seen.len() - new, self.interaction_run[i]);
+        }
+        let new = self.world.team_newly_observed();
+        let seen = self.world.team_observed();
+        self.rewards.team = self.reward_config.team(new, seen - new, self.world.is_complete());
     }
 
     /// Runs to completion or the step cap.

@@ -62,6 +62,12 @@ pub struct World {
     /// cast on first use: robots revisit cells, and rays are the costly part of sensing.
     visible_range: Vec<(u32, u32)>,
     visible: Vec<(Pos, Occupancy, u32)>,
+    /// Cells observed by the team in the current step (stamped with `sense_round`), and how
+    /// many were new to the team: the C_t and C_t ∩ U_t of Eq. (8).
+    seen_round: Vec<u32>,
+    sense_round: u32,
+    team_seen: usize,
+    team_new: usize,
 }
 
 const NOT_CAST: (u32, u32) = (u32::MAX, 0);
@@ -106,6 +112,10 @@ impl World {
             targets: Vec::with_capacity(n),
             visible_range: vec![NOT_CAST; cells],
             visible: Vec::new(),
+            seen_round: vec![0; cells],
+            sense_round: 0,
+            team_seen: 0,
+            team_new: 0,
             positions: starts.to_vec(),
             t: 0,
             view,
@@ -245,6 +255,10 @@ impl World {
         let miss = self.cfg.sensor_miss_prob;
         let always_miss = miss >= 1.0;
         let threshold = (miss * 18_446_744_073_709_551_616.0) as u64;
+        let known_before = self.known;
+        self.sense_round += 1;
+        let round = self.sense_round;
+        self.team_seen = 0;
         for i in 0..self.positions.len() {
             let at = self.positions[i];
             let (start, end) = self.visible_from(at);
@@ -259,6 +273,10 @@ impl World {
                 self.team_map[own] = Occupancy::Free;
                 self.known += 1;
             }
+            if self.seen_round[own] != round {
+                self.seen_round[own] = round;
+                self.team_seen += 1;
+            }
             for &(q, occ, k) in &self.visible[start as usize..end as usize] {
                 if always_miss || rng.next_u64() < threshold {
                     continue;
@@ -269,9 +287,14 @@ impl World {
                     self.team_map[k] = occ;
                     self.known += 1;
                 }
+                if self.seen_round[k] != round {
+                    self.seen_round[k] = round;
+                    self.team_seen += 1;
+                }
             }
             self.obs[i] = obs;
         }
+        self.team_new = self.known - known_before;
     }
 
     /// The range of `self.visible` listing the cells visible from `at`, cast on first use.
@@ -380,6 +403,14 @@ impl World {
     /// Known cells over explorable cells, 0..=1.
     pub fn explored_fraction(&self) -> f64 {
         self.known as f64 / self.explorable_count.max(1) as f64
+    }
+    /// Distinct cells the team observed in the last sensing stage (|C_t| of Eq. 8).
+    pub fn team_observed(&self) -> usize {
+        self.team_seen
+    }
+    /// Of those, the cells the team had not known before (|C_t ∩ U_t| of Eq. 8).
+    pub fn team_newly_observed(&self) -> usize {
+        self.team_new
     }
     /// The team knows every explorable cell.
     pub fn is_complete(&self) -> bool {
