@@ -80,6 +80,50 @@ impl<'a> AgentView<'a> {
         self.dijkstra.settled_cost(to).map(madenet_nav::cost_to_cells)
     }
 
+    /// Length of [`AgentView::macro_observation`] for `team` robots and `goals` candidates:
+    /// 3 + 8 · (team − 1) + 3 · goals.
+    pub fn macro_observation_len(team: usize, goals: usize) -> usize {
+        3 + 8 * team.saturating_sub(1) + 3 * goals
+    }
+
+    /// The macro observation z_i without the map (the input of the networks' F3), as `f32`s:
+    ///
+    /// * own position (row, col), each divided by (height − 1, width − 1);
+    /// * ϱ_i, the teammate-detected flag (0/1);
+    /// * for each teammate in index order (self skipped): previous goal (2), last known
+    ///   position (2), current goal (2) — normalised like the own position, −1 when unknown —
+    ///   |E_j| over the number of cells, and a flag whether anything was ever heard or seen of
+    ///   it;
+    /// * the |G| goal candidates (2 each, normalised, −1 for an empty slot), then their
+    ///   validity mask (0/1 each).
+    pub fn macro_observation(&self) -> Vec<f32> {
+        let b = self.belief;
+        let (sr, sc) = ((b.height().max(2) - 1) as f32, (b.width().max(2) - 1) as f32);
+        let coords = |p: Option<Pos>| match p {
+            Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
+            None => [-1.0, -1.0],
+        };
+        let mut z = Vec::with_capacity(Self::macro_observation_len(self.teammates.len(), self.candidates.slots));
+        z.extend(coords(Some(self.pos)));
+        z.push(self.teammate_detected as u8 as f32);
+        let cells = (b.width() * b.height()).max(1) as f32;
+        for (j, rec) in self.teammates.iter().enumerate() {
+            if j == self.id {
+                continue;
+            }
+            z.extend(coords(rec.prev_goal));
+            z.extend(coords(rec.last_pos()));
+            z.extend(coords(rec.goal));
+            z.push(rec.explored as f32 / cells);
+            z.push((rec.heard_at.is_some() || rec.seen_at.is_some()) as u8 as f32);
+        }
+        for k in 0..self.candidates.slots {
+            z.extend(coords(self.candidates.get(k)));
+        }
+        z.extend(self.candidates.valid_mask().iter().map(|&v| v as u8 as f32));
+        z
+    }
+
     /// The paper's 4-channel binary map image of this robot, channel-major
     /// `[4][height][width]`: explored space, obstacles, observed robot positions (own and
     /// teammates' last known), goal candidates.
@@ -144,5 +188,19 @@ mod tests {
         assert_eq!(ones(2), vec![0, 11]); // own position and the teammate's last known one
         assert_eq!(ones(3), vec![4]); // goal candidates
         assert!(img.iter().all(|&v| v <= 1));
+
+        // Macro observation: own (0,0) → 0,0; ϱ 0; teammate 1: no goals (−1s), position (2,3)
+        // → (1, 1), explored 0, known 1; candidate (1,0) → (0.5, 0), three empty slots, mask.
+        let z = view.macro_observation();
+        assert_eq!(z.len(), AgentView::macro_observation_len(2, 4));
+        assert_eq!(
+            z,
+            vec![
+                0.0, 0.0, 0.0, //
+                -1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 0.0, 1.0, //
+                0.5, 0.0, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0, //
+                1.0, 0.0, 0.0, 0.0
+            ]
+        );
     }
 }
