@@ -228,19 +228,9 @@ pub fn bar_panels(
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let png = with_ext(stem, "png");
-    validate_bars(panels, cols).map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
-    let names = legend_names(
-        panels
-            .iter()
-            .map(|p| p.series.iter().map(|s| s.name.as_str())),
-    )
-    .map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
+    let invalid = |reason| PlotError::InvalidInput { path: png.clone(), reason };
+    validate_bars(panels, cols).map_err(invalid)?;
+    let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
     let fig = Figure {
         names: &names,
         faint: vec![false; names.len()],
@@ -248,10 +238,7 @@ pub fn bar_panels(
         n_panels: panels.len(),
         cols,
     };
-    fig.check_size().map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
+    fig.check_size().map_err(invalid)?;
     write_figure(stem, &fig, &Bars(panels))
 }
 
@@ -281,19 +268,9 @@ pub fn line_panels(
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let png = with_ext(stem, "png");
-    validate_lines(panels, cols).map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
-    let names = legend_names(
-        panels
-            .iter()
-            .map(|p| p.series.iter().map(|s| s.name.as_str())),
-    )
-    .map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
+    let invalid = |reason| PlotError::InvalidInput { path: png.clone(), reason };
+    validate_lines(panels, cols).map_err(invalid)?;
+    let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
     let fig = Figure {
         faint: faint_series(panels, names.len()),
         names: &names,
@@ -301,10 +278,7 @@ pub fn line_panels(
         n_panels: panels.len(),
         cols,
     };
-    fig.check_size().map_err(|reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    })?;
+    fig.check_size().map_err(invalid)?;
     write_figure(stem, &fig, &Lines(panels))
 }
 
