@@ -94,6 +94,8 @@ pub struct Agent {
     termination: Option<Termination>,
     /// Timesteps in a row the robot intended to move and did not.
     blocked_for: usize,
+    /// The macro action (candidate index) in force, if the last decision chose one.
+    action: Option<usize>,
     stats: AgentStats,
 }
 
@@ -121,6 +123,7 @@ impl Agent {
             policy,
             termination: None,
             blocked_for: 0,
+            action: None,
             stats: AgentStats::default(),
             cfg,
         }
@@ -301,9 +304,19 @@ impl Agent {
         self.stats.decision_time += start.elapsed();
     }
 
+    /// The macro action in force: the goal candidate index chosen at the last decision (None
+    /// for decisions that named a cell or idled).
+    pub fn action(&self) -> Option<usize> {
+        self.action
+    }
+
     /// Sets the goal from a decision (own policy or a joint policy).
     pub fn apply_decision(&mut self, d: Decision) {
         self.stats.decisions += 1;
+        self.action = match d {
+            Decision::Candidate(k) if self.candidates.is_valid(k) => Some(k),
+            _ => None,
+        };
         let new_goal = match d {
             Decision::Candidate(k) => self.candidates.get(k),
             Decision::Goal(p) => Some(p),

@@ -29,8 +29,10 @@ pub struct StepRecord {
     pub positions: Vec<Pos>,
     pub moves: Vec<Move>,
     pub goals: Vec<Option<Pos>>,
-    /// Robots that took a decision in this step.
+    /// Robots that took a decision in this step (their macro action had terminated).
     pub decided: Vec<bool>,
+    /// Each robot's macro action in force (goal candidate index), if it chose one.
+    pub actions: Vec<Option<usize>>,
     pub exchanges: Vec<(usize, usize)>,
     pub explored: f64,
     /// Rewards of the step (Eq. 7 per robot, Eq. 8 for the team).
@@ -228,6 +230,7 @@ impl Trial {
                 moves: self.world.executed_moves().to_vec(),
                 goals: self.agents.iter().map(|a| a.goal()).collect(),
                 decided: self.decided.clone(),
+                actions: self.agents.iter().map(|a| a.action()).collect(),
                 exchanges: self.world.exchanges().to_vec(),
                 explored: self.world.explored_fraction(),
                 rewards: self.rewards.clone(),

@@ -57,6 +57,8 @@ fn joint_policy_decides_only_for_terminated_robots_and_explores() {
                 Some(g) => assert!(a.candidates().cells.contains(&g), "{g} not in {:?}", a.candidates().cells),
                 None => assert!(a.candidates().cells.is_empty()),
             }
+            // The recorded macro action is the index of that candidate.
+            assert_eq!(a.action().map(|k| a.candidates().cells[k]), a.goal());
         }
     }
     let result = trial.finish();
