@@ -1,0 +1,83 @@
+//! MADE-Net's learner (Tan et al., RA-L 2023, Sec. III.C.2–4 and IV). This part holds **the
+//! networks**: the Q-network shared by the centralized exploration policy (CEP) and the
+//! decentralized exploration policies (DEP), the masked and conditional action selection used in
+//! acting and in the targets of Eq. (5)/(6), and the CPU devices they run on. Replay, losses and
+//! the training loop build on it.
+//!
+//! Built on burn 0.22, whose tensors are not generic over a backend: a [`Tensor<D>`] lives on a
+//! runtime [`Device`]. [`cpu`] is burn's `flex` CPU backend; [`cpu_autodiff`] the same with
+//! automatic differentiation (for training with [`burn::optim::AdamConfig`]).
+//!
+//! # Architecture
+//!
+//! ```text
+//!  map image m (4 × H × W: explored, obstacles, robots, goal candidates)      observation z \ m
+//!          │                                                                 (obs_dim, see obs_dim_for)
+//!   C1  conv k4 s2,  8 ch ─ leaky ReLU        ┐                                      │
+//!   C2  conv k3 s2, 16 ch ─ leaky ReLU        │ MFE                        F3  fc width ─ leaky ReLU
+//!   C3  conv k2 s2, 16 ch ─ leaky ReLU        │ (map feature                         │
+//!   flatten (16 · h3 · w3; 64 on 20 × 20)     │  extractor)                          │
+//!   F1  fc 32 ─ leaky ReLU                    │                                      │
+//!   F2  fc 10 ─ leaky ReLU                    ┘                                      │
+//!          └──────────────────────── CONCAT [F3 ‖ F2] ───────────────────────────────┘
+//!                                  (bare: width + 10; or, with concat_fc, fc width ─ leaky ReLU)
+//!                                           │
+//!                                   F4  fc width ─ leaky ReLU
+//!                                   LSTM hidden 64 (over macro steps)
+//!                                   F5  fc width ─ leaky ReLU
+//!                                   F6  fc outputs (Q values, no activation)
+//!
+//!   CEP: width 128, obs = joint observation (3 · 31 = 93), outputs |G|^|I| = 64
+//!   DEP: width  64, obs = own observation (31),           outputs |G|     = 4
+//! ```
+//!
+//! # Conventions
+//!
+//! * **Shapes.** Sequences are batch-first: maps `[batch, time, 4, H, W]` (row = `H` axis),
+//!   observations `[batch, time, obs_dim]`, Q `[batch, time, outputs]`
+//!   ([`QNet::forward`]); a single decision drops the time axis ([`QNet::act`]). The LSTM state
+//!   ([`LstmState`]) is `[batch, 64]` cell and hidden; `None` means zeros (episode start).
+//! * **Convolutions** use no padding; sizes follow from the map (20×20 → 9 → 4 → 2; 30×30 → 14
+//!   → 6 → 3; 40×60 → 19×29 → 9×14 → 4×7). A map side below [`MIN_MAP_SIDE`] (12) is a
+//!   [`ConfigError::MapTooSmall`].
+//! * **Observation vector** layout: [`obs_dim_for`] (per robot) and [`joint_obs_dim_for`] (CEP:
+//!   the robots' vectors concatenated in robot order). The networks only see its length.
+//! * **Joint actions** (CEP): base-|G| index with robot 0 the most significant digit
+//!   ([`joint_index`], [`joint_actions`]).
+//! * **Masks**: `true` = the action may be chosen. Invalid candidates are never returned by
+//!   [`masked_argmax`] / [`conditional_argmax`] and are excluded from [`masked_max`]. In the
+//!   conditional argmax a robot whose macro action is still running keeps it (its mask is not
+//!   consulted).
+//! * **Parameters** (burn's layers): conv = k·k·in·out + out, linear = in·out + out, and burn's
+//!   LSTM keeps *separate* input and hidden biases per gate: 4·(in·h + h + h·h + h). At the
+//!   defaults the CEP has 101 202 parameters and a DEP 49 686 (hand arithmetic in the tests).
+
+mod actions;
+mod config;
+mod net;
+
+pub use actions::{
+    conditional_argmax, conditional_argmax_batch, conditional_joint_mask, gather_q, joint_actions,
+    joint_index, joint_valid_mask, mask_tensor, masked_argmax, masked_argmax_slice, masked_max,
+    try_masked_argmax, INVALID_Q,
+};
+pub use burn::tensor::{Bool, Device, Int, Tensor, TensorData};
+pub use config::{
+    joint_action_count, joint_obs_dim_for, obs_dim_for, ConfigError, ConvSpec, MfeDims, NetConfig,
+    MAP_CHANNELS, MIN_MAP_SIDE,
+};
+pub use net::{LayerShape, LstmState, QNet};
+
+/// burn's `flex` CPU device, without autodiff (acting, evaluation, target networks).
+///
+/// burn 0.22 has no backend type parameter, so this stands where a `type Cpu = …` alias would
+/// in earlier versions.
+pub fn cpu() -> Device {
+    Device::flex()
+}
+
+/// The `flex` CPU device with automatic differentiation (training). Move a trained module to
+/// [`cpu`] with `module.valid()` or `.to_device(&cpu())`.
+pub fn cpu_autodiff() -> Device {
+    Device::flex().autodiff()
+}
