@@ -1,8 +1,9 @@
 //! MADE-Net's learner (Tan et al., RA-L 2023, Sec. III.C.2–4 and IV). This part holds **the
-//! networks**: the Q-network shared by the centralized exploration policy (CEP) and the
+//! networks** — the Q-network shared by the centralized exploration policy (CEP) and the
 //! decentralized exploration policies (DEP), the masked and conditional action selection used in
 //! acting and in the targets of Eq. (5)/(6), and the CPU devices they run on. Replay, losses and
-//! the training loop build on it.
+//! the training loop build on it; [`replay`] already squeezes recorded episodes into the
+//! macro-level transitions of the CEP and the DEPs.
 //!
 //! Built on burn 0.22, whose tensors are not generic over a backend: a [`Tensor<D>`] lives on a
 //! runtime [`Device`]. [`cpu`] is burn's `flex` CPU backend; [`cpu_autodiff`] the same with
@@ -55,6 +56,7 @@
 mod actions;
 mod config;
 mod net;
+pub mod replay;
 
 pub use actions::{
     conditional_argmax, conditional_argmax_batch, conditional_joint_mask, gather_q, joint_actions,
