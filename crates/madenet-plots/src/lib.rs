@@ -14,15 +14,21 @@
 //!   [`line_panels`] from [`LinePanel`]s.
 //! * **Fig. 2** — training curves (team reward and steps per episode against
 //!   episode), usually shown smoothed with an exponentially weighted moving
-//!   average: [`ewma`] computes it, [`line_panels`] draws it.
+//!   average: [`ewma`] computes it, [`line_panels`] draws it — or
+//!   [`styled_line_panels`], when raw values and their EWMA should share a
+//!   colour or panels show different series (the training log's figure in
+//!   `madenet-trainlog`).
 //!
 //! Every figure is written twice, as `stem.png` and `stem.svg` (the
-//! extension is appended to the stem, so `fig4.csp` becomes `fig4.csp.png`).
+//! extension is appended to the stem, so `fig4.csp` becomes `fig4.csp.png`),
+//! except by [`styled_line_panels`], which writes the one file it is given.
 //! Panels are laid out in a grid of `cols` columns; one legend above the
 //! grid serves all panels, and series `i` of every panel has colour (and,
 //! for lines, marker shape) `i` — so series must be given in the same order,
-//! with the same names, in every panel. The palette is Okabe–Ito's
-//! colour-blind-safe one; line series also differ by marker shape.
+//! with the same names, in every panel ([`styled_line_panels`] instead
+//! matches series to explicit [`LineStyle`]s by name). The palette is
+//! Okabe–Ito's colour-blind-safe one; line series also differ by marker
+//! shape.
 //!
 //! Text is drawn with a bundled subset of DejaVu Sans (see
 //! `assets/README.md`), registered with plotters' `ab_glyph` font table, so
@@ -232,6 +238,7 @@ pub fn bar_panels(
     validate_bars(panels, cols).map_err(invalid)?;
     let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
     let fig = Figure {
+        colours: (0..names.len()).collect(),
         names: &names,
         faint: vec![false; names.len()],
         kind: LegendKind::Bar,
@@ -272,6 +279,7 @@ pub fn line_panels(
     validate_lines(panels, cols).map_err(invalid)?;
     let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
     let fig = Figure {
+        colours: (0..names.len()).collect(),
         faint: faint_series(panels, names.len()),
         names: &names,
         kind: LegendKind::Line,
@@ -279,7 +287,113 @@ pub fn line_panels(
         cols,
     };
     fig.check_size().map_err(invalid)?;
-    write_figure(stem, &fig, &Lines(panels))
+    let looks = panels
+        .iter()
+        .map(|p| {
+            jagged_series(p)
+                .into_iter()
+                .enumerate()
+                .map(|(colour, faint)| Look { colour, faint })
+                .collect()
+        })
+        .collect();
+    write_figure(stem, &fig, &Lines { panels, looks })
+}
+
+/// How [`styled_line_panels`] draws the series of one name, and that
+/// name's entry in the legend.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LineStyle {
+    /// The series drawn in this style: those of this name, in any panel.
+    /// Also the legend text.
+    pub name: String,
+    /// Colour and marker shape: entry `colour % 8` of the palette (0 blue,
+    /// 1 vermillion, 2 bluish green, 3 orange, 4 reddish purple, 5 sky
+    /// blue, 6 yellow, 7 black). Styles may share a colour — raw values and
+    /// their EWMA, say.
+    pub colour: usize,
+    /// Drawn 1 px wide and translucent, without markers (noise-like values
+    /// such as raw per-episode training values), instead of 3 px wide with
+    /// markers.
+    pub faint: bool,
+}
+
+/// Draws line panels in a grid (rows × `cols`, rows as needed) into the
+/// one file `path`, a PNG or an SVG by its extension (`.png` or `.svg`,
+/// any case), with each series' look and the legend given explicitly.
+/// Returns `path`.
+///
+/// Unlike [`line_panels`], series are matched to `styles` by name, so
+/// panels may show different series in any order, and several series may
+/// share a colour. The legend above the grid lists `styles` in the order
+/// given; series are drawn in each panel's order (later ones on top). Axes
+/// and lines are as in [`line_panels`], except that faintness comes from
+/// [`LineStyle::faint`] rather than from the data.
+///
+/// # Errors
+///
+/// [`PlotError::InvalidInput`] for any input [`line_panels`] rejects
+/// (except differing series between panels), if `path` does not end in
+/// `.png` or `.svg`, if `styles` is empty or names a series twice, or if a
+/// series has no style; [`PlotError::Io`] or [`PlotError::Draw`] if the
+/// file cannot be written.
+pub fn styled_line_panels(
+    path: &Path,
+    panels: &[LinePanel],
+    cols: usize,
+    styles: &[LineStyle],
+) -> Result<PathBuf, PlotError> {
+    let invalid = |reason| PlotError::InvalidInput {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let target = match ext.as_deref() {
+        Some("png") => Target::Bitmap,
+        Some("svg") => Target::Vector,
+        _ => return Err(invalid("the file name must end in .png or .svg".into())),
+    };
+    validate_lines(panels, cols).map_err(invalid)?;
+    if styles.is_empty() {
+        return Err(invalid("no line styles given".into()));
+    }
+    for (k, st) in styles.iter().enumerate() {
+        if styles[..k].iter().any(|o| o.name == st.name) {
+            return Err(invalid(format!("two line styles are named {:?}", st.name)));
+        }
+    }
+    let mut looks = Vec::with_capacity(panels.len());
+    for (pi, p) in panels.iter().enumerate() {
+        let mut panel_looks = Vec::with_capacity(p.series.len());
+        for ser in &p.series {
+            let st = styles.iter().find(|st| st.name == ser.name).ok_or_else(|| {
+                invalid(format!(
+                    "panel {pi} ({:?}): series {:?} has no line style",
+                    p.title, ser.name
+                ))
+            })?;
+            panel_looks.push(Look {
+                colour: st.colour,
+                faint: st.faint,
+            });
+        }
+        looks.push(panel_looks);
+    }
+    let names: Vec<String> = styles.iter().map(|st| st.name.clone()).collect();
+    let fig = Figure {
+        names: &names,
+        colours: styles.iter().map(|st| st.colour).collect(),
+        faint: styles.iter().map(|st| st.faint).collect(),
+        kind: LegendKind::Line,
+        n_panels: panels.len(),
+        cols,
+    };
+    fig.check_size().map_err(invalid)?;
+    write_one(path, &fig, &Lines { panels, looks }, target)?;
+    Ok(path.to_path_buf())
 }
 
 /// Exponentially weighted moving average with smoothing factor `alpha` as
@@ -486,6 +600,8 @@ enum LegendKind {
 
 struct Figure<'a> {
     names: &'a [String],
+    /// Per legend entry: its palette index (colour and marker shape).
+    colours: Vec<usize>,
     /// Per legend entry: drawn thin and translucent without markers (line
     /// series that are noise-like in every panel they appear in).
     faint: Vec<bool>,
@@ -582,43 +698,63 @@ fn write_figure<P: Panels>(
 ) -> Result<Vec<PathBuf>, PlotError> {
     let png = with_ext(stem, "png");
     let svg = with_ext(stem, "svg");
-    ensure_font(&png)?;
-    if let Some(dir) = png.parent().filter(|d| !d.as_os_str().is_empty()) {
+    write_one(&png, fig, draw_panel, Target::Bitmap)?;
+    write_one(&svg, fig, draw_panel, Target::Vector)?;
+    Ok(vec![png, svg])
+}
+
+/// Renders the figure with one backend (PNG for [`Target::Bitmap`], SVG
+/// for [`Target::Vector`]) and writes it to `path` atomically, creating
+/// missing parent directories.
+fn write_one<P: Panels>(
+    path: &Path,
+    fig: &Figure<'_>,
+    draw_panel: &P,
+    target: Target,
+) -> Result<(), PlotError> {
+    ensure_font(path)?;
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
             path: dir.to_path_buf(),
             source,
         })?;
     }
     let size = (fig.width(), fig.height());
-
-    // PNG: plotters writes the file itself on `present`; render to a
-    // temporary name and rename.
-    let tmp_png = temp_path(&png, "png");
-    let result = {
-        let root = BitMapBackend::new(&tmp_png, size).into_drawing_area();
-        render(&root, fig, draw_panel, Target::Bitmap).and_then(|()| root.present().map_err(s))
-    };
-    if let Err(message) = result {
-        let _ = std::fs::remove_file(&tmp_png);
-        return Err(draw_err(&png)(message));
+    match target {
+        Target::Bitmap => {
+            // plotters writes the file itself on `present`; render to a
+            // temporary name and rename.
+            let tmp = temp_path(path, "png");
+            let result = {
+                let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+                render(&root, fig, draw_panel, target).and_then(|()| root.present().map_err(s))
+            };
+            if let Err(message) = result {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(draw_err(path)(message));
+            }
+            rename(&tmp, path)
+        }
+        Target::Vector => {
+            // Render to a string, write it to a temporary file, rename.
+            let mut text = String::new();
+            {
+                let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+                render(&root, fig, draw_panel, target)
+                    .and_then(|()| root.present().map_err(s))
+                    .map_err(draw_err(path))?;
+            }
+            let tmp = temp_path(path, "svg");
+            if let Err(source) = std::fs::write(&tmp, text.as_bytes()) {
+                let _ = std::fs::remove_file(&tmp);
+                return Err(PlotError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                });
+            }
+            rename(&tmp, path)
+        }
     }
-    rename(&tmp_png, &png)?;
-
-    // SVG: render to a string, write it to a temporary file, rename.
-    let mut text = String::new();
-    {
-        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        render(&root, fig, draw_panel, Target::Vector)
-            .and_then(|()| root.present().map_err(s))
-            .map_err(draw_err(&svg))?;
-    }
-    let tmp_svg = temp_path(&svg, "svg");
-    if let Err(source) = std::fs::write(&tmp_svg, text.as_bytes()) {
-        let _ = std::fs::remove_file(&tmp_svg);
-        return Err(PlotError::Io { path: svg, source });
-    }
-    rename(&tmp_svg, &svg)?;
-    Ok(vec![png, svg])
 }
 
 fn rename(from: &Path, to: &Path) -> Result<(), PlotError> {
@@ -643,7 +779,20 @@ trait Panels {
 }
 
 struct Bars<'a>(&'a [BarPanel]);
-struct Lines<'a>(&'a [LinePanel]);
+struct Lines<'a> {
+    panels: &'a [LinePanel],
+    /// Per panel, per series: how it is drawn.
+    looks: Vec<Vec<Look>>,
+}
+
+/// How one line series is drawn.
+#[derive(Clone, Copy)]
+struct Look {
+    /// Palette index: colour and marker shape.
+    colour: usize,
+    /// Thin and translucent without markers.
+    faint: bool,
+}
 
 impl Panels for Bars<'_> {
     fn draw<DB: DrawingBackend>(
@@ -663,7 +812,7 @@ impl Panels for Lines<'_> {
         i: usize,
         target: Target,
     ) -> Result<(), String> {
-        draw_line_panel(area, &self.0[i], target)
+        draw_line_panel(area, &self.panels[i], &self.looks[i], target)
     }
 }
 
@@ -711,7 +860,8 @@ fn draw_legend<DB: DrawingBackend>(
         let mut x = (width.saturating_sub(total) / 2).max(LEGEND_PAD as i32);
         let cy = (LEGEND_PAD + LEGEND_ROW_H * r as u32 + LEGEND_ROW_H / 2) as i32;
         for &(i, w) in row {
-            let colour = colour(i);
+            let shape = fig.colours[i];
+            let colour = colour(shape);
             match fig.kind {
                 LegendKind::Bar => {
                     let (x0, x1) = (x + 6, x + LEGEND_SWATCH_W - 6);
@@ -739,7 +889,7 @@ fn draw_legend<DB: DrawingBackend>(
                         colour.stroke_width(3),
                     ))
                     .map_err(s)?;
-                    draw_marker(area, i, (x + LEGEND_SWATCH_W / 2, cy))?;
+                    draw_marker(area, shape, (x + LEGEND_SWATCH_W / 2, cy))?;
                 }
             }
             area.draw(&Text::new(
@@ -1168,10 +1318,10 @@ fn jagged_series(p: &LinePanel) -> Vec<bool> {
 fn draw_line_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     p: &LinePanel,
+    looks: &[Look],
     target: Target,
 ) -> Result<(), String> {
     let (x0, x1, y0, y1) = line_ranges(p);
-    let jagged = jagged_series(p);
 
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, font(TITLE_PX))
@@ -1219,20 +1369,21 @@ fn draw_line_panel<DB: DrawingBackend>(
         if path.len() < 2 {
             continue;
         }
-        if jagged[i] {
-            let style = colour(i).mix(0.45).stroke_width(1);
+        let look = looks[i];
+        if look.faint {
+            let style = colour(look.colour).mix(0.45).stroke_width(1);
             screen
                 .draw(&PathElement::new(path.clone(), style))
                 .map_err(s)?;
         } else {
-            draw_wide_path(&screen, path, colour(i), target)?;
+            draw_wide_path(&screen, path, colour(look.colour), target)?;
         }
     }
     // Markers on top of all lines, at staggered positions per series so
     // coinciding lines stay distinguishable.
     let n_ser = p.series.len();
     for (i, ser) in p.series.iter().enumerate() {
-        if jagged[i] {
+        if looks[i].faint {
             continue;
         }
         let n = ser.points.len();
@@ -1241,7 +1392,7 @@ fn draw_line_panel<DB: DrawingBackend>(
             let frac = (m as f64 + (i as f64 + 1.0) / (n_ser as f64 + 1.0)) / k as f64;
             let idx = ((frac * n as f64) as usize).min(n - 1);
             let c = plot.map_coordinate(&ser.points[idx]);
-            draw_marker(&screen, i, c)?;
+            draw_marker(&screen, looks[i].colour, c)?;
         }
     }
     Ok(())

@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use madenet_plots::{
-    bar_panels, ewma, line_panels, BarPanel, BarSeries, LinePanel, LineSeries, PlotError,
+    bar_panels, ewma, line_panels, styled_line_panels, BarPanel, BarSeries, LinePanel,
+    LineSeries, LineStyle, PlotError,
 };
 
 /// A fresh, empty directory for one test.
@@ -248,6 +249,78 @@ fn unusual_but_valid_data_is_drawn() {
         series: vec![curve("raw", &noisy), curve("EWMA", &ewma(&noisy, 0.9))],
     };
     line_panels(&d.join("fig2"), &[panel], 1).unwrap();
+}
+
+#[test]
+fn styled_line_panels_write_one_file_and_match_series_by_name() {
+    let d = dir("styled");
+    let noisy: Vec<f64> = (0..2000)
+        .map(|i| ((i * 7919) % 101) as f64 - 50.0 + i as f64 / 40.0)
+        .collect();
+    let curve = |name: &str, v: &[f64]| LineSeries {
+        name: name.into(),
+        points: v.iter().enumerate().map(|(e, &y)| (e as f64, y)).collect(),
+    };
+    let panel = |title: &str, series: Vec<LineSeries>| LinePanel {
+        title: title.into(),
+        x_label: "Episode".into(),
+        y_label: "y".into(),
+        series,
+    };
+    // Panels with different series; raw values and their EWMA in one colour.
+    let panels = [
+        panel(
+            "Team reward",
+            vec![curve("raw", &noisy), curve("EWMA", &ewma(&noisy, 0.9))],
+        ),
+        panel("Validation", vec![curve("validation", &[30.0, 25.0, 20.0])]),
+    ];
+    let style = |name: &str, colour: usize, faint: bool| LineStyle {
+        name: name.into(),
+        colour,
+        faint,
+    };
+    let styles = [
+        style("EWMA", 0, false),
+        style("raw", 0, true),
+        style("validation", 2, false),
+    ];
+    let png = d.join("fig2.png");
+    assert_eq!(styled_line_panels(&png, &panels, 2, &styles).unwrap(), png);
+    assert_eq!(files_in(&d), vec!["fig2.png"]);
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(img.width(), 1600);
+    assert!(count_colour(&img, [0x00, 0x72, 0xB2]) > 500, "no blue EWMA");
+    assert!(count_colour(&img, [0x00, 0x9E, 0x73]) > 200, "no green validation");
+    assert_eq!(count_colour(&img, [0xD5, 0x5E, 0x00]), 0, "vermillion unused");
+
+    let svg = d.join("fig2.SVG");
+    styled_line_panels(&svg, &panels, 2, &styles).unwrap();
+    assert_eq!(files_in(&d), vec!["fig2.SVG", "fig2.png"]);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg"));
+    for t in ["Team reward", "Validation", "EWMA", "raw", "validation"] {
+        assert!(text.contains(t), "SVG lacks {t:?}");
+    }
+
+    let err = |path: &Path, styles: &[LineStyle], needle: &str| {
+        match styled_line_panels(path, &panels, 2, styles) {
+            Err(e @ PlotError::InvalidInput { .. }) => {
+                let msg = e.to_string();
+                assert!(msg.contains(&path.display().to_string()), "{msg}");
+                assert!(msg.contains(needle), "{msg:?} lacks {needle:?}");
+            }
+            other => panic!("expected InvalidInput, got {other:?}"),
+        }
+        assert!(!path.exists());
+    };
+    err(&d.join("fig2.jpg"), &styles, ".png or .svg");
+    err(&d.join("fig2"), &styles, ".png or .svg");
+    err(&d.join("bad.png"), &styles[..2], "\"validation\" has no line style");
+    err(&d.join("bad.png"), &[], "no line styles");
+    let twice = [styles[0].clone(), styles[1].clone(), styles[2].clone(), styles[0].clone()];
+    err(&d.join("bad.png"), &twice, "two line styles");
+    assert_eq!(files_in(&d), vec!["fig2.SVG", "fig2.png"]);
 }
 
 /// Asserts `r` is an input error naming `png` and that nothing was written.

@@ -1,0 +1,107 @@
+//! `madenet plot-training` end to end: a run directory's `episodes.csv` becomes a PNG (at the
+//! default path or `--out`); bad input gives exit code 2 and one `error:` line naming the file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn madenet(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+}
+
+/// A temp folder removed on drop.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Self {
+        let p = std::env::temp_dir().join(format!("madenet-plot-training-test-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).expect("temp dir");
+        Scratch(p)
+    }
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::env::var_os("MADENET_KEEP_TEST_DIRS").is_none() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+const EPISODES: &str = "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s
+0,cen,1,300,-95.5,0,1.0,0,1.2
+1,cen,1,210,-60.25,1,0.9,12,2.3
+2,dec,0.5,180,-41,1,0.8,30,3.1
+3,cen,1,150,-30.5,1,0.7,51,4.0
+4,dec,0.5,120,-22,1,0.6,70,4.8
+";
+
+/// Exit code 2, one stderr line starting `error:` that contains every needle, no panic.
+fn assert_clean_error(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line expected: {err}");
+    assert!(lines[0].starts_with("error: "), "{err}");
+    for n in needles {
+        assert!(lines[0].contains(n), "`{n}` missing from: {err}");
+    }
+}
+
+fn png_size(path: &Path) -> (u32, u32) {
+    // PNG IHDR: width and height are the big-endian u32s at bytes 16..24.
+    let b = std::fs::read(path).expect("png");
+    assert_eq!(&b[1..4], b"PNG");
+    (u32::from_be_bytes(b[16..20].try_into().unwrap()), u32::from_be_bytes(b[20..24].try_into().unwrap()))
+}
+
+#[test]
+fn plot_training_writes_the_png_and_prints_its_path() {
+    let s = Scratch::new("ok");
+    let dir = s.path().join("run");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("episodes.csv"), EPISODES).unwrap();
+
+    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let png = dir.join("fig2_training.png");
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), png.display().to_string());
+    assert_eq!(png_size(&png), (1600, 564), "two panels side by side under the legend");
+
+    // With validation rows, a third panel; --out puts the figure elsewhere.
+    std::fs::write(
+        dir.join("validation.csv"),
+        "episode,updates,mean_steps,mean_team_reward,completed,trials\n2,30,150.5,-40,3,5\n4,70,110,-25.5,5,5\n",
+    )
+    .unwrap();
+    let other = s.path().join("figs").join("training.png");
+    let out = madenet(&["plot-training", dir.to_str().unwrap(), "--out", other.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(png_size(&other).0, 2400);
+}
+
+#[test]
+fn plot_training_bad_input_is_one_line_naming_the_file() {
+    let s = Scratch::new("bad");
+    let dir = s.path().join("no-such-run");
+    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+    assert_clean_error(&out, &[&dir.join("episodes.csv").display().to_string()]);
+
+    let dir = s.path();
+    std::fs::write(dir.join("episodes.csv"), "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s\n").unwrap();
+    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+    assert_clean_error(&out, &["episodes.csv", "no episodes"]);
+
+    std::fs::write(dir.join("episodes.csv"), EPISODES.replace("2,dec,0.5,180", "2,dec,0.5,many")).unwrap();
+    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+    assert_clean_error(&out, &["episodes.csv:4:", "column `steps` = \"many\""]);
+
+    std::fs::write(dir.join("episodes.csv"), EPISODES).unwrap();
+    let out = madenet(&["plot-training", dir.to_str().unwrap(), "--out", "fig.jpg"]);
+    assert_clean_error(&out, &["fig.jpg", ".png or .svg"]);
+    assert!(!dir.join("fig2_training.png").exists());
+}
