@@ -55,8 +55,13 @@
 
 mod actions;
 mod config;
+pub mod env;
+pub mod learner;
 mod net;
+pub mod obs;
+pub mod policy;
 pub mod replay;
+pub mod train;
 
 pub use actions::{
     conditional_argmax, conditional_argmax_batch, conditional_joint_mask, gather_q, joint_actions,
@@ -69,6 +74,8 @@ pub use config::{
     MAP_CHANNELS, MIN_MAP_SIDE,
 };
 pub use net::{LayerShape, LstmState, QNet};
+pub use policy::DepPolicy;
+pub use train::{train, Method, Model, Progress, TrainConfig, TrainError};
 
 /// burn's `flex` CPU device, without autodiff (acting, evaluation, target networks).
 ///

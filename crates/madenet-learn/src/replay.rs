@@ -9,7 +9,7 @@
 //! observations it uses.
 
 /// One primitive timestep of an episode, as recorded after the world moved.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PrimitiveStep {
     /// Per robot: a new macro action was chosen at this step (its previous one terminated, or
     /// the episode started). The observation of this step is the one it was chosen on.
@@ -25,7 +25,7 @@ pub struct PrimitiveStep {
 /// A macro-level transition: the observation of step `from`, the action chosen there, the
 /// rewards summed over steps `from..to`, and the next decision's observation at step `to`
 /// (`None` when the episode ended first: a terminal transition).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MacroTransition {
     pub from: usize,
     pub to: Option<usize>,

@@ -13,6 +13,8 @@ mod batch;
 mod compare;
 mod frames;
 mod map_cmd;
+mod plot_training;
+mod train_cmd;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +40,10 @@ enum Command {
     Map(map_cmd::MapCommand),
     /// List the available policies.
     Policies,
+    /// Train MADE-Net or MADE-Net-DT (logs, checkpoints, resume).
+    Train(train_cmd::TrainArgs),
+    /// Draw the training curves (the paper's Fig. 2) of a training run directory.
+    PlotTraining(plot_training::PlotTrainingArgs),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +53,8 @@ fn main() -> ExitCode {
         Command::Batch(a) => batch::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Map(c) => map_cmd::run(c),
+        Command::PlotTraining(a) => plot_training::run(a),
+        Command::Train(a) => train_cmd::run(a),
         Command::Policies => madenet_baselines::registry()
             .describe()
             .into_iter()

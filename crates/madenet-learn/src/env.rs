@@ -1,0 +1,278 @@
+//! The training environments (paper Sec. III.C.4, *Parallel Environments*): a team driven by
+//! the CEP with full communication (centralized) and a team driven by the DEPs whose CSP is
+//! drawn from U(0, 1) each episode (decentralized). Both run the real simulator pipeline
+//! ([`madenet_sim::Trial`]) through a [`JointPolicy`] that acts ε-greedily and records, at
+//! every joint decision, what the networks saw and chose. An [`Episode`] is one such run: its
+//! primitive steps (for [`crate::replay`]) and its decisions' observations.
+
+use crate::obs::{joint_obs, robot_obs, running_action, JointObs, RobotObs};
+use crate::replay::{squeeze_robot, squeeze_team, MacroTransition, PrimitiveStep, ReplayError};
+use crate::{conditional_argmax, joint_actions, masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
+use burn::tensor::Device;
+use madenet_agent::{AgentView, Decision, JointPolicy};
+use madenet_map::Occupancy;
+use madenet_sim::{SimError, Trial, TrialSpec};
+use madenet_world::rng::Rng;
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use std::sync::{Arc, Mutex};
+
+/// Which of the two training environments.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EnvKind {
+    /// Driven by the CEP, full communication.
+    Centralized,
+    /// Driven by the DEPs, CSP ~ U(0, 1).
+    Decentralized,
+}
+
+impl EnvKind {
+    /// `cen` / `dec` (the training log's `env` column).
+    pub fn short(self) -> &'static str {
+        match self {
+            EnvKind::Centralized => "cen",
+            EnvKind::Decentralized => "dec",
+        }
+    }
+}
+
+/// What was recorded at one joint decision (a step where some robot's macro action ended).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct JointStep {
+    /// The timestep.
+    pub t: usize,
+    /// Which robots chose a new macro action here.
+    pub decided: Vec<bool>,
+    /// Each robot's macro action in force from here: the new choice, or for a running robot
+    /// its action re-indexed into the current candidates ([`running_action`]).
+    pub actions: Vec<usize>,
+    /// The CEP's input (absent when no CEP is trained, as in MADE-Net-DT).
+    pub joint: Option<JointObs>,
+    /// Each deciding robot's DEP input.
+    pub robots: Vec<Option<RobotObs>>,
+}
+
+/// The networks an actor uses, on the plain (non-autodiff) CPU device.
+#[derive(Clone, Debug)]
+pub struct ActorNets {
+    /// The CEP: drives the centralized env; in the decentralized env it is stepped alongside
+    /// for `cen_explore`. `None` for MADE-Net-DT.
+    pub cep: Option<QNet>,
+    /// The DEPs: one shared by all robots, or one per robot.
+    pub deps: Vec<QNet>,
+}
+
+impl ActorNets {
+    fn dep(&self, robot: usize) -> &QNet {
+        &self.deps[if self.deps.len() == 1 { 0 } else { robot }]
+    }
+}
+
+/// The ε-greedy actor of one training episode (a [`JointPolicy`]).
+pub struct Actor {
+    kind: EnvKind,
+    nets: ActorNets,
+    epsilon: f32,
+    cen_explore: bool,
+    goals: usize,
+    rng: Rng,
+    device: Device,
+    cep_state: Option<LstmState>,
+    dep_states: Vec<Option<LstmState>>,
+    out: Arc<Mutex<Vec<JointStep>>>,
+}
+
+impl Actor {
+    pub fn new(kind: EnvKind, nets: ActorNets, epsilon: f32, cen_explore: bool, goals: usize, team: usize, rng: Rng) -> Self {
+        Actor {
+            kind,
+            nets,
+            epsilon,
+            cen_explore,
+            goals,
+            rng,
+            device: crate::cpu(),
+            cep_state: None,
+            dep_states: vec![None; team],
+            out: Arc::new(Mutex::new(Vec::new())),
+        }
+    }
+
+    /// Where the recorded joint steps go.
+    pub fn record(&self) -> Arc<Mutex<Vec<JointStep>>> {
+        Arc::clone(&self.out)
+    }
+
+    fn input(&self, map: &[u64], vec: &[f32], h: usize, w: usize) -> (Tensor<4>, Tensor<2>) {
+        let mut m = vec![0.0f32; 4 * h * w];
+        crate::obs::unpack_bits(map, &mut m);
+        let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
+        let obs = Tensor::<2>::from_data(TensorData::new(vec.to_vec(), [1, vec.len()]), &self.device);
+        (maps, obs)
+    }
+
+    fn random_valid(&mut self, mask: &[bool]) -> usize {
+        let valid: Vec<usize> = (0..mask.len()).filter(|&k| mask[k]).collect();
+        valid[self.rng.random_range(0..valid.len())]
+    }
+}
+
+fn q_host(q: Tensor<2>) -> Vec<f32> {
+    q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32")
+}
+
+impl JointPolicy for Actor {
+    fn name(&self) -> &str {
+        match self.kind {
+            EnvKind::Centralized => "made-net-cep",
+            EnvKind::Decentralized => "made-net-dep",
+        }
+    }
+
+    fn decide(&mut self, views: &mut [AgentView<'_>], needs: &[bool], team_map: &[Occupancy]) -> Vec<Decision> {
+        let n = views.len();
+        let (h, w) = (views[0].belief.height(), views[0].belief.width());
+        let joint = self.nets.cep.is_some().then(|| joint_obs(views, team_map));
+        let mut actions: Vec<usize> = views.iter().map(running_action).collect();
+        let fixed: Vec<Option<usize>> = (0..n).map(|i| (!needs[i]).then_some(actions[i])).collect();
+        // The CEP's greedy conditional joint choice (running robots fixed), stepping its state.
+        let cep_choice = match (&self.nets.cep, &joint) {
+            (Some(cep), Some(j)) => {
+                let (maps, obs) = self.input(&j.map, &j.vec, h, w);
+                let (q, state) = cep.act(maps, obs, self.cep_state.take());
+                self.cep_state = Some(state);
+                let q = q_host(q);
+                let a = conditional_argmax(&q, &j.masks, &fixed).expect("every robot has an admissible action");
+                Some(joint_actions(a, n, self.goals))
+            }
+            _ => None,
+        };
+        let mut robots: Vec<Option<RobotObs>> = vec![None; n];
+        for i in (0..n).filter(|&i| needs[i]) {
+            let o = robot_obs(&views[i]);
+            let explore = self.rng.random::<f32>() < self.epsilon;
+            actions[i] = match self.kind {
+                EnvKind::Centralized => {
+                    if explore {
+                        self.random_valid(&o.mask)
+                    } else {
+                        cep_choice.as_ref().expect("the centralized env has a CEP")[i]
+                    }
+                }
+                EnvKind::Decentralized => {
+                    let (maps, obs) = self.input(&o.map, &o.vec, h, w);
+                    let (q, state) = self.nets.dep(i).act(maps, obs, self.dep_states[i].take());
+                    self.dep_states[i] = Some(state);
+                    let greedy = masked_argmax_slice(&q_host(q), &o.mask).expect("mask has a valid action");
+                    match (explore, &cep_choice) {
+                        (false, _) => greedy,
+                        (true, Some(c)) if self.cen_explore => c[i],
+                        (true, _) => self.random_valid(&o.mask),
+                    }
+                }
+            };
+            robots[i] = Some(o);
+        }
+        let decisions = (0..n).map(|i| Decision::Candidate(actions[i])).collect();
+        self.out.lock().expect("recorder lock").push(JointStep {
+            t: views[0].t,
+            decided: needs.to_vec(),
+            actions,
+            joint,
+            robots,
+        });
+        decisions
+    }
+}
+
+/// One recorded training episode.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Episode {
+    pub kind: EnvKind,
+    pub comm_success_prob: f64,
+    /// Primitive steps (decided flags, actions in force, Eq. 7/8 rewards).
+    pub steps: Vec<PrimitiveStep>,
+    /// The joint decisions, in time order; `steps[decisions[k].t]` is joint-valid.
+    pub decisions: Vec<JointStep>,
+    /// The CEP's macro transitions: `cep[k]` starts at `decisions[k]`.
+    pub cep: Vec<MacroTransition>,
+    /// Each robot's DEP transitions and, for its `k`-th, the index into `decisions` where it
+    /// was chosen.
+    pub dep: Vec<Vec<MacroTransition>>,
+    pub dep_at: Vec<Vec<usize>>,
+    /// The team explored everything (else the step cap ended it).
+    pub complete: bool,
+    /// Σ r (Eq. 8) over the episode, unscaled.
+    pub team_return: f64,
+}
+
+impl Episode {
+    /// Robots in the team.
+    pub fn team(&self) -> usize {
+        self.dep.len()
+    }
+    /// Primitive steps taken.
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+}
+
+/// Why an episode could not be recorded.
+#[derive(Debug, thiserror::Error)]
+pub enum EpisodeError {
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error(transparent)]
+    Replay(#[from] ReplayError),
+}
+
+/// Runs one episode of `spec` (its config's CSP and step cap apply) with `actor`.
+pub fn run_episode(spec: TrialSpec, actor: Actor) -> Result<Episode, EpisodeError> {
+    let kind = actor.kind;
+    let record = actor.record();
+    let csp = spec.config.comm_success_prob;
+    let mut trial = Trial::with_joint_policy(spec, Box::new(actor))?;
+    let n = trial.agents().len();
+    let mut steps = Vec::new();
+    let mut actions = vec![0usize; n];
+    let mut team_return = 0.0;
+    loop {
+        let t = trial.world().t();
+        if !trial.step() {
+            break;
+        }
+        let rec = record.lock().expect("recorder lock");
+        let decided = match rec.last() {
+            Some(js) if js.t == t => {
+                actions.clone_from(&js.actions);
+                js.decided.clone()
+            }
+            _ => vec![false; n],
+        };
+        drop(rec);
+        let r = trial.rewards();
+        team_return += r.team;
+        steps.push(PrimitiveStep {
+            decided,
+            actions: actions.clone(),
+            robot_rewards: r.robots.iter().map(|&x| x as f32).collect(),
+            team_reward: r.team as f32,
+        });
+    }
+    let complete = trial.world().is_complete();
+    drop(trial);
+    let decisions = std::mem::take(&mut *record.lock().expect("recorder lock"));
+    let cep = squeeze_team(&steps)?;
+    let mut dep = Vec::with_capacity(n);
+    let mut dep_at = Vec::with_capacity(n);
+    for i in 0..n {
+        dep.push(squeeze_robot(&steps, i)?);
+        dep_at.push(decisions.iter().enumerate().filter(|(_, d)| d.decided[i]).map(|(k, _)| k).collect::<Vec<_>>());
+    }
+    debug_assert_eq!(cep.len(), decisions.len());
+    Ok(Episode { kind, comm_success_prob: csp, steps, decisions, cep, dep, dep_at, complete, team_return })
+}

@@ -1,0 +1,120 @@
+//! Network inputs built from the simulator: one robot's macro observation for its DEP and the
+//! joint observation (merged map, every robot's vector) for the CEP (paper Sec. III.C.1–2).
+
+use madenet_agent::AgentView;
+use madenet_map::{Occupancy, Pos};
+use serde::{Deserialize, Serialize};
+
+/// One robot's DEP input at a decision: the 4-channel map image (`[4][H][W]`, 0/1), the
+/// non-map vector of [`crate::obs_dim_for`] values and the candidate mask used for acting.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobotObs {
+    /// The map image, bit-packed ([`pack_bits`]).
+    pub map: Vec<u64>,
+    pub vec: Vec<f32>,
+    /// Which macro actions may be chosen ([`action_mask`]).
+    pub mask: Vec<bool>,
+}
+
+/// The CEP's input at a joint decision: the merged map image (explored and obstacles of the
+/// team's merged map, every robot's true position, every robot's goal candidates), the robots'
+/// vectors concatenated in robot order ([`crate::joint_obs_dim_for`]) and each robot's mask.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointObs {
+    /// The merged map image, bit-packed ([`pack_bits`]).
+    pub map: Vec<u64>,
+    pub vec: Vec<f32>,
+    pub masks: Vec<Vec<bool>>,
+}
+
+/// The macro actions a robot may choose: its valid goal candidates, or — when it has none
+/// (nothing reachable left to explore) — slot 0 alone, which then means "stay" (the agent
+/// idles on an empty slot). Every argmax therefore has at least one admissible action.
+pub fn action_mask(view: &AgentView<'_>) -> Vec<bool> {
+    let mut mask = view.candidates().valid_mask();
+    if !mask.iter().any(|&v| v) {
+        if let Some(first) = mask.first_mut() {
+            *first = true;
+        }
+    }
+    mask
+}
+
+/// Robot `view.id`'s DEP input.
+pub fn robot_obs(view: &AgentView<'_>) -> RobotObs {
+    RobotObs { map: pack_bits(&view.map_image()), vec: view.macro_observation(), mask: action_mask(view) }
+}
+
+/// The CEP's joint input from every robot's view and the team's merged map (row-major, the
+/// world's `team_map`).
+pub fn joint_obs(views: &[AgentView<'_>], team_map: &[Occupancy]) -> JointObs {
+    let n = team_map.len();
+    let mut map = vec![0u8; 4 * n];
+    for (i, &o) in team_map.iter().enumerate() {
+        map[i] = (o != Occupancy::Unknown) as u8;
+        map[n + i] = (o == Occupancy::Obstacle) as u8;
+    }
+    let mut vec = Vec::new();
+    let mut masks = Vec::with_capacity(views.len());
+    for v in views {
+        let idx = |p: Pos| v.belief.index(p);
+        map[2 * n + idx(v.pos)] = 1;
+        for &c in &v.candidates().cells {
+            map[3 * n + idx(c)] = 1;
+        }
+        vec.extend(v.macro_observation());
+        masks.push(action_mask(v));
+    }
+    JointObs { map: pack_bits(&map), vec, masks }
+}
+
+/// The candidate index that stands for a robot's running macro action at a later joint
+/// decision. Goal candidates are re-extracted at every joint decision, so the index chosen
+/// earlier may now name another cell: the running action is the valid candidate equal to the
+/// robot's goal, else the valid candidate nearest to it (Euclidean; ties to the lower index),
+/// else slot 0.
+pub fn running_action(view: &AgentView<'_>) -> usize {
+    let cells = &view.candidates().cells;
+    match view.goal {
+        Some(g) => cells
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.euclid(g).total_cmp(&b.1.euclid(g)).then(a.0.cmp(&b.0)))
+            .map_or(0, |(k, _)| k),
+        None => 0,
+    }
+}
+
+/// Packs 0/1 bytes into bits (64 per word, LSB first): the replay keeps map images at one bit
+/// per cell, 32× smaller than `f32`.
+pub fn pack_bits(bytes: &[u8]) -> Vec<u64> {
+    let mut words = vec![0u64; bytes.len().div_ceil(64)];
+    for (i, &b) in bytes.iter().enumerate() {
+        if b != 0 {
+            words[i / 64] |= 1 << (i % 64);
+        }
+    }
+    words
+}
+
+/// Writes the first `out.len()` bits of `words` into `out` as 0.0/1.0.
+pub fn unpack_bits(words: &[u64], out: &mut [f32]) {
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = ((words[i / 64] >> (i % 64)) & 1) as f32;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bits_round_trip() {
+        let bytes: Vec<u8> = (0..131).map(|i| ((i * 7 + i / 5) % 3 == 0) as u8).collect();
+        let words = pack_bits(&bytes);
+        assert_eq!(words.len(), 3);
+        let mut out = vec![9.0; 131];
+        unpack_bits(&words, &mut out);
+        assert_eq!(out, bytes.iter().map(|&b| b as f32).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,47 @@
+//! MADE-Net at execution time: each robot runs its DEP on its own macro observation at its
+//! macro-action terminations, greedily over its valid goal candidates, carrying the LSTM state
+//! from one decision to the next (paper Sec. III.C.3, *Decentralized Execution*).
+
+use crate::obs::{robot_obs, unpack_bits};
+use crate::{masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
+use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
+use std::sync::Arc;
+
+/// One robot's MADE-Net (or MADE-Net-DT) policy.
+pub struct DepPolicy {
+    name: String,
+    net: Arc<QNet>,
+    state: Option<LstmState>,
+}
+
+impl DepPolicy {
+    /// A fresh policy (zero LSTM state) running `net` under registry name `name`.
+    pub fn new(name: &str, net: Arc<QNet>) -> Self {
+        DepPolicy { name: name.to_string(), net, state: None }
+    }
+}
+
+impl Policy for DepPolicy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        let o = robot_obs(view);
+        if !view.candidates().valid_mask().contains(&true) {
+            return Decision::Idle;
+        }
+        let (h, w) = (view.belief.height(), view.belief.width());
+        let device = crate::cpu();
+        let mut m = vec![0.0f32; 4 * h * w];
+        unpack_bits(&o.map, &mut m);
+        let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &device);
+        let obs = Tensor::<2>::from_data(TensorData::new(o.vec.clone(), [1, o.vec.len()]), &device);
+        let (q, state) = self.net.act(maps, obs, self.state.take());
+        self.state = Some(state);
+        let q = q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32");
+        Decision::Candidate(masked_argmax_slice(&q, &o.mask).expect("a valid candidate"))
+    }
+}

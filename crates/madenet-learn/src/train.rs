@@ -1,0 +1,848 @@
+//! The training loop of MADE-Net (and MADE-Net-DT), CleanRL-style: one function,
+//! [`train`], reads top to bottom — build nets, then per iteration: an episode in each
+//! environment, replay, updates, target sync, logs, validation, checkpoint. Every
+//! hyperparameter is a field of [`TrainConfig`] with the paper's value, or MacDec-DDRQN's
+//! default, or ours (and why) beside it.
+//!
+//! # Randomness and resume
+//!
+//! Every random draw comes from a named stream derived from `seed` and a counter (the
+//! iteration for maps, starts, CSP and actors; the update for batch sampling), and the nets are
+//! initialised right after seeding burn's device. A checkpoint therefore needs only the
+//! counters, the nets, the optimizers and the replay buffers: a run resumed from it continues
+//! exactly as if it had not stopped (tested).
+//!
+//! # Run directory
+//!
+//! ```text
+//! config.toml            the resolved configuration (a resume reads it back)
+//! episodes.csv           one row per training episode (see `madenet-trainlog`)
+//! validation.csv         one row per validation
+//! updates.csv            update, cep_loss, dep_loss
+//! events.out.tfevents.*  the same scalars for TensorBoard
+//! checkpoint/            latest state: state.json, nets, optimizers, replay.bin
+//! best/                  the weights with the best validation (fewest mean steps): model.toml + *.bpk
+//! ```
+
+use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
+use crate::learner::{cep_update, dep_update, target_of, UpdateParams, Window};
+use crate::policy::DepPolicy;
+use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
+use burn::module::Module;
+use burn::optim::grad_clipping::GradientClippingConfig;
+use burn::optim::{AdamConfig, ModuleOptimizer};
+use burn::store::ModuleRecord;
+use madenet_map::generate::{generate, GeneratorConfig};
+use madenet_map::{OccGrid, Pos};
+use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_world::rng::{derive_seed, stream};
+use madenet_world::ScenarioConfig;
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Which learner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// CEP + DEPs trained together (Eq. 5 and 6), two environments.
+    MadeNet,
+    /// The paper's ablation: the DEPs alone on decentralized experience (double DRQN).
+    MadeNetDt,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::MadeNet => "made-net",
+            Method::MadeNetDt => "made-net-dt",
+        }
+    }
+}
+
+/// Every knob of a training run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrainConfig {
+    /// `made-net` or `made-net-dt`.
+    pub method: Method,
+    /// Master seed of every stream.
+    pub seed: u64,
+    /// Episodes per environment (the paper: ≈ 250 000 to converge, in 350 h).
+    pub episodes: u64,
+    /// Stop (with a checkpoint) after this many minutes of wall time; 0 = no limit.
+    pub max_minutes: f64,
+    /// The simulated world (team size, d_s, noise, step cap, …). Its `comm_success_prob` is
+    /// used by nothing: the centralized env has full communication and the decentralized env
+    /// draws CSP ~ U(0, 1) per episode (Sec. III.C.4).
+    pub scenario: ScenarioConfig,
+    /// Training map size (the paper: 20 × 20).
+    pub map_height: usize,
+    pub map_width: usize,
+    /// Obstacle density range of the training maps (the paper: 40–60 %).
+    pub density_min: f64,
+    pub density_max: f64,
+    /// γ (the paper: 1), applied once per macro step.
+    pub gamma: f32,
+    /// Sequences per batch (the paper: 16).
+    pub batch_size: usize,
+    /// Joint decisions per sampled sequence, unrolled from zero LSTM state (MacDec-DDRQN's
+    /// `trace_len`; the paper does not say). Each window carries one more decision for the
+    /// last target.
+    pub trace_len: usize,
+    /// Adam step size (MacDec-DDRQN's default 1e-3; the paper does not say).
+    pub learning_rate: f64,
+    /// Gradient norm clip (ours: keeps early TD errors on returns of −1000s from blowing up).
+    pub grad_clip_norm: f32,
+    /// Rewards are multiplied by this in the targets (ours: Eq. 7/8 sum to ±1000s per episode
+    /// and γ = 1; 0.01 keeps Q in tens).
+    pub reward_scale: f32,
+    /// Episodes kept per environment's replay (MacDec-DDRQN: 1000).
+    pub replay_episodes: usize,
+    /// Episodes per environment before the first update.
+    pub warmup_episodes: u64,
+    /// Updates (one CEP and one DEP step each) per iteration.
+    pub updates_per_episode: usize,
+    /// Target networks are copied from the online ones every this many updates.
+    pub target_update_every: u64,
+    /// ε-greedy, linear decay from `epsilon_start` to `epsilon_end` over
+    /// `epsilon_decay_episodes` episodes.
+    pub epsilon_start: f32,
+    pub epsilon_end: f32,
+    pub epsilon_decay_episodes: u64,
+    /// In the decentralized env, explore by following the CEP's joint choice (MacDec's
+    /// `cen_explore`) instead of a random candidate.
+    pub cen_explore: bool,
+    /// One DEP shared by all robots (ours, default: the robots are identical and sharing
+    /// triples each net's samples in a 1-hour budget) or one per robot (the paper).
+    pub shared_dep: bool,
+    /// CONCAT as a learned layer ([`NetConfig::concat_fc`]).
+    pub concat_fc: bool,
+    /// Validate every this many episodes per environment; 0 = never.
+    pub validate_every: u64,
+    /// Generated validation maps (fixed by `seed`, never the paper's).
+    pub validation_maps: usize,
+    /// CSPs each validation map is run at.
+    pub validation_csp: Vec<f64>,
+    /// Checkpoint every this many episodes per environment.
+    pub checkpoint_every: u64,
+    /// Learner threads (burn's CPU kernels run on this rayon pool).
+    pub threads: usize,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            method: Method::MadeNet,
+            seed: 1,
+            episodes: 20_000,
+            max_minutes: 55.0,
+            scenario: ScenarioConfig::default(),
+            map_height: 20,
+            map_width: 20,
+            density_min: 0.40,
+            density_max: 0.60,
+            gamma: 1.0,
+            batch_size: 16,
+            trace_len: 24,
+            learning_rate: 1e-3,
+            grad_clip_norm: 10.0,
+            reward_scale: 0.01,
+            replay_episodes: 1000,
+            warmup_episodes: 32,
+            updates_per_episode: 1,
+            target_update_every: 200,
+            epsilon_start: 1.0,
+            epsilon_end: 0.05,
+            epsilon_decay_episodes: 3000,
+            cen_explore: true,
+            shared_dep: true,
+            concat_fc: false,
+            validate_every: 250,
+            validation_maps: 12,
+            validation_csp: vec![1.0, 0.5, 0.0],
+            checkpoint_every: 500,
+            threads: 2,
+        }
+    }
+}
+
+/// Why training cannot start or go on. Messages name the file and field.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    #[error("{path}: {message}")]
+    Config { path: String, message: String },
+    #[error("{0}")]
+    Net(#[from] ConfigError),
+    #[error("{path}: {message}")]
+    Io { path: String, message: String },
+    #[error(transparent)]
+    Episode(#[from] EpisodeError),
+    #[error("{0}")]
+    Other(String),
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
+    move |e| TrainError::Io { path: path.display().to_string(), message: e.to_string() }
+}
+
+impl TrainConfig {
+    /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
+    pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
+        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+        let cfg: TrainConfig = toml::from_str(&text)
+            .map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
+        cfg.validate().map_err(|m| TrainError::Config { path: path.display().to_string(), message: m })?;
+        Ok(cfg)
+    }
+
+    /// Checks every field; the message names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
+        let checks: [(bool, &str, String); 14] = [
+            (self.episodes >= 1, "episodes", "must be at least 1".into()),
+            (self.max_minutes >= 0.0 && self.max_minutes.is_finite(), "max_minutes", "must be ≥ 0".into()),
+            (self.map_height >= crate::MIN_MAP_SIDE && self.map_width >= crate::MIN_MAP_SIDE, "map_height/map_width", format!("must be at least {}", crate::MIN_MAP_SIDE)),
+            (0.0 <= self.density_min && self.density_min <= self.density_max && self.density_max < 0.9, "density_min/density_max", "need 0 ≤ density_min ≤ density_max < 0.9".into()),
+            ((0.0..=1.0).contains(&self.gamma), "gamma", "must be in [0, 1]".into()),
+            (self.batch_size >= 1 && self.trace_len >= 1, "batch_size/trace_len", "must be at least 1".into()),
+            (self.learning_rate > 0.0 && self.learning_rate.is_finite(), "learning_rate", "must be positive".into()),
+            (self.grad_clip_norm > 0.0, "grad_clip_norm", "must be positive".into()),
+            (self.reward_scale > 0.0 && self.reward_scale.is_finite(), "reward_scale", "must be positive".into()),
+            (self.replay_episodes >= self.batch_size, "replay_episodes", "must be at least batch_size".into()),
+            (self.target_update_every >= 1, "target_update_every", "must be at least 1".into()),
+            ((0.0..=1.0).contains(&self.epsilon_start) && (0.0..=1.0).contains(&self.epsilon_end), "epsilon_start/epsilon_end", "must be in [0, 1]".into()),
+            (self.validation_csp.iter().all(|p| (0.0..=1.0).contains(p)), "validation_csp", "every CSP must be in [0, 1]".into()),
+            (self.threads >= 1 && self.checkpoint_every >= 1, "threads/checkpoint_every", "must be at least 1".into()),
+        ];
+        for (ok, field, msg) in checks {
+            if !ok {
+                return Err(format!("field `{field}`: {msg}"));
+            }
+        }
+        if self.validate_every > 0 && self.validation_maps == 0 {
+            return Err("field `validation_maps`: must be at least 1 when validate_every > 0".into());
+        }
+        Ok(())
+    }
+
+    /// |G| on the training maps.
+    pub fn goals(&self) -> usize {
+        self.scenario.goal_count_for(self.map_height * self.map_width)
+    }
+
+    fn team(&self) -> usize {
+        self.scenario.num_robots
+    }
+
+    /// The CEP's network config.
+    pub fn cep_config(&self) -> NetConfig {
+        NetConfig::cep(self.map_height, self.map_width, self.team(), self.goals()).with_concat_fc(self.concat_fc)
+    }
+
+    /// A DEP's network config.
+    pub fn dep_config(&self) -> NetConfig {
+        NetConfig::dep(self.map_height, self.map_width, self.team(), self.goals()).with_concat_fc(self.concat_fc)
+    }
+
+    /// ε after `episode` episodes.
+    pub fn epsilon(&self, episode: u64) -> f32 {
+        let f = (episode as f32 / self.epsilon_decay_episodes.max(1) as f32).min(1.0);
+        self.epsilon_start + (self.epsilon_end - self.epsilon_start) * f
+    }
+
+    fn update_params(&self) -> UpdateParams {
+        UpdateParams {
+            gamma: self.gamma,
+            learning_rate: self.learning_rate,
+            reward_scale: self.reward_scale,
+            map_height: self.map_height,
+            map_width: self.map_width,
+            team: self.team(),
+            goals: self.goals(),
+        }
+    }
+
+    /// Robot groups sharing a DEP.
+    fn dep_groups(&self) -> Vec<Vec<usize>> {
+        if self.shared_dep {
+            vec![(0..self.team()).collect()]
+        } else {
+            (0..self.team()).map(|i| vec![i]).collect()
+        }
+    }
+}
+
+/// A training map and start cells drawn from `seed`: a generated map at a density in the
+/// configured range and the team on the free cells nearest (by moves) to a random free cell.
+pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<Pos>), TrainError> {
+    let mut rng = stream(seed, "scenario", 0);
+    let gen = GeneratorConfig {
+        height: cfg.map_height,
+        width: cfg.map_width,
+        density_min: cfg.density_min,
+        density_max: cfg.density_max,
+        keep_free: Vec::new(),
+    };
+    let map = generate(&gen, derive_seed(seed, "map", 0)).map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
+    let free: Vec<usize> = (0..map.len()).filter(|&i| map.cells()[i] == madenet_map::Occupancy::Free).collect();
+    let team = cfg.team();
+    for _ in 0..64 {
+        let anchor = map.pos(free[rng.random_range(0..free.len())]);
+        // Breadth-first from the anchor: the first `team` cells reached.
+        let mut seen = vec![false; map.len()];
+        let mut queue = VecDeque::from([anchor]);
+        seen[map.index(anchor)] = true;
+        let mut starts = Vec::with_capacity(team);
+        while let Some(p) = queue.pop_front() {
+            starts.push(p);
+            if starts.len() == team {
+                return Ok((map, starts));
+            }
+            for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, cfg.scenario.movement) {
+                    seen[map.index(q)] = true;
+                    queue.push_back(q);
+                }
+            }
+        }
+    }
+    Err(TrainError::Other(format!("no free region of {team} connected cells found on training map {seed}")))
+}
+
+/// What [`train`] reports after each iteration (for a progress bar).
+#[derive(Clone, Debug)]
+pub struct Progress {
+    /// Episodes per environment done.
+    pub episode: u64,
+    pub episodes: u64,
+    pub epsilon: f32,
+    pub updates: u64,
+    /// Mean team reward and steps of the last iteration's episodes.
+    pub team_reward: f64,
+    pub steps: f64,
+    /// Last validation's mean steps, if any.
+    pub validation_steps: Option<f64>,
+}
+
+/// Counters saved with a checkpoint.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct State {
+    episode: u64,
+    updates: u64,
+    best_validation: Option<f64>,
+    wall_s: f64,
+}
+
+/// Replay of one environment: the last `capacity` episodes.
+#[derive(Default, Serialize, Deserialize)]
+struct Replay {
+    episodes: VecDeque<Episode>,
+}
+
+impl Replay {
+    fn push(&mut self, e: Episode, capacity: usize) {
+        if self.episodes.len() == capacity {
+            self.episodes.pop_front();
+        }
+        self.episodes.push_back(e);
+    }
+    /// `n` windows of `trace_len + 1` joint decisions: episodes drawn uniformly with
+    /// replacement, each window's start uniformly among the episode's joint decisions.
+    fn sample(&self, n: usize, trace_len: usize, rng: &mut madenet_world::rng::Rng) -> Vec<Window<'_>> {
+        (0..n)
+            .map(|_| {
+                let e = &self.episodes[rng.random_range(0..self.episodes.len())];
+                let start = rng.random_range(0..e.decisions.len().max(1));
+                Window::new(e, start, trace_len)
+            })
+            .collect()
+    }
+}
+
+/// The learner's nets and optimizers.
+struct Nets {
+    cep: Option<(QNet, QNet, ModuleOptimizer)>,
+    deps: Vec<(QNet, QNet, ModuleOptimizer)>,
+}
+
+impl Nets {
+    fn init(cfg: &TrainConfig) -> Result<Self, TrainError> {
+        let device = cpu_autodiff();
+        device.seed(cfg.seed);
+        let optim = || {
+            AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm))).init()
+        };
+        let cep = match cfg.method {
+            Method::MadeNet => {
+                let net = cfg.cep_config().init(&device)?;
+                Some((target_of(&net), net, optim()))
+            }
+            Method::MadeNetDt => None,
+        };
+        let mut deps = Vec::new();
+        for _ in cfg.dep_groups() {
+            let net = cfg.dep_config().init(&device)?;
+            deps.push((target_of(&net), net, optim()));
+        }
+        // Field order: (target, online, optimizer).
+        Ok(Nets { cep: cep.map(|(t, o, op)| (o, t, op)), deps: deps.into_iter().map(|(t, o, op)| (o, t, op)).collect() })
+    }
+
+    fn actor_nets(&self) -> ActorNets {
+        ActorNets {
+            cep: self.cep.as_ref().map(|(o, _, _)| target_of(o)),
+            deps: self.deps.iter().map(|(o, _, _)| target_of(o)).collect(),
+        }
+    }
+
+    fn sync_targets(&mut self) {
+        if let Some((o, t, _)) = self.cep.as_mut() {
+            *t = target_of(o);
+        }
+        for (o, t, _) in &mut self.deps {
+            *t = target_of(o);
+        }
+    }
+
+    /// All nets and optimizers by file stem.
+    fn save(&self, dir: &Path) -> Result<(), TrainError> {
+        let save_net = |net: &QNet, stem: &str| -> Result<(), TrainError> {
+            let path = dir.join(format!("{stem}.bpk"));
+            net.clone().into_record().save(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+        };
+        let save_opt = |op: &ModuleOptimizer, stem: &str| -> Result<(), TrainError> {
+            let path = dir.join(format!("{stem}.bpk"));
+            op.save(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+        };
+        if let Some((o, t, op)) = &self.cep {
+            save_net(o, "cep")?;
+            save_net(t, "cep_target")?;
+            save_opt(op, "cep_optim")?;
+        }
+        for (k, (o, t, op)) in self.deps.iter().enumerate() {
+            save_net(o, &format!("dep{k}"))?;
+            save_net(t, &format!("dep{k}_target"))?;
+            save_opt(op, &format!("dep{k}_optim"))?;
+        }
+        Ok(())
+    }
+
+    fn load(mut self, dir: &Path) -> Result<Self, TrainError> {
+        let rec = |stem: &str| -> Result<ModuleRecord, TrainError> {
+            let path = dir.join(format!("{stem}.bpk"));
+            ModuleRecord::load(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+        };
+        let opt = |op: ModuleOptimizer, stem: &str| -> Result<ModuleOptimizer, TrainError> {
+            let path = dir.join(format!("{stem}.bpk"));
+            op.load(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+        };
+        if let Some((o, t, op)) = self.cep.take() {
+            self.cep = Some((o.load_record(rec("cep")?), t.load_record(rec("cep_target")?), opt(op, "cep_optim")?));
+        }
+        let deps = std::mem::take(&mut self.deps);
+        for (k, (o, t, op)) in deps.into_iter().enumerate() {
+            self.deps.push((o.load_record(rec(&format!("dep{k}"))?), t.load_record(rec(&format!("dep{k}_target"))?), opt(op, &format!("dep{k}_optim"))?));
+        }
+        Ok(self)
+    }
+}
+
+/// The trained DEPs as shipped: `model.toml` (method, net config, |I|, |G|) and the weights.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModelInfo {
+    pub method: Method,
+    pub dep: NetConfigToml,
+    /// DEP weight files, one per robot group (one when shared).
+    pub deps: Vec<String>,
+    /// Episodes per environment and updates behind these weights.
+    pub episode: u64,
+    pub updates: u64,
+    /// Their validation mean steps.
+    pub validation_steps: Option<f64>,
+}
+
+/// The DEP's [`NetConfig`] fields that vary, for `model.toml`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct NetConfigToml {
+    pub map_height: usize,
+    pub map_width: usize,
+    pub team_size: usize,
+    pub goal_count: usize,
+    pub concat_fc: bool,
+}
+
+/// A loaded model: the DEP nets on the plain CPU device.
+#[derive(Clone)]
+pub struct Model {
+    pub info: ModelInfo,
+    pub deps: Vec<Arc<QNet>>,
+}
+
+impl Model {
+    /// Loads `dir/model.toml` and its weight files.
+    pub fn load(dir: &Path) -> Result<Self, TrainError> {
+        let path = dir.join("model.toml");
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let info: ModelInfo = toml::from_str(&text)
+            .map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
+        let d = &info.dep;
+        let cfg = NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc);
+        let mut deps = Vec::new();
+        for f in &info.deps {
+            let p = dir.join(f);
+            let rec = ModuleRecord::load(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+            deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
+        }
+        if deps.is_empty() {
+            return Err(TrainError::Config { path: path.display().to_string(), message: "field `deps`: no weight files".into() });
+        }
+        Ok(Model { info, deps })
+    }
+
+    /// Registers this model as policy `name` (robot i uses DEP i, or the shared one).
+    pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
+        let deps = self.deps.clone();
+        let owned = name.to_string();
+        registry.register(name, about, move |ctx| {
+            let net = Arc::clone(&deps[if deps.len() == 1 { 0 } else { ctx.robot.min(deps.len() - 1) }]);
+            Box::new(DepPolicy::new(&owned, net))
+        });
+    }
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(io_err(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io_err(path))
+}
+
+/// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
+/// half-written `dir`: the old one is moved to `dir.old` first and removed last.
+fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -> Result<(), TrainError> {
+    let tmp = dir.with_extension("tmp");
+    let old = dir.with_extension("old");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).map_err(io_err(&tmp))?;
+    }
+    std::fs::create_dir_all(&tmp).map_err(io_err(&tmp))?;
+    fill(&tmp)?;
+    if dir.exists() {
+        if old.exists() {
+            std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
+        }
+        std::fs::rename(dir, &old).map_err(io_err(dir))?;
+    }
+    std::fs::rename(&tmp, dir).map_err(io_err(dir))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
+    }
+    Ok(())
+}
+
+/// Keeps the header and the rows whose first column (a counter) is below `cutoff`.
+fn truncate_csv(path: &Path, cutoff: u64) -> Result<(), TrainError> {
+    if !path.exists() {
+        return Ok(());
+    }
+    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let keep = i == 0 || line.split(',').next().and_then(|v| v.parse::<u64>().ok()).is_some_and(|v| v < cutoff);
+        if keep && (i == 0 || text.ends_with('\n') || i + 1 < text.lines().count()) {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    write_atomic(path, out.as_bytes())
+}
+
+/// Appends whole lines to a CSV (header written on creation).
+struct CsvLog {
+    file: std::fs::File,
+    path: PathBuf,
+}
+
+impl CsvLog {
+    fn open(path: PathBuf, header: &str) -> Result<Self, TrainError> {
+        let fresh = !path.exists();
+        let mut file = std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(io_err(&path))?;
+        if fresh {
+            writeln!(file, "{header}").map_err(io_err(&path))?;
+        }
+        Ok(CsvLog { file, path })
+    }
+    fn row(&mut self, line: String) -> Result<(), TrainError> {
+        self.file.write_all(format!("{line}\n").as_bytes()).map_err(io_err(&self.path))
+    }
+}
+
+/// Validation: the greedy DEPs, decentralized, on the fixed generated validation maps at each
+/// validation CSP. Returns (mean steps, mean team return, completed, trials).
+pub fn validate_policy(cfg: &TrainConfig, registry: &PolicyRegistry, policy: &str) -> Result<(f64, f64, usize, usize), TrainError> {
+    let (mut steps, mut ret, mut done, mut n) = (0.0, 0.0, 0, 0);
+    for m in 0..cfg.validation_maps {
+        let seed = derive_seed(cfg.seed, "validation", m as u64);
+        let (map, starts) = training_scenario(cfg, seed)?;
+        for &csp in &cfg.validation_csp {
+            let spec = TrialSpec {
+                map: map.clone(),
+                map_name: format!("validation_{m}"),
+                starts: starts.clone(),
+                config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+                policy: policy.to_string(),
+                seed,
+            };
+            let mut trial = Trial::with_registry(spec, registry).map_err(|e| TrainError::Other(e.to_string()))?;
+            let mut team = 0.0;
+            while trial.step() {
+                team += trial.rewards().team;
+            }
+            let r = trial.finish();
+            steps += r.metrics.tns as f64;
+            ret += team;
+            done += r.metrics.completed as usize;
+            n += 1;
+        }
+    }
+    Ok((steps / n.max(1) as f64, ret / n.max(1) as f64, done, n))
+}
+
+/// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
+/// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`, to
+/// extend a run). `progress` is called after every iteration.
+pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
+    let cfg_path = run_dir.join("config.toml");
+    let ckpt_dir = run_dir.join("checkpoint");
+    // A crash between the two renames of `replace_dir` leaves only `checkpoint.old`.
+    if !ckpt_dir.exists() && ckpt_dir.with_extension("old").exists() {
+        std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
+    }
+    let resuming = ckpt_dir.join("state.json").exists();
+    let cfg = if cfg_path.exists() {
+        let saved = TrainConfig::from_toml_file(&cfg_path)?;
+        match cfg {
+            // Only the run's length may change on resume: the rest defines the run.
+            Some(given) => {
+                let same = TrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() };
+                if same != saved {
+                    return Err(TrainError::Config {
+                        path: cfg_path.display().to_string(),
+                        message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
+                    });
+                }
+                given.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+                let text = toml::to_string(&given).map_err(|e| TrainError::Other(e.to_string()))?;
+                write_atomic(&cfg_path, text.as_bytes())?;
+                given
+            }
+            None => saved,
+        }
+    } else {
+        let cfg = cfg.unwrap_or_default();
+        cfg.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+        let text = toml::to_string(&cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&cfg_path, text.as_bytes())?;
+        cfg
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(cfg.threads)
+        .build()
+        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
+    pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
+}
+
+fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+    let ckpt_dir = run_dir.join("checkpoint");
+    let mut nets = Nets::init(cfg)?;
+    let (mut state, mut cen, mut dec) = if resuming {
+        let sp = ckpt_dir.join("state.json");
+        let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
+        let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config { path: sp.display().to_string(), message: e.to_string() })?;
+        nets = nets.load(&ckpt_dir)?;
+        let rp = ckpt_dir.join("replay.bin");
+        let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
+        let (cen, dec): (Replay, Replay) =
+            postcard::from_bytes(&bytes).map_err(|e| TrainError::Config { path: rp.display().to_string(), message: e.to_string() })?;
+        (state, cen, dec)
+    } else {
+        (State::default(), Replay::default(), Replay::default())
+    };
+    let per_iter = match cfg.method {
+        Method::MadeNet => 2,
+        Method::MadeNetDt => 1,
+    };
+    truncate_csv(&run_dir.join("episodes.csv"), state.episode * per_iter)?;
+    truncate_csv(&run_dir.join("updates.csv"), state.updates)?;
+    truncate_csv(&run_dir.join("validation.csv"), state.episode * per_iter + 1)?;
+    let mut ep_log = CsvLog::open(run_dir.join("episodes.csv"), "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s")?;
+    let mut up_log = CsvLog::open(run_dir.join("updates.csv"), "update,cep_loss,dep_loss")?;
+    let mut val_log = CsvLog::open(run_dir.join("validation.csv"), "episode,updates,mean_steps,mean_team_reward,completed,trials")?;
+    let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
+    let started = Instant::now();
+    let wall0 = state.wall_s;
+    let wall = |started: &Instant| wall0 + started.elapsed().as_secs_f64();
+    // TensorBoard's wall-clock axis wants Unix seconds.
+    let unix = |_: &Instant| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let params = cfg.update_params();
+    let groups = cfg.dep_groups();
+    let mut last_validation = state.best_validation;
+    while state.episode < cfg.episodes {
+        if cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0 {
+            break;
+        }
+        let e = state.episode;
+        let epsilon = cfg.epsilon(e);
+        let actor_nets = nets.actor_nets();
+        let (mut reward_sum, mut steps_sum) = (0.0, 0.0);
+        let envs: &[EnvKind] = match cfg.method {
+            Method::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
+            Method::MadeNetDt => &[EnvKind::Decentralized],
+        };
+        for (k, &kind) in envs.iter().enumerate() {
+            let seed = derive_seed(cfg.seed, kind.short(), e);
+            let (map, starts) = training_scenario(cfg, seed)?;
+            let csp = match kind {
+                EnvKind::Centralized => 1.0,
+                EnvKind::Decentralized => stream(seed, "csp", 0).random::<f64>(),
+            };
+            let spec = TrialSpec {
+                map,
+                map_name: format!("train_{}_{e}", kind.short()),
+                starts,
+                config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+                policy: String::new(),
+                seed,
+            };
+            let actor = Actor::new(kind, actor_nets.clone(), epsilon, cfg.cen_explore, cfg.goals(), cfg.team(), stream(seed, "actor", 0));
+            let ep = run_episode(spec, actor)?;
+            let id = e * per_iter + k as u64;
+            ep_log.row(format!(
+                "{id},{},{csp},{},{},{},{epsilon},{},{:.3}",
+                kind.short(),
+                ep.len(),
+                ep.team_return,
+                ep.complete as u8,
+                state.updates,
+                wall(&started)
+            ))?;
+            tb.add_scalar(&format!("episode/{}_team_reward", kind.short()), ep.team_return as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            tb.add_scalar(&format!("episode/{}_steps", kind.short()), ep.len() as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            reward_sum += ep.team_return;
+            steps_sum += ep.len() as f64;
+            match kind {
+                EnvKind::Centralized => cen.push(ep, cfg.replay_episodes),
+                EnvKind::Decentralized => dec.push(ep, cfg.replay_episodes),
+            }
+        }
+        state.episode += 1;
+        if state.episode >= cfg.warmup_episodes {
+            for _ in 0..cfg.updates_per_episode {
+                let mut rng = stream(cfg.seed, "sample", state.updates);
+                let mut cep_loss = f32::NAN;
+                if let Some((online, target, mut optim)) = nets.cep.take() {
+                    let batch = cen.sample(cfg.batch_size, cfg.trace_len, &mut rng);
+                    let (online, loss) = cep_update(online, &target, &mut optim, &batch, &params);
+                    cep_loss = loss;
+                    nets.cep = Some((online, target, optim));
+                }
+                let batch = dec.sample(cfg.batch_size, cfg.trace_len, &mut rng);
+                let cep_plain = nets.cep.as_ref().map(|(o, _, _)| target_of(o));
+                let mut dep_loss = 0.0;
+                let deps = std::mem::take(&mut nets.deps);
+                for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
+                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, robots, &params);
+                    dep_loss += loss / groups.len() as f32;
+                    nets.deps.push((online, target, optim));
+                }
+                state.updates += 1;
+                if state.updates % cfg.target_update_every == 0 {
+                    nets.sync_targets();
+                }
+                up_log.row(format!("{},{cep_loss},{dep_loss}", state.updates - 1))?;
+                if cep_loss.is_finite() {
+                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix(&started)).map_err(io_err(run_dir))?;
+                }
+                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix(&started)).map_err(io_err(run_dir))?;
+            }
+        }
+        if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
+            let model = Model { info: model_info(cfg, &state, None), deps: nets.deps.iter().map(|(o, _, _)| Arc::new(target_of(o))).collect() };
+            let mut registry = PolicyRegistry::default();
+            model.register(&mut registry, "candidate", "the DEPs being trained");
+            let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
+            let id = state.episode * per_iter;
+            val_log.row(format!("{id},{},{steps},{ret},{done},{n}", state.updates))?;
+            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            last_validation = Some(steps);
+            if state.best_validation.is_none_or(|b| steps < b) {
+                state.best_validation = Some(steps);
+                let info = model_info(cfg, &state, Some(steps));
+                save_model(&run_dir.join("best"), &nets, &info)?;
+            }
+        }
+        let stopping = state.episode == cfg.episodes
+            || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
+        if state.episode % cfg.checkpoint_every == 0 || stopping {
+            state.wall_s = wall(&started);
+            checkpoint(&ckpt_dir, &nets, &state, &cen, &dec)?;
+            save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
+        }
+        tb.flush().map_err(io_err(run_dir))?;
+        progress(&Progress {
+            episode: state.episode,
+            episodes: cfg.episodes,
+            epsilon,
+            updates: state.updates,
+            team_reward: reward_sum / envs.len() as f64,
+            steps: steps_sum / envs.len() as f64,
+            validation_steps: last_validation,
+        });
+    }
+    Ok(())
+}
+
+fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -> ModelInfo {
+    let d = cfg.dep_config();
+    ModelInfo {
+        method: cfg.method,
+        dep: NetConfigToml { map_height: d.map_height, map_width: d.map_width, team_size: d.team_size, goal_count: d.goal_count, concat_fc: d.concat_fc },
+        deps: (0..cfg.dep_groups().len()).map(|k| format!("dep{k}.bpk")).collect(),
+        episode: state.episode,
+        updates: state.updates,
+        validation_steps,
+    }
+}
+
+/// Writes the DEPs (and the CEP, for reference) and `model.toml` into `dir`, atomically.
+fn save_model(dir: &Path, nets: &Nets, info: &ModelInfo) -> Result<(), TrainError> {
+    replace_dir(dir, |tmp| {
+        for (k, (o, _, _)) in nets.deps.iter().enumerate() {
+            let p = tmp.join(format!("dep{k}.bpk"));
+            target_of(o).into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+        }
+        if let Some((o, _, _)) = &nets.cep {
+            let p = tmp.join("cep.bpk");
+            target_of(o).into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+        }
+        let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
+        std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
+    })
+}
+
+fn checkpoint(dir: &Path, nets: &Nets, state: &State, cen: &Replay, dec: &Replay) -> Result<(), TrainError> {
+    replace_dir(dir, |tmp| {
+        nets.save(tmp)?;
+        let bytes = postcard::to_stdvec(&(cen, dec)).map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
+        std::fs::write(tmp.join("replay.bin"), bytes).map_err(io_err(&tmp.join("replay.bin")))?;
+        let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
+        std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
+    })
+}

@@ -1,0 +1,109 @@
+//! `madenet train`: trains MADE-Net (or MADE-Net-DT) into a run directory, with a progress bar;
+//! `--resume DIR` continues a run from its last checkpoint.
+
+use anyhow::{bail, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use madenet_learn::{Method, TrainConfig};
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct TrainArgs {
+    /// Training config (TOML; every field optional, see configs/train.toml).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Run directory to create (logs, checkpoints, best weights).
+    #[arg(long, conflicts_with = "resume")]
+    out: Option<PathBuf>,
+    /// Resume the run in this directory from its last checkpoint (with its saved config).
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Train this method instead of the config's (`made-net` or `made-net-dt`).
+    #[arg(long)]
+    method: Option<String>,
+    /// Override the config's episodes per environment.
+    #[arg(long)]
+    episodes: Option<u64>,
+    /// Override the config's wall-time limit in minutes.
+    #[arg(long)]
+    max_minutes: Option<f64>,
+    /// Override the config's seed.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Override the config's learner thread count.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+pub fn run(a: TrainArgs) -> Result<()> {
+    let (dir, cfg) = match (&a.out, &a.resume) {
+        (_, Some(dir)) => {
+            if !dir.join("config.toml").exists() {
+                bail!("{}: not a training run directory (no config.toml)", dir.display());
+            }
+            if a.config.is_some() || a.method.is_some() || a.seed.is_some() || a.threads.is_some() {
+                bail!("--resume continues with the run's saved config; only --episodes and --max-minutes may extend it");
+            }
+            let extend = a.episodes.is_some() || a.max_minutes.is_some();
+            let cfg = if extend {
+                let mut cfg = TrainConfig::from_toml_file(&dir.join("config.toml"))?;
+                cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
+                cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
+                Some(cfg)
+            } else {
+                None
+            };
+            (dir.clone(), cfg)
+        }
+        (Some(dir), None) => {
+            if dir.join("config.toml").exists() {
+                bail!("{}: already holds a training run; use --resume {0} or another --out", dir.display());
+            }
+            let mut cfg = match &a.config {
+                Some(p) => TrainConfig::from_toml_file(p)?,
+                None => TrainConfig::default(),
+            };
+            if let Some(m) = &a.method {
+                cfg.method = match m.as_str() {
+                    "made-net" => Method::MadeNet,
+                    "made-net-dt" => Method::MadeNetDt,
+                    other => bail!("--method `{other}`: expected made-net or made-net-dt"),
+                };
+            }
+            if let Some(e) = a.episodes {
+                cfg.episodes = e;
+            }
+            if let Some(m) = a.max_minutes {
+                cfg.max_minutes = m;
+            }
+            if let Some(s) = a.seed {
+                cfg.seed = s;
+            }
+            if let Some(t) = a.threads {
+                cfg.threads = t;
+            }
+            cfg.validate().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
+            (dir.clone(), Some(cfg))
+        }
+        (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
+    };
+    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} episodes  {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let mut on_progress = |p: &madenet_learn::Progress| {
+        bar.set_length(p.episodes);
+        bar.set_position(p.episode);
+        let val = p.validation_steps.map_or(String::new(), |v| format!("  val steps {v:.1}"));
+        bar.set_message(format!("ε {:.2}  reward {:.0}  steps {:.0}  updates {}{val}", p.epsilon, p.team_reward, p.steps, p.updates));
+    };
+    madenet_learn::train(&dir, cfg, &mut on_progress)?;
+    bar.finish();
+    out!("{}", dir.display())?;
+    Ok(())
+}
