@@ -269,7 +269,8 @@ impl Agent {
     /// The robot's view for a policy; candidates are extracted first when `with_candidates`.
     pub fn view(&mut self, with_candidates: bool) -> AgentView<'_> {
         if with_candidates {
-            self.candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra);
+            let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
+            self.candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra, &held);
             self.dijkstra_fresh = true;
         } else {
             self.candidates.cells.clear();

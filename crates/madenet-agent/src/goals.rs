@@ -33,7 +33,9 @@ impl GoalCandidates {
 ///
 /// 1. Frontier cells reachable from `from` through known free cells (the robot's own cell
 ///    excluded) are found with one Dijkstra run, which is left in `dijkstra` for the
-///    navigator to reuse.
+///    navigator to reuse. Cells in `held` — those of teammates detected now — are neither
+///    passed through nor offered, as in the nearest-frontier search: a goal on or behind a
+///    teammate standing in a corridor would deadlock two robots that cannot talk.
 /// 2. They are clustered into 8-connected components; each cluster is represented by its
 ///    cell nearest to the cluster's centroid (ties: lowest row-major index).
 /// 3. Farthest-point selection: the first candidate is the representative of the cluster
@@ -41,9 +43,9 @@ impl GoalCandidates {
 ///    each next one is the remaining representative farthest (Euclidean) from those chosen.
 ///    When clusters run out, the same selection continues over all reachable frontier cells,
 ///    so a single large frontier still yields several spread goals.
-pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra) -> GoalCandidates {
+pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra, held: &[Pos]) -> GoalCandidates {
     let mut reachable: Vec<Pos> = Vec::new();
-    dijkstra.run(from, |p| belief.is_free(p), belief.movement(), |p| {
+    dijkstra.run(from, |p| belief.is_free(p) && !held.contains(&p), belief.movement(), |p| {
         if p != from && belief.is_frontier(p) {
             reachable.push(p);
         }
@@ -167,7 +169,7 @@ mod tests {
             "?????????",
         ]);
         let mut d = Dijkstra::new(b.height(), b.width());
-        let g = extract_goals(&b, Pos::new(3, 3), 4, &mut d);
+        let g = extract_goals(&b, Pos::new(3, 3), 4, &mut d, &[]);
         assert_eq!(g.cells.len(), 4);
         for &c in &g.cells {
             assert!(b.is_frontier(c));
@@ -192,10 +194,26 @@ mod tests {
             "#########",
         ]);
         let mut d = Dijkstra::new(b.height(), b.width());
-        let g = extract_goals(&b, Pos::new(1, 1), 4, &mut d);
+        let g = extract_goals(&b, Pos::new(1, 1), 4, &mut d, &[]);
         assert!(!g.cells.is_empty());
         assert!(g.cells.iter().all(|c| c.col < 3), "{:?}", g.cells);
         assert_eq!(g.valid_mask().iter().filter(|&&v| v).count(), g.cells.len());
         assert!(g.cells.len() < 4);
+    }
+
+    #[test]
+    fn teammates_in_view_block_goals_on_and_behind_them() {
+        // A corridor: the robot at (1,1), a teammate at (1,4), frontiers at both ends.
+        let b = belief_from(&[
+            "###?#####",
+            "#.......?",
+            "#########",
+        ]);
+        let mut d = Dijkstra::new(b.height(), b.width());
+        let free = extract_goals(&b, Pos::new(1, 1), 4, &mut d, &[]);
+        assert!(free.cells.contains(&Pos::new(1, 7)), "{:?}", free.cells);
+        let held = extract_goals(&b, Pos::new(1, 1), 4, &mut d, &[Pos::new(1, 4)]);
+        assert!(held.cells.iter().all(|c| c.col < 4), "{:?}", held.cells);
+        assert!(!held.cells.is_empty());
     }
 }

@@ -158,7 +158,7 @@ impl Default for TrainConfig {
             target_update_every: 200,
             epsilon_start: 1.0,
             epsilon_end: 0.05,
-            epsilon_decay_episodes: 3000,
+            epsilon_decay_episodes: 1500,
             cen_explore: true,
             shared_dep: true,
             concat_fc: false,
