@@ -4,7 +4,7 @@
 //!
 //! * `cep_update_b16_t24` — Eq. (5): CEP forward + backward (autodiff), target-net forward,
 //!   conditional double-Q targets, one Adam step;
-//! * `dep_update_b16_t24_shared` — Eq. (6) for the shared DEP: 48 robot sequences forward +
+//! * `dep_update_b16_t24` — Eq. (6) for the shared DEP: 16 robot sequences forward +
 //!   backward, target forward, and the CEP's forward for the target actions;
 //! * `dt_update_b16_t24` — MADE-Net-DT's update of one robot's DEP (no CEP).
 //!
@@ -77,9 +77,9 @@ fn bench(c: &mut Criterion) {
         });
         let cep_plain = target_of(cep.as_ref().expect("CEP"));
         let mut optim = AdamConfig::new().init();
-        group.bench_function("dep_update_b16_t24_shared", |b| {
+        group.bench_function("dep_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, Some(&cep_plain), &dec_w, &[0, 1, 2], &p);
+                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, Some(&cep_plain), &dec_w, &(0..16).map(|b| (b % dec_w.len(), b % 3)).collect::<Vec<_>>(), &p);
                 dep = Some(next);
                 loss
             })
@@ -87,7 +87,7 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("dt_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, None, &dec_w, &[0], &p);
+                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, None, &dec_w, &(0..dec_w.len()).map(|b| (b, 0)).collect::<Vec<_>>(), &p);
                 dep = Some(next);
                 loss
             })

@@ -196,20 +196,20 @@ pub fn cep_update(
     td_step(online, optim, &seq, q, targets, p.learning_rate)
 }
 
-/// One DEP update (Eq. 6, or MADE-Net-DT's double DRQN when `cep` is `None`) of the net shared
-/// by `robots` on `eps`; returns the new online net and the loss.
+/// One DEP update (Eq. 6, or MADE-Net-DT's double DRQN when `cep` is `None`) on the robot
+/// sequences `pairs` — (index into `eps`, robot) — of the windows `eps`; returns the new online
+/// net and the loss.
 pub fn dep_update(
     online: QNet,
     target: &QNet,
     optim: &mut ModuleOptimizer,
     cep: Option<&QNet>,
     eps: &[Window<'_>],
-    robots: &[usize],
+    pairs: &[(usize, usize)],
     p: &UpdateParams,
 ) -> (QNet, f32) {
     let map_len = 4 * p.map_height * p.map_width;
     let obs_dim = crate::obs_dim_for(p.team, p.goals);
-    let pairs: Vec<(usize, usize)> = (0..eps.len()).flat_map(|b| robots.iter().map(move |&i| (b, i))).collect();
     // Robot i's decisions inside window b: k in ks[s] (indices into dep[i] / dep_at[i]).
     let ks: Vec<std::ops::Range<usize>> = pairs
         .iter()

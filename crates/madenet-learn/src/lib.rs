@@ -61,6 +61,7 @@ mod net;
 pub mod obs;
 pub mod policy;
 pub mod replay;
+pub mod shipped;
 pub mod train;
 
 pub use actions::{

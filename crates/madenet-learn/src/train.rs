@@ -155,7 +155,7 @@ impl Default for TrainConfig {
             replay_episodes: 1000,
             warmup_episodes: 32,
             updates_per_episode: 1,
-            target_update_every: 200,
+            target_update_every: 50,
             epsilon_start: 1.0,
             epsilon_end: 0.05,
             epsilon_decay_episodes: 1500,
@@ -489,27 +489,63 @@ impl Model {
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let info: ModelInfo = toml::from_str(&text)
-            .map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
-        let d = &info.dep;
-        let cfg = NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc);
-        let mut deps = Vec::new();
+        let info = Self::parse_info(&text, &path.display().to_string())?;
+        let mut files = Vec::new();
         for f in &info.deps {
             let p = dir.join(f);
-            let rec = ModuleRecord::load(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
-            deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
+            files.push((p.display().to_string(), std::fs::read(&p).map_err(io_err(&p))?));
         }
-        if deps.is_empty() {
-            return Err(TrainError::Config { path: path.display().to_string(), message: "field `deps`: no weight files".into() });
+        Self::from_parts(info, files, &path.display().to_string())
+    }
+
+    /// A model from the text of its `model.toml` and its weight files' bytes, in the order of
+    /// its `deps` list (`label` names it in errors).
+    pub fn from_bytes(model_toml: &str, weights: &[&[u8]], label: &str) -> Result<Self, TrainError> {
+        let info = Self::parse_info(model_toml, label)?;
+        let files = info.deps.iter().cloned().zip(weights.iter().map(|w| w.to_vec())).collect();
+        Self::from_parts(info, files, label)
+    }
+
+    fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
+        toml::from_str(text).map_err(|e| TrainError::Config { path: label.to_string(), message: e.message().to_string() })
+    }
+
+    fn from_parts(info: ModelInfo, files: Vec<(String, Vec<u8>)>, label: &str) -> Result<Self, TrainError> {
+        let d = &info.dep;
+        let cfg = NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc);
+        if files.len() != info.deps.len() || files.is_empty() {
+            return Err(TrainError::Config { path: label.to_string(), message: format!("field `deps`: {} weight files listed, {} given", info.deps.len(), files.len()) });
+        }
+        let mut deps = Vec::new();
+        for (name, bytes) in files {
+            let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
+                .map_err(|e| TrainError::Io { path: name.clone(), message: e.to_string() })?;
+            deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
         }
         Ok(Model { info, deps })
     }
 
-    /// Registers this model as policy `name` (robot i uses DEP i, or the shared one).
+    /// Why this model cannot act in a scenario, if it cannot: the networks are built for one
+    /// map size, team size and |G| (the paper trains one model per environment and team).
+    pub fn check(&self, height: usize, width: usize, scenario: &ScenarioConfig) -> Result<(), String> {
+        let d = &self.info.dep;
+        let goals = scenario.goal_count_for(height * width);
+        if (height, width, scenario.num_robots, goals) != (d.map_height, d.map_width, d.team_size, d.goal_count) {
+            return Err(format!(
+                "the model was trained for {}×{} maps, {} robots and |G| = {}; this scenario has {height}×{width}, {} robots and |G| = {goals} (train a model for it with `madenet train`)",
+                d.map_height, d.map_width, d.team_size, d.goal_count, scenario.num_robots
+            ));
+        }
+        Ok(())
+    }
+
+    /// Registers this model as policy `name` (robot i uses DEP i, or the shared one); it
+    /// refuses scenarios it was not built for ([`Model::check`]).
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
         let deps = self.deps.clone();
         let owned = name.to_string();
-        registry.register(name, about, move |ctx| {
+        let me = self.clone();
+        registry.register_checked(name, about, move |ctx| me.check(ctx.height, ctx.width, ctx.config), move |ctx| {
             let net = Arc::clone(&deps[if deps.len() == 1 { 0 } else { ctx.robot.min(deps.len() - 1) }]);
             Box::new(DepPolicy::new(&owned, net))
         });
@@ -752,12 +788,17 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                     cep_loss = loss;
                     nets.cep = Some((online, target, optim));
                 }
+                // DEP batches: `batch_size` robot sequences — for a shared DEP each sampled
+                // window gives one robot drawn uniformly; a per-robot DEP takes its own robot
+                // from every window.
                 let batch = dec.sample(cfg.batch_size, cfg.trace_len, &mut rng);
                 let cep_plain = nets.cep.as_ref().map(|(o, _, _)| target_of(o));
                 let mut dep_loss = 0.0;
                 let deps = std::mem::take(&mut nets.deps);
                 for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
-                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, robots, &params);
+                    let pairs: Vec<(usize, usize)> =
+                        (0..batch.len()).map(|b| (b, robots[rng.random_range(0..robots.len())])).collect();
+                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, &pairs, &params);
                     dep_loss += loss / groups.len() as f32;
                     nets.deps.push((online, target, optim));
                 }

@@ -134,3 +134,9 @@ fn bad_train_configs_name_file_and_field() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn shipped_train_config_is_the_default() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/train.toml");
+    assert_eq!(TrainConfig::from_toml_file(&path).unwrap(), TrainConfig::default());
+}

@@ -70,7 +70,7 @@ fn losses_fall_on_a_fixed_batch() {
     let mut optim = AdamConfig::new().init();
     let mut losses = Vec::new();
     for _ in 0..40 {
-        let (next, loss) = dep_update(dep, &dep_target, &mut optim, Some(&cep_plain), &dec_w, &[0, 1, 2], &p);
+        let (next, loss) = dep_update(dep, &dep_target, &mut optim, Some(&cep_plain), &dec_w, &(0..16).map(|b| (b % dec_w.len(), b % 3)).collect::<Vec<_>>(), &p);
         dep = next;
         losses.push(loss);
     }
@@ -82,7 +82,7 @@ fn losses_fall_on_a_fixed_batch() {
     let mut optim = AdamConfig::new().init();
     let mut losses = Vec::new();
     for _ in 0..40 {
-        let (next, loss) = dep_update(dt, &dt_target, &mut optim, None, &dec_w, &[1], &p);
+        let (next, loss) = dep_update(dt, &dt_target, &mut optim, None, &dec_w, &(0..dec_w.len()).map(|b| (b, 1)).collect::<Vec<_>>(), &p);
         dt = next;
         losses.push(loss);
     }

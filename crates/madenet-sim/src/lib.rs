@@ -31,6 +31,8 @@ pub use trial::{StepRecord, Trial, TrialResult, TrialSpec};
 pub enum SimError {
     #[error("unknown policy `{name}` (field `policy`); known policies: {known}")]
     UnknownPolicy { name: String, known: String },
+    #[error("policy `{name}` cannot run this scenario: {reason}")]
+    PolicyUnavailable { name: String, reason: String },
     #[error(transparent)]
     Scenario(#[from] madenet_world::ScenarioError),
     #[error(transparent)]

@@ -16,12 +16,15 @@ pub struct PolicyContext<'a> {
 }
 
 type Factory = Arc<dyn Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync>;
+type Check = Arc<dyn Fn(&PolicyContext<'_>) -> Result<(), String> + Send + Sync>;
 
 /// Named policy factories. [`PolicyRegistry::builtin`] holds the policies of the simulator
 /// core; later crates register theirs with [`PolicyRegistry::register`].
 #[derive(Clone, Default)]
 pub struct PolicyRegistry {
     factories: BTreeMap<String, (String, Factory)>,
+    /// Policies that run only on some scenarios (e.g. a learned model's map and team size).
+    checks: BTreeMap<String, Check>,
 }
 
 impl PolicyRegistry {
@@ -42,10 +45,36 @@ impl PolicyRegistry {
         f: impl Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync + 'static,
     ) {
         self.factories.insert(name.to_string(), (about.to_string(), Arc::new(f)));
+        self.checks.remove(name);
+    }
+
+    /// Like [`PolicyRegistry::register`], for a policy that runs only where `check` passes
+    /// (it says why not otherwise; [`PolicyRegistry::make`] then fails with that reason).
+    pub fn register_checked(
+        &mut self,
+        name: &str,
+        about: &str,
+        check: impl Fn(&PolicyContext<'_>) -> Result<(), String> + Send + Sync + 'static,
+        f: impl Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync + 'static,
+    ) {
+        self.register(name, about, f);
+        self.checks.insert(name.to_string(), Arc::new(check));
+    }
+
+    /// Whether `name` exists and can run in `ctx` (checked before any trial by studies).
+    pub fn check(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<(), crate::SimError> {
+        if !self.factories.contains_key(name) {
+            return Err(crate::SimError::UnknownPolicy { name: name.to_string(), known: self.names().join(", ") });
+        }
+        match self.checks.get(name) {
+            Some(check) => check(ctx).map_err(|reason| crate::SimError::PolicyUnavailable { name: name.to_string(), reason }),
+            None => Ok(()),
+        }
     }
 
     /// Builds robot `ctx.robot`'s policy, or an error listing the known names.
     pub fn make(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<Box<dyn Policy>, crate::SimError> {
+        self.check(name, ctx)?;
         match self.factories.get(name) {
             Some((_, f)) => Ok(f(ctx)),
             None => Err(crate::SimError::UnknownPolicy { name: name.to_string(), known: self.names().join(", ") }),

@@ -33,7 +33,7 @@ pub struct StudyConfig {
 impl Default for StudyConfig {
     fn default() -> Self {
         StudyConfig {
-            methods: ["nf", "ub", "pb"].map(String::from).to_vec(),
+            methods: ["nf", "ub", "pb", "made-net", "made-net-dt"].map(String::from).to_vec(),
             maps: vec!["paper".into()],
             starts: Corner::ALL.iter().map(|c| c.name().to_string()).collect(),
             csp: vec![0.0, 0.5, 0.8, 1.0],
@@ -86,12 +86,13 @@ impl StudyConfig {
         })
     }
 
-    /// The policy registry of the study: built-ins plus the baselines with this config's
-    /// parameters.
-    pub fn registry(&self) -> PolicyRegistry {
+    /// The policy registry of the study: built-ins, the baselines with this config's
+    /// parameters and the shipped learned models (`made-net`, `made-net-dt`).
+    pub fn registry(&self) -> Result<PolicyRegistry, StudyError> {
         let mut r = PolicyRegistry::builtin();
         madenet_baselines::register(&mut r, &self.baselines);
-        r
+        madenet_learn::shipped::register(&mut r).map_err(|e| StudyError::Other(e.to_string()))?;
+        Ok(r)
     }
 
     /// Checks everything that can be checked before a trial runs, and loads the maps.
@@ -129,6 +130,19 @@ impl StudyConfig {
             .iter()
             .map(|s| s.parse::<StartSpec>().map_err(|e| field("starts", e)))
             .collect::<Result<Vec<_>, _>>()?;
+        // Learned models run only on the map and team sizes they were trained for.
+        for m in &self.methods {
+            for map in &maps {
+                let ctx = madenet_sim::PolicyContext {
+                    seed: 0,
+                    robot: 0,
+                    config: &self.scenario,
+                    height: map.grid.height(),
+                    width: map.grid.width(),
+                };
+                registry.check(m, &ctx).map_err(|e| field("methods", format!("{e} (map {})", map.name)))?;
+            }
+        }
         Ok((maps, starts))
     }
 

@@ -33,7 +33,7 @@ pub fn run_study(
     fresh: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(PathBuf, Vec<TrialOutcome>), StudyError> {
-    let registry = cfg.registry();
+    let registry = cfg.registry()?;
     let (maps, starts) = cfg.validate(&registry)?;
     let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };
     std::fs::create_dir_all(out).map_err(io)?;

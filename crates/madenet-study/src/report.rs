@@ -36,6 +36,41 @@ fn summary_csv(rows: &[SummaryRow]) -> String {
     s
 }
 
+/// Per CSP, the method with the lowest mean of each metric where lower is better (TNS, TTD,
+/// NOLI) and the highest OFV; then each method's change from the highest to the lowest CSP.
+fn robustness_md(rows: &[SummaryRow], cs: &[(f64, String)], methods: &[String]) -> String {
+    let mut s = String::from("| CSP | fewest steps (TNS) | shortest distance (TTD) | fewest interactions (NOLI) | highest OFV |\n|---|---|---|---|---|\n");
+    for (_, c) in cs {
+        let at: Vec<&SummaryRow> = rows.iter().filter(|r| &r.csp == c).collect();
+        let best = |k: usize, lower: bool| {
+            at.iter()
+                .min_by(|a, b| {
+                    let (x, y) = (a.metrics[k].0, b.metrics[k].0);
+                    if lower { x.total_cmp(&y) } else { y.total_cmp(&x) }
+                })
+                .map_or(String::new(), |r| format!("{} ({:.1})", r.method, r.metrics[k].0))
+        };
+        let _ = writeln!(s, "| {} | {} | {} | {} | {} |", pct(c), best(0, true), best(1, true), best(2, true), best(3, false));
+    }
+    if let (Some((_, lo)), Some((_, hi))) = (cs.first(), cs.last()) {
+        if lo != hi {
+            let _ = writeln!(s, "\nChange from CSP {} to CSP {} (mean; positive = worse for TNS and TTD):\n", pct(hi), pct(lo));
+            s.push_str("| method | TNS | TTD (m) |\n|---|---|---|\n");
+            for m in methods {
+                let get = |c: &String| rows.iter().find(|r| &r.method == m && &r.csp == c);
+                if let (Some(a), Some(b)) = (get(hi), get(lo)) {
+                    let d = |k: usize| {
+                        let (x, y) = (a.metrics[k].0, b.metrics[k].0);
+                        format!("{:+.1} ({:+.1} %)", y - x, 100.0 * (y - x) / x.abs().max(1e-9))
+                    };
+                    let _ = writeln!(s, "| {m} | {} | {} |", d(0), d(1));
+                }
+            }
+        }
+    }
+    s
+}
+
 fn fmt_p(p: f64) -> String {
     if p < 1e-4 {
         format!("{p:.1e}")
@@ -205,6 +240,7 @@ pub fn write_all(
     if fig5 {
         let _ = writeln!(r, "![Fig. 5](fig5_exploration.png)\n\n*Fig. 5 — mean explored % against team distance travelled (`fig5_exploration.svg`).*\n");
     }
+    let _ = writeln!(r, "## Best method per CSP, and robustness to dropouts\n\n{}", robustness_md(&rows, &cs, &cfg.methods));
     let _ = writeln!(r, "## Statistics\n\n{}", statistics_md(&stats, alpha));
     let _ = writeln!(r, "## Calibration against the authors' code\n\n{}", calibration_md(&cmp));
     let path = out.join("report.md");

@@ -21,6 +21,9 @@ pub struct BatchArgs {
     /// Policy name.
     #[arg(long, default_value = "nf")]
     policy: String,
+    /// A trained model directory (`madenet train`'s `best/` or `last/`), usable as `--policy model`.
+    #[arg(long, value_name = "DIR")]
+    model: Option<std::path::PathBuf>,
     /// Communication success probabilities (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "1.0")]
     csp: Vec<f64>,
@@ -42,7 +45,7 @@ pub struct BatchArgs {
 
 pub fn run(a: BatchArgs) -> Result<()> {
     let base = crate::load_config(a.config.as_deref())?;
-    let registry = madenet_baselines::registry();
+    let registry = crate::registry(a.model.as_deref())?;
     if !registry.names().contains(&a.policy) {
         bail!("unknown policy `{}` (field `--policy`); known policies: {}", a.policy, registry.names().join(", "));
     }

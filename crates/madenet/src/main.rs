@@ -55,10 +55,11 @@ fn main() -> ExitCode {
         Command::Map(c) => map_cmd::run(c),
         Command::PlotTraining(a) => plot_training::run(a),
         Command::Train(a) => train_cmd::run(a),
-        Command::Policies => madenet_baselines::registry()
-            .describe()
+        Command::Policies => registry(None).and_then(|r| {
+            r.describe()
             .into_iter()
-            .try_for_each(|(name, about)| out!("{name:<10} {about}").map_err(anyhow::Error::from)),
+            .try_for_each(|(name, about)| out!("{name:<12} {about}").map_err(anyhow::Error::from))
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -71,6 +72,16 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// Every policy the CLI knows: built-ins, baselines, the shipped learned models, and the model
+/// in `model_dir` as `model`.
+pub fn registry(model_dir: Option<&std::path::Path>) -> anyhow::Result<madenet_sim::PolicyRegistry> {
+    let mut r = madenet_study::StudyConfig::default().registry()?;
+    if let Some(dir) = model_dir {
+        madenet_learn::Model::load(dir)?.register(&mut r, "model", "the model given with --model");
+    }
+    Ok(r)
 }
 
 /// Writes to stdout, reporting failures as errors.

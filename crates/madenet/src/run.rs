@@ -20,6 +20,9 @@ pub struct RunArgs {
     /// Policy name (see `madenet policies`).
     #[arg(long, default_value = "nf")]
     policy: String,
+    /// A trained model directory (`madenet train`'s `best/` or `last/`), usable as `--policy model`.
+    #[arg(long, value_name = "DIR")]
+    model: Option<std::path::PathBuf>,
     /// Communication success probability (overrides the config).
     #[arg(long)]
     csp: Option<f64>,
@@ -66,7 +69,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         policy: a.policy.clone(),
         seed: a.seed,
     };
-    let mut trial = Trial::with_registry(spec, &madenet_baselines::registry())
+    let mut trial = Trial::with_registry(spec, &crate::registry(a.model.as_deref())?)
         .with_context(|| format!("map {}, start {}", source.name(), a.start.name()))?
         .record_trajectory(a.trajectory);
     let opts = RenderOptions { cell_px: a.cell_px, ..Default::default() };

@@ -1,0 +1,44 @@
+//! The trained models shipped in the repository (`models/`), compiled into the binary so that
+//! `madenet run --policy made-net` and `madenet compare` work from any directory. How each was
+//! trained (config, command, wall time, validation) is in `models/README.md`.
+
+use crate::train::{Model, TrainError};
+use madenet_sim::PolicyRegistry;
+
+/// (policy name, description, model.toml, DEP weights).
+const SHIPPED: [(&str, &str, &str, &[u8]); 2] = [
+    (
+        "made-net",
+        "MADE-Net (shipped model): DEP trained with the CEP, decentralized execution",
+        include_str!("../../../models/made-net/model.toml"),
+        include_bytes!("../../../models/made-net/dep0.bpk"),
+    ),
+    (
+        "made-net-dt",
+        "MADE-Net-DT (shipped model): DEP trained on decentralized experience alone",
+        include_str!("../../../models/made-net-dt/model.toml"),
+        include_bytes!("../../../models/made-net-dt/dep0.bpk"),
+    ),
+];
+
+/// Names of the shipped models.
+pub fn names() -> Vec<&'static str> {
+    SHIPPED.iter().map(|s| s.0).collect()
+}
+
+/// Loads shipped model `name`.
+pub fn model(name: &str) -> Result<Model, TrainError> {
+    let (_, _, toml, weights) = SHIPPED
+        .iter()
+        .find(|s| s.0 == name)
+        .ok_or_else(|| TrainError::Other(format!("no shipped model `{name}`; shipped: {}", names().join(", "))))?;
+    Model::from_bytes(toml, &[weights], &format!("models/{name}/model.toml"))
+}
+
+/// Registers every shipped model under its name.
+pub fn register(registry: &mut PolicyRegistry) -> Result<(), TrainError> {
+    for (name, about, _, _) in SHIPPED {
+        model(name)?.register(registry, name, about);
+    }
+    Ok(())
+}
