@@ -14,7 +14,7 @@
 use burn::optim::AdamConfig;
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{cep_update, dep_update, target_of, UpdateParams, Window};
+use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
@@ -62,7 +62,9 @@ fn bench(c: &mut Criterion) {
         let nets = ActorNets { cep: cep.as_ref().map(target_of), deps: vec![target_of(dep.as_ref().expect("DEP"))] };
         let cen = episodes(&cfg, &nets, EnvKind::Centralized, 8);
         let dec = episodes(&cfg, &nets, EnvKind::Decentralized, 8);
-        let (cen_w, dec_w) = (windows(&cen, 16, cfg.trace_len), windows(&dec, 16, cfg.trace_len));
+        let cen_w = windows(&cen, 16, cfg.trace_len);
+        let dec_r: Vec<RobotWindow<'_>> = (0..16).map(|k| RobotWindow::new(&dec[k % dec.len()], k % 3, k % 5, cfg.trace_len)).collect();
+        let dt_r: Vec<RobotWindow<'_>> = (0..16).map(|k| RobotWindow::new(&dec[k % dec.len()], 0, k % 5, cfg.trace_len)).collect();
         let cep_target = target_of(cep.as_ref().expect("CEP"));
         let dep_target = target_of(dep.as_ref().expect("DEP"));
         let mut group = c.benchmark_group("ddrqn");
@@ -79,7 +81,7 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("dep_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, Some(&cep_plain), &dec_w, &(0..16).map(|b| (b % dec_w.len(), b % 3)).collect::<Vec<_>>(), &p);
+                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, Some(&cep_plain), &dec_r, &p);
                 dep = Some(next);
                 loss
             })
@@ -87,7 +89,7 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("dt_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, None, &dec_w, &(0..dec_w.len()).map(|b| (b, 0)).collect::<Vec<_>>(), &p);
+                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, None, &dt_r, &p);
                 dep = Some(next);
                 loss
             })

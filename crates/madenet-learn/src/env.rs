@@ -172,7 +172,8 @@ impl JointPolicy for Actor {
                 }
                 EnvKind::Decentralized => {
                     let (maps, obs) = self.input(&o.map, &o.vec, h, w);
-                    let (q, state) = self.nets.dep(i).act(maps, obs, self.dep_states[i].take());
+                    let prev = if self.forget { None } else { self.dep_states[i].take() };
+                    let (q, state) = self.nets.dep(i).act(maps, obs, prev);
                     self.dep_states[i] = Some(state);
                     let greedy = masked_argmax_slice(&q_host(q), &o.mask).expect("mask has a valid action");
                     match (explore, &cep_choice) {

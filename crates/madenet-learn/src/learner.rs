@@ -196,32 +196,51 @@ pub fn cep_update(
     td_step(online, optim, &seq, q, targets, p.learning_rate)
 }
 
+/// A slice of one robot's decisions in an episode: its DEP transitions `start..end` (indices
+/// into `dep[robot]` / `dep_at[robot]`). Cut in the robot's own decisions, so a macro action
+/// that spans many joint decisions (teammates deciding often) is trained like any other.
+#[derive(Clone, Copy, Debug)]
+pub struct RobotWindow<'a> {
+    pub episode: &'a Episode,
+    pub robot: usize,
+    pub start: usize,
+    pub end: usize,
+}
+
+impl<'a> RobotWindow<'a> {
+    /// `trace_len + 1` decisions of `robot` from `start` (clipped to the episode).
+    pub fn new(episode: &'a Episode, robot: usize, start: usize, trace_len: usize) -> Self {
+        let n = episode.dep[robot].len();
+        let end = (start + trace_len + 1).min(n);
+        RobotWindow { episode, robot, start: start.min(end), end }
+    }
+    /// The joint decisions this window's decisions span (for the CEP's target actions).
+    fn joint_span(&self) -> Window<'a> {
+        let at = &self.episode.dep_at[self.robot];
+        match (at.get(self.start), self.end.checked_sub(1).and_then(|l| at.get(l))) {
+            (Some(&a), Some(&b)) if self.end > self.start => Window { episode: self.episode, start: a, end: b + 1 },
+            _ => Window { episode: self.episode, start: 0, end: 0 },
+        }
+    }
+}
+
 /// One DEP update (Eq. 6, or MADE-Net-DT's double DRQN when `cep` is `None`) on the robot
-/// sequences `pairs` — (index into `eps`, robot) — of the windows `eps`; returns the new online
-/// net and the loss.
+/// sequences `seqs`; returns the new online net and the loss.
 pub fn dep_update(
     online: QNet,
     target: &QNet,
     optim: &mut ModuleOptimizer,
     cep: Option<&QNet>,
-    eps: &[Window<'_>],
-    pairs: &[(usize, usize)],
+    seqs: &[RobotWindow<'_>],
     p: &UpdateParams,
 ) -> (QNet, f32) {
     let map_len = 4 * p.map_height * p.map_width;
     let obs_dim = crate::obs_dim_for(p.team, p.goals);
-    // Robot i's decisions inside window b: k in ks[s] (indices into dep[i] / dep_at[i]).
-    let ks: Vec<std::ops::Range<usize>> = pairs
-        .iter()
-        .map(|&(b, i)| {
-            let (w, at) = (&eps[b], &eps[b].episode.dep_at[i]);
-            at.partition_point(|&j| j < w.start)..at.partition_point(|&j| j < w.end)
-        })
-        .collect();
+    let ks: Vec<std::ops::Range<usize>> = seqs.iter().map(|w| w.start..w.end).collect();
     let time = ks.iter().map(|r| r.len()).max().unwrap_or(1).max(1);
-    let mut seq = Sequences::new(pairs.len(), time, map_len, obs_dim);
-    for (s, &(b, i)) in pairs.iter().enumerate() {
-        let e = eps[b].episode;
+    let mut seq = Sequences::new(seqs.len(), time, map_len, obs_dim);
+    for (s, w) in seqs.iter().enumerate() {
+        let (e, i) = (w.episode, w.robot);
         for (kw, k) in ks[s].clone().enumerate() {
             let tr = &e.dep[i][k];
             let o = e.decisions[e.dep_at[i][k]].robots[i].as_ref().expect("a deciding robot's observation");
@@ -236,9 +255,10 @@ pub fn dep_update(
             seq.not_done[idx] = (!terminal && next_inside) as u8 as f32;
         }
     }
+    let spans: Vec<Window<'_>> = seqs.iter().map(RobotWindow::joint_span).collect();
     // The CEP's Q values on every sampled episode's joint history (no gradient).
     let cep_q: Option<(Vec<f32>, usize, usize)> = cep.map(|cep| {
-        let (cseq, _) = cep_sequences(eps, p);
+        let (cseq, _) = cep_sequences(&spans, p);
         let (maps, obs) = cseq.tensors(p, &crate::cpu());
         let q = cep.forward(maps, obs, None).0;
         let outputs = q.dims()[2];
@@ -255,18 +275,17 @@ pub fn dep_update(
             let mut y = seq.rewards[idx];
             if seq.not_done[idx] > 0.0 {
                 let (s, kw) = (idx / time, idx % time);
-                let (b, i) = pairs[s];
-                let (w, k) = (&eps[b], ks[s].start + kw);
-                let e = w.episode;
+                let (w, k) = (&seqs[s], ks[s].start + kw);
+                let (e, i, span) = (w.episode, w.robot, &spans[s]);
                 let a = match &cep_q {
                     Some((cq, ctime, couts)) => {
                         let j = e.dep_at[i][k + 1];
                         let d = &e.decisions[j];
-                        let j = j - w.start;
+                        let j = j - span.start;
                         let fixed: Vec<Option<usize>> =
                             (0..p.team).map(|r| (!d.decided[r]).then_some(d.actions[r])).collect();
                         let masks = &d.joint.as_ref().expect("joint observation").masks;
-                        let row = (b * ctime + j) * couts..(b * ctime + j + 1) * couts;
+                        let row = (s * ctime + j) * couts..(s * ctime + j + 1) * couts;
                         let ja = conditional_argmax(&cq[row], masks, &fixed).expect("admissible joint action");
                         joint_actions(ja, p.team, p.goals)[i]
                     }

@@ -30,9 +30,6 @@ impl Policy for DepPolicy {
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let o = robot_obs(view);
-        if !view.candidates().valid_mask().contains(&true) {
-            return Decision::Idle;
-        }
         let (h, w) = (view.belief.height(), view.belief.width());
         let device = crate::cpu();
         let mut m = vec![0.0f32; 4 * h * w];
@@ -42,6 +39,11 @@ impl Policy for DepPolicy {
         let (q, state) = self.net.act(maps, obs, self.state.take());
         self.state = Some(state);
         let q = q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32");
+        // The state advances at every decision, as in training; with no valid candidate the
+        // mask offers slot 0 alone, which leaves the robot without a goal (it stays).
+        if !view.candidates().valid_mask().contains(&true) {
+            return Decision::Idle;
+        }
         Decision::Candidate(masked_argmax_slice(&q, &o.mask).expect("a valid candidate"))
     }
 }

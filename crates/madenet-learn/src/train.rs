@@ -25,7 +25,7 @@
 //! ```
 
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
-use crate::learner::{cep_update, dep_update, target_of, UpdateParams, Window};
+use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::policy::DepPolicy;
 use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
 use burn::module::Module;
@@ -352,17 +352,34 @@ impl Replay {
         }
         self.episodes.push_back(e);
     }
-    /// `n` windows of `trace_len + 1` joint decisions: episodes drawn uniformly with
-    /// replacement, each window's start uniformly among the episode's joint decisions.
+    /// `n` windows of `trace_len + 1` joint decisions (the CEP's): episodes drawn uniformly
+    /// with replacement; each window's start uniform in `−trace_len..len` and clipped at 0, so
+    /// that every decision, the first ones included, is in the same number of windows.
     fn sample(&self, n: usize, trace_len: usize, rng: &mut madenet_world::rng::Rng) -> Vec<Window<'_>> {
         (0..n)
             .map(|_| {
                 let e = &self.episodes[rng.random_range(0..self.episodes.len())];
-                let start = rng.random_range(0..e.decisions.len().max(1));
-                Window::new(e, start, trace_len)
+                Window::new(e, window_start(e.decisions.len(), trace_len, rng), trace_len)
             })
             .collect()
     }
+
+    /// `n` windows of `trace_len + 1` decisions of one robot of `robots` (drawn uniformly), for
+    /// a DEP; starts drawn like [`Replay::sample`]'s in the robot's own decisions.
+    fn sample_robots(&self, n: usize, trace_len: usize, robots: &[usize], rng: &mut madenet_world::rng::Rng) -> Vec<RobotWindow<'_>> {
+        (0..n)
+            .map(|_| {
+                let e = &self.episodes[rng.random_range(0..self.episodes.len())];
+                let robot = robots[rng.random_range(0..robots.len())];
+                RobotWindow::new(e, robot, window_start(e.dep[robot].len(), trace_len, rng), trace_len)
+            })
+            .collect()
+    }
+}
+
+fn window_start(len: usize, trace_len: usize, rng: &mut madenet_world::rng::Rng) -> usize {
+    let s = rng.random_range(0..(len + trace_len).max(1)) as i64 - trace_len as i64;
+    s.max(0) as usize
 }
 
 /// The learner's nets and optimizers.
@@ -730,9 +747,6 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
     while state.episode < cfg.episodes {
-        if cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0 {
-            break;
-        }
         let e = state.episode;
         let epsilon = cfg.epsilon(e);
         let actor_nets = nets.actor_nets();
@@ -788,17 +802,14 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                     cep_loss = loss;
                     nets.cep = Some((online, target, optim));
                 }
-                // DEP batches: `batch_size` robot sequences — for a shared DEP each sampled
-                // window gives one robot drawn uniformly; a per-robot DEP takes its own robot
-                // from every window.
-                let batch = dec.sample(cfg.batch_size, cfg.trace_len, &mut rng);
+                // DEP batches: `batch_size` robot sequences — for a shared DEP of any robot,
+                // for a per-robot DEP of its own.
                 let cep_plain = nets.cep.as_ref().map(|(o, _, _)| target_of(o));
                 let mut dep_loss = 0.0;
                 let deps = std::mem::take(&mut nets.deps);
                 for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
-                    let pairs: Vec<(usize, usize)> =
-                        (0..batch.len()).map(|b| (b, robots[rng.random_range(0..robots.len())])).collect();
-                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, &pairs, &params);
+                    let batch = dec.sample_robots(cfg.batch_size, cfg.trace_len, robots, &mut rng);
+                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, &params);
                     dep_loss += loss / groups.len() as f32;
                     nets.deps.push((online, target, optim));
                 }
@@ -846,6 +857,9 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
             steps: steps_sum / envs.len() as f64,
             validation_steps: last_validation,
         });
+        if stopping {
+            break;
+        }
     }
     Ok(())
 }

@@ -4,7 +4,7 @@
 
 use burn::optim::AdamConfig;
 use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{cep_update, dep_update, target_of, UpdateParams, Window};
+use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
@@ -53,7 +53,8 @@ fn losses_fall_on_a_fixed_batch() {
         assert!((total - e.team_return as f32).abs() < 1e-2 * total.abs().max(1.0));
     }
     let cen_w: Vec<Window<'_>> = cen.iter().map(|e| Window::new(e, 2, 10)).collect();
-    let dec_w: Vec<Window<'_>> = dec.iter().map(|e| Window::new(e, 0, 10)).collect();
+    let dec_r: Vec<RobotWindow<'_>> = dec.iter().flat_map(|e| (0..3).map(move |i| RobotWindow::new(e, i, 0, 10))).collect();
+    let dt_r: Vec<RobotWindow<'_>> = dec.iter().map(|e| RobotWindow::new(e, 1, 1, 10)).collect();
 
     let cep_target = target_of(&cep);
     let mut optim = AdamConfig::new().init();
@@ -70,7 +71,7 @@ fn losses_fall_on_a_fixed_batch() {
     let mut optim = AdamConfig::new().init();
     let mut losses = Vec::new();
     for _ in 0..40 {
-        let (next, loss) = dep_update(dep, &dep_target, &mut optim, Some(&cep_plain), &dec_w, &(0..16).map(|b| (b % dec_w.len(), b % 3)).collect::<Vec<_>>(), &p);
+        let (next, loss) = dep_update(dep, &dep_target, &mut optim, Some(&cep_plain), &dec_r, &p);
         dep = next;
         losses.push(loss);
     }
@@ -82,7 +83,7 @@ fn losses_fall_on_a_fixed_batch() {
     let mut optim = AdamConfig::new().init();
     let mut losses = Vec::new();
     for _ in 0..40 {
-        let (next, loss) = dep_update(dt, &dt_target, &mut optim, None, &dec_w, &(0..dec_w.len()).map(|b| (b, 1)).collect::<Vec<_>>(), &p);
+        let (next, loss) = dep_update(dt, &dt_target, &mut optim, None, &dt_r, &p);
         dt = next;
         losses.push(loss);
     }

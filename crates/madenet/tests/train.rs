@@ -1,0 +1,71 @@
+//! `madenet train` end to end on a tiny run (plumbing, not learning), `--resume` extending it,
+//! `--model` playing the result, and bad input: exit code 2 and one `error:` line naming the
+//! file or flag.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn madenet(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let p = std::env::temp_dir().join(format!("madenet-train-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&p);
+    std::fs::create_dir_all(&p).expect("temp dir");
+    p
+}
+
+fn error_line(o: &Output) -> String {
+    assert_eq!(o.status.code(), Some(2), "stdout {} stderr {}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(err.lines().count(), 1, "one line: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    err
+}
+
+const TINY: &str = "episodes = 3\nwarmup_episodes = 1\nbatch_size = 2\ntrace_len = 4\nreplay_episodes = 4\nvalidate_every = 3\nvalidation_maps = 1\nvalidation_csp = [0.5]\ncheckpoint_every = 2\nthreads = 1\n[scenario]\nstep_cap = 30\n";
+
+#[test]
+fn tiny_run_resume_and_model() {
+    let dir = scratch("run");
+    let cfg = dir.join("tiny.toml");
+    std::fs::write(&cfg, TINY).unwrap();
+    let run = dir.join("run");
+    let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
+    let o = madenet(&["train", "--config", c, "--out", r, "--method", "made-net-dt", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 3);
+    // A second --out into the same folder is refused; --resume with --episodes extends the run.
+    let e = error_line(&madenet(&["train", "--config", c, "--out", r, "-q"]));
+    assert!(e.contains("--resume"), "{e}");
+    let o = madenet(&["train", "--resume", r, "--episodes", "4", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 4);
+    // The trained model plays a generated map.
+    let best = run.join("best");
+    let o = madenet(&["run", "--map", "generate:2", "--policy", "model", "--model", best.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_training_input_is_one_line() {
+    let dir = scratch("bad");
+    let cfg = dir.join("bad.toml");
+    std::fs::write(&cfg, "gamma = 2.0\n").unwrap();
+    let out = dir.join("out");
+    let e = error_line(&madenet(&["train", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]));
+    assert!(e.contains("bad.toml") && e.contains("gamma"), "{e}");
+    let e = error_line(&madenet(&["train", "--resume", dir.join("nothing").to_str().unwrap()]));
+    assert!(e.contains("nothing") && e.contains("config.toml"), "{e}");
+    let e = error_line(&madenet(&["train", "--out", out.to_str().unwrap(), "--method", "dqn"]));
+    assert!(e.contains("dqn"), "{e}");
+    // A learned model refuses a team size it was not trained for.
+    let four = dir.join("four.toml");
+    std::fs::write(&four, "num_robots = 4\n").unwrap();
+    let e = error_line(&madenet(&["run", "--map", "paper:1", "--policy", "made-net", "--start", "0,0;0,1;1,0;1,1", "--config", four.to_str().unwrap()]));
+    assert!(e.contains("made-net") && e.contains("3 robots"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
