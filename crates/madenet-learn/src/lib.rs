@@ -1,9 +1,19 @@
-//! MADE-Net's learner (Tan et al., RA-L 2023, Sec. III.C.2–4 and IV). This part holds **the
-//! networks** — the Q-network shared by the centralized exploration policy (CEP) and the
-//! decentralized exploration policies (DEP), the masked and conditional action selection used in
-//! acting and in the targets of Eq. (5)/(6), and the CPU devices they run on. Replay, losses and
-//! the training loop build on it; [`replay`] already squeezes recorded episodes into the
-//! macro-level transitions of the CEP and the DEPs.
+//! MADE-Net's learner (Tan et al., RA-L 2023, Sec. III.C.2–4 and IV), following MacDec-DDRQN with
+//! a centralized Q-net (Xiao et al., ICRA 2020). The data flow, one module each:
+//!
+//! * [`QNet`] / [`NetConfig`] — the Q-network shared by the centralized exploration policy (CEP)
+//!   and the decentralized exploration policies (DEP), built from map size, team size and |G|;
+//!   masked and conditional action selection ([`masked_argmax`], [`conditional_argmax`]);
+//! * [`obs`] — the networks' inputs from the simulator (a robot's macro observation, the joint
+//!   observation with the merged map);
+//! * [`env`](mod@env) — the two training environments (CEP-driven with full communication, DEP-driven
+//!   with CSP ~ U(0, 1)) as an ε-greedy [`madenet_agent::JointPolicy`] recording [`env::Episode`]s;
+//! * [`replay`] — episodes of primitive steps squeezed into the CEP's and DEPs' macro transitions;
+//! * [`learner`] — the updates of Eq. (5) and (6) (and MADE-Net-DT's double DRQN) on sampled
+//!   windows;
+//! * [`train`](mod@train) — the training loop, its [`TrainConfig`], logs, validation, checkpoints and resume;
+//! * [`policy`] / [`shipped`] — the DEP acting alone at execution, and the models shipped in
+//!   `models/`, registered as the policies `made-net` and `made-net-dt`.
 //!
 //! Built on burn 0.22, whose tensors are not generic over a backend: a [`Tensor<D>`] lives on a
 //! runtime [`Device`]. [`cpu`] is burn's `flex` CPU backend; [`cpu_autodiff`] the same with
