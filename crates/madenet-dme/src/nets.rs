@@ -1,0 +1,132 @@
+//! DME-DRL's networks (MADDPG: one decentralized actor per robot, one centralized critic per
+//! robot), sized for madenet's grid world. The original (design brief §1) feeds 100 × 100 map
+//! frames through two convolutions and an LSTM over a 6-frame history; here the history is
+//! stacked as channels (`history` frames × 4 channels of the map image), the convolutions are
+//! scaled to 20 × 20 maps, and a hidden layer of `hidden` units follows (the original goes
+//! straight to the output).
+//!
+//! * Actor: map history `[b, 4·history, H, W]` → C1 (k4 s2, 16) → C2 (k3 s2, 32) → flatten,
+//!   ‖ pose vector `[b, 2·team]` (own and teammates' last known positions, normalised, −1
+//!   unknown) → FC hidden → FC 8 sector logits.
+//! * Critic (robot i's): every robot's map history stacked `[b, team·4·history, H, W]` → the
+//!   same convolutions → flatten, ‖ every robot's action (`team · 8`, one-hot or soft) ‖ every
+//!   robot's pose vector (`team · 2·team`) → FC hidden → FC 1.
+
+use crate::SECTORS;
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::{Linear, LinearConfig, Relu};
+use burn::tensor::{Device, Tensor};
+
+/// Sizes of the DME-DRL networks.
+#[derive(Config, Debug, PartialEq)]
+pub struct DmeConfig {
+    /// Map height and width in cells.
+    #[config(default = 20)]
+    pub map_height: usize,
+    #[config(default = 20)]
+    pub map_width: usize,
+    /// Robots |I|.
+    #[config(default = 3)]
+    pub team_size: usize,
+    /// Map frames stacked as input (the original: 6; ours 3 on a 20 × 20 world).
+    #[config(default = 3)]
+    pub history: usize,
+    /// Units of the hidden fully connected layer.
+    #[config(default = 128)]
+    pub hidden: usize,
+}
+
+/// Valid-convolution output side.
+fn out_side(input: usize, kernel: usize, stride: usize) -> usize {
+    (input.saturating_sub(kernel)) / stride + 1
+}
+
+impl DmeConfig {
+    /// Channels of one robot's input: 4 map channels per frame.
+    pub fn robot_channels(&self) -> usize {
+        4 * self.history
+    }
+    /// Length of a pose vector: every robot's (row, col).
+    pub fn pose_len(&self) -> usize {
+        2 * self.team_size
+    }
+    /// Flattened length after the two convolutions for `channels` input channels.
+    fn flat(&self) -> usize {
+        let (h, w) = (out_side(out_side(self.map_height, 4, 2), 3, 2), out_side(out_side(self.map_width, 4, 2), 3, 2));
+        32 * h * w
+    }
+    fn convs(&self, channels: usize, device: &Device) -> (Conv2d, Conv2d) {
+        (
+            Conv2dConfig::new([channels, 16], [4, 4]).with_stride([2, 2]).init(device),
+            Conv2dConfig::new([16, 32], [3, 3]).with_stride([2, 2]).init(device),
+        )
+    }
+
+    /// Robot i's actor.
+    pub fn actor(&self, device: &Device) -> Actor {
+        let (c1, c2) = self.convs(self.robot_channels(), device);
+        Actor {
+            c1,
+            c2,
+            f1: LinearConfig::new(self.flat() + self.pose_len(), self.hidden).init(device),
+            f2: LinearConfig::new(self.hidden, SECTORS).init(device),
+            act: Relu::new(),
+        }
+    }
+
+    /// Robot i's centralized critic.
+    pub fn critic(&self, device: &Device) -> Critic {
+        let (c1, c2) = self.convs(self.team_size * self.robot_channels(), device);
+        let extra = self.team_size * SECTORS + self.team_size * self.pose_len();
+        Critic {
+            c1,
+            c2,
+            f1: LinearConfig::new(self.flat() + extra, self.hidden).init(device),
+            f2: LinearConfig::new(self.hidden, 1).init(device),
+            act: Relu::new(),
+        }
+    }
+}
+
+/// A decentralized actor: sector logits from the robot's own map history and pose vector.
+#[derive(Module, Debug)]
+pub struct Actor {
+    pub c1: Conv2d,
+    pub c2: Conv2d,
+    pub f1: Linear,
+    pub f2: Linear,
+    pub act: Relu,
+}
+
+impl Actor {
+    /// `maps` `[b, 4·history, H, W]`, `pose` `[b, 2·team]` → logits `[b, 8]`.
+    pub fn forward(&self, maps: Tensor<4>, pose: Tensor<2>) -> Tensor<2> {
+        let x = self.act.forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
+        let x: Tensor<2> = x.flatten(1, 3);
+        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![x, pose], 1)));
+        self.f2.forward(x)
+    }
+}
+
+/// A centralized critic: Q_i from every robot's map history, action and pose vector.
+#[derive(Module, Debug)]
+pub struct Critic {
+    pub c1: Conv2d,
+    pub c2: Conv2d,
+    pub f1: Linear,
+    pub f2: Linear,
+    pub act: Relu,
+}
+
+impl Critic {
+    /// `maps` `[b, team·4·history, H, W]`, `actions` `[b, team·8]`, `poses` `[b, team·2·team]`
+    /// → Q `[b, 1]`.
+    pub fn forward(&self, maps: Tensor<4>, actions: Tensor<2>, poses: Tensor<2>) -> Tensor<2> {
+        let x = self.act.forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
+        let x: Tensor<2> = x.flatten(1, 3);
+        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![x, actions, poses], 1)));
+        self.f2.forward(x)
+    }
+}
