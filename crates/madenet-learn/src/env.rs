@@ -81,17 +81,9 @@ pub struct Actor {
     cep_state: Option<LstmState>,
     dep_states: Vec<Option<LstmState>>,
     out: Arc<Mutex<Vec<JointStep>>>,
-    forget: bool,
 }
 
 impl Actor {
-    /// Start every decision from zero LSTM state (a diagnostic: how much the carried state
-    /// matters).
-    pub fn forgetful(mut self) -> Self {
-        self.forget = true;
-        self
-    }
-
     pub fn new(kind: EnvKind, nets: ActorNets, epsilon: f32, cen_explore: bool, goals: usize, team: usize, rng: Rng) -> Self {
         Actor {
             kind,
@@ -104,7 +96,6 @@ impl Actor {
             cep_state: None,
             dep_states: vec![None; team],
             out: Arc::new(Mutex::new(Vec::new())),
-            forget: false,
         }
     }
 
@@ -149,8 +140,7 @@ impl JointPolicy for Actor {
         let cep_choice = match (&self.nets.cep, &joint) {
             (Some(cep), Some(j)) => {
                 let (maps, obs) = self.input(&j.map, &j.vec, h, w);
-                let prev = if self.forget { None } else { self.cep_state.take() };
-                let (q, state) = cep.act(maps, obs, prev);
+                let (q, state) = cep.act(maps, obs, self.cep_state.take());
                 self.cep_state = Some(state);
                 let q = q_host(q);
                 let a = conditional_argmax(&q, &j.masks, &fixed).expect("every robot has an admissible action");
@@ -172,8 +162,7 @@ impl JointPolicy for Actor {
                 }
                 EnvKind::Decentralized => {
                     let (maps, obs) = self.input(&o.map, &o.vec, h, w);
-                    let prev = if self.forget { None } else { self.dep_states[i].take() };
-                    let (q, state) = self.nets.dep(i).act(maps, obs, prev);
+                    let (q, state) = self.nets.dep(i).act(maps, obs, self.dep_states[i].take());
                     self.dep_states[i] = Some(state);
                     let greedy = masked_argmax_slice(&q_host(q), &o.mask).expect("mask has a valid action");
                     match (explore, &cep_choice) {

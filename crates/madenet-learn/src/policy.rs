@@ -2,7 +2,7 @@
 //! macro-action terminations, greedily over its valid goal candidates, carrying the LSTM state
 //! from one decision to the next (paper Sec. III.C.3, *Decentralized Execution*).
 
-use crate::obs::{robot_obs, unpack_bits};
+use crate::obs::action_mask;
 use crate::{masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
 use std::sync::Arc;
@@ -12,12 +12,13 @@ pub struct DepPolicy {
     name: String,
     net: Arc<QNet>,
     state: Option<LstmState>,
+    device: burn::tensor::Device,
 }
 
 impl DepPolicy {
     /// A fresh policy (zero LSTM state) running `net` under registry name `name`.
     pub fn new(name: &str, net: Arc<QNet>) -> Self {
-        DepPolicy { name: name.to_string(), net, state: None }
+        DepPolicy { name: name.to_string(), net, state: None, device: crate::cpu() }
     }
 }
 
@@ -29,13 +30,12 @@ impl Policy for DepPolicy {
         DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
-        let o = robot_obs(view);
         let (h, w) = (view.belief.height(), view.belief.width());
-        let device = crate::cpu();
-        let mut m = vec![0.0f32; 4 * h * w];
-        unpack_bits(&o.map, &mut m);
-        let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &device);
-        let obs = Tensor::<2>::from_data(TensorData::new(o.vec.clone(), [1, o.vec.len()]), &device);
+        let m: Vec<f32> = view.map_image().into_iter().map(f32::from).collect();
+        let vec = view.macro_observation();
+        let mask = action_mask(view);
+        let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
+        let obs = Tensor::<2>::from_data(TensorData::new(vec.clone(), [1, vec.len()]), &self.device);
         let (q, state) = self.net.act(maps, obs, self.state.take());
         self.state = Some(state);
         let q = q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32");
@@ -44,6 +44,6 @@ impl Policy for DepPolicy {
         if !view.candidates().valid_mask().contains(&true) {
             return Decision::Idle;
         }
-        Decision::Candidate(masked_argmax_slice(&q, &o.mask).expect("a valid candidate"))
+        Decision::Candidate(masked_argmax_slice(&q, &mask).expect("a valid candidate"))
     }
 }

@@ -32,7 +32,7 @@ use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::store::ModuleRecord;
-use madenet_map::generate::{generate, GeneratorConfig};
+use madenet_map::generate::{generate_with_movement, GeneratorConfig};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream};
@@ -288,31 +288,34 @@ pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<P
         density_max: cfg.density_max,
         keep_free: Vec::new(),
     };
-    let map = generate(&gen, derive_seed(seed, "map", 0)).map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
+    // Connected under the scenario's movement rule, so any free anchor reaches the whole team.
+    let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), cfg.scenario.movement)
+        .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
     let free: Vec<usize> = (0..map.len()).filter(|&i| map.cells()[i] == madenet_map::Occupancy::Free).collect();
     let team = cfg.team();
-    for _ in 0..64 {
-        let anchor = map.pos(free[rng.random_range(0..free.len())]);
-        // Breadth-first from the anchor: the first `team` cells reached.
-        let mut seen = vec![false; map.len()];
-        let mut queue = VecDeque::from([anchor]);
-        seen[map.index(anchor)] = true;
-        let mut starts = Vec::with_capacity(team);
-        while let Some(p) = queue.pop_front() {
-            starts.push(p);
-            if starts.len() == team {
-                return Ok((map, starts));
-            }
-            for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
-                let q = Pos::new(p.row + dr, p.col + dc);
-                if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, cfg.scenario.movement) {
-                    seen[map.index(q)] = true;
-                    queue.push_back(q);
-                }
+    if free.len() < team {
+        return Err(TrainError::Other(format!("training map {seed} has {} free cells for {team} robots", free.len())));
+    }
+    // Breadth-first from a random free cell: the first `team` cells reached.
+    let anchor = map.pos(free[rng.random_range(0..free.len())]);
+    let mut seen = vec![false; map.len()];
+    let mut queue = VecDeque::from([anchor]);
+    seen[map.index(anchor)] = true;
+    let mut starts = Vec::with_capacity(team);
+    while let Some(p) = queue.pop_front() {
+        starts.push(p);
+        if starts.len() == team {
+            return Ok((map, starts));
+        }
+        for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
+            let q = Pos::new(p.row + dr, p.col + dc);
+            if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, cfg.scenario.movement) {
+                seen[map.index(q)] = true;
+                queue.push_back(q);
             }
         }
     }
-    Err(TrainError::Other(format!("no free region of {team} connected cells found on training map {seed}")))
+    Err(TrainError::Other(format!("training map {seed}: fewer than {team} connected free cells")))
 }
 
 /// What [`train`] reports after each iteration (for a progress bar).
@@ -398,17 +401,18 @@ impl Nets {
         let cep = match cfg.method {
             Method::MadeNet => {
                 let net = cfg.cep_config().init(&device)?;
-                Some((target_of(&net), net, optim()))
+                let target = target_of(&net);
+                Some((net, target, optim()))
             }
             Method::MadeNetDt => None,
         };
         let mut deps = Vec::new();
         for _ in cfg.dep_groups() {
             let net = cfg.dep_config().init(&device)?;
-            deps.push((target_of(&net), net, optim()));
+            let target = target_of(&net);
+            deps.push((net, target, optim()));
         }
-        // Field order: (target, online, optimizer).
-        Ok(Nets { cep: cep.map(|(t, o, op)| (o, t, op)), deps: deps.into_iter().map(|(t, o, op)| (o, t, op)).collect() })
+        Ok(Nets { cep, deps })
     }
 
     fn actor_nets(&self) -> ActorNets {
@@ -561,8 +565,8 @@ impl Model {
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
         let deps = self.deps.clone();
         let owned = name.to_string();
-        let me = self.clone();
-        registry.register_checked(name, about, move |ctx| me.check(ctx.height, ctx.width, ctx.config), move |ctx| {
+        let info = Model { info: self.info.clone(), deps: Vec::new() };
+        registry.register_checked(name, about, move |ctx| info.check(ctx.height, ctx.width, ctx.config), move |ctx| {
             let net = Arc::clone(&deps[if deps.len() == 1 { 0 } else { ctx.robot.min(deps.len() - 1) }]);
             Box::new(DepPolicy::new(&owned, net))
         });
@@ -571,7 +575,8 @@ impl Model {
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
     let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(io_err(&tmp))?;
+    let mut f = std::fs::File::create(&tmp).map_err(io_err(&tmp))?;
+    f.write_all(bytes).and_then(|_| f.sync_all()).map_err(io_err(&tmp))?;
     std::fs::rename(&tmp, path).map_err(io_err(path))
 }
 
@@ -598,16 +603,20 @@ fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -
     Ok(())
 }
 
-/// Keeps the header and the rows whose first column (a counter) is below `cutoff`.
+/// Keeps the header and the complete rows whose first column (a counter) is below `cutoff`; a
+/// last line without its newline (torn by a kill) goes too.
 fn truncate_csv(path: &Path, cutoff: u64) -> Result<(), TrainError> {
     if !path.exists() {
         return Ok(());
     }
     let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    let complete = match text.rfind('\n') {
+        Some(end) => &text[..=end],
+        None => "",
+    };
     let mut out = String::new();
-    for (i, line) in text.lines().enumerate() {
-        let keep = i == 0 || line.split(',').next().and_then(|v| v.parse::<u64>().ok()).is_some_and(|v| v < cutoff);
-        if keep && (i == 0 || text.ends_with('\n') || i + 1 < text.lines().count()) {
+    for (i, line) in complete.lines().enumerate() {
+        if i == 0 || line.split(',').next().and_then(|v| v.parse::<u64>().ok()).is_some_and(|v| v < cutoff) {
             out.push_str(line);
             out.push('\n');
         }
@@ -742,7 +751,7 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     let wall0 = state.wall_s;
     let wall = |started: &Instant| wall0 + started.elapsed().as_secs_f64();
     // TensorBoard's wall-clock axis wants Unix seconds.
-    let unix = |_: &Instant| std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let unix = || std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
     let params = cfg.update_params();
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
@@ -782,8 +791,8 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 state.updates,
                 wall(&started)
             ))?;
-            tb.add_scalar(&format!("episode/{}_team_reward", kind.short()), ep.team_return as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
-            tb.add_scalar(&format!("episode/{}_steps", kind.short()), ep.len() as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            tb.add_scalar(&format!("episode/{}_team_reward", kind.short()), ep.team_return as f32, id as i64, unix()).map_err(io_err(run_dir))?;
+            tb.add_scalar(&format!("episode/{}_steps", kind.short()), ep.len() as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             reward_sum += ep.team_return;
             steps_sum += ep.len() as f64;
             match kind {
@@ -819,9 +828,9 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 }
                 up_log.row(format!("{},{cep_loss},{dep_loss}", state.updates - 1))?;
                 if cep_loss.is_finite() {
-                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix(&started)).map_err(io_err(run_dir))?;
+                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
                 }
-                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix(&started)).map_err(io_err(run_dir))?;
+                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
             }
         }
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
@@ -831,8 +840,8 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
             let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
             let id = state.episode * per_iter;
             val_log.row(format!("{id},{},{steps},{ret},{done},{n}", state.updates))?;
-            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
-            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix(&started)).map_err(io_err(run_dir))?;
+            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix()).map_err(io_err(run_dir))?;
+            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             last_validation = Some(steps);
             if state.best_validation.is_none_or(|b| steps < b) {
                 state.best_validation = Some(steps);
@@ -900,4 +909,29 @@ fn checkpoint(dir: &Path, nets: &Nets, state: &State, cen: &Replay, dec: &Replay
         let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn truncate_csv_keeps_header_and_earlier_complete_rows() {
+        let path = std::env::temp_dir().join(format!("madenet-truncate-{}.csv", std::process::id()));
+        std::fs::write(&path, "n,x\n0,a\n1,b\n2,c\n3,d\n4,e").unwrap();
+        truncate_csv(&path, 3).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "n,x\n0,a\n1,b\n2,c\n");
+        std::fs::write(&path, "n,x\n0,a\n1,b\n2,c\n3,d\n4,e").unwrap();
+        truncate_csv(&path, 10).unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "n,x\n0,a\n1,b\n2,c\n3,d\n", "the torn last row goes");
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn epsilon_decays_linearly_then_stays() {
+        let cfg = TrainConfig { epsilon_start: 1.0, epsilon_end: 0.1, epsilon_decay_episodes: 10, ..TrainConfig::default() };
+        assert_eq!(cfg.epsilon(0), 1.0);
+        assert!((cfg.epsilon(5) - 0.55).abs() < 1e-6);
+        assert!((cfg.epsilon(10) - 0.1).abs() < 1e-6 && (cfg.epsilon(1000) - 0.1).abs() < 1e-6);
+    }
 }
