@@ -30,9 +30,15 @@ pub enum EnvKind {
 impl EnvKind {
     /// `cen` / `dec` (the training log's `env` column).
     pub fn short(self) -> &'static str {
-        match self {
-            EnvKind::Centralized => "cen",
-            EnvKind::Decentralized => "dec",
+        madenet_trainlog::Env::from(self).as_str()
+    }
+}
+
+impl From<EnvKind> for madenet_trainlog::Env {
+    fn from(k: EnvKind) -> Self {
+        match k {
+            EnvKind::Centralized => madenet_trainlog::Env::Cen,
+            EnvKind::Decentralized => madenet_trainlog::Env::Dec,
         }
     }
 }

@@ -28,6 +28,7 @@ use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::policy::DepPolicy;
 use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
+use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
@@ -41,7 +42,7 @@ use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -182,6 +183,8 @@ pub enum TrainError {
     Io { path: String, message: String },
     #[error(transparent)]
     Episode(#[from] EpisodeError),
+    #[error(transparent)]
+    Log(#[from] madenet_trainlog::TrainLogError),
     #[error("{0}")]
     Other(String),
 }
@@ -603,47 +606,6 @@ fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -
     Ok(())
 }
 
-/// Keeps the header and the complete rows whose first column (a counter) is below `cutoff`; a
-/// last line without its newline (torn by a kill) goes too.
-fn truncate_csv(path: &Path, cutoff: u64) -> Result<(), TrainError> {
-    if !path.exists() {
-        return Ok(());
-    }
-    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-    let complete = match text.rfind('\n') {
-        Some(end) => &text[..=end],
-        None => "",
-    };
-    let mut out = String::new();
-    for (i, line) in complete.lines().enumerate() {
-        if i == 0 || line.split(',').next().and_then(|v| v.parse::<u64>().ok()).is_some_and(|v| v < cutoff) {
-            out.push_str(line);
-            out.push('\n');
-        }
-    }
-    write_atomic(path, out.as_bytes())
-}
-
-/// Appends whole lines to a CSV (header written on creation).
-struct CsvLog {
-    file: std::fs::File,
-    path: PathBuf,
-}
-
-impl CsvLog {
-    fn open(path: PathBuf, header: &str) -> Result<Self, TrainError> {
-        let fresh = !path.exists();
-        let mut file = std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(io_err(&path))?;
-        if fresh {
-            writeln!(file, "{header}").map_err(io_err(&path))?;
-        }
-        Ok(CsvLog { file, path })
-    }
-    fn row(&mut self, line: String) -> Result<(), TrainError> {
-        self.file.write_all(format!("{line}\n").as_bytes()).map_err(io_err(&self.path))
-    }
-}
-
 /// Validation: the greedy DEPs, decentralized, on the fixed generated validation maps at each
 /// validation CSP. Returns (mean steps, mean team return, completed, trials).
 pub fn validate_policy(cfg: &TrainConfig, registry: &PolicyRegistry, policy: &str) -> Result<(f64, f64, usize, usize), TrainError> {
@@ -740,12 +702,15 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
         Method::MadeNet => 2,
         Method::MadeNetDt => 1,
     };
-    truncate_csv(&run_dir.join("episodes.csv"), state.episode * per_iter)?;
-    truncate_csv(&run_dir.join("updates.csv"), state.updates)?;
-    truncate_csv(&run_dir.join("validation.csv"), state.episode * per_iter + 1)?;
-    let mut ep_log = CsvLog::open(run_dir.join("episodes.csv"), "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s")?;
-    let mut up_log = CsvLog::open(run_dir.join("updates.csv"), "update,cep_loss,dep_loss")?;
-    let mut val_log = CsvLog::open(run_dir.join("validation.csv"), "episode,updates,mean_steps,mean_team_reward,completed,trials")?;
+    // Logs keep what the checkpoint has seen; a resumed run appends from there.
+    let seen = state.episode * per_iter;
+    let log_path = |name: &str| run_dir.join(name);
+    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < seen)?;
+    truncate_rows::<UpdateRow>(&log_path(UpdateRow::FILE_NAME), |r| r.update < state.updates)?;
+    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= seen)?;
+    let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
+    let mut up_log = LogWriter::<UpdateRow>::open(log_path(UpdateRow::FILE_NAME))?;
+    let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
     let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
     let started = Instant::now();
     let wall0 = state.wall_s;
@@ -782,15 +747,17 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
             let actor = Actor::new(kind, actor_nets.clone(), epsilon, cfg.cen_explore, cfg.goals(), cfg.team(), stream(seed, "actor", 0));
             let ep = run_episode(spec, actor)?;
             let id = e * per_iter + k as u64;
-            ep_log.row(format!(
-                "{id},{},{csp},{},{},{},{epsilon},{},{:.3}",
-                kind.short(),
-                ep.len(),
-                ep.team_return,
-                ep.complete as u8,
-                state.updates,
-                wall(&started)
-            ))?;
+            ep_log.append(&EpisodeRow {
+                episode: id,
+                env: kind.into(),
+                csp,
+                steps: ep.len() as u32,
+                team_reward: ep.team_return,
+                complete: ep.complete,
+                epsilon: f64::from(epsilon),
+                updates: state.updates,
+                wall_s: wall(&started),
+            })?;
             tb.add_scalar(&format!("episode/{}_team_reward", kind.short()), ep.team_return as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             tb.add_scalar(&format!("episode/{}_steps", kind.short()), ep.len() as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             reward_sum += ep.team_return;
@@ -826,7 +793,7 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 if state.updates % cfg.target_update_every == 0 {
                     nets.sync_targets();
                 }
-                up_log.row(format!("{},{cep_loss},{dep_loss}", state.updates - 1))?;
+                up_log.append(&UpdateRow { update: state.updates - 1, cep_loss: cep_loss.into(), dep_loss: dep_loss.into() })?;
                 if cep_loss.is_finite() {
                     tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
                 }
@@ -839,7 +806,14 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
             model.register(&mut registry, "candidate", "the DEPs being trained");
             let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
             let id = state.episode * per_iter;
-            val_log.row(format!("{id},{},{steps},{ret},{done},{n}", state.updates))?;
+            val_log.append(&ValidationRow {
+                episode: id,
+                updates: state.updates,
+                mean_steps: steps,
+                mean_team_reward: ret,
+                completed: done as u32,
+                trials: n as u32,
+            })?;
             tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix()).map_err(io_err(run_dir))?;
             last_validation = Some(steps);
@@ -914,18 +888,6 @@ fn checkpoint(dir: &Path, nets: &Nets, state: &State, cen: &Replay, dec: &Replay
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn truncate_csv_keeps_header_and_earlier_complete_rows() {
-        let path = std::env::temp_dir().join(format!("madenet-truncate-{}.csv", std::process::id()));
-        std::fs::write(&path, "n,x\n0,a\n1,b\n2,c\n3,d\n4,e").unwrap();
-        truncate_csv(&path, 3).unwrap();
-        assert_eq!(std::fs::read_to_string(&path).unwrap(), "n,x\n0,a\n1,b\n2,c\n");
-        std::fs::write(&path, "n,x\n0,a\n1,b\n2,c\n3,d\n4,e").unwrap();
-        truncate_csv(&path, 10).unwrap();
-        assert_eq!(std::fs::read_to_string(&path).unwrap(), "n,x\n0,a\n1,b\n2,c\n3,d\n", "the torn last row goes");
-        std::fs::remove_file(&path).unwrap();
-    }
 
     #[test]
     fn epsilon_decays_linearly_then_stays() {

@@ -84,6 +84,17 @@ pub struct ValidationRow {
     pub trials: u32,
 }
 
+/// One gradient update: a row of `updates.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UpdateRow {
+    /// Index of the update in the run, from 0.
+    pub update: u64,
+    /// The CEP's loss (Eq. 5); NaN when no CEP is trained (MADE-Net-DT).
+    pub cep_loss: f64,
+    /// The DEPs' loss (Eq. 6), averaged over the DEP nets.
+    pub dep_loss: f64,
+}
+
 /// A row type of the training log: its file name, its header and the
 /// checks a row must pass besides parsing.
 pub trait LogRow: Serialize + DeserializeOwned {
@@ -151,6 +162,44 @@ impl LogRow for ValidationRow {
         }
         Ok(())
     }
+}
+
+impl LogRow for UpdateRow {
+    const FILE_NAME: &'static str = "updates.csv";
+    const HEADER: &'static str = "update,cep_loss,dep_loss";
+    const EXAMPLE: &'static str = "0,0,0";
+
+    fn check(&self) -> Result<(), String> {
+        if !self.cep_loss.is_nan() {
+            finite("cep_loss", self.cep_loss)?;
+        }
+        finite("dep_loss", self.dep_loss)
+    }
+}
+
+/// Rewrites the log at `path` (if it exists) with only the rows `keep` accepts — e.g. the rows
+/// a resumed run's checkpoint has seen; a row cut short at the end goes too. The new file
+/// replaces the old one atomically.
+///
+/// # Errors
+///
+/// As [`read_rows`], and [`TrainLogError::Io`] if the new file cannot be written.
+pub fn truncate_rows<R: LogRow>(path: &Path, keep: impl Fn(&R) -> bool) -> Result<(), TrainLogError> {
+    if !path.exists() {
+        return Ok(());
+    }
+    let rows: Vec<R> = read_rows(path)?;
+    let tmp = path.with_extension("tmp");
+    let io = |source| TrainLogError::Io { action: "write", path: tmp.clone(), source };
+    let mut file = File::create(&tmp).map_err(io)?;
+    file.write_all(format!("{}\n", R::HEADER).as_bytes()).map_err(io)?;
+    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(file);
+    for r in rows.iter().filter(|r| keep(r)) {
+        out.serialize(r).map_err(|e| io(std::io::Error::other(e.to_string())))?;
+    }
+    let file = out.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
+    file.sync_all().map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(|source| TrainLogError::Io { action: "replace", path: path.to_path_buf(), source })
 }
 
 /// Reads `episodes.csv` (see [`read_rows`]).
