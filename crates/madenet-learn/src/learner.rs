@@ -82,6 +82,25 @@ impl Sequences {
     }
 }
 
+/// The online net's Q over a batch (kept for the gradient) with its host copy, and the target
+/// net's Q on the host.
+struct Forward {
+    q: Tensor<3>,
+    outputs: usize,
+    qv: Vec<f32>,
+    qt: Vec<f32>,
+}
+
+fn forward_both(online: &QNet, target: &QNet, seq: &Sequences, p: &UpdateParams) -> Forward {
+    let (maps, obs) = seq.tensors(p, &online.devices()[0]);
+    let (q, _) = online.forward(maps, obs, None);
+    let outputs = q.dims()[2];
+    let qv = host(q.clone());
+    let (maps_t, obs_t) = seq.tensors(p, &crate::cpu());
+    let qt = host(target.forward(maps_t, obs_t, None).0);
+    Forward { q, outputs, qv, qt }
+}
+
 fn host(q: Tensor<3>) -> Vec<f32> {
     q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32")
 }
@@ -175,12 +194,7 @@ pub fn cep_update(
     p: &UpdateParams,
 ) -> (QNet, f32) {
     let (seq, next_mask) = cep_sequences(eps, p);
-    let (maps, obs) = seq.tensors(p, &online.devices()[0]);
-    let (q, _) = online.forward(maps, obs, None);
-    let outputs = q.dims()[2];
-    let qv = host(q.clone());
-    let (maps_t, obs_t) = seq.tensors(p, &crate::cpu());
-    let qt = host(target.forward(maps_t, obs_t, None).0);
+    let Forward { q, outputs, qv, qt } = forward_both(&online, target, &seq, p);
     let targets: Vec<f32> = (0..seq.batch * seq.time)
         .map(|idx| {
             let mut y = seq.rewards[idx];
@@ -264,12 +278,7 @@ pub fn dep_update(
         let outputs = q.dims()[2];
         (host(q), cseq.time, outputs)
     });
-    let (maps, obs) = seq.tensors(p, &online.devices()[0]);
-    let (q, _) = online.forward(maps, obs, None);
-    let outputs = q.dims()[2];
-    let qv = host(q.clone());
-    let (maps_t, obs_t) = seq.tensors(p, &crate::cpu());
-    let qt = host(target.forward(maps_t, obs_t, None).0);
+    let Forward { q, outputs, qv, qt } = forward_both(&online, target, &seq, p);
     let targets: Vec<f32> = (0..seq.batch * seq.time)
         .map(|idx| {
             let mut y = seq.rewards[idx];
