@@ -8,7 +8,8 @@
 //! * Actor: map history `[b, 4·history, H, W]` → C1 (k4 s2, 16) → C2 (k3 s2, 32) → flatten,
 //!   ‖ pose vector `[b, 2·team]` (own and teammates' last known positions, normalised, −1
 //!   unknown) → FC hidden → FC 8 sector logits.
-//! * Critic (robot i's): every robot's map history stacked `[b, team·4·history, H, W]` → the
+//! * Critic (robot i's): every robot's newest `critic_history` frames stacked
+//!   `[b, team·4·critic_history, H, W]` → the
 //!   same convolutions → flatten, ‖ every robot's action (`team · 8`, one-hot or soft) ‖ every
 //!   robot's pose vector (`team · 2·team`) → FC hidden → FC 1.
 
@@ -33,6 +34,11 @@ pub struct DmeConfig {
     /// Map frames stacked as input (the original: 6; ours 3 on a 20 × 20 world).
     #[config(default = 3)]
     pub history: usize,
+    /// The newest frames of each robot the critics see (ours: 1 — the critic is centralized
+    /// and sees every robot's map; the history serves the actors' partial view, and
+    /// three frames would triple the critics' convolution cost).
+    #[config(default = 1)]
+    pub critic_history: usize,
     /// Units of the hidden fully connected layer.
     #[config(default = 128)]
     pub hidden: usize,
@@ -47,6 +53,10 @@ impl DmeConfig {
     /// Channels of one robot's input: 4 map channels per frame.
     pub fn robot_channels(&self) -> usize {
         4 * self.history
+    }
+    /// Channels of one robot's frames in a critic's input.
+    pub fn critic_robot_channels(&self) -> usize {
+        4 * self.critic_history.clamp(1, self.history)
     }
     /// Length of a pose vector: every robot's (row, col).
     pub fn pose_len(&self) -> usize {
@@ -78,7 +88,7 @@ impl DmeConfig {
 
     /// Robot i's centralized critic.
     pub fn critic(&self, device: &Device) -> Critic {
-        let (c1, c2) = self.convs(self.team_size * self.robot_channels(), device);
+        let (c1, c2) = self.convs(self.team_size * self.critic_robot_channels(), device);
         let extra = self.team_size * SECTORS + self.team_size * self.pose_len();
         Critic {
             c1,
@@ -121,12 +131,22 @@ pub struct Critic {
 }
 
 impl Critic {
-    /// `maps` `[b, team·4·history, H, W]`, `actions` `[b, team·8]`, `poses` `[b, team·2·team]`
-    /// → Q `[b, 1]`.
+    /// `maps` `[b, team·4·critic_history, H, W]`, `actions` `[b, team·8]`, `poses`
+    /// `[b, team·2·team]` → Q `[b, 1]`.
     pub fn forward(&self, maps: Tensor<4>, actions: Tensor<2>, poses: Tensor<2>) -> Tensor<2> {
+        self.head(self.features(maps), actions, poses)
+    }
+
+    /// The convolutional trunk alone: flattened map features `[b, flat]` (the actors' update
+    /// reuses them, since only the action input changes).
+    pub fn features(&self, maps: Tensor<4>) -> Tensor<2> {
         let x = self.act.forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
-        let x: Tensor<2> = x.flatten(1, 3);
-        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![x, actions, poses], 1)));
+        x.flatten(1, 3)
+    }
+
+    /// Q from trunk features, actions and poses.
+    pub fn head(&self, features: Tensor<2>, actions: Tensor<2>, poses: Tensor<2>) -> Tensor<2> {
+        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![features, actions, poses], 1)));
         self.f2.forward(x)
     }
 }

@@ -5,7 +5,7 @@
 //! original code assigns cells straight above or below the robot to the opposite side's sector
 //! (a `tan = ±inf` quirk, see the design brief); here every direction has exactly one sector.
 
-use madenet_agent::Belief;
+use madenet_agent::{AgentView, Belief};
 use madenet_map::Pos;
 use madenet_nav::Dijkstra;
 
@@ -36,30 +36,58 @@ impl SectorGoals {
     }
 }
 
+/// The best frontier cell per sector among the cells a cost-ordered search settles.
+struct SectorBest {
+    from: Pos,
+    own: usize,
+    best: [Option<(u32, usize)>; SECTORS],
+}
+
+impl SectorBest {
+    fn visit(&mut self, belief: &Belief, i: usize, cost: u32) {
+        if i != self.own && belief.is_frontier_index(i) {
+            if let Some(k) = sector_of(self.from, belief.pos(i)) {
+                if self.best[k].is_none_or(|b| (cost, i) < b) {
+                    self.best[k] = Some((cost, i));
+                }
+            }
+        }
+    }
+    fn goals(self, belief: &Belief) -> SectorGoals {
+        SectorGoals { goals: self.best.map(|b| b.map(|(_, i)| belief.pos(i))) }
+    }
+}
+
 /// The sector goals of a robot at `from` with map `belief`. Paths go through known free cells
 /// not in `held` (teammates in view), like every other planner in madenet; the robot's own
 /// cell is never a goal.
 pub fn sector_goals(belief: &Belief, from: Pos, held: &[Pos], dijkstra: &mut Dijkstra) -> SectorGoals {
     let map = belief.map();
     let held: Vec<usize> = held.iter().filter(|p| belief.in_bounds(**p)).map(|&p| belief.index(p)).collect();
-    let own = belief.index(from);
-    let mut best: [Option<(u32, usize)>; SECTORS] = [None; SECTORS];
+    let mut best = SectorBest { from, own: belief.index(from), best: [None; SECTORS] };
     dijkstra.run_indexed(
         from,
         |i| map[i] == madenet_map::Occupancy::Free && !held.contains(&i),
         belief.movement(),
         |i, cost| {
-            if i != own && belief.is_frontier_index(i) {
-                if let Some(k) = sector_of(from, belief.pos(i)) {
-                    if best[k].is_none_or(|b| (cost, i) < b) {
-                        best[k] = Some((cost, i));
-                    }
-                }
-            }
+            best.visit(belief, i, cost);
             false
         },
     );
-    SectorGoals { goals: best.map(|b| b.map(|(_, i)| belief.pos(i))) }
+    best.goals(belief)
+}
+
+/// [`sector_goals`] of the robot a policy is deciding for, through its view's search (which
+/// treats the teammates it detects now as obstacles, and leaves the search tree for the
+/// navigator's path).
+pub fn view_sector_goals(view: &mut AgentView<'_>) -> SectorGoals {
+    let belief = view.belief;
+    let mut best = SectorBest { from: view.pos, own: belief.index(view.pos), best: [None; SECTORS] };
+    view.search(|i, cost| {
+        best.visit(belief, i, cost);
+        false
+    });
+    best.goals(belief)
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@ fn shapes_and_critic_learns_a_fixed_batch() {
     let logits = actor.forward(Tensor::<4>::ones([b, 12, 20, 20], &device), Tensor::<2>::zeros([b, 6], &device));
     assert_eq!(logits.dims(), [b, 8]);
     let mut critic = cfg.critic(&device);
-    let maps = Tensor::<4>::random([b, 36, 20, 20], burn::tensor::Distribution::Uniform(0.0, 1.0), &device);
+    let maps = Tensor::<4>::random([b, cfg.team_size * cfg.critic_robot_channels(), 20, 20], burn::tensor::Distribution::Uniform(0.0, 1.0), &device);
     let actions = Tensor::<2>::random([b, 24], burn::tensor::Distribution::Uniform(0.0, 1.0), &device);
     let poses = Tensor::<2>::random([b, 18], burn::tensor::Distribution::Uniform(-1.0, 1.0), &device);
     let target = Tensor::<2>::random([b, 1], burn::tensor::Distribution::Uniform(-1.0, 1.0), &device);

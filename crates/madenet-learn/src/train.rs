@@ -189,7 +189,8 @@ pub enum TrainError {
     Other(String),
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
+/// An I/O error naming `path`.
+pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
     move |e| TrainError::Io { path: path.display().to_string(), message: e.to_string() }
 }
 
@@ -576,7 +577,8 @@ impl Model {
     }
 }
 
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
+/// Writes `bytes` to `path` through a synced temporary file and a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
     let tmp = path.with_extension("tmp");
     let mut f = std::fs::File::create(&tmp).map_err(io_err(&tmp))?;
     f.write_all(bytes).and_then(|_| f.sync_all()).map_err(io_err(&tmp))?;
@@ -585,7 +587,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
 
 /// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
 /// half-written `dir`: the old one is moved to `dir.old` first and removed last.
-fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -> Result<(), TrainError> {
+pub fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -> Result<(), TrainError> {
     let tmp = dir.with_extension("tmp");
     let old = dir.with_extension("old");
     if tmp.exists() {

@@ -33,7 +33,7 @@ pub struct StudyConfig {
 impl Default for StudyConfig {
     fn default() -> Self {
         StudyConfig {
-            methods: ["nf", "ub", "pb", "made-net", "made-net-dt"].map(String::from).to_vec(),
+            methods: ["nf", "ub", "pb", "made-net", "made-net-dt", "dme-drl"].map(String::from).to_vec(),
             maps: vec!["paper".into()],
             starts: Corner::ALL.iter().map(|c| c.name().to_string()).collect(),
             csp: vec![0.0, 0.5, 0.8, 1.0],
@@ -87,11 +87,12 @@ impl StudyConfig {
     }
 
     /// The policy registry of the study: built-ins, the baselines with this config's
-    /// parameters and the shipped learned models (`made-net`, `made-net-dt`).
+    /// parameters and the shipped learned models (`made-net`, `made-net-dt`, `dme-drl`).
     pub fn registry(&self) -> Result<PolicyRegistry, StudyError> {
         let mut r = PolicyRegistry::builtin();
         madenet_baselines::register(&mut r, &self.baselines);
         madenet_learn::shipped::register(&mut r).map_err(|e| StudyError::Other(e.to_string()))?;
+        madenet_dme::shipped::register(&mut r).map_err(|e| StudyError::Other(e.to_string()))?;
         Ok(r)
     }
 

@@ -113,7 +113,7 @@ mod log;
 mod plot;
 mod tfevents;
 
-pub use log::{read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
+pub use log::{read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, UpdateRow, ValidationRow};
 pub use plot::{plot_training, DEFAULT_FIGURE, EWMA_ALPHA};
 pub use tfevents::{masked_crc32c, TfEventWriter, FILE_VERSION};
 

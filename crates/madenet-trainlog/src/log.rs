@@ -95,6 +95,17 @@ pub struct UpdateRow {
     pub dep_loss: f64,
 }
 
+/// One MADDPG update (DME-DRL): a row of `updates.csv` in a DME-DRL run directory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MaddpgUpdateRow {
+    /// Index of the update in the run, from 0.
+    pub update: u64,
+    /// The critics' TD loss, averaged over robots.
+    pub critic_loss: f64,
+    /// The actors' objective −Q, averaged over robots.
+    pub actor_loss: f64,
+}
+
 /// A row type of the training log: its file name, its header and the
 /// checks a row must pass besides parsing.
 pub trait LogRow: Serialize + DeserializeOwned {
@@ -174,6 +185,17 @@ impl LogRow for UpdateRow {
             finite("cep_loss", self.cep_loss)?;
         }
         finite("dep_loss", self.dep_loss)
+    }
+}
+
+impl LogRow for MaddpgUpdateRow {
+    const FILE_NAME: &'static str = "updates.csv";
+    const HEADER: &'static str = "update,critic_loss,actor_loss";
+    const EXAMPLE: &'static str = "0,0,0";
+
+    fn check(&self) -> Result<(), String> {
+        finite("critic_loss", self.critic_loss)?;
+        finite("actor_loss", self.actor_loss)
     }
 }
 

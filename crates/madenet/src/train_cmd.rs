@@ -1,11 +1,11 @@
-//! `madenet train`: trains MADE-Net (or MADE-Net-DT) into a run directory, with a progress bar;
+//! `madenet train`: trains MADE-Net, MADE-Net-DT or DME-DRL into a run directory, with a progress bar;
 //! `--resume DIR` continues a run from its last checkpoint.
 
 use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use madenet_learn::{Method, TrainConfig};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct TrainArgs {
@@ -18,7 +18,7 @@ pub struct TrainArgs {
     /// Resume the run in this directory from its last checkpoint (with its saved config).
     #[arg(long)]
     resume: Option<PathBuf>,
-    /// Train this method instead of the config's (`made-net` or `made-net-dt`).
+    /// Train this method instead of the config's (`made-net`, `made-net-dt` or `dme-drl`).
     #[arg(long)]
     method: Option<String>,
     /// Override the config's episodes per environment.
@@ -38,7 +38,26 @@ pub struct TrainArgs {
     quiet: bool,
 }
 
+/// The `method` key of a training config file, if it has one.
+fn method_of(path: &Path) -> Result<Option<String>> {
+    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let value: toml::Table = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+    Ok(value.get("method").and_then(|m| m.as_str()).map(str::to_string))
+}
+
 pub fn run(a: TrainArgs) -> Result<()> {
+    // Which learner: --method, else the config's (the run's own on --resume), else MADE-Net.
+    let source = a.resume.as_ref().map(|d| d.join("config.toml")).or_else(|| a.config.clone());
+    let from_file = match &source {
+        Some(p) if p.exists() => method_of(p)?,
+        _ => None,
+    };
+    if a.resume.is_none() && a.method.as_deref().or(from_file.as_deref()) == Some(madenet_dme::train::METHOD) {
+        return run_dme(a);
+    }
+    if a.resume.is_some() && from_file.as_deref() == Some(madenet_dme::train::METHOD) {
+        return run_dme(a);
+    }
     let (dir, cfg) = match (&a.out, &a.resume) {
         (_, Some(dir)) => {
             if !dir.join("config.toml").exists() {
@@ -70,7 +89,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
                 cfg.method = match m.as_str() {
                     "made-net" => Method::MadeNet,
                     "made-net-dt" => Method::MadeNetDt,
-                    other => bail!("--method `{other}`: expected made-net or made-net-dt"),
+                    other => bail!("--method `{other}`: expected made-net, made-net-dt or dme-drl"),
                 };
             }
             if let Some(e) = a.episodes {
@@ -90,12 +109,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         }
         (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
     };
-    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} episodes  {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
+    let bar = progress_bar(a.quiet);
     let mut on_progress = |p: &madenet_learn::Progress| {
         bar.set_length(p.episodes);
         bar.set_position(p.episode);
@@ -103,6 +117,64 @@ pub fn run(a: TrainArgs) -> Result<()> {
         bar.set_message(format!("ε {:.2}  reward {:.0}  steps {:.0}  updates {}{val}", p.epsilon, p.team_reward, p.steps, p.updates));
     };
     madenet_learn::train(&dir, cfg, &mut on_progress)?;
+    bar.finish();
+    out!("{}", dir.display())?;
+    Ok(())
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} episodes  {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+/// `madenet train --method dme-drl` (or a DME-DRL config or run directory).
+fn run_dme(a: TrainArgs) -> Result<()> {
+    use madenet_dme::train::DmeTrainConfig;
+    let (dir, cfg) = match (&a.out, &a.resume) {
+        (_, Some(dir)) => {
+            if a.config.is_some() || a.method.is_some() || a.seed.is_some() || a.threads.is_some() {
+                bail!("--resume continues with the run's saved config; only --episodes and --max-minutes may extend it");
+            }
+            let cfg = if a.episodes.is_some() || a.max_minutes.is_some() {
+                let mut cfg = DmeTrainConfig::from_toml_file(&dir.join("config.toml"))?;
+                cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
+                cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
+                Some(cfg)
+            } else {
+                None
+            };
+            (dir.clone(), cfg)
+        }
+        (Some(dir), None) => {
+            if dir.join("config.toml").exists() {
+                bail!("{}: already holds a training run; use --resume {0} or another --out", dir.display());
+            }
+            let mut cfg = match &a.config {
+                Some(p) => DmeTrainConfig::from_toml_file(p)?,
+                None => DmeTrainConfig::default(),
+            };
+            cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
+            cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
+            cfg.seed = a.seed.unwrap_or(cfg.seed);
+            cfg.threads = a.threads.unwrap_or(cfg.threads);
+            cfg.validate().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
+            (dir.clone(), Some(cfg))
+        }
+        (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
+    };
+    let bar = progress_bar(a.quiet);
+    let mut on_progress = |p: &madenet_dme::train::Progress| {
+        bar.set_length(p.episodes);
+        bar.set_position(p.episode);
+        let val = p.validation_steps.map_or(String::new(), |v| format!("  val steps {v:.1}"));
+        bar.set_message(format!("reward {:.2}  steps {}  updates {}{val}", p.reward, p.steps, p.updates));
+    };
+    madenet_dme::train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
     out!("{}", dir.display())?;
     Ok(())

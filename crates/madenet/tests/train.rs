@@ -69,3 +69,36 @@ fn bad_training_input_is_one_line() {
     assert!(e.contains("made-net") && e.contains("3 robots"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+const TINY_DME: &str = "method = \"dme-drl\"\nepisodes = 2\nbatch_size = 4\nreplay_steps = 100\nwarmup_steps = 8\nupdate_every = 4\nhidden = 16\nvalidate_every = 2\nvalidation_maps = 1\nvalidation_csp = [0.5]\ncheckpoint_every = 1\nthreads = 1\n[scenario]\nstep_cap = 25\n";
+
+#[test]
+fn dme_drl_tiny_run_resume_model_and_bad_input() {
+    let dir = scratch("dme");
+    let cfg = dir.join("tiny-dme.toml");
+    std::fs::write(&cfg, TINY_DME).unwrap();
+    let run = dir.join("run");
+    let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
+    // The config's `method` picks the learner; --method dme-drl says the same.
+    let o = madenet(&["train", "--config", c, "--out", r, "--method", "dme-drl", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let updates = std::fs::read_to_string(run.join("updates.csv")).unwrap();
+    assert!(updates.starts_with("update,critic_loss,actor_loss"), "{updates}");
+    let o = madenet(&["train", "--resume", r, "--episodes", "3", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 3);
+    let o = madenet(&["plot-training", r]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = madenet(&["run", "--map", "generate:2", "--policy", "model", "--model", run.join("last").to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
+    // Bad DME-DRL input: the file and field named, exit 2.
+    let bad = dir.join("bad-dme.toml");
+    std::fs::write(&bad, "method = \"dme-drl\"\ntau = 0.0\n").unwrap();
+    let e = error_line(&madenet(&["train", "--config", bad.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]));
+    assert!(e.contains("bad-dme.toml") && e.contains("tau"), "{e}");
+    std::fs::write(&bad, "method = \"dme-drl\"\ntrace_len = 4\n").unwrap();
+    let e = error_line(&madenet(&["train", "--config", bad.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]));
+    assert!(e.contains("bad-dme.toml") && e.contains("trace_len"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

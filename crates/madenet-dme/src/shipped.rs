@@ -1,0 +1,28 @@
+//! The shipped DME-DRL model (`models/dme-drl/`), compiled into the binary so that
+//! `madenet run --policy dme-drl` and `madenet compare` work from any directory. How it was
+//! trained (config, command, wall time, validation) is in `models/README.md`.
+
+use crate::train::Model;
+use madenet_learn::TrainError;
+use madenet_sim::PolicyRegistry;
+
+/// The policy name of the shipped model.
+pub const NAME: &str = "dme-drl";
+const ABOUT: &str = "DME-DRL (shipped model): MADDPG actors choosing a frontier sector every step";
+const MODEL_TOML: &str = include_str!("../../../models/dme-drl/model.toml");
+const ACTORS: [&[u8]; 3] = [
+    include_bytes!("../../../models/dme-drl/actor0.bpk"),
+    include_bytes!("../../../models/dme-drl/actor1.bpk"),
+    include_bytes!("../../../models/dme-drl/actor2.bpk"),
+];
+
+/// Loads the shipped model.
+pub fn model() -> Result<Model, TrainError> {
+    Model::from_bytes(MODEL_TOML, &ACTORS, "models/dme-drl/model.toml")
+}
+
+/// Registers the shipped model as policy `dme-drl`.
+pub fn register(registry: &mut PolicyRegistry) -> Result<(), TrainError> {
+    model()?.register(registry, NAME, ABOUT);
+    Ok(())
+}

@@ -1,0 +1,765 @@
+//! `madenet train --method dme-drl`: MADDPG on episodes of the real simulator, read top to
+//! bottom in [`train`].
+//!
+//! Each episode is a generated map (never the paper's) with the team started together and the
+//! CSP drawn from U(0, 1), so the actors meet every communication condition of the study. Every
+//! robot runs [`DmePolicy`] sampling from its actor; every timestep is stored (frames, poses,
+//! masks, actions in force, who decided, per-robot rewards), and a robot's transitions run from
+//! one of its decisions to its next. Every `update_every` timesteps one MADDPG update
+//! ([`crate::maddpg`]) runs on a minibatch per robot from the replay of the last
+//! `replay_steps` timesteps, and the acting actors get the new weights. Validation runs the
+//! greedy actors on the same generated validation maps as `madenet train`'s MADE-Net runs; the
+//! best weights go to `best/`, the latest to `last/`, and a checkpoint (networks, Adam states,
+//! replay, counters) lets a killed run resume exactly where it stopped.
+//!
+//! Rewards (design brief §2, scaled to the grid): `r_i = new_cell_reward · (cells robot i
+//! observed that it had not known) − move_cost · (cells it moved)`, individual, with no
+//! interaction term — as the MADE-Net paper describes DME-DRL. An episode ends when the map is
+//! explored or at the step cap; both end the bootstrap (the nets have no time input).
+
+use crate::maddpg::{Batch, Maddpg, UpdateParams};
+use crate::nets::DmeConfig;
+use crate::obs::{history_step, FRAME_CHANNELS};
+use crate::policy::{DmePolicy, Recorder, SharedActor};
+use crate::SECTORS;
+use burn::module::Module;
+use burn::store::ModuleRecord;
+use burn::tensor::Device;
+use madenet_learn::train::{io_err, replace_dir, training_scenario, validate_policy, write_atomic};
+use madenet_learn::{TrainConfig, TrainError};
+use madenet_sim::rewards::RewardConfig;
+use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, ValidationRow};
+use madenet_world::rng::{derive_seed, stream};
+use madenet_world::ScenarioConfig;
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::{Arc, Mutex, RwLock};
+use std::time::Instant;
+
+/// The registry name of the method.
+pub const METHOD: &str = "dme-drl";
+
+/// Every knob of a DME-DRL training run (`configs/train-dme.toml` holds the defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DmeTrainConfig {
+    /// Always `dme-drl` (tells `madenet train --resume` which learner a run directory needs).
+    pub method: String,
+    /// Master seed of every stream.
+    pub seed: u64,
+    /// Episodes to play (the original: 200 000).
+    pub episodes: u64,
+    /// Stop (with a checkpoint) after this many minutes of wall time; 0 = no limit.
+    pub max_minutes: f64,
+    /// The simulated world; its `comm_success_prob` is unused (drawn per episode from U(0, 1)).
+    pub scenario: ScenarioConfig,
+    /// Training map size and obstacle density range (as MADE-Net's: 20 × 20, 40–60 %).
+    pub map_height: usize,
+    pub map_width: usize,
+    pub density_min: f64,
+    pub density_max: f64,
+    /// Frames of map history in an actor's input (the original: 6 frames of 100 × 100).
+    pub history: usize,
+    /// Newest frames per robot in the critics' input ([`DmeConfig::critic_history`]).
+    pub critic_history: usize,
+    /// Hidden units of the actors' and critics' fully connected layer.
+    pub hidden: usize,
+    /// Reward per newly observed cell (the original: 2e-5 per pixel ≈ 2e-3 per cell).
+    pub new_cell_reward: f64,
+    /// Cost per cell moved (the original: 1e-3 per pixel ≈ 1e-2 per cell).
+    pub move_cost: f64,
+    /// γ per timestep (the original: 0.95).
+    pub gamma: f32,
+    /// Soft target update rate (the original: 0.01).
+    pub tau: f32,
+    /// Adam step sizes (the original: 1e-3).
+    pub actor_lr: f64,
+    pub critic_lr: f64,
+    /// Gumbel-softmax temperature (the original: 1).
+    pub temperature: f32,
+    /// λ of the actors' logit penalty (MADDPG's reference code: 1e-3).
+    pub logit_penalty: f32,
+    /// Transitions per minibatch (the original: 100).
+    pub batch_size: usize,
+    /// Timesteps kept in the replay (the original: 5 000 transitions of whole-path steps).
+    pub replay_steps: usize,
+    /// Timesteps in the replay before the first update.
+    pub warmup_steps: usize,
+    /// One update every this many timesteps (the original: 10 environment steps).
+    pub update_every: u64,
+    /// Validate every this many episodes; 0 = never.
+    pub validate_every: u64,
+    /// Generated validation maps (fixed by `seed`, never the paper's) and their CSPs.
+    pub validation_maps: usize,
+    pub validation_csp: Vec<f64>,
+    /// Checkpoint every this many episodes.
+    pub checkpoint_every: u64,
+    /// Learner threads (burn's CPU kernels run on this rayon pool).
+    pub threads: usize,
+}
+
+impl Default for DmeTrainConfig {
+    fn default() -> Self {
+        DmeTrainConfig {
+            method: METHOD.into(),
+            seed: 1,
+            episodes: 20_000,
+            max_minutes: 55.0,
+            scenario: ScenarioConfig::default(),
+            map_height: 20,
+            map_width: 20,
+            density_min: 0.40,
+            density_max: 0.60,
+            history: 3,
+            critic_history: 1,
+            hidden: 128,
+            new_cell_reward: 2e-3,
+            move_cost: 1e-2,
+            gamma: 0.95,
+            tau: 0.01,
+            actor_lr: 1e-3,
+            critic_lr: 1e-3,
+            temperature: 1.0,
+            logit_penalty: 1e-3,
+            batch_size: 100,
+            replay_steps: 5_000,
+            warmup_steps: 1_000,
+            update_every: 10,
+            validate_every: 100,
+            validation_maps: 12,
+            validation_csp: vec![1.0, 0.5, 0.0],
+            checkpoint_every: 100,
+            threads: 2,
+        }
+    }
+}
+
+impl DmeTrainConfig {
+    /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
+    pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
+        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+        let cfg: DmeTrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config { path: path.display().to_string(), message: toml_error(&text, &e) })?;
+        cfg.validate().map_err(|m| TrainError::Config { path: path.display().to_string(), message: m })?;
+        Ok(cfg)
+    }
+
+    /// One message naming the first bad field.
+    pub fn validate(&self) -> Result<(), String> {
+        let bad = |field: &str, why: &str| Err(format!("field `{field}`: {why}"));
+        if self.method != METHOD {
+            return bad("method", &format!("must be `{METHOD}` here (MADE-Net runs use `madenet train --method made-net`)"));
+        }
+        if self.history == 0 {
+            return bad("history", "must be at least 1");
+        }
+        if self.critic_history == 0 || self.critic_history > self.history {
+            return bad("critic_history", "must lie in 1..=history");
+        }
+        if self.hidden == 0 {
+            return bad("hidden", "must be at least 1");
+        }
+        if !(0.0..=1.0).contains(&self.gamma) {
+            return bad("gamma", "must lie in [0, 1]");
+        }
+        if !(self.tau > 0.0 && self.tau <= 1.0) {
+            return bad("tau", "must lie in (0, 1]");
+        }
+        if !(self.actor_lr > 0.0 && self.critic_lr > 0.0) {
+            return bad(if self.actor_lr > 0.0 { "critic_lr" } else { "actor_lr" }, "must be positive");
+        }
+        if self.temperature <= 0.0 || !self.temperature.is_finite() {
+            return bad("temperature", "must be positive");
+        }
+        if self.logit_penalty < 0.0 {
+            return bad("logit_penalty", "must not be negative");
+        }
+        if self.batch_size == 0 {
+            return bad("batch_size", "must be at least 1");
+        }
+        if self.replay_steps < self.batch_size {
+            return bad("replay_steps", "must hold at least one batch");
+        }
+        if self.update_every == 0 {
+            return bad("update_every", "must be at least 1");
+        }
+        if self.checkpoint_every == 0 {
+            return bad("checkpoint_every", "must be at least 1");
+        }
+        if self.threads == 0 {
+            return bad("threads", "must be at least 1");
+        }
+        if !(self.max_minutes >= 0.0) {
+            return bad("max_minutes", "must be 0 (no limit) or positive");
+        }
+        if self.validation_csp.iter().any(|c| !(0.0..=1.0).contains(c)) {
+            return bad("validation_csp", "CSPs lie in [0, 1]");
+        }
+        // Maps, densities and the scenario are checked as MADE-Net's are.
+        self.learn_view().validate()
+    }
+
+    /// The networks' sizes.
+    pub fn nets(&self) -> DmeConfig {
+        DmeConfig::new()
+            .with_map_height(self.map_height)
+            .with_map_width(self.map_width)
+            .with_team_size(self.scenario.num_robots)
+            .with_history(self.history)
+            .with_critic_history(self.critic_history)
+            .with_hidden(self.hidden)
+    }
+
+    /// The fields MADE-Net's trainer shares with this one (map generation, validation set), as
+    /// its config — the two methods train and validate on the same generated maps.
+    pub fn learn_view(&self) -> TrainConfig {
+        TrainConfig {
+            seed: self.seed,
+            scenario: self.scenario.clone(),
+            map_height: self.map_height,
+            map_width: self.map_width,
+            density_min: self.density_min,
+            density_max: self.density_max,
+            validation_maps: self.validation_maps,
+            validation_csp: self.validation_csp.clone(),
+            threads: self.threads,
+            ..TrainConfig::default()
+        }
+    }
+
+    fn update_params(&self) -> UpdateParams {
+        UpdateParams {
+            tau: self.tau,
+            actor_lr: self.actor_lr,
+            critic_lr: self.critic_lr,
+            temperature: self.temperature,
+            logit_penalty: self.logit_penalty,
+        }
+    }
+}
+
+/// A TOML error on one line: the line number and text it points at, and the message.
+fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    match e.span() {
+        Some(span) => {
+            let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+            let src = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!("line {line} (`{src}`): {}", e.message())
+        }
+        None => e.message().to_string(),
+    }
+}
+
+/// One played episode, as the replay keeps it: per timestep and robot the frame (bit-packed),
+/// pose vector, valid sectors, action in force, whether it decided, and its reward.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Episode {
+    team: usize,
+    /// u64 words per packed frame.
+    words: usize,
+    frames: Vec<u64>,
+    poses: Vec<f32>,
+    /// Bit k set: sector k valid.
+    masks: Vec<u8>,
+    /// Sector in force, or [`NO_ACTION`].
+    actions: Vec<u8>,
+    decided: Vec<bool>,
+    rewards: Vec<f32>,
+    /// Per robot, the timesteps at which it chose a sector: its transitions start there.
+    decisions: Vec<Vec<u32>>,
+    steps: usize,
+    pub complete: bool,
+}
+
+/// The stored action of a robot that had no valid sector (it stayed).
+pub const NO_ACTION: u8 = u8::MAX;
+
+impl Episode {
+    fn new(team: usize) -> Self {
+        Episode { team, decisions: vec![Vec::new(); team], ..Episode::default() }
+    }
+    /// Timesteps played.
+    pub fn len(&self) -> usize {
+        self.steps
+    }
+    pub fn is_empty(&self) -> bool {
+        self.steps == 0
+    }
+    fn push(&mut self, records: &[crate::policy::StepRecord], rewards: &[f32]) {
+        for (i, r) in records.iter().enumerate() {
+            let words = madenet_learn::obs::pack_bits(&r.frame);
+            self.words = words.len();
+            self.frames.extend(words);
+            self.poses.extend(&r.pose);
+            self.masks.push(r.mask.iter().enumerate().fold(0u8, |m, (k, &v)| m | ((v as u8) << k)));
+            self.actions.push(r.action.unwrap_or(NO_ACTION));
+            self.decided.push(r.decided);
+            if r.decided && r.action.is_some() {
+                self.decisions[i].push(self.steps as u32);
+            }
+        }
+        self.rewards.extend(rewards);
+        self.steps += 1;
+    }
+    /// Sum of all robots' rewards.
+    pub fn team_return(&self) -> f64 {
+        self.rewards.iter().map(|&r| f64::from(r)).sum()
+    }
+}
+
+/// The replay: whole episodes, the oldest dropped once more than `capacity` timesteps.
+#[derive(Default, Serialize, Deserialize)]
+struct Replay {
+    episodes: VecDeque<Episode>,
+    steps: usize,
+}
+
+impl Replay {
+    fn push(&mut self, e: Episode, capacity: usize) {
+        self.steps += e.len();
+        self.episodes.push_back(e);
+        while self.steps > capacity && self.episodes.len() > 1 {
+            let old = self.episodes.pop_front().expect("non-empty");
+            self.steps -= old.len();
+        }
+    }
+
+    /// Robot i's transitions in the replay.
+    fn transitions(&self, robot: usize) -> usize {
+        self.episodes.iter().map(|e| e.decisions[robot].len()).sum()
+    }
+
+    /// `n` of robot `robot`'s transitions drawn uniformly (with replacement), as a [`Batch`].
+    fn sample(&self, robot: usize, n: usize, cfg: &DmeConfig, gamma: f32, rng: &mut madenet_world::rng::Rng) -> Batch {
+        let team = cfg.team_size;
+        let frame_len = FRAME_CHANNELS * cfg.map_height * cfg.map_width;
+        let robot_len = cfg.history * frame_len;
+        let pose_len = cfg.pose_len();
+        let mut b = Batch {
+            size: n,
+            maps: vec![0.0; n * team * robot_len],
+            next_maps: vec![0.0; n * team * robot_len],
+            poses: Vec::with_capacity(n * team * pose_len),
+            next_poses: Vec::with_capacity(n * team * pose_len),
+            actions: vec![0.0; n * team * SECTORS],
+            next_actions: vec![0.0; n * team * SECTORS],
+            masks: vec![0.0; n * team * SECTORS],
+            next_masks: vec![0.0; n * team * SECTORS],
+            next_deciding: vec![0.0; n * team],
+            rewards: Vec::with_capacity(n),
+            discounts: Vec::with_capacity(n),
+        };
+        let total = self.transitions(robot);
+        for k in 0..n {
+            let mut g = rng.random_range(0..total);
+            let e = self
+                .episodes
+                .iter()
+                .find(|e| g < e.decisions[robot].len() || {
+                    g -= e.decisions[robot].len();
+                    false
+                })
+                .expect("index within the replay");
+            let t = e.decisions[robot][g] as usize;
+            let next = e.decisions[robot].get(g + 1).map(|&s| s as usize);
+            let end = next.unwrap_or(e.len());
+            let (mut ret, mut disc) = (0.0f32, 1.0f32);
+            for s in t..end {
+                ret += disc * e.rewards[s * team + robot];
+                disc *= gamma;
+            }
+            b.rewards.push(ret);
+            b.discounts.push(if next.is_some() { disc } else { 0.0 });
+            let at_next = next.unwrap_or(t);
+            for (step, maps, poses, masks, actions) in [
+                (t, &mut b.maps, &mut b.poses, &mut b.masks, &mut b.actions),
+                (at_next, &mut b.next_maps, &mut b.next_poses, &mut b.next_masks, &mut b.next_actions),
+            ] {
+                for i in 0..team {
+                    for slot in 0..cfg.history {
+                        let s = history_step(step, cfg.history, slot);
+                        let at = ((k * team + i) * cfg.history + slot) * frame_len;
+                        let words = &e.frames[(s * team + i) * e.words..][..e.words];
+                        madenet_learn::obs::unpack_bits(words, &mut maps[at..at + frame_len]);
+                    }
+                    let m = e.masks[step * team + i];
+                    for a in 0..SECTORS {
+                        masks[(k * team + i) * SECTORS + a] = ((m >> a) & 1) as f32;
+                    }
+                    let a = e.actions[step * team + i];
+                    if a != NO_ACTION {
+                        actions[(k * team + i) * SECTORS + a as usize] = 1.0;
+                    }
+                }
+                poses.extend(&e.poses[step * team * pose_len..(step + 1) * team * pose_len]);
+            }
+            for i in 0..team {
+                b.next_deciding[k * team + i] = e.decided[at_next * team + i] as u8 as f32;
+            }
+        }
+        b
+    }
+}
+
+/// What [`train`] reports after each episode (for a progress bar).
+#[derive(Clone, Debug)]
+pub struct Progress {
+    pub episode: u64,
+    pub episodes: u64,
+    pub updates: u64,
+    /// The episode's summed reward and steps.
+    pub reward: f64,
+    pub steps: usize,
+    pub validation_steps: Option<f64>,
+}
+
+/// Counters saved with a checkpoint.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct State {
+    episode: u64,
+    /// Timesteps played.
+    steps: u64,
+    updates: u64,
+    best_validation: Option<f64>,
+    wall_s: f64,
+}
+
+/// The trained actors as shipped: `model.toml` and one weight file per robot.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelInfo {
+    pub method: String,
+    pub map_height: usize,
+    pub map_width: usize,
+    pub team_size: usize,
+    pub history: usize,
+    pub hidden: usize,
+    pub actors: Vec<String>,
+    pub episode: u64,
+    pub updates: u64,
+    pub validation_steps: Option<f64>,
+}
+
+/// A loaded DME-DRL model: one actor per robot on the plain CPU device.
+#[derive(Clone)]
+pub struct Model {
+    pub info: ModelInfo,
+    pub actors: Vec<SharedActor>,
+}
+
+impl Model {
+    /// Loads `dir/model.toml` and its actors.
+    pub fn load(dir: &Path) -> Result<Self, TrainError> {
+        let path = dir.join("model.toml");
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let info: ModelInfo = toml::from_str(&text).map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
+        let mut files = Vec::new();
+        for f in &info.actors {
+            let p = dir.join(f);
+            files.push(std::fs::read(&p).map_err(io_err(&p))?);
+        }
+        Self::from_parts(info, files, &path.display().to_string())
+    }
+
+    /// A model from the text of its `model.toml` and its actors' bytes in order.
+    pub fn from_bytes(model_toml: &str, weights: &[&[u8]], label: &str) -> Result<Self, TrainError> {
+        let info: ModelInfo = toml::from_str(model_toml).map_err(|e| TrainError::Config { path: label.to_string(), message: e.message().to_string() })?;
+        Self::from_parts(info, weights.iter().map(|w| w.to_vec()).collect(), label)
+    }
+
+    fn from_parts(info: ModelInfo, files: Vec<Vec<u8>>, label: &str) -> Result<Self, TrainError> {
+        if info.method != METHOD {
+            return Err(TrainError::Config { path: label.into(), message: format!("field `method`: `{}` is not a DME-DRL model", info.method) });
+        }
+        if files.len() != info.team_size || files.len() != info.actors.len() {
+            return Err(TrainError::Config { path: label.into(), message: format!("field `actors`: {} weight files for a team of {}", files.len(), info.team_size) });
+        }
+        let cfg = DmeConfig::new()
+            .with_map_height(info.map_height)
+            .with_map_width(info.map_width)
+            .with_team_size(info.team_size)
+            .with_history(info.history)
+            .with_hidden(info.hidden);
+        let mut actors = Vec::new();
+        for (name, bytes) in info.actors.iter().zip(files) {
+            let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
+                .map_err(|e| TrainError::Io { path: format!("{label}: {name}"), message: e.to_string() })?;
+            actors.push(Arc::new(RwLock::new(cfg.actor(&Device::flex()).load_record(rec))));
+        }
+        Ok(Model { info, actors })
+    }
+
+    /// Why this model cannot act in a scenario, if it cannot.
+    pub fn check(&self, height: usize, width: usize, scenario: &ScenarioConfig) -> Result<(), String> {
+        let i = &self.info;
+        if (height, width, scenario.num_robots) != (i.map_height, i.map_width, i.team_size) {
+            return Err(format!(
+                "the model was trained for {}×{} maps and {} robots; this scenario has {height}×{width} and {} robots (train one for it with `madenet train --method dme-drl`)",
+                i.map_height, i.map_width, i.team_size, scenario.num_robots
+            ));
+        }
+        Ok(())
+    }
+
+    /// Registers this model as policy `name` (greedy actors, robot i runs actor i).
+    pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
+        let actors = self.actors.clone();
+        let history = self.info.history;
+        let owned = name.to_string();
+        let info = Model { info: self.info.clone(), actors: Vec::new() };
+        registry.register_checked(name, about, move |ctx| info.check(ctx.height, ctx.width, ctx.config), move |ctx| {
+            let actor = Arc::clone(&actors[ctx.robot.min(actors.len() - 1)]);
+            Box::new(DmePolicy::new(&owned, ctx.robot, actor, history))
+        });
+    }
+}
+
+fn model_info(cfg: &DmeTrainConfig, state: &State, validation_steps: Option<f64>) -> ModelInfo {
+    ModelInfo {
+        method: METHOD.into(),
+        map_height: cfg.map_height,
+        map_width: cfg.map_width,
+        team_size: cfg.scenario.num_robots,
+        history: cfg.history,
+        hidden: cfg.hidden,
+        actors: (0..cfg.scenario.num_robots).map(|i| format!("actor{i}.bpk")).collect(),
+        episode: state.episode,
+        updates: state.updates,
+        validation_steps,
+    }
+}
+
+fn save_err<E: std::fmt::Display>(p: &Path) -> impl FnOnce(E) -> TrainError + '_ {
+    move |e| TrainError::Io { path: p.display().to_string(), message: e.to_string() }
+}
+
+/// Writes the actors and `model.toml` into `dir`, atomically.
+fn save_model(dir: &Path, nets: &Maddpg, info: &ModelInfo) -> Result<(), TrainError> {
+    replace_dir(dir, |tmp| {
+        for (i, name) in info.actors.iter().enumerate() {
+            let p = tmp.join(name);
+            nets.acting_actor(i).into_record().save(&p).map_err(save_err(&p))?;
+        }
+        let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&tmp.join("model.toml"), text.as_bytes())
+    })
+}
+
+/// Everything a resumed run needs: networks, targets, Adam states, replay, counters.
+fn checkpoint(dir: &Path, nets: &Maddpg, state: &State, replay: &Replay) -> Result<(), TrainError> {
+    replace_dir(dir, |tmp| {
+        for i in 0..nets.actors.len() {
+            let files: [(String, ModuleRecord); 4] = [
+                (format!("actor{i}"), nets.actors[i].clone().into_record()),
+                (format!("critic{i}"), nets.critics[i].clone().into_record()),
+                (format!("actor{i}_target"), nets.target_actors[i].clone().into_record()),
+                (format!("critic{i}_target"), nets.target_critics[i].clone().into_record()),
+            ];
+            for (stem, rec) in files {
+                let p = tmp.join(format!("{stem}.bpk"));
+                rec.save(&p).map_err(save_err(&p))?;
+            }
+            for (stem, op) in [(format!("actor{i}_optim"), &nets.actor_optims[i]), (format!("critic{i}_optim"), &nets.critic_optims[i])] {
+                let p = tmp.join(format!("{stem}.bpk"));
+                op.save(&p).map_err(save_err(&p))?;
+            }
+        }
+        let bytes = postcard::to_stdvec(replay).map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
+        write_atomic(&tmp.join("replay.bin"), &bytes)?;
+        let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&tmp.join("state.json"), text.as_bytes())
+    })
+}
+
+fn restore(dir: &Path, mut nets: Maddpg) -> Result<(Maddpg, State, Replay), TrainError> {
+    let rec = |stem: &str| -> Result<ModuleRecord, TrainError> {
+        let p = dir.join(format!("{stem}.bpk"));
+        ModuleRecord::load(&p).map_err(save_err(&p))
+    };
+    for i in 0..nets.actors.len() {
+        nets.actors[i] = nets.actors[i].clone().load_record(rec(&format!("actor{i}"))?);
+        nets.critics[i] = nets.critics[i].clone().load_record(rec(&format!("critic{i}"))?);
+        nets.target_actors[i] = nets.target_actors[i].clone().load_record(rec(&format!("actor{i}_target"))?);
+        nets.target_critics[i] = nets.target_critics[i].clone().load_record(rec(&format!("critic{i}_target"))?);
+        for (stem, op) in [(format!("actor{i}_optim"), &mut nets.actor_optims[i]), (format!("critic{i}_optim"), &mut nets.critic_optims[i])] {
+            let p = dir.join(format!("{stem}.bpk"));
+            let loaded = std::mem::replace(op, burn::optim::AdamConfig::new().init()).load(&p).map_err(save_err(&p))?;
+            *op = loaded;
+        }
+    }
+    let sp = dir.join("state.json");
+    let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
+    let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config { path: sp.display().to_string(), message: e.to_string() })?;
+    let rp = dir.join("replay.bin");
+    let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
+    let replay: Replay = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config { path: rp.display().to_string(), message: e.to_string() })?;
+    Ok((nets, state, replay))
+}
+
+/// Validation: the greedy actors on the generated validation maps. Returns (mean steps, mean
+/// team return (Eq. 8, for comparison with MADE-Net's runs), completed, trials).
+pub fn validate(cfg: &DmeTrainConfig, nets: &Maddpg) -> Result<(f64, f64, usize, usize), TrainError> {
+    let model = Model {
+        info: model_info(cfg, &State::default(), None),
+        actors: (0..nets.actors.len()).map(|i| Arc::new(RwLock::new(nets.acting_actor(i)))).collect(),
+    };
+    let mut registry = PolicyRegistry::default();
+    model.register(&mut registry, "candidate", "the actors being trained");
+    validate_policy(&cfg.learn_view(), &registry, "candidate")
+}
+
+/// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
+/// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`).
+pub fn train(run_dir: &Path, cfg: Option<DmeTrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
+    let cfg_path = run_dir.join("config.toml");
+    let ckpt_dir = run_dir.join("checkpoint");
+    if !ckpt_dir.exists() && ckpt_dir.with_extension("old").exists() {
+        std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
+    }
+    let resuming = ckpt_dir.join("state.json").exists();
+    let cfg = if cfg_path.exists() {
+        let saved = DmeTrainConfig::from_toml_file(&cfg_path)?;
+        match cfg {
+            Some(given) => {
+                let same = DmeTrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() };
+                if same != saved {
+                    return Err(TrainError::Config {
+                        path: cfg_path.display().to_string(),
+                        message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
+                    });
+                }
+                given.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+                write_atomic(&cfg_path, toml::to_string(&given).map_err(|e| TrainError::Other(e.to_string()))?.as_bytes())?;
+                given
+            }
+            None => saved,
+        }
+    } else {
+        let cfg = cfg.unwrap_or_default();
+        cfg.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+        write_atomic(&cfg_path, toml::to_string(&cfg).map_err(|e| TrainError::Other(e.to_string()))?.as_bytes())?;
+        cfg
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(cfg.threads)
+        .build()
+        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
+    pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
+}
+
+fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+    let ckpt_dir = run_dir.join("checkpoint");
+    let device = Device::flex().autodiff();
+    device.seed(cfg.seed);
+    let net_cfg = cfg.nets();
+    let nets = Maddpg::new(&net_cfg, &device);
+    let (mut nets, mut state, mut replay) = if resuming { restore(&ckpt_dir, nets)? } else { (nets, State::default(), Replay::default()) };
+    let log_path = |name: &str| run_dir.join(name);
+    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < state.episode)?;
+    truncate_rows::<MaddpgUpdateRow>(&log_path(MaddpgUpdateRow::FILE_NAME), |r| r.update < state.updates)?;
+    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= state.episode)?;
+    let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
+    let mut up_log = LogWriter::<MaddpgUpdateRow>::open(log_path(MaddpgUpdateRow::FILE_NAME))?;
+    let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
+    let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
+    let unix = || std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let started = Instant::now();
+    let wall0 = state.wall_s;
+    let params = cfg.update_params();
+    let team = cfg.scenario.num_robots;
+    let learn = cfg.learn_view();
+    // The acting actors: the policies read them, the trainer replaces them after each update.
+    let acting: Vec<SharedActor> = (0..team).map(|i| Arc::new(RwLock::new(nets.acting_actor(i)))).collect();
+    let rewards = RewardConfig { new_cell: cfg.new_cell_reward, reobserved_cell: 0.0, interaction_from: u32::MAX, ..RewardConfig::default() };
+    let mut last_validation = state.best_validation;
+    while state.episode < cfg.episodes {
+        let e = state.episode;
+        let seed = derive_seed(cfg.seed, "dme", e);
+        let (map, starts) = training_scenario(&learn, seed)?;
+        let csp = stream(seed, "csp", 0).random::<f64>();
+        let recorder: Recorder = Arc::new(Mutex::new(vec![None; team]));
+        let mut registry = PolicyRegistry::default();
+        {
+            let (acting, recorder, history) = (acting.clone(), recorder.clone(), cfg.history);
+            registry.register("dme-train", "DME-DRL actors sampling", move |ctx| {
+                Box::new(
+                    DmePolicy::new("dme-train", ctx.robot, Arc::clone(&acting[ctx.robot]), history)
+                        .sampling(stream(ctx.seed, "dme/sample", ctx.robot as u64))
+                        .recording(recorder.clone()),
+                )
+            });
+        }
+        let spec = TrialSpec {
+            map,
+            map_name: format!("train_dme_{e}"),
+            starts,
+            config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+            policy: "dme-train".into(),
+            seed,
+        };
+        let mut trial = Trial::with_registry(spec, &registry).map_err(|err| TrainError::Other(err.to_string()))?.reward_config(rewards.clone());
+        let mut episode = Episode::new(team);
+        while trial.step() {
+            let records: Vec<_> = recorder.lock().expect("recorder lock").iter_mut().map(|r| r.take()).collect();
+            let records: Vec<_> = records.into_iter().collect::<Option<Vec<_>>>().ok_or_else(|| TrainError::Other("a robot skipped its decision".into()))?;
+            let moved = trial.world().executed_moves();
+            let r: Vec<f32> = (0..team).map(|i| (trial.rewards().robots[i] - cfg.move_cost * moved[i].length()) as f32).collect();
+            episode.push(&records, &r);
+            state.steps += 1;
+            let ready = replay.steps >= cfg.warmup_steps && (0..team).all(|i| replay.transitions(i) > 0);
+            if ready && state.steps % cfg.update_every == 0 {
+                let mut rng = stream(cfg.seed, "dme/batch", state.updates);
+                let batches: Vec<Batch> = (0..team).map(|i| replay.sample(i, cfg.batch_size, &net_cfg, cfg.gamma, &mut rng)).collect();
+                let stats = nets.update(&batches, &mut stream(cfg.seed, "dme/gumbel", state.updates), &params);
+                for (i, a) in acting.iter().enumerate() {
+                    *a.write().expect("actor lock") = nets.acting_actor(i);
+                }
+                up_log.append(&MaddpgUpdateRow { update: state.updates, critic_loss: stats.critic_loss.into(), actor_loss: stats.actor_loss.into() })?;
+                tb.add_scalar("loss/critic", stats.critic_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
+                tb.add_scalar("loss/actor", stats.actor_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
+                state.updates += 1;
+            }
+        }
+        episode.complete = trial.is_done() && trial.world().is_complete();
+        let (steps, reward) = (episode.len(), episode.team_return());
+        ep_log.append(&EpisodeRow {
+            episode: e,
+            env: madenet_trainlog::Env::Dec,
+            csp,
+            steps: steps as u32,
+            team_reward: reward,
+            complete: episode.complete,
+            epsilon: 0.0,
+            updates: state.updates,
+            wall_s: wall0 + started.elapsed().as_secs_f64(),
+        })?;
+        tb.add_scalar("episode/reward", reward as f32, e as i64, unix()).map_err(io_err(run_dir))?;
+        tb.add_scalar("episode/steps", steps as f32, e as i64, unix()).map_err(io_err(run_dir))?;
+        replay.push(episode, cfg.replay_steps);
+        state.episode += 1;
+        if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
+            let (steps, ret, done, n) = validate(cfg, &nets)?;
+            val_log.append(&ValidationRow { episode: state.episode, updates: state.updates, mean_steps: steps, mean_team_reward: ret, completed: done as u32, trials: n as u32 })?;
+            tb.add_scalar("validation/mean_steps", steps as f32, state.episode as i64, unix()).map_err(io_err(run_dir))?;
+            last_validation = Some(steps);
+            if state.best_validation.is_none_or(|b| steps < b) {
+                state.best_validation = Some(steps);
+                save_model(&run_dir.join("best"), &nets, &model_info(cfg, &state, Some(steps)))?;
+            }
+        }
+        let stopping = state.episode == cfg.episodes || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
+        if state.episode % cfg.checkpoint_every == 0 || stopping {
+            state.wall_s = wall0 + started.elapsed().as_secs_f64();
+            checkpoint(&ckpt_dir, &nets, &state, &replay)?;
+            save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
+        }
+        tb.flush().map_err(io_err(run_dir))?;
+        progress(&Progress { episode: state.episode, episodes: cfg.episodes, updates: state.updates, reward, steps, validation_steps: last_validation });
+        if stopping {
+            break;
+        }
+    }
+    Ok(())
+}
