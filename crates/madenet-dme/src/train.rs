@@ -182,6 +182,23 @@ impl DmeTrainConfig {
         if self.replay_steps < self.batch_size {
             return bad("replay_steps", "must hold at least one batch");
         }
+        if self.warmup_steps > self.replay_steps {
+            return bad("warmup_steps", "must not exceed replay_steps (the replay never holds more)");
+        }
+        let finite = [
+            ("new_cell_reward", self.new_cell_reward),
+            ("move_cost", self.move_cost),
+            ("actor_lr", self.actor_lr),
+            ("critic_lr", self.critic_lr),
+            ("logit_penalty", f64::from(self.logit_penalty)),
+            ("gamma", f64::from(self.gamma)),
+        ];
+        if let Some((field, _)) = finite.iter().find(|(_, v)| !v.is_finite()) {
+            return bad(field, "must be a finite number");
+        }
+        if self.validate_every > 0 && self.validation_csp.is_empty() {
+            return bad("validation_csp", "must name at least one CSP when validate_every > 0");
+        }
         if self.update_every == 0 {
             return bad("update_every", "must be at least 1");
         }
@@ -222,6 +239,7 @@ impl DmeTrainConfig {
             map_width: self.map_width,
             density_min: self.density_min,
             density_max: self.density_max,
+            validate_every: self.validate_every,
             validation_maps: self.validation_maps,
             validation_csp: self.validation_csp.clone(),
             threads: self.threads,
@@ -475,6 +493,12 @@ impl Model {
         if files.len() != info.team_size || files.len() != info.actors.len() {
             return Err(TrainError::Config { path: label.into(), message: format!("field `actors`: {} weight files for a team of {}", files.len(), info.team_size) });
         }
+        if info.history == 0 || info.hidden == 0 || info.map_height < madenet_learn::MIN_MAP_SIDE || info.map_width < madenet_learn::MIN_MAP_SIDE {
+            return Err(TrainError::Config {
+                path: label.into(),
+                message: format!("fields `history`, `hidden` must be ≥ 1 and the map sides ≥ {}", madenet_learn::MIN_MAP_SIDE),
+            });
+        }
         let cfg = DmeConfig::new()
             .with_map_height(info.map_height)
             .with_map_width(info.map_width)
@@ -485,7 +509,11 @@ impl Model {
         for (name, bytes) in info.actors.iter().zip(files) {
             let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
                 .map_err(|e| TrainError::Io { path: format!("{label}: {name}"), message: e.to_string() })?;
-            actors.push(Arc::new(RwLock::new(cfg.actor(&Device::flex()).load_record(rec))));
+            let actor = cfg.actor(&Device::flex()).try_load_record(rec).map_err(|e| TrainError::Config {
+                path: format!("{label}: {name}"),
+                message: format!("weights do not fit the sizes in model.toml: {e}"),
+            })?;
+            actors.push(Arc::new(RwLock::new(actor)));
         }
         Ok(Model { info, actors })
     }

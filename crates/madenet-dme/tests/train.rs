@@ -140,6 +140,20 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     assert!(bad(DmeTrainConfig { tau: 0.0, ..tiny(1) }).contains("tau"));
     assert!(bad(DmeTrainConfig { method: "made-net".into(), ..tiny(1) }).contains("method"));
     assert!(bad(DmeTrainConfig { replay_steps: 4, ..tiny(1) }).contains("replay_steps"));
+    assert!(bad(DmeTrainConfig { warmup_steps: 500, ..tiny(1) }).contains("warmup_steps"));
+    assert!(bad(DmeTrainConfig { move_cost: f64::NAN, ..tiny(1) }).contains("move_cost"));
+    assert!(bad(DmeTrainConfig { validation_csp: vec![], ..tiny(1) }).contains("validation_csp"));
+    assert!(DmeTrainConfig { validate_every: 0, validation_maps: 0, ..tiny(1) }.validate().is_ok());
+    // A model whose sizes do not fit its weights is an error naming the file, not a crash.
+    let broken = root.join("broken");
+    std::fs::create_dir_all(&broken).unwrap();
+    for f in ["actor0.bpk", "actor1.bpk", "actor2.bpk"] {
+        std::fs::copy(straight.join("last").join(f), broken.join(f)).unwrap();
+    }
+    let toml = read(&straight.join("last/model.toml")).replace("hidden = 32", "hidden = 64");
+    std::fs::write(broken.join("model.toml"), toml).unwrap();
+    let err = Model::load(&broken).err().expect("sizes do not fit").to_string();
+    assert!(err.contains("model.toml") && err.contains("actor0.bpk"), "{err}");
     let file = root.join("bad.toml");
     std::fs::write(&file, "gamma = \"high\"\n").unwrap();
     let err = DmeTrainConfig::from_toml_file(&file).unwrap_err().to_string();
