@@ -8,7 +8,7 @@ use madenet_sim::PolicyRegistry;
 
 /// The policy name of the shipped model.
 pub const NAME: &str = "dme-drl";
-const ABOUT: &str = "DME-DRL (shipped model): MADDPG actors choosing a frontier sector every step";
+const ABOUT: &str = "DME-DRL (shipped model): MADDPG actors choosing a frontier sector, heading to its nearest frontier cell";
 const MODEL_TOML: &str = include_str!("../../../models/dme-drl/model.toml");
 const ACTORS: [&[u8]; 3] = [
     include_bytes!("../../../models/dme-drl/actor0.bpk"),
