@@ -3,7 +3,7 @@
 use crate::registry::{PolicyContext, PolicyRegistry};
 use crate::rewards::{RewardConfig, StepRewards};
 use crate::SimError;
-use madenet_agent::{Agent, AgentConfig, Beta, External, JointPolicy};
+use madenet_agent::{Agent, AgentConfig, Beta, Decision, External, JointPolicy};
 use madenet_map::{OccGrid, Pos};
 use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
 use madenet_world::{Move, ScenarioConfig, World};
@@ -159,6 +159,21 @@ impl Trial {
 
     /// Runs one timestep (stages 1–5 of the crate docs). Returns false once done.
     pub fn step(&mut self) -> bool {
+        if !self.begin_step() {
+            return false;
+        }
+        self.decide();
+        self.finish_step();
+        true
+    }
+
+    /// The first half of a timestep, up to the decision point: every robot observes (stage 1),
+    /// β is exchanged along successful links (stage 2), and each robot finds whether it decides
+    /// now ([`Trial::deciding`]). Returns false once done (nothing happens then). Complete the
+    /// timestep with [`Trial::finish_step`], after [`Trial::apply_decisions`] for robots driven
+    /// from outside (e.g. a Python environment); [`Trial::step`] does all three with the robots'
+    /// own policies.
+    pub fn begin_step(&mut self) -> bool {
         if self.world.is_done() {
             return false;
         }
@@ -184,11 +199,29 @@ impl Trial {
                 self.agents[i].receive_beta(outbox[j].as_ref().expect("composed above"));
             }
         }
-        // 3. decide
+        // 3a. who decides now (each robot's own state only)
         for (i, a) in self.agents.iter_mut().enumerate() {
             self.decided[i] = a.needs_decision();
-            if self.decided[i] && self.joint.is_none() {
-                a.decide();
+        }
+        self.elapsed += started.elapsed();
+        true
+    }
+
+    /// Which robots decide at this timestep (valid between [`Trial::begin_step`] and
+    /// [`Trial::finish_step`]).
+    pub fn deciding(&self) -> &[bool] {
+        &self.decided
+    }
+
+    /// 3b. The deciding robots ask their own policies, or the joint policy decides for them.
+    fn decide(&mut self) {
+        let started = Instant::now();
+        let n = self.agents.len();
+        if self.joint.is_none() {
+            for (i, a) in self.agents.iter_mut().enumerate() {
+                if self.decided[i] {
+                    a.decide();
+                }
             }
         }
         if let Some(joint) = self.joint.as_mut().filter(|_| self.decided.contains(&true)) {
@@ -201,6 +234,24 @@ impl Trial {
                 }
             }
         }
+        self.elapsed += started.elapsed();
+    }
+
+    /// 3b from outside: `decisions[i]` for each deciding robot i (the others' entries are
+    /// ignored), in place of the robots' own policies.
+    pub fn apply_decisions(&mut self, decisions: &[Decision]) {
+        for (i, &d) in decisions.iter().enumerate().take(self.agents.len()) {
+            if self.decided[i] {
+                self.agents[i].apply_decision(d);
+            }
+        }
+    }
+
+    /// The second half of a timestep: planning (stage 4), the moves (stage 5), metrics,
+    /// rewards and the trajectory record.
+    pub fn finish_step(&mut self) {
+        let started = Instant::now();
+        let n = self.agents.len();
         // 4. plan in priority order; plans go to lower-priority robots this one exchanged with.
         for i in 0..n {
             self.agents[i].plan();
@@ -236,7 +287,6 @@ impl Trial {
                 rewards: self.rewards.clone(),
             });
         }
-        true
     }
 
     /// Eq. (7) and (8) for the step just taken: what each robot observed against what it had
