@@ -70,6 +70,19 @@ pub struct AgentStats {
     pub space_time_failures: usize,
 }
 
+/// Scratch space for [`Agent::peek_view`].
+pub struct ViewScratch {
+    dijkstra: Dijkstra,
+    candidates: GoalCandidates,
+    fresh: bool,
+}
+
+impl ViewScratch {
+    pub fn new(height: usize, width: usize) -> Self {
+        ViewScratch { dijkstra: Dijkstra::new(height, width), candidates: GoalCandidates { slots: 0, cells: Vec::new() }, fresh: false }
+    }
+}
+
 /// One robot.
 pub struct Agent {
     cfg: AgentConfig,
@@ -287,6 +300,35 @@ impl Agent {
             candidates: &self.candidates,
             dijkstra: &mut self.dijkstra,
             dijkstra_fresh: &mut self.dijkstra_fresh,
+        }
+    }
+
+    /// The robot's view without touching its own navigator state: candidates and searches use
+    /// `scratch`. For observers (e.g. an environment building observations of robots that do
+    /// not decide now); the trajectory is the same whether or not this is called.
+    pub fn peek_view<'a>(&'a self, with_candidates: bool, scratch: &'a mut ViewScratch) -> AgentView<'a> {
+        let ViewScratch { dijkstra, candidates, fresh } = scratch;
+        if with_candidates {
+            let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
+            *candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, dijkstra, &held);
+            *fresh = true;
+        } else {
+            candidates.slots = self.cfg.goal_count;
+            candidates.cells.clear();
+            *fresh = false;
+        }
+        AgentView {
+            id: self.cfg.id,
+            t: self.t,
+            pos: self.pos,
+            teammate_detected: self.detected_any,
+            belief: &self.belief,
+            teammates: &self.teammates,
+            goal: self.goal,
+            prev_goal: self.prev_goal,
+            candidates,
+            dijkstra,
+            dijkstra_fresh: fresh,
         }
     }
 

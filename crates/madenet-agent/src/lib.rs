@@ -19,7 +19,7 @@ pub mod messages;
 pub mod policy;
 pub mod view;
 
-pub use agent::{Agent, AgentConfig, AgentStats, Termination, BLOCKED_STEPS};
+pub use agent::{Agent, AgentConfig, AgentStats, Termination, ViewScratch, BLOCKED_STEPS};
 pub use belief::Belief;
 pub use goals::{extract_goals, GoalCandidates};
 pub use messages::{Beta, PlanMessage, TeammateRecord};
