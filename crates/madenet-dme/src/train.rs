@@ -25,7 +25,7 @@ use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
-use madenet_learn::train::{io_err, replace_dir, training_scenario, validate_policy, write_atomic};
+use madenet_learn::train::{io_err, prepare_run, replace_dir, training_scenario, validate_policy, write_atomic};
 use madenet_learn::{TrainConfig, TrainError};
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -640,36 +640,13 @@ pub fn validate(cfg: &DmeTrainConfig, nets: &Maddpg) -> Result<(f64, f64, usize,
 /// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
 /// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`).
 pub fn train(run_dir: &Path, cfg: Option<DmeTrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
-    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
-    let cfg_path = run_dir.join("config.toml");
-    let ckpt_dir = run_dir.join("checkpoint");
-    if !ckpt_dir.exists() && ckpt_dir.with_extension("old").exists() {
-        std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
-    }
-    let resuming = ckpt_dir.join("state.json").exists();
-    let cfg = if cfg_path.exists() {
-        let saved = DmeTrainConfig::from_toml_file(&cfg_path)?;
-        match cfg {
-            Some(given) => {
-                let same = DmeTrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() };
-                if same != saved {
-                    return Err(TrainError::Config {
-                        path: cfg_path.display().to_string(),
-                        message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
-                    });
-                }
-                given.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
-                write_atomic(&cfg_path, toml::to_string(&given).map_err(|e| TrainError::Other(e.to_string()))?.as_bytes())?;
-                given
-            }
-            None => saved,
-        }
-    } else {
-        let cfg = cfg.unwrap_or_default();
-        cfg.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
-        write_atomic(&cfg_path, toml::to_string(&cfg).map_err(|e| TrainError::Other(e.to_string()))?.as_bytes())?;
-        cfg
-    };
+    let (cfg, resuming) = prepare_run(
+        run_dir,
+        cfg,
+        DmeTrainConfig::from_toml_file,
+        DmeTrainConfig::validate,
+        |given, saved| DmeTrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() } == *saved,
+    )?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cfg.threads)
         .build()

@@ -642,7 +642,18 @@ pub fn validate_policy(cfg: &TrainConfig, registry: &PolicyRegistry, policy: &st
 /// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
 /// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`, to
 /// extend a run). `progress` is called after every iteration.
-pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+/// Opens a training run directory (created if needed) and settles its config: a new run writes
+/// `cfg` (or the defaults) to `config.toml`; a directory holding a checkpoint resumes with the
+/// saved config, which `cfg`, if given, may change only where `same_run(given, saved)` allows
+/// (the run's length). Also recovers `checkpoint/` from a crash between the two renames of
+/// [`replace_dir`]. Returns the config and whether the run resumes. Shared by every learner.
+pub fn prepare_run<C: Default + Serialize>(
+    run_dir: &Path,
+    cfg: Option<C>,
+    load: impl Fn(&Path) -> Result<C, TrainError>,
+    validate: impl Fn(&C) -> Result<(), String>,
+    same_run: impl Fn(&C, &C) -> bool,
+) -> Result<(C, bool), TrainError> {
     std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
     let cfg_path = run_dir.join("config.toml");
     let ckpt_dir = run_dir.join("checkpoint");
@@ -651,32 +662,42 @@ pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut
         std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
     }
     let resuming = ckpt_dir.join("state.json").exists();
+    let save = |cfg: &C| -> Result<(), TrainError> {
+        let text = toml::to_string(cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&cfg_path, text.as_bytes())
+    };
+    let checked = |cfg: C| -> Result<C, TrainError> {
+        validate(&cfg).map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+        save(&cfg)?;
+        Ok(cfg)
+    };
     let cfg = if cfg_path.exists() {
-        let saved = TrainConfig::from_toml_file(&cfg_path)?;
+        let saved = load(&cfg_path)?;
         match cfg {
             // Only the run's length may change on resume: the rest defines the run.
-            Some(given) => {
-                let same = TrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() };
-                if same != saved {
-                    return Err(TrainError::Config {
-                        path: cfg_path.display().to_string(),
-                        message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
-                    });
-                }
-                given.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
-                let text = toml::to_string(&given).map_err(|e| TrainError::Other(e.to_string()))?;
-                write_atomic(&cfg_path, text.as_bytes())?;
-                given
+            Some(given) if !same_run(&given, &saved) => {
+                return Err(TrainError::Config {
+                    path: cfg_path.display().to_string(),
+                    message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
+                });
             }
+            Some(given) => checked(given)?,
             None => saved,
         }
     } else {
-        let cfg = cfg.unwrap_or_default();
-        cfg.validate().map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
-        let text = toml::to_string(&cfg).map_err(|e| TrainError::Other(e.to_string()))?;
-        write_atomic(&cfg_path, text.as_bytes())?;
-        cfg
+        checked(cfg.unwrap_or_default())?
     };
+    Ok((cfg, resuming))
+}
+
+pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+    let (cfg, resuming) = prepare_run(
+        run_dir,
+        cfg,
+        TrainConfig::from_toml_file,
+        TrainConfig::validate,
+        |given, saved| TrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() } == *saved,
+    )?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cfg.threads)
         .build()
