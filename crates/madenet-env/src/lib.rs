@@ -20,6 +20,10 @@
 //! Invalid actions are tolerated (a robot given an invalid candidate stays and decides again).
 //! With the same seed and the same decisions, the trajectory is the one `madenet run` produces.
 
+pub mod vector;
+
+pub use vector::{VecBuffers, VecEnv};
+
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy, ViewScratch};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec};
@@ -111,6 +115,13 @@ impl ExplorationEnv {
         env.build(0)?;
         env.trial = None;
         Ok(env)
+    }
+
+    /// A fresh environment with the same map, starts, scenario, mode and rewards (no episode).
+    pub fn clone_config(&self) -> Result<Self, EnvError> {
+        Ok(ExplorationEnv::new(self.map.clone(), &self.map_name, self.starts.clone(), self.scenario.clone(), self.mode)?
+            .with_rewards(self.rewards.clone())
+            .recording(self.record))
     }
 
     /// Use these reward constants (default: the paper's).
