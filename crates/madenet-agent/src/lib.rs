@@ -24,4 +24,4 @@ pub use belief::Belief;
 pub use goals::{extract_goals, GoalCandidates};
 pub use messages::{Beta, PlanMessage, TeammateRecord};
 pub use policy::{Decision, DecisionMode, External, JointPolicy, NearestFrontier, Policy, RandomCandidate};
-pub use view::AgentView;
+pub use view::{action_mask, write_joint_map_image, AgentView};

@@ -97,54 +97,126 @@ impl<'a> AgentView<'a> {
     /// * the |G| goal candidates (2 each, normalised, −1 for an empty slot), then their
     ///   validity mask (0/1 each).
     pub fn macro_observation(&self) -> Vec<f32> {
+        let mut z = vec![0.0; Self::macro_observation_len(self.teammates.len(), self.candidates.slots)];
+        self.write_macro_observation(&mut z);
+        z
+    }
+
+    /// [`AgentView::macro_observation`] written into `z` (of exactly
+    /// [`AgentView::macro_observation_len`] values): batched callers allocate nothing.
+    ///
+    /// # Panics
+    /// If `z` has another length.
+    pub fn write_macro_observation(&self, z: &mut [f32]) {
+        assert_eq!(z.len(), Self::macro_observation_len(self.teammates.len(), self.candidates.slots), "macro observation length");
         let b = self.belief;
         let (sr, sc) = ((b.height().max(2) - 1) as f32, (b.width().max(2) - 1) as f32);
         let coords = |p: Option<Pos>| match p {
             Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
             None => [-1.0, -1.0],
         };
-        let mut z = Vec::with_capacity(Self::macro_observation_len(self.teammates.len(), self.candidates.slots));
-        z.extend(coords(Some(self.pos)));
-        z.push(self.teammate_detected as u8 as f32);
+        let mut k = 0;
+        let mut put = |vals: &[f32]| {
+            z[k..k + vals.len()].copy_from_slice(vals);
+            k += vals.len();
+        };
+        put(&coords(Some(self.pos)));
+        put(&[self.teammate_detected as u8 as f32]);
         let cells = (b.width() * b.height()).max(1) as f32;
         for (j, rec) in self.teammates.iter().enumerate() {
             if j == self.id {
                 continue;
             }
-            z.extend(coords(rec.prev_goal));
-            z.extend(coords(rec.last_pos()));
-            z.extend(coords(rec.goal));
-            z.push(rec.explored as f32 / cells);
-            z.push((rec.heard_at.is_some() || rec.seen_at.is_some()) as u8 as f32);
+            put(&coords(rec.prev_goal));
+            put(&coords(rec.last_pos()));
+            put(&coords(rec.goal));
+            put(&[rec.explored as f32 / cells, (rec.heard_at.is_some() || rec.seen_at.is_some()) as u8 as f32]);
         }
-        for k in 0..self.candidates.slots {
-            z.extend(coords(self.candidates.get(k)));
+        for slot in 0..self.candidates.slots {
+            put(&coords(self.candidates.get(slot)));
         }
-        z.extend(self.candidates.valid_mask().iter().map(|&v| v as u8 as f32));
-        z
+        for slot in 0..self.candidates.slots {
+            put(&[self.candidates.is_valid(slot) as u8 as f32]);
+        }
     }
 
     /// The paper's 4-channel binary map image of this robot, channel-major
     /// `[4][height][width]`: explored space, obstacles, observed robot positions (own and
     /// teammates' last known), goal candidates.
     pub fn map_image(&self) -> Vec<u8> {
+        let mut img = vec![0u8; 4 * self.belief.width() * self.belief.height()];
+        self.write_map_image(&mut img);
+        img
+    }
+
+    /// [`AgentView::map_image`] written into `img` (4 · H · W values of any numeric type, e.g.
+    /// `f32` for a network's or numpy's buffer).
+    ///
+    /// # Panics
+    /// If `img` has another length.
+    pub fn write_map_image<T: Copy + From<u8>>(&self, img: &mut [T]) {
         let b = self.belief;
         let n = b.width() * b.height();
-        let mut img = vec![0u8; 4 * n];
-        for (i, &o) in b.map().iter().enumerate() {
-            img[i] = (o != Occupancy::Unknown) as u8;
-            img[n + i] = (o == Occupancy::Obstacle) as u8;
+        assert_eq!(img.len(), 4 * n, "map image length");
+        let (zero, one) = (T::from(0), T::from(1));
+        let (known, rest) = img.split_at_mut(n);
+        let (obstacles, rest) = rest.split_at_mut(n);
+        let (robots, goals) = rest.split_at_mut(n);
+        for ((k, o), &cell) in known.iter_mut().zip(obstacles.iter_mut()).zip(b.map()) {
+            *k = if cell != Occupancy::Unknown { one } else { zero };
+            *o = if cell == Occupancy::Obstacle { one } else { zero };
         }
-        img[2 * n + b.index(self.pos)] = 1;
+        robots.fill(zero);
+        robots[b.index(self.pos)] = one;
         for rec in self.teammates {
             if let Some(p) = rec.last_pos() {
-                img[2 * n + b.index(p)] = 1;
+                robots[b.index(p)] = one;
             }
         }
+        goals.fill(zero);
         for &c in &self.candidates.cells {
-            img[3 * n + b.index(c)] = 1;
+            goals[b.index(c)] = one;
         }
-        img
+    }
+}
+
+/// The macro actions a robot may choose: its valid goal candidates, or — when it has none
+/// (nothing reachable left to explore) — slot 0 alone, which then means "stay" (the agent
+/// idles on an empty slot). Every argmax therefore has at least one admissible action.
+pub fn action_mask(view: &AgentView<'_>) -> Vec<bool> {
+    let mut mask = view.candidates().valid_mask();
+    if !mask.iter().any(|&v| v) {
+        if let Some(first) = mask.first_mut() {
+            *first = true;
+        }
+    }
+    mask
+}
+
+/// The merged map image a centralized policy (the CEP, Sec. III.C.2) sees, channel-major
+/// `[4][H][W]`: explored space and obstacles of the team's merged map (`team_map`, row-major),
+/// every robot's position, every robot's goal candidates.
+///
+/// # Panics
+/// If `img` is not 4 × `team_map.len()` long.
+pub fn write_joint_map_image<T: Copy + From<u8>>(views: &[AgentView<'_>], team_map: &[Occupancy], img: &mut [T]) {
+    let n = team_map.len();
+    assert_eq!(img.len(), 4 * n, "joint map image length");
+    let (zero, one) = (T::from(0), T::from(1));
+    let (known, rest) = img.split_at_mut(n);
+    let (obstacles, rest) = rest.split_at_mut(n);
+    let (robots, goals) = rest.split_at_mut(n);
+    for ((k, o), &cell) in known.iter_mut().zip(obstacles.iter_mut()).zip(team_map) {
+        *k = if cell != Occupancy::Unknown { one } else { zero };
+        *o = if cell == Occupancy::Obstacle { one } else { zero };
+    }
+    robots.fill(zero);
+    goals.fill(zero);
+    for v in views {
+        robots[v.belief.index(v.pos)] = one;
+        for &c in &v.candidates().cells {
+            goals[v.belief.index(c)] = one;
+        }
     }
 }
 

@@ -6,7 +6,8 @@
 //! the robots' actions from the caller:
 //!
 //! * [`ActionMode::Macro`] — the paper's macro actions: action k = go to goal candidate k
-//!   (|G| actions, the invalid ones masked). A step applies the actions of the robots whose
+//!   (|G| actions, the invalid ones masked; a robot with no candidate left may take slot 0
+//!   alone, which means "stay", as in MADE-Net's training, [`madenet_agent::action_mask`]). A step applies the actions of the robots whose
 //!   macro action terminated ([`ExplorationEnv::needs_action`]; the others' are ignored), then
 //!   advances primitive timesteps until some robot's macro action terminates or the episode
 //!   ends; rewards are summed over those timesteps.
@@ -24,10 +25,26 @@ pub mod vector;
 
 pub use vector::{VecBuffers, VecEnv};
 
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy, ViewScratch};
+pub mod render;
+
+pub use madenet_agent::Decision;
+pub use render::frame;
+
+use madenet_agent::{action_mask, write_joint_map_image, AgentView, DecisionMode, Policy, ViewScratch};
 use madenet_map::{OccGrid, Pos};
-use madenet_sim::{PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec};
+use madenet_render::Frame;
+use madenet_sim::{PolicyContext, PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec};
 use madenet_world::{Move, ScenarioConfig};
+
+/// Whether primitive move `mv` is allowed for the robot of `view`: staying always is; a move
+/// needs a target cell the robot knows to be free and where it sees no teammate.
+fn primitive_allowed(view: &AgentView<'_>, mv: Move) -> bool {
+    if mv == Move::Stay {
+        return true;
+    }
+    let to = mv.apply(view.pos);
+    view.belief.is_free(to) && !view.teammates.iter().any(|r| r.detected && r.seen_pos == Some(to))
+}
 
 /// What an action means.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -87,9 +104,15 @@ pub struct ExplorationEnv {
     mode: ActionMode,
     rewards: RewardConfig,
     record: bool,
+    observe_candidates: bool,
     trial: Option<Trial>,
-    scratch: ViewScratch,
+    seed: u64,
+    /// One scratch per robot: the joint observation holds every robot's view at once.
+    scratch: Vec<ViewScratch>,
     decisions: Vec<Decision>,
+    /// Shipped policies acting in this episode ([`ExplorationEnv::policy_decisions`]), one
+    /// instance per robot, built with the episode's seed.
+    policies: Vec<(String, Vec<Box<dyn Policy>>)>,
 }
 
 impl ExplorationEnv {
@@ -99,7 +122,7 @@ impl ExplorationEnv {
         if starts.len() != scenario.num_robots {
             return Err(EnvError::Usage(format!("{} start cells for {} robots (`num_robots`)", starts.len(), scenario.num_robots)));
         }
-        let (h, w) = (map.height(), map.width());
+        let (h, w, starts_len) = (map.height(), map.width(), starts.len());
         let mut env = ExplorationEnv {
             map,
             map_name: map_name.to_string(),
@@ -108,9 +131,12 @@ impl ExplorationEnv {
             mode,
             rewards: RewardConfig::default(),
             record: false,
+            observe_candidates: mode == ActionMode::Macro,
             trial: None,
-            scratch: ViewScratch::new(h, w),
+            seed: 0,
+            scratch: (0..starts_len).map(|_| ViewScratch::new(h, w)).collect(),
             decisions: Vec::new(),
+            policies: Vec::new(),
         };
         env.build(0)?;
         env.trial = None;
@@ -121,7 +147,17 @@ impl ExplorationEnv {
     pub fn clone_config(&self) -> Result<Self, EnvError> {
         Ok(ExplorationEnv::new(self.map.clone(), &self.map_name, self.starts.clone(), self.scenario.clone(), self.mode)?
             .with_rewards(self.rewards.clone())
-            .recording(self.record))
+            .recording(self.record)
+            .observing_candidates(self.observe_candidates))
+    }
+
+    /// Whether observations carry the goal candidates (map channel 3, the vector's candidate
+    /// slots). Always in macro mode (the actions are candidates); off by default in primitive
+    /// mode, where extracting them (a Dijkstra and a clustering per robot per step) would cost
+    /// more than the step itself.
+    pub fn observing_candidates(mut self, on: bool) -> Self {
+        self.observe_candidates = on || self.mode == ActionMode::Macro;
+        self
     }
 
     /// Use these reward constants (default: the paper's).
@@ -191,7 +227,14 @@ impl ExplorationEnv {
         let mut trial = self.build(seed)?;
         trial.begin_step();
         self.trial = Some(trial);
+        self.seed = seed;
+        self.policies.clear();
         Ok(())
+    }
+
+    /// The seed of the current episode.
+    pub fn seed(&self) -> u64 {
+        self.seed
     }
 
     fn trial(&self) -> Result<&Trial, EnvError> {
@@ -229,31 +272,148 @@ impl ExplorationEnv {
         }
         let mode = self.mode;
         let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
-        let view = trial.agents()[robot].peek_view(true, &mut self.scratch);
-        for (o, v) in map.iter_mut().zip(view.map_image()) {
-            *o = f32::from(v);
-        }
-        vector.copy_from_slice(&view.macro_observation());
+        let view = trial.agents()[robot].peek_view(self.observe_candidates, &mut self.scratch[robot]);
+        view.write_map_image(map);
+        view.write_macro_observation(vector);
         match mode {
             ActionMode::Macro => {
-                for (m, v) in mask.iter_mut().zip(view.candidates().valid_mask()) {
+                for (m, v) in mask.iter_mut().zip(action_mask(&view)) {
                     *m = v as u8;
                 }
             }
             ActionMode::Primitive => {
-                let held: Vec<Pos> = view.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
                 for (m, mv) in mask.iter_mut().zip(Move::ALL) {
-                    let to = mv.apply(view.pos);
-                    *m = (mv == Move::Stay || (view.belief.is_free(to) && !held.contains(&to))) as u8;
+                    *m = primitive_allowed(&view, mv) as u8;
                 }
             }
         }
         Ok(())
     }
 
+    /// Number of joint macro actions |G|^|I| (`None` if it overflows).
+    pub fn joint_action_count(&self) -> Option<usize> {
+        self.goal_count().checked_pow(u32::try_from(self.num_robots()).ok()?)
+    }
+
+    /// Length of the joint observation vector: every robot's vector in robot order.
+    pub fn joint_vector_len(&self) -> usize {
+        self.num_robots() * self.vector_len()
+    }
+
+    /// The centralized observation (what the CEP of centralized training sees, Sec. III.C.2):
+    /// the merged map image ([`madenet_agent::write_joint_map_image`]) into `map` (4·H·W),
+    /// every robot's vector into `vector` ([`ExplorationEnv::joint_vector_len`]), and the joint
+    /// action mask into `mask` ([`ExplorationEnv::joint_action_count`]): joint action
+    /// a = Σ k_i·|G|^i is valid when every deciding robot's k_i is valid for it (slot 0 = stay
+    /// when it has no candidate, [`madenet_agent::action_mask`]) and k_i = 0 for the robots
+    /// whose macro action is still running (their part is ignored).
+    pub fn observe_joint_into(&mut self, map: &mut [f32], vector: &mut [f32], mask: &mut [u8]) -> Result<(), EnvError> {
+        if self.mode != ActionMode::Macro {
+            return Err(EnvError::Usage("the joint observation needs a macro-mode environment".into()));
+        }
+        let count = self.joint_action_count().ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
+        let (vl, goals) = (self.vector_len(), self.goal_count());
+        if map.len() != self.map_len() || vector.len() != self.joint_vector_len() || mask.len() != count {
+            return Err(EnvError::Usage("joint observation buffers of the wrong length".into()));
+        }
+        let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
+        let deciding = if trial.is_done() { vec![false; self.starts.len()] } else { trial.deciding().to_vec() };
+        let views: Vec<AgentView<'_>> = trial.agents().iter().zip(self.scratch.iter_mut()).map(|(a, s)| a.peek_view(true, s)).collect();
+        write_joint_map_image(&views, trial.world().team_map(), map);
+        let mut masks = Vec::with_capacity(views.len());
+        for (i, v) in views.iter().enumerate() {
+            v.write_macro_observation(&mut vector[i * vl..(i + 1) * vl]);
+            masks.push(if deciding[i] { action_mask(v) } else { (0..goals).map(|k| k == 0).collect() });
+        }
+        for (a, m) in mask.iter_mut().enumerate() {
+            let mut rest = a;
+            let mut ok = true;
+            for robot_mask in &masks {
+                ok &= robot_mask[rest % goals];
+                rest /= goals;
+            }
+            *m = ok as u8;
+        }
+        Ok(())
+    }
+
+    /// Applies joint action a = Σ k_i·|G|^i (robot i's part k_i; see
+    /// [`ExplorationEnv::observe_joint_into`]).
+    pub fn step_joint(&mut self, action: usize) -> Result<StepResult, EnvError> {
+        let count = self.joint_action_count().ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
+        if self.mode != ActionMode::Macro {
+            return Err(EnvError::Usage("joint actions need a macro-mode environment".into()));
+        }
+        if action >= count {
+            return Err(EnvError::Usage(format!("joint action {action}: the joint action space has {count} actions")));
+        }
+        let goals = self.goal_count();
+        let actions: Vec<usize> = (0..self.num_robots()).scan(action, |rest, _| {
+            let k = *rest % goals;
+            *rest /= goals;
+            Some(k)
+        }).collect();
+        self.step(&actions)
+    }
+
+    /// The decisions shipped policy `name` (from `registry`) makes for the robots that decide
+    /// now, each from its own robot's view; [`Decision::Idle`] for the others. The policy's
+    /// instances (one per robot, built with the episode's seed) keep their state through the
+    /// episode, so passing these decisions to [`ExplorationEnv::step_decisions`] at every step
+    /// reproduces the policy's own trial. Its decision mode must be the environment's: policies
+    /// that decide every timestep (NF, UB, PB, DME-DRL) act in primitive mode, those that decide
+    /// when their macro action terminates (MADE-Net, random) in macro mode.
+    pub fn policy_decisions(&mut self, name: &str, registry: &PolicyRegistry) -> Result<Vec<Decision>, EnvError> {
+        let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
+        if trial.is_done() {
+            return Err(EnvError::Usage("the episode has ended; call reset()".into()));
+        }
+        let slot = match self.policies.iter().position(|(n, _)| n == name) {
+            Some(k) => k,
+            None => {
+                let (h, w) = (self.map.height(), self.map.width());
+                let built = (0..self.starts.len())
+                    .map(|robot| registry.make(name, &PolicyContext { seed: self.seed, robot, config: &self.scenario, height: h, width: w }))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let wanted = match self.mode {
+                    ActionMode::Macro => DecisionMode::OnTermination,
+                    ActionMode::Primitive => DecisionMode::EveryStep,
+                };
+                if built[0].mode() != wanted {
+                    let (its, use_mode) = match built[0].mode() {
+                        DecisionMode::EveryStep => ("decides every timestep", "primitive"),
+                        DecisionMode::OnTermination => ("decides when its macro action terminates", "macro"),
+                    };
+                    return Err(EnvError::Usage(format!("policy `{name}` {its}: use it in a `{use_mode}` environment")));
+                }
+                self.policies.push((name.to_string(), built));
+                self.policies.len() - 1
+            }
+        };
+        let policies = &mut self.policies[slot].1;
+        let deciding = trial.deciding().to_vec();
+        Ok((0..policies.len())
+            .map(|i| {
+                if !deciding[i] {
+                    return Decision::Idle;
+                }
+                let p = &mut policies[i];
+                let mut view = trial.agent_mut(i).view(p.needs_candidates());
+                p.decide(&mut view)
+            })
+            .collect())
+    }
+
+    /// The picture `madenet run --render` draws of the current state (truth and team map,
+    /// robots, paths, goals, candidates, links).
+    pub fn frame(&self) -> Result<Frame, EnvError> {
+        Ok(frame(self.trial()?))
+    }
+
     /// Applies `actions` (one per robot; only those of robots in
     /// [`ExplorationEnv::needs_action`] count) and advances to the next decision point or the
-    /// episode's end.
+    /// episode's end. Macro: action k = goal candidate k. Primitive: [`Move::ALL`]`[k]`; a move
+    /// the mask forbids keeps the robot where it is.
     pub fn step(&mut self, actions: &[usize]) -> Result<StepResult, EnvError> {
         let n = self.num_robots();
         if actions.len() != n {
@@ -263,33 +423,51 @@ impl ExplorationEnv {
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
             return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
         }
-        self.trial()?;
         let mode = self.mode;
-        let trial = self.trial.as_mut().expect("checked above");
+        let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
+        let mut decisions = std::mem::take(&mut self.decisions);
+        decisions.clear();
+        for (i, &a) in actions.iter().enumerate() {
+            decisions.push(match mode {
+                ActionMode::Macro => Decision::Candidate(a),
+                ActionMode::Primitive => {
+                    let agent = &trial.agents()[i];
+                    let view = agent.peek_view(false, &mut self.scratch[i]);
+                    match Move::ALL[a] {
+                        mv if mv != Move::Stay && primitive_allowed(&view, mv) => Decision::Goal(mv.apply(view.pos)),
+                        _ => Decision::Idle,
+                    }
+                }
+            });
+        }
+        let r = self.step_decisions(&decisions);
+        self.decisions = decisions;
+        r
+    }
+
+    /// Applies one [`Decision`] per robot (those of robots not in
+    /// [`ExplorationEnv::needs_action`] are ignored): a candidate index, any goal cell, or
+    /// idling; then advances to the next decision point or the episode's end.
+    pub fn step_decisions(&mut self, decisions: &[Decision]) -> Result<StepResult, EnvError> {
+        let n = self.num_robots();
+        if decisions.len() != n {
+            return Err(EnvError::Usage(format!("{} decisions for {n} robots", decisions.len())));
+        }
+        let (h, w) = (self.map.height() as i32, self.map.width() as i32);
+        if let Some(Decision::Goal(p)) = decisions.iter().find(|d| matches!(d, Decision::Goal(p) if p.row < 0 || p.col < 0 || p.row >= h || p.col >= w)) {
+            return Err(EnvError::Usage(format!("goal ({}, {}) lies outside the {h} × {w} map", p.row, p.col)));
+        }
+        let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
         if trial.is_done() {
             return Err(EnvError::Usage("the episode has ended; call reset()".into()));
         }
-        self.decisions.clear();
-        for (i, &a) in actions.iter().enumerate() {
-            let deciding = trial.deciding()[i];
-            let d = match mode {
+        for (i, d) in decisions.iter().enumerate() {
+            if trial.deciding()[i] && matches!(d, Decision::Candidate(_)) {
                 // The robot's own candidates, extracted as its own policy would see them.
-                ActionMode::Macro if deciding => {
-                    let _ = trial.agent_mut(i).view(true);
-                    Decision::Candidate(a)
-                }
-                ActionMode::Primitive if deciding => {
-                    let _ = trial.agent_mut(i).view(false);
-                    match Move::ALL[a] {
-                        Move::Stay => Decision::Idle,
-                        mv => Decision::Goal(mv.apply(trial.agents()[i].pos())),
-                    }
-                }
-                _ => Decision::Idle,
-            };
-            self.decisions.push(d);
+                let _ = trial.agent_mut(i).view(true);
+            }
         }
-        trial.apply_decisions(&self.decisions);
+        trial.apply_decisions(decisions);
         let mut out = StepResult { rewards: vec![0.0; n], ..StepResult::default() };
         loop {
             trial.finish_step();

@@ -51,6 +51,11 @@ impl VecEnv {
         &self.envs[0]
     }
 
+    /// The seed of each environment's current episode.
+    pub fn episode_seeds(&self) -> Vec<u64> {
+        self.envs.iter().map(ExplorationEnv::seed).collect()
+    }
+
     fn episode_seed(&self, k: usize) -> u64 {
         madenet_world::rng::derive_seed(self.seeds[k], "episode", self.episodes[k])
     }

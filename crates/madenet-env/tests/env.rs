@@ -31,8 +31,13 @@ fn random_candidates_through_the_env_reproduce_the_random_policy_trial() {
             let mut actions = vec![0; n];
             for i in 0..n {
                 e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2).unwrap();
-                let valid = buffers.2.iter().filter(|&&m| m == 1).count();
-                assert!(buffers.2[..valid].iter().all(|&m| m == 1), "valid candidates come first");
+                // The vector ends with the candidates' validity; the mask is the same but for a
+                // robot with no candidate, whose mask offers slot 0 alone ("stay").
+                let validity = &buffers.1[buffers.1.len() - g..];
+                let valid = validity.iter().filter(|&&v| v == 1.0).count();
+                assert!(validity[..valid].iter().all(|&v| v == 1.0), "valid candidates come first");
+                let expected: Vec<u8> = (0..g).map(|k| (k < valid || (valid == 0 && k == 0)) as u8).collect();
+                assert_eq!(buffers.2, expected);
                 if needs[i] && valid > 0 {
                     actions[i] = rngs[i].random_range(0..valid);
                 } else if needs[i] {
@@ -97,4 +102,63 @@ fn primitive_moves_and_bad_calls() {
     let map = paper_map(1).unwrap();
     let err = ExplorationEnv::new(map, "m", vec![madenet_map::Pos::new(0, 0)], ScenarioConfig::default(), ActionMode::Macro).err().unwrap();
     assert!(err.to_string().contains("num_robots"), "{err}");
+}
+
+#[test]
+fn a_policys_decisions_through_the_env_reproduce_its_own_trial_and_modes_are_checked() {
+    let registry = madenet_sim::PolicyRegistry::builtin();
+    for (name, mode) in [("nf", ActionMode::Primitive), ("random", ActionMode::Macro)] {
+        let mut e = env(mode, 0.5);
+        e.reset(4).unwrap();
+        while !e.is_done() {
+            let d = e.policy_decisions(name, &registry).unwrap();
+            e.step_decisions(&d).unwrap();
+        }
+        let ext = e.finish().unwrap();
+        let map = paper_map(6).unwrap();
+        let starts = Corner::BottomRight.start_cells(map.height(), map.width()).to_vec();
+        let scenario = ScenarioConfig { comm_success_prob: 0.5, ..Default::default() };
+        let spec = TrialSpec { map, map_name: paper_map_name(6), starts, config: scenario, policy: name.into(), seed: 4 };
+        let own = Trial::new(spec).unwrap().record_trajectory(true).run();
+        assert_eq!(own.trajectory, ext.trajectory, "{name}");
+        assert_eq!(own.metrics, ext.metrics, "{name}");
+    }
+    let mut e = env(ActionMode::Macro, 1.0);
+    e.reset(1).unwrap();
+    let err = e.policy_decisions("nf", &registry).unwrap_err().to_string();
+    assert!(err.contains("primitive"), "{err}");
+    assert!(e.policy_decisions("no-such", &registry).is_err());
+}
+
+#[test]
+fn joint_actions_decode_to_the_robots_parts() {
+    let mut e = env(ActionMode::Macro, 1.0);
+    let (n, g) = (e.num_robots(), e.goal_count());
+    let count = e.joint_action_count().unwrap();
+    assert_eq!(count, g.pow(n as u32));
+    e.reset(2).unwrap();
+    let (mut map, mut vector, mut mask) = (vec![0.0; e.map_len()], vec![0.0; e.joint_vector_len()], vec![0u8; count]);
+    e.observe_joint_into(&mut map, &mut vector, &mut mask).unwrap();
+    // Every robot decides first; the joint mask is the product of the robots' masks.
+    let mut own = Vec::new();
+    for i in 0..n {
+        let (mut m, mut v, mut k) = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; g]);
+        e.observe_into(i, &mut m, &mut v, &mut k).unwrap();
+        assert_eq!(&vector[i * e.vector_len()..(i + 1) * e.vector_len()], &v[..]);
+        own.push(k);
+    }
+    for (a, &m) in mask.iter().enumerate() {
+        let expected = (0..n).all(|i| own[i][(a / g.pow(i as u32)) % g] == 1);
+        assert_eq!(m == 1, expected, "joint action {a}");
+    }
+    // The merged map's explored channel is the team map; robots appear in channel 2.
+    assert!(map[2 * e.height() * e.width()..3 * e.height() * e.width()].iter().filter(|&&v| v == 1.0).count() >= 1);
+    // A valid joint action steps like the robots' parts.
+    let a = mask.iter().position(|&m| m == 1).unwrap();
+    let mut twin = env(ActionMode::Macro, 1.0);
+    twin.reset(2).unwrap();
+    let parts: Vec<usize> = (0..n).map(|i| (a / g.pow(i as u32)) % g).collect();
+    assert_eq!(e.step_joint(a).unwrap(), twin.step(&parts).unwrap());
+    assert!(e.step_joint(count).is_err());
+    assert!(env(ActionMode::Primitive, 1.0).joint_action_count().is_some());
 }

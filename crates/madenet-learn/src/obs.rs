@@ -2,7 +2,7 @@
 //! joint observation (merged map, every robot's vector) for the CEP (paper Sec. III.C.1–2).
 
 use madenet_agent::AgentView;
-use madenet_map::{Occupancy, Pos};
+use madenet_map::Occupancy;
 use serde::{Deserialize, Serialize};
 
 /// One robot's DEP input at a decision: the 4-channel map image (`[4][H][W]`, 0/1), the
@@ -27,18 +27,7 @@ pub struct JointObs {
     pub masks: Vec<Vec<bool>>,
 }
 
-/// The macro actions a robot may choose: its valid goal candidates, or — when it has none
-/// (nothing reachable left to explore) — slot 0 alone, which then means "stay" (the agent
-/// idles on an empty slot). Every argmax therefore has at least one admissible action.
-pub fn action_mask(view: &AgentView<'_>) -> Vec<bool> {
-    let mut mask = view.candidates().valid_mask();
-    if !mask.iter().any(|&v| v) {
-        if let Some(first) = mask.first_mut() {
-            *first = true;
-        }
-    }
-    mask
-}
+pub use madenet_agent::action_mask;
 
 /// Robot `view.id`'s DEP input.
 pub fn robot_obs(view: &AgentView<'_>) -> RobotObs {
@@ -48,20 +37,11 @@ pub fn robot_obs(view: &AgentView<'_>) -> RobotObs {
 /// The CEP's joint input from every robot's view and the team's merged map (row-major, the
 /// world's `team_map`).
 pub fn joint_obs(views: &[AgentView<'_>], team_map: &[Occupancy]) -> JointObs {
-    let n = team_map.len();
-    let mut map = vec![0u8; 4 * n];
-    for (i, &o) in team_map.iter().enumerate() {
-        map[i] = (o != Occupancy::Unknown) as u8;
-        map[n + i] = (o == Occupancy::Obstacle) as u8;
-    }
+    let mut map = vec![0u8; 4 * team_map.len()];
+    madenet_agent::write_joint_map_image(views, team_map, &mut map);
     let mut vec = Vec::new();
     let mut masks = Vec::with_capacity(views.len());
     for v in views {
-        let idx = |p: Pos| v.belief.index(p);
-        map[2 * n + idx(v.pos)] = 1;
-        for &c in &v.candidates().cells {
-            map[3 * n + idx(c)] = 1;
-        }
         vec.extend(v.macro_observation());
         masks.push(action_mask(v));
     }

@@ -60,7 +60,8 @@ const FIXED_HEADER: [&str; 15] = [
     "trial_s", "decisions", "per_decision_s",
 ];
 
-fn header() -> Vec<String> {
+/// The columns of `trials.csv`.
+pub fn header() -> Vec<String> {
     let mut h: Vec<String> = FIXED_HEADER.iter().map(|s| s.to_string()).collect();
     h.extend(COVERAGE_LEVELS.iter().map(|n| format!("to_{n}")));
     h
@@ -203,6 +204,30 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(
     v
 }
 
+/// Runs one planned trial (its outcome depends only on `key` and `spec`, never on which
+/// thread, process or machine runs it).
+pub fn run_one(key: &TrialKey, spec: &TrialSpec, registry: &PolicyRegistry) -> Result<TrialOutcome, StudyError> {
+    let result = Trial::with_registry(spec.clone(), registry).map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?.run();
+    let m = &result.metrics;
+    Ok(TrialOutcome {
+        row: TrialRow {
+            key: key.clone(),
+            completed: m.completed,
+            tns: m.tns,
+            ttd: m.ttd,
+            noli: m.noli,
+            noli_authors: m.noli_authors,
+            ofv: m.ofv,
+            explored: m.explored,
+            steps_to: m.steps_to.clone(),
+            trial_s: result.timing.trial_s,
+            decisions: result.timing.decisions,
+            per_decision_s: result.timing.per_decision_s,
+        },
+        curve: Curve { key: key.clone(), explored: m.explored_per_step.clone(), distance: m.distance_per_step.clone() },
+    })
+}
+
 /// Runs every planned trial not yet recorded in `out`, appending each as it finishes, and
 /// returns all outcomes in plan order. `progress(done, total)` is called as trials finish.
 pub fn run(
@@ -241,27 +266,7 @@ pub fn run(
     let fresh: Vec<Result<TrialOutcome, StudyError>> = todo
         .par_iter()
         .map(|(key, spec)| {
-            let result = Trial::with_registry(spec.clone(), registry)
-                .map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?
-                .run();
-            let m = &result.metrics;
-            let outcome = TrialOutcome {
-                row: TrialRow {
-                    key: key.clone(),
-                    completed: m.completed,
-                    tns: m.tns,
-                    ttd: m.ttd,
-                    noli: m.noli,
-                    noli_authors: m.noli_authors,
-                    ofv: m.ofv,
-                    explored: m.explored,
-                    steps_to: m.steps_to.clone(),
-                    trial_s: result.timing.trial_s,
-                    decisions: result.timing.decisions,
-                    per_decision_s: result.timing.per_decision_s,
-                },
-                curve: Curve { key: key.clone(), explored: m.explored_per_step.clone(), distance: m.distance_per_step.clone() },
-            };
+            let outcome = run_one(key, spec, registry)?;
             {
                 let mut f = files.lock().expect("no panics while holding the lock");
                 let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };

@@ -11,7 +11,6 @@ macro_rules! out {
 
 mod batch;
 mod compare;
-mod frames;
 mod map_cmd;
 mod plot_training;
 mod train_cmd;

@@ -78,15 +78,15 @@ pub fn run(a: RunArgs) -> Result<()> {
         None => None,
     };
     if let Some(g) = gif.as_mut() {
-        g.push(&crate::frames::frame(&trial))?;
+        g.push(&madenet_env::frame(&trial))?;
     }
     while trial.step() {
         if let Some(g) = gif.as_mut() {
-            g.push(&crate::frames::frame(&trial))?;
+            g.push(&madenet_env::frame(&trial))?;
         }
     }
     if let Some(p) = &a.snapshot {
-        madenet_render::save_png(&crate::frames::frame(&trial), &opts, p)?;
+        madenet_render::save_png(&madenet_env::frame(&trial), &opts, p)?;
     }
     if let Some(g) = gif {
         g.finish()?;

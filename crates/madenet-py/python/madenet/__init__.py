@@ -1,12 +1,23 @@
 """madenet: decentralized multi-robot exploration (MADE-Net, Tan et al., RA-L 2023) with a fast
 simulator in Rust.
 
-``ExplorationEnv`` is a PettingZoo ``ParallelEnv`` over the real world (``madenet._core``): macro
-actions (choose goal candidate k) or primitive moves, the paper's rewards, the same trajectories
-as the ``madenet`` command line for the same seed and decisions.
+* ``ExplorationEnv`` — a PettingZoo ``ParallelEnv`` over the real world: macro actions (choose
+  goal candidate k) or primitive moves, the paper's rewards, the same trajectories as the
+  ``madenet`` command line for the same seed and decisions;
+* ``CentralizedEnv`` — a Gymnasium ``Env`` of the whole team (joint macro action, merged
+  observation);
+* ``VectorEnv`` — N environments stepped together in Rust into preallocated numpy arrays;
+* ``policy(name)`` — the shipped policies (NF, UB, PB, MADE-Net, DME-DRL, …) acting in an env;
+* ``run_trial`` and ``compare`` — one trial and the comparison study; ``madenet.ray.compare``
+  fans the study out over a Ray cluster.
 """
 
 from madenet._core import __version__
+from madenet.centralized import CentralizedEnv
 from madenet.env import ExplorationEnv
+from madenet.policies import Policy, policies, policy
+from madenet.study import TIMING_COLUMNS, compare, run_trial, table
+from madenet.vector import VectorEnv
 
-__all__ = ["ExplorationEnv", "__version__"]
+__all__ = ["CentralizedEnv", "ExplorationEnv", "Policy", "TIMING_COLUMNS", "VectorEnv", "__version__", "compare",
+           "policies", "policy", "run_trial", "table"]

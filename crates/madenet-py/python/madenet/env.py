@@ -2,28 +2,15 @@
 
 from __future__ import annotations
 
-import functools
+import json
 
 import numpy as np
 from gymnasium import spaces
 from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
+from madenet._config import path_or_none, scenario_overrides
 from madenet._core import CoreEnv
-
-
-def _toml_value(key: str, value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return repr(value)
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    raise ValueError(f"{key}: unsupported value {value!r} (numbers, booleans and strings only)")
-
-
-def _overrides(kwargs: dict) -> str:
-    return "".join(f"{k} = {_toml_value(k, v)}\n" for k, v in kwargs.items())
 
 
 class ExplorationEnv(ParallelEnv):
@@ -33,23 +20,37 @@ class ExplorationEnv(ParallelEnv):
     ``start``: a corner (``top-left`` …) or ``"r,c;r,c;r,c"``; ``mode``: ``"macro"`` (action k =
     go to goal candidate k; robots whose macro action is still running have
     ``info["needs_action"] = False`` and their action is ignored) or ``"primitive"`` (one of 9
-    moves every timestep); ``config``: a scenario TOML file; keyword arguments override its fields
-    (``comm_success_prob=0.5``, ``num_robots=3``, …). Bad values raise ``ValueError`` naming the field.
+    moves every timestep: stay, N, NE, E, SE, S, SW, W, NW; a move the mask forbids keeps the robot
+    in place); ``config``: a scenario TOML file; keyword arguments override its fields
+    (``comm_success_prob=0.5``, ``num_robots=3``, …). Bad values raise ``ValueError`` naming the
+    field.
 
     Observations per robot: ``map`` (4 × H × W binary image: explored, obstacles, robots, goal
     candidates), ``vector`` (the macro observation, Sec. III.C.1) and ``action_mask`` (int8).
-    Rewards are Eq. (7) per robot, summed over the timesteps a step advances; Eq. (8), the team
-    reward, is in ``info["team_reward"]``.
+    In primitive mode the goal candidates are left out (channel 3 zero, candidate slots −1)
+    unless ``candidates=True``: extracting them costs more than the step. Rewards are Eq. (7) per
+    robot, summed over the timesteps a step advances; Eq. (8), the team reward, is in
+    ``info["team_reward"]``.
+
+    Besides indices, ``step`` accepts ``None`` (stay) and ``(row, col)`` (go to that cell, the
+    world's navigator plans the path) per robot: what the shipped policies of
+    ``madenet.policy(name).act(env)`` return. ``record=True`` keeps the trajectory for
+    ``result()``. ``render_mode="rgb_array"``: ``render()`` returns the frame ``madenet run
+    --render`` draws (``cell_px`` pixels per cell).
     """
 
-    metadata = {"name": "madenet_exploration_v0", "render_modes": [], "is_parallelizable": True}
+    metadata = {"name": "madenet_exploration_v0", "render_modes": ["rgb_array"], "render_fps": 4, "is_parallelizable": True}
 
     def __init__(self, map: str = "paper:1", start: str = "top-left", mode: str = "macro",
-                 config: str | None = None, render_mode: str | None = None, **overrides):
+                 config: str | None = None, render_mode: str | None = None, candidates: bool = False,
+                 record: bool = False, cell_px: int = 16, **overrides):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode: {render_mode!r} is not supported")
+            raise ValueError(f"render_mode: {render_mode!r} is not supported (expected None or 'rgb_array')")
+        if not isinstance(cell_px, int) or cell_px < 1:
+            raise ValueError(f"cell_px: {cell_px!r} is not a positive int")
         self.render_mode = render_mode
-        self._core = CoreEnv(map, start, mode, config, _overrides(overrides))
+        self.cell_px = cell_px
+        self._core = CoreEnv(map, start, mode, path_or_none(config), scenario_overrides(overrides), bool(candidates), bool(record))
         self.mode = mode
         self.possible_agents = [f"robot_{i}" for i in range(self._core.num_robots)]
         self.agents: list[str] = []
@@ -95,7 +96,7 @@ class ExplorationEnv(ParallelEnv):
     def step(self, actions: dict):
         if not self.agents:
             raise ValueError("step() after the episode ended; call reset()")
-        acts = [int(actions.get(a, 0)) for a in self.possible_agents]
+        acts = [actions.get(a, 0) for a in self.possible_agents]
         rewards, team, steps, terminated, truncated = self._core.step(acts)
         obs = self._observations()
         infos = self._infos(team, steps)
@@ -106,12 +107,19 @@ class ExplorationEnv(ParallelEnv):
             self.agents = []
         return obs, rew, term, trunc, infos
 
+    def result(self) -> dict:
+        """The episode as ``madenet run --json`` prints it (metrics, timing, and the trajectory
+        with ``record=True``); ends the episode."""
+        return json.loads(self._core.finish())
+
     def metrics(self) -> dict:
-        """The episode's metrics (TNS, TTD, NOLI, OFV, explored, completed); ends the episode."""
-        return self._core.metrics()
+        """The episode's metrics (TNS, TTD, NOLI, OFV, explored, completed, …); ends the episode."""
+        return self.result()["metrics"]
 
     def render(self):
-        return None
+        if self.render_mode is None:
+            return None
+        return self._core.render(self.cell_px)
 
     def close(self):
         pass

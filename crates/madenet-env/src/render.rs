@@ -1,4 +1,5 @@
-//! Turning a trial's state into a picture.
+//! A trial's current state as a [`madenet_render::Frame`]: the picture `madenet run --render`
+//! draws and the Python environments' `render()` returns.
 
 use madenet_map::OccGrid;
 use madenet_render::{Frame, RobotFrame};

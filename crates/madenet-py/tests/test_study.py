@@ -1,0 +1,69 @@
+"""madenet.compare against `madenet compare`, and madenet.ray.compare against madenet.compare."""
+
+import csv
+import subprocess
+
+import numpy as np
+import pytest
+
+import madenet
+
+SMALL = dict(methods=["nf", "random"], maps=["paper:3", "generate:5"], starts=["top-left", "bottom-right"],
+             csp=[1.0, 0.5], seeds=2)
+
+
+def assert_same_table(a: dict, b: dict):
+    assert list(a) == list(b)
+    for column in a:
+        if column in madenet.TIMING_COLUMNS:
+            continue
+        np.testing.assert_array_equal(a[column], b[column], err_msg=column)
+
+
+def test_compare_matches_the_command_line(cli, tmp_path):
+    config = tmp_path / "study.toml"
+    config.write_text('methods = ["nf", "random"]\nmaps = ["paper:3", "generate:5"]\nstarts = ["top-left", "bottom-right"]\n'
+                      'csp = [1.0, 0.5]\nseeds = 2\n')
+    subprocess.run([cli, "compare", "--config", str(config), "--out", str(tmp_path / "cli")], check=True, capture_output=True)
+    with open(tmp_path / "cli" / "trials.csv") as f:
+        rows = list(csv.DictReader(f))
+    table = madenet.compare(config)
+    assert len(rows) == len(table["tns"]) == 2 * 2 * 2 * 2 * 2
+    for i, row in enumerate(rows):
+        for column, value in row.items():
+            if column in madenet.TIMING_COLUMNS:
+                continue
+            got = table[column][i]
+            if column in ("method", "map", "start"):
+                assert got == value, column
+            elif column.startswith("to_"):
+                assert got == (int(value) if value else -1), column
+            elif column == "completed":
+                assert bool(got) == (value == "true"), column
+            else:
+                assert float(got) == pytest.approx(float(value), abs=1e-6), column
+    # In memory (keyword fields) and into a folder (the CLI's outputs) give the same table.
+    assert_same_table(madenet.compare(**SMALL, threads=1), table)
+    into = madenet.compare(config, out=tmp_path / "py")
+    assert_same_table(into, table)
+    assert (tmp_path / "py" / "report.md").is_file()
+
+
+def test_compare_rejects_bad_fields():
+    with pytest.raises(ValueError, match="no_such_field"):
+        madenet.compare(no_such_field=1)
+    with pytest.raises(ValueError, match="methods"):
+        madenet.compare(methods=["no-such-method"])
+    with pytest.raises(ValueError, match="csp"):
+        madenet.compare(csp=[2.0], methods=["nf"])
+
+
+def test_ray_compare_equals_the_local_study():
+    ray = pytest.importorskip("ray")
+    import madenet.ray
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        distributed = madenet.ray.compare(**SMALL, batch_size=5)
+    finally:
+        ray.shutdown()
+    assert_same_table(distributed, madenet.compare(**SMALL))
