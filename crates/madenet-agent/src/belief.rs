@@ -147,12 +147,24 @@ impl Belief {
     /// known there is copied. Returns the number of new cells.
     pub fn merge(&mut self, other: &[Occupancy]) -> usize {
         assert_eq!(other.len(), self.map.len(), "merging maps of different sizes");
+        // Blocks of 32 cells are scanned branch-free (vectorized) and only blocks with a cell
+        // unknown here and known there are merged cell by cell, in the same cell order as a
+        // plain loop: once maps agree, the common case, a merge is this scan.
+        const BLOCK: usize = 32;
+        let news = |a: Occupancy, b: Occupancy| a == Occupancy::Unknown && b != Occupancy::Unknown;
         let mut added = 0;
-        for i in 0..other.len() {
-            if self.map.cells()[i] == Occupancy::Unknown && other[i] != Occupancy::Unknown {
-                let p = self.pos(i);
-                self.observe(p, other[i]);
-                added += 1;
+        for start in (0..other.len()).step_by(BLOCK) {
+            let end = (start + BLOCK).min(other.len());
+            let any = self.map.cells()[start..end].iter().zip(&other[start..end]).fold(false, |acc, (&a, &b)| acc | news(a, b));
+            if !any {
+                continue;
+            }
+            for i in start..end {
+                if news(self.map.cells()[i], other[i]) {
+                    let p = self.pos(i);
+                    self.observe(p, other[i]);
+                    added += 1;
+                }
             }
         }
         added
