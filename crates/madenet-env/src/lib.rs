@@ -13,7 +13,7 @@
 //!   ends; rewards are summed over those timesteps.
 //! * [`ActionMode::Primitive`] — one of 9 moves ([`Move::ALL`]: stay, N, NE, …) for every robot
 //!   every timestep; a move into a cell the robot does not know to be free, or where it sees a
-//!   teammate, is masked (taken anyway, the robot stays or is blocked).
+//!   teammate, is masked (taken anyway, the robot stays).
 //!
 //! Observations are the robot's own ([`AgentView`]): the paper's 4-channel map image, the macro
 //! observation vector and the action mask, written into caller-provided slices so that batched

@@ -38,7 +38,9 @@ impl VecEnv {
             return Err(EnvError::Usage("a vector of 0 environments".into()));
         }
         let envs = (0..n).map(|_| env.clone_config()).collect::<Result<Vec<_>, _>>()?;
-        Ok(VecEnv { envs, seeds: (0..n as u64).map(|k| madenet_world::rng::derive_seed(seed, "vec-env", k)).collect(), episodes: vec![0; n] })
+        let mut v = VecEnv { envs, seeds: vec![0; n], episodes: vec![0; n] };
+        v.reseed(seed);
+        Ok(v)
     }
 
     pub fn len(&self) -> usize {
@@ -62,6 +64,7 @@ impl VecEnv {
 
     /// Resets every environment and writes the first observations.
     pub fn reset(&mut self, out: VecBuffers<'_>) -> Result<(), EnvError> {
+        self.check(&out)?;
         for k in 0..self.envs.len() {
             let s = self.episode_seed(k);
             self.envs[k].reset(s)?;
@@ -79,6 +82,12 @@ impl VecEnv {
         if actions.len() != self.envs.len() * robots {
             return Err(EnvError::Usage(format!("{} actions for {} environments × {robots} robots", actions.len(), self.envs.len())));
         }
+        let count = self.envs[0].action_count();
+        if let Some(a) = actions.iter().find(|&&a| a >= count) {
+            return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
+        }
+        // Nothing steps unless every input and output fits.
+        self.check(&out)?;
         let seeds: Vec<u64> = (0..self.envs.len()).map(|k| madenet_world::rng::derive_seed(self.seeds[k], "episode", self.episodes[k] + 1)).collect();
         let results: Vec<Result<(Vec<f64>, bool, bool), EnvError>> = self
             .envs
@@ -107,17 +116,38 @@ impl VecEnv {
         self.write(out)
     }
 
+    /// Every buffer has the length `n` environments need.
+    fn check(&self, out: &VecBuffers<'_>) -> Result<(), EnvError> {
+        let e0 = &self.envs[0];
+        let (n, robots) = (self.envs.len(), e0.num_robots());
+        let lengths = [
+            (out.maps.len(), n * robots * e0.map_len()),
+            (out.vectors.len(), n * robots * e0.vector_len()),
+            (out.masks.len(), n * robots * e0.action_count()),
+            (out.rewards.len(), n * robots),
+            (out.needs_action.len(), n * robots),
+            (out.terminated.len(), n),
+            (out.truncated.len(), n),
+        ];
+        if lengths.iter().any(|(got, want)| got != want) {
+            return Err(EnvError::Usage("output buffers of the wrong length".into()));
+        }
+        Ok(())
+    }
+
+    /// Starts over with the seed sequences of `seed` (as a new `VecEnv` with that seed would).
+    pub fn reseed(&mut self, seed: u64) {
+        for (k, s) in self.seeds.iter_mut().enumerate() {
+            *s = madenet_world::rng::derive_seed(seed, "vec-env", k as u64);
+        }
+        self.episodes.fill(0);
+    }
+
     fn write(&mut self, out: VecBuffers<'_>) -> Result<(), EnvError> {
+        self.check(&out)?;
         let e0 = &self.envs[0];
         let (robots, ml, vl, al) = (e0.num_robots(), e0.map_len(), e0.vector_len(), e0.action_count());
         let per = |len: usize| len * robots;
-        if out.maps.len() != self.envs.len() * per(ml)
-            || out.vectors.len() != self.envs.len() * per(vl)
-            || out.masks.len() != self.envs.len() * per(al)
-            || out.needs_action.len() != self.envs.len() * robots
-        {
-            return Err(EnvError::Usage("output buffers of the wrong length".into()));
-        }
         let results: Vec<Result<(), EnvError>> = self
             .envs
             .par_iter_mut()

@@ -153,12 +153,22 @@ fn joint_actions_decode_to_the_robots_parts() {
     }
     // The merged map's explored channel is the team map; robots appear in channel 2.
     assert!(map[2 * e.height() * e.width()..3 * e.height() * e.width()].iter().filter(|&&v| v == 1.0).count() >= 1);
-    // A valid joint action steps like the robots' parts.
-    let a = mask.iter().position(|&m| m == 1).unwrap();
+    // A valid joint action whose parts differ (so the digit order matters) steps like them.
+    let decode = |a: usize| -> Vec<usize> { (0..n).map(|i| (a / g.pow(i as u32)) % g).collect() };
+    let a = (0..count).find(|&a| mask[a] == 1 && decode(a)[0] != decode(a)[n - 1]).expect("robots with more than one candidate");
+    let parts = decode(a);
     let mut twin = env(ActionMode::Macro, 1.0);
     twin.reset(2).unwrap();
-    let parts: Vec<usize> = (0..n).map(|i| (a / g.pow(i as u32)) % g).collect();
-    assert_eq!(e.step_joint(a).unwrap(), twin.step(&parts).unwrap());
+    let mut reversed = env(ActionMode::Macro, 1.0);
+    reversed.reset(2).unwrap();
+    let (ours, twins) = (e.step_joint(a).unwrap(), twin.step(&parts).unwrap());
+    assert_eq!(ours, twins);
+    let rev: Vec<usize> = parts.iter().rev().copied().collect();
+    reversed.step(&rev).unwrap();
     assert!(e.step_joint(count).is_err());
-    assert!(env(ActionMode::Primitive, 1.0).joint_action_count().is_some());
+    let ours = e.finish().unwrap().trajectory;
+    assert_eq!(ours, twin.finish().unwrap().trajectory);
+    assert_ne!(ours[0].goals, reversed.finish().unwrap().trajectory[0].goals, "the digit order matters");
+    let err = env(ActionMode::Primitive, 1.0).observe_joint_into(&mut map, &mut vector, &mut mask).unwrap_err();
+    assert!(err.to_string().contains("macro"), "{err}");
 }

@@ -107,6 +107,9 @@ fn decision_to_py(py: Python<'_>, d: Decision) -> PyResult<Py<PyAny>> {
     })
 }
 
+/// Largest picture scale: 20 × 20 maps at 64 px per cell are ≈ 2.6 k pixels wide already.
+const MAX_CELL_PX: u32 = 64;
+
 type Observation<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<i8>>);
 
 /// One environment (see `madenet_env`): `map` is `paper:N`, `generate:SEED` or a map file,
@@ -254,6 +257,9 @@ impl CoreEnv {
 
     /// The frame `madenet run --render` draws, as an RGB array `[height, width, 3]` uint8.
     fn render<'py>(&self, py: Python<'py>, cell_px: u32) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        if !(1..=MAX_CELL_PX).contains(&cell_px) {
+            return Err(value_error(format!("cell_px: {cell_px} is not in 1..={MAX_CELL_PX}")));
+        }
         let frame = self.env.frame().map_err(value_error)?;
         let img = madenet_render::render(&frame, &madenet_render::RenderOptions { cell_px, ..Default::default() });
         let (w, h) = (img.width() as usize, img.height() as usize);

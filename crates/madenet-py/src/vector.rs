@@ -7,6 +7,11 @@ use numpy::ndarray::{Ix1, Ix2, Ix3, Ix5};
 use numpy::{PyArray, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
+/// Most environments in one vector.
+const MAX_ENVS: usize = 1 << 16;
+/// Most bytes of observation buffers.
+const MAX_BUFFER_BYTES: usize = 8 << 30;
+
 /// N copies of one environment; see `madenet.VectorEnv`.
 #[pyclass(module = "madenet._core", unsendable)]
 pub struct CoreVecEnv {
@@ -73,6 +78,13 @@ impl CoreVecEnv {
         let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
         let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?).map_err(value_error)?.observing_candidates(candidates);
         let (r, h, w, vl, al) = (env.num_robots(), env.height(), env.width(), env.vector_len(), env.action_count());
+        if num_envs > MAX_ENVS {
+            return Err(value_error(format!("num_envs: {num_envs} is more than {MAX_ENVS}")));
+        }
+        let bytes = [4 * h * w * 4, vl * 4, al].iter().map(|&per_robot| per_robot.checked_mul(r).and_then(|b| b.checked_mul(num_envs))).try_fold(0usize, |acc, b| b.and_then(|b| acc.checked_add(b)));
+        if bytes.is_none_or(|b| b > MAX_BUFFER_BYTES) {
+            return Err(value_error(format!("num_envs: {num_envs} environments' observations would exceed {} GiB", MAX_BUFFER_BYTES >> 30)));
+        }
         let inner = VecEnv::new(env, num_envs, seed).map_err(|e| value_error(format!("num_envs: {e}")))?;
         Ok(CoreVecEnv {
             inner,
@@ -105,8 +117,13 @@ impl CoreVecEnv {
         self.inner.episode_seeds()
     }
 
-    /// Resets every environment; the arrays hold the first observations.
-    fn reset(&mut self, py: Python<'_>) -> PyResult<()> {
+    /// Resets every environment (with `seed`, the seed sequences start over from it); the
+    /// arrays hold the first observations.
+    #[pyo3(signature = (seed = None))]
+    fn reset(&mut self, py: Python<'_>, seed: Option<u64>) -> PyResult<()> {
+        if let Some(s) = seed {
+            self.inner.reseed(s);
+        }
         self.with_buffers(py, |inner, _, out| inner.reset(out))
     }
 
@@ -114,8 +131,8 @@ impl CoreVecEnv {
     /// overwritten in place. Finished environments start their next episode.
     fn step(&mut self, py: Python<'_>, actions: &Bound<'_, PyArrayDyn<i64>>) -> PyResult<()> {
         let count = self.inner.first().action_count();
-        if actions.len() != self.actions.len() {
-            return Err(value_error(format!("actions: {} values for {} environments × {} robots", actions.len(), self.inner.len(), self.num_robots())));
+        if actions.shape() != [self.inner.len(), self.num_robots()] {
+            return Err(value_error(format!("actions: shape {:?}, expected [{}, {}] (environments × robots)", actions.shape(), self.inner.len(), self.num_robots())));
         }
         {
             let ro = actions.try_readonly().map_err(value_error)?;

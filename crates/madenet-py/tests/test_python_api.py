@@ -34,9 +34,7 @@ def test_centralized_joint_mask_matches_the_robots_own_masks_and_episode_ends():
     assert env.action_space.n == g ** n
     # At the first decision every robot decides: joint action a is valid iff each robot's part is.
     masks = [pobs[a]["action_mask"].astype(bool) for a in per_robot.possible_agents]
-    for i, m in enumerate(masks):
-        if not m.any():
-            masks[i] = np.eye(g, dtype=bool)[0]
+    assert sum(m.sum() for m in masks) > n, "some robot has a choice, so the digit order matters"
     for a in range(g ** n):
         parts = [(a // g ** i) % g for i in range(n)]
         assert bool(obs["action_mask"][a]) == all(masks[i][parts[i]] for i in range(n)), a
@@ -166,9 +164,39 @@ def test_vector_env_is_deterministic_and_checks_its_arguments():
         venv.step(np.zeros((2, 2), dtype=np.int64))
     with pytest.raises(ValueError, match="actions"):
         venv.step(np.full((2, 3), 9))
+    with pytest.raises(ValueError, match="actions"):
+        venv.step(np.zeros((3, 2), dtype=np.int64))
+    with pytest.raises(ValueError, match="actions"):
+        venv.step(np.zeros((2, 3), dtype=np.float32))
+    with pytest.raises(ValueError, match="num_envs"):
+        madenet.VectorEnv(10**9)
+    # reset(seed) starts the seed sequences over: the same first episodes as a fresh vector.
+    fresh = madenet.VectorEnv(2, seed=4)
+    fresh.reset()
+    venv.reset(seed=4)
+    np.testing.assert_array_equal(venv._core.episode_seeds(), fresh._core.episode_seeds())
+    np.testing.assert_array_equal(venv.obs["map"], fresh.obs["map"])
 
 
 def test_goal_and_idle_actions_and_their_errors():
+    env = madenet.ExplorationEnv(map="paper:1", mode="primitive", record=True)
+    obs, _ = env.reset(seed=1)
+    # Robot 0 is sent to a known free cell two steps away, the others stay.
+    m = obs["robot_0"]["map"]
+    h, w = m.shape[1:]
+    v = obs["robot_0"]["vector"]
+    here = (round(float(v[0]) * (h - 1)), round(float(v[1]) * (w - 1)))  # own position, normalised
+    free = np.argwhere((m[0] == 1) & (m[1] == 0))
+    robots = np.argwhere(m[2] == 1)
+    # Two steps away, as far from the (idle) teammates as possible, so that none is in the way.
+    ring = [tuple(int(x) for x in p) for p in free if max(abs(p[0] - here[0]), abs(p[1] - here[1])) == 2]
+    goal = max(ring, key=lambda g: min(max(abs(g[0] - r[0]), abs(g[1] - r[1])) for r in robots))
+    for _ in range(6):
+        env.step({"robot_0": goal, "robot_1": None, "robot_2": None})
+    traj = env.result()["trajectory"]
+    assert all(s["goals"][0] == {"row": goal[0], "col": goal[1]} for s in traj)
+    assert all(s["goals"][1] is None and s["goals"][2] is None for s in traj)
+    assert {"row": goal[0], "col": goal[1]} in [s["positions"][0] for s in traj]
     env = madenet.ExplorationEnv(map="paper:1", mode="macro")
     env.reset(seed=1)
     with pytest.raises(ValueError, match="outside"):

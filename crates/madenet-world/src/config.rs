@@ -122,6 +122,9 @@ impl ScenarioConfig {
         if self.num_robots == 0 {
             return Err(field("num_robots", "must be at least 1"));
         }
+        if self.num_robots > MAX_ROBOTS {
+            return Err(field("num_robots", format!("at most {MAX_ROBOTS}, got {}", self.num_robots)));
+        }
         if self.sensing_range < 1 {
             return Err(field("sensing_range", format!("must be at least 1, got {}", self.sensing_range)));
         }
@@ -139,6 +142,9 @@ impl ScenarioConfig {
         if self.goal_count == Some(0) {
             return Err(field("goal_count", "must be at least 1"));
         }
+        if let Some(g) = self.goal_count.filter(|&g| g > MAX_GOALS) {
+            return Err(field("goal_count", format!("at most {MAX_GOALS}, got {g}")));
+        }
         if self.plan_horizon == 0 {
             return Err(field("plan_horizon", "must be at least 1"));
         }
@@ -153,6 +159,11 @@ impl ScenarioConfig {
             .unwrap_or_else(|| goal_count_eq3(cells, self.sensing_range, self.num_robots).unwrap_or(self.num_robots))
     }
 }
+
+/// Largest team a scenario may have (far beyond the paper's 3; keeps every buffer size sane).
+pub const MAX_ROBOTS: usize = 256;
+/// Largest configured |G|.
+pub const MAX_GOALS: usize = 4096;
 
 /// Eq. (3): |G| = floor(4·log10(√|X| / (2·d_s+1))) + |I|, defined when 2·d_s+1 ≤ √|X|.
 pub fn goal_count_eq3(cells: usize, sensing_range: i32, robots: usize) -> Option<usize> {

@@ -29,8 +29,8 @@ class CentralizedEnv(gym.Env):
                  render_mode: str | None = None, cell_px: int = 16, **overrides):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode: {render_mode!r} is not supported (expected None or 'rgb_array')")
-        if not isinstance(cell_px, int) or cell_px < 1:
-            raise ValueError(f"cell_px: {cell_px!r} is not a positive int")
+        if not isinstance(cell_px, int) or not 1 <= cell_px <= 64:
+            raise ValueError(f"cell_px: {cell_px!r} is not an int in 1..64")
         self.render_mode = render_mode
         self.cell_px = cell_px
         self._core = CoreEnv(map, start, "macro", path_or_none(config), scenario_overrides(overrides), True, False)

@@ -23,6 +23,9 @@ class Policy:
     Policies that decide every timestep act in ``mode="primitive"`` environments, those that
     decide when their macro action terminates (MADE-Net, random) in ``mode="macro"``; the wrong
     mode raises ``ValueError`` saying which to use.
+
+    Call ``act`` once per step: each call is a decision of the policy's instances (it advances
+    their random streams and recurrent memory).
     """
 
     def __init__(self, name: str):

@@ -32,13 +32,15 @@ def compare(config=None, address: str | None = None, batch_size: int | None = No
     study = CoreStudy(path, extra)
     text = study.toml_text()
     n = len(study)
+    if batch_size is not None and (not isinstance(batch_size, int) or batch_size < 1):
+        raise ValueError(f"batch_size: {batch_size!r} is not a positive int")
     if not ray.is_initialized():
         ray.init(address=address)
+    elif address is not None:
+        raise ValueError("address: Ray is already initialized here; call ray.shutdown() first or pass address=None")
     if batch_size is None:
         cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
         batch_size = max(1, math.ceil(n / (4 * cpus)))
-    if not isinstance(batch_size, int) or batch_size < 1:
-        raise ValueError(f"batch_size: {batch_size!r} is not a positive int")
     if _remote is None:
         _remote = ray.remote(_run_batch)
     batches = [list(range(i, min(i + batch_size, n))) for i in range(0, n, batch_size)]

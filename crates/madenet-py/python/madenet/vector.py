@@ -28,6 +28,8 @@ class VectorEnv:
 
     def __init__(self, num_envs: int, map: str = "paper:1", start: str = "top-left", mode: str = "primitive",
                  config: str | None = None, seed: int = 0, candidates: bool = False, **overrides):
+        if not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed: {seed!r} is not a non-negative int")
         if not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs: {num_envs!r} is not a positive int")
         self._core = CoreVecEnv(num_envs, map, start, mode, path_or_none(config), scenario_overrides(overrides), int(seed), bool(candidates))
@@ -40,12 +42,19 @@ class VectorEnv:
         self.truncated = self._core.truncated
         self.info = {"needs_action": self._core.needs_action}
 
-    def reset(self):
-        self._core.reset()
+    def reset(self, seed: int | None = None):
+        """Resets every environment; with ``seed``, the episode seed sequences start over from it."""
+        if seed is not None and (not isinstance(seed, (int, np.integer)) or seed < 0):
+            raise ValueError(f"seed: {seed!r} is not a non-negative int")
+        self._core.reset(None if seed is None else int(seed))
         return self.obs, self.info
 
     def step(self, actions):
         """``actions``: ints ``[num_envs, num_robots]`` (any integer dtype)."""
-        a = np.ascontiguousarray(actions, dtype=np.int64)
-        self._core.step(a)
+        a = np.asarray(actions)
+        if not np.issubdtype(a.dtype, np.integer):
+            raise ValueError(f"actions: dtype {a.dtype} is not an integer type")
+        if a.shape != (self.num_envs, self.num_robots):
+            raise ValueError(f"actions: shape {a.shape}, expected ({self.num_envs}, {self.num_robots})")
+        self._core.step(np.ascontiguousarray(a, dtype=np.int64))
         return self.obs, self.rewards, self.terminated, self.truncated, self.info
