@@ -20,6 +20,16 @@
 //! callers allocate nothing per step. Rewards are Eq. (7) per robot and Eq. (8) for the team.
 //! Invalid actions are tolerated (a robot given an invalid candidate stays and decides again).
 //! With the same seed and the same decisions, the trajectory is the one `madenet run` produces.
+//!
+//! Around that core:
+//!
+//! * [`ExplorationEnv::step_decisions`] takes any [`Decision`] (candidate, goal cell, idle), and
+//!   [`ExplorationEnv::policy_decisions`] asks a shipped policy for them — each robot deciding
+//!   from its own view, reproducing the policy's own trial;
+//! * [`ExplorationEnv::observe_joint_into`] / [`ExplorationEnv::step_joint`]: the whole team as
+//!   one agent (merged observation, joint action |G|^|I|), for centralized learners;
+//! * [`VecEnv`]: N environments stepped together on rayon into flat buffers, auto-resetting;
+//! * [`frame`]: the picture of the current state, as `madenet run --render` draws it.
 
 pub mod vector;
 
