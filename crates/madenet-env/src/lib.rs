@@ -123,6 +123,8 @@ pub struct ExplorationEnv {
     /// Shipped policies acting in this episode ([`ExplorationEnv::policy_decisions`]), one
     /// instance per robot, built with the episode's seed.
     policies: Vec<(String, Vec<Box<dyn Policy>>)>,
+    /// Cast rays shared with the other environments of a [`VecEnv`].
+    visibility: Option<std::sync::Arc<madenet_world::Visibility>>,
 }
 
 impl ExplorationEnv {
@@ -147,6 +149,7 @@ impl ExplorationEnv {
             scratch: (0..starts_len).map(|_| ViewScratch::new(h, w)).collect(),
             decisions: Vec::new(),
             policies: Vec::new(),
+            visibility: None,
         };
         env.build(0)?;
         env.trial = None;
@@ -159,6 +162,23 @@ impl ExplorationEnv {
             .with_rewards(self.rewards.clone())
             .recording(self.record)
             .observing_candidates(self.observe_candidates))
+    }
+
+    /// This environment's cast rays, to share with copies of it ([`ExplorationEnv::share_visibility`]).
+    pub fn visibility(&mut self) -> Result<std::sync::Arc<madenet_world::Visibility>, EnvError> {
+        if self.visibility.is_none() {
+            let mut probe = self.build(0)?;
+            self.visibility = Some(probe.visibility());
+        }
+        Ok(self.visibility.clone().expect("set above"))
+    }
+
+    /// Senses with `v` (from [`ExplorationEnv::visibility`] of an environment with the same
+    /// map and scenario) from the next episode on: the same observations, one copy of the rays
+    /// for a whole batch of environments.
+    pub fn share_visibility(&mut self, v: std::sync::Arc<madenet_world::Visibility>) {
+        self.visibility = Some(v);
+        self.trial = None;
     }
 
     /// Whether observations carry the goal candidates (map channel 3, the vector's candidate
@@ -182,13 +202,19 @@ impl ExplorationEnv {
         self
     }
 
-    fn build(&mut self, seed: u64) -> Result<Trial, EnvError> {
+    /// The registry of the stand-in policy.
+    fn registry(&self) -> PolicyRegistry {
         let mode = match self.mode {
             ActionMode::Macro => DecisionMode::OnTermination,
             ActionMode::Primitive => DecisionMode::EveryStep,
         };
         let mut registry = PolicyRegistry::default();
         registry.register("env", "decisions from the environment's caller", move |_| Box::new(Driven(mode)));
+        registry
+    }
+
+    fn build(&mut self, seed: u64) -> Result<Trial, EnvError> {
+        let registry = self.registry();
         let spec = TrialSpec {
             map: self.map.clone(),
             map_name: self.map_name.clone(),
@@ -234,7 +260,17 @@ impl ExplorationEnv {
 
     /// Starts an episode with `seed` (world noise, dropouts) and runs to the first decision point.
     pub fn reset(&mut self, seed: u64) -> Result<(), EnvError> {
-        let mut trial = self.build(seed)?;
+        // The next episode reuses the last one's world (its cast rays): same result as new.
+        let mut trial = match self.trial.take() {
+            Some(old) => old.restart(seed, &self.registry())?,
+            None => {
+                let mut t = self.build(seed)?;
+                if let Some(v) = &self.visibility {
+                    t.use_visibility(v.clone());
+                }
+                t
+            }
+        };
         trial.begin_step();
         self.trial = Some(trial);
         self.seed = seed;

@@ -37,7 +37,17 @@ impl VecEnv {
         if n == 0 {
             return Err(EnvError::Usage("a vector of 0 environments".into()));
         }
-        let envs = (0..n).map(|_| env.clone_config()).collect::<Result<Vec<_>, _>>()?;
+        let mut env = env;
+        // One copy of the cast rays for all (≈ 0.5 MB each on a 20 × 20 map: 64 copies
+        // overflowed the caches).
+        let rays = env.visibility()?;
+        let envs = (0..n)
+            .map(|_| {
+                let mut e = env.clone_config()?;
+                e.share_visibility(rays.clone());
+                Ok(e)
+            })
+            .collect::<Result<Vec<_>, EnvError>>()?;
         let mut v = VecEnv { envs, seeds: vec![0; n], episodes: vec![0; n] };
         v.reseed(seed);
         Ok(v)

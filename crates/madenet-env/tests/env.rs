@@ -172,3 +172,35 @@ fn joint_actions_decode_to_the_robots_parts() {
     let err = env(ActionMode::Primitive, 1.0).observe_joint_into(&mut map, &mut vector, &mut mask).unwrap_err();
     assert!(err.to_string().contains("macro"), "{err}");
 }
+
+#[test]
+fn a_restarted_episode_is_the_same_as_a_fresh_one() {
+    for mode in [ActionMode::Primitive, ActionMode::Macro] {
+        let run = |e: &mut ExplorationEnv, seed: u64, steps: usize| {
+            e.reset(seed).unwrap();
+            let mut rng = madenet_world::rng::stream(seed, "test/actions", 0);
+            let mut rewards = Vec::new();
+            for _ in 0..steps {
+                if e.is_done() {
+                    break;
+                }
+                let a: Vec<usize> = (0..e.num_robots()).map(|_| rng.random_range(0..e.action_count().min(3))).collect();
+                rewards.push(e.step(&a).unwrap());
+            }
+            rewards
+        };
+        let mut reused = env(mode, 0.6);
+        run(&mut reused, 1, 120); // an earlier episode: moves robots, casts rays, drops links
+        let again = run(&mut reused, 5, 400);
+        let mut fresh = env(mode, 0.6);
+        let first = run(&mut fresh, 5, 400);
+        assert_eq!(again, first, "{mode:?}");
+        // Sensing with another environment's cast rays changes nothing either.
+        let mut sharing = env(mode, 0.6);
+        sharing.share_visibility(env(mode, 0.6).visibility().unwrap());
+        assert_eq!(run(&mut sharing, 5, 400), first, "{mode:?}");
+        let want = fresh.finish().unwrap().trajectory;
+        assert_eq!(reused.finish().unwrap().trajectory, want, "{mode:?}");
+        assert_eq!(sharing.finish().unwrap().trajectory, want, "{mode:?}");
+    }
+}

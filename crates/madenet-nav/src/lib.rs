@@ -75,6 +75,25 @@ pub fn astar(
     if start == goal {
         return Some((Vec::new(), 0));
     }
+    // A goal one allowed step away: that step is the unique shortest path (any other takes two
+    // steps, ≥ 2·STRAIGHT > DIAGONAL), so skip the search and its hash map — the common case of
+    // primitive moves and of PB's one-cell goals.
+    if let Some(m) = Move::between(start, goal).filter(|&m| m != Move::Stay && step_allowed(passable, start, m, movement)) {
+        return Some((vec![goal], move_cost(m)));
+    }
+    astar_search(start, goal, passable, movement)
+}
+
+/// [`astar`] without its one-step shortcut: the `pathfinding` crate's A* (for tests).
+pub fn astar_search(
+    start: Pos,
+    goal: Pos,
+    passable: impl Fn(Pos) -> bool + Copy,
+    movement: Movement,
+) -> Option<(Vec<Pos>, u32)> {
+    if start == goal {
+        return Some((Vec::new(), 0));
+    }
     let (mut path, cost) = pathfinding::directed::astar::astar(
         &start,
         |&p| neighbours(p, passable, movement),

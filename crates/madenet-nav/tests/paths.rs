@@ -3,7 +3,7 @@
 
 use madenet_map::{Movement, Pos};
 use madenet_nav::{
-    astar, move_cost, octile, path_length, space_time_astar, Dijkstra, Reservations, DIAGONAL, STRAIGHT,
+    astar, astar_search, move_cost, octile, path_length, space_time_astar, Dijkstra, Reservations, DIAGONAL, STRAIGHT,
     WAIT_COST,
 };
 use madenet_world::{step_allowed, Move};
@@ -113,6 +113,23 @@ proptest! {
                 let mut dpath = vec![Pos::new(99, 99)];
                 prop_assert!(!dij.path_to(goal, &mut dpath));
                 prop_assert!(dpath.is_empty());
+            }
+        }
+    }
+
+    #[test]
+    fn one_step_shortcut_gives_the_searchs_own_path(
+        mut grid in grid_strategy(6, 0.5),
+        s in any::<prop::sample::Index>(),
+    ) {
+        let n = grid.h * grid.w;
+        let start = grid.pos(s.index(n));
+        grid.free[s.index(n)] = true;
+        for movement in RULES {
+            for m in Move::ALL {
+                let goal = m.apply(start);
+                let pass = |p: Pos| grid.passable(p);
+                prop_assert_eq!(astar(start, goal, pass, movement), astar_search(start, goal, pass, movement), "{:?} {:?} from {}", movement, m, start);
             }
         }
     }

@@ -113,6 +113,45 @@ impl Trial {
         })
     }
 
+    /// The trial `with_registry` would build for the same spec with `seed` (policy instances
+    /// made anew from `registry`), reusing this trial's world (its allocations and cast rays):
+    /// how an environment starts its next episode cheaply. Recording and reward settings are
+    /// kept; a joint policy is dropped.
+    pub fn restart(mut self, seed: u64, registry: &PolicyRegistry) -> Result<Self, SimError> {
+        let cfg = self.world.config().clone();
+        let (h, w) = (self.world.truth().height(), self.world.truth().width());
+        let n = self.agents.len();
+        self.agents.clear();
+        for i in 0..n {
+            let ctx = PolicyContext { seed, robot: i, config: &cfg, height: h, width: w };
+            let policy = registry.make(&self.policy, &ctx)?;
+            self.agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w), self.starts[i], policy));
+        }
+        self.world.restart(seed);
+        self.recorder = MetricsRecorder::new(self.world.explored_fraction());
+        self.seed = seed;
+        self.trajectory.clear();
+        self.elapsed = std::time::Duration::ZERO;
+        self.decided.fill(false);
+        self.moves.fill(Move::Stay);
+        self.joint = None;
+        self.interaction_run.fill(0);
+        self.rewards = StepRewards { robots: vec![0.0; n], team: 0.0 };
+        Ok(self)
+    }
+
+    /// Shares the world's cast rays ([`madenet_world::World::visibility`]) with other trials
+    /// on the same map and scenario; see [`Trial::use_visibility`].
+    pub fn visibility(&mut self) -> std::sync::Arc<madenet_world::Visibility> {
+        self.world.visibility()
+    }
+
+    /// Senses with `v` (cast by a trial on the same map and scenario) instead of this world's
+    /// own cache: same observations, less memory when many trials run side by side.
+    pub fn use_visibility(&mut self, v: std::sync::Arc<madenet_world::Visibility>) {
+        self.world.use_visibility(v);
+    }
+
     /// A trial whose robots are driven by one centralized policy (e.g. the CEP of centralized
     /// training): at each step the robots whose macro action terminated get their decision
     /// from `joint`, which sees every robot's view and the team's merged map.

@@ -24,4 +24,4 @@ pub mod world;
 
 pub use config::{goal_count_eq3, ConfigError, ScenarioConfig};
 pub use geometry::{bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern};
-pub use world::{Observation, ScenarioError, World};
+pub use world::{Observation, ScenarioError, Visibility, World};
