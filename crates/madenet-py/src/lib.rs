@@ -247,11 +247,8 @@ impl CoreEnv {
 
     /// What shipped policy `name` decides now for each robot (int, `(row, col)` or `None`).
     fn policy_actions(&mut self, py: Python<'_>, name: &str) -> PyResult<Vec<Py<PyAny>>> {
-        let registry = registry()?;
-        if !registry.names().iter().any(|n| n == name) {
-            return Err(value_error(format!("policy: unknown `{name}`; known: {}", registry.names().join(", "))));
-        }
-        let decisions = self.env.policy_decisions(name, registry).map_err(value_error)?;
+        // An unknown name is the registry's error, naming the known policies.
+        let decisions = self.env.policy_decisions(name, registry()?).map_err(value_error)?;
         decisions.into_iter().map(|d| decision_to_py(py, d)).collect()
     }
 

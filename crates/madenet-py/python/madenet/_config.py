@@ -21,6 +21,14 @@ def scenario_overrides(kwargs: dict) -> str:
     return "".join(f"{k} = {_toml_value(k, v)}\n" for k, v in kwargs.items())
 
 
+def check_render(render_mode, cell_px, modes) -> None:
+    """The rendering arguments every madenet environment takes."""
+    if render_mode is not None and render_mode not in modes:
+        raise ValueError(f"render_mode: {render_mode!r} is not supported (expected None or one of {modes})")
+    if not isinstance(cell_px, int) or not 1 <= cell_px <= 64:
+        raise ValueError(f"cell_px: {cell_px!r} is not an int in 1..64")
+
+
 def path_or_none(config) -> str | None:
     """A config file argument: ``None`` or a path."""
     if config is None:

@@ -9,7 +9,7 @@ from gymnasium import spaces
 from gymnasium.utils import seeding
 from pettingzoo import ParallelEnv
 
-from madenet._config import path_or_none, scenario_overrides
+from madenet._config import check_render, path_or_none, scenario_overrides
 from madenet._core import CoreEnv
 
 
@@ -44,10 +44,7 @@ class ExplorationEnv(ParallelEnv):
     def __init__(self, map: str = "paper:1", start: str = "top-left", mode: str = "macro",
                  config: str | None = None, render_mode: str | None = None, candidates: bool = False,
                  record: bool = False, cell_px: int = 16, **overrides):
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode: {render_mode!r} is not supported (expected None or 'rgb_array')")
-        if not isinstance(cell_px, int) or not 1 <= cell_px <= 64:
-            raise ValueError(f"cell_px: {cell_px!r} is not an int in 1..64")
+        check_render(render_mode, cell_px, self.metadata["render_modes"])
         self.render_mode = render_mode
         self.cell_px = cell_px
         self._core = CoreEnv(map, start, mode, path_or_none(config), scenario_overrides(overrides), bool(candidates), bool(record))
