@@ -8,7 +8,7 @@ use crate::messages::{Beta, PlanMessage, TeammateRecord};
 use crate::policy::{Decision, DecisionMode, Policy};
 use crate::view::AgentView;
 use madenet_map::Pos;
-use madenet_nav::{astar, Dijkstra, Reservations, SpaceTimePlanner};
+use madenet_nav::{astar, one_step, Dijkstra, Reservations, SpaceTimePlanner};
 use madenet_world::{Move, Observation, ScenarioConfig};
 use std::time::{Duration, Instant};
 
@@ -64,7 +64,6 @@ pub const BLOCKED_STEPS: usize = 3;
 pub struct AgentStats {
     pub decisions: usize,
     pub decision_time: Duration,
-    pub plan_time: Duration,
     /// Space-time searches run, and how many found no plan.
     pub space_time_plans: usize,
     pub space_time_failures: usize,
@@ -219,15 +218,21 @@ impl Agent {
 
     /// β_i to send to a teammate this timestep.
     pub fn beta(&self) -> Beta {
-        Beta {
-            from: self.cfg.id,
-            t: self.t,
-            prev_goal: self.prev_goal,
-            pos: self.pos,
-            goal: self.goal,
-            map: self.belief.map().to_vec(),
-            explored: self.belief.known_count(),
-        }
+        let mut b = Beta { from: 0, t: 0, prev_goal: None, pos: self.pos, goal: None, map: Vec::new(), explored: 0 };
+        self.beta_into(&mut b);
+        b
+    }
+
+    /// [`Agent::beta`] written over `b`, reusing its map's allocation.
+    pub fn beta_into(&self, b: &mut Beta) {
+        b.from = self.cfg.id;
+        b.t = self.t;
+        b.prev_goal = self.prev_goal;
+        b.pos = self.pos;
+        b.goal = self.goal;
+        b.map.clear();
+        b.map.extend_from_slice(self.belief.map());
+        b.explored = self.belief.known_count();
     }
 
     /// Stage 2: take in a teammate's β: merge its map, remember its goals and position.
@@ -384,7 +389,6 @@ impl Agent {
     /// detected teammate this robot cannot talk to (a static obstacle to it), space-time A*
     /// plans around them, waiting where needed.
     pub fn plan(&mut self) {
-        let start = Instant::now();
         let Some(goal) = self.goal else {
             self.path.clear();
             return;
@@ -397,7 +401,13 @@ impl Agent {
             let ok = self.dijkstra_fresh && self.dijkstra.source() == Some(self.pos) && self.dijkstra.path_to(goal, &mut self.path);
             if !ok {
                 let belief = &self.belief;
-                self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+                if one_step(self.pos, goal, |p| belief.is_free(p), belief.movement()).is_some() {
+                    // astar's path, without allocating one (primitive moves, one-cell goals).
+                    self.path.clear();
+                    self.path.push(goal);
+                } else {
+                    self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+                }
             }
             self.path_ready = true;
         }
@@ -432,12 +442,22 @@ impl Agent {
             }
             self.stats.space_time_plans += 1;
         }
-        self.stats.plan_time += start.elapsed();
     }
 
     /// This robot's plan, for lower-priority teammates it communicates with.
     pub fn plan_message(&self) -> PlanMessage {
-        PlanMessage { from: self.cfg.id, t: self.t, start: self.pos, path: self.path.clone() }
+        let mut m = PlanMessage { from: 0, t: 0, start: self.pos, path: Vec::new() };
+        self.plan_message_into(&mut m);
+        m
+    }
+
+    /// [`Agent::plan_message`] written over `m`, reusing its path's allocation.
+    pub fn plan_message_into(&self, m: &mut PlanMessage) {
+        m.from = self.cfg.id;
+        m.t = self.t;
+        m.start = self.pos;
+        m.path.clear();
+        m.path.extend_from_slice(&self.path);
     }
 
     /// Teammates this robot exchanged with this timestep.

@@ -150,13 +150,11 @@ impl Belief {
         // Blocks of 32 cells are scanned branch-free (vectorized) and only blocks with a cell
         // unknown here and known there are merged cell by cell, in the same cell order as a
         // plain loop: once maps agree, the common case, a merge is this scan.
-        const BLOCK: usize = 32;
         let news = |a: Occupancy, b: Occupancy| a == Occupancy::Unknown && b != Occupancy::Unknown;
         let mut added = 0;
-        for start in (0..other.len()).step_by(BLOCK) {
-            let end = (start + BLOCK).min(other.len());
-            let any = self.map.cells()[start..end].iter().zip(&other[start..end]).fold(false, |acc, (&a, &b)| acc | news(a, b));
-            if !any {
+        for start in (0..other.len()).step_by(MERGE_BLOCK) {
+            let end = (start + MERGE_BLOCK).min(other.len());
+            if !block_has_news(&self.map.cells()[start..end], &other[start..end]) {
                 continue;
             }
             for i in start..end {
@@ -194,6 +192,26 @@ impl Belief {
                 self.frontier_count -= 1;
             }
         }
+    }
+}
+
+/// Cells per block of [`Belief::merge`]'s scan.
+const MERGE_BLOCK: usize = 32;
+
+/// Whether a block has a cell unknown in `mine` and known in `theirs`. Full blocks are fixed-size
+/// arrays reduced with a byte-wise OR on the codes (unknown = 0), which compiles to a few vector
+/// instructions; a slice `fold` of the same did not vectorize (≈ 4 instructions per cell).
+#[inline]
+fn block_has_news(mine: &[Occupancy], theirs: &[Occupancy]) -> bool {
+    match (<&[Occupancy; MERGE_BLOCK]>::try_from(mine), <&[Occupancy; MERGE_BLOCK]>::try_from(theirs)) {
+        (Ok(a), Ok(b)) => {
+            let mut acc = 0u8;
+            for i in 0..MERGE_BLOCK {
+                acc |= (a[i] as u8 == 0) as u8 & (b[i] as u8 != 0) as u8;
+            }
+            acc != 0
+        }
+        _ => mine.iter().zip(theirs).any(|(&a, &b)| a == Occupancy::Unknown && b != Occupancy::Unknown),
     }
 }
 

@@ -40,20 +40,20 @@ pub mod render;
 pub use madenet_agent::Decision;
 pub use render::frame;
 
-use madenet_agent::{action_mask, write_joint_map_image, AgentView, DecisionMode, Policy, ViewScratch};
+use madenet_agent::{action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord, ViewScratch};
 use madenet_map::{OccGrid, Pos};
 use madenet_render::Frame;
 use madenet_sim::{PolicyContext, PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec};
 use madenet_world::{Move, ScenarioConfig};
 
-/// Whether primitive move `mv` is allowed for the robot of `view`: staying always is; a move
+/// Whether primitive move `mv` is allowed for a robot at `pos` with this belief and teammates: staying always is; a move
 /// needs a target cell the robot knows to be free and where it sees no teammate.
-fn primitive_allowed(view: &AgentView<'_>, mv: Move) -> bool {
+fn primitive_allowed(pos: Pos, belief: &Belief, teammates: &[TeammateRecord], mv: Move) -> bool {
     if mv == Move::Stay {
         return true;
     }
-    let to = mv.apply(view.pos);
-    view.belief.is_free(to) && !view.teammates.iter().any(|r| r.detected && r.seen_pos == Some(to))
+    let to = mv.apply(pos);
+    belief.is_free(to) && !teammates.iter().any(|r| r.detected && r.seen_pos == Some(to))
 }
 
 /// What an action means.
@@ -125,6 +125,19 @@ pub struct ExplorationEnv {
     policies: Vec<(String, Vec<Box<dyn Policy>>)>,
     /// Cast rays shared with the other environments of a [`VecEnv`].
     visibility: Option<std::sync::Arc<madenet_world::Visibility>>,
+    /// |G| (Eq. 3 unless configured), computed once.
+    goal_count: usize,
+    /// Eq. (7) per robot summed over the last step's timesteps (reused, no allocation per step).
+    step_rewards: Vec<f64>,
+}
+
+/// What [`ExplorationEnv::advance`] reports besides the per-robot rewards.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Advanced {
+    team_reward: f64,
+    steps: usize,
+    pub(crate) terminated: bool,
+    pub(crate) truncated: bool,
 }
 
 impl ExplorationEnv {
@@ -150,7 +163,10 @@ impl ExplorationEnv {
             decisions: Vec::new(),
             policies: Vec::new(),
             visibility: None,
+            goal_count: 0,
+            step_rewards: vec![0.0; starts_len],
         };
+        env.goal_count = env.scenario.goal_count_for(h * w);
         env.build(0)?;
         env.trial = None;
         Ok(env)
@@ -223,7 +239,7 @@ impl ExplorationEnv {
             policy: "env".into(),
             seed,
         };
-        Ok(Trial::with_registry(spec, &registry)?.reward_config(self.rewards.clone()).record_trajectory(self.record))
+        Ok(Trial::with_registry(spec, &registry)?.reward_config(self.rewards.clone()).record_trajectory(self.record).timed(false))
     }
 
     pub fn num_robots(&self) -> usize {
@@ -247,7 +263,7 @@ impl ExplorationEnv {
     }
     /// |G| for this map (Eq. 3 unless configured).
     pub fn goal_count(&self) -> usize {
-        self.scenario.goal_count_for(self.map.height() * self.map.width())
+        self.goal_count
     }
     /// Length of the observation vector ([`AgentView::macro_observation`]).
     pub fn vector_len(&self) -> usize {
@@ -300,6 +316,14 @@ impl ExplorationEnv {
         }
     }
 
+    /// [`ExplorationEnv::needs_action`] written into `out` (one per robot).
+    pub(crate) fn needs_action_into(&self, out: &mut [bool]) {
+        match &self.trial {
+            Some(t) if !t.is_done() => out.copy_from_slice(t.deciding()),
+            _ => out.fill(false),
+        }
+    }
+
     /// The current timestep.
     pub fn t(&self) -> usize {
         self.trial.as_ref().map_or(0, |t| t.world().t())
@@ -329,7 +353,7 @@ impl ExplorationEnv {
             }
             ActionMode::Primitive => {
                 for (m, mv) in mask.iter_mut().zip(Move::ALL) {
-                    *m = primitive_allowed(&view, mv) as u8;
+                    *m = primitive_allowed(view.pos, view.belief, view.teammates, mv) as u8;
                 }
             }
         }
@@ -461,40 +485,65 @@ impl ExplorationEnv {
     /// episode's end. Macro: action k = goal candidate k. Primitive: [`Move::ALL`]`[k]`; a move
     /// the mask forbids keeps the robot where it is.
     pub fn step(&mut self, actions: &[usize]) -> Result<StepResult, EnvError> {
-        let n = self.num_robots();
-        if actions.len() != n {
-            return Err(EnvError::Usage(format!("{} actions for {n} robots", actions.len())));
-        }
+        let a = self.step_in_place(actions)?;
+        Ok(self.step_result(a))
+    }
+
+    /// The decisions `actions` (one per robot, checked) stand for.
+    fn decide_actions(&self, actions: &[usize], decisions: &mut Vec<Decision>) -> Result<(), EnvError> {
         let count = self.action_count();
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
             return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
         }
-        let mode = self.mode;
-        let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
-        let mut decisions = std::mem::take(&mut self.decisions);
+        let trial = self.trial()?;
         decisions.clear();
         for (i, &a) in actions.iter().enumerate() {
-            decisions.push(match mode {
+            decisions.push(match self.mode {
                 ActionMode::Macro => Decision::Candidate(a),
                 ActionMode::Primitive => {
                     let agent = &trial.agents()[i];
-                    let view = agent.peek_view(false, &mut self.scratch[i]);
                     match Move::ALL[a] {
-                        mv if mv != Move::Stay && primitive_allowed(&view, mv) => Decision::Goal(mv.apply(view.pos)),
+                        mv if mv != Move::Stay && primitive_allowed(agent.pos(), agent.belief(), agent.teammates(), mv) => Decision::Goal(mv.apply(agent.pos())),
                         _ => Decision::Idle,
                     }
                 }
             });
         }
-        let r = self.step_decisions(&decisions);
+        Ok(())
+    }
+
+    /// [`ExplorationEnv::step`] without building a [`StepResult`]: the rewards stay in
+    /// [`ExplorationEnv::step_rewards`] (the batched path allocates nothing per step).
+    pub(crate) fn step_in_place(&mut self, actions: &[usize]) -> Result<Advanced, EnvError> {
+        let n = self.num_robots();
+        if actions.len() != n {
+            return Err(EnvError::Usage(format!("{} actions for {n} robots", actions.len())));
+        }
+        let mut decisions = std::mem::take(&mut self.decisions);
+        let r = self.decide_actions(actions, &mut decisions).and_then(|()| self.advance(&decisions));
         self.decisions = decisions;
         r
+    }
+
+    /// Eq. (7) per robot, summed over the timesteps of the last step.
+    pub(crate) fn step_rewards(&self) -> &[f64] {
+        &self.step_rewards
+    }
+
+    fn step_result(&self, a: Advanced) -> StepResult {
+        StepResult { rewards: self.step_rewards.clone(), team_reward: a.team_reward, steps: a.steps, terminated: a.terminated, truncated: a.truncated }
     }
 
     /// Applies one [`Decision`] per robot (those of robots not in
     /// [`ExplorationEnv::needs_action`] are ignored): a candidate index, any goal cell, or
     /// idling; then advances to the next decision point or the episode's end.
     pub fn step_decisions(&mut self, decisions: &[Decision]) -> Result<StepResult, EnvError> {
+        let a = self.advance(decisions)?;
+        Ok(self.step_result(a))
+    }
+
+    /// [`ExplorationEnv::step_decisions`], the rewards left in `step_rewards`.
+    fn advance(&mut self, decisions: &[Decision]) -> Result<Advanced, EnvError> {
         let n = self.num_robots();
         if decisions.len() != n {
             return Err(EnvError::Usage(format!("{} decisions for {n} robots", decisions.len())));
@@ -514,11 +563,12 @@ impl ExplorationEnv {
             }
         }
         trial.apply_decisions(decisions);
-        let mut out = StepResult { rewards: vec![0.0; n], ..StepResult::default() };
+        self.step_rewards.fill(0.0);
+        let mut out = Advanced { team_reward: 0.0, steps: 0, terminated: false, truncated: false };
         loop {
             trial.finish_step();
             out.steps += 1;
-            for (o, r) in out.rewards.iter_mut().zip(&trial.rewards().robots) {
+            for (o, r) in self.step_rewards.iter_mut().zip(&trial.rewards().robots) {
                 *o += r;
             }
             out.team_reward += trial.rewards().team;
@@ -531,7 +581,8 @@ impl ExplorationEnv {
         Ok(out)
     }
 
-    /// The trial so far (metrics, and the trajectory if recording).
+    /// The trial so far (metrics, and the trajectory if recording). Steps are not timed in an
+    /// environment (the caller's decisions are part of its loop): `timing.trial_s` is 0.
     pub fn finish(&mut self) -> Option<TrialResult> {
         self.trial.take().map(Trial::finish)
     }

@@ -24,11 +24,85 @@ pub struct VecBuffers<'a> {
     pub truncated: &'a mut [bool],
 }
 
+/// One environment's share of the [`VecBuffers`].
+struct EnvOut<'a> {
+    maps: &'a mut [f32],
+    vectors: &'a mut [f32],
+    masks: &'a mut [u8],
+    rewards: &'a mut [f32],
+    needs_action: &'a mut [bool],
+    terminated: &'a mut bool,
+    truncated: &'a mut bool,
+}
+
+/// One environment of the batch with its seed sequence.
+struct Slot {
+    env: ExplorationEnv,
+    /// Seed of the sequence of episode seeds.
+    seed: u64,
+    /// Episodes finished so far.
+    episode: u64,
+}
+
+impl Slot {
+    fn episode_seed(&self) -> u64 {
+        madenet_world::rng::derive_seed(self.seed, "episode", self.episode)
+    }
+
+    /// Writes every robot's observation and whether it acts next.
+    fn observe(&mut self, out: &mut EnvOut<'_>) -> Result<(), EnvError> {
+        let e = &mut self.env;
+        let (ml, vl, al) = (e.map_len(), e.vector_len(), e.action_count());
+        for i in 0..e.num_robots() {
+            e.observe_into(i, &mut out.maps[i * ml..(i + 1) * ml], &mut out.vectors[i * vl..(i + 1) * vl], &mut out.masks[i * al..(i + 1) * al])?;
+        }
+        e.needs_action_into(out.needs_action);
+        Ok(())
+    }
+
+    /// One step with `actions`, resetting with the next seed when the episode ends, then the
+    /// observations.
+    fn step(&mut self, actions: &[usize], out: &mut EnvOut<'_>) -> Result<(), EnvError> {
+        let r = self.env.step_in_place(actions)?;
+        for (o, &v) in out.rewards.iter_mut().zip(self.env.step_rewards()) {
+            *o = v as f32;
+        }
+        *out.terminated = r.terminated;
+        *out.truncated = r.truncated;
+        if r.terminated || r.truncated {
+            self.episode += 1;
+            let s = self.episode_seed();
+            self.env.reset(s)?;
+        }
+        self.observe(out)
+    }
+}
+
+/// Runs `f` on every (slot, output share) pair: on the calling thread when rayon has one
+/// thread (no hand-off to a worker per call), else on rayon's pool. Every environment runs
+/// even if one fails; the first error (in environment order) is returned.
+fn for_each_env<F>(slots: &mut [Slot], outs: Vec<EnvOut<'_>>, f: F) -> Result<(), EnvError>
+where
+    F: Fn(usize, &mut Slot, &mut EnvOut<'_>) -> Result<(), EnvError> + Sync,
+{
+    if rayon::current_num_threads() <= 1 {
+        let mut first = Ok(());
+        for (k, (slot, mut out)) in slots.iter_mut().zip(outs).enumerate() {
+            let r = f(k, slot, &mut out);
+            if first.is_ok() {
+                first = r;
+            }
+        }
+        first
+    } else {
+        let results: Vec<Result<(), EnvError>> = slots.par_iter_mut().zip(outs).enumerate().map(|(k, (slot, mut out))| f(k, slot, &mut out)).collect();
+        results.into_iter().collect()
+    }
+}
+
 /// N environments over the same scenario.
 pub struct VecEnv {
-    envs: Vec<ExplorationEnv>,
-    seeds: Vec<u64>,
-    episodes: Vec<u64>,
+    slots: Vec<Slot>,
 }
 
 impl VecEnv {
@@ -41,99 +115,72 @@ impl VecEnv {
         // One copy of the cast rays for all (≈ 0.5 MB each on a 20 × 20 map: 64 copies
         // overflowed the caches).
         let rays = env.visibility()?;
-        let envs = (0..n)
+        let slots = (0..n)
             .map(|_| {
                 let mut e = env.clone_config()?;
                 e.share_visibility(rays.clone());
-                Ok(e)
+                Ok(Slot { env: e, seed: 0, episode: 0 })
             })
             .collect::<Result<Vec<_>, EnvError>>()?;
-        let mut v = VecEnv { envs, seeds: vec![0; n], episodes: vec![0; n] };
+        let mut v = VecEnv { slots };
         v.reseed(seed);
         Ok(v)
     }
 
     pub fn len(&self) -> usize {
-        self.envs.len()
+        self.slots.len()
     }
     pub fn is_empty(&self) -> bool {
-        self.envs.is_empty()
+        self.slots.is_empty()
     }
     pub fn first(&self) -> &ExplorationEnv {
-        &self.envs[0]
+        &self.slots[0].env
     }
 
     /// The seed of each environment's current episode.
     pub fn episode_seeds(&self) -> Vec<u64> {
-        self.envs.iter().map(ExplorationEnv::seed).collect()
-    }
-
-    fn episode_seed(&self, k: usize) -> u64 {
-        madenet_world::rng::derive_seed(self.seeds[k], "episode", self.episodes[k])
+        self.slots.iter().map(|s| s.env.seed()).collect()
     }
 
     /// Resets every environment and writes the first observations.
     pub fn reset(&mut self, out: VecBuffers<'_>) -> Result<(), EnvError> {
-        self.check(&out)?;
-        for k in 0..self.envs.len() {
-            let s = self.episode_seed(k);
-            self.envs[k].reset(s)?;
-        }
-        out.terminated.fill(false);
-        out.truncated.fill(false);
-        out.rewards.fill(0.0);
-        self.write(out)
+        let outs = self.split(out)?;
+        for_each_env(&mut self.slots, outs, |_, slot, out| {
+            let s = slot.episode_seed();
+            slot.env.reset(s)?;
+            *out.terminated = false;
+            *out.truncated = false;
+            out.rewards.fill(0.0);
+            slot.observe(out)
+        })
     }
 
     /// Steps environment k with `actions[k·robots..]` (all environments in parallel on rayon's
-    /// pool); environments whose episode ended are reset and observed anew.
+    /// pool, or in turn on the calling thread when the pool has one thread); environments
+    /// whose episode ended are reset and observed anew.
     pub fn step(&mut self, actions: &[usize], out: VecBuffers<'_>) -> Result<(), EnvError> {
-        let robots = self.envs[0].num_robots();
-        if actions.len() != self.envs.len() * robots {
-            return Err(EnvError::Usage(format!("{} actions for {} environments × {robots} robots", actions.len(), self.envs.len())));
+        let robots = self.slots[0].env.num_robots();
+        if actions.len() != self.slots.len() * robots {
+            return Err(EnvError::Usage(format!("{} actions for {} environments × {robots} robots", actions.len(), self.slots.len())));
         }
-        let count = self.envs[0].action_count();
+        let count = self.slots[0].env.action_count();
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
             return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
         }
         // Nothing steps unless every input and output fits.
-        self.check(&out)?;
-        let seeds: Vec<u64> = (0..self.envs.len()).map(|k| madenet_world::rng::derive_seed(self.seeds[k], "episode", self.episodes[k] + 1)).collect();
-        let results: Vec<Result<(Vec<f64>, bool, bool), EnvError>> = self
-            .envs
-            .par_iter_mut()
-            .zip(actions.par_chunks(robots))
-            .zip(seeds.par_iter())
-            .map(|((env, acts), &next_seed)| {
-                let r = env.step(acts)?;
-                if env.is_done() {
-                    env.reset(next_seed)?;
-                }
-                Ok((r.rewards, r.terminated, r.truncated))
-            })
-            .collect();
-        for (k, r) in results.into_iter().enumerate() {
-            let (rewards, term, trunc) = r?;
-            for (o, v) in out.rewards[k * robots..(k + 1) * robots].iter_mut().zip(rewards) {
-                *o = v as f32;
-            }
-            out.terminated[k] = term;
-            out.truncated[k] = trunc;
-            if term || trunc {
-                self.episodes[k] += 1;
-            }
-        }
-        self.write(out)
+        let outs = self.split(out)?;
+        for_each_env(&mut self.slots, outs, |k, slot, out| slot.step(&actions[k * robots..(k + 1) * robots], out))
     }
 
-    /// Every buffer has the length `n` environments need.
-    fn check(&self, out: &VecBuffers<'_>) -> Result<(), EnvError> {
-        let e0 = &self.envs[0];
-        let (n, robots) = (self.envs.len(), e0.num_robots());
+    /// Every buffer has the length `n` environments need; cut into one share per environment.
+    fn split<'a>(&self, out: VecBuffers<'a>) -> Result<Vec<EnvOut<'a>>, EnvError> {
+        let e0 = &self.slots[0].env;
+        let (n, robots) = (self.slots.len(), e0.num_robots());
+        let (ml, vl, al) = (e0.map_len(), e0.vector_len(), e0.action_count());
         let lengths = [
-            (out.maps.len(), n * robots * e0.map_len()),
-            (out.vectors.len(), n * robots * e0.vector_len()),
-            (out.masks.len(), n * robots * e0.action_count()),
+            (out.maps.len(), n * robots * ml),
+            (out.vectors.len(), n * robots * vl),
+            (out.masks.len(), n * robots * al),
             (out.rewards.len(), n * robots),
             (out.needs_action.len(), n * robots),
             (out.terminated.len(), n),
@@ -142,37 +189,23 @@ impl VecEnv {
         if lengths.iter().any(|(got, want)| got != want) {
             return Err(EnvError::Usage("output buffers of the wrong length".into()));
         }
-        Ok(())
+        Ok(out
+            .maps
+            .chunks_mut(robots * ml)
+            .zip(out.vectors.chunks_mut(robots * vl))
+            .zip(out.masks.chunks_mut((robots * al).max(1)))
+            .zip(out.rewards.chunks_mut(robots))
+            .zip(out.needs_action.chunks_mut(robots))
+            .zip(out.terminated.iter_mut().zip(out.truncated.iter_mut()))
+            .map(|(((((maps, vectors), masks), rewards), needs_action), (terminated, truncated))| EnvOut { maps, vectors, masks, rewards, needs_action, terminated, truncated })
+            .collect())
     }
 
     /// Starts over with the seed sequences of `seed` (as a new `VecEnv` with that seed would).
     pub fn reseed(&mut self, seed: u64) {
-        for (k, s) in self.seeds.iter_mut().enumerate() {
-            *s = madenet_world::rng::derive_seed(seed, "vec-env", k as u64);
+        for (k, s) in self.slots.iter_mut().enumerate() {
+            s.seed = madenet_world::rng::derive_seed(seed, "vec-env", k as u64);
+            s.episode = 0;
         }
-        self.episodes.fill(0);
-    }
-
-    fn write(&mut self, out: VecBuffers<'_>) -> Result<(), EnvError> {
-        self.check(&out)?;
-        let e0 = &self.envs[0];
-        let (robots, ml, vl, al) = (e0.num_robots(), e0.map_len(), e0.vector_len(), e0.action_count());
-        let per = |len: usize| len * robots;
-        let results: Vec<Result<(), EnvError>> = self
-            .envs
-            .par_iter_mut()
-            .zip(out.maps.par_chunks_mut(per(ml)))
-            .zip(out.vectors.par_chunks_mut(per(vl)))
-            .zip(out.masks.par_chunks_mut(per(al)))
-            .zip(out.needs_action.par_chunks_mut(robots))
-            .map(|((((env, maps), vectors), masks), needs)| {
-                for i in 0..robots {
-                    env.observe_into(i, &mut maps[i * ml..(i + 1) * ml], &mut vectors[i * vl..(i + 1) * vl], &mut masks[i * al..(i + 1) * al])?;
-                }
-                needs.copy_from_slice(&env.needs_action());
-                Ok(())
-            })
-            .collect();
-        results.into_iter().collect()
     }
 }

@@ -78,10 +78,17 @@ pub fn astar(
     // A goal one allowed step away: that step is the unique shortest path (any other takes two
     // steps, ≥ 2·STRAIGHT > DIAGONAL), so skip the search and its hash map — the common case of
     // primitive moves and of PB's one-cell goals.
-    if let Some(m) = Move::between(start, goal).filter(|&m| m != Move::Stay && step_allowed(passable, start, m, movement)) {
-        return Some((vec![goal], move_cost(m)));
+    if let Some(cost) = one_step(start, goal, passable, movement) {
+        return Some((vec![goal], cost));
     }
     astar_search(start, goal, passable, movement)
+}
+
+/// The cost of reaching `goal` from `start` in one allowed step (`None` if it takes more or
+/// cannot be done): then `[goal]` is [`astar`]'s path, found without a search.
+#[inline]
+pub fn one_step(start: Pos, goal: Pos, passable: impl Fn(Pos) -> bool + Copy, movement: Movement) -> Option<u32> {
+    Move::between(start, goal).filter(|&m| m != Move::Stay && step_allowed(passable, start, m, movement)).map(move_cost)
 }
 
 /// [`astar`] without its one-step shortcut: the `pathfinding` crate's A* (for tests).

@@ -19,6 +19,7 @@ pub struct Reservations {
     horizon: usize,
     stamp: Vec<u32>,
     generation: u32,
+    /// Reservations made since the last clear (repeats counted): zero means none.
     count: usize,
 }
 
@@ -46,21 +47,35 @@ impl Reservations {
         self.count == 0
     }
 
+    /// Index of (`p`, `t`) in `stamp`, cell-major (a cell's timesteps are adjacent, so parking
+    /// a robot until the horizon writes one run of memory).
     #[inline]
     fn slot(&self, p: Pos, t: usize) -> Option<usize> {
         let inb = p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width;
-        (inb && t <= self.horizon).then(|| t * self.width * self.height + p.row as usize * self.width + p.col as usize)
+        (inb && t <= self.horizon).then(|| (p.row as usize * self.width + p.col as usize) * (self.horizon + 1) + t)
     }
 
-    pub fn reserve(&mut self, p: Pos, t: usize) {
+    fn allocate(&mut self) {
         if self.stamp.is_empty() {
             self.stamp = vec![0; self.width * self.height * (self.horizon + 1)];
         }
+    }
+
+    pub fn reserve(&mut self, p: Pos, t: usize) {
+        self.allocate();
         if let Some(s) = self.slot(p, t) {
-            if self.stamp[s] != self.generation {
-                self.stamp[s] = self.generation;
-                self.count += 1;
-            }
+            self.stamp[s] = self.generation;
+            self.count += 1;
+        }
+    }
+
+    /// Reserves `p` for every t in `from..=self.horizon`.
+    fn reserve_until_horizon(&mut self, p: Pos, from: usize) {
+        self.allocate();
+        if let Some(s) = self.slot(p, from) {
+            let end = s + (self.horizon - from) + 1;
+            self.stamp[s..end].fill(self.generation);
+            self.count += end - s;
         }
     }
 
@@ -80,8 +95,8 @@ impl Reservations {
             self.reserve(p, k);
         }
         let last = path.last().copied().unwrap_or(start);
-        for t in path.len() + 1..=self.horizon {
-            self.reserve(last, t);
+        if path.len() < self.horizon {
+            self.reserve_until_horizon(last, path.len() + 1);
         }
     }
 

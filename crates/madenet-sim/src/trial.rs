@@ -3,7 +3,7 @@
 use crate::registry::{PolicyContext, PolicyRegistry};
 use crate::rewards::{RewardConfig, StepRewards};
 use crate::SimError;
-use madenet_agent::{Agent, AgentConfig, Beta, Decision, External, JointPolicy};
+use madenet_agent::{Agent, AgentConfig, Beta, Decision, External, JointPolicy, PlanMessage};
 use madenet_map::{OccGrid, Pos};
 use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
 use madenet_world::{Move, ScenarioConfig, World};
@@ -64,8 +64,9 @@ pub struct Trial {
     recorder: MetricsRecorder,
     trajectory: Vec<StepRecord>,
     record: bool,
-    /// Wall time spent inside `step`.
+    /// Wall time spent inside `step` (when `timed`).
     elapsed: std::time::Duration,
+    timed: bool,
     decided: Vec<bool>,
     moves: Vec<Move>,
     /// A centralized policy deciding for every robot, if any (else each agent's own).
@@ -74,6 +75,11 @@ pub struct Trial {
     /// Consecutive timesteps each robot has been in local interaction (ρ of Eq. 7).
     interaction_run: Vec<u32>,
     rewards: StepRewards,
+    /// Messages of the current step, kept to reuse their allocations: each robot's β
+    /// (`composed` = written this step) and the plan being announced.
+    outbox: Vec<Beta>,
+    composed: Vec<bool>,
+    plan_message: PlanMessage,
 }
 
 impl Trial {
@@ -104,12 +110,16 @@ impl Trial {
             trajectory: Vec::new(),
             record: false,
             elapsed: std::time::Duration::ZERO,
+            timed: true,
             decided: vec![false; n],
             moves: vec![Move::Stay; n],
             joint: None,
             reward_config: RewardConfig::default(),
             interaction_run: vec![0; n],
             rewards: StepRewards { robots: vec![0.0; n], team: 0.0 },
+            outbox: (0..n).map(|i| Beta { from: i, t: 0, prev_goal: None, pos: Pos::new(0, 0), goal: None, map: Vec::new(), explored: 0 }).collect(),
+            composed: vec![false; n],
+            plan_message: PlanMessage { from: 0, t: 0, start: Pos::new(0, 0), path: Vec::new() },
         })
     }
 
@@ -176,6 +186,26 @@ impl Trial {
         &self.rewards
     }
 
+    /// Measure the wall time of the steps (`timing.trial_s`; on by default). Off, the result's
+    /// `trial_s` is 0 and a step reads no clock: for callers that time (or do not need) the
+    /// steps themselves, such as step-wise environments, where reading the clock was 7 % of a
+    /// step.
+    pub fn timed(mut self, on: bool) -> Self {
+        self.timed = on;
+        self
+    }
+
+    /// The clock when timing, to add the time since to `elapsed` with [`Trial::add_elapsed`].
+    fn clock(&self) -> Option<Instant> {
+        self.timed.then(Instant::now)
+    }
+
+    fn add_elapsed(&mut self, started: Option<Instant>) {
+        if let Some(s) = started {
+            self.elapsed += s.elapsed();
+        }
+    }
+
     /// Keep a [`StepRecord`] per timestep in the result.
     pub fn record_trajectory(mut self, on: bool) -> Self {
         self.record = on;
@@ -216,8 +246,7 @@ impl Trial {
         if self.world.is_done() {
             return false;
         }
-        let started = Instant::now();
-        let n = self.agents.len();
+        let started = self.clock();
         // 1. observe
         for (i, a) in self.agents.iter_mut().enumerate() {
             a.observe(self.world.observation(i));
@@ -225,24 +254,26 @@ impl Trial {
         // 2. exchange β along successful links; messages are composed before delivery.
         let exchanges = self.world.exchanges();
         if !exchanges.is_empty() {
-            let mut outbox: Vec<Option<Beta>> = vec![None; n];
+            // The outbox's messages are reused from step to step (no allocation per message).
+            self.composed.fill(false);
             for &(i, j) in exchanges {
                 for k in [i, j] {
-                    if outbox[k].is_none() {
-                        outbox[k] = Some(self.agents[k].beta());
+                    if !self.composed[k] {
+                        self.agents[k].beta_into(&mut self.outbox[k]);
+                        self.composed[k] = true;
                     }
                 }
             }
             for &(i, j) in exchanges {
-                self.agents[j].receive_beta(outbox[i].as_ref().expect("composed above"));
-                self.agents[i].receive_beta(outbox[j].as_ref().expect("composed above"));
+                self.agents[j].receive_beta(&self.outbox[i]);
+                self.agents[i].receive_beta(&self.outbox[j]);
             }
         }
         // 3a. who decides now (each robot's own state only)
         for (i, a) in self.agents.iter_mut().enumerate() {
             self.decided[i] = a.needs_decision();
         }
-        self.elapsed += started.elapsed();
+        self.add_elapsed(started);
         true
     }
 
@@ -254,7 +285,7 @@ impl Trial {
 
     /// 3b. The deciding robots ask their own policies, or the joint policy decides for them.
     fn decide(&mut self) {
-        let started = Instant::now();
+        let started = self.clock();
         let n = self.agents.len();
         if self.joint.is_none() {
             for (i, a) in self.agents.iter_mut().enumerate() {
@@ -273,7 +304,7 @@ impl Trial {
                 }
             }
         }
-        self.elapsed += started.elapsed();
+        self.add_elapsed(started);
     }
 
     /// 3b from outside: `decisions[i]` for each deciding robot i (the others' entries are
@@ -289,16 +320,18 @@ impl Trial {
     /// The second half of a timestep: planning (stage 4), the moves (stage 5), metrics,
     /// rewards and the trajectory record.
     pub fn finish_step(&mut self) {
-        let started = Instant::now();
+        let started = self.clock();
         let n = self.agents.len();
         // 4. plan in priority order; plans go to lower-priority robots this one exchanged with.
         for i in 0..n {
             self.agents[i].plan();
-            let lower: Vec<usize> = self.agents[i].exchanged_with().iter().copied().filter(|&j| j > i).collect();
-            if !lower.is_empty() {
-                let msg = self.agents[i].plan_message();
-                for j in lower {
-                    self.agents[j].receive_plan(&msg);
+            if self.agents[i].exchanged_with().iter().any(|&j| j > i) {
+                self.agents[i].plan_message_into(&mut self.plan_message);
+                for k in 0..self.agents[i].exchanged_with().len() {
+                    let j = self.agents[i].exchanged_with()[k];
+                    if j > i {
+                        self.agents[j].receive_plan(&self.plan_message);
+                    }
                 }
             }
         }
@@ -312,7 +345,7 @@ impl Trial {
         let closer = self.world.contacts().iter().filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds).count();
         self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len(), closer);
         self.compute_rewards();
-        self.elapsed += started.elapsed();
+        self.add_elapsed(started);
         if self.record {
             self.trajectory.push(StepRecord {
                 t: self.world.t(),

@@ -93,6 +93,11 @@ pub fn step_allowed(passable: impl Fn(Pos) -> bool, from: Pos, m: Move, movement
 /// transposition of the grid.
 pub fn bresenham(from: Pos, to: Pos, out: &mut Vec<Pos>) {
     out.clear();
+    out.extend(bresenham_cells(from, to));
+}
+
+/// [`bresenham`]'s cells as an iterator (no buffer: line-of-sight checks run every step).
+pub fn bresenham_cells(from: Pos, to: Pos) -> impl ExactSizeIterator<Item = Pos> {
     let dr = to.row - from.row;
     let dc = to.col - from.col;
     let (sr, sc) = (dr.signum(), dc.signum());
@@ -101,15 +106,16 @@ pub fn bresenham(from: Pos, to: Pos, out: &mut Vec<Pos>) {
     let (major, minor) = if swap { (ar, ac) } else { (ac, ar) };
     let mut err = 2 * minor - major;
     let mut m = 0;
-    for k in 1..=major {
+    (1..major as usize + 1).map(move |k| {
+        let k = k as i32;
         if err > 0 {
             m += 1;
             err -= 2 * major;
         }
         err += 2 * minor;
         let (r, c) = if swap { (k * sr, m * sc) } else { (m * sr, k * sc) };
-        out.push(Pos::new(from.row + r, from.col + c));
-    }
+        Pos::new(from.row + r, from.col + c)
+    })
 }
 
 /// True when the Bresenham ray from `from` reaches `to`: no cell strictly between them is
@@ -118,11 +124,11 @@ pub fn bresenham(from: Pos, to: Pos, out: &mut Vec<Pos>) {
 /// to robots is closed to light, so everything visible can be approached.
 pub fn ray_clear(blocked: impl Fn(Pos) -> bool, from: Pos, to: Pos, movement: Movement) -> bool {
     let squeeze_blocks = movement == Movement::NoCornerCutting;
-    let mut cells = Vec::with_capacity(16);
-    bresenham(from, to, &mut cells);
+    let cells = bresenham_cells(from, to);
+    let len = cells.len();
     let mut prev = from;
-    for (k, &p) in cells.iter().enumerate() {
-        if k + 1 < cells.len() && blocked(p) {
+    for (k, p) in cells.enumerate() {
+        if k + 1 < len && blocked(p) {
             return false;
         }
         if squeeze_blocks && squeezed(&blocked, prev, p) {
