@@ -141,6 +141,48 @@ impl Agent {
         }
     }
 
+    /// The agent [`Agent::new`] would build with this agent's config, `start` and `policy`,
+    /// reusing this one's buffers (map, search scratch, reservation table): how a trial starts
+    /// its next episode without allocating.
+    pub fn restarted(self, start: Pos, policy: Box<dyn Policy>) -> Self {
+        let Agent { cfg, mut belief, mut teammates, mut exchanged, mut candidates, dijkstra, mut reservations, mut space_time, mut scratch, mut path, .. } = self;
+        belief.reset();
+        teammates.fill(TeammateRecord::default());
+        exchanged.clear();
+        candidates.cells.clear();
+        candidates.slots = cfg.goal_count;
+        reservations.clear();
+        space_time.expanded = 0;
+        scratch.clear();
+        path.clear();
+        Agent {
+            t: 0,
+            pos: start,
+            belief,
+            teammates,
+            detected_any: false,
+            newly_detected: false,
+            exchanged,
+            goal: None,
+            prev_goal: None,
+            candidates,
+            // Only read after a search from the robot's position (`dijkstra_fresh`).
+            dijkstra,
+            dijkstra_fresh: false,
+            reservations,
+            space_time,
+            scratch,
+            path,
+            path_ready: false,
+            policy,
+            termination: None,
+            blocked_for: 0,
+            action: None,
+            stats: AgentStats::default(),
+            cfg,
+        }
+    }
+
     pub fn id(&self) -> usize {
         self.cfg.id
     }

@@ -22,24 +22,31 @@ pub struct Belief {
 
 impl Belief {
     pub fn new(height: usize, width: usize, movement: Movement) -> Self {
-        Belief {
+        let mut b = Belief {
             map: OccGrid::new(height, width, Occupancy::Unknown),
             known: 0,
             frontier: vec![false; width * height],
             frontier_count: 0,
-            unknown_neighbours: (0..width * height)
-                .map(|i| {
-                    let (r, c) = ((i / width) as i32, (i % width) as i32);
-                    NEIGHBOURS
-                        .iter()
-                        .filter(|&&(dr, dc)| {
-                            let (nr, nc) = (r + dr, c + dc);
-                            nr >= 0 && nc >= 0 && (nr as usize) < height && (nc as usize) < width
-                        })
-                        .count() as u8
-                })
-                .collect(),
+            unknown_neighbours: vec![0; width * height],
             movement,
+        };
+        b.reset();
+        b
+    }
+
+    /// Forgets everything: the state [`Belief::new`] starts from, in place.
+    pub fn reset(&mut self) {
+        let (height, width) = (self.map.height(), self.map.width());
+        self.map.cells_mut().fill(Occupancy::Unknown);
+        self.known = 0;
+        self.frontier.fill(false);
+        self.frontier_count = 0;
+        // In-bounds 8-neighbours: the 3 × 3 block clipped to the map, less the cell itself.
+        for (i, u) in self.unknown_neighbours.iter_mut().enumerate() {
+            let (r, c) = (i / width, i % width);
+            let rows = (r + 1).min(height - 1) - r.saturating_sub(1) + 1;
+            let cols = (c + 1).min(width - 1) - c.saturating_sub(1) + 1;
+            *u = (rows * cols - 1) as u8;
         }
     }
 

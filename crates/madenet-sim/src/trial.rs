@@ -131,11 +131,11 @@ impl Trial {
         let cfg = self.world.config().clone();
         let (h, w) = (self.world.truth().height(), self.world.truth().width());
         let n = self.agents.len();
-        self.agents.clear();
-        for i in 0..n {
+        let old = std::mem::take(&mut self.agents);
+        for (i, agent) in old.into_iter().enumerate() {
             let ctx = PolicyContext { seed, robot: i, config: &cfg, height: h, width: w };
             let policy = registry.make(&self.policy, &ctx)?;
-            self.agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w), self.starts[i], policy));
+            self.agents.push(agent.restarted(self.starts[i], policy));
         }
         self.world.restart(seed);
         self.recorder = MetricsRecorder::new(self.world.explored_fraction());
@@ -369,7 +369,9 @@ impl Trial {
         for i in 0..n {
             let belief = self.agents[i].belief();
             let seen = &self.world.observation(i).seen;
-            let new = seen.iter().filter(|(p, _)| belief.get(*p) == madenet_map::Occupancy::Unknown).count();
+            // Seen cells lie on the map: index the belief directly (no bounds test per cell).
+            let (map, w) = (belief.map(), belief.width());
+            let new = seen.iter().filter(|(p, _)| map[p.row as usize * w + p.col as usize] == madenet_map::Occupancy::Unknown).count();
             let interacting = self.world.contacts().iter().any(|&(a, b)| a == i || b == i);
             self.interaction_run[i] = if interacting { self.interaction_run[i] + 1 } else { 0 };
             self.rewards.robots[i] = self.reward_config.robot(new, seen.len() - new, self.interaction_run[i]);
