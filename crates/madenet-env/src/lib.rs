@@ -129,6 +129,8 @@ pub struct ExplorationEnv {
     goal_count: usize,
     /// Eq. (7) per robot summed over the last step's timesteps (reused, no allocation per step).
     step_rewards: Vec<f64>,
+    /// A step has reported the end of the current episode.
+    end_reported: bool,
 }
 
 /// What [`ExplorationEnv::advance`] reports besides the per-robot rewards.
@@ -165,6 +167,7 @@ impl ExplorationEnv {
             visibility: None,
             goal_count: 0,
             step_rewards: vec![0.0; starts_len],
+            end_reported: false,
         };
         env.goal_count = env.scenario.goal_count_for(h * w);
         env.build(0)?;
@@ -290,6 +293,7 @@ impl ExplorationEnv {
         trial.begin_step();
         self.trial = Some(trial);
         self.seed = seed;
+        self.end_reported = false;
         self.policies.clear();
         Ok(())
     }
@@ -436,6 +440,10 @@ impl ExplorationEnv {
     pub fn policy_decisions(&mut self, name: &str, registry: &PolicyRegistry) -> Result<Vec<Decision>, EnvError> {
         let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
         if trial.is_done() {
+            if !self.end_reported {
+                // Over at its start: nothing to decide; the next step reports the end.
+                return Ok(vec![Decision::Idle; self.starts.len()]);
+            }
             return Err(EnvError::Usage("the episode has ended; call reset()".into()));
         }
         let slot = match self.policies.iter().position(|(n, _)| n == name) {
@@ -554,7 +562,15 @@ impl ExplorationEnv {
         }
         let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
         if trial.is_done() {
-            return Err(EnvError::Usage("the episode has ended; call reset()".into()));
+            if self.end_reported {
+                return Err(EnvError::Usage("the episode has ended; call reset()".into()));
+            }
+            // Over at its start (a map seen whole from the start cells): this step reports the
+            // end, advancing nothing, so callers (and a VecEnv's autoreset) see it end.
+            self.end_reported = true;
+            self.step_rewards.fill(0.0);
+            let terminated = trial.world().is_complete();
+            return Ok(Advanced { team_reward: 0.0, steps: 0, terminated, truncated: !terminated });
         }
         for (i, d) in decisions.iter().enumerate() {
             if trial.deciding()[i] && matches!(d, Decision::Candidate(_)) {
@@ -578,6 +594,7 @@ impl ExplorationEnv {
         }
         out.terminated = trial.world().is_complete();
         out.truncated = trial.is_done() && !out.terminated;
+        self.end_reported = out.terminated || out.truncated;
         Ok(out)
     }
 

@@ -204,3 +204,45 @@ fn a_restarted_episode_is_the_same_as_a_fresh_one() {
         assert_eq!(sharing.finish().unwrap().trajectory, want, "{mode:?}");
     }
 }
+
+/// A map seen whole from the start cells: the episode is over at reset. The first step reports
+/// the end (terminated, nothing advanced, zero rewards), a second is an error, and a `VecEnv`
+/// of such environments keeps stepping (each step ends and restarts them) instead of failing.
+#[test]
+fn an_episode_over_at_its_start_ends_at_the_first_step() {
+    use madenet_env::{VecBuffers, VecEnv};
+    use madenet_map::{OccGrid, Occupancy, Pos};
+    let map = OccGrid::new(4, 4, Occupancy::Free);
+    let starts = vec![Pos::new(0, 0), Pos::new(0, 1), Pos::new(1, 0)];
+    let scenario = ScenarioConfig { sensor_miss_prob: 0.0, ..Default::default() };
+    for mode in [ActionMode::Primitive, ActionMode::Macro] {
+        let mut e = ExplorationEnv::new(map.clone(), "open_4x4", starts.clone(), scenario.clone(), mode).unwrap();
+        e.reset(1).unwrap();
+        assert!(e.is_done(), "{mode:?}: seen whole at t = 0");
+        let r = e.step(&[0, 0, 0]).unwrap();
+        assert!(r.terminated && !r.truncated, "{mode:?}: {r:?}");
+        assert_eq!((r.steps, r.rewards.clone(), r.team_reward), (0, vec![0.0; 3], 0.0), "{mode:?}");
+        assert!(matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))), "{mode:?}: a step after the reported end");
+        e.reset(2).unwrap();
+        assert!(e.step(&[0, 0, 0]).unwrap().terminated, "{mode:?}: again after a reset");
+
+        let n = 2;
+        let mut v = VecEnv::new(e.clone_config().unwrap(), n, 3).unwrap();
+        let (ml, vl, al) = (e.map_len(), e.vector_len(), e.action_count());
+        let (mut maps, mut vectors, mut masks) = (vec![0.0; n * 3 * ml], vec![0.0; n * 3 * vl], vec![0u8; n * 3 * al]);
+        let (mut rewards, mut needs, mut term, mut trunc) = (vec![1.0; n * 3], vec![false; n * 3], vec![false; n], vec![false; n]);
+        macro_rules! buffers {
+            () => {
+                VecBuffers { maps: &mut maps, vectors: &mut vectors, masks: &mut masks, rewards: &mut rewards, needs_action: &mut needs, terminated: &mut term, truncated: &mut trunc }
+            };
+        }
+        v.reset(buffers!()).unwrap();
+        let seeds = v.episode_seeds();
+        for step in 0..3 {
+            v.step(&[0; 6], buffers!()).unwrap();
+            assert_eq!(term, vec![true; n], "{mode:?} step {step}");
+            assert!(rewards.iter().all(|&r| r == 0.0));
+        }
+        assert_ne!(v.episode_seeds(), seeds, "{mode:?}: the environments restarted with their next seeds");
+    }
+}

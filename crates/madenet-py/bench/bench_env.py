@@ -3,8 +3,9 @@ trials of the paper's maps from Python — the figures of BENCHMARKS.md's Python
 
     python crates/madenet-py/bench/bench_env.py [--seconds 5] [--threads 1]
 
-`--threads` sets RAYON_NUM_THREADS for the VectorEnv (1 = one core, the issue's yardstick).
-Prints one JSON object.
+`--threads` sets RAYON_NUM_THREADS for the VectorEnv and the study. With `--threads 1` (the
+issue's yardstick, "one core") the process also pins itself to one CPU, so nothing of it runs
+on a second core. Prints one JSON object.
 """
 
 import argparse
@@ -22,10 +23,14 @@ def main():
     ap.add_argument("--map", default="paper:3")
     args = ap.parse_args()
     os.environ["RAYON_NUM_THREADS"] = str(args.threads)  # read when rayon's pool starts
+    pinned = None
+    if args.threads == 1 and hasattr(os, "sched_setaffinity"):
+        pinned = min(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {pinned})
     import numpy as np
     import madenet
 
-    out = {"python": sys.version.split()[0], "machine": platform.machine(), "threads": args.threads, "map": args.map}
+    out = {"python": sys.version.split()[0], "machine": platform.machine(), "threads": args.threads, "pinned_cpu": pinned, "map": args.map}
     rng = np.random.default_rng(0)
 
     # One ExplorationEnv, primitive mode, a Python loop over dict actions (PettingZoo API).
