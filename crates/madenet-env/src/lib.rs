@@ -491,7 +491,8 @@ impl ExplorationEnv {
     /// Applies `actions` (one per robot; only those of robots in
     /// [`ExplorationEnv::needs_action`] count) and advances to the next decision point or the
     /// episode's end. Macro: action k = goal candidate k. Primitive: [`Move::ALL`]`[k]`; a move
-    /// the mask forbids keeps the robot where it is.
+    /// the mask forbids keeps the robot where it is. An episode over at its start (a map seen
+    /// whole from the start cells) ends at its first step: terminated, no timestep advanced.
     pub fn step(&mut self, actions: &[usize]) -> Result<StepResult, EnvError> {
         let a = self.step_in_place(actions)?;
         Ok(self.step_result(a))
