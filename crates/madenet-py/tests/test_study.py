@@ -49,6 +49,13 @@ def test_compare_matches_the_command_line(cli, tmp_path):
     assert (tmp_path / "py" / "report.md").is_file()
 
 
+def test_compare_as_a_dataframe():
+    import pandas as pd  # in the [test] extra
+    frame = madenet.compare(**SMALL, threads=1, as_dataframe=True)
+    assert isinstance(frame, pd.DataFrame)
+    assert_same_table({c: frame[c].to_numpy() for c in frame.columns}, madenet.compare(**SMALL, threads=1))
+
+
 def test_compare_rejects_bad_fields():
     with pytest.raises(ValueError, match="no_such_field"):
         madenet.compare(no_such_field=1)

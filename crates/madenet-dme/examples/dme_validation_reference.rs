@@ -3,7 +3,7 @@
 //! uniform random sector at each decision), and optionally a trained model directory, all on
 //! the default config's generated validation set (36 trials; never the paper's maps).
 //!
-//! `cargo run --release -p madenet-dme --example validation_reference [MODEL_DIR]`
+//! `cargo run --release -p madenet-dme --example dme_validation_reference [MODEL_DIR]`
 
 use burn::tensor::Device;
 use madenet_dme::maddpg::Maddpg;
