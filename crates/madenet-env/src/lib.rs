@@ -28,7 +28,8 @@
 //!   from its own view, reproducing the policy's own trial;
 //! * [`ExplorationEnv::observe_joint_into`] / [`ExplorationEnv::step_joint`]: the whole team as
 //!   one agent (merged observation, joint action |G|^|I|), for centralized learners;
-//! * [`VecEnv`]: N environments stepped together on rayon into flat buffers, auto-resetting;
+//! * [`VecEnv`]: N environments stepped together (on rayon, or in turn on the calling thread
+//!   when rayon has one thread) into flat buffers, auto-resetting;
 //! * [`frame`]: the picture of the current state, as `madenet run --render` draws it.
 
 pub mod vector;
@@ -307,7 +308,8 @@ impl ExplorationEnv {
         self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))
     }
 
-    /// The episode has ended (explored or at the cap).
+    /// The episode has ended (explored or at the cap). Right after a reset this can already be
+    /// true (a map seen whole from the start cells): the next step then reports the end.
     pub fn is_done(&self) -> bool {
         self.trial.as_ref().is_none_or(|t| t.is_done())
     }
@@ -439,11 +441,7 @@ impl ExplorationEnv {
     /// when their macro action terminates (MADE-Net, random) in macro mode.
     pub fn policy_decisions(&mut self, name: &str, registry: &PolicyRegistry) -> Result<Vec<Decision>, EnvError> {
         let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
-        if trial.is_done() {
-            if !self.end_reported {
-                // Over at its start: nothing to decide; the next step reports the end.
-                return Ok(vec![Decision::Idle; self.starts.len()]);
-            }
+        if trial.is_done() && self.end_reported {
             return Err(EnvError::Usage("the episode has ended; call reset()".into()));
         }
         let slot = match self.policies.iter().position(|(n, _)| n == name) {
@@ -469,6 +467,10 @@ impl ExplorationEnv {
             }
         };
         let policies = &mut self.policies[slot].1;
+        if trial.is_done() {
+            // Over at its start: nothing to decide; the next step reports the end.
+            return Ok(vec![Decision::Idle; policies.len()]);
+        }
         let deciding = trial.deciding().to_vec();
         Ok((0..policies.len())
             .map(|i| {
@@ -545,7 +547,8 @@ impl ExplorationEnv {
 
     /// Applies one [`Decision`] per robot (those of robots not in
     /// [`ExplorationEnv::needs_action`] are ignored): a candidate index, any goal cell, or
-    /// idling; then advances to the next decision point or the episode's end.
+    /// idling; then advances to the next decision point or the episode's end (an episode over
+    /// at its start ends here, as in [`ExplorationEnv::step`]).
     pub fn step_decisions(&mut self, decisions: &[Decision]) -> Result<StepResult, EnvError> {
         let a = self.advance(decisions)?;
         Ok(self.step_result(a))

@@ -157,7 +157,9 @@ impl VecEnv {
 
     /// Steps environment k with `actions[k·robots..]` (all environments in parallel on rayon's
     /// pool, or in turn on the calling thread when the pool has one thread); environments
-    /// whose episode ended are reset and observed anew.
+    /// whose episode ended are reset and observed anew. Wrong action counts or buffer lengths
+    /// are refused before anything steps; an environment failing later (e.g. never reset) does
+    /// not stop the others, and the first failure in environment order is returned.
     pub fn step(&mut self, actions: &[usize], out: VecBuffers<'_>) -> Result<(), EnvError> {
         let robots = self.slots[0].env.num_robots();
         if actions.len() != self.slots.len() * robots {
@@ -193,7 +195,7 @@ impl VecEnv {
             .maps
             .chunks_mut(robots * ml)
             .zip(out.vectors.chunks_mut(robots * vl))
-            .zip(out.masks.chunks_mut((robots * al).max(1)))
+            .zip(out.masks.chunks_mut(robots * al))
             .zip(out.rewards.chunks_mut(robots))
             .zip(out.needs_action.chunks_mut(robots))
             .zip(out.terminated.iter_mut().zip(out.truncated.iter_mut()))

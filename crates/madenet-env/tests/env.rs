@@ -225,6 +225,15 @@ fn an_episode_over_at_its_start_ends_at_the_first_step() {
         assert!(matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))), "{mode:?}: a step after the reported end");
         e.reset(2).unwrap();
         assert!(e.step(&[0, 0, 0]).unwrap().terminated, "{mode:?}: again after a reset");
+        // A shipped policy has nothing to decide then (names and modes are still checked).
+        let registry = madenet_sim::PolicyRegistry::builtin();
+        let own = if mode == ActionMode::Primitive { "nf" } else { "random" };
+        e.reset(4).unwrap();
+        assert!(e.policy_decisions("no-such-policy", &registry).is_err());
+        assert!(e.policy_decisions(if own == "nf" { "random" } else { "nf" }, &registry).is_err(), "{mode:?}: wrong mode");
+        assert_eq!(e.policy_decisions(own, &registry).unwrap(), vec![madenet_env::Decision::Idle; 3]);
+        assert!(e.step_decisions(&[madenet_env::Decision::Idle; 3]).unwrap().terminated);
+        assert!(e.policy_decisions(own, &registry).is_err(), "{mode:?}: asked after the reported end");
 
         let n = 2;
         let mut v = VecEnv::new(e.clone_config().unwrap(), n, 3).unwrap();

@@ -205,3 +205,31 @@ def test_goal_and_idle_actions_and_their_errors():
         env.step({"robot_0": "north"})
     with pytest.raises(ValueError, match="render_mode"):
         madenet.ExplorationEnv(render_mode="human")
+
+
+def test_an_episode_over_at_its_start_ends_at_the_first_step(tmp_path):
+    """A 4 × 4 open map seen whole from the start cells (no sensor misses): every environment
+    reports the end at its first step instead of raising, and a VectorEnv keeps stepping."""
+    grid = tmp_path / "open.txt"
+    grid.write_text("....\n....\n....\n....\n")
+    kw = dict(map=str(grid), start="0,0;0,1;1,0", sensor_miss_prob=0.0)
+    for mode in ("primitive", "macro"):
+        env = madenet.ExplorationEnv(mode=mode, **kw)
+        env.reset(seed=1)
+        assert env.agents, mode
+        _, rewards, terms, truncs, infos = env.step({a: 0 for a in env.agents})
+        assert all(terms.values()) and not any(truncs.values()) and not env.agents, mode
+        assert set(rewards.values()) == {0.0} and infos["robot_0"]["steps"] == 0, mode
+        with pytest.raises(ValueError):
+            env.step({a: 0 for a in env.possible_agents})
+        venv = madenet.VectorEnv(2, mode=mode, seed=3, **kw)
+        venv.reset()
+        for _ in range(3):
+            venv.step(np.zeros((2, 3), dtype=np.int64))
+            assert venv.terminated.all(), mode
+    cenv = madenet.CentralizedEnv(**kw)
+    cenv.reset(seed=1)
+    _, team, terminated, truncated, info = cenv.step(0)
+    assert terminated and not truncated and team == 0.0 and info["steps"] == 0
+    with pytest.raises(ValueError):
+        cenv.step(0)

@@ -187,9 +187,10 @@ impl Trial {
     }
 
     /// Measure the wall time of the steps (`timing.trial_s`; on by default). Off, the result's
-    /// `trial_s` is 0 and a step reads no clock: for callers that time (or do not need) the
-    /// steps themselves, such as step-wise environments, where reading the clock was 7 % of a
-    /// step.
+    /// `trial_s` is 0 and [`Trial::begin_step`] / [`Trial::finish_step`] read no clock (the
+    /// robots' own policies, when they decide, still time their decisions): for callers that
+    /// time (or do not need) the steps themselves, such as step-wise environments, where
+    /// reading the clock was 7 % of a step.
     pub fn timed(mut self, on: bool) -> Self {
         self.timed = on;
         self

@@ -56,8 +56,8 @@ class CentralizedEnv(gym.Env):
         return self._obs(), self._info(0)
 
     def step(self, action):
-        if self._core.done:
-            raise ValueError("step() after the episode ended; call reset()")
+        # A step after the episode's reported end raises ValueError (from the core); an episode
+        # over at its start ends at its first step.
         team, steps, terminated, truncated = self._core.step_joint(int(action))
         return self._obs(), float(team), bool(terminated), bool(truncated), self._info(steps)
 
