@@ -8,8 +8,12 @@ NOT run in CI: RLlib pulls in PyTorch (several GB). To try it:
 
 The env is macro mode on generated maps (never the paper's evaluation maps); robots whose macro
 action is still running ignore their action (`info["needs_action"]`), which plain PPO treats as
-noise — fine for a demonstration, while action masking needs an RLModule that reads
-`obs["action_mask"]` (see RLlib's action-masking example).
+noise — fine for a demonstration. RLlib's default models take no Dict observations, so the
+`FlattenObservations` connector flattens map, vector and mask into one feature vector; invalid
+choices are tolerated by the env (the robot stays and decides again), while true action masking
+needs an RLModule that reads `obs["action_mask"]` (see RLlib's action-masking example).
+
+Checked with ray 2.60 (new API stack) and torch 2.15 on CPU.
 """
 
 import argparse
@@ -29,24 +33,26 @@ def main():
     args = ap.parse_args()
     import ray
     from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.connectors.env_to_module import FlattenObservations
     from ray.tune.registry import register_env
 
     ray.init()
     register_env("madenet", make_env)
-    probe = madenet.ExplorationEnv(map="generate:0", mode="macro")
-    agent = probe.possible_agents[0]
     config = (
         PPOConfig()
         .environment("madenet", env_config={"map_seed": 100})
         .multi_agent(
             # One policy shared by every robot (parameter sharing).
-            policies={"shared": (None, probe.observation_space(agent), probe.action_space(agent), {})},
+            policies={"shared"},
             policy_mapping_fn=lambda agent_id, *a, **k: "shared",
         )
-        .env_runners(num_env_runners=1)
+        .env_runners(
+            num_env_runners=1,
+            env_to_module_connector=lambda env, spaces, device: FlattenObservations(multi_agent=True),
+        )
         .training(train_batch_size=2000)
     )
-    algo = config.build()
+    algo = config.build_algo()
     for i in range(args.iterations):
         result = algo.train()
         ret = result.get("env_runners", {}).get("episode_return_mean")
