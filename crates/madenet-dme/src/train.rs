@@ -665,6 +665,14 @@ fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &m
     truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < state.episode)?;
     truncate_rows::<MaddpgUpdateRow>(&log_path(MaddpgUpdateRow::FILE_NAME), |r| r.update < state.updates)?;
     truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= state.episode)?;
+    // TensorBoard's curves likewise.
+    madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
+        Some("episode") => step < state.episode as i64,
+        Some("loss") => step < state.updates as i64,
+        Some("validation") => step <= state.episode as i64,
+        _ => true,
+    })
+    .map_err(io_err(run_dir))?;
     let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
     let mut up_log = LogWriter::<MaddpgUpdateRow>::open(log_path(MaddpgUpdateRow::FILE_NAME))?;
     let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;

@@ -60,11 +60,28 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     assert!(updates.lines().count() > 10, "updates ran:\n{updates}");
     assert_eq!(read(&straight.join("validation.csv")).lines().count(), 1 + 2, "validated at episodes 2 and 4");
 
-    // Killed after 2 episodes, then resumed to 4: the same episodes, updates and weights.
-    train(&resumed, Some(tiny(2)), &mut |_| {}).unwrap();
+    // Killed after 3 episodes with its checkpoint of episode 2 (the third episode's logs lie
+    // past it), then resumed to 4: the same episodes, updates, TensorBoard scalars and weights.
+    train(&resumed, Some(tiny(3)), &mut |_| {}).unwrap();
+    let scratch = root.join("scratch");
+    train(&scratch, Some(tiny(2)), &mut |_| {}).unwrap();
+    std::fs::remove_dir_all(resumed.join("checkpoint")).unwrap();
+    std::fs::create_dir_all(resumed.join("checkpoint")).unwrap();
+    for f in std::fs::read_dir(scratch.join("checkpoint")).unwrap() {
+        let f = f.unwrap().path();
+        std::fs::copy(&f, resumed.join("checkpoint").join(f.file_name().unwrap())).unwrap();
+    }
     train(&resumed, Some(tiny(4)), &mut |_| {}).unwrap();
     assert_eq!(without_time(&resumed), eps);
     assert_eq!(read(&resumed.join("updates.csv")), updates);
+    let scalars = |dir: &Path| {
+        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir).unwrap().into_iter().map(|(t, step, v)| (t, step, v.to_bits())).collect();
+        s.sort();
+        s
+    };
+    let want = scalars(&straight);
+    assert!(want.iter().any(|s| s.0.starts_with("loss/")) && want.iter().any(|s| s.0.starts_with("episode/")));
+    assert_eq!(scalars(&resumed), want, "resumed run's TensorBoard scalars");
     // Same weights (the files also carry parameter ids, which differ): same logits.
     let (a, b) = (Model::load(&straight.join("last")).unwrap(), Model::load(&resumed.join("last")).unwrap());
     let device = burn::tensor::Device::flex();

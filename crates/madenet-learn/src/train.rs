@@ -731,6 +731,14 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < seen)?;
     truncate_rows::<UpdateRow>(&log_path(UpdateRow::FILE_NAME), |r| r.update < state.updates)?;
     truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= seen)?;
+    // TensorBoard's curves likewise (`loss/*` steps count updates from 1).
+    madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
+        Some("episode") => step < seen as i64,
+        Some("loss") => step <= state.updates as i64,
+        Some("validation") => step <= seen as i64,
+        _ => true,
+    })
+    .map_err(io_err(run_dir))?;
     let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
     let mut up_log = LogWriter::<UpdateRow>::open(log_path(UpdateRow::FILE_NAME))?;
     let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;

@@ -83,6 +83,16 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     assert_eq!(episodes_without_time(&resumed), eps, "resumed run differs in its episodes");
     assert_eq!(read(&resumed.join("updates.csv")), updates, "resumed run differs in its updates");
     assert!(q_of(&resumed.join("last")) == q_of(&straight.join("last")), "resumed run ends with other weights");
+    // TensorBoard holds each scalar once: the resumed run dropped what it wrote after the
+    // checkpoint before writing it again.
+    let scalars = |dir: &Path| {
+        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir).unwrap().into_iter().map(|(t, step, v)| (t, step, v.to_bits())).collect();
+        s.sort();
+        s
+    };
+    let want = scalars(&straight);
+    assert!(want.iter().any(|s| s.0.starts_with("loss/")) && want.iter().any(|s| s.0.starts_with("validation/")));
+    assert_eq!(scalars(&resumed), want, "resumed run's TensorBoard scalars");
 
     // The saved model loads and plays.
     let model = Model::load(&straight.join("best")).unwrap();

@@ -115,7 +115,7 @@ mod tfevents;
 
 pub use log::{read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, UpdateRow, ValidationRow};
 pub use plot::{plot_training, DEFAULT_FIGURE, EWMA_ALPHA};
-pub use tfevents::{masked_crc32c, TfEventWriter, FILE_VERSION};
+pub use tfevents::{masked_crc32c, read_scalars, truncate_events, TfEventWriter, FILE_VERSION};
 
 /// What went wrong with a training log. Every message is one line naming
 /// the file concerned.

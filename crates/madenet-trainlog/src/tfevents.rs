@@ -140,6 +140,170 @@ impl TfEventWriter {
     }
 }
 
+/// Drops, from every TensorBoard event file in `dir` (`events.out.tfevents.*`), the scalar
+/// events that `keep(tag, step)` refuses — what a resumed run does with the events written
+/// after its checkpoint, which it is about to write again (TensorBoard would otherwise draw
+/// both). Each changed file is rewritten through a temporary file and a rename, so a crash
+/// leaves either the old or the new file; a record cut short or corrupt at the end (a writer
+/// stopped mid-record) is dropped with everything after it. Events that are not scalars (the
+/// file-version record) are kept; a file left with no scalar is removed. A missing `dir` is
+/// nothing to do. Returns the number of events dropped.
+///
+/// # Errors
+///
+/// Any I/O error reading, writing or renaming, naming the file.
+pub fn truncate_events(dir: impl AsRef<Path>, keep: impl Fn(&str, i64) -> bool) -> io::Result<usize> {
+    let dir = dir.as_ref();
+    let named = |e: io::Error, p: &Path| io::Error::new(e.kind(), format!("{}: {e}", p.display()));
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(named(e, dir)),
+    };
+    let mut dropped = 0;
+    let files = event_files(entries);
+    for path in files {
+        let bytes = std::fs::read(&path).map_err(|e| named(e, &path))?;
+        let (mut kept, mut scalars, mut changed) = (Vec::with_capacity(bytes.len()), 0usize, false);
+        let mut at = 0;
+        while at < bytes.len() {
+            let Some((data, next)) = read_record(&bytes, at) else {
+                changed = true; // a torn or corrupt tail
+                break;
+            };
+            match scalar_tag_and_step(data) {
+                Some((tag, step)) if !keep(tag, step) => {
+                    dropped += 1;
+                    changed = true;
+                }
+                other => {
+                    scalars += usize::from(other.is_some());
+                    kept.extend_from_slice(&bytes[at..next]);
+                }
+            }
+            at = next;
+        }
+        if scalars == 0 {
+            std::fs::remove_file(&path).map_err(|e| named(e, &path))?;
+        } else if changed {
+            // Not named like an event file: a crash mid-rewrite leaves nothing TensorBoard reads.
+            let tmp = dir.join(format!(".{}.truncating", path.file_name().and_then(|n| n.to_str()).unwrap_or("events")));
+            std::fs::write(&tmp, &kept).map_err(|e| named(e, &tmp))?;
+            std::fs::rename(&tmp, &path).map_err(|e| named(e, &path))?;
+        }
+    }
+    Ok(dropped)
+}
+
+/// The event files among `entries`, in name (= creation) order.
+fn event_files(entries: std::fs::ReadDir) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.is_file() && p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("events.out.tfevents.")))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Every scalar of the TensorBoard event files in `dir` as (tag, step, value), file by file in
+/// creation order, each in writing order (a torn or corrupt tail ends a file's reading).
+///
+/// # Errors
+///
+/// Any I/O error listing `dir` or reading a file, naming it.
+pub fn read_scalars(dir: impl AsRef<Path>) -> io::Result<Vec<(String, i64, f32)>> {
+    let dir = dir.as_ref();
+    let named = |e: io::Error, p: &Path| io::Error::new(e.kind(), format!("{}: {e}", p.display()));
+    let mut out = Vec::new();
+    for path in event_files(std::fs::read_dir(dir).map_err(|e| named(e, dir))?) {
+        let bytes = std::fs::read(&path).map_err(|e| named(e, &path))?;
+        let mut at = 0;
+        while let Some((data, next)) = read_record(&bytes, at) {
+            if let (Some((tag, step)), Some(value)) = (scalar_tag_and_step(data), scalar_value(data)) {
+                out.push((tag.to_string(), step, value));
+            }
+            at = next;
+        }
+    }
+    Ok(out)
+}
+
+/// The simple value of a scalar event (`summary = 5 { value = 1 { simple_value = 2 } }`).
+fn scalar_value(event: &[u8]) -> Option<f32> {
+    let summary = proto_fields(event)?.into_iter().find(|f| f.0 == 5 && f.1 == WIRE_LEN)?.3;
+    let value = proto_fields(summary)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
+    let x = proto_fields(value)?.into_iter().find(|f| f.0 == 2 && f.1 == WIRE_FIXED32)?.3;
+    Some(f32::from_le_bytes(x.try_into().ok()?))
+}
+
+/// The data of the TFRecord at `at` and where the next one starts, if the record is whole and
+/// both its CRCs match.
+fn read_record(file: &[u8], at: usize) -> Option<(&[u8], usize)> {
+    let header = file.get(at..at.checked_add(12)?)?;
+    let (len_bytes, len_crc) = header.split_at(8);
+    if u32::from_le_bytes(len_crc.try_into().ok()?) != masked_crc32c(len_bytes) {
+        return None;
+    }
+    let len = usize::try_from(u64::from_le_bytes(len_bytes.try_into().ok()?)).ok()?;
+    let start = at + 12;
+    let end = start.checked_add(len)?;
+    let data = file.get(start..end)?;
+    let crc = file.get(end..end.checked_add(4)?)?;
+    (u32::from_le_bytes(crc.try_into().ok()?) == masked_crc32c(data)).then_some((data, end + 4))
+}
+
+/// A protobuf varint at `*at` (advancing past it), if well formed.
+fn read_varint(b: &[u8], at: &mut usize) -> Option<u64> {
+    let mut v = 0u64;
+    for shift in (0..70).step_by(7) {
+        let byte = *b.get(*at)?;
+        *at += 1;
+        v |= u64::from(byte & 0x7f) << shift;
+        if byte < 0x80 {
+            return Some(v);
+        }
+    }
+    None
+}
+
+/// The fields of one protobuf message as (number, wire type, payload): the varint's value
+/// for wire type 0, the bytes for the others. `None` if malformed.
+fn proto_fields(b: &[u8]) -> Option<Vec<(u32, u8, u64, &[u8])>> {
+    let mut at = 0;
+    let mut out = Vec::new();
+    while at < b.len() {
+        let key = read_varint(b, &mut at)?;
+        let (num, wire) = (u32::try_from(key >> 3).ok()?, (key & 7) as u8);
+        let size = match wire {
+            WIRE_VARINT => {
+                let v = read_varint(b, &mut at)?;
+                out.push((num, wire, v, &b[at..at]));
+                continue;
+            }
+            WIRE_FIXED64 => 8,
+            WIRE_LEN => usize::try_from(read_varint(b, &mut at)?).ok()?,
+            WIRE_FIXED32 => 4,
+            _ => return None,
+        };
+        let payload = b.get(at..at.checked_add(size)?)?;
+        out.push((num, wire, 0, payload));
+        at += size;
+    }
+    Some(out)
+}
+
+/// The tag and step of a scalar event (`Event { step = 2, summary = 5 { value = 1 { tag = 1 } } }`),
+/// or `None` for any other record (the file-version event, or bytes that do not decode).
+fn scalar_tag_and_step(event: &[u8]) -> Option<(&str, i64)> {
+    let fields = proto_fields(event)?;
+    let step = fields.iter().find(|f| f.0 == 2 && f.1 == WIRE_VARINT).map_or(0, |f| f.2 as i64);
+    let summary = fields.iter().find(|f| f.0 == 5 && f.1 == WIRE_LEN)?.3;
+    let value = proto_fields(summary)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
+    let tag = proto_fields(value)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
+    Some((std::str::from_utf8(tag).ok()?, step))
+}
+
 /// The CRC-32C (Castagnoli) of `data`, masked as TFRecord stores it (a CRC
 /// of data that itself embeds CRCs is otherwise prone to collisions):
 /// rotated right by 15 bits, plus `0xa282ead8`.
@@ -395,6 +559,65 @@ mod tests {
         assert_eq!(names.len(), 2);
         let values: Vec<f32> = names.iter().map(|p| scalar(&records(&std::fs::read(p).unwrap())[1]).3).collect();
         assert_eq!(values, [1.0, 2.0], "names sort in creation order");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn truncating_keeps_what_the_checkpoint_saw_and_drops_a_torn_tail() {
+        let dir = temp_dir("truncate");
+        // An earlier run: episodes 0..6 and losses 1..=4, then a second file from a resume.
+        let mut a = TfEventWriter::create(&dir).unwrap();
+        for e in 0..6 {
+            a.add_scalar("episode/reward", e as f32, e, 1.0).unwrap();
+        }
+        for u in 1..=4 {
+            a.add_scalar("loss/dep", u as f32 * 0.5, u, 2.0).unwrap();
+        }
+        a.add_scalar("other/x", 9.0, 99, 3.0).unwrap();
+        drop(a);
+        // A resumed run's file, whose writer stopped mid-record (a torn tail)…
+        let mut b = TfEventWriter::create(&dir).unwrap();
+        b.add_scalar("other/y", 10.0, 1, 4.0).unwrap();
+        let second = b.path().to_path_buf();
+        drop(b);
+        let whole = std::fs::read(&second).unwrap();
+        let mut torn = whole.clone();
+        torn.extend_from_slice(&whole[..10]);
+        std::fs::write(&second, &torn).unwrap();
+        // …and a file holding only episodes the checkpoint never saw.
+        let mut c = TfEventWriter::create(&dir).unwrap();
+        c.add_scalar("episode/reward", 11.0, 8, 5.0).unwrap();
+        drop(c);
+
+        let keep = |tag: &str, step: i64| match tag.split('/').next() {
+            Some("episode") => step < 4,
+            Some("loss") => step <= 2,
+            _ => true,
+        };
+        let dropped = truncate_events(&dir, keep).unwrap();
+        assert_eq!(dropped, 2 + 2 + 1, "episodes 4 and 5, losses 3 and 4, episode 8");
+        let mut names: Vec<PathBuf> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+        names.sort();
+        assert_eq!(names.len(), 2, "the file left without scalars is gone: {names:?}");
+        assert_eq!(names[1], second);
+        assert_eq!(std::fs::read(&second).unwrap(), whole, "the torn tail is cut off");
+        let recs = records(&std::fs::read(&names[0]).unwrap());
+        assert!(matches!(fields(&recs[0])[..], [Field::Fixed64(1, _), Field::Len(3, _)]), "the version record stays first");
+        let left: Vec<(String, i64)> = recs[1..].iter().map(|r| scalar(r)).map(|(_, step, tag, _)| (tag, step)).collect();
+        let want: Vec<(String, i64)> = (0..4)
+            .map(|e| ("episode/reward".to_string(), e))
+            .chain((1..=2).map(|u| ("loss/dep".to_string(), u)))
+            .chain([("other/x".to_string(), 99)])
+            .collect();
+        assert_eq!(left, want);
+        let read: Vec<(String, i64)> = read_scalars(&dir).unwrap().into_iter().map(|(tag, step, _)| (tag, step)).collect();
+        assert_eq!(read, want.iter().cloned().chain([("other/y".to_string(), 1)]).collect::<Vec<_>>());
+        assert_eq!(read_scalars(&dir).unwrap()[0].2, 0.0);
+        // Nothing more to drop: the file is left as it is.
+        let before = std::fs::read(&names[0]).unwrap();
+        assert_eq!(truncate_events(&dir, keep).unwrap(), 0);
+        assert_eq!(std::fs::read(&names[0]).unwrap(), before);
+        assert_eq!(truncate_events(dir.join("missing"), keep).unwrap(), 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
