@@ -45,20 +45,47 @@ fn method_of(path: &Path) -> Result<Option<String>> {
     Ok(value.get("method").and_then(|m| m.as_str()).map(str::to_string))
 }
 
-pub fn run(a: TrainArgs) -> Result<()> {
-    // Which learner: --method, else the config's (the run's own on --resume), else MADE-Net.
-    let source = a.resume.as_ref().map(|d| d.join("config.toml")).or_else(|| a.config.clone());
-    let from_file = match &source {
-        Some(p) if p.exists() => method_of(p)?,
-        _ => None,
+/// What `madenet train` sets in either learner's config.
+trait LearnerConfig: Default + Sized {
+    fn from_file(path: &Path) -> Result<Self>;
+    fn episodes(&mut self) -> &mut u64;
+    fn max_minutes(&mut self) -> &mut f64;
+    fn seed(&mut self) -> &mut u64;
+    fn threads(&mut self) -> &mut usize;
+    fn check(&self) -> Result<(), String>;
+}
+
+macro_rules! learner_config {
+    ($t:ty) => {
+        impl LearnerConfig for $t {
+            fn from_file(path: &Path) -> Result<Self> {
+                Ok(<$t>::from_toml_file(path)?)
+            }
+            fn episodes(&mut self) -> &mut u64 {
+                &mut self.episodes
+            }
+            fn max_minutes(&mut self) -> &mut f64 {
+                &mut self.max_minutes
+            }
+            fn seed(&mut self) -> &mut u64 {
+                &mut self.seed
+            }
+            fn threads(&mut self) -> &mut usize {
+                &mut self.threads
+            }
+            fn check(&self) -> Result<(), String> {
+                self.validate()
+            }
+        }
     };
-    if a.resume.is_none() && a.method.as_deref().or(from_file.as_deref()) == Some(madenet_dme::train::METHOD) {
-        return run_dme(a);
-    }
-    if a.resume.is_some() && from_file.as_deref() == Some(madenet_dme::train::METHOD) {
-        return run_dme(a);
-    }
-    let (dir, cfg) = match (&a.out, &a.resume) {
+}
+learner_config!(TrainConfig);
+learner_config!(madenet_dme::train::DmeTrainConfig);
+
+/// The run directory and the config to train with (`None`: resume with the run's saved one),
+/// from the arguments; `set_method` applies `--method` to a new run's config.
+fn run_dir_and_config<C: LearnerConfig>(a: &TrainArgs, set_method: impl FnOnce(&mut C) -> Result<()>) -> Result<(PathBuf, Option<C>)> {
+    match (&a.out, &a.resume) {
         (_, Some(dir)) => {
             if !dir.join("config.toml").exists() {
                 bail!("{}: not a training run directory (no config.toml)", dir.display());
@@ -66,49 +93,55 @@ pub fn run(a: TrainArgs) -> Result<()> {
             if a.config.is_some() || a.method.is_some() || a.seed.is_some() || a.threads.is_some() {
                 bail!("--resume continues with the run's saved config; only --episodes and --max-minutes may extend it");
             }
-            let extend = a.episodes.is_some() || a.max_minutes.is_some();
-            let cfg = if extend {
-                let mut cfg = TrainConfig::from_toml_file(&dir.join("config.toml"))?;
-                cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
-                cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
-                Some(cfg)
-            } else {
-                None
-            };
-            (dir.clone(), cfg)
+            if a.episodes.is_none() && a.max_minutes.is_none() {
+                return Ok((dir.clone(), None));
+            }
+            let mut cfg = C::from_file(&dir.join("config.toml"))?;
+            *cfg.episodes() = a.episodes.unwrap_or(*cfg.episodes());
+            *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
+            Ok((dir.clone(), Some(cfg)))
         }
         (Some(dir), None) => {
             if dir.join("config.toml").exists() {
                 bail!("{}: already holds a training run; use --resume {0} or another --out", dir.display());
             }
             let mut cfg = match &a.config {
-                Some(p) => TrainConfig::from_toml_file(p)?,
-                None => TrainConfig::default(),
+                Some(p) => C::from_file(p)?,
+                None => C::default(),
             };
-            if let Some(m) = &a.method {
-                cfg.method = match m.as_str() {
-                    "made-net" => Method::MadeNet,
-                    "made-net-dt" => Method::MadeNetDt,
-                    other => bail!("--method `{other}`: expected made-net, made-net-dt or dme-drl"),
-                };
-            }
-            if let Some(e) = a.episodes {
-                cfg.episodes = e;
-            }
-            if let Some(m) = a.max_minutes {
-                cfg.max_minutes = m;
-            }
-            if let Some(s) = a.seed {
-                cfg.seed = s;
-            }
-            if let Some(t) = a.threads {
-                cfg.threads = t;
-            }
-            cfg.validate().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
-            (dir.clone(), Some(cfg))
+            set_method(&mut cfg)?;
+            *cfg.episodes() = a.episodes.unwrap_or(*cfg.episodes());
+            *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
+            *cfg.seed() = a.seed.unwrap_or(*cfg.seed());
+            *cfg.threads() = a.threads.unwrap_or(*cfg.threads());
+            cfg.check().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
+            Ok((dir.clone(), Some(cfg)))
         }
         (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
+    }
+}
+
+pub fn run(a: TrainArgs) -> Result<()> {
+    // Which learner: --method, else the config's (the run's own on --resume), else MADE-Net.
+    let source = a.resume.as_ref().map(|d| d.join("config.toml")).or_else(|| a.config.clone());
+    let from_file = match &source {
+        Some(p) if p.exists() => method_of(p)?,
+        _ => None,
     };
+    let chosen = if a.resume.is_some() { from_file.as_deref() } else { a.method.as_deref().or(from_file.as_deref()) };
+    if chosen == Some(madenet_dme::train::METHOD) {
+        return run_dme(a);
+    }
+    let (dir, cfg) = run_dir_and_config::<TrainConfig>(&a, |cfg| {
+        if let Some(m) = &a.method {
+            cfg.method = match m.as_str() {
+                "made-net" => Method::MadeNet,
+                "made-net-dt" => Method::MadeNetDt,
+                other => bail!("--method `{other}`: expected made-net, made-net-dt or dme-drl"),
+            };
+        }
+        Ok(())
+    })?;
     let bar = progress_bar(a.quiet);
     let mut on_progress = |p: &madenet_learn::Progress| {
         bar.set_length(p.episodes);
@@ -134,39 +167,8 @@ fn progress_bar(quiet: bool) -> ProgressBar {
 
 /// `madenet train --method dme-drl` (or a DME-DRL config or run directory).
 fn run_dme(a: TrainArgs) -> Result<()> {
-    use madenet_dme::train::DmeTrainConfig;
-    let (dir, cfg) = match (&a.out, &a.resume) {
-        (_, Some(dir)) => {
-            if a.config.is_some() || a.method.is_some() || a.seed.is_some() || a.threads.is_some() {
-                bail!("--resume continues with the run's saved config; only --episodes and --max-minutes may extend it");
-            }
-            let cfg = if a.episodes.is_some() || a.max_minutes.is_some() {
-                let mut cfg = DmeTrainConfig::from_toml_file(&dir.join("config.toml"))?;
-                cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
-                cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
-                Some(cfg)
-            } else {
-                None
-            };
-            (dir.clone(), cfg)
-        }
-        (Some(dir), None) => {
-            if dir.join("config.toml").exists() {
-                bail!("{}: already holds a training run; use --resume {0} or another --out", dir.display());
-            }
-            let mut cfg = match &a.config {
-                Some(p) => DmeTrainConfig::from_toml_file(p)?,
-                None => DmeTrainConfig::default(),
-            };
-            cfg.episodes = a.episodes.unwrap_or(cfg.episodes);
-            cfg.max_minutes = a.max_minutes.unwrap_or(cfg.max_minutes);
-            cfg.seed = a.seed.unwrap_or(cfg.seed);
-            cfg.threads = a.threads.unwrap_or(cfg.threads);
-            cfg.validate().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
-            (dir.clone(), Some(cfg))
-        }
-        (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
-    };
+    // `--method dme-drl` is what brought us here: nothing more to set.
+    let (dir, cfg) = run_dir_and_config::<madenet_dme::train::DmeTrainConfig>(&a, |_| Ok(()))?;
     let bar = progress_bar(a.quiet);
     let mut on_progress = |p: &madenet_dme::train::Progress| {
         bar.set_length(p.episodes);
