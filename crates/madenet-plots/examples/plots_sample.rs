@@ -5,7 +5,7 @@
 //! * `fig5` — explored area vs distance at CSP 100 % and 0 %;
 //! * `fig2` — noisy training curves with their EWMA (α = 0.9).
 //!
-//! Run: `cargo run -p madenet-plots --example sample [-- OUT_DIR]`
+//! Run: `cargo run -p madenet-plots --example plots_sample [-- OUT_DIR]`
 
 use std::path::PathBuf;
 

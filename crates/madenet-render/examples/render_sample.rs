@@ -2,7 +2,7 @@
 //! unknown, three robots with paths, goals and candidates) to a PNG, and a short GIF of the
 //! robots walking their paths.
 //!
-//! `cargo run -p madenet-render --example sample -- [out.png] [out.gif] [cell_px]`
+//! `cargo run -p madenet-render --example render_sample -- [out.png] [out.gif] [cell_px]`
 //! (defaults /tmp/render_sample.png, /tmp/render_sample.gif, 16)
 
 use madenet_map::{OccGrid, Occupancy, Pos};
