@@ -231,9 +231,9 @@ pub fn read_scalars(dir: impl AsRef<Path>) -> io::Result<Vec<(String, i64, f32)>
 
 /// The simple value of a scalar event (`summary = 5 { value = 1 { simple_value = 2 } }`).
 fn scalar_value(event: &[u8]) -> Option<f32> {
-    let summary = proto_fields(event)?.into_iter().find(|f| f.0 == 5 && f.1 == WIRE_LEN)?.3;
-    let value = proto_fields(summary)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
-    let x = proto_fields(value)?.into_iter().find(|f| f.0 == 2 && f.1 == WIRE_FIXED32)?.3;
+    let summary = proto_fields(event)?.into_iter().find(|f| f.is(5, WIRE_LEN))?.bytes;
+    let value = proto_fields(summary)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
+    let x = proto_fields(value)?.into_iter().find(|f| f.is(2, WIRE_FIXED32))?.bytes;
     Some(f32::from_le_bytes(x.try_into().ok()?))
 }
 
@@ -267,9 +267,23 @@ fn read_varint(b: &[u8], at: &mut usize) -> Option<u64> {
     None
 }
 
-/// The fields of one protobuf message as (number, wire type, payload): the varint's value
-/// for wire type 0, the bytes for the others. `None` if malformed.
-fn proto_fields(b: &[u8]) -> Option<Vec<(u32, u8, u64, &[u8])>> {
+/// One field of a protobuf message: its number, wire type, and payload (`varint` for wire
+/// type 0, `bytes` for the others).
+struct ProtoField<'a> {
+    num: u32,
+    wire: u8,
+    varint: u64,
+    bytes: &'a [u8],
+}
+
+impl ProtoField<'_> {
+    fn is(&self, num: u32, wire: u8) -> bool {
+        self.num == num && self.wire == wire
+    }
+}
+
+/// The fields of one protobuf message, in order; `None` if malformed.
+fn proto_fields(b: &[u8]) -> Option<Vec<ProtoField<'_>>> {
     let mut at = 0;
     let mut out = Vec::new();
     while at < b.len() {
@@ -277,8 +291,8 @@ fn proto_fields(b: &[u8]) -> Option<Vec<(u32, u8, u64, &[u8])>> {
         let (num, wire) = (u32::try_from(key >> 3).ok()?, (key & 7) as u8);
         let size = match wire {
             WIRE_VARINT => {
-                let v = read_varint(b, &mut at)?;
-                out.push((num, wire, v, &b[at..at]));
+                let varint = read_varint(b, &mut at)?;
+                out.push(ProtoField { num, wire, varint, bytes: &[] });
                 continue;
             }
             WIRE_FIXED64 => 8,
@@ -287,7 +301,7 @@ fn proto_fields(b: &[u8]) -> Option<Vec<(u32, u8, u64, &[u8])>> {
             _ => return None,
         };
         let payload = b.get(at..at.checked_add(size)?)?;
-        out.push((num, wire, 0, payload));
+        out.push(ProtoField { num, wire, varint: 0, bytes: payload });
         at += size;
     }
     Some(out)
@@ -297,10 +311,10 @@ fn proto_fields(b: &[u8]) -> Option<Vec<(u32, u8, u64, &[u8])>> {
 /// or `None` for any other record (the file-version event, or bytes that do not decode).
 fn scalar_tag_and_step(event: &[u8]) -> Option<(&str, i64)> {
     let fields = proto_fields(event)?;
-    let step = fields.iter().find(|f| f.0 == 2 && f.1 == WIRE_VARINT).map_or(0, |f| f.2 as i64);
-    let summary = fields.iter().find(|f| f.0 == 5 && f.1 == WIRE_LEN)?.3;
-    let value = proto_fields(summary)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
-    let tag = proto_fields(value)?.into_iter().find(|f| f.0 == 1 && f.1 == WIRE_LEN)?.3;
+    let step = fields.iter().find(|f| f.is(2, WIRE_VARINT)).map_or(0, |f| f.varint as i64);
+    let summary = fields.iter().find(|f| f.is(5, WIRE_LEN))?.bytes;
+    let value = proto_fields(summary)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
+    let tag = proto_fields(value)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
     Some((std::str::from_utf8(tag).ok()?, step))
 }
 
