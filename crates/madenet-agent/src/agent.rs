@@ -350,6 +350,17 @@ impl Agent {
         }
     }
 
+    /// Takes the goal candidates, and the search that found them, from `scratch` after an
+    /// observer's [`Agent::peek_view`]`(true, scratch)` of this agent in its current state:
+    /// exactly what [`Agent::view`]`(true)` would compute (same inputs, same search), without
+    /// searching again. The scratch is left holding the agent's old buffers.
+    pub fn adopt_candidates(&mut self, scratch: &mut ViewScratch) {
+        std::mem::swap(&mut self.candidates, &mut scratch.candidates);
+        std::mem::swap(&mut self.dijkstra, &mut scratch.dijkstra);
+        self.dijkstra_fresh = true;
+        scratch.fresh = false;
+    }
+
     /// The robot's view without touching its own navigator state: candidates and searches use
     /// `scratch`. For observers (e.g. an environment building observations of robots that do
     /// not decide now); the trajectory is the same whether or not this is called.

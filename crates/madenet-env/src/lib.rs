@@ -120,6 +120,9 @@ pub struct ExplorationEnv {
     seed: u64,
     /// One scratch per robot: the joint observation holds every robot's view at once.
     scratch: Vec<ViewScratch>,
+    /// `scratch[i]` holds robot i's goal candidates (and their search) for the current state:
+    /// a step hands them to the robot instead of extracting them again.
+    scratch_current: Vec<bool>,
     decisions: Vec<Decision>,
     /// Shipped policies acting in this episode ([`ExplorationEnv::policy_decisions`]), one
     /// instance per robot, built with the episode's seed.
@@ -163,6 +166,7 @@ impl ExplorationEnv {
             trial: None,
             seed: 0,
             scratch: (0..starts_len).map(|_| ViewScratch::new(h, w)).collect(),
+            scratch_current: vec![false; starts_len],
             decisions: Vec::new(),
             policies: Vec::new(),
             visibility: None,
@@ -295,6 +299,7 @@ impl ExplorationEnv {
         self.trial = Some(trial);
         self.seed = seed;
         self.end_reported = false;
+        self.scratch_current.fill(false);
         self.policies.clear();
         Ok(())
     }
@@ -349,6 +354,7 @@ impl ExplorationEnv {
         let mode = self.mode;
         let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
         let view = trial.agents()[robot].peek_view(self.observe_candidates, &mut self.scratch[robot]);
+        self.scratch_current[robot] = self.observe_candidates;
         view.write_map_image(map);
         view.write_macro_observation(vector);
         match mode {
@@ -395,6 +401,7 @@ impl ExplorationEnv {
         let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
         let deciding = if trial.is_done() { vec![false; self.starts.len()] } else { trial.deciding().to_vec() };
         let views: Vec<AgentView<'_>> = trial.agents().iter().zip(self.scratch.iter_mut()).map(|(a, s)| a.peek_view(true, s)).collect();
+        self.scratch_current.fill(true);
         write_joint_map_image(&views, trial.world().team_map(), map);
         let mut masks = Vec::with_capacity(views.len());
         for (i, v) in views.iter().enumerate() {
@@ -578,10 +585,16 @@ impl ExplorationEnv {
         }
         for (i, d) in decisions.iter().enumerate() {
             if trial.deciding()[i] && matches!(d, Decision::Candidate(_)) {
-                // The robot's own candidates, extracted as its own policy would see them.
-                let _ = trial.agent_mut(i).view(true);
+                // The robot's own candidates, as its own policy would see them: those of its
+                // last observation if it is of this state, else extracted now.
+                if self.scratch_current[i] {
+                    trial.agent_mut(i).adopt_candidates(&mut self.scratch[i]);
+                } else {
+                    let _ = trial.agent_mut(i).view(true);
+                }
             }
         }
+        self.scratch_current.fill(false);
         trial.apply_decisions(decisions);
         self.step_rewards.fill(0.0);
         let mut out = Advanced { team_reward: 0.0, steps: 0, terminated: false, truncated: false };
