@@ -255,3 +255,32 @@ fn an_episode_over_at_its_start_ends_at_the_first_step() {
         assert_ne!(v.episode_seeds(), seeds, "{mode:?}: the environments restarted with their next seeds");
     }
 }
+
+/// Observing before a step (whose candidates the step then hands to the deciding robots) or not
+/// (the step extracts them itself) gives the same episode.
+#[test]
+fn stepping_with_or_without_observing_first_is_the_same() {
+    for csp in [1.0, 0.3] {
+        let run = |observe: bool| {
+            let mut e = env(ActionMode::Macro, csp);
+            e.reset(21).unwrap();
+            let (n, g) = (e.num_robots(), e.action_count());
+            let mut buffers = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; g]);
+            let mut rng = madenet_world::rng::stream(3, "test/actions", 0);
+            let mut results = Vec::new();
+            while !e.is_done() {
+                if observe {
+                    for i in 0..n {
+                        e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2).unwrap();
+                    }
+                }
+                let a: Vec<usize> = (0..n).map(|_| rng.random_range(0..g.min(3))).collect();
+                results.push(e.step(&a).unwrap());
+            }
+            (results, e.finish().unwrap().trajectory)
+        };
+        let (observed, plain) = (run(true), run(false));
+        assert!(observed.0.len() > 5);
+        assert_eq!(observed, plain, "CSP {csp}");
+    }
+}
