@@ -82,6 +82,20 @@ impl ViewScratch {
     }
 }
 
+/// The parts of an [`Agent`] that hold allocations, carried from one episode to the next by
+/// [`Agent::restarted`].
+struct Buffers {
+    belief: Belief,
+    teammates: Vec<TeammateRecord>,
+    exchanged: Vec<usize>,
+    candidates: GoalCandidates,
+    dijkstra: Dijkstra,
+    reservations: Reservations,
+    space_time: SpaceTimePlanner,
+    scratch: Vec<Pos>,
+    path: Vec<Pos>,
+}
+
 /// One robot.
 pub struct Agent {
     cfg: AgentConfig,
@@ -114,31 +128,18 @@ pub struct Agent {
 impl Agent {
     pub fn new(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>) -> Self {
         let (h, w) = (cfg.height, cfg.width);
-        Agent {
-            t: 0,
-            pos: start,
+        let buffers = Buffers {
             belief: Belief::new(h, w, cfg.movement),
             teammates: vec![TeammateRecord::default(); cfg.num_robots],
-            detected_any: false,
-            newly_detected: false,
             exchanged: Vec::new(),
-            goal: None,
-            prev_goal: None,
             candidates: GoalCandidates { slots: cfg.goal_count, cells: Vec::new() },
             dijkstra: Dijkstra::new(h, w),
-            dijkstra_fresh: false,
             reservations: Reservations::new(h, w, cfg.plan_horizon),
             space_time: SpaceTimePlanner::new(h, w, cfg.plan_horizon),
             scratch: Vec::new(),
             path: Vec::new(),
-            path_ready: false,
-            policy,
-            termination: None,
-            blocked_for: 0,
-            action: None,
-            stats: AgentStats::default(),
-            cfg,
-        }
+        };
+        Self::assemble(cfg, start, policy, buffers)
     }
 
     /// The agent [`Agent::new`] would build with this agent's config, `start` and `policy`,
@@ -155,6 +156,15 @@ impl Agent {
         space_time.expanded = 0;
         scratch.clear();
         path.clear();
+        // The search scratch is only read after a search from the robot's position
+        // (`dijkstra_fresh`), so it need not be cleared.
+        let buffers = Buffers { belief, teammates, exchanged, candidates, dijkstra, reservations, space_time, scratch, path };
+        Self::assemble(cfg, start, policy, buffers)
+    }
+
+    /// An agent at the start of an episode, holding `buffers` (in their initial state).
+    fn assemble(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>, buffers: Buffers) -> Self {
+        let Buffers { belief, teammates, exchanged, candidates, dijkstra, reservations, space_time, scratch, path } = buffers;
         Agent {
             t: 0,
             pos: start,
@@ -166,7 +176,6 @@ impl Agent {
             goal: None,
             prev_goal: None,
             candidates,
-            // Only read after a search from the robot's position (`dijkstra_fresh`).
             dijkstra,
             dijkstra_fresh: false,
             reservations,

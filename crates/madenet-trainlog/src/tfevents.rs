@@ -171,8 +171,8 @@ pub fn truncate_events(dir: impl AsRef<Path>, keep: impl Fn(&str, i64) -> bool) 
                 changed = true; // a torn or corrupt tail
                 break;
             };
-            match scalar_tag_and_step(data) {
-                Some((tag, step)) if !keep(tag, step) => {
+            match scalar_event(data) {
+                Some((tag, step, _)) if !keep(tag, step) => {
                     dropped += 1;
                     changed = true;
                 }
@@ -220,21 +220,13 @@ pub fn read_scalars(dir: impl AsRef<Path>) -> io::Result<Vec<(String, i64, f32)>
         let bytes = std::fs::read(&path).map_err(|e| named(e, &path))?;
         let mut at = 0;
         while let Some((data, next)) = read_record(&bytes, at) {
-            if let (Some((tag, step)), Some(value)) = (scalar_tag_and_step(data), scalar_value(data)) {
+            if let Some((tag, step, value)) = scalar_event(data) {
                 out.push((tag.to_string(), step, value));
             }
             at = next;
         }
     }
     Ok(out)
-}
-
-/// The simple value of a scalar event (`summary = 5 { value = 1 { simple_value = 2 } }`).
-fn scalar_value(event: &[u8]) -> Option<f32> {
-    let summary = proto_fields(event)?.into_iter().find(|f| f.is(5, WIRE_LEN))?.bytes;
-    let value = proto_fields(summary)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
-    let x = proto_fields(value)?.into_iter().find(|f| f.is(2, WIRE_FIXED32))?.bytes;
-    Some(f32::from_le_bytes(x.try_into().ok()?))
 }
 
 /// The data of the TFRecord at `at` and where the next one starts, if the record is whole and
@@ -307,15 +299,18 @@ fn proto_fields(b: &[u8]) -> Option<Vec<ProtoField<'_>>> {
     Some(out)
 }
 
-/// The tag and step of a scalar event (`Event { step = 2, summary = 5 { value = 1 { tag = 1 } } }`),
-/// or `None` for any other record (the file-version event, or bytes that do not decode).
-fn scalar_tag_and_step(event: &[u8]) -> Option<(&str, i64)> {
+/// The tag, step and value of a scalar event
+/// (`Event { step = 2, summary = 5 { value = 1 { tag = 1, simple_value = 2 } } }`), or `None`
+/// for any other record (the file-version event, or bytes that do not decode).
+fn scalar_event(event: &[u8]) -> Option<(&str, i64, f32)> {
     let fields = proto_fields(event)?;
     let step = fields.iter().find(|f| f.is(2, WIRE_VARINT)).map_or(0, |f| f.varint as i64);
     let summary = fields.iter().find(|f| f.is(5, WIRE_LEN))?.bytes;
     let value = proto_fields(summary)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
-    let tag = proto_fields(value)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
-    Some((std::str::from_utf8(tag).ok()?, step))
+    let value = proto_fields(value)?;
+    let tag = value.iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
+    let x = value.iter().find(|f| f.is(2, WIRE_FIXED32))?.bytes;
+    Some((std::str::from_utf8(tag).ok()?, step, f32::from_le_bytes(x.try_into().ok()?)))
 }
 
 /// The CRC-32C (Castagnoli) of `data`, masked as TFRecord stores it (a CRC
