@@ -3,10 +3,10 @@
 //! [`Move`].
 
 use crate::belief::Belief;
-use crate::goals::{extract_goals, GoalCandidates};
+use crate::goals::{extract_goals_with, GoalCandidates};
 use crate::messages::{Beta, PlanMessage, TeammateRecord};
 use crate::policy::{Decision, DecisionMode, Policy};
-use crate::view::AgentView;
+use crate::view::{search_from, AgentView};
 use madenet_map::Pos;
 use madenet_nav::{astar, one_step, Dijkstra, Reservations, SpaceTimePlanner};
 use madenet_world::{Move, Observation, ScenarioConfig};
@@ -24,6 +24,8 @@ pub struct AgentConfig {
     pub prioritized_planning: bool,
     pub plan_horizon: usize,
     pub movement: madenet_map::Movement,
+    /// How 𝒢 is chosen ([`madenet_world::CandidateRule`]).
+    pub candidate_rule: madenet_world::CandidateRule,
 }
 
 impl AgentConfig {
@@ -37,6 +39,7 @@ impl AgentConfig {
             prioritized_planning: cfg.prioritized_planning,
             plan_horizon: cfg.plan_horizon,
             movement: cfg.movement,
+            candidate_rule: cfg.candidate_rule,
         }
     }
 }
@@ -58,6 +61,17 @@ pub enum Termination {
 
 /// Consecutive timesteps without moving, despite a goal elsewhere, that end a macro action.
 pub const BLOCKED_STEPS: usize = 3;
+
+/// Timesteps of the oscillation test: a robot with a goal that learned nothing new over this
+/// many steps while shuttling between at most [`OSCILLATION_CELLS`] cells, with a teammate of
+/// lower index in view, is in a livelock with it (two robots that cannot talk swapping places
+/// or goals back and forth); it yields.
+pub const OSCILLATION_STEPS: usize = 8;
+/// Distinct cells a shuttling robot visits within [`OSCILLATION_STEPS`].
+pub const OSCILLATION_CELLS: usize = 3;
+/// Timesteps a robot in a livelock stays put so that the teammate of lower index can get by.
+/// The robot of lowest index in view never yields, which breaks the symmetry.
+pub const YIELD_STEPS: usize = 4;
 
 /// Per-agent timing and counters.
 #[derive(Clone, Debug, Default)]
@@ -120,6 +134,12 @@ pub struct Agent {
     termination: Option<Termination>,
     /// Timesteps in a row the robot intended to move and did not.
     blocked_for: usize,
+    /// The last positions and known-cell counts (ring of [`OSCILLATION_STEPS`] + 1, newest at
+    /// `history_len - 1` modulo), for the livelock test.
+    history: [(Pos, usize); OSCILLATION_STEPS + 1],
+    history_len: usize,
+    /// Timesteps left to stay put, yielding to a teammate in a livelock.
+    yield_for: usize,
     /// The macro action (candidate index) in force, if the last decision chose one.
     action: Option<usize>,
     stats: AgentStats,
@@ -162,6 +182,40 @@ impl Agent {
         Self::assemble(cfg, start, policy, buffers)
     }
 
+    /// A copy of this agent in its current state (map, teammate records, goal, macro action,
+    /// navigator state) driven from now on by `policy`: how a rollout continues a trial from
+    /// its present under another policy. Counters start from zero.
+    pub fn fork(&self, policy: Box<dyn Policy>) -> Self {
+        Agent {
+            cfg: self.cfg.clone(),
+            t: self.t,
+            pos: self.pos,
+            belief: self.belief.clone(),
+            teammates: self.teammates.clone(),
+            detected_any: self.detected_any,
+            newly_detected: self.newly_detected,
+            exchanged: self.exchanged.clone(),
+            goal: self.goal,
+            prev_goal: self.prev_goal,
+            candidates: self.candidates.clone(),
+            dijkstra: self.dijkstra.clone(),
+            dijkstra_fresh: self.dijkstra_fresh,
+            reservations: self.reservations.clone(),
+            space_time: self.space_time.clone(),
+            scratch: Vec::new(),
+            path: self.path.clone(),
+            path_ready: self.path_ready,
+            policy,
+            termination: self.termination,
+            blocked_for: self.blocked_for,
+            history: self.history,
+            history_len: self.history_len,
+            yield_for: self.yield_for,
+            action: self.action,
+            stats: AgentStats::default(),
+        }
+    }
+
     /// An agent at the start of an episode, holding `buffers` (in their initial state).
     fn assemble(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>, buffers: Buffers) -> Self {
         let Buffers { belief, teammates, exchanged, candidates, dijkstra, reservations, space_time, scratch, path } = buffers;
@@ -186,6 +240,9 @@ impl Agent {
             policy,
             termination: None,
             blocked_for: 0,
+            history: [(start, 0); OSCILLATION_STEPS + 1],
+            history_len: 0,
+            yield_for: 0,
             action: None,
             stats: AgentStats::default(),
             cfg,
@@ -259,12 +316,49 @@ impl Agent {
         }
         self.newly_detected = newly;
         self.detected_any = !obs.teammates.is_empty();
+        self.check_livelock();
         self.exchanged.clear();
         self.exchanged.extend_from_slice(&obs.exchanged_with);
         self.reservations.clear();
         self.dijkstra_fresh = false;
         self.path_ready = false;
         self.termination = None;
+    }
+
+    /// The livelock test (after taking in an observation): remembers the position and the
+    /// known-cell count, and starts yielding for [`YIELD_STEPS`] when the robot has a goal, has
+    /// learned nothing over [`OSCILLATION_STEPS`] steps while visiting at most
+    /// [`OSCILLATION_CELLS`] cells, and sees a teammate of lower index.
+    fn check_livelock(&mut self) {
+        let ring = self.history.len();
+        self.history[self.history_len % ring] = (self.pos, self.belief.known_count());
+        self.history_len += 1;
+        if self.history_len < ring || self.yield_for > 0 || self.goal.is_none_or(|g| g == self.pos) {
+            return;
+        }
+        let oldest = self.history[self.history_len % ring];
+        if oldest.1 != self.belief.known_count() {
+            return;
+        }
+        let mut cells: [Option<Pos>; OSCILLATION_CELLS + 1] = [None; OSCILLATION_CELLS + 1];
+        let mut distinct = 0;
+        for &(p, _) in &self.history {
+            if !cells[..distinct].contains(&Some(p)) {
+                if distinct == cells.len() {
+                    return;
+                }
+                cells[distinct] = Some(p);
+                distinct += 1;
+            }
+        }
+        if distinct > OSCILLATION_CELLS {
+            return;
+        }
+        let id = self.cfg.id;
+        if self.teammates.iter().enumerate().any(|(j, r)| j < id && r.detected) {
+            self.yield_for = YIELD_STEPS;
+            self.history_len = 0;
+        }
     }
 
     /// β_i to send to a teammate this timestep.
@@ -339,7 +433,7 @@ impl Agent {
     pub fn view(&mut self, with_candidates: bool) -> AgentView<'_> {
         if with_candidates {
             let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
-            self.candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra, &held);
+            self.candidates = extract_goals_with(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra, &held, self.cfg.candidate_rule);
             self.dijkstra_fresh = true;
         } else {
             self.candidates.cells.clear();
@@ -377,7 +471,7 @@ impl Agent {
         let ViewScratch { dijkstra, candidates, fresh } = scratch;
         if with_candidates {
             let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
-            *candidates = extract_goals(&self.belief, self.pos, self.cfg.goal_count, dijkstra, &held);
+            *candidates = extract_goals_with(&self.belief, self.pos, self.cfg.goal_count, dijkstra, &held, self.cfg.candidate_rule);
             *fresh = true;
         } else {
             candidates.slots = self.cfg.goal_count;
@@ -451,6 +545,13 @@ impl Agent {
     /// detected teammate this robot cannot talk to (a static obstacle to it), space-time A*
     /// plans around them, waiting where needed.
     pub fn plan(&mut self) {
+        if self.yield_for > 0 {
+            // Yielding in a livelock: stay put (the path is planned afresh afterwards).
+            self.yield_for -= 1;
+            self.path.clear();
+            self.path_ready = false;
+            return;
+        }
         let Some(goal) = self.goal else {
             self.path.clear();
             return;
@@ -460,15 +561,25 @@ impl Agent {
             return;
         }
         if !self.path_ready {
+            // The path is the robot's one search's path to the goal (`view::search_from`),
+            // whatever the policy queried before: from the tree at hand if it settled the goal
+            // (a stopped search settles exactly what the full one does), else searched on.
             let ok = self.dijkstra_fresh && self.dijkstra.source() == Some(self.pos) && self.dijkstra.path_to(goal, &mut self.path);
             if !ok {
-                let belief = &self.belief;
-                if one_step(self.pos, goal, |p| belief.is_free(p), belief.movement()).is_some() {
-                    // astar's path, without allocating one (primitive moves, one-cell goals).
+                let (belief, teammates) = (&self.belief, &self.teammates);
+                let held = |q: Pos| teammates.iter().any(|r| r.detected && r.seen_pos == Some(q));
+                if one_step(self.pos, goal, |p| belief.is_free(p) && !held(p), belief.movement()).is_some() {
+                    // The search's path, without a search (a one-step path is the unique shortest).
                     self.path.clear();
                     self.path.push(goal);
                 } else {
-                    self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+                    let g = belief.index(goal);
+                    let found = search_from(&mut self.dijkstra, belief, teammates, self.pos, |i, _| i == g).is_some();
+                    self.dijkstra_fresh = true;
+                    if !(found && self.dijkstra.path_to(goal, &mut self.path)) {
+                        // Not reachable around the teammates in view: through them (they may move).
+                        self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+                    }
                 }
             }
             self.path_ready = true;

@@ -4,6 +4,7 @@
 use crate::belief::{Belief, NEIGHBOURS};
 use madenet_map::Pos;
 use madenet_nav::Dijkstra;
+use madenet_world::CandidateRule;
 use serde::{Deserialize, Serialize};
 
 /// The goal candidates 𝒢_i of one robot: `cells[k]` is the goal of macro action k; `valid`
@@ -43,7 +44,16 @@ impl GoalCandidates {
 ///    each next one is the remaining representative farthest (Euclidean) from those chosen.
 ///    When clusters run out, the same selection continues over all reachable frontier cells,
 ///    so a single large frontier still yields several spread goals.
+///
+/// With [`CandidateRule::NearestClusters`], step 3 takes the cluster representatives in order
+/// of their nearest cell's path cost instead (then farthest-point selection over frontier cells
+/// when clusters run out).
 pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra, held: &[Pos]) -> GoalCandidates {
+    extract_goals_with(belief, from, slots, dijkstra, held, CandidateRule::Paper)
+}
+
+/// [`extract_goals`] under `rule`.
+pub fn extract_goals_with(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra, held: &[Pos], rule: CandidateRule) -> GoalCandidates {
     let mut reachable: Vec<Pos> = Vec::new();
     dijkstra.run(from, |p| belief.is_free(p) && !held.contains(&p), belief.movement(), |p| {
         if p != from && belief.is_frontier(p) {
@@ -101,8 +111,15 @@ pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Di
             .expect("cluster is not empty");
         reps.push(rep);
     }
-    out.cells.push(reps[0]);
-    farthest_point(&reps, &mut out.cells, slots);
+    match rule {
+        CandidateRule::Paper => {
+            out.cells.push(reps[0]);
+            farthest_point(&reps, &mut out.cells, slots);
+        }
+        // Clusters are numbered in order of their nearest cell's path cost (flood fills start
+        // from `reachable`, nearest first).
+        CandidateRule::NearestClusters => out.cells.extend(reps.iter().take(slots)),
+    }
     if out.cells.len() < slots {
         farthest_point(&reachable, &mut out.cells, slots);
     }

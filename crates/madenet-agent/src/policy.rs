@@ -117,3 +117,81 @@ impl Policy for RandomCandidate {
         }
     }
 }
+
+/// "spread": the ten-line rule a learned macro policy must beat. At each macro termination it
+/// takes the goal candidate of least path cost plus a penalty of 2·d_s for every teammate whose
+/// announced goal (heard within [`Spread::GOAL_MEMORY`] steps) or last known position (within
+/// [`Spread::POSITION_MEMORY`] steps) lies within d_s (Chebyshev) of the candidate: go to the
+/// nearest frontier nobody else is heading for or standing at. Ties go to the lower slot. The
+/// constants were chosen once, not tuned.
+#[derive(Clone, Debug)]
+pub struct Spread {
+    /// d_s, the sensing range in cells (the radius a teammate covers).
+    pub sensing_range: i32,
+}
+
+impl Spread {
+    /// Announced goals older than this many steps are ignored.
+    pub const GOAL_MEMORY: usize = 30;
+    /// Positions older than this many steps are ignored.
+    pub const POSITION_MEMORY: usize = 10;
+
+    pub fn new(sensing_range: i32) -> Self {
+        Spread { sensing_range }
+    }
+
+    /// The spread score of every candidate (lower is better; path cost in cells plus the
+    /// crowding penalty), `None` for a candidate the robot cannot reach.
+    pub fn scores(&self, view: &mut AgentView<'_>) -> Vec<Option<f64>> {
+        let cells = view.candidates().cells.clone();
+        let costs: Vec<Option<f64>> = cells.iter().map(|&c| view.path_cost(c)).collect();
+        let view = &*view;
+        let ds = self.sensing_range;
+        let recent = |at: Option<usize>, memory: usize| at.is_some_and(|a| view.t.saturating_sub(a) <= memory);
+        let near = |a: Pos, b: Pos| a.chebyshev(b) <= ds;
+        cells
+            .iter()
+            .zip(costs)
+            .map(|(&c, cost)| {
+                let cost = cost?;
+                let crowded = view
+                    .teammates
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != view.id)
+                    .filter(|(_, r)| {
+                        let goal = r.goal.filter(|_| recent(r.heard_at, Self::GOAL_MEMORY));
+                        let seen_at = match (r.seen_at, r.heard_at) {
+                            (Some(s), Some(h)) => Some(s.max(h)),
+                            (s, h) => s.or(h),
+                        };
+                        let pos = r.last_pos().filter(|_| recent(seen_at, Self::POSITION_MEMORY));
+                        goal.is_some_and(|g| near(g, c)) || pos.is_some_and(|p| near(p, c))
+                    })
+                    .count();
+                Some(cost + 2.0 * ds as f64 * crowded as f64)
+            })
+            .collect()
+    }
+}
+
+impl Policy for Spread {
+    fn name(&self) -> &str {
+        "spread"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        let best = self
+            .scores(view)
+            .into_iter()
+            .enumerate()
+            .filter_map(|(k, s)| s.map(|s| (k, s)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        match best {
+            Some((k, _)) => Decision::Candidate(k),
+            None => Decision::Idle,
+        }
+    }
+}

@@ -32,6 +32,9 @@ pub struct AgentView<'a> {
 }
 
 impl<'a> AgentView<'a> {
+    /// Values per candidate in [`AgentView::write_candidate_features`].
+    pub const CANDIDATE_FEATURES: usize = 9;
+
     /// 𝒢_i, the goal candidates (empty if the policy declared it does not need them).
     pub fn candidates(&self) -> &GoalCandidates {
         self.candidates
@@ -49,33 +52,26 @@ impl<'a> AgentView<'a> {
     /// settling cells (row-major index, cost in units of [`madenet_nav::STRAIGHT`] per cell)
     /// in order of cost until `stop` returns true; see [`Dijkstra::run_indexed`]. The search
     /// tree is kept, so the navigator's path to a settled goal is free.
+    ///
+    /// Every search of the view (and the goal extraction) is this one search, stopped at
+    /// different cells: the cells a stopped search settles have exactly the costs and parents
+    /// of the full search, so whatever a policy queries, the navigator's path to a goal is the
+    /// same (it searches on when the goal is not settled).
     pub fn search(&mut self, stop: impl FnMut(usize, u32) -> bool) -> Option<usize> {
-        let belief = self.belief;
-        let map = belief.map();
-        let mut held = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p));
-        let (a, b) = (held.next().unwrap_or(usize::MAX), held.next().unwrap_or(usize::MAX));
         *self.dijkstra_fresh = true;
-        if held.next().is_none() {
-            // Up to two teammates in view (the paper's team of three): two compares per cell.
-            self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && i != a && i != b, belief.movement(), stop)
-        } else {
-            let cells: Vec<usize> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p)).collect();
-            self.dijkstra.run_indexed(self.pos, |i| map[i] == Occupancy::Free && !cells.contains(&i), belief.movement(), stop)
-        }
+        search_from(self.dijkstra, self.belief, self.teammates, self.pos, stop)
     }
-
     /// The cost to a cell settled by the last [`AgentView::search`], in cells.
     pub fn searched_cost(&self, p: Pos) -> Option<f64> {
         self.dijkstra.settled_cost(p).map(madenet_nav::cost_to_cells)
     }
 
-    /// Path cost in cells from the robot to every known-free cell, computed once (full
-    /// Dijkstra) and reused by the navigator. `None` if unreachable.
+    /// Path cost in cells from the robot through known free cells not held by a teammate
+    /// detected now (as [`AgentView::search`] and the goal extraction), from the last search if
+    /// it settled `to`, else from a full search, reused by the navigator. `None` if unreachable.
     pub fn path_cost(&mut self, to: Pos) -> Option<f64> {
-        if !*self.dijkstra_fresh || self.dijkstra.settled_cost(to).is_none() {
-            let (belief, from) = (self.belief, self.pos);
-            self.dijkstra.run(from, |p| belief.is_free(p), belief.movement(), |_| false);
-            *self.dijkstra_fresh = true;
+        if !*self.dijkstra_fresh || self.dijkstra.source() != Some(self.pos) || self.dijkstra.settled_cost(to).is_none() {
+            self.search(|_, _| false);
         }
         self.dijkstra.settled_cost(to).map(madenet_nav::cost_to_cells)
     }
@@ -140,6 +136,89 @@ impl<'a> AgentView<'a> {
         }
     }
 
+    /// Features per goal candidate: [`AgentView::CANDIDATE_FEATURES`] values for each of the
+    /// |G| slots.
+    pub fn candidate_features_len(goals: usize) -> usize {
+        Self::CANDIDATE_FEATURES * goals
+    }
+
+    /// Per-candidate inputs of the learned policy beyond the paper's (the `candidate-features`
+    /// observation; zeros for an empty slot), `sensing_range` = d_s:
+    ///
+    /// 0. path cost from the robot (cells) / (height + width);
+    /// 1. unknown cells within d_s (Chebyshev) of the candidate / (2 d_s + 1)², the information
+    ///    to be gained there;
+    /// 2. frontier cells within d_s / (2 d_s + 1)²;
+    /// 3. distance (Chebyshev) to the nearest teammate goal announced within
+    ///    [`crate::Spread::GOAL_MEMORY`] steps, / (4 d_s), capped at 1 (1: none);
+    /// 4. the same for teammates' last known positions within [`crate::Spread::POSITION_MEMORY`];
+    /// 5. the [`crate::Spread`] crowding count (teammates whose goal or position is within d_s) / 2;
+    /// 6. rank of the path cost among the candidates / |G| (0 = nearest);
+    /// 7. the [`crate::Spread`] score / (height + width);
+    /// 8. 1 for the candidate [`crate::Spread`] would take, else 0.
+    ///
+    /// Costs are [`AgentView::path_cost`]s (the goal extraction's search when it is at hand).
+    pub fn write_candidate_features(&mut self, sensing_range: i32, out: &mut [f32]) {
+        let slots = self.candidates.slots;
+        assert_eq!(out.len(), Self::candidate_features_len(slots), "candidate features length");
+        out.fill(0.0);
+        let b = self.belief;
+        let ds = sensing_range.max(1);
+        let window = ((2 * ds + 1) * (2 * ds + 1)) as f32;
+        let recent = |at: Option<usize>, memory: usize| at.is_some_and(|a| self.t.saturating_sub(a) <= memory);
+        let mates: Vec<(Option<Pos>, Option<Pos>)> = self
+            .teammates
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != self.id)
+            .map(|(_, r)| {
+                let goal = r.goal.filter(|_| recent(r.heard_at, crate::Spread::GOAL_MEMORY));
+                let at = match (r.seen_at, r.heard_at) {
+                    (Some(s), Some(h)) => Some(s.max(h)),
+                    (s, h) => s.or(h),
+                };
+                (goal, r.last_pos().filter(|_| recent(at, crate::Spread::POSITION_MEMORY)))
+            })
+            .collect();
+        let cells = self.candidates.cells.clone();
+        let costs: Vec<f64> = cells.iter().map(|&c| self.path_cost(c).unwrap_or(f64::MAX)).collect();
+        let scale = (b.height() + b.width()) as f64;
+        let near_cap = (4 * ds) as f32;
+        for (k, &c) in self.candidates.cells.iter().enumerate().take(slots) {
+            let f = &mut out[k * Self::CANDIDATE_FEATURES..(k + 1) * Self::CANDIDATE_FEATURES];
+            f[0] = if costs[k] == f64::MAX { 1.0 } else { (costs[k] / scale) as f32 };
+            let (mut unknown, mut frontier) = (0, 0);
+            for r in c.row - ds..=c.row + ds {
+                for col in c.col - ds..=c.col + ds {
+                    let q = Pos::new(r, col);
+                    if b.in_bounds(q) {
+                        unknown += (b.get(q) == Occupancy::Unknown) as u32;
+                        frontier += b.is_frontier(q) as u32;
+                    }
+                }
+            }
+            f[1] = unknown as f32 / window;
+            f[2] = frontier as f32 / window;
+            let nearest = |sel: &dyn Fn(&(Option<Pos>, Option<Pos>)) -> Option<Pos>| {
+                mates.iter().filter_map(sel).map(|p| p.chebyshev(c) as f32).fold(near_cap, f32::min) / near_cap
+            };
+            f[3] = nearest(&|m| m.0);
+            f[4] = nearest(&|m| m.1);
+            let crowded = mates.iter().filter(|m| m.0.is_some_and(|g| g.chebyshev(c) <= ds) || m.1.is_some_and(|p| p.chebyshev(c) <= ds)).count();
+            f[5] = crowded as f32 / 2.0;
+            let rank = costs.iter().enumerate().filter(|&(j, &x)| x < costs[k] || (x == costs[k] && j < k)).count();
+            f[6] = rank as f32 / slots.max(1) as f32;
+        }
+        let spread = crate::Spread::new(sensing_range);
+        let scores = spread.scores(self);
+        let best = scores.iter().enumerate().filter_map(|(k, s)| s.map(|s| (k, s))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        for (k, s) in scores.iter().enumerate().take(slots) {
+            let f = &mut out[k * Self::CANDIDATE_FEATURES..(k + 1) * Self::CANDIDATE_FEATURES];
+            f[7] = s.map_or(1.0, |s| (s / scale) as f32);
+            f[8] = (best.map(|b| b.0) == Some(k)) as u8 as f32;
+        }
+    }
+
     /// The paper's 4-channel binary map image of this robot, channel-major
     /// `[4][height][width]`: explored space, obstacles, observed robot positions (own and
     /// teammates' last known), goal candidates.
@@ -189,6 +268,29 @@ fn write_known_and_obstacles<T: Copy + From<u8>>(cells: &[Occupancy], known: &mu
         let code = c as u8;
         *k = T::from((code != 0) as u8);
         *o = T::from(code >> 1);
+    }
+}
+
+/// The one search of a robot: Dijkstra from `pos` through the known free cells of `belief`
+/// not held by a teammate detected now (`teammates[j].detected`, at its `seen_pos`), until
+/// `stop(cell, cost)` returns true. [`AgentView::search`], the goal extraction and the
+/// navigator's path all use it, so a search stopped anywhere is a prefix of the full one.
+pub(crate) fn search_from(
+    dijkstra: &mut Dijkstra,
+    belief: &Belief,
+    teammates: &[TeammateRecord],
+    pos: Pos,
+    stop: impl FnMut(usize, u32) -> bool,
+) -> Option<usize> {
+    let map = belief.map();
+    let mut held = teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p));
+    let (a, b) = (held.next().unwrap_or(usize::MAX), held.next().unwrap_or(usize::MAX));
+    if held.next().is_none() {
+        // Up to two teammates in view (the paper's team of three): two compares per cell.
+        dijkstra.run_indexed(pos, |i| map[i] == Occupancy::Free && i != a && i != b, belief.movement(), stop)
+    } else {
+        let cells: Vec<usize> = teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p)).collect();
+        dijkstra.run_indexed(pos, |i| map[i] == Occupancy::Free && !cells.contains(&i), belief.movement(), stop)
     }
 }
 

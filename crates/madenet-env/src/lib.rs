@@ -409,13 +409,7 @@ impl ExplorationEnv {
             masks.push(if deciding[i] { action_mask(v) } else { (0..goals).map(|k| k == 0).collect() });
         }
         for (a, m) in mask.iter_mut().enumerate() {
-            let mut rest = a;
-            let mut ok = true;
-            for robot_mask in &masks {
-                ok &= robot_mask[rest % goals];
-                rest /= goals;
-            }
-            *m = ok as u8;
+            *m = masks.iter().enumerate().all(|(i, robot_mask)| robot_mask[madenet_agent::joint_digit(a, i, goals)]) as u8;
         }
         Ok(())
     }
@@ -431,11 +425,7 @@ impl ExplorationEnv {
             return Err(EnvError::Usage(format!("joint action {action}: the joint action space has {count} actions")));
         }
         let goals = self.goal_count();
-        let actions: Vec<usize> = (0..self.num_robots()).scan(action, |rest, _| {
-            let k = *rest % goals;
-            *rest /= goals;
-            Some(k)
-        }).collect();
+        let actions = madenet_agent::joint_decode(action, self.num_robots(), goals);
         self.step(&actions)
     }
 

@@ -27,6 +27,40 @@ use rand_pcg::Pcg64Mcg;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
+/// The obstacle-fraction range of the "wide" generated maps (`generate-wide:SEED`, the learned
+/// policy's training, validation and held-out sets): the paper's training maps are 40–60 %
+/// obstacles, its evaluation maps 18–36 %, real buildings span both.
+pub const WIDE_DENSITY: (f64, f64) = (0.15, 0.60);
+
+/// `team` start cells around a free cell of `map` drawn with `seed`: the free cells nearest to it
+/// by moves (breadth-first under `movement`), or `None` if fewer than `team` are connected to it.
+pub fn random_starts(map: &OccGrid, team: usize, movement: Movement, seed: u64) -> Option<Vec<Pos>> {
+    let free: Vec<usize> = (0..map.len()).filter(|&i| map.cells()[i] == Occupancy::Free).collect();
+    if free.len() < team || free.is_empty() {
+        return None;
+    }
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let anchor = map.pos(free[rng.random_range(0..free.len())]);
+    let mut seen = vec![false; map.len()];
+    let mut queue = VecDeque::from([anchor]);
+    seen[map.index(anchor)] = true;
+    let mut starts = Vec::with_capacity(team);
+    while let Some(p) = queue.pop_front() {
+        starts.push(p);
+        if starts.len() == team {
+            return Some(starts);
+        }
+        for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
+            let q = Pos::new(p.row + dr, p.col + dc);
+            if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, movement) {
+                seen[map.index(q)] = true;
+                queue.push_back(q);
+            }
+        }
+    }
+    None
+}
+
 /// Parameters of [`generate`].
 ///
 /// With serde, missing fields take their [`Default`] values; note that the default

@@ -18,13 +18,14 @@
 
 mod registry;
 pub mod rewards;
+pub mod rollout;
 pub mod scenario;
 mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};
 pub use rewards::{RewardConfig, StepRewards};
 pub use scenario::{MapSource, StartSpec};
-pub use trial::{StepRecord, Trial, TrialResult, TrialSpec};
+pub use trial::{Future, StepRecord, Trial, TrialResult, TrialSpec};
 
 /// Errors setting up a trial; messages name the field at fault.
 #[derive(Debug, thiserror::Error)]

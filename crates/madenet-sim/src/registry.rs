@@ -1,6 +1,6 @@
 //! Policies by name, so studies and the CLI have no special case per method.
 
-use madenet_agent::{NearestFrontier, Policy, RandomCandidate};
+use madenet_agent::{NearestFrontier, Policy, RandomCandidate, Spread};
 use madenet_world::ScenarioConfig;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -28,12 +28,16 @@ pub struct PolicyRegistry {
 }
 
 impl PolicyRegistry {
-    /// `nf` (nearest frontier) and `random` (uniform random goal candidate).
+    /// `nf` (nearest frontier), `random` (uniform random goal candidate) and `spread` (nearest
+    /// candidate away from teammates, [`Spread`]).
     pub fn builtin() -> Self {
         let mut r = PolicyRegistry::default();
         r.register("nf", "nearest frontier (Yamauchi 1997), re-decided every timestep", |_| Box::new(NearestFrontier));
         r.register("random", "uniformly random goal candidate at each macro termination", |c| {
             Box::new(RandomCandidate::new(c.seed, c.robot))
+        });
+        r.register("spread", "nearest goal candidate, penalised 2·d_s per teammate whose goal or position is within d_s (the simple rule)", |c| {
+            Box::new(Spread::new(c.config.sensing_range))
         });
         r
     }

@@ -1,7 +1,7 @@
 //! Naming a scenario on a command line or in a config: where the map comes from and where
 //! the robots start.
 
-use madenet_map::generate::{generate, GeneratorConfig};
+use madenet_map::generate::{generate, generate_with_movement, random_starts, GeneratorConfig, WIDE_DENSITY};
 use madenet_map::io::{load, LoadOptions};
 use madenet_map::paper::{paper_map, paper_map_name, Corner, PAPER_MAP_COUNT};
 use madenet_map::{MapError, OccGrid, Pos};
@@ -10,11 +10,14 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 /// Where a map comes from: `paper:N` (the paper's evaluation map N, embedded),
-/// `generate:SEED` (the seeded generator at its defaults) or a file path.
+/// `generate:SEED` (the seeded generator at its defaults: 15–40 % obstacles),
+/// `generate-wide:SEED` (the generator at [`WIDE_DENSITY`], 15–60 %, the learned policy's
+/// training range; the corner start cells kept free) or a file path.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MapSource {
     Paper(usize),
     Generated(u64),
+    GeneratedWide(u64),
     File(PathBuf),
 }
 
@@ -27,6 +30,8 @@ impl FromStr for MapSource {
                 return Err(format!("`{s}`: the paper has maps 1..={PAPER_MAP_COUNT}"));
             }
             Ok(MapSource::Paper(n))
+        } else if let Some(seed) = s.strip_prefix("generate-wide:") {
+            seed.parse().map(MapSource::GeneratedWide).map_err(|_| format!("`{s}`: expected generate-wide:SEED with an integer seed"))
         } else if let Some(seed) = s.strip_prefix("generate:") {
             seed.parse().map(MapSource::Generated).map_err(|_| format!("`{s}`: expected generate:SEED with an integer seed"))
         } else {
@@ -41,6 +46,10 @@ impl MapSource {
         match self {
             MapSource::Paper(n) => paper_map(*n),
             MapSource::Generated(seed) => generate(&GeneratorConfig::default(), *seed),
+            MapSource::GeneratedWide(seed) => {
+                let gen = GeneratorConfig { density_min: WIDE_DENSITY.0, density_max: WIDE_DENSITY.1, ..GeneratorConfig::default() };
+                generate_with_movement(&gen, *seed, cfg.movement)
+            }
             MapSource::File(p) => load(p, &LoadOptions { cell_size: cfg.cell_size, discretize: cfg.discretize }),
         }
     }
@@ -50,21 +59,28 @@ impl MapSource {
         match self {
             MapSource::Paper(n) => paper_map_name(*n),
             MapSource::Generated(seed) => format!("generated_{seed}"),
+            MapSource::GeneratedWide(seed) => format!("generated_wide_{seed}"),
             MapSource::File(p) => p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string()),
         }
     }
 }
 
-/// Where the robots start: one of the paper's corners, or explicit cells `r,c;r,c;…`.
+/// Where the robots start: one of the paper's corners, explicit cells `r,c;r,c;…`, or `random`
+/// (the free cells nearest to a free cell drawn from the map itself, [`random_starts`]: the same
+/// map always gives the same cells).
 #[derive(Clone, Debug, PartialEq)]
 pub enum StartSpec {
     Corner(Corner),
     Cells(Vec<Pos>),
+    Random,
 }
 
 impl FromStr for StartSpec {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
+        if s == "random" {
+            return Ok(StartSpec::Random);
+        }
         if s.contains(',') {
             let cells = s
                 .split(';')
@@ -84,11 +100,17 @@ impl FromStr for StartSpec {
 }
 
 impl StartSpec {
-    /// The start cells on a `height × width` map.
-    pub fn cells(&self, height: usize, width: usize) -> Vec<Pos> {
+    /// The start cells of `team` robots on `map` (corner and explicit starts ignore the team
+    /// size: a trial checks it).
+    pub fn cells(&self, map: &OccGrid, team: usize, movement: madenet_map::Movement) -> Vec<Pos> {
         match self {
-            StartSpec::Corner(c) => c.start_cells(height, width).to_vec(),
+            StartSpec::Corner(c) => c.start_cells(map.height(), map.width()).to_vec(),
             StartSpec::Cells(v) => v.clone(),
+            StartSpec::Random => {
+                // The map's own cells seed the draw (FNV-1a), so every method meets the same starts.
+                let seed = map.cells().iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &c| (h ^ c as u64).wrapping_mul(0x0100_0000_01b3));
+                random_starts(map, team, movement, seed).unwrap_or_default()
+            }
         }
     }
 
@@ -96,6 +118,7 @@ impl StartSpec {
         match self {
             StartSpec::Corner(c) => c.name().to_string(),
             StartSpec::Cells(v) => v.iter().map(|p| format!("{},{}", p.row, p.col)).collect::<Vec<_>>().join(";"),
+            StartSpec::Random => "random".to_string(),
         }
     }
 }
@@ -117,5 +140,13 @@ mod tests {
         );
         assert!("0,0;x".parse::<StartSpec>().is_err());
         assert!("middle".parse::<StartSpec>().is_err());
+        assert_eq!("random".parse::<StartSpec>().unwrap(), StartSpec::Random);
+        assert_eq!("generate-wide:9".parse::<MapSource>().unwrap(), MapSource::GeneratedWide(9));
+        let cfg = ScenarioConfig::default();
+        let map = MapSource::GeneratedWide(9).load(&cfg).unwrap();
+        let starts = StartSpec::Random.cells(&map, 3, cfg.movement);
+        assert_eq!(starts.len(), 3);
+        assert!(starts.iter().all(|&p| map.get(p) == madenet_map::Occupancy::Free));
+        assert_eq!(starts, StartSpec::Random.cells(&map, 3, cfg.movement), "the same map, the same starts");
     }
 }

@@ -53,6 +53,19 @@ pub struct TrialResult {
     pub timing: Timing,
 }
 
+/// Which future a [`Trial::fork`] lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Future {
+    /// This trial's own: the same noise draws (a replay, which knows the luck to come).
+    Own,
+    /// Another future of the same present: noise streams from this salt
+    /// ([`madenet_world::World::reseed_noise`]).
+    Salted(u64),
+    /// No sensor misses and no slips from now on ([`madenet_world::World::set_noiseless`]):
+    /// the certainty-equivalent future, free of luck.
+    Noiseless,
+}
+
 /// A trial in progress.
 pub struct Trial {
     spec_map: String,
@@ -148,6 +161,54 @@ impl Trial {
         self.interaction_run.fill(0);
         self.rewards = StepRewards { robots: vec![0.0; n], team: 0.0 };
         Ok(self)
+    }
+
+    /// A copy of this trial in its present state, between timesteps, whose robots are driven
+    /// from now on by registry policy `policy` (instances made with this trial's seed), without
+    /// recording, living `future` (see [`Future`]). Metrics continue from the present (TNS
+    /// counts from t = 0). How rollouts evaluate a decision.
+    pub fn fork(&self, policy: &str, registry: &PolicyRegistry, future: Future) -> Result<Self, SimError> {
+        let cfg = self.world.config();
+        let (h, w) = (self.world.truth().height(), self.world.truth().width());
+        let mut agents = Vec::with_capacity(self.agents.len());
+        for (i, a) in self.agents.iter().enumerate() {
+            let ctx = PolicyContext { seed: self.seed, robot: i, config: cfg, height: h, width: w };
+            agents.push(a.fork(registry.make(policy, &ctx)?));
+        }
+        let mut world = self.world.clone();
+        match future {
+            Future::Own => {}
+            Future::Salted(salt) => world.reseed_noise(self.seed, salt),
+            Future::Noiseless => world.set_noiseless(),
+        }
+        Ok(Trial {
+            spec_map: self.spec_map.clone(),
+            policy: policy.to_string(),
+            starts: self.starts.clone(),
+            seed: self.seed,
+            world,
+            agents,
+            recorder: self.recorder.clone(),
+            trajectory: Vec::new(),
+            record: false,
+            elapsed: std::time::Duration::ZERO,
+            timed: false,
+            decided: self.decided.clone(),
+            moves: self.moves.clone(),
+            joint: None,
+            reward_config: self.reward_config.clone(),
+            interaction_run: self.interaction_run.clone(),
+            rewards: self.rewards.clone(),
+            outbox: self.outbox.clone(),
+            composed: self.composed.clone(),
+            plan_message: self.plan_message.clone(),
+        })
+    }
+
+    /// Replaces the world's noise streams by those of future `salt`
+    /// ([`madenet_world::World::reseed_noise`]) from now on.
+    pub fn reseed_noise(&mut self, salt: u64) {
+        self.world.reseed_noise(self.seed, salt);
     }
 
     /// Shares the world's cast rays ([`madenet_world::World::visibility`]) with other trials
@@ -314,6 +375,20 @@ impl Trial {
         for (i, &d) in decisions.iter().enumerate().take(self.agents.len()) {
             if self.decided[i] {
                 self.agents[i].apply_decision(d);
+            }
+        }
+    }
+
+    /// 3b with some decisions fixed from outside: each deciding robot i takes `fixed[i]` if
+    /// given, else asks its own policy (a rollout's first step: one robot's candidate under
+    /// evaluation, the others as their policies would decide).
+    pub fn decide_with(&mut self, fixed: &[Option<Decision>]) {
+        for (i, a) in self.agents.iter_mut().enumerate() {
+            if self.decided[i] {
+                match fixed.get(i).copied().flatten() {
+                    Some(d) => a.apply_decision(d),
+                    None => a.decide(),
+                }
             }
         }
     }

@@ -190,7 +190,7 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(
                         let spec = TrialSpec {
                             map: m.grid.clone(),
                             map_name: m.name.clone(),
-                            starts: s.cells(m.grid.height(), m.grid.width()),
+                            starts: s.cells(&m.grid, cfg.scenario.num_robots, cfg.scenario.movement),
                             config,
                             policy: method.clone(),
                             seed,

@@ -8,6 +8,19 @@ use madenet_map::Movement;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// How goal candidates are chosen ([`ScenarioConfig::candidate_rule`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CandidateRule {
+    /// The nearest frontier cluster's representative, then farthest-point selection among the
+    /// other clusters' representatives (straight-line distance), then among frontier cells.
+    #[default]
+    Paper,
+    /// The representatives of the clusters in order of their nearest cell's path cost, then
+    /// farthest-point selection among frontier cells when clusters run out.
+    NearestClusters,
+}
+
 /// One scenario's parameters. Load from TOML with [`ScenarioConfig::from_toml_file`]; unknown
 /// fields are rejected so a typo never silently falls back to a default.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -48,6 +61,11 @@ pub struct ScenarioConfig {
     /// Number of goal candidates |G|; unset means Eq. (3):
     /// floor(4·log10(√|X| / (2·d_s+1))) + |I|.
     pub goal_count: Option<usize>,
+    /// How the goal candidates 𝒢 are chosen among the frontier clusters (Sec. III.C.1):
+    /// `paper` (default) — the nearest cluster, then farthest-point selection; or
+    /// `nearest-clusters` — the clusters in order of path cost (ours: far, extreme candidates
+    /// are rarely worth their trip).
+    pub candidate_rule: CandidateRule,
     /// Plan among communicating robots with prioritized space-time A* (paper, Sec. III.C.5).
     pub prioritized_planning: bool,
     /// Space-time A* horizon in timesteps; beyond it reservations are ignored.
@@ -69,6 +87,7 @@ impl Default for ScenarioConfig {
             cell_size: 1.0,
             discretize: DiscretizeParams::default(),
             goal_count: None,
+            candidate_rule: CandidateRule::Paper,
             prioritized_planning: true,
             plan_horizon: 24,
         }

@@ -145,6 +145,25 @@ impl World {
         Ok(w)
     }
 
+    /// From now on, no sensor misses and no slips (communication stays as configured): the
+    /// certainty-equivalent future a rollout can score a decision in without luck.
+    pub fn set_noiseless(&mut self) {
+        self.cfg.sensor_miss_prob = 0.0;
+        self.cfg.motion_success_prob = 1.0;
+    }
+
+    /// Replaces every noise stream (motion, sensor, communication) by fresh ones derived from
+    /// the world's seed and `salt` (streams `fork/motion`, `fork/sensor`, `fork/comm`): a
+    /// clone of this world then lives a different future from the same present. How the
+    /// rollout teacher and oracle average over the future's noise.
+    pub fn reseed_noise(&mut self, seed: u64, salt: u64) {
+        let n = self.positions.len();
+        let k = |i: usize| salt.wrapping_mul(1 << 16).wrapping_add(i as u64);
+        self.rng_motion = (0..n).map(|i| stream(seed, "fork/motion", k(i))).collect();
+        self.rng_sensor = (0..n).map(|i| stream(seed, "fork/sensor", k(i))).collect();
+        self.rng_comm = stream(seed, "fork/comm", k(0));
+    }
+
     /// The world of `World::new(truth, starts, cfg, seed)` for the same map, starts and
     /// scenario, reusing this one's allocations and its cache of cast rays (the costly part of
     /// building and sensing): an episode restarts without casting again what earlier episodes
