@@ -5,9 +5,10 @@
 //! # Joint action index
 //!
 //! A joint action `(a_0, …, a_{n−1})` of `n` robots with `|G|` candidates each is the base-`|G|`
-//! number with **robot 0 as the most significant digit**:
-//! `index = Σ_i a_i · |G|^(n−1−i)`, so with 3 robots and 4 candidates `(1, 2, 3)` ↦ 16 + 8 + 3
-//! = 27 and robot `n−1`'s action varies fastest along the CEP's F6 outputs.
+//! number with **robot 0 as the least significant digit** ([`madenet_agent::joint_encode`], the
+//! one order of the learner, the environments and Python's `CentralizedEnv`):
+//! `index = Σ_i a_i · |G|^i`, so with 3 robots and 4 candidates `(1, 2, 3)` ↦ 1 + 8 + 48 = 57
+//! and robot 0's action varies fastest along the CEP's F6 outputs.
 
 use burn::tensor::{Bool, Int, Tensor, TensorData};
 
@@ -97,36 +98,29 @@ pub fn mask_tensor(
     Tensor::from_data(TensorData::new(valid.to_vec(), [rows, cols]), device)
 }
 
-/// The joint action index of per-robot actions (robot 0 most significant; see the module doc).
+/// The joint action index of per-robot actions: [`madenet_agent::joint_encode`], a = Σ k_i·|G|^i
+/// (robot 0 the least significant digit; one order for the learner, the environments and Python).
 ///
 /// # Panics
 /// If an action is ≥ `goals`.
 pub fn joint_index(actions: &[usize], goals: usize) -> usize {
-    actions.iter().fold(0, |acc, &a| {
-        assert!(
-            a < goals,
-            "robot action {a} out of range for {goals} candidates"
-        );
-        acc * goals + a
-    })
+    assert!(
+        actions.iter().all(|&a| a < goals),
+        "robot action out of range for {goals} candidates"
+    );
+    madenet_agent::joint_encode(actions, goals)
 }
 
 /// The per-robot actions of joint action `index` for `team` robots (inverse of [`joint_index`]).
 ///
 /// # Panics
-/// If `index ≥ goals^team`.
+/// If `index` is out of range.
 pub fn joint_actions(index: usize, team: usize, goals: usize) -> Vec<usize> {
     assert!(
         index < crate::joint_action_count(team, goals),
         "joint index {index} out of range"
     );
-    let mut out = vec![0; team];
-    let mut rest = index;
-    for slot in out.iter_mut().rev() {
-        *slot = rest % goals;
-        rest /= goals;
-    }
-    out
+    madenet_agent::joint_decode(index, team, goals)
 }
 
 /// The joint validity mask (length `goals^team`, in joint-index order) from each robot's
@@ -171,8 +165,8 @@ pub fn conditional_joint_mask<M: AsRef<[bool]>>(
     for (index, ok) in mask.iter_mut().enumerate() {
         // Decode without allocating: robot team−1 is the least significant digit.
         let mut rest = index;
-        for robot in (0..team).rev() {
-            if !allowed[robot][rest % goals] {
+        for robot_allowed in &allowed {
+            if !robot_allowed[rest % goals] {
                 *ok = false;
                 break;
             }

@@ -53,7 +53,7 @@
 //!   [`ConfigError::MapTooSmall`].
 //! * **Observation vector** layout: [`obs_dim_for`] (per robot) and [`joint_obs_dim_for`] (CEP:
 //!   the robots' vectors concatenated in robot order). The networks only see its length.
-//! * **Joint actions** (CEP): base-|G| index with robot 0 the most significant digit
+//! * **Joint actions** (CEP): base-|G| index with robot 0 the least significant digit
 //!   ([`joint_index`], [`joint_actions`]).
 //! * **Masks**: `true` = the action may be chosen. Invalid candidates are never returned by
 //!   [`masked_argmax`] / [`conditional_argmax`] and are excluded from [`masked_max`]. In the
@@ -71,6 +71,7 @@ mod net;
 pub mod obs;
 pub mod policy;
 pub mod replay;
+pub mod rollout_train;
 pub mod shipped;
 pub mod train;
 

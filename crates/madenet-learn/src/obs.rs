@@ -48,6 +48,43 @@ pub fn joint_obs(views: &[AgentView<'_>], team_map: &[Occupancy]) -> JointObs {
     JointObs { map: pack_bits(&map), vec, masks }
 }
 
+/// Which non-map observation vector a DEP reads: the one definition of its layout, used by
+/// training, acting and `model.toml`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Observation {
+    /// The paper's z_i \ m_i ([`AgentView::macro_observation`], [`crate::obs_dim_for`]).
+    #[default]
+    Paper,
+    /// The paper's vector followed by [`AgentView::CANDIDATE_FEATURES`] features per goal
+    /// candidate ([`AgentView::write_candidate_features`]: path cost, unknown and frontier cells
+    /// around it, distance to teammates' goals and positions, crowding, cost rank) — a departure
+    /// from the paper (the "MADE-Net that wins" issue).
+    CandidateFeatures,
+}
+
+impl Observation {
+    /// Length of the vector for `team` robots and `goals` candidates.
+    pub fn dim(self, team: usize, goals: usize) -> usize {
+        crate::obs_dim_for(team, goals)
+            + match self {
+                Observation::Paper => 0,
+                Observation::CandidateFeatures => AgentView::candidate_features_len(goals),
+            }
+    }
+
+    /// The vector of `view` (d_s = `sensing_range`).
+    pub fn vector(self, view: &mut AgentView<'_>, sensing_range: i32) -> Vec<f32> {
+        let mut z = view.macro_observation();
+        if self == Observation::CandidateFeatures {
+            let base = z.len();
+            z.resize(base + AgentView::candidate_features_len(view.candidates().slots), 0.0);
+            view.write_candidate_features(sensing_range, &mut z[base..]);
+        }
+        z
+    }
+}
+
 /// The candidate index that stands for a robot's running macro action at a later joint
 /// decision. Goal candidates are re-extracted at every joint decision, so the index chosen
 /// earlier may now name another cell: the running action is the valid candidate equal to the

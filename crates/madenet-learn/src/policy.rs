@@ -2,7 +2,7 @@
 //! macro-action terminations, greedily over its valid goal candidates, carrying the LSTM state
 //! from one decision to the next (paper Sec. III.C.3, *Decentralized Execution*).
 
-use crate::obs::action_mask;
+use crate::obs::{action_mask, Observation};
 use crate::{masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
 use std::sync::Arc;
@@ -13,12 +13,37 @@ pub struct DepPolicy {
     net: Arc<QNet>,
     state: Option<LstmState>,
     device: burn::tensor::Device,
+    observation: Observation,
+    sensing_range: i32,
+    recurrent: bool,
+    spread_margin: Option<f32>,
 }
 
 impl DepPolicy {
     /// A fresh policy (zero LSTM state) running `net` under registry name `name`.
     pub fn new(name: &str, net: Arc<QNet>) -> Self {
-        DepPolicy { name: name.to_string(), net, state: None, device: crate::cpu() }
+        DepPolicy { name: name.to_string(), net, state: None, device: crate::cpu(), observation: Observation::Paper, sensing_range: 4, recurrent: true, spread_margin: None }
+    }
+
+    /// Whether the LSTM state is carried from decision to decision (the paper's DEP) or every
+    /// decision starts from zero state (a model trained on single decisions).
+    pub fn with_recurrence(mut self, recurrent: bool) -> Self {
+        self.recurrent = recurrent;
+        self
+    }
+
+    /// Conservative acting: the `spread` rule's candidate unless the DEP values another more by
+    /// at least `margin` (`None`: the DEP's greedy choice).
+    pub fn with_spread_margin(mut self, margin: Option<f32>) -> Self {
+        self.spread_margin = margin;
+        self
+    }
+
+    /// Reads `observation`'s vector (d_s = `sensing_range`) instead of the paper's.
+    pub fn with_observation(mut self, observation: Observation, sensing_range: i32) -> Self {
+        self.observation = observation;
+        self.sensing_range = sensing_range;
+        self
     }
 }
 
@@ -32,18 +57,28 @@ impl Policy for DepPolicy {
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let (h, w) = (view.belief.height(), view.belief.width());
         let m: Vec<f32> = view.map_image().into_iter().map(f32::from).collect();
-        let vec = view.macro_observation();
+        let vec = self.observation.vector(view, self.sensing_range);
         let mask = action_mask(view);
         let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
         let obs = Tensor::<2>::from_data(TensorData::new(vec.clone(), [1, vec.len()]), &self.device);
         let (q, state) = self.net.act(maps, obs, self.state.take());
-        self.state = Some(state);
+        self.state = self.recurrent.then_some(state);
         let q = q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32");
         // The state advances at every decision, as in training; with no valid candidate the
         // mask offers slot 0 alone, which leaves the robot without a goal (it stays).
         if !view.candidates().valid_mask().contains(&true) {
             return Decision::Idle;
         }
-        Decision::Candidate(masked_argmax_slice(&q, &mask).expect("a valid candidate"))
+        let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
+        if let Some(margin) = self.spread_margin {
+            let spread = madenet_agent::Spread::new(self.sensing_range).scores(view);
+            let anchor = spread.iter().enumerate().filter_map(|(k, s)| s.map(|s| (k, s))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            if let Some((k, _)) = anchor {
+                if q[greedy] - q[k] < margin {
+                    return Decision::Candidate(k);
+                }
+            }
+        }
+        Decision::Candidate(greedy)
     }
 }

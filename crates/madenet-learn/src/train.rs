@@ -26,6 +26,7 @@
 
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
+use crate::obs::Observation;
 use crate::policy::DepPolicy;
 use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
 use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
@@ -54,6 +55,9 @@ pub enum Method {
     MadeNet,
     /// The paper's ablation: the DEPs alone on decentralized experience (double DRQN).
     MadeNetDt,
+    /// The DEP regressed on a centralized rollout teacher's candidate values, DAgger-style
+    /// ([`crate::rollout_train`]; a departure from the paper).
+    MadeNetRollout,
 }
 
 impl Method {
@@ -61,6 +65,7 @@ impl Method {
         match self {
             Method::MadeNet => "made-net",
             Method::MadeNetDt => "made-net-dt",
+            Method::MadeNetRollout => crate::rollout_train::METHOD,
         }
     }
 }
@@ -206,6 +211,9 @@ impl TrainConfig {
 
     /// Checks every field; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
+        if self.method == Method::MadeNetRollout {
+            return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", crate::rollout_train::METHOD));
+        }
         self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
         let checks: [(bool, &str, String); 14] = [
             (self.episodes >= 1, "episodes", "must be at least 1".into()),
@@ -408,7 +416,7 @@ impl Nets {
                 let target = target_of(&net);
                 Some((net, target, optim()))
             }
-            Method::MadeNetDt => None,
+            Method::MadeNetDt | Method::MadeNetRollout => None,
         };
         let mut deps = Vec::new();
         for _ in cfg.dep_groups() {
@@ -490,6 +498,22 @@ pub struct ModelInfo {
     pub updates: u64,
     /// Their validation mean steps.
     pub validation_steps: Option<f64>,
+    /// The DEP's observation vector (default: the paper's).
+    #[serde(default)]
+    pub observation: Observation,
+    /// Whether the DEP carries its LSTM state from one decision to the next (default: yes, the
+    /// paper's); a model trained on single decisions acts from zero state at each.
+    #[serde(default = "yes")]
+    pub recurrent: bool,
+    /// Conservative acting (ours, rollout-teacher models): take the candidate the `spread` rule
+    /// takes unless the DEP values another more by at least this margin (in the model's value
+    /// units). Unset: the DEP's greedy choice alone (the paper's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spread_margin: Option<f32>,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// The DEP's [`NetConfig`] fields that vary, for `model.toml`.
@@ -537,7 +561,10 @@ impl Model {
 
     fn from_parts(info: ModelInfo, files: Vec<(String, Vec<u8>)>, label: &str) -> Result<Self, TrainError> {
         let d = &info.dep;
-        let cfg = NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc);
+        let cfg = NetConfig {
+            obs_dim: info.observation.dim(d.team_size, d.goal_count),
+            ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc)
+        };
         if files.len() != info.deps.len() || files.is_empty() {
             return Err(TrainError::Config { path: label.to_string(), message: format!("field `deps`: {} weight files listed, {} given", info.deps.len(), files.len()) });
         }
@@ -570,9 +597,10 @@ impl Model {
         let deps = self.deps.clone();
         let owned = name.to_string();
         let info = Model { info: self.info.clone(), deps: Vec::new() };
+        let (observation, recurrent, margin) = (self.info.observation, self.info.recurrent, self.info.spread_margin);
         registry.register_checked(name, about, move |ctx| info.check(ctx.height, ctx.width, ctx.config), move |ctx| {
             let net = Arc::clone(&deps[if deps.len() == 1 { 0 } else { ctx.robot.min(deps.len() - 1) }]);
-            Box::new(DepPolicy::new(&owned, net))
+            Box::new(DepPolicy::new(&owned, net).with_observation(observation, ctx.config.sensing_range).with_recurrence(recurrent).with_spread_margin(margin))
         });
     }
 }
@@ -723,7 +751,7 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     };
     let per_iter = match cfg.method {
         Method::MadeNet => 2,
-        Method::MadeNetDt => 1,
+        Method::MadeNetDt | Method::MadeNetRollout => 1,
     };
     // Logs keep what the checkpoint has seen; a resumed run appends from there.
     let seen = state.episode * per_iter;
@@ -758,7 +786,7 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
         let (mut reward_sum, mut steps_sum) = (0.0, 0.0);
         let envs: &[EnvKind] = match cfg.method {
             Method::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
-            Method::MadeNetDt => &[EnvKind::Decentralized],
+            Method::MadeNetDt | Method::MadeNetRollout => &[EnvKind::Decentralized],
         };
         for (k, &kind) in envs.iter().enumerate() {
             let seed = derive_seed(cfg.seed, kind.short(), e);
@@ -887,6 +915,9 @@ fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -
         episode: state.episode,
         updates: state.updates,
         validation_steps,
+        observation: Observation::Paper,
+        recurrent: true,
+        spread_margin: None,
     }
 }
 

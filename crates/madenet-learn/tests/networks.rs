@@ -293,8 +293,11 @@ fn gather_q_picks_entries() {
 
 #[test]
 fn joint_index_round_trip_and_order() {
-    assert_eq!(joint_index(&[1, 2, 3], 4), 16 + 2 * 4 + 3);
-    assert_eq!(joint_actions(27, 3, 4), vec![1, 2, 3]);
+    // Robot 0 is the least significant digit — the order of the environments and of Python's
+    // CentralizedEnv (madenet_agent::joint_encode).
+    assert_eq!(joint_index(&[1, 2, 3], 4), 1 + 2 * 4 + 3 * 16);
+    assert_eq!(joint_actions(57, 3, 4), vec![1, 2, 3]);
+    assert_eq!(joint_index(&[1, 2, 3], 4), madenet_agent::joint_encode(&[1, 2, 3], 4));
     for (team, goals) in [(1, 4), (3, 4), (2, 7), (4, 5)] {
         let count = joint_action_count(team, goals);
         for index in 0..count {
@@ -333,7 +336,7 @@ fn conditional_argmax_keeps_running_robots_fixed() {
         vec![true, true, false, false],
         vec![true, false, true, false],
     ];
-    // Robot 0 running action 2; robots 1, 2 choose: best is a1 = 1, a2 = 2 → 2·16 + 4 + 2.
+    // Robot 0 running action 2; robots 1, 2 choose: best is a1 = 1, a2 = 2 → 2 + 4 + 2·16.
     let fixed = [Some(2), None, None];
     assert_eq!(conditional_argmax(&q, &masks, &fixed), Some(38));
     // Nobody fixed: robot 0 can't take 2; decoy 63 is (3,3,3) with a1 = 3 invalid → (3, 1, 2).
@@ -365,8 +368,9 @@ fn conditional_argmax_keeps_running_robots_fixed() {
         &[masks.to_vec(), masks.to_vec()],
         &[fixed.to_vec(), vec![None, None, Some(3)]],
     );
-    // Row 1: q = −k → smallest index with a2 = 3: a0 = 0, a1 = 0 → 3.
-    assert_eq!(picks, vec![38, 3]);
+    // Row 1: q = −k → smallest index with a2 = 3: a0 = 0, a1 = 0 → 3·16 = 48.
+    assert_eq!(picks, vec![38, joint_index(&[0, 0, 3], 4)]);
+    assert_eq!(picks[1], 48);
 }
 
 #[test]
