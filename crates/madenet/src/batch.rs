@@ -44,51 +44,11 @@ pub struct BatchArgs {
 }
 
 pub fn run(a: BatchArgs) -> Result<()> {
-    let base = crate::load_config(a.config.as_deref())?;
     let registry = crate::registry(a.model.as_deref())?;
     if !registry.names().contains(&a.policy) {
         bail!("unknown policy `{}` (field `--policy`); known policies: {}", a.policy, registry.names().join(", "));
     }
-    let mut maps = Vec::new();
-    for m in &a.maps {
-        if m == "paper" {
-            maps.extend((1..=PAPER_MAP_COUNT).map(MapSource::Paper));
-        } else {
-            maps.push(m.parse::<MapSource>().map_err(anyhow::Error::msg).context("--maps")?);
-        }
-    }
-    let mut starts = Vec::new();
-    for s in &a.starts {
-        if s == "all" {
-            starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
-        } else {
-            starts.push(s.parse::<StartSpec>().map_err(anyhow::Error::msg).context("--starts")?);
-        }
-    }
-    let mut specs = Vec::new();
-    for source in &maps {
-        let map = source.load(&base)?;
-        for start in &starts {
-            for &csp in &a.csp {
-                let mut cfg = base.clone();
-                cfg.comm_success_prob = csp;
-                cfg.validate().context("--csp")?;
-                for k in 0..a.seeds {
-                    specs.push((
-                        start.name(),
-                        TrialSpec {
-                            map: map.clone(),
-                            map_name: source.name(),
-                            starts: start.cells(map.height(), map.width()),
-                            config: cfg.clone(),
-                            policy: a.policy.clone(),
-                            seed: a.seed_base + k,
-                        },
-                    ));
-                }
-            }
-        }
-    }
+    let specs = plan(&a.maps, &a.starts, &a.csp, a.seeds, a.seed_base, a.config.as_deref(), &a.policy)?;
     let bar = ProgressBar::new(specs.len() as u64);
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}").expect("valid template"));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build()?;
@@ -126,7 +86,61 @@ pub fn run(a: BatchArgs) -> Result<()> {
     Ok(())
 }
 
-fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> Result<()> {
+/// The trials of a trial set: every map × start × CSP × seed, with its start's name.
+pub fn plan(
+    maps_arg: &[String],
+    starts_arg: &[String],
+    csps: &[f64],
+    seeds: u64,
+    seed_base: u64,
+    config: Option<&std::path::Path>,
+    policy: &str,
+) -> Result<Vec<(String, TrialSpec)>> {
+    let base = crate::load_config(config)?;
+    let mut maps = Vec::new();
+    for m in maps_arg {
+        if m == "paper" {
+            maps.extend((1..=PAPER_MAP_COUNT).map(MapSource::Paper));
+        } else {
+            maps.push(m.parse::<MapSource>().map_err(anyhow::Error::msg).context("--maps")?);
+        }
+    }
+    let mut starts = Vec::new();
+    for s in starts_arg {
+        if s == "all" {
+            starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
+        } else {
+            starts.push(s.parse::<StartSpec>().map_err(anyhow::Error::msg).context("--starts")?);
+        }
+    }
+    let mut specs = Vec::new();
+    for source in &maps {
+        let map = source.load(&base)?;
+        for start in &starts {
+            for &csp in csps {
+                let mut cfg = base.clone();
+                cfg.comm_success_prob = csp;
+                cfg.validate().context("--csp")?;
+                for k in 0..seeds {
+                    specs.push((
+                        start.name(),
+                        TrialSpec {
+                            map: map.clone(),
+                            map_name: source.name(),
+                            starts: start.cells(&map, cfg.num_robots, cfg.movement),
+                            config: cfg.clone(),
+                            policy: policy.to_string(),
+                            seed: seed_base + k,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(specs)
+}
+
+pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> Result<()> {
     let tmp = path.with_extension("csv.tmp");
     let file = std::fs::File::create(&tmp).with_context(|| format!("{}", tmp.display()))?;
     let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));

@@ -12,6 +12,7 @@ macro_rules! out {
 mod batch;
 mod compare;
 mod map_cmd;
+mod oracle;
 mod plot_training;
 mod train_cmd;
 mod run;
@@ -39,10 +40,12 @@ enum Command {
     Map(map_cmd::MapCommand),
     /// List the available policies.
     Policies,
-    /// Train MADE-Net or MADE-Net-DT (logs, checkpoints, resume).
+    /// Train MADE-Net (paper or rollout-teacher), MADE-Net-DT or DME-DRL (logs, checkpoints, resume).
     Train(train_cmd::TrainArgs),
     /// Draw the training curves (the paper's Fig. 2) of a training run directory.
     PlotTraining(plot_training::PlotTrainingArgs),
+    /// The rollout oracle (or its placebo) beside its base rule: the ceiling of candidate choice.
+    Oracle(oracle::OracleArgs),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +57,7 @@ fn main() -> ExitCode {
         Command::Map(c) => map_cmd::run(c),
         Command::PlotTraining(a) => plot_training::run(a),
         Command::Train(a) => train_cmd::run(a),
+        Command::Oracle(a) => oracle::run(a),
         Command::Policies => registry(None).and_then(|r| {
             r.describe()
             .into_iter()

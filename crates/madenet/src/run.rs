@@ -60,7 +60,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     }
     let source = a.generate.map(MapSource::Generated).unwrap_or(a.map);
     let map = source.load(&cfg)?;
-    let starts = a.start.cells(map.height(), map.width());
+    let starts = a.start.cells(&map, cfg.num_robots, cfg.movement);
     let spec = TrialSpec {
         starts,
         map_name: source.name(),

@@ -18,7 +18,7 @@ pub struct TrainArgs {
     /// Resume the run in this directory from its last checkpoint (with its saved config).
     #[arg(long)]
     resume: Option<PathBuf>,
-    /// Train this method instead of the config's (`made-net`, `made-net-dt` or `dme-drl`).
+    /// Train this method instead of the config's (`made-net`, `made-net-dt`, `made-net-rollout` or `dme-drl`).
     #[arg(long)]
     method: Option<String>,
     /// Override the config's episodes per environment.
@@ -81,6 +81,7 @@ macro_rules! learner_config {
 }
 learner_config!(TrainConfig);
 learner_config!(madenet_dme::train::DmeTrainConfig);
+learner_config!(madenet_learn::rollout_train::RolloutTrainConfig);
 
 /// The run directory and the config to train with (`None`: resume with the run's saved one),
 /// from the arguments; `set_method` applies `--method` to a new run's config.
@@ -132,12 +133,15 @@ pub fn run(a: TrainArgs) -> Result<()> {
     if chosen == Some(madenet_dme::train::METHOD) {
         return run_dme(a);
     }
+    if chosen == Some(madenet_learn::rollout_train::METHOD) {
+        return run_rollout(a);
+    }
     let (dir, cfg) = run_dir_and_config::<TrainConfig>(&a, |cfg| {
         if let Some(m) = &a.method {
             cfg.method = match m.as_str() {
                 "made-net" => Method::MadeNet,
                 "made-net-dt" => Method::MadeNetDt,
-                other => bail!("--method `{other}`: expected made-net, made-net-dt or dme-drl"),
+                other => bail!("--method `{other}`: expected made-net, made-net-dt, made-net-rollout or dme-drl"),
             };
         }
         Ok(())
@@ -177,6 +181,34 @@ fn run_dme(a: TrainArgs) -> Result<()> {
         bar.set_message(format!("reward {:.2}  steps {}  updates {}{val}", p.reward, p.steps, p.updates));
     };
     madenet_dme::train::train(&dir, cfg, &mut on_progress)?;
+    bar.finish();
+    out!("{}", dir.display())?;
+    Ok(())
+}
+
+/// `madenet train --method made-net-rollout` (or such a config or run directory): the DEP
+/// trained from the centralized rollout teacher (`madenet_learn::rollout_train`).
+fn run_rollout(a: TrainArgs) -> Result<()> {
+    let (dir, cfg) = run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, |_| Ok(()))?;
+    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} iterations  {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let mut on_progress = |p: &madenet_learn::rollout_train::Progress| {
+        bar.set_length(p.iterations);
+        bar.set_position(p.iteration);
+        bar.set_message(format!(
+            "episodes {}  decisions {}  loss {:.3}  val steps {:.1} (base rule {:.1})",
+            p.episodes, p.decisions, p.loss, p.validation_steps, p.base_steps
+        ));
+        if a.quiet {
+            return;
+        }
+        bar.println(format!("iteration {}: val steps {:.2} (base {:.2}), loss {:.4}", p.iteration, p.validation_steps, p.base_steps, p.loss));
+    };
+    madenet_learn::rollout_train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
     out!("{}", dir.display())?;
     Ok(())
