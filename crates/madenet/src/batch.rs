@@ -12,10 +12,10 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// Maps (comma-separated): `paper` for all 10 paper maps, `paper:N`, `generate:SEED`, or files.
+    /// Maps (comma-separated): `paper` for all 10 paper maps, `paper:N`, `generate:SEED`, `generate-wide:SEED`, or files.
     #[arg(long, value_delimiter = ',', default_value = "paper")]
     maps: Vec<String>,
-    /// Starts (comma-separated): `all` for the four corners, or corner names.
+    /// Starts (comma-separated): `all` for the four corners, corner names, or `random`.
     #[arg(long, value_delimiter = ',', default_value = "all")]
     starts: Vec<String>,
     /// Policy name.

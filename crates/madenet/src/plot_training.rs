@@ -1,13 +1,16 @@
-//! `madenet plot-training`: the training curves of a run directory (the paper's Fig. 2).
+//! `madenet plot-training`: the training curves of a run directory (the paper's Fig. 2), or of a
+//! rollout-teacher run (`iterations.csv`: validation steps and loss per DAgger iteration).
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
+use madenet_plots::{line_panels, LinePanel, LineSeries};
 use madenet_trainlog::{plot_training, DEFAULT_FIGURE};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct PlotTrainingArgs {
-    /// Training run directory, holding episodes.csv (and validation.csv, if any).
+    /// Training run directory, holding episodes.csv (and validation.csv, if any), or a
+    /// rollout-teacher run's iterations.csv.
     dir: PathBuf,
     /// Output figure, PNG or SVG by its extension [default: DIR/fig2_training.png].
     #[arg(long)]
@@ -16,7 +19,50 @@ pub struct PlotTrainingArgs {
 
 pub fn run(a: PlotTrainingArgs) -> Result<()> {
     let out = a.out.unwrap_or_else(|| a.dir.join(DEFAULT_FIGURE));
+    let rollout = a.dir.join("iterations.csv");
+    if rollout.exists() && !a.dir.join("episodes.csv").exists() {
+        let written = plot_iterations(&rollout, &out)?;
+        out!("{}", written.display())?;
+        return Ok(());
+    }
     let written = plot_training(&a.dir, &out)?;
     out!("{}", written.display())?;
     Ok(())
+}
+
+/// A rollout-teacher run's curves: validation mean steps per iteration (the DEP as it acts, the
+/// greedy DEP, the base rule), the training loss per iteration in the title.
+fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
+    let mut rd = csv::Reader::from_path(csv_path).with_context(|| csv_path.display().to_string())?;
+    let headers = rd.headers().with_context(|| csv_path.display().to_string())?.clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).with_context(|| format!("{}: no column `{name}`", csv_path.display()));
+    let (it, val, greedy, base, loss) = (col("iteration")?, col("validation_steps")?, col("greedy_steps")?, col("base_steps")?, col("loss")?);
+    let (mut v, mut g, mut b, mut l) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for rec in rd.records() {
+        let rec = rec.with_context(|| csv_path.display().to_string())?;
+        let num = |k: usize| -> Result<f64> { rec[k].parse::<f64>().with_context(|| format!("{}: `{}` is not a number", csv_path.display(), &rec[k])) };
+        let x = num(it)? + 1.0;
+        v.push((x, num(val)?));
+        if num(greedy)? > 0.0 {
+            g.push((x, num(greedy)?));
+        }
+        b.push((x, num(base)?));
+        l.push((x, num(loss)?));
+    }
+    anyhow::ensure!(!v.is_empty(), "{}: no iterations yet", csv_path.display());
+    let mut steps = vec![LineSeries { name: "DEP as it acts (validation)".into(), points: v }, LineSeries { name: "base rule (spread)".into(), points: b }];
+    if !g.is_empty() {
+        steps.push(LineSeries { name: "greedy DEP".into(), points: g });
+    }
+    let losses = l.iter().map(|(x, y)| format!("{x:.0}: {y:.3}")).collect::<Vec<_>>().join(", ");
+    let panels = [LinePanel {
+        title: format!("Validation mean steps (loss by iteration: {losses})"),
+        x_label: "DAgger iteration".into(),
+        y_label: "mean TNS over the validation trials".into(),
+        series: steps,
+    }];
+    let stem = out.with_extension("");
+    let written = line_panels(&stem, &panels, 1)?;
+    let want = out.extension().and_then(|e| e.to_str()).unwrap_or("png");
+    Ok(written.into_iter().find(|p| p.extension().and_then(|e| e.to_str()) == Some(want)).unwrap_or_else(|| out.to_path_buf()))
 }

@@ -8,13 +8,13 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
-    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), or `generate:SEED`.
+    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), `generate:SEED` or `generate-wide:SEED` (15–60 % obstacles).
     #[arg(long, default_value = "paper:1", conflicts_with = "generate")]
     map: MapSource,
     /// Use a generated map with this seed (same as `--map generate:SEED`).
     #[arg(long, value_name = "SEED")]
     generate: Option<u64>,
-    /// Start: top-left, top-right, bottom-left, bottom-right, or cells `r,c;r,c;r,c`.
+    /// Start: top-left, top-right, bottom-left, bottom-right, `random` (drawn from the map), or cells `r,c;r,c;r,c`.
     #[arg(long, default_value = "top-left")]
     start: StartSpec,
     /// Policy name (see `madenet policies`).
