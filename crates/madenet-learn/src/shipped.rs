@@ -6,12 +6,18 @@ use crate::train::{Model, TrainError};
 use madenet_sim::PolicyRegistry;
 
 /// (policy name, description, model.toml, DEP weights).
-const SHIPPED: [(&str, &str, &str, &[u8]); 2] = [
+const SHIPPED: [(&str, &str, &str, &[u8]); 3] = [
     (
         "made-net",
-        "MADE-Net (shipped model): DEP trained with the CEP, decentralized execution",
+        "MADE-Net (shipped model): DEP trained from a centralized rollout teacher, decentralized execution",
         include_str!("../../../models/made-net/model.toml"),
         include_bytes!("../../../models/made-net/dep0.bpk"),
+    ),
+    (
+        "made-net-paper",
+        "MADE-Net by the paper's procedure (shipped model): DEP trained with the CEP (Eq. 5/6), decentralized execution",
+        include_str!("../../../models/made-net-paper/model.toml"),
+        include_bytes!("../../../models/made-net-paper/dep0.bpk"),
     ),
     (
         "made-net-dt",

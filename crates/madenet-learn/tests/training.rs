@@ -150,6 +150,8 @@ fn bad_train_configs_name_file_and_field() {
 
 #[test]
 fn shipped_train_config_is_the_default() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/train.toml");
-    assert_eq!(TrainConfig::from_toml_file(&path).unwrap(), TrainConfig::default());
+    for name in ["train.toml", "train-paper.toml"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(name);
+        assert_eq!(TrainConfig::from_toml_file(&path).unwrap(), TrainConfig::default(), "{name}");
+    }
 }

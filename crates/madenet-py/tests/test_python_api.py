@@ -89,7 +89,7 @@ def test_a_shipped_policy_acting_in_the_env_reproduces_its_own_trial(name, mode)
 
 
 def test_policies_in_the_wrong_mode_or_unknown_are_value_errors():
-    assert {"nf", "ub", "pb", "made-net", "made-net-dt", "dme-drl"} <= set(madenet.policies())
+    assert {"nf", "ub", "pb", "spread", "made-net", "made-net-paper", "made-net-dt", "dme-drl"} <= set(madenet.policies())
     env = madenet.ExplorationEnv(mode="macro")
     env.reset(seed=1)
     with pytest.raises(ValueError, match="primitive"):

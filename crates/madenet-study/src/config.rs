@@ -33,7 +33,7 @@ pub struct StudyConfig {
 impl Default for StudyConfig {
     fn default() -> Self {
         StudyConfig {
-            methods: ["nf", "ub", "pb", "spread", "made-net", "made-net-dt", "dme-drl"].map(String::from).to_vec(),
+            methods: ["nf", "ub", "pb", "spread", "made-net", "made-net-paper", "made-net-dt", "dme-drl"].map(String::from).to_vec(),
             maps: vec!["paper".into()],
             starts: Corner::ALL.iter().map(|c| c.name().to_string()).collect(),
             csp: vec![0.0, 0.5, 0.8, 1.0],

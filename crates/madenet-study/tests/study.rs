@@ -783,7 +783,7 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
         (r.timing.trial_s, r.timing.per_decision_s) = (0.0, 0.0);
         r
     };
-    for policy in ["nf", "ub", "pb", "random", "spread", "made-net", "made-net-dt", "dme-drl"] {
+    for policy in ["nf", "ub", "pb", "random", "spread", "made-net", "made-net-paper", "made-net-dt", "dme-drl"] {
         let mut first = Trial::with_registry(spec(policy, 11), &registry).unwrap().record_trajectory(true);
         while first.step() {}
         let restarted = first.restart(12, &registry).unwrap().run();
