@@ -277,6 +277,10 @@ impl Agent {
     pub fn policy_name(&self) -> &str {
         self.policy.name()
     }
+    /// When this robot's policy decides.
+    pub fn policy_mode(&self) -> DecisionMode {
+        self.policy.mode()
+    }
     pub fn stats(&self) -> &AgentStats {
         &self.stats
     }

@@ -163,7 +163,7 @@ pub fn conditional_joint_mask<M: AsRef<[bool]>>(
     let count = crate::joint_action_count(team, goals);
     let mut mask = vec![true; count];
     for (index, ok) in mask.iter_mut().enumerate() {
-        // Decode without allocating: robot team−1 is the least significant digit.
+        // Decode without allocating: robot 0 is the least significant digit.
         let mut rest = index;
         for robot_allowed in &allowed {
             if !robot_allowed[rest % goals] {

@@ -58,8 +58,8 @@ pub enum Observation {
     Paper,
     /// The paper's vector followed by [`AgentView::CANDIDATE_FEATURES`] features per goal
     /// candidate ([`AgentView::write_candidate_features`]: path cost, unknown and frontier cells
-    /// around it, distance to teammates' goals and positions, crowding, cost rank) — a departure
-    /// from the paper (the "MADE-Net that wins" issue).
+    /// around it, distance to teammates' goals and positions, crowding, cost rank, the `spread`
+    /// rule's score and choice) — a departure from the paper (the "MADE-Net that wins" issue).
     CandidateFeatures,
 }
 

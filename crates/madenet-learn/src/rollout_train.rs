@@ -1,28 +1,30 @@
 //! MADE-Net's DEP trained from a centralized **rollout teacher** (`method = "made-net-rollout"`),
 //! read top to bottom like a CleanRL script. A departure from the paper's CEP/DEP Q-learning
-//! (which stays as `made-net`), chosen because that learner ends no better than "always take
-//! candidate 0" within an hour while a rollout oracle shows the candidates leave 20–30 % of the
-//! exploration time on the table.
+//! (which ships as `made-net-paper`), chosen because that learner ends no better than "always
+//! take candidate 0" within an hour.
 //!
 //! 1. **Scenarios**: generated maps at obstacle fractions across `density_min..density_max`
 //!    (15–60 % by default: the paper's training maps are 40–60 %, its evaluation maps 18–36 %),
 //!    the team in a shared corner or around a random cell, CSP drawn per episode.
 //! 2. **Behaviour** (DAgger): iteration 0 follows the base rule (`spread`), later iterations the
-//!    DEP being trained; both take a random valid candidate with probability
+//!    DEP being trained (greedy); both take a random valid candidate with probability
 //!    `behaviour_epsilon`.
 //! 3. **Teacher** (centralized training: it sees the simulator): at each decision of a robot
-//!    with two or more candidates, every candidate k is scored by `rollouts` continuations of the
-//!    trial from this very state ([`Trial::fork`]) in which the robot takes k and everyone
-//!    follows the base rule afterwards, each continuation with a different future of the noise
-//!    ([`madenet_world::World::reseed_noise`]; the same futures for every k). The label of k is
-//!    the mean number of steps left until the map is explored — one step of policy improvement
-//!    over the base rule, averaged over the luck a single replay would exploit.
+//!    with two or more candidates, every candidate k is scored by continuing the trial from this
+//!    very state ([`Trial::fork`]) with the robot taking k and everyone following the base rule
+//!    afterwards — by default once, in the noiseless future (no sensor misses, no slips;
+//!    communication keeps the trial's own draws), or with `futures = "salted"` over `rollouts`
+//!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k).
+//!    The label of k is the mean number of steps left until the map is explored: one step of
+//!    policy improvement over the base rule.
 //! 4. **Student**: the paper's DEP (MFE, F3, LSTM, F6; `observation` may add per-candidate
 //!    features) regresses the labels' *advantages* (label minus its mean over the valid
-//!    candidates) on windows of each robot's own decision sequence, from zero LSTM state, with
-//!    Adam. Acting is the DEP's greedy choice, decentralized, exactly as `made-net` acts.
-//! 5. **Validation** on ≥ 200 generated trials (maps and seeds of their own) after every
-//!    iteration; the best iteration is kept in `best/`, the last in `last/`.
+//!    candidates) with Adam — by default on single decisions from zero LSTM state
+//!    (`recurrent = false`), else on windows of each robot's decision sequence.
+//! 5. **Validation** after every iteration on generated trials of their own seeds (210 by
+//!    default), the DEP acting greedily and with each `spread_margins` margin (the `spread` rule's
+//!    candidate unless the DEP values another more by the margin); the best (iteration, margin)
+//!    is kept in `best/`, the last iteration in `last/`.
 //!
 //! Checkpoints are written after every iteration (dataset, net, optimizer, counters), so a
 //! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
@@ -203,8 +205,16 @@ impl RolloutTrainConfig {
         if self.scenario.num_robots > 3 && self.corner_start_prob > 0.0 {
             return Err("field `corner_start_prob`: corner starts hold 3 robots; set 0 for larger teams".into());
         }
-        if !PolicyRegistry::builtin().names().contains(&self.base_policy) {
-            return Err(format!("field `base_policy`: unknown `{}`; known: {}", self.base_policy, PolicyRegistry::builtin().names().join(", ")));
+        let builtin = PolicyRegistry::builtin();
+        if !builtin.names().contains(&self.base_policy) {
+            return Err(format!("field `base_policy`: unknown `{}`; known: {}", self.base_policy, builtin.names().join(", ")));
+        }
+        let ctx = madenet_sim::PolicyContext { seed: 0, robot: 0, config: &self.scenario, height: self.map_height, width: self.map_width };
+        if builtin.make(&self.base_policy, &ctx).map_err(|e| format!("field `base_policy`: {e}"))?.mode() != DecisionMode::OnTermination {
+            return Err(format!("field `base_policy`: `{}` re-decides every step; the teacher needs a rule that chooses among goal candidates (e.g. spread)", self.base_policy));
+        }
+        if self.goals() < 2 {
+            return Err(format!("field `scenario.goal_count`: |G| = {} leaves no choice to learn; need at least 2", self.goals()));
         }
         Ok(())
     }
@@ -518,8 +528,8 @@ fn save_model(dir: &Path, net: &QNet, info: &ModelInfo) -> Result<(), TrainError
 }
 
 /// Trains into `run_dir` (created; a run directory with a checkpoint resumes from it with its
-/// saved config, which `cfg` may change only in `episodes`/`iterations`-free fields
-/// `max_minutes`). `progress` is called after every iteration.
+/// saved config, which `cfg` may change only in `max_minutes`: the episodes per iteration define
+/// the run). `progress` is called after every iteration.
 pub fn train(run_dir: &Path, cfg: Option<RolloutTrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
     let (cfg, resuming) = prepare_run(run_dir, cfg, RolloutTrainConfig::from_toml_file, RolloutTrainConfig::validate, |given, saved| {
         RolloutTrainConfig { max_minutes: saved.max_minutes, ..given.clone() } == *saved
@@ -573,6 +583,9 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
         let rollouts: usize = collected.iter().map(|c| c.rollouts).sum();
         let behaviour_steps = collected.iter().map(|c| c.steps as f64).sum::<f64>() / collected.len().max(1) as f64;
         data.extend(collected.into_iter().flat_map(|c| c.robots).filter(|s| !s.is_empty()));
+        if data.is_empty() {
+            return Err(TrainError::Other("no robot decided in any training episode so far (are the maps seen whole from the start?)".into()));
+        }
         state.episodes += per;
         // 4. Regress the advantages on windows of the robots' decision sequences.
         let mut loss_sum = 0.0;

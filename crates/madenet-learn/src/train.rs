@@ -706,7 +706,7 @@ pub fn prepare_run<C: Default + Serialize>(
             Some(given) if !same_run(&given, &saved) => {
                 return Err(TrainError::Config {
                     path: cfg_path.display().to_string(),
-                    message: "this run was started with a different config (only `episodes` and `max_minutes` may change on resume); use a new directory".into(),
+                    message: "this run was started with a different config (only its length may change on resume: `episodes` and `max_minutes`, or `max_minutes` alone for made-net-rollout); use a new directory".into(),
                 });
             }
             Some(given) => checked(given)?,

@@ -69,8 +69,8 @@ pub enum OracleKind {
     /// one step of policy improvement over the base rule — drowned in luck unless `futures` is
     /// large.
     Averaged,
-    /// Every candidate scored in the noiseless future (it knows the map, not the noise; no
-    /// luck): the rollout teacher's choice.
+    /// Every candidate scored in the noiseless future (it knows the map, not the sensing and
+    /// motion noise; communication keeps the trial's own draws): the rollout teacher's choice.
     Noiseless,
     /// The placebo: the robot takes the base rule's own choice, and the oracle picks among
     /// `futures` futures of the noise the one that finishes soonest (the trial then lives it).
@@ -90,6 +90,7 @@ pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, 
     let mut decision = 0u64;
     while trial.begin_step() {
         let mut fixed = vec![None; n];
+        let mut placebo_done = false;
         for i in 0..n {
             if !trial.deciding()[i] {
                 continue;
@@ -111,7 +112,10 @@ pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, 
                     let best = values.iter().enumerate().filter_map(|(k, v)| v.map(|v| (k, v))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
                     fixed[i] = best.map(|(k, _)| Decision::Candidate(k));
                 }
+                OracleKind::Placebo if placebo_done => {}
                 OracleKind::Placebo => {
+                    // One choice of future per step (the first deciding robot with a choice).
+                    placebo_done = true;
                     let mut best: Option<(u64, f64)> = None;
                     for future in salts {
                         let Future::Salted(salt) = future else { continue };

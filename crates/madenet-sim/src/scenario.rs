@@ -101,7 +101,8 @@ impl FromStr for StartSpec {
 
 impl StartSpec {
     /// The start cells of `team` robots on `map` (corner and explicit starts ignore the team
-    /// size: a trial checks it).
+    /// size: a trial checks it). Empty for `random` when the drawn cell's connected free area
+    /// holds fewer than `team` cells (callers say so naming `random`).
     pub fn cells(&self, map: &OccGrid, team: usize, movement: madenet_map::Movement) -> Vec<Pos> {
         match self {
             StartSpec::Corner(c) => c.start_cells(map.height(), map.width()).to_vec(),

@@ -62,7 +62,9 @@ pub enum Future {
     /// ([`madenet_world::World::reseed_noise`]).
     Salted(u64),
     /// No sensor misses and no slips from now on ([`madenet_world::World::set_noiseless`]):
-    /// the certainty-equivalent future, free of luck.
+    /// the certainty-equivalent future, free of the luck of sensing and motion (communication
+    /// keeps this trial's own draws, so at a CSP strictly between 0 and 1 it knows which
+    /// exchanges will succeed).
     Noiseless,
 }
 
@@ -163,7 +165,9 @@ impl Trial {
         Ok(self)
     }
 
-    /// A copy of this trial in its present state, between timesteps, whose robots are driven
+    /// A copy of this trial in its present state — between timesteps, or between
+    /// [`Trial::begin_step`] and the decisions (then finish the copy's step with
+    /// [`Trial::decide_with`] and [`Trial::finish_step`]) — whose robots are driven
     /// from now on by registry policy `policy` (instances made with this trial's seed), without
     /// recording, living `future` (see [`Future`]). Metrics continue from the present (TNS
     /// counts from t = 0). How rollouts evaluate a decision.

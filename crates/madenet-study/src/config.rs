@@ -131,6 +131,11 @@ impl StudyConfig {
             .iter()
             .map(|s| s.parse::<StartSpec>().map_err(|e| field("starts", e)))
             .collect::<Result<Vec<_>, _>>()?;
+        for map in &maps {
+            if starts.contains(&StartSpec::Random) && StartSpec::Random.cells(&map.grid, self.scenario.num_robots, self.scenario.movement).is_empty() {
+                return Err(field("starts", format!("`random`: map {} has no {} connected free cells around any cell drawn from it", map.name, self.scenario.num_robots)));
+            }
+        }
         // Learned models run only on the map and team sizes they were trained for.
         for m in &self.methods {
             for map in &maps {

@@ -121,13 +121,17 @@ pub fn plan(
                 let mut cfg = base.clone();
                 cfg.comm_success_prob = csp;
                 cfg.validate().context("--csp")?;
+                let cells = start.cells(&map, cfg.num_robots, cfg.movement);
+                if cells.is_empty() {
+                    bail!("--starts random: map {} has no {} connected free cells around the cell drawn from it", source.name(), cfg.num_robots);
+                }
                 for k in 0..seeds {
                     specs.push((
                         start.name(),
                         TrialSpec {
                             map: map.clone(),
                             map_name: source.name(),
-                            starts: start.cells(&map, cfg.num_robots, cfg.movement),
+                            starts: cells.clone(),
                             config: cfg.clone(),
                             policy: policy.to_string(),
                             seed: seed_base + k,

@@ -24,10 +24,10 @@ enum Kind {
 
 #[derive(Args, Debug)]
 pub struct OracleArgs {
-    /// Maps (comma-separated): `paper`, `paper:N`, `generate:SEED`, or files.
+    /// Maps (comma-separated): `paper`, `paper:N`, `generate:SEED`, `generate-wide:SEED`, or files.
     #[arg(long, value_delimiter = ',', default_value = "generate:1,generate:2,generate:3,generate:4,generate:5")]
     maps: Vec<String>,
-    /// Starts (comma-separated): `all` for the four corners, or corner names.
+    /// Starts (comma-separated): `all` for the four corners, corner names, or `random`.
     #[arg(long, value_delimiter = ',', default_value = "all")]
     starts: Vec<String>,
     /// The base rule the oracle's continuations follow (and the trial runs by): a macro policy.
@@ -62,6 +62,9 @@ pub fn run(a: OracleArgs) -> Result<()> {
     if !(1..=64).contains(&a.futures) {
         bail!("--futures {}: must be in 1..=64", a.futures);
     }
+    if a.seeds == 0 {
+        bail!("--seeds 0: need at least one seed");
+    }
     let registry = crate::registry(None)?;
     if !registry.names().contains(&a.base) {
         bail!("unknown policy `{}` (field `--base`); known policies: {}", a.base, registry.names().join(", "));
@@ -71,6 +74,9 @@ pub fn run(a: OracleArgs) -> Result<()> {
         let probe = Trial::with_registry(s.clone(), &registry)?;
         if probe.agents().first().is_some_and(|ag| ag.config().goal_count < 2) {
             bail!("--base: the oracle needs at least 2 goal candidates per decision");
+        }
+        if probe.agents().first().is_some_and(|ag| ag.policy_mode() != madenet_agent::DecisionMode::OnTermination) {
+            bail!("--base {}: re-decides every step; the oracle needs a rule that chooses among goal candidates (e.g. spread, random, made-net)", a.base);
         }
     }
     let kind = match a.kind {
@@ -102,7 +108,11 @@ pub fn run(a: OracleArgs) -> Result<()> {
         let rows: Vec<(String, TrialResult)> = results.iter().map(|(s, _, o)| (s.clone(), o.clone())).collect();
         crate::batch::write_csv(path, &rows)?;
     }
-    out!("{} trials in {:.1} s; oracle {:?} over base `{}` ({} futures)", results.len(), started.elapsed().as_secs_f64(), a.kind, a.base, a.futures)?;
+    let futures = match a.kind {
+        Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
+        Kind::Replay | Kind::Noiseless => String::new(),
+    };
+    out!("{} trials in {:.1} s; oracle {:?} over base `{}`{futures}", results.len(), started.elapsed().as_secs_f64(), a.kind, a.base)?;
     for &csp in &a.csp {
         let sel: Vec<&(String, TrialResult, TrialResult)> = results.iter().filter(|r| r.1.comm_success_prob == csp).collect();
         let n = sel.len().max(1) as f64;

@@ -50,7 +50,7 @@ fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
         l.push((x, num(loss)?));
     }
     anyhow::ensure!(!v.is_empty(), "{}: no iterations yet", csv_path.display());
-    let mut steps = vec![LineSeries { name: "DEP as it acts (validation)".into(), points: v }, LineSeries { name: "base rule (spread)".into(), points: b }];
+    let mut steps = vec![LineSeries { name: "DEP as it acts (validation)".into(), points: v }, LineSeries { name: "base rule".into(), points: b }];
     if !g.is_empty() {
         steps.push(LineSeries { name: "greedy DEP".into(), points: g });
     }

@@ -61,6 +61,9 @@ pub fn run(a: RunArgs) -> Result<()> {
     let source = a.generate.map(MapSource::Generated).unwrap_or(a.map);
     let map = source.load(&cfg)?;
     let starts = a.start.cells(&map, cfg.num_robots, cfg.movement);
+    if starts.is_empty() {
+        anyhow::bail!("--start random: map {} has no {} connected free cells around the cell drawn from it", source.name(), cfg.num_robots);
+    }
     let spec = TrialSpec {
         starts,
         map_name: source.name(),

@@ -140,3 +140,27 @@ fn bad_config_values() {
     }
     assert_clean_error(&madenet(&["run", "--csp=-0.1"]), &["comm_success_prob"]);
 }
+
+#[test]
+fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
+    let out = madenet(&["oracle", "--maps", "generate-wide:5", "--starts", "top-left,random", "--kind", "noiseless", "--csp", "1"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("2 trials") && text.contains("oracle Noiseless over base `spread`") && text.contains("base TNS"), "{text}");
+    assert_clean_error(&madenet(&["oracle", "--seeds", "0"]), &["--seeds"]);
+    assert_clean_error(&madenet(&["oracle", "--futures", "0"]), &["--futures"]);
+    assert_clean_error(&madenet(&["oracle", "--base", "nf", "--maps", "paper:3"]), &["--base", "nf"]);
+    assert_clean_error(&madenet(&["oracle", "--base", "nope"]), &["--base", "nope"]);
+}
+
+#[test]
+fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
+    let out = madenet(&["run", "--map", "generate-wide:5", "--start", "random", "--policy", "spread", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("\"policy\": \"spread\""));
+    // A map whose free cells are single pockets: no three connected free cells anywhere.
+    let dir = scratch("pockets");
+    let map = dir.join("pockets.txt");
+    std::fs::write(&map, ".#.#.#\n######\n.#.#.#\n######\n.#.#.#\n######\n").unwrap();
+    assert_clean_error(&madenet(&["run", "--map", map.to_str().unwrap(), "--start", "random"]), &["random"]);
+}
