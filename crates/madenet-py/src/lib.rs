@@ -45,7 +45,10 @@ pub(crate) fn setup(map: &str, start: &str, config: Option<&str>, overrides: &st
     let scenario = scenario(config, overrides)?;
     let source = MapSource::from_str(map).map_err(|e| value_error(format!("map: {e}")))?;
     let grid = source.load(&scenario).map_err(|e| value_error(format!("map: {e}")))?;
-    let starts = StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?.cells(grid.height(), grid.width());
+    let starts = StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?.cells(&grid, scenario.num_robots, scenario.movement);
+    if starts.is_empty() {
+        return Err(value_error(format!("start: `random`: map {} has no {} connected free cells around the cell drawn from it", source.name(), scenario.num_robots)));
+    }
     Ok((grid, source.name(), starts, scenario))
 }
 
