@@ -34,7 +34,7 @@ use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::store::ModuleRecord;
-use madenet_map::generate::{generate_with_movement, GeneratorConfig};
+use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream};
@@ -292,7 +292,6 @@ impl TrainConfig {
 /// A training map and start cells drawn from `seed`: a generated map at a density in the
 /// configured range and the team on the free cells nearest (by moves) to a random free cell.
 pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<Pos>), TrainError> {
-    let mut rng = stream(seed, "scenario", 0);
     let gen = GeneratorConfig {
         height: cfg.map_height,
         width: cfg.map_width,
@@ -303,31 +302,11 @@ pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<P
     // Connected under the scenario's movement rule, so any free anchor reaches the whole team.
     let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), cfg.scenario.movement)
         .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
-    let free: Vec<usize> = (0..map.len()).filter(|&i| map.cells()[i] == madenet_map::Occupancy::Free).collect();
     let team = cfg.team();
-    if free.len() < team {
-        return Err(TrainError::Other(format!("training map {seed} has {} free cells for {team} robots", free.len())));
-    }
-    // Breadth-first from a random free cell: the first `team` cells reached.
-    let anchor = map.pos(free[rng.random_range(0..free.len())]);
-    let mut seen = vec![false; map.len()];
-    let mut queue = VecDeque::from([anchor]);
-    seen[map.index(anchor)] = true;
-    let mut starts = Vec::with_capacity(team);
-    while let Some(p) = queue.pop_front() {
-        starts.push(p);
-        if starts.len() == team {
-            return Ok((map, starts));
-        }
-        for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
-            let q = Pos::new(p.row + dr, p.col + dc);
-            if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, cfg.scenario.movement) {
-                seen[map.index(q)] = true;
-                queue.push_back(q);
-            }
-        }
-    }
-    Err(TrainError::Other(format!("training map {seed}: fewer than {team} connected free cells")))
+    // The anchor is the first draw of the `scenario` stream, as it always was.
+    random_starts(&map, team, cfg.scenario.movement, derive_seed(seed, "scenario", 0))
+        .map(|starts| (map, starts))
+        .ok_or_else(|| TrainError::Other(format!("training map {seed}: fewer than {team} connected free cells")))
 }
 
 /// What [`train`] reports after each iteration (for a progress bar).
