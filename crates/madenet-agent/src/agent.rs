@@ -92,7 +92,14 @@ pub struct ViewScratch {
 
 impl ViewScratch {
     pub fn new(height: usize, width: usize) -> Self {
-        ViewScratch { dijkstra: Dijkstra::new(height, width), candidates: GoalCandidates { slots: 0, cells: Vec::new() }, fresh: false }
+        ViewScratch {
+            dijkstra: Dijkstra::new(height, width),
+            candidates: GoalCandidates {
+                slots: 0,
+                cells: Vec::new(),
+            },
+            fresh: false,
+        }
     }
 }
 
@@ -152,7 +159,10 @@ impl Agent {
             belief: Belief::new(h, w, cfg.movement),
             teammates: vec![TeammateRecord::default(); cfg.num_robots],
             exchanged: Vec::new(),
-            candidates: GoalCandidates { slots: cfg.goal_count, cells: Vec::new() },
+            candidates: GoalCandidates {
+                slots: cfg.goal_count,
+                cells: Vec::new(),
+            },
             dijkstra: Dijkstra::new(h, w),
             reservations: Reservations::new(h, w, cfg.plan_horizon),
             space_time: SpaceTimePlanner::new(h, w, cfg.plan_horizon),
@@ -166,7 +176,19 @@ impl Agent {
     /// reusing this one's buffers (map, search scratch, reservation table): how a trial starts
     /// its next episode without allocating.
     pub fn restarted(self, start: Pos, policy: Box<dyn Policy>) -> Self {
-        let Agent { cfg, mut belief, mut teammates, mut exchanged, mut candidates, dijkstra, mut reservations, mut space_time, mut scratch, mut path, .. } = self;
+        let Agent {
+            cfg,
+            mut belief,
+            mut teammates,
+            mut exchanged,
+            mut candidates,
+            dijkstra,
+            mut reservations,
+            mut space_time,
+            mut scratch,
+            mut path,
+            ..
+        } = self;
         belief.reset();
         teammates.fill(TeammateRecord::default());
         exchanged.clear();
@@ -178,7 +200,17 @@ impl Agent {
         path.clear();
         // The search scratch is only read after a search from the robot's position
         // (`dijkstra_fresh`), so it need not be cleared.
-        let buffers = Buffers { belief, teammates, exchanged, candidates, dijkstra, reservations, space_time, scratch, path };
+        let buffers = Buffers {
+            belief,
+            teammates,
+            exchanged,
+            candidates,
+            dijkstra,
+            reservations,
+            space_time,
+            scratch,
+            path,
+        };
         Self::assemble(cfg, start, policy, buffers)
     }
 
@@ -218,7 +250,17 @@ impl Agent {
 
     /// An agent at the start of an episode, holding `buffers` (in their initial state).
     fn assemble(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>, buffers: Buffers) -> Self {
-        let Buffers { belief, teammates, exchanged, candidates, dijkstra, reservations, space_time, scratch, path } = buffers;
+        let Buffers {
+            belief,
+            teammates,
+            exchanged,
+            candidates,
+            dijkstra,
+            reservations,
+            space_time,
+            scratch,
+            path,
+        } = buffers;
         Agent {
             t: 0,
             pos: start,
@@ -337,7 +379,8 @@ impl Agent {
         let ring = self.history.len();
         self.history[self.history_len % ring] = (self.pos, self.belief.known_count());
         self.history_len += 1;
-        if self.history_len < ring || self.yield_for > 0 || self.goal.is_none_or(|g| g == self.pos) {
+        if self.history_len < ring || self.yield_for > 0 || self.goal.is_none_or(|g| g == self.pos)
+        {
             return;
         }
         let oldest = self.history[self.history_len % ring];
@@ -359,7 +402,12 @@ impl Agent {
             return;
         }
         let id = self.cfg.id;
-        if self.teammates.iter().enumerate().any(|(j, r)| j < id && r.detected) {
+        if self
+            .teammates
+            .iter()
+            .enumerate()
+            .any(|(j, r)| j < id && r.detected)
+        {
             self.yield_for = YIELD_STEPS;
             self.history_len = 0;
         }
@@ -367,7 +415,15 @@ impl Agent {
 
     /// β_i to send to a teammate this timestep.
     pub fn beta(&self) -> Beta {
-        let mut b = Beta { from: 0, t: 0, prev_goal: None, pos: self.pos, goal: None, map: Vec::new(), explored: 0 };
+        let mut b = Beta {
+            from: 0,
+            t: 0,
+            prev_goal: None,
+            pos: self.pos,
+            goal: None,
+            map: Vec::new(),
+            explored: 0,
+        };
         self.beta_into(&mut b);
         b
     }
@@ -408,7 +464,9 @@ impl Agent {
         if self.policy.mode() == DecisionMode::EveryStep {
             return Some(Termination::EveryStep);
         }
-        let Some(goal) = self.goal else { return Some(Termination::NoGoal) };
+        let Some(goal) = self.goal else {
+            return Some(Termination::NoGoal);
+        };
         if goal == self.pos {
             return Some(Termination::Reached);
         }
@@ -436,8 +494,20 @@ impl Agent {
     /// The robot's view for a policy; candidates are extracted first when `with_candidates`.
     pub fn view(&mut self, with_candidates: bool) -> AgentView<'_> {
         if with_candidates {
-            let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
-            self.candidates = extract_goals_with(&self.belief, self.pos, self.cfg.goal_count, &mut self.dijkstra, &held, self.cfg.candidate_rule);
+            let held: Vec<Pos> = self
+                .teammates
+                .iter()
+                .filter(|r| r.detected)
+                .filter_map(|r| r.seen_pos)
+                .collect();
+            self.candidates = extract_goals_with(
+                &self.belief,
+                self.pos,
+                self.cfg.goal_count,
+                &mut self.dijkstra,
+                &held,
+                self.cfg.candidate_rule,
+            );
             self.dijkstra_fresh = true;
         } else {
             self.candidates.cells.clear();
@@ -471,11 +541,31 @@ impl Agent {
     /// The robot's view without touching its own navigator state: candidates and searches use
     /// `scratch`. For observers (e.g. an environment building observations of robots that do
     /// not decide now); the trajectory is the same whether or not this is called.
-    pub fn peek_view<'a>(&'a self, with_candidates: bool, scratch: &'a mut ViewScratch) -> AgentView<'a> {
-        let ViewScratch { dijkstra, candidates, fresh } = scratch;
+    pub fn peek_view<'a>(
+        &'a self,
+        with_candidates: bool,
+        scratch: &'a mut ViewScratch,
+    ) -> AgentView<'a> {
+        let ViewScratch {
+            dijkstra,
+            candidates,
+            fresh,
+        } = scratch;
         if with_candidates {
-            let held: Vec<Pos> = self.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).collect();
-            *candidates = extract_goals_with(&self.belief, self.pos, self.cfg.goal_count, dijkstra, &held, self.cfg.candidate_rule);
+            let held: Vec<Pos> = self
+                .teammates
+                .iter()
+                .filter(|r| r.detected)
+                .filter_map(|r| r.seen_pos)
+                .collect();
+            *candidates = extract_goals_with(
+                &self.belief,
+                self.pos,
+                self.cfg.goal_count,
+                dijkstra,
+                &held,
+                self.cfg.candidate_rule,
+            );
             *fresh = true;
         } else {
             candidates.slots = self.cfg.goal_count;
@@ -502,7 +592,8 @@ impl Agent {
         let start = Instant::now();
         let needs = self.policy.needs_candidates();
         // Temporarily take the policy out so the view can borrow the rest of the agent.
-        let mut policy = std::mem::replace(&mut self.policy, Box::new(crate::policy::NearestFrontier));
+        let mut policy =
+            std::mem::replace(&mut self.policy, Box::new(crate::policy::NearestFrontier));
         let decision = {
             let mut view = self.view(needs);
             policy.decide(&mut view)
@@ -568,21 +659,40 @@ impl Agent {
             // The path is the robot's one search's path to the goal (`view::search_from`),
             // whatever the policy queried before: from the tree at hand if it settled the goal
             // (a stopped search settles exactly what the full one does), else searched on.
-            let ok = self.dijkstra_fresh && self.dijkstra.source() == Some(self.pos) && self.dijkstra.path_to(goal, &mut self.path);
+            let ok = self.dijkstra_fresh
+                && self.dijkstra.source() == Some(self.pos)
+                && self.dijkstra.path_to(goal, &mut self.path);
             if !ok {
                 let (belief, teammates) = (&self.belief, &self.teammates);
-                let held = |q: Pos| teammates.iter().any(|r| r.detected && r.seen_pos == Some(q));
-                if one_step(self.pos, goal, |p| belief.is_free(p) && !held(p), belief.movement()).is_some() {
+                let held = |q: Pos| {
+                    teammates
+                        .iter()
+                        .any(|r| r.detected && r.seen_pos == Some(q))
+                };
+                if one_step(
+                    self.pos,
+                    goal,
+                    |p| belief.is_free(p) && !held(p),
+                    belief.movement(),
+                )
+                .is_some()
+                {
                     // The search's path, without a search (a one-step path is the unique shortest).
                     self.path.clear();
                     self.path.push(goal);
                 } else {
                     let g = belief.index(goal);
-                    let found = search_from(&mut self.dijkstra, belief, teammates, self.pos, |i, _| i == g).is_some();
+                    let found =
+                        search_from(&mut self.dijkstra, belief, teammates, self.pos, |i, _| {
+                            i == g
+                        })
+                        .is_some();
                     self.dijkstra_fresh = true;
                     if !(found && self.dijkstra.path_to(goal, &mut self.path)) {
                         // Not reachable around the teammates in view: through them (they may move).
-                        self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement()).map(|(p, _)| p).unwrap_or_default();
+                        self.path = astar(self.pos, goal, |p| belief.is_free(p), belief.movement())
+                            .map(|(p, _)| p)
+                            .unwrap_or_default();
                     }
                 }
             }
@@ -611,8 +721,18 @@ impl Agent {
                 self.path = p;
             }
         }
-        if !self.path.is_empty() && !self.reservations.is_empty() && self.reservations.conflicts(self.pos, &self.path) {
-            if self.space_time.plan(self.pos, goal, passable, belief.movement(), &self.reservations, &mut self.scratch) {
+        if !self.path.is_empty()
+            && !self.reservations.is_empty()
+            && self.reservations.conflicts(self.pos, &self.path)
+        {
+            if self.space_time.plan(
+                self.pos,
+                goal,
+                passable,
+                belief.movement(),
+                &self.reservations,
+                &mut self.scratch,
+            ) {
                 std::mem::swap(&mut self.path, &mut self.scratch);
             } else {
                 self.stats.space_time_failures += 1;
@@ -623,7 +743,12 @@ impl Agent {
 
     /// This robot's plan, for lower-priority teammates it communicates with.
     pub fn plan_message(&self) -> PlanMessage {
-        let mut m = PlanMessage { from: 0, t: 0, start: self.pos, path: Vec::new() };
+        let mut m = PlanMessage {
+            from: 0,
+            t: 0,
+            start: self.pos,
+            path: Vec::new(),
+        };
         self.plan_message_into(&mut m);
         m
     }
@@ -644,6 +769,9 @@ impl Agent {
 
     /// Stage 7: the primitive action a_i.
     pub fn next_move(&self) -> Move {
-        self.path.first().and_then(|&n| Move::between(self.pos, n)).unwrap_or(Move::Stay)
+        self.path
+            .first()
+            .and_then(|&n| Move::between(self.pos, n))
+            .unwrap_or(Move::Stay)
     }
 }

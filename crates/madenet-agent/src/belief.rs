@@ -114,7 +114,11 @@ impl Belief {
     }
     /// All frontier cells in row-major order.
     pub fn frontier_cells(&self) -> impl Iterator<Item = Pos> + '_ {
-        self.frontier.iter().enumerate().filter(|(_, &f)| f).map(|(i, _)| self.pos(i))
+        self.frontier
+            .iter()
+            .enumerate()
+            .filter(|(_, &f)| f)
+            .map(|(i, _)| self.pos(i))
     }
 
     /// Records an observation of `p`. Knowledge is never lost: a known cell keeps its value
@@ -153,7 +157,11 @@ impl Belief {
     /// Merges a teammate's local map (Sec. III.C.1, *Mapping*): every cell unknown here and
     /// known there is copied. Returns the number of new cells.
     pub fn merge(&mut self, other: &[Occupancy]) -> usize {
-        assert_eq!(other.len(), self.map.len(), "merging maps of different sizes");
+        assert_eq!(
+            other.len(),
+            self.map.len(),
+            "merging maps of different sizes"
+        );
         // Blocks of 32 cells are scanned branch-free (vectorized) and only blocks with a cell
         // unknown here and known there are merged cell by cell, in the same cell order as a
         // plain loop: once maps agree, the common case, a merge is this scan.
@@ -210,7 +218,10 @@ const MERGE_BLOCK: usize = 32;
 /// instructions; a slice `fold` of the same did not vectorize (≈ 4 instructions per cell).
 #[inline]
 fn block_has_news(mine: &[Occupancy], theirs: &[Occupancy]) -> bool {
-    match (<&[Occupancy; MERGE_BLOCK]>::try_from(mine), <&[Occupancy; MERGE_BLOCK]>::try_from(theirs)) {
+    match (
+        <&[Occupancy; MERGE_BLOCK]>::try_from(mine),
+        <&[Occupancy; MERGE_BLOCK]>::try_from(theirs),
+    ) {
         (Ok(a), Ok(b)) => {
             let mut acc = 0u8;
             for i in 0..MERGE_BLOCK {
@@ -218,12 +229,24 @@ fn block_has_news(mine: &[Occupancy], theirs: &[Occupancy]) -> bool {
             }
             acc != 0
         }
-        _ => mine.iter().zip(theirs).any(|(&a, &b)| a == Occupancy::Unknown && b != Occupancy::Unknown),
+        _ => mine
+            .iter()
+            .zip(theirs)
+            .any(|(&a, &b)| a == Occupancy::Unknown && b != Occupancy::Unknown),
     }
 }
 
 /// The 8-neighbourhood offsets.
-pub const NEIGHBOURS: [(i32, i32); 8] = [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)];
+pub const NEIGHBOURS: [(i32, i32); 8] = [
+    (-1, -1),
+    (-1, 0),
+    (-1, 1),
+    (0, -1),
+    (0, 1),
+    (1, -1),
+    (1, 0),
+    (1, 1),
+];
 
 #[cfg(test)]
 mod tests {
@@ -237,7 +260,9 @@ mod tests {
                 b.get(p) == Occupancy::Free
                     && NEIGHBOURS.iter().any(|&(dr, dc)| {
                         let q = Pos::new(p.row + dr, p.col + dc);
-                        let squeeze = b.movement() == Movement::NoCornerCutting && dr != 0 && dc != 0
+                        let squeeze = b.movement() == Movement::NoCornerCutting
+                            && dr != 0
+                            && dc != 0
                             && b.get(Pos::new(p.row, q.col)) == Occupancy::Obstacle
                             && b.get(Pos::new(q.row, p.col)) == Occupancy::Obstacle;
                         b.in_bounds(q) && b.get(q) == Occupancy::Unknown && !squeeze

@@ -48,22 +48,43 @@ impl GoalCandidates {
 /// With [`CandidateRule::NearestClusters`], step 3 takes the cluster representatives in order
 /// of their nearest cell's path cost instead (then farthest-point selection over frontier cells
 /// when clusters run out).
-pub fn extract_goals(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra, held: &[Pos]) -> GoalCandidates {
+pub fn extract_goals(
+    belief: &Belief,
+    from: Pos,
+    slots: usize,
+    dijkstra: &mut Dijkstra,
+    held: &[Pos],
+) -> GoalCandidates {
     extract_goals_with(belief, from, slots, dijkstra, held, CandidateRule::Paper)
 }
 
 /// [`extract_goals`] under `rule`.
-pub fn extract_goals_with(belief: &Belief, from: Pos, slots: usize, dijkstra: &mut Dijkstra, held: &[Pos], rule: CandidateRule) -> GoalCandidates {
+pub fn extract_goals_with(
+    belief: &Belief,
+    from: Pos,
+    slots: usize,
+    dijkstra: &mut Dijkstra,
+    held: &[Pos],
+    rule: CandidateRule,
+) -> GoalCandidates {
     let mut reachable: Vec<Pos> = Vec::new();
-    dijkstra.run(from, |p| belief.is_free(p) && !held.contains(&p), belief.movement(), |p| {
-        if p != from && belief.is_frontier(p) {
-            reachable.push(p);
-        }
-        false
-    });
+    dijkstra.run(
+        from,
+        |p| belief.is_free(p) && !held.contains(&p),
+        belief.movement(),
+        |p| {
+            if p != from && belief.is_frontier(p) {
+                reachable.push(p);
+            }
+            false
+        },
+    );
     // Nearest first (ties: row-major index), whatever order the search settled them in.
     reachable.sort_by_key(|&p| (dijkstra.settled_cost(p), belief.index(p)));
-    let mut out = GoalCandidates { slots, cells: Vec::with_capacity(slots) };
+    let mut out = GoalCandidates {
+        slots,
+        cells: Vec::with_capacity(slots),
+    };
     if reachable.is_empty() || slots == 0 {
         return out;
     }
@@ -99,14 +120,17 @@ pub fn extract_goals_with(belief: &Belief, from: Pos, slots: usize, dijkstra: &m
             }
         }
         let n = members.len() as f64;
-        let (sr, sc) = members.iter().fold((0.0, 0.0), |(r, c), p| (r + p.row as f64, c + p.col as f64));
+        let (sr, sc) = members
+            .iter()
+            .fold((0.0, 0.0), |(r, c), p| (r + p.row as f64, c + p.col as f64));
         let (cr, cc) = (sr / n, sc / n);
         let rep = *members
             .iter()
             .min_by(|a, b| {
                 let da = (a.row as f64 - cr).powi(2) + (a.col as f64 - cc).powi(2);
                 let db = (b.row as f64 - cr).powi(2) + (b.col as f64 - cc).powi(2);
-                da.total_cmp(&db).then(belief.index(**a).cmp(&belief.index(**b)))
+                da.total_cmp(&db)
+                    .then(belief.index(**a).cmp(&belief.index(**b)))
             })
             .expect("cluster is not empty");
         reps.push(rep);
@@ -131,7 +155,13 @@ pub fn extract_goals_with(belief: &Belief, from: Pos, slots: usize, dijkstra: &m
 fn farthest_point(pool: &[Pos], chosen: &mut Vec<Pos>, slots: usize) {
     let mut best_d: Vec<i64> = pool
         .iter()
-        .map(|p| chosen.iter().map(|c| sq_dist(*p, *c)).min().unwrap_or(i64::MAX))
+        .map(|p| {
+            chosen
+                .iter()
+                .map(|c| sq_dist(*p, *c))
+                .min()
+                .unwrap_or(i64::MAX)
+        })
         .collect();
     while chosen.len() < slots {
         let mut best = None;
@@ -204,12 +234,7 @@ mod tests {
     #[test]
     fn fewer_frontiers_fewer_candidates_and_unreachable_excluded() {
         // A walled-off pocket with a frontier at (1,7) cannot be reached from (1,1).
-        let b = belief_from(&[
-            "#########",
-            "#..#...?#",
-            "#.?#...##",
-            "#########",
-        ]);
+        let b = belief_from(&["#########", "#..#...?#", "#.?#...##", "#########"]);
         let mut d = Dijkstra::new(b.height(), b.width());
         let g = extract_goals(&b, Pos::new(1, 1), 4, &mut d, &[]);
         assert!(!g.cells.is_empty());
@@ -221,11 +246,7 @@ mod tests {
     #[test]
     fn teammates_in_view_block_goals_on_and_behind_them() {
         // A corridor: the robot at (1,1), a teammate at (1,4), frontiers at both ends.
-        let b = belief_from(&[
-            "###?#####",
-            "#.......?",
-            "#########",
-        ]);
+        let b = belief_from(&["###?#####", "#.......?", "#########"]);
         let mut d = Dijkstra::new(b.height(), b.width());
         let free = extract_goals(&b, Pos::new(1, 1), 4, &mut d, &[]);
         assert!(free.cells.contains(&Pos::new(1, 7)), "{:?}", free.cells);

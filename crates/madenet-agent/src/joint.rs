@@ -8,8 +8,13 @@
 /// If an action is out of range or the index overflows `usize`.
 pub fn joint_encode(actions: &[usize], goals: usize) -> usize {
     actions.iter().rev().fold(0usize, |acc, &a| {
-        assert!(a < goals, "robot action {a} out of range for {goals} candidates");
-        acc.checked_mul(goals).and_then(|x| x.checked_add(a)).expect("joint index overflows usize")
+        assert!(
+            a < goals,
+            "robot action {a} out of range for {goals} candidates"
+        );
+        acc.checked_mul(goals)
+            .and_then(|x| x.checked_add(a))
+            .expect("joint index overflows usize")
     })
 }
 

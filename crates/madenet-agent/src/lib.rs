@@ -20,10 +20,15 @@ pub mod messages;
 pub mod policy;
 pub mod view;
 
-pub use agent::{Agent, AgentConfig, AgentStats, Termination, ViewScratch, BLOCKED_STEPS, OSCILLATION_CELLS, OSCILLATION_STEPS, YIELD_STEPS};
+pub use agent::{
+    Agent, AgentConfig, AgentStats, Termination, ViewScratch, BLOCKED_STEPS, OSCILLATION_CELLS,
+    OSCILLATION_STEPS, YIELD_STEPS,
+};
 pub use belief::Belief;
-pub use joint::{joint_decode, joint_digit, joint_encode};
 pub use goals::{extract_goals, extract_goals_with, GoalCandidates};
+pub use joint::{joint_decode, joint_digit, joint_encode};
 pub use messages::{Beta, PlanMessage, TeammateRecord};
-pub use policy::{Decision, DecisionMode, External, JointPolicy, NearestFrontier, Policy, RandomCandidate, Spread};
+pub use policy::{
+    Decision, DecisionMode, External, JointPolicy, NearestFrontier, Policy, RandomCandidate, Spread,
+};
 pub use view::{action_mask, write_joint_map_image, AgentView};

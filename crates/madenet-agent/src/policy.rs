@@ -42,7 +42,12 @@ pub trait Policy: Send {
 /// decisions of the others are ignored.
 pub trait JointPolicy: Send {
     fn name(&self) -> &str;
-    fn decide(&mut self, views: &mut [AgentView<'_>], needs: &[bool], team_map: &[Occupancy]) -> Vec<Decision>;
+    fn decide(
+        &mut self,
+        views: &mut [AgentView<'_>],
+        needs: &[bool],
+        team_map: &[Occupancy],
+    ) -> Vec<Decision>;
 }
 
 /// The stand-in policy of a robot whose decisions come from outside, from a [`JointPolicy`]:
@@ -97,7 +102,9 @@ pub struct RandomCandidate {
 
 impl RandomCandidate {
     pub fn new(seed: u64, robot: usize) -> Self {
-        RandomCandidate { rng: madenet_world::rng::stream(seed, "policy/random", robot as u64) }
+        RandomCandidate {
+            rng: madenet_world::rng::stream(seed, "policy/random", robot as u64),
+        }
     }
 }
 
@@ -147,7 +154,9 @@ impl Spread {
         let costs: Vec<Option<f64>> = cells.iter().map(|&c| view.path_cost(c)).collect();
         let view = &*view;
         let ds = self.sensing_range;
-        let recent = |at: Option<usize>, memory: usize| at.is_some_and(|a| view.t.saturating_sub(a) <= memory);
+        let recent = |at: Option<usize>, memory: usize| {
+            at.is_some_and(|a| view.t.saturating_sub(a) <= memory)
+        };
         let near = |a: Pos, b: Pos| a.chebyshev(b) <= ds;
         cells
             .iter()
@@ -165,7 +174,9 @@ impl Spread {
                             (Some(s), Some(h)) => Some(s.max(h)),
                             (s, h) => s.or(h),
                         };
-                        let pos = r.last_pos().filter(|_| recent(seen_at, Self::POSITION_MEMORY));
+                        let pos = r
+                            .last_pos()
+                            .filter(|_| recent(seen_at, Self::POSITION_MEMORY));
                         goal.is_some_and(|g| near(g, c)) || pos.is_some_and(|p| near(p, c))
                     })
                     .count();

@@ -45,7 +45,8 @@ impl<'a> AgentView<'a> {
     /// row-major index).
     pub fn nearest_frontier(&mut self) -> Option<Pos> {
         let (belief, own) = (self.belief, self.belief.index(self.pos));
-        self.search(|i, _| i != own && belief.is_frontier_index(i)).map(|i| belief.pos(i))
+        self.search(|i, _| i != own && belief.is_frontier_index(i))
+            .map(|i| belief.pos(i))
     }
 
     /// Dijkstra from the robot through known free cells not held by a teammate detected now,
@@ -63,17 +64,24 @@ impl<'a> AgentView<'a> {
     }
     /// The cost to a cell settled by the last [`AgentView::search`], in cells.
     pub fn searched_cost(&self, p: Pos) -> Option<f64> {
-        self.dijkstra.settled_cost(p).map(madenet_nav::cost_to_cells)
+        self.dijkstra
+            .settled_cost(p)
+            .map(madenet_nav::cost_to_cells)
     }
 
     /// Path cost in cells from the robot through known free cells not held by a teammate
     /// detected now (as [`AgentView::search`] and the goal extraction), from the last search if
     /// it settled `to`, else from a full search, reused by the navigator. `None` if unreachable.
     pub fn path_cost(&mut self, to: Pos) -> Option<f64> {
-        if !*self.dijkstra_fresh || self.dijkstra.source() != Some(self.pos) || self.dijkstra.settled_cost(to).is_none() {
+        if !*self.dijkstra_fresh
+            || self.dijkstra.source() != Some(self.pos)
+            || self.dijkstra.settled_cost(to).is_none()
+        {
             self.search(|_, _| false);
         }
-        self.dijkstra.settled_cost(to).map(madenet_nav::cost_to_cells)
+        self.dijkstra
+            .settled_cost(to)
+            .map(madenet_nav::cost_to_cells)
     }
 
     /// Length of [`AgentView::macro_observation`] for `team` robots and `goals` candidates:
@@ -93,7 +101,8 @@ impl<'a> AgentView<'a> {
     /// * the |G| goal candidates (2 each, normalised, −1 for an empty slot), then their
     ///   validity mask (0/1 each).
     pub fn macro_observation(&self) -> Vec<f32> {
-        let mut z = vec![0.0; Self::macro_observation_len(self.teammates.len(), self.candidates.slots)];
+        let mut z =
+            vec![0.0; Self::macro_observation_len(self.teammates.len(), self.candidates.slots)];
         self.write_macro_observation(&mut z);
         z
     }
@@ -104,9 +113,16 @@ impl<'a> AgentView<'a> {
     /// # Panics
     /// If `z` has another length.
     pub fn write_macro_observation(&self, z: &mut [f32]) {
-        assert_eq!(z.len(), Self::macro_observation_len(self.teammates.len(), self.candidates.slots), "macro observation length");
+        assert_eq!(
+            z.len(),
+            Self::macro_observation_len(self.teammates.len(), self.candidates.slots),
+            "macro observation length"
+        );
         let b = self.belief;
-        let (sr, sc) = ((b.height().max(2) - 1) as f32, (b.width().max(2) - 1) as f32);
+        let (sr, sc) = (
+            (b.height().max(2) - 1) as f32,
+            (b.width().max(2) - 1) as f32,
+        );
         let coords = |p: Option<Pos>| match p {
             Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
             None => [-1.0, -1.0],
@@ -126,7 +142,10 @@ impl<'a> AgentView<'a> {
             put(&coords(rec.prev_goal));
             put(&coords(rec.last_pos()));
             put(&coords(rec.goal));
-            put(&[rec.explored as f32 / cells, (rec.heard_at.is_some() || rec.seen_at.is_some()) as u8 as f32]);
+            put(&[
+                rec.explored as f32 / cells,
+                (rec.heard_at.is_some() || rec.seen_at.is_some()) as u8 as f32,
+            ]);
         }
         for slot in 0..self.candidates.slots {
             put(&coords(self.candidates.get(slot)));
@@ -160,33 +179,52 @@ impl<'a> AgentView<'a> {
     /// Costs are [`AgentView::path_cost`]s (the goal extraction's search when it is at hand).
     pub fn write_candidate_features(&mut self, sensing_range: i32, out: &mut [f32]) {
         let slots = self.candidates.slots;
-        assert_eq!(out.len(), Self::candidate_features_len(slots), "candidate features length");
+        assert_eq!(
+            out.len(),
+            Self::candidate_features_len(slots),
+            "candidate features length"
+        );
         out.fill(0.0);
         let b = self.belief;
         let ds = sensing_range.max(1);
         let window = ((2 * ds + 1) * (2 * ds + 1)) as f32;
-        let recent = |at: Option<usize>, memory: usize| at.is_some_and(|a| self.t.saturating_sub(a) <= memory);
+        let recent = |at: Option<usize>, memory: usize| {
+            at.is_some_and(|a| self.t.saturating_sub(a) <= memory)
+        };
         let mates: Vec<(Option<Pos>, Option<Pos>)> = self
             .teammates
             .iter()
             .enumerate()
             .filter(|&(j, _)| j != self.id)
             .map(|(_, r)| {
-                let goal = r.goal.filter(|_| recent(r.heard_at, crate::Spread::GOAL_MEMORY));
+                let goal = r
+                    .goal
+                    .filter(|_| recent(r.heard_at, crate::Spread::GOAL_MEMORY));
                 let at = match (r.seen_at, r.heard_at) {
                     (Some(s), Some(h)) => Some(s.max(h)),
                     (s, h) => s.or(h),
                 };
-                (goal, r.last_pos().filter(|_| recent(at, crate::Spread::POSITION_MEMORY)))
+                (
+                    goal,
+                    r.last_pos()
+                        .filter(|_| recent(at, crate::Spread::POSITION_MEMORY)),
+                )
             })
             .collect();
         let cells = self.candidates.cells.clone();
-        let costs: Vec<f64> = cells.iter().map(|&c| self.path_cost(c).unwrap_or(f64::MAX)).collect();
+        let costs: Vec<f64> = cells
+            .iter()
+            .map(|&c| self.path_cost(c).unwrap_or(f64::MAX))
+            .collect();
         let scale = (b.height() + b.width()) as f64;
         let near_cap = (4 * ds) as f32;
         for (k, &c) in self.candidates.cells.iter().enumerate().take(slots) {
             let f = &mut out[k * Self::CANDIDATE_FEATURES..(k + 1) * Self::CANDIDATE_FEATURES];
-            f[0] = if costs[k] == f64::MAX { 1.0 } else { (costs[k] / scale) as f32 };
+            f[0] = if costs[k] == f64::MAX {
+                1.0
+            } else {
+                (costs[k] / scale) as f32
+            };
             let (mut unknown, mut frontier) = (0, 0);
             for r in c.row - ds..=c.row + ds {
                 for col in c.col - ds..=c.col + ds {
@@ -200,18 +238,37 @@ impl<'a> AgentView<'a> {
             f[1] = unknown as f32 / window;
             f[2] = frontier as f32 / window;
             let nearest = |sel: &dyn Fn(&(Option<Pos>, Option<Pos>)) -> Option<Pos>| {
-                mates.iter().filter_map(sel).map(|p| p.chebyshev(c) as f32).fold(near_cap, f32::min) / near_cap
+                mates
+                    .iter()
+                    .filter_map(sel)
+                    .map(|p| p.chebyshev(c) as f32)
+                    .fold(near_cap, f32::min)
+                    / near_cap
             };
             f[3] = nearest(&|m| m.0);
             f[4] = nearest(&|m| m.1);
-            let crowded = mates.iter().filter(|m| m.0.is_some_and(|g| g.chebyshev(c) <= ds) || m.1.is_some_and(|p| p.chebyshev(c) <= ds)).count();
+            let crowded = mates
+                .iter()
+                .filter(|m| {
+                    m.0.is_some_and(|g| g.chebyshev(c) <= ds)
+                        || m.1.is_some_and(|p| p.chebyshev(c) <= ds)
+                })
+                .count();
             f[5] = crowded as f32 / 2.0;
-            let rank = costs.iter().enumerate().filter(|&(j, &x)| x < costs[k] || (x == costs[k] && j < k)).count();
+            let rank = costs
+                .iter()
+                .enumerate()
+                .filter(|&(j, &x)| x < costs[k] || (x == costs[k] && j < k))
+                .count();
             f[6] = rank as f32 / slots.max(1) as f32;
         }
         let spread = crate::Spread::new(sensing_range);
         let scores = spread.scores(self);
-        let best = scores.iter().enumerate().filter_map(|(k, s)| s.map(|s| (k, s))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+        let best = scores
+            .iter()
+            .enumerate()
+            .filter_map(|(k, s)| s.map(|s| (k, s)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
         for (k, s) in scores.iter().enumerate().take(slots) {
             let f = &mut out[k * Self::CANDIDATE_FEATURES..(k + 1) * Self::CANDIDATE_FEATURES];
             f[7] = s.map_or(1.0, |s| (s / scale) as f32);
@@ -262,7 +319,11 @@ impl<'a> AgentView<'a> {
 /// (`multiversion`): widening bytes to floats takes one instruction there instead of four,
 /// and this loop is a fifth of a primitive environment step's instructions.
 #[multiversion::multiversion(targets("x86_64+avx2"))]
-fn write_known_and_obstacles<T: Copy + From<u8>>(cells: &[Occupancy], known: &mut [T], obstacles: &mut [T]) {
+fn write_known_and_obstacles<T: Copy + From<u8>>(
+    cells: &[Occupancy],
+    known: &mut [T],
+    obstacles: &mut [T],
+) {
     let n = cells.len();
     for ((k, o), &c) in known[..n].iter_mut().zip(&mut obstacles[..n]).zip(cells) {
         let code = c as u8;
@@ -283,14 +344,36 @@ pub(crate) fn search_from(
     stop: impl FnMut(usize, u32) -> bool,
 ) -> Option<usize> {
     let map = belief.map();
-    let mut held = teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p));
-    let (a, b) = (held.next().unwrap_or(usize::MAX), held.next().unwrap_or(usize::MAX));
+    let mut held = teammates
+        .iter()
+        .filter(|r| r.detected)
+        .filter_map(|r| r.seen_pos)
+        .map(|p| belief.index(p));
+    let (a, b) = (
+        held.next().unwrap_or(usize::MAX),
+        held.next().unwrap_or(usize::MAX),
+    );
     if held.next().is_none() {
         // Up to two teammates in view (the paper's team of three): two compares per cell.
-        dijkstra.run_indexed(pos, |i| map[i] == Occupancy::Free && i != a && i != b, belief.movement(), stop)
+        dijkstra.run_indexed(
+            pos,
+            |i| map[i] == Occupancy::Free && i != a && i != b,
+            belief.movement(),
+            stop,
+        )
     } else {
-        let cells: Vec<usize> = teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| belief.index(p)).collect();
-        dijkstra.run_indexed(pos, |i| map[i] == Occupancy::Free && !cells.contains(&i), belief.movement(), stop)
+        let cells: Vec<usize> = teammates
+            .iter()
+            .filter(|r| r.detected)
+            .filter_map(|r| r.seen_pos)
+            .map(|p| belief.index(p))
+            .collect();
+        dijkstra.run_indexed(
+            pos,
+            |i| map[i] == Occupancy::Free && !cells.contains(&i),
+            belief.movement(),
+            stop,
+        )
     }
 }
 
@@ -313,7 +396,11 @@ pub fn action_mask(view: &AgentView<'_>) -> Vec<bool> {
 ///
 /// # Panics
 /// If `img` is not 4 × `team_map.len()` long.
-pub fn write_joint_map_image<T: Copy + From<u8>>(views: &[AgentView<'_>], team_map: &[Occupancy], img: &mut [T]) {
+pub fn write_joint_map_image<T: Copy + From<u8>>(
+    views: &[AgentView<'_>],
+    team_map: &[Occupancy],
+    img: &mut [T],
+) {
     let n = team_map.len();
     assert_eq!(img.len(), 4 * n, "joint map image length");
     let (zero, one) = (T::from(0), T::from(1));
@@ -345,9 +432,16 @@ mod tests {
         b.observe(Pos::new(1, 0), Occupancy::Free);
         let teammates = vec![
             TeammateRecord::default(),
-            TeammateRecord { seen_pos: Some(Pos::new(2, 3)), seen_at: Some(5), ..Default::default() },
+            TeammateRecord {
+                seen_pos: Some(Pos::new(2, 3)),
+                seen_at: Some(5),
+                ..Default::default()
+            },
         ];
-        let candidates = GoalCandidates { slots: 4, cells: vec![Pos::new(1, 0)] };
+        let candidates = GoalCandidates {
+            slots: 4,
+            cells: vec![Pos::new(1, 0)],
+        };
         let mut d = Dijkstra::new(3, 4);
         let mut fresh = false;
         let view = AgentView {

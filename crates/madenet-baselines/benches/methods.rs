@@ -36,15 +36,18 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("paper_40");
     group.sample_size(10);
     for method in ["nf", "ub", "pb"] {
-        let specs: Vec<TrialSpec> =
-            (1..=PAPER_MAP_COUNT).flat_map(|n| Corner::ALL.map(|corner| spec(n, corner, method))).collect();
+        let specs: Vec<TrialSpec> = (1..=PAPER_MAP_COUNT)
+            .flat_map(|n| Corner::ALL.map(|corner| spec(n, corner, method)))
+            .collect();
         group.bench_function(method, |b| b.iter(|| run_all(&specs, &reg)));
     }
     group.finish();
     let mut group = c.benchmark_group("trial");
     for method in ["nf", "ub", "pb"] {
         let s = spec(5, Corner::TopLeft, method);
-        group.bench_function(method, |b| b.iter(|| black_box(Trial::with_registry(s.clone(), &reg).expect("trial").run())));
+        group.bench_function(method, |b| {
+            b.iter(|| black_box(Trial::with_registry(s.clone(), &reg).expect("trial").run()))
+        });
     }
     group.finish();
     let mut trial = Trial::with_registry(spec(5, Corner::TopLeft, "pb"), &reg).expect("trial");

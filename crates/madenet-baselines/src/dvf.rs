@@ -94,7 +94,16 @@ pub struct DistributedValueFunctions {
     queue: std::collections::VecDeque<usize>,
 }
 
-const DIRS: [(isize, isize); 8] = [(-1, 0), (-1, 1), (0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1)];
+const DIRS: [(isize, isize); 8] = [
+    (-1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+    (1, 0),
+    (1, -1),
+    (0, -1),
+    (-1, -1),
+];
 
 impl DistributedValueFunctions {
     pub fn new(p: PbParams, cfg: &ScenarioConfig, height: usize, width: usize) -> Self {
@@ -307,7 +316,8 @@ impl Policy for DistributedValueFunctions {
                 for k in 0..self.dvf.len() {
                     let pr = self.prob[k];
                     if pr > 0.0 {
-                        self.dvf[k] += self.p.teammate_weight * pr * self.team_value[k].abs() + self.p.crowding_weight * pr * pr;
+                        self.dvf[k] += self.p.teammate_weight * pr * self.team_value[k].abs()
+                            + self.p.crowding_weight * pr * pr;
                     }
                 }
             }
@@ -315,7 +325,13 @@ impl Policy for DistributedValueFunctions {
         let v = self.value_iteration(true);
         // The best move from here, avoiding teammates it can see.
         let here = self.padded(at);
-        let held: Vec<usize> = view.teammates.iter().filter(|r| r.detected).filter_map(|r| r.seen_pos).map(|p| self.padded(p)).collect();
+        let held: Vec<usize> = view
+            .teammates
+            .iter()
+            .filter(|r| r.detected)
+            .filter_map(|r| r.seen_pos)
+            .map(|p| self.padded(p))
+            .collect();
         let mut best: Option<(f32, usize)> = None;
         let cells = self.reward.len();
         for d in 0..8 {
@@ -333,7 +349,10 @@ impl Policy for DistributedValueFunctions {
         self.next = v;
         match best {
             Some((bv, d)) if (bv - self.next[here]).abs() >= self.p.stuck_threshold => {
-                Decision::Goal(Pos::new(at.row + DIRS[d].0 as i32, at.col + DIRS[d].1 as i32))
+                Decision::Goal(Pos::new(
+                    at.row + DIRS[d].0 as i32,
+                    at.col + DIRS[d].1 as i32,
+                ))
             }
             _ => match view.nearest_frontier() {
                 Some(p) => Decision::Goal(p),
@@ -358,21 +377,35 @@ fn bellman(src: &[&[f32]; 8], pen: &[&[f32]; 8], reward: &[f32], out: &mut [f32]
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn bellman_avx2(src: &[&[f32]; 8], pen: &[&[f32]; 8], reward: &[f32], out: &mut [f32], gamma: f32) {
+unsafe fn bellman_avx2(
+    src: &[&[f32]; 8],
+    pen: &[&[f32]; 8],
+    reward: &[f32],
+    out: &mut [f32],
+    gamma: f32,
+) {
     bellman_body(src, pen, reward, out, gamma);
 }
 
 #[inline(always)]
 fn bellman_body(src: &[&[f32]; 8], pen: &[&[f32]; 8], reward: &[f32], out: &mut [f32], gamma: f32) {
     let len = out.len();
-    let (reward, src, pen) = (&reward[..len], src.map(|s| &s[..len]), pen.map(|p| &p[..len]));
+    let (reward, src, pen) = (
+        &reward[..len],
+        src.map(|s| &s[..len]),
+        pen.map(|p| &p[..len]),
+    );
     for i in 0..len {
         let mut b = f32::NEG_INFINITY;
         for d in 0..8 {
             let y = src[d][i] + pen[d][i];
             b = if y > b { y } else { b };
         }
-        out[i] = if b == f32::NEG_INFINITY { reward[i] } else { reward[i] + gamma * b };
+        out[i] = if b == f32::NEG_INFINITY {
+            reward[i]
+        } else {
+            reward[i] + gamma * b
+        };
     }
 }
 
@@ -382,7 +415,8 @@ mod tests {
 
     #[test]
     fn padded_layout_round_trips() {
-        let pb = DistributedValueFunctions::new(PbParams::default(), &ScenarioConfig::default(), 5, 7);
+        let pb =
+            DistributedValueFunctions::new(PbParams::default(), &ScenarioConfig::default(), 5, 7);
         assert_eq!(pb.padded(Pos::new(0, 0)), 9 + 1);
         assert_eq!(pb.value.len(), 7 * 9);
         assert_eq!(pb.offset(0), -9);

@@ -36,9 +36,18 @@ pub struct BaselineParams {
 /// Registers `ub` and `pb` with these parameters.
 pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
     let ub = params.ub.clone();
-    registry.register("ub", "utility-based coordinated exploration (Burgard et al. 2005), re-decided every timestep", move |ctx| {
-        Box::new(UtilityBased::new(ub.clone(), ctx.config, ctx.height, ctx.width))
-    });
+    registry.register(
+        "ub",
+        "utility-based coordinated exploration (Burgard et al. 2005), re-decided every timestep",
+        move |ctx| {
+            Box::new(UtilityBased::new(
+                ub.clone(),
+                ctx.config,
+                ctx.height,
+                ctx.width,
+            ))
+        },
+    );
     let pb = params.pb.clone();
     registry.register(
         "pb",

@@ -22,7 +22,10 @@ pub struct UbParams {
 
 impl Default for UbParams {
     fn default() -> Self {
-        UbParams { beta: None, coordination_radius: None }
+        UbParams {
+            beta: None,
+            coordination_radius: None,
+        }
     }
 }
 
@@ -56,7 +59,9 @@ impl UtilityBased {
         let side_m = (height.max(width) as f64) * cfg.cell_size;
         UtilityBased {
             beta: params.beta.unwrap_or(1.0 / side_m),
-            radius: params.coordination_radius.unwrap_or(cfg.sensing_range as f64),
+            radius: params
+                .coordination_radius
+                .unwrap_or(cfg.sensing_range as f64),
             sensing_range: cfg.sensing_range.max(0) as usize,
             cell_size: cfg.cell_size,
             sat: Vec::new(),
@@ -82,7 +87,9 @@ impl UtilityBased {
         let (r0, c0) = (r.saturating_sub(ds), c.saturating_sub(ds));
         let (r1, c1) = ((r + ds + 1).min(height), (c + ds + 1).min(width));
         let w1 = width + 1;
-        self.sat[r1 * w1 + c1] + self.sat[r0 * w1 + c0] - self.sat[r0 * w1 + c1] - self.sat[r1 * w1 + c0]
+        self.sat[r1 * w1 + c1] + self.sat[r0 * w1 + c0]
+            - self.sat[r0 * w1 + c1]
+            - self.sat[r1 * w1 + c0]
     }
 }
 
@@ -115,10 +122,16 @@ impl Policy for UtilityBased {
         let this = &*self;
         let utility = |p: Pos| {
             let gain = this.unknown_around(p.row as usize, p.col as usize, h, w) as f64 / window;
-            let overlap: f64 = goals.iter().map(|g| (1.0 - p.euclid(*g) / radius).max(0.0)).sum();
+            let overlap: f64 = goals
+                .iter()
+                .map(|g| (1.0 - p.euclid(*g) / radius).max(0.0))
+                .sum();
             gain - overlap
         };
-        let max_utility = belief.frontier_cells().map(utility).fold(f64::NEG_INFINITY, f64::max);
+        let max_utility = belief
+            .frontier_cells()
+            .map(utility)
+            .fold(f64::NEG_INFINITY, f64::max);
         let mut best: Option<(f64, u32, usize)> = None; // (score, cost, cell)
         view.search(|i, cost| {
             let metres = madenet_nav::cost_to_cells(cost) * cell_size;

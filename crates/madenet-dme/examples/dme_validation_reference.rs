@@ -20,12 +20,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let nets = Maddpg::new(&cfg.nets(), &device);
     let (steps, _, done, n) = validate(&cfg, &nets)?;
     println!("initial actors, greedy:   {steps:.1} mean steps, {done}/{n} complete");
-    let actors: Vec<_> = (0..cfg.scenario.num_robots).map(|i| Arc::new(RwLock::new(nets.acting_actor(i)))).collect();
+    let actors: Vec<_> = (0..cfg.scenario.num_robots)
+        .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
+        .collect();
     let mut registry = PolicyRegistry::default();
     let history = cfg.history;
     registry.register("sampling", "initial actors, sampling", move |ctx| {
         let rng = madenet_world::rng::stream(ctx.seed, "reference/sample", ctx.robot as u64);
-        Box::new(DmePolicy::new("sampling", ctx.robot, Arc::clone(&actors[ctx.robot]), history).sampling(rng))
+        Box::new(
+            DmePolicy::new(
+                "sampling",
+                ctx.robot,
+                Arc::clone(&actors[ctx.robot]),
+                history,
+            )
+            .sampling(rng),
+        )
     });
     let (steps, _, done, n) = validate_policy(&cfg.learn_view(), &registry, "sampling")?;
     println!("initial actors, sampling: {steps:.1} mean steps, {done}/{n} complete");

@@ -116,8 +116,12 @@ impl Maddpg {
         let (mut critic_loss, mut actor_loss) = (0.0, 0.0);
         for (i, batch) in batches.iter().enumerate().take(n) {
             let b = batch.size;
-            let t2 = |v: &[f32], cols: usize, d: &Device| Tensor::<2>::from_data(TensorData::new(v.to_vec(), [b, cols]), d);
-            let t4 = |v: &[f32], d: &Device| Tensor::<4>::from_data(TensorData::new(v.to_vec(), [b, n * c, h, w]), d);
+            let t2 = |v: &[f32], cols: usize, d: &Device| {
+                Tensor::<2>::from_data(TensorData::new(v.to_vec(), [b, cols]), d)
+            };
+            let t4 = |v: &[f32], d: &Device| {
+                Tensor::<4>::from_data(TensorData::new(v.to_vec(), [b, n * c, h, w]), d)
+            };
 
             // 1a. The target, without gradients: deciding robots sample their target actor,
             // busy ones keep their action.
@@ -128,15 +132,33 @@ impl Maddpg {
             let deciding = t2(&batch.next_deciding, n, &plain);
             let next_actions: Vec<Tensor<2>> = (0..n)
                 .map(|j| {
-                    let logits = self.target_actors[j].forward(next_maps.clone().narrow(1, j * c, c), next_poses.clone().narrow(1, j * pose_len, pose_len));
-                    let sampled = gumbel_softmax(logits, next_masks.clone().narrow(1, j * SECTORS, SECTORS), gumbel(b, noise, &plain), p.temperature);
+                    let logits = self.target_actors[j].forward(
+                        next_maps.clone().narrow(1, j * c, c),
+                        next_poses.clone().narrow(1, j * pose_len, pose_len),
+                    );
+                    let sampled = gumbel_softmax(
+                        logits,
+                        next_masks.clone().narrow(1, j * SECTORS, SECTORS),
+                        gumbel(b, noise, &plain),
+                        p.temperature,
+                    );
                     let d = deciding.clone().narrow(1, j, 1);
-                    sampled * d.clone() + in_force.clone().narrow(1, j * SECTORS, SECTORS) * d.neg().add_scalar(1.0)
+                    sampled * d.clone()
+                        + in_force.clone().narrow(1, j * SECTORS, SECTORS) * d.neg().add_scalar(1.0)
                 })
                 .collect();
-            let q = self.target_critics[i].forward(critic_maps(&cfg, next_maps), Tensor::cat(next_actions, 1), next_poses);
-            let q = q.into_data().try_into_vec_as::<f32>().expect("Q readable as f32");
-            let y: Vec<f32> = (0..b).map(|k| batch.rewards[k] + batch.discounts[k] * q[k]).collect();
+            let q = self.target_critics[i].forward(
+                critic_maps(&cfg, next_maps),
+                Tensor::cat(next_actions, 1),
+                next_poses,
+            );
+            let q = q
+                .into_data()
+                .try_into_vec_as::<f32>()
+                .expect("Q readable as f32");
+            let y: Vec<f32> = (0..b)
+                .map(|k| batch.rewards[k] + batch.discounts[k] * q[k])
+                .collect();
 
             // 1b. Critic i: one step on the squared TD error.
             let maps = t4(&batch.maps, &ad);
@@ -155,12 +177,24 @@ impl Maddpg {
             // critic's trunk features carry no gradient (only the action input changes), so
             // they are computed once without the autodiff graph.
             let actor = self.actors[i].clone();
-            let logits = actor.forward(maps.narrow(1, i * c, c), poses.clone().narrow(1, i * pose_len, pose_len));
+            let logits = actor.forward(
+                maps.narrow(1, i * c, c),
+                poses.clone().narrow(1, i * pose_len, pose_len),
+            );
             let mask = t2(&batch.masks, n * SECTORS, &ad).narrow(1, i * SECTORS, SECTORS);
             let own = gumbel_softmax(logits.clone(), mask, gumbel(b, noise, &ad), p.temperature);
-            let joint: Vec<Tensor<2>> =
-                (0..n).map(|j| if j == i { own.clone() } else { actions.clone().narrow(1, j * SECTORS, SECTORS) }).collect();
-            let features = self.critics[i].valid().features(critic_maps(&cfg, t4(&batch.maps, &plain)));
+            let joint: Vec<Tensor<2>> = (0..n)
+                .map(|j| {
+                    if j == i {
+                        own.clone()
+                    } else {
+                        actions.clone().narrow(1, j * SECTORS, SECTORS)
+                    }
+                })
+                .collect();
+            let features = self.critics[i]
+                .valid()
+                .features(critic_maps(&cfg, t4(&batch.maps, &plain)));
             let features = Tensor::<2>::from_data(features.into_data(), &ad);
             let q = self.critics[i].head(features, Tensor::cat(joint, 1), poses);
             let pg = q.mean().neg();
@@ -172,10 +206,15 @@ impl Maddpg {
 
         // 3. Soft target updates.
         for i in 0..n {
-            self.target_actors[i] = soft_update(self.target_actors[i].clone(), &self.actors[i], p.tau);
-            self.target_critics[i] = soft_update(self.target_critics[i].clone(), &self.critics[i], p.tau);
+            self.target_actors[i] =
+                soft_update(self.target_actors[i].clone(), &self.actors[i], p.tau);
+            self.target_critics[i] =
+                soft_update(self.target_critics[i].clone(), &self.critics[i], p.tau);
         }
-        UpdateStats { critic_loss, actor_loss }
+        UpdateStats {
+            critic_loss,
+            actor_loss,
+        }
     }
 
     /// Robot i's actor for acting (plain device).
@@ -191,11 +230,18 @@ fn critic_maps(cfg: &DmeConfig, maps: Tensor<4>) -> Tensor<4> {
     if c == cc {
         return maps;
     }
-    Tensor::cat((0..cfg.team_size).map(|j| maps.clone().narrow(1, j * c + c - cc, cc)).collect(), 1)
+    Tensor::cat(
+        (0..cfg.team_size)
+            .map(|j| maps.clone().narrow(1, j * c + c - cc, cc))
+            .collect(),
+        1,
+    )
 }
 
 fn scalar(t: Tensor<1>) -> f32 {
-    t.into_data().try_into_vec_as::<f32>().expect("scalar readable as f32")[0]
+    t.into_data()
+        .try_into_vec_as::<f32>()
+        .expect("scalar readable as f32")[0]
 }
 
 /// `[b, 8]` standard Gumbel noise −ln(−ln u) from `rng`.
@@ -210,7 +256,12 @@ fn gumbel(b: usize, rng: &mut Rng, device: &Device) -> Tensor<2> {
 }
 
 /// softmax((logits + g) / τ) over the valid sectors; all zero where none is valid.
-pub fn gumbel_softmax(logits: Tensor<2>, mask: Tensor<2>, g: Tensor<2>, temperature: f32) -> Tensor<2> {
+pub fn gumbel_softmax(
+    logits: Tensor<2>,
+    mask: Tensor<2>,
+    g: Tensor<2>,
+    temperature: f32,
+) -> Tensor<2> {
     // Invalid sectors get −1e9 before the softmax, then the mask zeroes rows with none valid.
     let off = mask.clone().sub_scalar(1.0).mul_scalar(1e9);
     let y = burn::tensor::activation::softmax((logits + g).div_scalar(temperature) + off, 1);
@@ -241,5 +292,8 @@ pub fn soft_update<M: Module>(target: M, online: &M, tau: f32) -> M {
     }
     let mut collect = Collect(Vec::new());
     online.visit(&mut collect);
-    target.map(&mut Blend { online: collect.0.into_iter(), tau })
+    target.map(&mut Blend {
+        online: collect.0.into_iter(),
+        tau,
+    })
 }

@@ -64,13 +64,20 @@ impl DmeConfig {
     }
     /// Flattened length after the two convolutions for `channels` input channels.
     fn flat(&self) -> usize {
-        let (h, w) = (out_side(out_side(self.map_height, 4, 2), 3, 2), out_side(out_side(self.map_width, 4, 2), 3, 2));
+        let (h, w) = (
+            out_side(out_side(self.map_height, 4, 2), 3, 2),
+            out_side(out_side(self.map_width, 4, 2), 3, 2),
+        );
         32 * h * w
     }
     fn convs(&self, channels: usize, device: &Device) -> (Conv2d, Conv2d) {
         (
-            Conv2dConfig::new([channels, 16], [4, 4]).with_stride([2, 2]).init(device),
-            Conv2dConfig::new([16, 32], [3, 3]).with_stride([2, 2]).init(device),
+            Conv2dConfig::new([channels, 16], [4, 4])
+                .with_stride([2, 2])
+                .init(device),
+            Conv2dConfig::new([16, 32], [3, 3])
+                .with_stride([2, 2])
+                .init(device),
         )
     }
 
@@ -113,9 +120,13 @@ pub struct Actor {
 impl Actor {
     /// `maps` `[b, 4·history, H, W]`, `pose` `[b, 2·team]` → logits `[b, 8]`.
     pub fn forward(&self, maps: Tensor<4>, pose: Tensor<2>) -> Tensor<2> {
-        let x = self.act.forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
+        let x = self
+            .act
+            .forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
         let x: Tensor<2> = x.flatten(1, 3);
-        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![x, pose], 1)));
+        let x = self
+            .act
+            .forward(self.f1.forward(Tensor::cat(vec![x, pose], 1)));
         self.f2.forward(x)
     }
 }
@@ -140,13 +151,18 @@ impl Critic {
     /// The convolutional trunk alone: flattened map features `[b, flat]` (the actors' update
     /// reuses them, since only the action input changes).
     pub fn features(&self, maps: Tensor<4>) -> Tensor<2> {
-        let x = self.act.forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
+        let x = self
+            .act
+            .forward(self.c2.forward(self.act.forward(self.c1.forward(maps))));
         x.flatten(1, 3)
     }
 
     /// Q from trunk features, actions and poses.
     pub fn head(&self, features: Tensor<2>, actions: Tensor<2>, poses: Tensor<2>) -> Tensor<2> {
-        let x = self.act.forward(self.f1.forward(Tensor::cat(vec![features, actions, poses], 1)));
+        let x = self.act.forward(
+            self.f1
+                .forward(Tensor::cat(vec![features, actions, poses], 1)),
+        );
         self.f2.forward(x)
     }
 }

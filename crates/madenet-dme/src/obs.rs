@@ -37,7 +37,10 @@ pub fn frame(view: &AgentView<'_>) -> Vec<u8> {
 /// The pose vector, `2 · team` values.
 pub fn pose_vector(view: &AgentView<'_>) -> Vec<f32> {
     let b = view.belief;
-    let (sr, sc) = ((b.height().max(2) - 1) as f32, (b.width().max(2) - 1) as f32);
+    let (sr, sc) = (
+        (b.height().max(2) - 1) as f32,
+        (b.width().max(2) - 1) as f32,
+    );
     let coords = |p: Option<Pos>| match p {
         Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
         None => [-1.0, -1.0],
@@ -45,7 +48,13 @@ pub fn pose_vector(view: &AgentView<'_>) -> Vec<f32> {
     view.teammates
         .iter()
         .enumerate()
-        .flat_map(|(j, rec)| coords(if j == view.id { Some(view.pos) } else { rec.last_pos() }))
+        .flat_map(|(j, rec)| {
+            coords(if j == view.id {
+                Some(view.pos)
+            } else {
+                rec.last_pos()
+            })
+        })
         .collect()
 }
 
@@ -58,7 +67,10 @@ pub struct History {
 
 impl History {
     pub fn new(len: usize) -> Self {
-        History { len: len.max(1), frames: VecDeque::new() }
+        History {
+            len: len.max(1),
+            frames: VecDeque::new(),
+        }
     }
 
     /// Adds the newest frame (the first one fills the whole history).
@@ -73,7 +85,10 @@ impl History {
 
     /// The stacked input `[history · 4][H][W]` as `f32`, oldest frame first.
     pub fn stacked(&self) -> Vec<f32> {
-        self.frames.iter().flat_map(|f| f.iter().map(|&v| f32::from(v))).collect()
+        self.frames
+            .iter()
+            .flat_map(|f| f.iter().map(|&v| f32::from(v)))
+            .collect()
     }
 }
 
@@ -98,7 +113,13 @@ mod tests {
         h.push(vec![0]);
         assert_eq!(h.stacked(), vec![0.0, 1.0, 0.0]);
         // The replay's reconstruction agrees: at step 1 of an episode slots are steps 0, 0, 1.
-        assert_eq!((0..3).map(|k| history_step(1, 3, k)).collect::<Vec<_>>(), vec![0, 0, 1]);
-        assert_eq!((0..3).map(|k| history_step(3, 3, k)).collect::<Vec<_>>(), vec![1, 2, 3]);
+        assert_eq!(
+            (0..3).map(|k| history_step(1, 3, k)).collect::<Vec<_>>(),
+            vec![0, 0, 1]
+        );
+        assert_eq!(
+            (0..3).map(|k| history_step(3, 3, k)).collect::<Vec<_>>(),
+            vec![1, 2, 3]
+        );
     }
 }

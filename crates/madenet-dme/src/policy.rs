@@ -96,19 +96,32 @@ impl DmePolicy {
 
 /// The index of the largest of `logits` among valid ones.
 pub fn masked_argmax(logits: &[f32], mask: &[bool; SECTORS]) -> Option<usize> {
-    (0..SECTORS).filter(|&k| mask[k]).fold(None, |best: Option<usize>, k| match best {
-        Some(b) if logits[b] >= logits[k] => Some(b),
-        _ => Some(k),
-    })
+    (0..SECTORS)
+        .filter(|&k| mask[k])
+        .fold(None, |best: Option<usize>, k| match best {
+            Some(b) if logits[b] >= logits[k] => Some(b),
+            _ => Some(k),
+        })
 }
 
 /// A draw from the softmax of `logits` restricted to the valid ones.
 pub fn masked_sample(logits: &[f32], mask: &[bool; SECTORS], rng: &mut Rng) -> Option<usize> {
-    let top = (0..SECTORS).filter(|&k| mask[k]).map(|k| logits[k]).fold(f32::NEG_INFINITY, f32::max);
+    let top = (0..SECTORS)
+        .filter(|&k| mask[k])
+        .map(|k| logits[k])
+        .fold(f32::NEG_INFINITY, f32::max);
     if top == f32::NEG_INFINITY {
         return None;
     }
-    let w: Vec<f64> = (0..SECTORS).map(|k| if mask[k] { f64::from(logits[k] - top).exp() } else { 0.0 }).collect();
+    let w: Vec<f64> = (0..SECTORS)
+        .map(|k| {
+            if mask[k] {
+                f64::from(logits[k] - top).exp()
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let mut u = rng.random::<f64>() * w.iter().sum::<f64>();
     let mut last = None;
     for (k, &wk) in w.iter().enumerate() {
@@ -139,21 +152,37 @@ impl Policy for DmePolicy {
         let pose = pose_vector(view);
         let goals = view_sector_goals(view);
         let mask = goals.mask();
-        self.still_for = if self.goal.is_some() && self.last_pos == Some(view.pos) { self.still_for + 1 } else { 0 };
+        self.still_for = if self.goal.is_some() && self.last_pos == Some(view.pos) {
+            self.still_for + 1
+        } else {
+            0
+        };
         self.last_pos = Some(view.pos);
         // The macro action goes on while its goal is an unreached, reachable frontier cell.
         let going_on = self.goal.is_some_and(|g| {
-            g != view.pos && view.belief.is_frontier(g) && view.searched_cost(g).is_some() && self.still_for < BLOCKED_STEPS
+            g != view.pos
+                && view.belief.is_frontier(g)
+                && view.searched_cost(g).is_some()
+                && self.still_for < BLOCKED_STEPS
         });
         if !going_on {
             self.action = if mask.contains(&true) {
                 let (h, w) = (view.belief.height(), view.belief.width());
                 let maps = self.history.stacked();
                 let channels = maps.len() / (h * w);
-                let maps = Tensor::<4>::from_data(TensorData::new(maps, [1, channels, h, w]), &self.device);
-                let p = Tensor::<2>::from_data(TensorData::new(pose.clone(), [1, pose.len()]), &self.device);
+                let maps = Tensor::<4>::from_data(
+                    TensorData::new(maps, [1, channels, h, w]),
+                    &self.device,
+                );
+                let p = Tensor::<2>::from_data(
+                    TensorData::new(pose.clone(), [1, pose.len()]),
+                    &self.device,
+                );
                 let logits = self.actor.read().expect("actor lock").forward(maps, p);
-                let logits = logits.into_data().try_into_vec_as::<f32>().expect("logits readable as f32");
+                let logits = logits
+                    .into_data()
+                    .try_into_vec_as::<f32>()
+                    .expect("logits readable as f32");
                 match self.sample.as_mut() {
                     Some(rng) => masked_sample(&logits, &mask, rng),
                     None => masked_argmax(&logits, &mask),
@@ -166,7 +195,13 @@ impl Policy for DmePolicy {
             self.still_for = 0;
         }
         if let Some(rec) = &self.recorder {
-            rec.lock().expect("recorder lock")[self.robot] = Some(StepRecord { frame: f, pose, mask, action: self.action, decided: !going_on });
+            rec.lock().expect("recorder lock")[self.robot] = Some(StepRecord {
+                frame: f,
+                pose,
+                mask,
+                action: self.action,
+                decided: !going_on,
+            });
         }
         match self.goal {
             Some(goal) => Decision::Goal(goal),

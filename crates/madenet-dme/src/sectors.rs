@@ -54,17 +54,32 @@ impl SectorBest {
         }
     }
     fn goals(self, belief: &Belief) -> SectorGoals {
-        SectorGoals { goals: self.best.map(|b| b.map(|(_, i)| belief.pos(i))) }
+        SectorGoals {
+            goals: self.best.map(|b| b.map(|(_, i)| belief.pos(i))),
+        }
     }
 }
 
 /// The sector goals of a robot at `from` with map `belief`. Paths go through known free cells
 /// not in `held` (teammates in view), like every other planner in madenet; the robot's own
 /// cell is never a goal.
-pub fn sector_goals(belief: &Belief, from: Pos, held: &[Pos], dijkstra: &mut Dijkstra) -> SectorGoals {
+pub fn sector_goals(
+    belief: &Belief,
+    from: Pos,
+    held: &[Pos],
+    dijkstra: &mut Dijkstra,
+) -> SectorGoals {
     let map = belief.map();
-    let held: Vec<usize> = held.iter().filter(|p| belief.in_bounds(**p)).map(|&p| belief.index(p)).collect();
-    let mut best = SectorBest { from, own: belief.index(from), best: [None; SECTORS] };
+    let held: Vec<usize> = held
+        .iter()
+        .filter(|p| belief.in_bounds(**p))
+        .map(|&p| belief.index(p))
+        .collect();
+    let mut best = SectorBest {
+        from,
+        own: belief.index(from),
+        best: [None; SECTORS],
+    };
     dijkstra.run_indexed(
         from,
         |i| map[i] == madenet_map::Occupancy::Free && !held.contains(&i),
@@ -82,7 +97,11 @@ pub fn sector_goals(belief: &Belief, from: Pos, held: &[Pos], dijkstra: &mut Dij
 /// navigator's path).
 pub fn view_sector_goals(view: &mut AgentView<'_>) -> SectorGoals {
     let belief = view.belief;
-    let mut best = SectorBest { from: view.pos, own: belief.index(view.pos), best: [None; SECTORS] };
+    let mut best = SectorBest {
+        from: view.pos,
+        own: belief.index(view.pos),
+        best: [None; SECTORS],
+    };
     view.search(|i, cost| {
         best.visit(belief, i, cost);
         false
@@ -166,7 +185,13 @@ mod tests {
         // A teammate blocking the corridor's only way east hides the east sector's frontier.
         let corridor = belief_from(&["#####", "#...?", "#####"]);
         let mut d = Dijkstra::new(corridor.height(), corridor.width());
-        assert_eq!(sector_goals(&corridor, Pos::new(1, 1), &[], &mut d).goals[0], Some(Pos::new(1, 3)));
-        assert_eq!(sector_goals(&corridor, Pos::new(1, 1), &[Pos::new(1, 2)], &mut d).goals[0], None);
+        assert_eq!(
+            sector_goals(&corridor, Pos::new(1, 1), &[], &mut d).goals[0],
+            Some(Pos::new(1, 3))
+        );
+        assert_eq!(
+            sector_goals(&corridor, Pos::new(1, 1), &[Pos::new(1, 2)], &mut d).goals[0],
+            None
+        );
     }
 }

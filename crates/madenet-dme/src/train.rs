@@ -25,11 +25,15 @@ use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
-use madenet_learn::train::{io_err, prepare_run, replace_dir, training_scenario, validate_policy, write_atomic};
+use madenet_learn::train::{
+    io_err, prepare_run, replace_dir, training_scenario, validate_policy, write_atomic,
+};
 use madenet_learn::{TrainConfig, TrainError};
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
-use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, ValidationRow};
+use madenet_trainlog::{
+    truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, ValidationRow,
+};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -141,8 +145,14 @@ impl DmeTrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: DmeTrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config { path: path.display().to_string(), message: toml_error(&text, &e) })?;
-        cfg.validate().map_err(|m| TrainError::Config { path: path.display().to_string(), message: m })?;
+        let cfg: DmeTrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config {
+            path: path.display().to_string(),
+            message: toml_error(&text, &e),
+        })?;
+        cfg.validate().map_err(|m| TrainError::Config {
+            path: path.display().to_string(),
+            message: m,
+        })?;
         Ok(cfg)
     }
 
@@ -150,7 +160,12 @@ impl DmeTrainConfig {
     pub fn validate(&self) -> Result<(), String> {
         let bad = |field: &str, why: &str| Err(format!("field `{field}`: {why}"));
         if self.method != METHOD {
-            return bad("method", &format!("must be `{METHOD}` here (MADE-Net runs use `madenet train --method made-net`)"));
+            return bad(
+                "method",
+                &format!(
+                    "must be `{METHOD}` here (MADE-Net runs use `madenet train --method made-net`)"
+                ),
+            );
         }
         if self.history == 0 {
             return bad("history", "must be at least 1");
@@ -168,7 +183,14 @@ impl DmeTrainConfig {
             return bad("tau", "must lie in (0, 1]");
         }
         if !(self.actor_lr > 0.0 && self.critic_lr > 0.0) {
-            return bad(if self.actor_lr > 0.0 { "critic_lr" } else { "actor_lr" }, "must be positive");
+            return bad(
+                if self.actor_lr > 0.0 {
+                    "critic_lr"
+                } else {
+                    "actor_lr"
+                },
+                "must be positive",
+            );
         }
         if self.temperature <= 0.0 || !self.temperature.is_finite() {
             return bad("temperature", "must be positive");
@@ -183,7 +205,10 @@ impl DmeTrainConfig {
             return bad("replay_steps", "must hold at least one batch");
         }
         if self.warmup_steps > self.replay_steps {
-            return bad("warmup_steps", "must not exceed replay_steps (the replay never holds more)");
+            return bad(
+                "warmup_steps",
+                "must not exceed replay_steps (the replay never holds more)",
+            );
         }
         let finite = [
             ("new_cell_reward", self.new_cell_reward),
@@ -197,7 +222,10 @@ impl DmeTrainConfig {
             return bad(field, "must be a finite number");
         }
         if self.validate_every > 0 && self.validation_csp.is_empty() {
-            return bad("validation_csp", "must name at least one CSP when validate_every > 0");
+            return bad(
+                "validation_csp",
+                "must name at least one CSP when validate_every > 0",
+            );
         }
         if self.update_every == 0 {
             return bad("update_every", "must be at least 1");
@@ -296,7 +324,11 @@ pub const NO_ACTION: u8 = u8::MAX;
 
 impl Episode {
     fn new(team: usize) -> Self {
-        Episode { team, decisions: vec![Vec::new(); team], ..Episode::default() }
+        Episode {
+            team,
+            decisions: vec![Vec::new(); team],
+            ..Episode::default()
+        }
     }
     /// Timesteps played.
     pub fn len(&self) -> usize {
@@ -311,7 +343,12 @@ impl Episode {
             self.words = words.len();
             self.frames.extend(words);
             self.poses.extend(&r.pose);
-            self.masks.push(r.mask.iter().enumerate().fold(0u8, |m, (k, &v)| m | ((v as u8) << k)));
+            self.masks.push(
+                r.mask
+                    .iter()
+                    .enumerate()
+                    .fold(0u8, |m, (k, &v)| m | ((v as u8) << k)),
+            );
             self.actions.push(r.action.unwrap_or(NO_ACTION));
             self.decided.push(r.decided);
             if r.decided && r.action.is_some() {
@@ -350,7 +387,14 @@ impl Replay {
     }
 
     /// `n` of robot `robot`'s transitions drawn uniformly (with replacement), as a [`Batch`].
-    fn sample(&self, robot: usize, n: usize, cfg: &DmeConfig, gamma: f32, rng: &mut madenet_world::rng::Rng) -> Batch {
+    fn sample(
+        &self,
+        robot: usize,
+        n: usize,
+        cfg: &DmeConfig,
+        gamma: f32,
+        rng: &mut madenet_world::rng::Rng,
+    ) -> Batch {
         let team = cfg.team_size;
         let frame_len = FRAME_CHANNELS * cfg.map_height * cfg.map_width;
         let robot_len = cfg.history * frame_len;
@@ -375,9 +419,11 @@ impl Replay {
             let e = self
                 .episodes
                 .iter()
-                .find(|e| g < e.decisions[robot].len() || {
-                    g -= e.decisions[robot].len();
-                    false
+                .find(|e| {
+                    g < e.decisions[robot].len() || {
+                        g -= e.decisions[robot].len();
+                        false
+                    }
                 })
                 .expect("index within the replay");
             let t = e.decisions[robot][g] as usize;
@@ -393,7 +439,13 @@ impl Replay {
             let at_next = next.unwrap_or(t);
             for (step, maps, poses, masks, actions) in [
                 (t, &mut b.maps, &mut b.poses, &mut b.masks, &mut b.actions),
-                (at_next, &mut b.next_maps, &mut b.next_poses, &mut b.next_masks, &mut b.next_actions),
+                (
+                    at_next,
+                    &mut b.next_maps,
+                    &mut b.next_poses,
+                    &mut b.next_masks,
+                    &mut b.next_actions,
+                ),
             ] {
                 for i in 0..team {
                     for slot in 0..cfg.history {
@@ -471,7 +523,10 @@ impl Model {
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let info: ModelInfo = toml::from_str(&text).map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
+        let info: ModelInfo = toml::from_str(&text).map_err(|e| TrainError::Config {
+            path: path.display().to_string(),
+            message: e.message().to_string(),
+        })?;
         let mut files = Vec::new();
         for f in &info.actors {
             let p = dir.join(f);
@@ -481,22 +536,46 @@ impl Model {
     }
 
     /// A model from the text of its `model.toml` and its actors' bytes in order.
-    pub fn from_bytes(model_toml: &str, weights: &[&[u8]], label: &str) -> Result<Self, TrainError> {
-        let info: ModelInfo = toml::from_str(model_toml).map_err(|e| TrainError::Config { path: label.to_string(), message: e.message().to_string() })?;
+    pub fn from_bytes(
+        model_toml: &str,
+        weights: &[&[u8]],
+        label: &str,
+    ) -> Result<Self, TrainError> {
+        let info: ModelInfo = toml::from_str(model_toml).map_err(|e| TrainError::Config {
+            path: label.to_string(),
+            message: e.message().to_string(),
+        })?;
         Self::from_parts(info, weights.iter().map(|w| w.to_vec()).collect(), label)
     }
 
     fn from_parts(info: ModelInfo, files: Vec<Vec<u8>>, label: &str) -> Result<Self, TrainError> {
         if info.method != METHOD {
-            return Err(TrainError::Config { path: label.into(), message: format!("field `method`: `{}` is not a DME-DRL model", info.method) });
-        }
-        if files.len() != info.team_size || files.len() != info.actors.len() {
-            return Err(TrainError::Config { path: label.into(), message: format!("field `actors`: {} weight files for a team of {}", files.len(), info.team_size) });
-        }
-        if info.history == 0 || info.hidden == 0 || info.map_height < madenet_learn::MIN_MAP_SIDE || info.map_width < madenet_learn::MIN_MAP_SIDE {
             return Err(TrainError::Config {
                 path: label.into(),
-                message: format!("fields `history`, `hidden` must be ≥ 1 and the map sides ≥ {}", madenet_learn::MIN_MAP_SIDE),
+                message: format!("field `method`: `{}` is not a DME-DRL model", info.method),
+            });
+        }
+        if files.len() != info.team_size || files.len() != info.actors.len() {
+            return Err(TrainError::Config {
+                path: label.into(),
+                message: format!(
+                    "field `actors`: {} weight files for a team of {}",
+                    files.len(),
+                    info.team_size
+                ),
+            });
+        }
+        if info.history == 0
+            || info.hidden == 0
+            || info.map_height < madenet_learn::MIN_MAP_SIDE
+            || info.map_width < madenet_learn::MIN_MAP_SIDE
+        {
+            return Err(TrainError::Config {
+                path: label.into(),
+                message: format!(
+                    "fields `history`, `hidden` must be ≥ 1 and the map sides ≥ {}",
+                    madenet_learn::MIN_MAP_SIDE
+                ),
             });
         }
         let cfg = DmeConfig::new()
@@ -508,18 +587,29 @@ impl Model {
         let mut actors = Vec::new();
         for (name, bytes) in info.actors.iter().zip(files) {
             let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
-                .map_err(|e| TrainError::Io { path: format!("{label}: {name}"), message: e.to_string() })?;
-            let actor = cfg.actor(&Device::flex()).try_load_record(rec).map_err(|e| TrainError::Config {
-                path: format!("{label}: {name}"),
-                message: format!("weights do not fit the sizes in model.toml: {e}"),
-            })?;
+                .map_err(|e| TrainError::Io {
+                    path: format!("{label}: {name}"),
+                    message: e.to_string(),
+                })?;
+            let actor = cfg
+                .actor(&Device::flex())
+                .try_load_record(rec)
+                .map_err(|e| TrainError::Config {
+                    path: format!("{label}: {name}"),
+                    message: format!("weights do not fit the sizes in model.toml: {e}"),
+                })?;
             actors.push(Arc::new(RwLock::new(actor)));
         }
         Ok(Model { info, actors })
     }
 
     /// Why this model cannot act in a scenario, if it cannot.
-    pub fn check(&self, height: usize, width: usize, scenario: &ScenarioConfig) -> Result<(), String> {
+    pub fn check(
+        &self,
+        height: usize,
+        width: usize,
+        scenario: &ScenarioConfig,
+    ) -> Result<(), String> {
         let i = &self.info;
         if (height, width, scenario.num_robots) != (i.map_height, i.map_width, i.team_size) {
             return Err(format!(
@@ -535,11 +625,19 @@ impl Model {
         let actors = self.actors.clone();
         let history = self.info.history;
         let owned = name.to_string();
-        let info = Model { info: self.info.clone(), actors: Vec::new() };
-        registry.register_checked(name, about, move |ctx| info.check(ctx.height, ctx.width, ctx.config), move |ctx| {
-            let actor = Arc::clone(&actors[ctx.robot.min(actors.len() - 1)]);
-            Box::new(DmePolicy::new(&owned, ctx.robot, actor, history))
-        });
+        let info = Model {
+            info: self.info.clone(),
+            actors: Vec::new(),
+        };
+        registry.register_checked(
+            name,
+            about,
+            move |ctx| info.check(ctx.height, ctx.width, ctx.config),
+            move |ctx| {
+                let actor = Arc::clone(&actors[ctx.robot.min(actors.len() - 1)]);
+                Box::new(DmePolicy::new(&owned, ctx.robot, actor, history))
+            },
+        );
     }
 }
 
@@ -551,7 +649,9 @@ fn model_info(cfg: &DmeTrainConfig, state: &State, validation_steps: Option<f64>
         team_size: cfg.scenario.num_robots,
         history: cfg.history,
         hidden: cfg.hidden,
-        actors: (0..cfg.scenario.num_robots).map(|i| format!("actor{i}.bpk")).collect(),
+        actors: (0..cfg.scenario.num_robots)
+            .map(|i| format!("actor{i}.bpk"))
+            .collect(),
         episode: state.episode,
         updates: state.updates,
         validation_steps,
@@ -559,7 +659,10 @@ fn model_info(cfg: &DmeTrainConfig, state: &State, validation_steps: Option<f64>
 }
 
 fn save_err<E: std::fmt::Display>(p: &Path) -> impl FnOnce(E) -> TrainError + '_ {
-    move |e| TrainError::Io { path: p.display().to_string(), message: e.to_string() }
+    move |e| TrainError::Io {
+        path: p.display().to_string(),
+        message: e.to_string(),
+    }
 }
 
 /// Writes the actors and `model.toml` into `dir`, atomically.
@@ -567,7 +670,10 @@ fn save_model(dir: &Path, nets: &Maddpg, info: &ModelInfo) -> Result<(), TrainEr
     replace_dir(dir, |tmp| {
         for (i, name) in info.actors.iter().enumerate() {
             let p = tmp.join(name);
-            nets.acting_actor(i).into_record().save(&p).map_err(save_err(&p))?;
+            nets.acting_actor(i)
+                .into_record()
+                .save(&p)
+                .map_err(save_err(&p))?;
         }
         let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
         write_atomic(&tmp.join("model.toml"), text.as_bytes())
@@ -581,21 +687,32 @@ fn checkpoint(dir: &Path, nets: &Maddpg, state: &State, replay: &Replay) -> Resu
             let files: [(String, ModuleRecord); 4] = [
                 (format!("actor{i}"), nets.actors[i].clone().into_record()),
                 (format!("critic{i}"), nets.critics[i].clone().into_record()),
-                (format!("actor{i}_target"), nets.target_actors[i].clone().into_record()),
-                (format!("critic{i}_target"), nets.target_critics[i].clone().into_record()),
+                (
+                    format!("actor{i}_target"),
+                    nets.target_actors[i].clone().into_record(),
+                ),
+                (
+                    format!("critic{i}_target"),
+                    nets.target_critics[i].clone().into_record(),
+                ),
             ];
             for (stem, rec) in files {
                 let p = tmp.join(format!("{stem}.bpk"));
                 rec.save(&p).map_err(save_err(&p))?;
             }
-            for (stem, op) in [(format!("actor{i}_optim"), &nets.actor_optims[i]), (format!("critic{i}_optim"), &nets.critic_optims[i])] {
+            for (stem, op) in [
+                (format!("actor{i}_optim"), &nets.actor_optims[i]),
+                (format!("critic{i}_optim"), &nets.critic_optims[i]),
+            ] {
                 let p = tmp.join(format!("{stem}.bpk"));
                 op.save(&p).map_err(save_err(&p))?;
             }
         }
-        let bytes = postcard::to_stdvec(replay).map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
+        let bytes = postcard::to_stdvec(replay)
+            .map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
         write_atomic(&tmp.join("replay.bin"), &bytes)?;
-        let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
+        let text =
+            serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
         write_atomic(&tmp.join("state.json"), text.as_bytes())
     })
 }
@@ -606,31 +723,55 @@ fn restore(dir: &Path, mut nets: Maddpg) -> Result<(Maddpg, State, Replay), Trai
         ModuleRecord::load(&p).map_err(save_err(&p))
     };
     for i in 0..nets.actors.len() {
-        nets.actors[i] = nets.actors[i].clone().load_record(rec(&format!("actor{i}"))?);
-        nets.critics[i] = nets.critics[i].clone().load_record(rec(&format!("critic{i}"))?);
-        nets.target_actors[i] = nets.target_actors[i].clone().load_record(rec(&format!("actor{i}_target"))?);
-        nets.target_critics[i] = nets.target_critics[i].clone().load_record(rec(&format!("critic{i}_target"))?);
-        for (stem, op) in [(format!("actor{i}_optim"), &mut nets.actor_optims[i]), (format!("critic{i}_optim"), &mut nets.critic_optims[i])] {
+        nets.actors[i] = nets.actors[i]
+            .clone()
+            .load_record(rec(&format!("actor{i}"))?);
+        nets.critics[i] = nets.critics[i]
+            .clone()
+            .load_record(rec(&format!("critic{i}"))?);
+        nets.target_actors[i] = nets.target_actors[i]
+            .clone()
+            .load_record(rec(&format!("actor{i}_target"))?);
+        nets.target_critics[i] = nets.target_critics[i]
+            .clone()
+            .load_record(rec(&format!("critic{i}_target"))?);
+        for (stem, op) in [
+            (format!("actor{i}_optim"), &mut nets.actor_optims[i]),
+            (format!("critic{i}_optim"), &mut nets.critic_optims[i]),
+        ] {
             let p = dir.join(format!("{stem}.bpk"));
-            let loaded = std::mem::replace(op, burn::optim::AdamConfig::new().init()).load(&p).map_err(save_err(&p))?;
+            let loaded = std::mem::replace(op, burn::optim::AdamConfig::new().init())
+                .load(&p)
+                .map_err(save_err(&p))?;
             *op = loaded;
         }
     }
     let sp = dir.join("state.json");
     let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-    let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config { path: sp.display().to_string(), message: e.to_string() })?;
+    let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config {
+        path: sp.display().to_string(),
+        message: e.to_string(),
+    })?;
     let rp = dir.join("replay.bin");
     let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
-    let replay: Replay = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config { path: rp.display().to_string(), message: e.to_string() })?;
+    let replay: Replay = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
+        path: rp.display().to_string(),
+        message: e.to_string(),
+    })?;
     Ok((nets, state, replay))
 }
 
 /// Validation: the greedy actors on the generated validation maps. Returns (mean steps, mean
 /// team return (Eq. 8, for comparison with MADE-Net's runs), completed, trials).
-pub fn validate(cfg: &DmeTrainConfig, nets: &Maddpg) -> Result<(f64, f64, usize, usize), TrainError> {
+pub fn validate(
+    cfg: &DmeTrainConfig,
+    nets: &Maddpg,
+) -> Result<(f64, f64, usize, usize), TrainError> {
     let model = Model {
         info: model_info(cfg, &State::default(), None),
-        actors: (0..nets.actors.len()).map(|i| Arc::new(RwLock::new(nets.acting_actor(i)))).collect(),
+        actors: (0..nets.actors.len())
+            .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
+            .collect(),
     };
     let mut registry = PolicyRegistry::default();
     model.register(&mut registry, "candidate", "the actors being trained");
@@ -639,13 +780,23 @@ pub fn validate(cfg: &DmeTrainConfig, nets: &Maddpg) -> Result<(f64, f64, usize,
 
 /// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
 /// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`).
-pub fn train(run_dir: &Path, cfg: Option<DmeTrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+pub fn train(
+    run_dir: &Path,
+    cfg: Option<DmeTrainConfig>,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
     let (cfg, resuming) = prepare_run(
         run_dir,
         cfg,
         DmeTrainConfig::from_toml_file,
         DmeTrainConfig::validate,
-        |given, saved| DmeTrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() } == *saved,
+        |given, saved| {
+            DmeTrainConfig {
+                episodes: saved.episodes,
+                max_minutes: saved.max_minutes,
+                ..given.clone()
+            } == *saved
+        },
     )?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cfg.threads)
@@ -654,17 +805,32 @@ pub fn train(run_dir: &Path, cfg: Option<DmeTrainConfig>, progress: &mut (dyn Fn
     pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
 }
 
-fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+fn train_loop(
+    run_dir: &Path,
+    cfg: &DmeTrainConfig,
+    resuming: bool,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
     let ckpt_dir = run_dir.join("checkpoint");
     let device = Device::flex().autodiff();
     device.seed(cfg.seed);
     let net_cfg = cfg.nets();
     let nets = Maddpg::new(&net_cfg, &device);
-    let (mut nets, mut state, mut replay) = if resuming { restore(&ckpt_dir, nets)? } else { (nets, State::default(), Replay::default()) };
+    let (mut nets, mut state, mut replay) = if resuming {
+        restore(&ckpt_dir, nets)?
+    } else {
+        (nets, State::default(), Replay::default())
+    };
     let log_path = |name: &str| run_dir.join(name);
-    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < state.episode)?;
-    truncate_rows::<MaddpgUpdateRow>(&log_path(MaddpgUpdateRow::FILE_NAME), |r| r.update < state.updates)?;
-    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= state.episode)?;
+    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| {
+        r.episode < state.episode
+    })?;
+    truncate_rows::<MaddpgUpdateRow>(&log_path(MaddpgUpdateRow::FILE_NAME), |r| {
+        r.update < state.updates
+    })?;
+    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| {
+        r.episode <= state.episode
+    })?;
     // TensorBoard's curves likewise.
     madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
         Some("episode") => step < state.episode as i64,
@@ -677,15 +843,26 @@ fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &m
     let mut up_log = LogWriter::<MaddpgUpdateRow>::open(log_path(MaddpgUpdateRow::FILE_NAME))?;
     let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
     let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
-    let unix = || std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let unix = || {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64())
+    };
     let started = Instant::now();
     let wall0 = state.wall_s;
     let params = cfg.update_params();
     let team = cfg.scenario.num_robots;
     let learn = cfg.learn_view();
     // The acting actors: the policies read them, the trainer replaces them after each update.
-    let acting: Vec<SharedActor> = (0..team).map(|i| Arc::new(RwLock::new(nets.acting_actor(i)))).collect();
-    let rewards = RewardConfig { new_cell: cfg.new_cell_reward, reobserved_cell: 0.0, interaction_from: u32::MAX, ..RewardConfig::default() };
+    let acting: Vec<SharedActor> = (0..team)
+        .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
+        .collect();
+    let rewards = RewardConfig {
+        new_cell: cfg.new_cell_reward,
+        reobserved_cell: 0.0,
+        interaction_from: u32::MAX,
+        ..RewardConfig::default()
+    };
     let mut last_validation = state.best_validation;
     while state.episode < cfg.episodes {
         let e = state.episode;
@@ -698,9 +875,14 @@ fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &m
             let (acting, recorder, history) = (acting.clone(), recorder.clone(), cfg.history);
             registry.register("dme-train", "DME-DRL actors sampling", move |ctx| {
                 Box::new(
-                    DmePolicy::new("dme-train", ctx.robot, Arc::clone(&acting[ctx.robot]), history)
-                        .sampling(stream(ctx.seed, "dme/sample", ctx.robot as u64))
-                        .recording(recorder.clone()),
+                    DmePolicy::new(
+                        "dme-train",
+                        ctx.robot,
+                        Arc::clone(&acting[ctx.robot]),
+                        history,
+                    )
+                    .sampling(stream(ctx.seed, "dme/sample", ctx.robot as u64))
+                    .recording(recorder.clone()),
                 )
             });
         }
@@ -708,30 +890,63 @@ fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &m
             map,
             map_name: format!("train_dme_{e}"),
             starts,
-            config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+            config: ScenarioConfig {
+                comm_success_prob: csp,
+                ..cfg.scenario.clone()
+            },
             policy: "dme-train".into(),
             seed,
         };
-        let mut trial = Trial::with_registry(spec, &registry).map_err(|err| TrainError::Other(err.to_string()))?.reward_config(rewards.clone());
+        let mut trial = Trial::with_registry(spec, &registry)
+            .map_err(|err| TrainError::Other(err.to_string()))?
+            .reward_config(rewards.clone());
         let mut episode = Episode::new(team);
         while trial.step() {
-            let records: Vec<_> = recorder.lock().expect("recorder lock").iter_mut().map(|r| r.take()).collect();
-            let records: Vec<_> = records.into_iter().collect::<Option<Vec<_>>>().ok_or_else(|| TrainError::Other("a robot skipped its decision".into()))?;
+            let records: Vec<_> = recorder
+                .lock()
+                .expect("recorder lock")
+                .iter_mut()
+                .map(|r| r.take())
+                .collect();
+            let records: Vec<_> = records
+                .into_iter()
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| TrainError::Other("a robot skipped its decision".into()))?;
             let moved = trial.world().executed_moves();
-            let r: Vec<f32> = (0..team).map(|i| (trial.rewards().robots[i] - cfg.move_cost * moved[i].length()) as f32).collect();
+            let r: Vec<f32> = (0..team)
+                .map(|i| (trial.rewards().robots[i] - cfg.move_cost * moved[i].length()) as f32)
+                .collect();
             episode.push(&records, &r);
             state.steps += 1;
-            let ready = replay.steps >= cfg.warmup_steps && (0..team).all(|i| replay.transitions(i) > 0);
+            let ready =
+                replay.steps >= cfg.warmup_steps && (0..team).all(|i| replay.transitions(i) > 0);
             if ready && state.steps % cfg.update_every == 0 {
                 let mut rng = stream(cfg.seed, "dme/batch", state.updates);
-                let batches: Vec<Batch> = (0..team).map(|i| replay.sample(i, cfg.batch_size, &net_cfg, cfg.gamma, &mut rng)).collect();
-                let stats = nets.update(&batches, &mut stream(cfg.seed, "dme/gumbel", state.updates), &params);
+                let batches: Vec<Batch> = (0..team)
+                    .map(|i| replay.sample(i, cfg.batch_size, &net_cfg, cfg.gamma, &mut rng))
+                    .collect();
+                let stats = nets.update(
+                    &batches,
+                    &mut stream(cfg.seed, "dme/gumbel", state.updates),
+                    &params,
+                );
                 for (i, a) in acting.iter().enumerate() {
                     *a.write().expect("actor lock") = nets.acting_actor(i);
                 }
-                up_log.append(&MaddpgUpdateRow { update: state.updates, critic_loss: stats.critic_loss.into(), actor_loss: stats.actor_loss.into() })?;
-                tb.add_scalar("loss/critic", stats.critic_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
-                tb.add_scalar("loss/actor", stats.actor_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
+                up_log.append(&MaddpgUpdateRow {
+                    update: state.updates,
+                    critic_loss: stats.critic_loss.into(),
+                    actor_loss: stats.actor_loss.into(),
+                })?;
+                tb.add_scalar(
+                    "loss/critic",
+                    stats.critic_loss,
+                    state.updates as i64,
+                    unix(),
+                )
+                .map_err(io_err(run_dir))?;
+                tb.add_scalar("loss/actor", stats.actor_loss, state.updates as i64, unix())
+                    .map_err(io_err(run_dir))?;
                 state.updates += 1;
             }
         }
@@ -748,28 +963,55 @@ fn train_loop(run_dir: &Path, cfg: &DmeTrainConfig, resuming: bool, progress: &m
             updates: state.updates,
             wall_s: wall0 + started.elapsed().as_secs_f64(),
         })?;
-        tb.add_scalar("episode/reward", reward as f32, e as i64, unix()).map_err(io_err(run_dir))?;
-        tb.add_scalar("episode/steps", steps as f32, e as i64, unix()).map_err(io_err(run_dir))?;
+        tb.add_scalar("episode/reward", reward as f32, e as i64, unix())
+            .map_err(io_err(run_dir))?;
+        tb.add_scalar("episode/steps", steps as f32, e as i64, unix())
+            .map_err(io_err(run_dir))?;
         replay.push(episode, cfg.replay_steps);
         state.episode += 1;
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
             let (steps, ret, done, n) = validate(cfg, &nets)?;
-            val_log.append(&ValidationRow { episode: state.episode, updates: state.updates, mean_steps: steps, mean_team_reward: ret, completed: done as u32, trials: n as u32 })?;
-            tb.add_scalar("validation/mean_steps", steps as f32, state.episode as i64, unix()).map_err(io_err(run_dir))?;
+            val_log.append(&ValidationRow {
+                episode: state.episode,
+                updates: state.updates,
+                mean_steps: steps,
+                mean_team_reward: ret,
+                completed: done as u32,
+                trials: n as u32,
+            })?;
+            tb.add_scalar(
+                "validation/mean_steps",
+                steps as f32,
+                state.episode as i64,
+                unix(),
+            )
+            .map_err(io_err(run_dir))?;
             last_validation = Some(steps);
             if state.best_validation.is_none_or(|b| steps < b) {
                 state.best_validation = Some(steps);
-                save_model(&run_dir.join("best"), &nets, &model_info(cfg, &state, Some(steps)))?;
+                save_model(
+                    &run_dir.join("best"),
+                    &nets,
+                    &model_info(cfg, &state, Some(steps)),
+                )?;
             }
         }
-        let stopping = state.episode == cfg.episodes || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
+        let stopping = state.episode == cfg.episodes
+            || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
         if state.episode % cfg.checkpoint_every == 0 || stopping {
             state.wall_s = wall0 + started.elapsed().as_secs_f64();
             checkpoint(&ckpt_dir, &nets, &state, &replay)?;
             save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
         }
         tb.flush().map_err(io_err(run_dir))?;
-        progress(&Progress { episode: state.episode, episodes: cfg.episodes, updates: state.updates, reward, steps, validation_steps: last_validation });
+        progress(&Progress {
+            episode: state.episode,
+            episodes: cfg.episodes,
+            updates: state.updates,
+            reward,
+            steps,
+            validation_steps: last_validation,
+        });
         if stopping {
             break;
         }

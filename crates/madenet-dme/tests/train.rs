@@ -41,7 +41,10 @@ fn read(path: &Path) -> String {
 
 /// A log without its wall-time column (the last one in episodes.csv).
 fn without_time(dir: &Path) -> Vec<String> {
-    read(&dir.join("episodes.csv")).lines().map(|l| l.rsplit_once(',').expect("columns").0.to_string()).collect()
+    read(&dir.join("episodes.csv"))
+        .lines()
+        .map(|l| l.rsplit_once(',').expect("columns").0.to_string())
+        .collect()
 }
 
 #[test]
@@ -51,14 +54,28 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     let (straight, resumed) = (root.join("straight"), root.join("resumed"));
 
     train(&straight, Some(tiny(4)), &mut |_| {}).unwrap();
-    for f in ["config.toml", "episodes.csv", "updates.csv", "validation.csv", "checkpoint/state.json", "checkpoint/replay.bin", "checkpoint/critic2_optim.bpk", "best/model.toml", "last/actor2.bpk"] {
+    for f in [
+        "config.toml",
+        "episodes.csv",
+        "updates.csv",
+        "validation.csv",
+        "checkpoint/state.json",
+        "checkpoint/replay.bin",
+        "checkpoint/critic2_optim.bpk",
+        "best/model.toml",
+        "last/actor2.bpk",
+    ] {
         assert!(straight.join(f).exists(), "{f} missing");
     }
     let eps = without_time(&straight);
     assert_eq!(eps.len(), 1 + 4, "header + 4 episodes");
     let updates = read(&straight.join("updates.csv"));
     assert!(updates.lines().count() > 10, "updates ran:\n{updates}");
-    assert_eq!(read(&straight.join("validation.csv")).lines().count(), 1 + 2, "validated at episodes 2 and 4");
+    assert_eq!(
+        read(&straight.join("validation.csv")).lines().count(),
+        1 + 2,
+        "validated at episodes 2 and 4"
+    );
 
     // Killed after 3 episodes with its checkpoint of episode 2 (the third episode's logs lie
     // past it), then resumed to 4: the same episodes, updates, TensorBoard scalars and weights.
@@ -75,26 +92,52 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     assert_eq!(without_time(&resumed), eps);
     assert_eq!(read(&resumed.join("updates.csv")), updates);
     let scalars = |dir: &Path| {
-        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir).unwrap().into_iter().map(|(t, step, v)| (t, step, v.to_bits())).collect();
+        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
+            .unwrap()
+            .into_iter()
+            .map(|(t, step, v)| (t, step, v.to_bits()))
+            .collect();
         s.sort();
         s
     };
     let want = scalars(&straight);
-    assert!(want.iter().any(|s| s.0.starts_with("loss/")) && want.iter().any(|s| s.0.starts_with("episode/")));
+    assert!(
+        want.iter().any(|s| s.0.starts_with("loss/"))
+            && want.iter().any(|s| s.0.starts_with("episode/"))
+    );
     assert_eq!(scalars(&resumed), want, "resumed run's TensorBoard scalars");
     // Same weights (the files also carry parameter ids, which differ): same logits.
-    let (a, b) = (Model::load(&straight.join("last")).unwrap(), Model::load(&resumed.join("last")).unwrap());
+    let (a, b) = (
+        Model::load(&straight.join("last")).unwrap(),
+        Model::load(&resumed.join("last")).unwrap(),
+    );
     let device = burn::tensor::Device::flex();
     for i in 0..3 {
         let maps = burn::tensor::Tensor::<4>::ones([2, 12, 20, 20], &device);
         let pose = burn::tensor::Tensor::<2>::zeros([2, 6], &device).add_scalar(0.5);
-        let logits = |m: &Model| m.actors[i].read().unwrap().forward(maps.clone(), pose.clone()).into_data().to_vec::<f32>().unwrap();
+        let logits = |m: &Model| {
+            m.actors[i]
+                .read()
+                .unwrap()
+                .forward(maps.clone(), pose.clone())
+                .into_data()
+                .to_vec::<f32>()
+                .unwrap()
+        };
         assert!(logits(&a) == logits(&b), "actor {i} differs after resume");
     }
     // Resuming with another config is refused, naming the file.
-    let other = DmeTrainConfig { gamma: 0.5, ..tiny(4) };
-    let err = train(&resumed, Some(other), &mut |_| {}).unwrap_err().to_string();
-    assert!(err.contains("config.toml") && err.contains("different config"), "{err}");
+    let other = DmeTrainConfig {
+        gamma: 0.5,
+        ..tiny(4)
+    };
+    let err = train(&resumed, Some(other), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("config.toml") && err.contains("different config"),
+        "{err}"
+    );
 
     // The trained actors load, refuse other team sizes, and play a trial greedily.
     let model = Model::load(&straight.join("last")).unwrap();
@@ -111,13 +154,19 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     let mut registry = PolicyRegistry::default();
     let (actors, rec) = (model.actors.clone(), recorder.clone());
     registry.register("dme-test", "recording", move |ctx| {
-        Box::new(DmePolicy::new("dme-test", ctx.robot, Arc::clone(&actors[ctx.robot]), 3).recording(rec.clone()))
+        Box::new(
+            DmePolicy::new("dme-test", ctx.robot, Arc::clone(&actors[ctx.robot]), 3)
+                .recording(rec.clone()),
+        )
     });
     let spec = TrialSpec {
         map,
         map_name: "generated".into(),
         starts,
-        config: madenet_world::ScenarioConfig { comm_success_prob: 0.5, ..cfg.scenario.clone() },
+        config: madenet_world::ScenarioConfig {
+            comm_success_prob: 0.5,
+            ..cfg.scenario.clone()
+        },
         policy: "dme-test".into(),
         seed: 77,
     };
@@ -128,14 +177,28 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     while trial.step() {
         steps += 1;
         for (i, agent) in trial.agents().iter().enumerate() {
-            let r = recorder.lock().unwrap()[i].take().expect("the policy runs every step");
-            let held: Vec<_> = agent.teammates().iter().filter(|t| t.detected).filter_map(|t| t.seen_pos).collect();
+            let r = recorder.lock().unwrap()[i]
+                .take()
+                .expect("the policy runs every step");
+            let held: Vec<_> = agent
+                .teammates()
+                .iter()
+                .filter(|t| t.detected)
+                .filter_map(|t| t.seen_pos)
+                .collect();
             let goals = sector_goals(agent.belief(), agent.pos(), &held, &mut dijkstra);
             assert_eq!(r.mask, goals.mask(), "robot {i} step {steps}");
             match (r.decided, r.action) {
                 (true, Some(k)) => {
-                    assert!((k as usize) < SECTORS && goals.mask()[k as usize], "robot {i} step {steps}: masked sector {k}");
-                    assert_eq!(agent.goal(), goals.goals[k as usize], "robot {i} step {steps}");
+                    assert!(
+                        (k as usize) < SECTORS && goals.mask()[k as usize],
+                        "robot {i} step {steps}: masked sector {k}"
+                    );
+                    assert_eq!(
+                        agent.goal(),
+                        goals.goals[k as usize],
+                        "robot {i} step {steps}"
+                    );
                     decisions += 1;
                 }
                 (true, None) => assert!(!r.mask.contains(&true) && agent.goal().is_none()),
@@ -149,18 +212,55 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
             previous[i] = agent.goal();
         }
     }
-    assert!(decisions > 0 && kept > 0 && steps > 0, "{decisions} decisions, {kept} steps keeping a goal");
+    assert!(
+        decisions > 0 && kept > 0 && steps > 0,
+        "{decisions} decisions, {kept} steps keeping a goal"
+    );
 
     // Bad configs: one message naming the field.
     let bad = |cfg: DmeTrainConfig| cfg.validate().unwrap_err();
-    assert!(bad(DmeTrainConfig { critic_history: 4, ..tiny(1) }).contains("critic_history"));
-    assert!(bad(DmeTrainConfig { tau: 0.0, ..tiny(1) }).contains("tau"));
-    assert!(bad(DmeTrainConfig { method: "made-net".into(), ..tiny(1) }).contains("method"));
-    assert!(bad(DmeTrainConfig { replay_steps: 4, ..tiny(1) }).contains("replay_steps"));
-    assert!(bad(DmeTrainConfig { warmup_steps: 500, ..tiny(1) }).contains("warmup_steps"));
-    assert!(bad(DmeTrainConfig { move_cost: f64::NAN, ..tiny(1) }).contains("move_cost"));
-    assert!(bad(DmeTrainConfig { validation_csp: vec![], ..tiny(1) }).contains("validation_csp"));
-    assert!(DmeTrainConfig { validate_every: 0, validation_maps: 0, ..tiny(1) }.validate().is_ok());
+    assert!(bad(DmeTrainConfig {
+        critic_history: 4,
+        ..tiny(1)
+    })
+    .contains("critic_history"));
+    assert!(bad(DmeTrainConfig {
+        tau: 0.0,
+        ..tiny(1)
+    })
+    .contains("tau"));
+    assert!(bad(DmeTrainConfig {
+        method: "made-net".into(),
+        ..tiny(1)
+    })
+    .contains("method"));
+    assert!(bad(DmeTrainConfig {
+        replay_steps: 4,
+        ..tiny(1)
+    })
+    .contains("replay_steps"));
+    assert!(bad(DmeTrainConfig {
+        warmup_steps: 500,
+        ..tiny(1)
+    })
+    .contains("warmup_steps"));
+    assert!(bad(DmeTrainConfig {
+        move_cost: f64::NAN,
+        ..tiny(1)
+    })
+    .contains("move_cost"));
+    assert!(bad(DmeTrainConfig {
+        validation_csp: vec![],
+        ..tiny(1)
+    })
+    .contains("validation_csp"));
+    assert!(DmeTrainConfig {
+        validate_every: 0,
+        validation_maps: 0,
+        ..tiny(1)
+    }
+    .validate()
+    .is_ok());
     // A model whose sizes do not fit its weights is an error naming the file, not a crash.
     let broken = root.join("broken");
     std::fs::create_dir_all(&broken).unwrap();
@@ -169,11 +269,19 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     }
     let toml = read(&straight.join("last/model.toml")).replace("hidden = 32", "hidden = 64");
     std::fs::write(broken.join("model.toml"), toml).unwrap();
-    let err = Model::load(&broken).err().expect("sizes do not fit").to_string();
-    assert!(err.contains("model.toml") && err.contains("actor0.bpk"), "{err}");
+    let err = Model::load(&broken)
+        .err()
+        .expect("sizes do not fit")
+        .to_string();
+    assert!(
+        err.contains("model.toml") && err.contains("actor0.bpk"),
+        "{err}"
+    );
     let file = root.join("bad.toml");
     std::fs::write(&file, "gamma = \"high\"\n").unwrap();
-    let err = DmeTrainConfig::from_toml_file(&file).unwrap_err().to_string();
+    let err = DmeTrainConfig::from_toml_file(&file)
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("bad.toml") && err.contains("gamma"), "{err}");
     std::fs::remove_dir_all(&root).ok();
 }
@@ -181,5 +289,8 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
 #[test]
 fn shipped_config_is_the_defaults() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/train-dme.toml");
-    assert_eq!(DmeTrainConfig::from_toml_file(&path).unwrap(), DmeTrainConfig::default());
+    assert_eq!(
+        DmeTrainConfig::from_toml_file(&path).unwrap(),
+        DmeTrainConfig::default()
+    );
 }

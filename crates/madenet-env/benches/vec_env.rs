@@ -9,17 +9,27 @@ use rand::RngExt;
 
 fn env(mode: ActionMode) -> ExplorationEnv {
     let map = paper_map(3).unwrap();
-    let starts = Corner::TopLeft.start_cells(map.height(), map.width()).to_vec();
+    let starts = Corner::TopLeft
+        .start_cells(map.height(), map.width())
+        .to_vec();
     ExplorationEnv::new(map, "paper_3", starts, ScenarioConfig::default(), mode).unwrap()
 }
 
 fn bench(c: &mut Criterion) {
-    rayon::ThreadPoolBuilder::new().num_threads(1).build_global().ok();
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .ok();
     let mut group = c.benchmark_group("env");
     for n in [1usize, 64] {
         let mut v = VecEnv::new(env(ActionMode::Primitive), n, 1).unwrap();
         let e = v.first();
-        let (r, ml, vl, al) = (e.num_robots(), e.map_len(), e.vector_len(), e.action_count());
+        let (r, ml, vl, al) = (
+            e.num_robots(),
+            e.map_len(),
+            e.vector_len(),
+            e.action_count(),
+        );
         let mut maps = vec![0.0; n * r * ml];
         let mut vectors = vec![0.0; n * r * vl];
         let mut masks = vec![0u8; n * r * al];
@@ -29,7 +39,15 @@ fn bench(c: &mut Criterion) {
         let mut trunc = vec![false; n];
         macro_rules! buffers {
             () => {
-                VecBuffers { maps: &mut maps, vectors: &mut vectors, masks: &mut masks, rewards: &mut rewards, needs_action: &mut needs, terminated: &mut term, truncated: &mut trunc }
+                VecBuffers {
+                    maps: &mut maps,
+                    vectors: &mut vectors,
+                    masks: &mut masks,
+                    rewards: &mut rewards,
+                    needs_action: &mut needs,
+                    terminated: &mut term,
+                    truncated: &mut trunc,
+                }
             };
         }
         v.reset(buffers!()).unwrap();

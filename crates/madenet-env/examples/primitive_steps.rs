@@ -18,23 +18,52 @@ fn main() {
         Some("macro") => ActionMode::Macro,
         _ => ActionMode::Primitive,
     };
-    rayon::ThreadPoolBuilder::new().num_threads(1).build_global().ok();
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .ok();
     let map = paper_map(3).unwrap();
-    let starts = Corner::TopLeft.start_cells(map.height(), map.width()).to_vec();
+    let starts = Corner::TopLeft
+        .start_cells(map.height(), map.width())
+        .to_vec();
     let env = ExplorationEnv::new(map, "paper_3", starts, ScenarioConfig::default(), mode).unwrap();
     let mut v = VecEnv::new(env, n, 1).unwrap();
     let e = v.first();
-    let (r, ml, vl, al) = (e.num_robots(), e.map_len(), e.vector_len(), e.action_count());
-    let (mut maps, mut vectors, mut masks) = (vec![0.0; n * r * ml], vec![0.0; n * r * vl], vec![0u8; n * r * al]);
-    let (mut rewards, mut needs, mut term, mut trunc) = (vec![0.0; n * r], vec![false; n * r], vec![false; n], vec![false; n]);
+    let (r, ml, vl, al) = (
+        e.num_robots(),
+        e.map_len(),
+        e.vector_len(),
+        e.action_count(),
+    );
+    let (mut maps, mut vectors, mut masks) = (
+        vec![0.0; n * r * ml],
+        vec![0.0; n * r * vl],
+        vec![0u8; n * r * al],
+    );
+    let (mut rewards, mut needs, mut term, mut trunc) = (
+        vec![0.0; n * r],
+        vec![false; n * r],
+        vec![false; n],
+        vec![false; n],
+    );
     macro_rules! buffers {
         () => {
-            VecBuffers { maps: &mut maps, vectors: &mut vectors, masks: &mut masks, rewards: &mut rewards, needs_action: &mut needs, terminated: &mut term, truncated: &mut trunc }
+            VecBuffers {
+                maps: &mut maps,
+                vectors: &mut vectors,
+                masks: &mut masks,
+                rewards: &mut rewards,
+                needs_action: &mut needs,
+                terminated: &mut term,
+                truncated: &mut trunc,
+            }
         };
     }
     v.reset(buffers!()).unwrap();
     let mut rng = madenet_world::rng::stream(1, "example/actions", 0);
-    let actions: Vec<Vec<usize>> = (0..256).map(|_| (0..n * r).map(|_| rng.random_range(0..al)).collect()).collect();
+    let actions: Vec<Vec<usize>> = (0..256)
+        .map(|_| (0..n * r).map(|_| rng.random_range(0..al)).collect())
+        .collect();
     let start = std::time::Instant::now();
     for s in 0..steps {
         v.step(&actions[s % 256], buffers!()).unwrap();

@@ -41,10 +41,15 @@ pub mod render;
 pub use madenet_agent::Decision;
 pub use render::frame;
 
-use madenet_agent::{action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord, ViewScratch};
+use madenet_agent::{
+    action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord,
+    ViewScratch,
+};
 use madenet_map::{OccGrid, Pos};
 use madenet_render::Frame;
-use madenet_sim::{PolicyContext, PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec};
+use madenet_sim::{
+    PolicyContext, PolicyRegistry, RewardConfig, SimError, Trial, TrialResult, TrialSpec,
+};
 use madenet_world::{Move, ScenarioConfig};
 
 /// Whether primitive move `mv` is allowed for a robot at `pos` with this belief and teammates: staying always is; a move
@@ -54,7 +59,10 @@ fn primitive_allowed(pos: Pos, belief: &Belief, teammates: &[TeammateRecord], mv
         return true;
     }
     let to = mv.apply(pos);
-    belief.is_free(to) && !teammates.iter().any(|r| r.detected && r.seen_pos == Some(to))
+    belief.is_free(to)
+        && !teammates
+            .iter()
+            .any(|r| r.detected && r.seen_pos == Some(to))
 }
 
 /// What an action means.
@@ -149,9 +157,19 @@ pub(crate) struct Advanced {
 impl ExplorationEnv {
     /// An environment on `map` with the team starting at `starts`; checked by building one
     /// trial (bad scenarios, starts off free cells or a wrong number of starts are errors).
-    pub fn new(map: OccGrid, map_name: &str, starts: Vec<Pos>, scenario: ScenarioConfig, mode: ActionMode) -> Result<Self, EnvError> {
+    pub fn new(
+        map: OccGrid,
+        map_name: &str,
+        starts: Vec<Pos>,
+        scenario: ScenarioConfig,
+        mode: ActionMode,
+    ) -> Result<Self, EnvError> {
         if starts.len() != scenario.num_robots {
-            return Err(EnvError::Usage(format!("{} start cells for {} robots (`num_robots`)", starts.len(), scenario.num_robots)));
+            return Err(EnvError::Usage(format!(
+                "{} start cells for {} robots (`num_robots`)",
+                starts.len(),
+                scenario.num_robots
+            )));
         }
         let (h, w, starts_len) = (map.height(), map.width(), starts.len());
         let mut env = ExplorationEnv {
@@ -182,10 +200,16 @@ impl ExplorationEnv {
 
     /// A fresh environment with the same map, starts, scenario, mode and rewards (no episode).
     pub fn clone_config(&self) -> Result<Self, EnvError> {
-        Ok(ExplorationEnv::new(self.map.clone(), &self.map_name, self.starts.clone(), self.scenario.clone(), self.mode)?
-            .with_rewards(self.rewards.clone())
-            .recording(self.record)
-            .observing_candidates(self.observe_candidates))
+        Ok(ExplorationEnv::new(
+            self.map.clone(),
+            &self.map_name,
+            self.starts.clone(),
+            self.scenario.clone(),
+            self.mode,
+        )?
+        .with_rewards(self.rewards.clone())
+        .recording(self.record)
+        .observing_candidates(self.observe_candidates))
     }
 
     /// This environment's cast rays, to share with copies of it ([`ExplorationEnv::share_visibility`]).
@@ -233,7 +257,11 @@ impl ExplorationEnv {
             ActionMode::Primitive => DecisionMode::EveryStep,
         };
         let mut registry = PolicyRegistry::default();
-        registry.register("env", "decisions from the environment's caller", move |_| Box::new(Driven(mode)));
+        registry.register(
+            "env",
+            "decisions from the environment's caller",
+            move |_| Box::new(Driven(mode)),
+        );
         registry
     }
 
@@ -247,7 +275,10 @@ impl ExplorationEnv {
             policy: "env".into(),
             seed,
         };
-        Ok(Trial::with_registry(spec, &registry)?.reward_config(self.rewards.clone()).record_trajectory(self.record).timed(false))
+        Ok(Trial::with_registry(spec, &registry)?
+            .reward_config(self.rewards.clone())
+            .record_trajectory(self.record)
+            .timed(false))
     }
 
     pub fn num_robots(&self) -> usize {
@@ -310,7 +341,9 @@ impl ExplorationEnv {
     }
 
     fn trial(&self) -> Result<&Trial, EnvError> {
-        self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))
+        self.trial
+            .as_ref()
+            .ok_or_else(|| EnvError::Usage("call reset() before step()".into()))
     }
 
     /// The episode has ended (explored or at the cap). Right after a reset this can already be
@@ -343,17 +376,32 @@ impl ExplorationEnv {
     /// Robot `robot`'s observation written into `map` (4·H·W, 0/1), `vector`
     /// ([`ExplorationEnv::vector_len`]) and `mask` ([`ExplorationEnv::action_count`], 1 = valid).
     /// Reading observations never changes the trajectory.
-    pub fn observe_into(&mut self, robot: usize, map: &mut [f32], vector: &mut [f32], mask: &mut [u8]) -> Result<(), EnvError> {
+    pub fn observe_into(
+        &mut self,
+        robot: usize,
+        map: &mut [f32],
+        vector: &mut [f32],
+        mask: &mut [u8],
+    ) -> Result<(), EnvError> {
         let n = self.num_robots();
         if robot >= n {
             return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
         }
-        if map.len() != self.map_len() || vector.len() != self.vector_len() || mask.len() != self.action_count() {
-            return Err(EnvError::Usage("observation buffers of the wrong length".into()));
+        if map.len() != self.map_len()
+            || vector.len() != self.vector_len()
+            || mask.len() != self.action_count()
+        {
+            return Err(EnvError::Usage(
+                "observation buffers of the wrong length".into(),
+            ));
         }
         let mode = self.mode;
-        let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
-        let view = trial.agents()[robot].peek_view(self.observe_candidates, &mut self.scratch[robot]);
+        let trial = self
+            .trial
+            .as_ref()
+            .ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
+        let view =
+            trial.agents()[robot].peek_view(self.observe_candidates, &mut self.scratch[robot]);
         self.scratch_current[robot] = self.observe_candidates;
         view.write_map_image(map);
         view.write_macro_observation(vector);
@@ -374,7 +422,8 @@ impl ExplorationEnv {
 
     /// Number of joint macro actions |G|^|I| (`None` if it overflows).
     pub fn joint_action_count(&self) -> Option<usize> {
-        self.goal_count().checked_pow(u32::try_from(self.num_robots()).ok()?)
+        self.goal_count()
+            .checked_pow(u32::try_from(self.num_robots()).ok()?)
     }
 
     /// Length of the joint observation vector: every robot's vector in robot order.
@@ -389,27 +438,61 @@ impl ExplorationEnv {
     /// a = Σ k_i·|G|^i is valid when every deciding robot's k_i is valid for it (slot 0 = stay
     /// when it has no candidate, [`madenet_agent::action_mask`]) and k_i = 0 for the robots
     /// whose macro action is still running (their part is ignored).
-    pub fn observe_joint_into(&mut self, map: &mut [f32], vector: &mut [f32], mask: &mut [u8]) -> Result<(), EnvError> {
+    pub fn observe_joint_into(
+        &mut self,
+        map: &mut [f32],
+        vector: &mut [f32],
+        mask: &mut [u8],
+    ) -> Result<(), EnvError> {
         if self.mode != ActionMode::Macro {
-            return Err(EnvError::Usage("the joint observation needs a macro-mode environment".into()));
+            return Err(EnvError::Usage(
+                "the joint observation needs a macro-mode environment".into(),
+            ));
         }
-        let count = self.joint_action_count().ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
+        let count = self
+            .joint_action_count()
+            .ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
         let (vl, goals) = (self.vector_len(), self.goal_count());
-        if map.len() != self.map_len() || vector.len() != self.joint_vector_len() || mask.len() != count {
-            return Err(EnvError::Usage("joint observation buffers of the wrong length".into()));
+        if map.len() != self.map_len()
+            || vector.len() != self.joint_vector_len()
+            || mask.len() != count
+        {
+            return Err(EnvError::Usage(
+                "joint observation buffers of the wrong length".into(),
+            ));
         }
-        let trial = self.trial.as_ref().ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
-        let deciding = if trial.is_done() { vec![false; self.starts.len()] } else { trial.deciding().to_vec() };
-        let views: Vec<AgentView<'_>> = trial.agents().iter().zip(self.scratch.iter_mut()).map(|(a, s)| a.peek_view(true, s)).collect();
+        let trial = self
+            .trial
+            .as_ref()
+            .ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
+        let deciding = if trial.is_done() {
+            vec![false; self.starts.len()]
+        } else {
+            trial.deciding().to_vec()
+        };
+        let views: Vec<AgentView<'_>> = trial
+            .agents()
+            .iter()
+            .zip(self.scratch.iter_mut())
+            .map(|(a, s)| a.peek_view(true, s))
+            .collect();
         self.scratch_current.fill(true);
         write_joint_map_image(&views, trial.world().team_map(), map);
         let mut masks = Vec::with_capacity(views.len());
         for (i, v) in views.iter().enumerate() {
             v.write_macro_observation(&mut vector[i * vl..(i + 1) * vl]);
-            masks.push(if deciding[i] { action_mask(v) } else { (0..goals).map(|k| k == 0).collect() });
+            masks.push(if deciding[i] {
+                action_mask(v)
+            } else {
+                (0..goals).map(|k| k == 0).collect()
+            });
         }
         for (a, m) in mask.iter_mut().enumerate() {
-            *m = masks.iter().enumerate().all(|(i, robot_mask)| robot_mask[madenet_agent::joint_digit(a, i, goals)]) as u8;
+            *m = masks
+                .iter()
+                .enumerate()
+                .all(|(i, robot_mask)| robot_mask[madenet_agent::joint_digit(a, i, goals)])
+                as u8;
         }
         Ok(())
     }
@@ -417,12 +500,18 @@ impl ExplorationEnv {
     /// Applies joint action a = Σ k_i·|G|^i (robot i's part k_i; see
     /// [`ExplorationEnv::observe_joint_into`]).
     pub fn step_joint(&mut self, action: usize) -> Result<StepResult, EnvError> {
-        let count = self.joint_action_count().ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
+        let count = self
+            .joint_action_count()
+            .ok_or_else(|| EnvError::Usage("|G|^|I| overflows".into()))?;
         if self.mode != ActionMode::Macro {
-            return Err(EnvError::Usage("joint actions need a macro-mode environment".into()));
+            return Err(EnvError::Usage(
+                "joint actions need a macro-mode environment".into(),
+            ));
         }
         if action >= count {
-            return Err(EnvError::Usage(format!("joint action {action}: the joint action space has {count} actions")));
+            return Err(EnvError::Usage(format!(
+                "joint action {action}: the joint action space has {count} actions"
+            )));
         }
         let goals = self.goal_count();
         let actions = madenet_agent::joint_decode(action, self.num_robots(), goals);
@@ -436,17 +525,37 @@ impl ExplorationEnv {
     /// reproduces the policy's own trial. Its decision mode must be the environment's: policies
     /// that decide every timestep (NF, UB, PB, DME-DRL) act in primitive mode, those that decide
     /// when their macro action terminates (MADE-Net, random) in macro mode.
-    pub fn policy_decisions(&mut self, name: &str, registry: &PolicyRegistry) -> Result<Vec<Decision>, EnvError> {
-        let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
+    pub fn policy_decisions(
+        &mut self,
+        name: &str,
+        registry: &PolicyRegistry,
+    ) -> Result<Vec<Decision>, EnvError> {
+        let trial = self
+            .trial
+            .as_mut()
+            .ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
         if trial.is_done() && self.end_reported {
-            return Err(EnvError::Usage("the episode has ended; call reset()".into()));
+            return Err(EnvError::Usage(
+                "the episode has ended; call reset()".into(),
+            ));
         }
         let slot = match self.policies.iter().position(|(n, _)| n == name) {
             Some(k) => k,
             None => {
                 let (h, w) = (self.map.height(), self.map.width());
                 let built = (0..self.starts.len())
-                    .map(|robot| registry.make(name, &PolicyContext { seed: self.seed, robot, config: &self.scenario, height: h, width: w }))
+                    .map(|robot| {
+                        registry.make(
+                            name,
+                            &PolicyContext {
+                                seed: self.seed,
+                                robot,
+                                config: &self.scenario,
+                                height: h,
+                                width: w,
+                            },
+                        )
+                    })
                     .collect::<Result<Vec<_>, _>>()?;
                 let wanted = match self.mode {
                     ActionMode::Macro => DecisionMode::OnTermination,
@@ -455,9 +564,13 @@ impl ExplorationEnv {
                 if built[0].mode() != wanted {
                     let (its, use_mode) = match built[0].mode() {
                         DecisionMode::EveryStep => ("decides every timestep", "primitive"),
-                        DecisionMode::OnTermination => ("decides when its macro action terminates", "macro"),
+                        DecisionMode::OnTermination => {
+                            ("decides when its macro action terminates", "macro")
+                        }
                     };
-                    return Err(EnvError::Usage(format!("policy `{name}` {its}: use it in a `{use_mode}` environment")));
+                    return Err(EnvError::Usage(format!(
+                        "policy `{name}` {its}: use it in a `{use_mode}` environment"
+                    )));
                 }
                 self.policies.push((name.to_string(), built));
                 self.policies.len() - 1
@@ -498,10 +611,16 @@ impl ExplorationEnv {
     }
 
     /// The decisions `actions` (one per robot, checked) stand for.
-    fn decide_actions(&self, actions: &[usize], decisions: &mut Vec<Decision>) -> Result<(), EnvError> {
+    fn decide_actions(
+        &self,
+        actions: &[usize],
+        decisions: &mut Vec<Decision>,
+    ) -> Result<(), EnvError> {
         let count = self.action_count();
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
-            return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
+            return Err(EnvError::Usage(format!(
+                "action {a}: the action space has {count} actions"
+            )));
         }
         let trial = self.trial()?;
         decisions.clear();
@@ -511,7 +630,16 @@ impl ExplorationEnv {
                 ActionMode::Primitive => {
                     let agent = &trial.agents()[i];
                     match Move::ALL[a] {
-                        mv if mv != Move::Stay && primitive_allowed(agent.pos(), agent.belief(), agent.teammates(), mv) => Decision::Goal(mv.apply(agent.pos())),
+                        mv if mv != Move::Stay
+                            && primitive_allowed(
+                                agent.pos(),
+                                agent.belief(),
+                                agent.teammates(),
+                                mv,
+                            ) =>
+                        {
+                            Decision::Goal(mv.apply(agent.pos()))
+                        }
                         _ => Decision::Idle,
                     }
                 }
@@ -525,10 +653,15 @@ impl ExplorationEnv {
     pub(crate) fn step_in_place(&mut self, actions: &[usize]) -> Result<Advanced, EnvError> {
         let n = self.num_robots();
         if actions.len() != n {
-            return Err(EnvError::Usage(format!("{} actions for {n} robots", actions.len())));
+            return Err(EnvError::Usage(format!(
+                "{} actions for {n} robots",
+                actions.len()
+            )));
         }
         let mut decisions = std::mem::take(&mut self.decisions);
-        let r = self.decide_actions(actions, &mut decisions).and_then(|()| self.advance(&decisions));
+        let r = self
+            .decide_actions(actions, &mut decisions)
+            .and_then(|()| self.advance(&decisions));
         self.decisions = decisions;
         r
     }
@@ -539,7 +672,13 @@ impl ExplorationEnv {
     }
 
     fn step_result(&self, a: Advanced) -> StepResult {
-        StepResult { rewards: self.step_rewards.clone(), team_reward: a.team_reward, steps: a.steps, terminated: a.terminated, truncated: a.truncated }
+        StepResult {
+            rewards: self.step_rewards.clone(),
+            team_reward: a.team_reward,
+            steps: a.steps,
+            terminated: a.terminated,
+            truncated: a.truncated,
+        }
     }
 
     /// Applies one [`Decision`] per robot (those of robots not in
@@ -555,23 +694,36 @@ impl ExplorationEnv {
     fn advance(&mut self, decisions: &[Decision]) -> Result<Advanced, EnvError> {
         let n = self.num_robots();
         if decisions.len() != n {
-            return Err(EnvError::Usage(format!("{} decisions for {n} robots", decisions.len())));
+            return Err(EnvError::Usage(format!(
+                "{} decisions for {n} robots",
+                decisions.len()
+            )));
         }
         let (h, w) = (self.map.height() as i32, self.map.width() as i32);
         if let Some(Decision::Goal(p)) = decisions.iter().find(|d| matches!(d, Decision::Goal(p) if p.row < 0 || p.col < 0 || p.row >= h || p.col >= w)) {
             return Err(EnvError::Usage(format!("goal ({}, {}) lies outside the {h} × {w} map", p.row, p.col)));
         }
-        let trial = self.trial.as_mut().ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
+        let trial = self
+            .trial
+            .as_mut()
+            .ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
         if trial.is_done() {
             if self.end_reported {
-                return Err(EnvError::Usage("the episode has ended; call reset()".into()));
+                return Err(EnvError::Usage(
+                    "the episode has ended; call reset()".into(),
+                ));
             }
             // Over at its start (a map seen whole from the start cells): this step reports the
             // end, advancing nothing, so callers (and a VecEnv's autoreset) see it end.
             self.end_reported = true;
             self.step_rewards.fill(0.0);
             let terminated = trial.world().is_complete();
-            return Ok(Advanced { team_reward: 0.0, steps: 0, terminated, truncated: !terminated });
+            return Ok(Advanced {
+                team_reward: 0.0,
+                steps: 0,
+                terminated,
+                truncated: !terminated,
+            });
         }
         for (i, d) in decisions.iter().enumerate() {
             if trial.deciding()[i] && matches!(d, Decision::Candidate(_)) {
@@ -587,7 +739,12 @@ impl ExplorationEnv {
         self.scratch_current.fill(false);
         trial.apply_decisions(decisions);
         self.step_rewards.fill(0.0);
-        let mut out = Advanced { team_reward: 0.0, steps: 0, terminated: false, truncated: false };
+        let mut out = Advanced {
+            team_reward: 0.0,
+            steps: 0,
+            terminated: false,
+            truncated: false,
+        };
         loop {
             trial.finish_step();
             out.steps += 1;

@@ -22,5 +22,12 @@ pub fn frame(trial: &Trial) -> Frame {
             in_view: w.observation(i).seen.iter().map(|&(p, _)| p).collect(),
         })
         .collect();
-    Frame { step: w.t(), truth, team_map, robots, explored: w.explored_fraction(), links: w.exchanges().to_vec() }
+    Frame {
+        step: w.t(),
+        truth,
+        team_map,
+        robots,
+        explored: w.explored_fraction(),
+        links: w.exchanges().to_vec(),
+    }
 }

@@ -54,7 +54,12 @@ impl Slot {
         let e = &mut self.env;
         let (ml, vl, al) = (e.map_len(), e.vector_len(), e.action_count());
         for i in 0..e.num_robots() {
-            e.observe_into(i, &mut out.maps[i * ml..(i + 1) * ml], &mut out.vectors[i * vl..(i + 1) * vl], &mut out.masks[i * al..(i + 1) * al])?;
+            e.observe_into(
+                i,
+                &mut out.maps[i * ml..(i + 1) * ml],
+                &mut out.vectors[i * vl..(i + 1) * vl],
+                &mut out.masks[i * al..(i + 1) * al],
+            )?;
         }
         e.needs_action_into(out.needs_action);
         Ok(())
@@ -95,7 +100,12 @@ where
         }
         first
     } else {
-        let results: Vec<Result<(), EnvError>> = slots.par_iter_mut().zip(outs).enumerate().map(|(k, (slot, mut out))| f(k, slot, &mut out)).collect();
+        let results: Vec<Result<(), EnvError>> = slots
+            .par_iter_mut()
+            .zip(outs)
+            .enumerate()
+            .map(|(k, (slot, mut out))| f(k, slot, &mut out))
+            .collect();
         results.into_iter().collect()
     }
 }
@@ -119,7 +129,11 @@ impl VecEnv {
             .map(|_| {
                 let mut e = env.clone_config()?;
                 e.share_visibility(rays.clone());
-                Ok(Slot { env: e, seed: 0, episode: 0 })
+                Ok(Slot {
+                    env: e,
+                    seed: 0,
+                    episode: 0,
+                })
             })
             .collect::<Result<Vec<_>, EnvError>>()?;
         let mut v = VecEnv { slots };
@@ -163,15 +177,23 @@ impl VecEnv {
     pub fn step(&mut self, actions: &[usize], out: VecBuffers<'_>) -> Result<(), EnvError> {
         let robots = self.slots[0].env.num_robots();
         if actions.len() != self.slots.len() * robots {
-            return Err(EnvError::Usage(format!("{} actions for {} environments × {robots} robots", actions.len(), self.slots.len())));
+            return Err(EnvError::Usage(format!(
+                "{} actions for {} environments × {robots} robots",
+                actions.len(),
+                self.slots.len()
+            )));
         }
         let count = self.slots[0].env.action_count();
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
-            return Err(EnvError::Usage(format!("action {a}: the action space has {count} actions")));
+            return Err(EnvError::Usage(format!(
+                "action {a}: the action space has {count} actions"
+            )));
         }
         // Nothing steps unless every input and output fits.
         let outs = self.split(out)?;
-        for_each_env(&mut self.slots, outs, |k, slot, out| slot.step(&actions[k * robots..(k + 1) * robots], out))
+        for_each_env(&mut self.slots, outs, |k, slot, out| {
+            slot.step(&actions[k * robots..(k + 1) * robots], out)
+        })
     }
 
     /// Every buffer has the length `n` environments need; cut into one share per environment.
@@ -199,7 +221,19 @@ impl VecEnv {
             .zip(out.rewards.chunks_mut(robots))
             .zip(out.needs_action.chunks_mut(robots))
             .zip(out.terminated.iter_mut().zip(out.truncated.iter_mut()))
-            .map(|(((((maps, vectors), masks), rewards), needs_action), (terminated, truncated))| EnvOut { maps, vectors, masks, rewards, needs_action, terminated, truncated })
+            .map(
+                |(((((maps, vectors), masks), rewards), needs_action), (terminated, truncated))| {
+                    EnvOut {
+                        maps,
+                        vectors,
+                        masks,
+                        rewards,
+                        needs_action,
+                        terminated,
+                        truncated,
+                    }
+                },
+            )
             .collect())
     }
 

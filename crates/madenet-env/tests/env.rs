@@ -10,9 +10,16 @@ use rand::RngExt;
 
 fn env(mode: ActionMode, csp: f64) -> ExplorationEnv {
     let map = paper_map(6).unwrap();
-    let starts = Corner::BottomRight.start_cells(map.height(), map.width()).to_vec();
-    let scenario = ScenarioConfig { comm_success_prob: csp, ..Default::default() };
-    ExplorationEnv::new(map, &paper_map_name(6), starts, scenario, mode).unwrap().recording(true)
+    let starts = Corner::BottomRight
+        .start_cells(map.height(), map.width())
+        .to_vec();
+    let scenario = ScenarioConfig {
+        comm_success_prob: csp,
+        ..Default::default()
+    };
+    ExplorationEnv::new(map, &paper_map_name(6), starts, scenario, mode)
+        .unwrap()
+        .recording(true)
 }
 
 #[test]
@@ -21,22 +28,34 @@ fn random_candidates_through_the_env_reproduce_the_random_policy_trial() {
         let seed = 9;
         let mut e = env(ActionMode::Macro, csp);
         let (n, g) = (e.num_robots(), e.action_count());
-        let mut buffers = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; g]);
+        let mut buffers = (
+            vec![0.0; e.map_len()],
+            vec![0.0; e.vector_len()],
+            vec![0u8; g],
+        );
         // The `random` policy's draws: a stream per robot, one draw per decision over its valid candidates.
-        let mut rngs: Vec<_> = (0..n).map(|i| madenet_world::rng::stream(seed, "policy/random", i as u64)).collect();
+        let mut rngs: Vec<_> = (0..n)
+            .map(|i| madenet_world::rng::stream(seed, "policy/random", i as u64))
+            .collect();
         e.reset(seed).unwrap();
         let (mut steps, mut team) = (0, 0.0);
         while !e.is_done() {
             let needs = e.needs_action();
             let mut actions = vec![0; n];
             for i in 0..n {
-                e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2).unwrap();
+                e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2)
+                    .unwrap();
                 // The vector ends with the candidates' validity; the mask is the same but for a
                 // robot with no candidate, whose mask offers slot 0 alone ("stay").
                 let validity = &buffers.1[buffers.1.len() - g..];
                 let valid = validity.iter().filter(|&&v| v == 1.0).count();
-                assert!(validity[..valid].iter().all(|&v| v == 1.0), "valid candidates come first");
-                let expected: Vec<u8> = (0..g).map(|k| (k < valid || (valid == 0 && k == 0)) as u8).collect();
+                assert!(
+                    validity[..valid].iter().all(|&v| v == 1.0),
+                    "valid candidates come first"
+                );
+                let expected: Vec<u8> = (0..g)
+                    .map(|k| (k < valid || (valid == 0 && k == 0)) as u8)
+                    .collect();
                 assert_eq!(buffers.2, expected);
                 if needs[i] && valid > 0 {
                     actions[i] = rngs[i].random_range(0..valid);
@@ -51,12 +70,17 @@ fn random_candidates_through_the_env_reproduce_the_random_policy_trial() {
         }
         let ext = e.finish().unwrap();
         let map = paper_map(6).unwrap();
-        let starts = Corner::BottomRight.start_cells(map.height(), map.width()).to_vec();
+        let starts = Corner::BottomRight
+            .start_cells(map.height(), map.width())
+            .to_vec();
         let spec = TrialSpec {
             map,
             map_name: paper_map_name(6),
             starts,
-            config: ScenarioConfig { comm_success_prob: csp, ..Default::default() },
+            config: ScenarioConfig {
+                comm_success_prob: csp,
+                ..Default::default()
+            },
             policy: "random".into(),
             seed,
         };
@@ -73,12 +97,19 @@ fn random_candidates_through_the_env_reproduce_the_random_policy_trial() {
 fn primitive_moves_and_bad_calls() {
     let mut e = env(ActionMode::Primitive, 1.0);
     assert_eq!(e.action_count(), 9);
-    assert!(matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))), "step before reset");
+    assert!(
+        matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))),
+        "step before reset"
+    );
     e.reset(3).unwrap();
     assert_eq!(e.needs_action(), vec![true; 3]);
     assert!(e.step(&[0, 0]).is_err());
     assert!(e.step(&[0, 0, 9]).is_err());
-    let (mut map, mut vector, mut mask) = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; 9]);
+    let (mut map, mut vector, mut mask) = (
+        vec![0.0; e.map_len()],
+        vec![0.0; e.vector_len()],
+        vec![0u8; 9],
+    );
     // Robot 0 moves along valid moves; every step advances one timestep for everyone.
     for t in 0..40 {
         e.observe_into(0, &mut map, &mut vector, &mut mask).unwrap();
@@ -96,11 +127,24 @@ fn primitive_moves_and_bad_calls() {
         }
     }
     let traj = e.finish().unwrap().trajectory;
-    assert!(traj.iter().any(|s| s.moves[0] != madenet_world::Move::Stay), "robot 0 moved");
-    assert!(traj.iter().all(|s| s.moves[1] == madenet_world::Move::Stay && s.moves[2] == madenet_world::Move::Stay));
+    assert!(
+        traj.iter().any(|s| s.moves[0] != madenet_world::Move::Stay),
+        "robot 0 moved"
+    );
+    assert!(traj.iter().all(
+        |s| s.moves[1] == madenet_world::Move::Stay && s.moves[2] == madenet_world::Move::Stay
+    ));
     // Bad construction: starts that do not match the team.
     let map = paper_map(1).unwrap();
-    let err = ExplorationEnv::new(map, "m", vec![madenet_map::Pos::new(0, 0)], ScenarioConfig::default(), ActionMode::Macro).err().unwrap();
+    let err = ExplorationEnv::new(
+        map,
+        "m",
+        vec![madenet_map::Pos::new(0, 0)],
+        ScenarioConfig::default(),
+        ActionMode::Macro,
+    )
+    .err()
+    .unwrap();
     assert!(err.to_string().contains("num_robots"), "{err}");
 }
 
@@ -116,9 +160,21 @@ fn a_policys_decisions_through_the_env_reproduce_its_own_trial_and_modes_are_che
         }
         let ext = e.finish().unwrap();
         let map = paper_map(6).unwrap();
-        let starts = Corner::BottomRight.start_cells(map.height(), map.width()).to_vec();
-        let scenario = ScenarioConfig { comm_success_prob: 0.5, ..Default::default() };
-        let spec = TrialSpec { map, map_name: paper_map_name(6), starts, config: scenario, policy: name.into(), seed: 4 };
+        let starts = Corner::BottomRight
+            .start_cells(map.height(), map.width())
+            .to_vec();
+        let scenario = ScenarioConfig {
+            comm_success_prob: 0.5,
+            ..Default::default()
+        };
+        let spec = TrialSpec {
+            map,
+            map_name: paper_map_name(6),
+            starts,
+            config: scenario,
+            policy: name.into(),
+            seed: 4,
+        };
         let own = Trial::new(spec).unwrap().record_trajectory(true).run();
         assert_eq!(own.trajectory, ext.trajectory, "{name}");
         assert_eq!(own.metrics, ext.metrics, "{name}");
@@ -137,14 +193,26 @@ fn joint_actions_decode_to_the_robots_parts() {
     let count = e.joint_action_count().unwrap();
     assert_eq!(count, g.pow(n as u32));
     e.reset(2).unwrap();
-    let (mut map, mut vector, mut mask) = (vec![0.0; e.map_len()], vec![0.0; e.joint_vector_len()], vec![0u8; count]);
-    e.observe_joint_into(&mut map, &mut vector, &mut mask).unwrap();
+    let (mut map, mut vector, mut mask) = (
+        vec![0.0; e.map_len()],
+        vec![0.0; e.joint_vector_len()],
+        vec![0u8; count],
+    );
+    e.observe_joint_into(&mut map, &mut vector, &mut mask)
+        .unwrap();
     // Every robot decides first; the joint mask is the product of the robots' masks.
     let mut own = Vec::new();
     for i in 0..n {
-        let (mut m, mut v, mut k) = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; g]);
+        let (mut m, mut v, mut k) = (
+            vec![0.0; e.map_len()],
+            vec![0.0; e.vector_len()],
+            vec![0u8; g],
+        );
         e.observe_into(i, &mut m, &mut v, &mut k).unwrap();
-        assert_eq!(&vector[i * e.vector_len()..(i + 1) * e.vector_len()], &v[..]);
+        assert_eq!(
+            &vector[i * e.vector_len()..(i + 1) * e.vector_len()],
+            &v[..]
+        );
         own.push(k);
     }
     for (a, &m) in mask.iter().enumerate() {
@@ -152,10 +220,18 @@ fn joint_actions_decode_to_the_robots_parts() {
         assert_eq!(m == 1, expected, "joint action {a}");
     }
     // The merged map's explored channel is the team map; robots appear in channel 2.
-    assert!(map[2 * e.height() * e.width()..3 * e.height() * e.width()].iter().filter(|&&v| v == 1.0).count() >= 1);
+    assert!(
+        map[2 * e.height() * e.width()..3 * e.height() * e.width()]
+            .iter()
+            .filter(|&&v| v == 1.0)
+            .count()
+            >= 1
+    );
     // A valid joint action whose parts differ (so the digit order matters) steps like them.
     let decode = |a: usize| -> Vec<usize> { (0..n).map(|i| (a / g.pow(i as u32)) % g).collect() };
-    let a = (0..count).find(|&a| mask[a] == 1 && decode(a)[0] != decode(a)[n - 1]).expect("robots with more than one candidate");
+    let a = (0..count)
+        .find(|&a| mask[a] == 1 && decode(a)[0] != decode(a)[n - 1])
+        .expect("robots with more than one candidate");
     let parts = decode(a);
     let mut twin = env(ActionMode::Macro, 1.0);
     twin.reset(2).unwrap();
@@ -168,8 +244,14 @@ fn joint_actions_decode_to_the_robots_parts() {
     assert!(e.step_joint(count).is_err());
     let ours = e.finish().unwrap().trajectory;
     assert_eq!(ours, twin.finish().unwrap().trajectory);
-    assert_ne!(ours[0].goals, reversed.finish().unwrap().trajectory[0].goals, "the digit order matters");
-    let err = env(ActionMode::Primitive, 1.0).observe_joint_into(&mut map, &mut vector, &mut mask).unwrap_err();
+    assert_ne!(
+        ours[0].goals,
+        reversed.finish().unwrap().trajectory[0].goals,
+        "the digit order matters"
+    );
+    let err = env(ActionMode::Primitive, 1.0)
+        .observe_joint_into(&mut map, &mut vector, &mut mask)
+        .unwrap_err();
     assert!(err.to_string().contains("macro"), "{err}");
 }
 
@@ -184,7 +266,9 @@ fn a_restarted_episode_is_the_same_as_a_fresh_one() {
                 if e.is_done() {
                     break;
                 }
-                let a: Vec<usize> = (0..e.num_robots()).map(|_| rng.random_range(0..e.action_count().min(3))).collect();
+                let a: Vec<usize> = (0..e.num_robots())
+                    .map(|_| rng.random_range(0..e.action_count().min(3)))
+                    .collect();
                 rewards.push(e.step(&a).unwrap());
             }
             rewards
@@ -214,35 +298,90 @@ fn an_episode_over_at_its_start_ends_at_the_first_step() {
     use madenet_map::{OccGrid, Occupancy, Pos};
     let map = OccGrid::new(4, 4, Occupancy::Free);
     let starts = vec![Pos::new(0, 0), Pos::new(0, 1), Pos::new(1, 0)];
-    let scenario = ScenarioConfig { sensor_miss_prob: 0.0, ..Default::default() };
+    let scenario = ScenarioConfig {
+        sensor_miss_prob: 0.0,
+        ..Default::default()
+    };
     for mode in [ActionMode::Primitive, ActionMode::Macro] {
-        let mut e = ExplorationEnv::new(map.clone(), "open_4x4", starts.clone(), scenario.clone(), mode).unwrap();
+        let mut e = ExplorationEnv::new(
+            map.clone(),
+            "open_4x4",
+            starts.clone(),
+            scenario.clone(),
+            mode,
+        )
+        .unwrap();
         e.reset(1).unwrap();
         assert!(e.is_done(), "{mode:?}: seen whole at t = 0");
         let r = e.step(&[0, 0, 0]).unwrap();
         assert!(r.terminated && !r.truncated, "{mode:?}: {r:?}");
-        assert_eq!((r.steps, r.rewards.clone(), r.team_reward), (0, vec![0.0; 3], 0.0), "{mode:?}");
-        assert!(matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))), "{mode:?}: a step after the reported end");
+        assert_eq!(
+            (r.steps, r.rewards.clone(), r.team_reward),
+            (0, vec![0.0; 3], 0.0),
+            "{mode:?}"
+        );
+        assert!(
+            matches!(e.step(&[0, 0, 0]), Err(EnvError::Usage(_))),
+            "{mode:?}: a step after the reported end"
+        );
         e.reset(2).unwrap();
-        assert!(e.step(&[0, 0, 0]).unwrap().terminated, "{mode:?}: again after a reset");
+        assert!(
+            e.step(&[0, 0, 0]).unwrap().terminated,
+            "{mode:?}: again after a reset"
+        );
         // A shipped policy has nothing to decide then (names and modes are still checked).
         let registry = madenet_sim::PolicyRegistry::builtin();
-        let own = if mode == ActionMode::Primitive { "nf" } else { "random" };
+        let own = if mode == ActionMode::Primitive {
+            "nf"
+        } else {
+            "random"
+        };
         e.reset(4).unwrap();
         assert!(e.policy_decisions("no-such-policy", &registry).is_err());
-        assert!(e.policy_decisions(if own == "nf" { "random" } else { "nf" }, &registry).is_err(), "{mode:?}: wrong mode");
-        assert_eq!(e.policy_decisions(own, &registry).unwrap(), vec![madenet_env::Decision::Idle; 3]);
-        assert!(e.step_decisions(&[madenet_env::Decision::Idle; 3]).unwrap().terminated);
-        assert!(e.policy_decisions(own, &registry).is_err(), "{mode:?}: asked after the reported end");
+        assert!(
+            e.policy_decisions(if own == "nf" { "random" } else { "nf" }, &registry)
+                .is_err(),
+            "{mode:?}: wrong mode"
+        );
+        assert_eq!(
+            e.policy_decisions(own, &registry).unwrap(),
+            vec![madenet_env::Decision::Idle; 3]
+        );
+        assert!(
+            e.step_decisions(&[madenet_env::Decision::Idle; 3])
+                .unwrap()
+                .terminated
+        );
+        assert!(
+            e.policy_decisions(own, &registry).is_err(),
+            "{mode:?}: asked after the reported end"
+        );
 
         let n = 2;
         let mut v = VecEnv::new(e.clone_config().unwrap(), n, 3).unwrap();
         let (ml, vl, al) = (e.map_len(), e.vector_len(), e.action_count());
-        let (mut maps, mut vectors, mut masks) = (vec![0.0; n * 3 * ml], vec![0.0; n * 3 * vl], vec![0u8; n * 3 * al]);
-        let (mut rewards, mut needs, mut term, mut trunc) = (vec![1.0; n * 3], vec![false; n * 3], vec![false; n], vec![false; n]);
+        let (mut maps, mut vectors, mut masks) = (
+            vec![0.0; n * 3 * ml],
+            vec![0.0; n * 3 * vl],
+            vec![0u8; n * 3 * al],
+        );
+        let (mut rewards, mut needs, mut term, mut trunc) = (
+            vec![1.0; n * 3],
+            vec![false; n * 3],
+            vec![false; n],
+            vec![false; n],
+        );
         macro_rules! buffers {
             () => {
-                VecBuffers { maps: &mut maps, vectors: &mut vectors, masks: &mut masks, rewards: &mut rewards, needs_action: &mut needs, terminated: &mut term, truncated: &mut trunc }
+                VecBuffers {
+                    maps: &mut maps,
+                    vectors: &mut vectors,
+                    masks: &mut masks,
+                    rewards: &mut rewards,
+                    needs_action: &mut needs,
+                    terminated: &mut term,
+                    truncated: &mut trunc,
+                }
             };
         }
         v.reset(buffers!()).unwrap();
@@ -252,7 +391,11 @@ fn an_episode_over_at_its_start_ends_at_the_first_step() {
             assert_eq!(term, vec![true; n], "{mode:?} step {step}");
             assert!(rewards.iter().all(|&r| r == 0.0));
         }
-        assert_ne!(v.episode_seeds(), seeds, "{mode:?}: the environments restarted with their next seeds");
+        assert_ne!(
+            v.episode_seeds(),
+            seeds,
+            "{mode:?}: the environments restarted with their next seeds"
+        );
     }
 }
 
@@ -265,13 +408,18 @@ fn stepping_with_or_without_observing_first_is_the_same() {
             let mut e = env(ActionMode::Macro, csp);
             e.reset(21).unwrap();
             let (n, g) = (e.num_robots(), e.action_count());
-            let mut buffers = (vec![0.0; e.map_len()], vec![0.0; e.vector_len()], vec![0u8; g]);
+            let mut buffers = (
+                vec![0.0; e.map_len()],
+                vec![0.0; e.vector_len()],
+                vec![0u8; g],
+            );
             let mut rng = madenet_world::rng::stream(3, "test/actions", 0);
             let mut results = Vec::new();
             while !e.is_done() {
                 if observe {
                     for i in 0..n {
-                        e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2).unwrap();
+                        e.observe_into(i, &mut buffers.0, &mut buffers.1, &mut buffers.2)
+                            .unwrap();
                     }
                 }
                 let a: Vec<usize> = (0..n).map(|_| rng.random_range(0..g.min(3))).collect();

@@ -14,7 +14,9 @@
 use burn::optim::AdamConfig;
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
+use madenet_learn::learner::{
+    cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
+};
 use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
@@ -29,11 +31,22 @@ fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<E
                 map,
                 map_name: "bench".into(),
                 starts,
-                config: madenet_world::ScenarioConfig { comm_success_prob: 0.5, ..cfg.scenario.clone() },
+                config: madenet_world::ScenarioConfig {
+                    comm_success_prob: 0.5,
+                    ..cfg.scenario.clone()
+                },
                 policy: String::new(),
                 seed: k,
             };
-            let actor = Actor::new(kind, nets.clone(), 1.0, false, cfg.goals(), 3, stream(k, "bench-actor", 0));
+            let actor = Actor::new(
+                kind,
+                nets.clone(),
+                1.0,
+                false,
+                cfg.goals(),
+                3,
+                stream(k, "bench-actor", 0),
+            );
             run_episode(spec, actor).expect("episode")
         })
         .collect()
@@ -44,27 +57,48 @@ fn windows(eps: &[Episode], n: usize, trace: usize) -> Vec<Window<'_>> {
     (0..n)
         .map(|k| {
             let e = &eps[k % eps.len()];
-            Window::new(e, rng.random_range(0..e.decisions.len().saturating_sub(trace).max(1)), trace)
+            Window::new(
+                e,
+                rng.random_range(0..e.decisions.len().saturating_sub(trace).max(1)),
+                trace,
+            )
         })
         .collect()
 }
 
 fn bench(c: &mut Criterion) {
     // Criterion is not Send, so the one-thread pool is the global one here.
-    let _ = rayon::ThreadPoolBuilder::new().num_threads(1).build_global();
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global();
     {
         let cfg = TrainConfig::default();
         let device = cpu_autodiff();
         device.seed(3);
-        let p = UpdateParams { gamma: 1.0, learning_rate: 1e-3, reward_scale: 0.01, map_height: 20, map_width: 20, team: 3, goals: cfg.goals() };
+        let p = UpdateParams {
+            gamma: 1.0,
+            learning_rate: 1e-3,
+            reward_scale: 0.01,
+            map_height: 20,
+            map_width: 20,
+            team: 3,
+            goals: cfg.goals(),
+        };
         let mut cep = Some(cfg.cep_config().init(&device).expect("CEP"));
         let mut dep = Some(cfg.dep_config().init(&device).expect("DEP"));
-        let nets = ActorNets { cep: cep.as_ref().map(target_of), deps: vec![target_of(dep.as_ref().expect("DEP"))] };
+        let nets = ActorNets {
+            cep: cep.as_ref().map(target_of),
+            deps: vec![target_of(dep.as_ref().expect("DEP"))],
+        };
         let cen = episodes(&cfg, &nets, EnvKind::Centralized, 8);
         let dec = episodes(&cfg, &nets, EnvKind::Decentralized, 8);
         let cen_w = windows(&cen, 16, cfg.trace_len);
-        let dec_r: Vec<RobotWindow<'_>> = (0..16).map(|k| RobotWindow::new(&dec[k % dec.len()], k % 3, k % 5, cfg.trace_len)).collect();
-        let dt_r: Vec<RobotWindow<'_>> = (0..16).map(|k| RobotWindow::new(&dec[k % dec.len()], 0, k % 5, cfg.trace_len)).collect();
+        let dec_r: Vec<RobotWindow<'_>> = (0..16)
+            .map(|k| RobotWindow::new(&dec[k % dec.len()], k % 3, k % 5, cfg.trace_len))
+            .collect();
+        let dt_r: Vec<RobotWindow<'_>> = (0..16)
+            .map(|k| RobotWindow::new(&dec[k % dec.len()], 0, k % 5, cfg.trace_len))
+            .collect();
         let cep_target = target_of(cep.as_ref().expect("CEP"));
         let dep_target = target_of(dep.as_ref().expect("DEP"));
         let mut group = c.benchmark_group("ddrqn");
@@ -72,7 +106,13 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("cep_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = cep_update(cep.take().expect("CEP"), &cep_target, &mut optim, &cen_w, &p);
+                let (next, loss) = cep_update(
+                    cep.take().expect("CEP"),
+                    &cep_target,
+                    &mut optim,
+                    &cen_w,
+                    &p,
+                );
                 cep = Some(next);
                 loss
             })
@@ -81,7 +121,14 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("dep_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, Some(&cep_plain), &dec_r, &p);
+                let (next, loss) = dep_update(
+                    dep.take().expect("DEP"),
+                    &dep_target,
+                    &mut optim,
+                    Some(&cep_plain),
+                    &dec_r,
+                    &p,
+                );
                 dep = Some(next);
                 loss
             })
@@ -89,7 +136,14 @@ fn bench(c: &mut Criterion) {
         let mut optim = AdamConfig::new().init();
         group.bench_function("dt_update_b16_t24", |b| {
             b.iter(|| {
-                let (next, loss) = dep_update(dep.take().expect("DEP"), &dep_target, &mut optim, None, &dt_r, &p);
+                let (next, loss) = dep_update(
+                    dep.take().expect("DEP"),
+                    &dep_target,
+                    &mut optim,
+                    None,
+                    &dt_r,
+                    &p,
+                );
                 dep = Some(next);
                 loss
             })

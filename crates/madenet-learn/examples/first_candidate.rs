@@ -16,7 +16,11 @@ impl Policy for First {
         DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
-        if view.candidates().valid_mask()[0] { Decision::Candidate(0) } else { Decision::Idle }
+        if view.candidates().valid_mask()[0] {
+            Decision::Candidate(0)
+        } else {
+            Decision::Idle
+        }
     }
 }
 
@@ -32,7 +36,14 @@ fn main() {
         for e in from..to {
             let seed = derive_seed(cfg.seed, &args[1], e);
             let (map, starts) = training_scenario(&cfg, seed).unwrap();
-            let spec = TrialSpec { map, map_name: "t".into(), starts, config: cfg.scenario.clone(), policy: "first".into(), seed };
+            let spec = TrialSpec {
+                map,
+                map_name: "t".into(),
+                starts,
+                config: cfg.scenario.clone(),
+                policy: "first".into(),
+                seed,
+            };
             let r = Trial::with_registry(spec, &registry).unwrap().run();
             println!("{e} {}", r.metrics.tns);
         }
@@ -47,21 +58,44 @@ fn main() {
             let seed = derive_seed(cfg.seed, "validation", m);
             let (map, starts) = training_scenario(&cfg, seed).unwrap();
             for (k, csp) in [1.0, 0.5, 0.0].into_iter().enumerate() {
-                let spec = TrialSpec { map: map.clone(), map_name: "v".into(), starts: starts.clone(), config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() }, policy: policy.into(), seed };
-                let r = Trial::with_registry(spec, &registry).unwrap().record_trajectory(true).run();
+                let spec = TrialSpec {
+                    map: map.clone(),
+                    map_name: "v".into(),
+                    starts: starts.clone(),
+                    config: ScenarioConfig {
+                        comm_success_prob: csp,
+                        ..cfg.scenario.clone()
+                    },
+                    policy: policy.into(),
+                    seed,
+                };
+                let r = Trial::with_registry(spec, &registry)
+                    .unwrap()
+                    .record_trajectory(true)
+                    .run();
                 steps += r.metrics.tns;
                 per_csp[k] += r.metrics.tns;
                 if !r.metrics.completed {
                     fails += 1;
                     if fails <= 2 {
-                        println!("{policy} map {m} csp {csp}: explored {:.3}", r.trajectory.last().unwrap().explored);
+                        println!(
+                            "{policy} map {m} csp {csp}: explored {:.3}",
+                            r.trajectory.last().unwrap().explored
+                        );
                         for s in r.trajectory.iter().rev().take(4) {
-                            println!("  t {} pos {:?} goals {:?} decided {:?} moves {:?}", s.t, s.positions, s.goals, s.decided, s.moves);
+                            println!(
+                                "  t {} pos {:?} goals {:?} decided {:?} moves {:?}",
+                                s.t, s.positions, s.goals, s.decided, s.moves
+                            );
                         }
                     }
                 }
             }
         }
-        println!("{policy}: mean steps {:.1} (CSP 1, 0.5, 0: {:?}), failures {fails}/36", steps as f64 / 36.0, per_csp.map(|s| s as f64 / 12.0));
+        println!(
+            "{policy}: mean steps {:.1} (CSP 1, 0.5, 0: {:?}), failures {fails}/36",
+            steps as f64 / 36.0,
+            per_csp.map(|s| s as f64 / 12.0)
+        );
     }
 }

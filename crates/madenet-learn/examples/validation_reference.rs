@@ -22,7 +22,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     for name in names {
         let (steps, ret, done, n) = validate_policy(&cfg, &registry, &name)?;
-        println!("{name:<8} mean steps {steps:6.1}  mean team reward {ret:8.0}  completed {done}/{n}");
+        println!(
+            "{name:<8} mean steps {steps:6.1}  mean team reward {ret:8.0}  completed {done}/{n}"
+        );
     }
     Ok(())
 }

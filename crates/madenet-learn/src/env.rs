@@ -7,7 +7,9 @@
 
 use crate::obs::{joint_obs, robot_obs, running_action, JointObs, RobotObs};
 use crate::replay::{squeeze_robot, squeeze_team, MacroTransition, PrimitiveStep, ReplayError};
-use crate::{conditional_argmax, joint_actions, masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
+use crate::{
+    conditional_argmax, joint_actions, masked_argmax_slice, LstmState, QNet, Tensor, TensorData,
+};
 use burn::tensor::Device;
 use madenet_agent::{AgentView, Decision, JointPolicy};
 use madenet_map::Occupancy;
@@ -90,7 +92,15 @@ pub struct Actor {
 }
 
 impl Actor {
-    pub fn new(kind: EnvKind, nets: ActorNets, epsilon: f32, cen_explore: bool, goals: usize, team: usize, rng: Rng) -> Self {
+    pub fn new(
+        kind: EnvKind,
+        nets: ActorNets,
+        epsilon: f32,
+        cen_explore: bool,
+        goals: usize,
+        team: usize,
+        rng: Rng,
+    ) -> Self {
         Actor {
             kind,
             nets,
@@ -114,7 +124,8 @@ impl Actor {
         let mut m = vec![0.0f32; 4 * h * w];
         crate::obs::unpack_bits(map, &mut m);
         let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
-        let obs = Tensor::<2>::from_data(TensorData::new(vec.to_vec(), [1, vec.len()]), &self.device);
+        let obs =
+            Tensor::<2>::from_data(TensorData::new(vec.to_vec(), [1, vec.len()]), &self.device);
         (maps, obs)
     }
 
@@ -125,7 +136,9 @@ impl Actor {
 }
 
 fn q_host(q: Tensor<2>) -> Vec<f32> {
-    q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32")
+    q.into_data()
+        .try_into_vec_as::<f32>()
+        .expect("Q values readable as f32")
 }
 
 impl JointPolicy for Actor {
@@ -136,7 +149,12 @@ impl JointPolicy for Actor {
         }
     }
 
-    fn decide(&mut self, views: &mut [AgentView<'_>], needs: &[bool], team_map: &[Occupancy]) -> Vec<Decision> {
+    fn decide(
+        &mut self,
+        views: &mut [AgentView<'_>],
+        needs: &[bool],
+        team_map: &[Occupancy],
+    ) -> Vec<Decision> {
         let n = views.len();
         let (h, w) = (views[0].belief.height(), views[0].belief.width());
         let joint = self.nets.cep.is_some().then(|| joint_obs(views, team_map));
@@ -149,7 +167,8 @@ impl JointPolicy for Actor {
                 let (q, state) = cep.act(maps, obs, self.cep_state.take());
                 self.cep_state = Some(state);
                 let q = q_host(q);
-                let a = conditional_argmax(&q, &j.masks, &fixed).expect("every robot has an admissible action");
+                let a = conditional_argmax(&q, &j.masks, &fixed)
+                    .expect("every robot has an admissible action");
                 Some(joint_actions(a, n, self.goals))
             }
             _ => None,
@@ -170,7 +189,8 @@ impl JointPolicy for Actor {
                     let (maps, obs) = self.input(&o.map, &o.vec, h, w);
                     let (q, state) = self.nets.dep(i).act(maps, obs, self.dep_states[i].take());
                     self.dep_states[i] = Some(state);
-                    let greedy = masked_argmax_slice(&q_host(q), &o.mask).expect("mask has a valid action");
+                    let greedy =
+                        masked_argmax_slice(&q_host(q), &o.mask).expect("mask has a valid action");
                     match (explore, &cep_choice) {
                         (false, _) => greedy,
                         (true, Some(c)) if self.cen_explore => c[i],
@@ -277,8 +297,25 @@ pub fn run_episode(spec: TrialSpec, actor: Actor) -> Result<Episode, EpisodeErro
     let mut dep_at = Vec::with_capacity(n);
     for i in 0..n {
         dep.push(squeeze_robot(&steps, i)?);
-        dep_at.push(decisions.iter().enumerate().filter(|(_, d)| d.decided[i]).map(|(k, _)| k).collect::<Vec<_>>());
+        dep_at.push(
+            decisions
+                .iter()
+                .enumerate()
+                .filter(|(_, d)| d.decided[i])
+                .map(|(k, _)| k)
+                .collect::<Vec<_>>(),
+        );
     }
     debug_assert_eq!(cep.len(), decisions.len());
-    Ok(Episode { kind, comm_success_prob: csp, steps, decisions, cep, dep, dep_at, complete, team_return })
+    Ok(Episode {
+        kind,
+        comm_success_prob: csp,
+        steps,
+        decisions,
+        cep,
+        dep,
+        dep_at,
+        complete,
+        team_return,
+    })
 }

@@ -22,7 +22,10 @@
 use crate::env::Episode;
 
 use crate::obs::unpack_bits;
-use crate::{conditional_argmax, conditional_joint_mask, gather_q, joint_actions, joint_index, masked_argmax_slice, QNet};
+use crate::{
+    conditional_argmax, conditional_joint_mask, gather_q, joint_actions, joint_index,
+    masked_argmax_slice, QNet,
+};
 use burn::module::Module;
 use burn::optim::{GradientsParams, ModuleOptimizer};
 use burn::tensor::{Device, Tensor, TensorData};
@@ -76,8 +79,14 @@ impl Sequences {
 
     fn tensors(&self, p: &UpdateParams, device: &Device) -> (Tensor<5>, Tensor<3>) {
         let (b, t) = (self.batch, self.time);
-        let maps = Tensor::from_data(TensorData::new(self.maps.clone(), [b, t, 4, p.map_height, p.map_width]), device);
-        let obs = Tensor::from_data(TensorData::new(self.obs.clone(), [b, t, self.obs_dim]), device);
+        let maps = Tensor::from_data(
+            TensorData::new(self.maps.clone(), [b, t, 4, p.map_height, p.map_width]),
+            device,
+        );
+        let obs = Tensor::from_data(
+            TensorData::new(self.obs.clone(), [b, t, self.obs_dim]),
+            device,
+        );
         (maps, obs)
     }
 }
@@ -102,7 +111,9 @@ fn forward_both(online: &QNet, target: &QNet, seq: &Sequences, p: &UpdateParams)
 }
 
 fn host(q: Tensor<3>) -> Vec<f32> {
-    q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32")
+    q.into_data()
+        .try_into_vec_as::<f32>()
+        .expect("Q values readable as f32")
 }
 
 /// Mean squared TD error over real steps, one Adam step; returns the loss.
@@ -122,7 +133,11 @@ fn td_step(
     let real = Tensor::<1>::from_data(TensorData::new(seq.real.clone(), [n]), &device);
     let count = seq.real.iter().sum::<f32>().max(1.0);
     let loss = (q - y).powf_scalar(2.0).mul(real).sum().div_scalar(count);
-    let value = loss.clone().into_data().try_into_vec_as::<f32>().expect("loss readable")[0];
+    let value = loss
+        .clone()
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .expect("loss readable")[0];
     let grads = GradientsParams::from_grads(loss.backward(), &net);
     (optim.step(lr, net, grads), value)
 }
@@ -139,11 +154,19 @@ impl<'a> Window<'a> {
     /// The window of `trace_len + 1` joint decisions from `start` (clipped to the episode).
     pub fn new(episode: &'a Episode, start: usize, trace_len: usize) -> Self {
         let end = (start + trace_len + 1).min(episode.decisions.len());
-        Window { episode, start: start.min(end), end }
+        Window {
+            episode,
+            start: start.min(end),
+            end,
+        }
     }
     /// The whole episode.
     pub fn whole(episode: &'a Episode) -> Self {
-        Window { episode, start: 0, end: episode.decisions.len() }
+        Window {
+            episode,
+            start: 0,
+            end: episode.decisions.len(),
+        }
     }
     fn len(&self) -> usize {
         self.end - self.start
@@ -163,7 +186,10 @@ fn cep_sequences(eps: &[Window<'_>], p: &UpdateParams) -> (Sequences, Vec<Vec<bo
         let e = w.episode;
         for (k, d) in e.decisions[w.start..w.end].iter().enumerate() {
             let (k, kw) = (w.start + k, k);
-            let j = d.joint.as_ref().expect("CEP training needs joint observations");
+            let j = d
+                .joint
+                .as_ref()
+                .expect("CEP training needs joint observations");
             let idx = b * time + kw;
             unpack_bits(&j.map, &mut seq.maps[idx * map_len..(idx + 1) * map_len]);
             seq.obs[idx * obs_dim..(idx + 1) * obs_dim].copy_from_slice(&j.vec);
@@ -173,7 +199,9 @@ fn cep_sequences(eps: &[Window<'_>], p: &UpdateParams) -> (Sequences, Vec<Vec<bo
             seq.real[idx] = (terminal || k + 1 < w.end) as u8 as f32;
             if !terminal && k + 1 < w.end {
                 let nd = &e.decisions[k + 1];
-                let fixed: Vec<Option<usize>> = (0..p.team).map(|i| (!nd.decided[i]).then_some(nd.actions[i])).collect();
+                let fixed: Vec<Option<usize>> = (0..p.team)
+                    .map(|i| (!nd.decided[i]).then_some(nd.actions[i]))
+                    .collect();
                 let masks = &nd.joint.as_ref().expect("joint observation").masks;
                 next_mask[idx] = conditional_joint_mask(masks, &fixed);
                 seq.not_done[idx] = 1.0;
@@ -201,7 +229,8 @@ pub fn cep_update(
             if seq.not_done[idx] > 0.0 {
                 let next = idx + 1;
                 let row = next * outputs..(next + 1) * outputs;
-                let a = masked_argmax_slice(&qv[row.clone()], &next_mask[idx]).expect("admissible joint action");
+                let a = masked_argmax_slice(&qv[row.clone()], &next_mask[idx])
+                    .expect("admissible joint action");
                 y += p.gamma * qt[row][a];
             }
             y
@@ -226,14 +255,30 @@ impl<'a> RobotWindow<'a> {
     pub fn new(episode: &'a Episode, robot: usize, start: usize, trace_len: usize) -> Self {
         let n = episode.dep[robot].len();
         let end = (start + trace_len + 1).min(n);
-        RobotWindow { episode, robot, start: start.min(end), end }
+        RobotWindow {
+            episode,
+            robot,
+            start: start.min(end),
+            end,
+        }
     }
     /// The joint decisions this window's decisions span (for the CEP's target actions).
     fn joint_span(&self) -> Window<'a> {
         let at = &self.episode.dep_at[self.robot];
-        match (at.get(self.start), self.end.checked_sub(1).and_then(|l| at.get(l))) {
-            (Some(&a), Some(&b)) if self.end > self.start => Window { episode: self.episode, start: a, end: b + 1 },
-            _ => Window { episode: self.episode, start: 0, end: 0 },
+        match (
+            at.get(self.start),
+            self.end.checked_sub(1).and_then(|l| at.get(l)),
+        ) {
+            (Some(&a), Some(&b)) if self.end > self.start => Window {
+                episode: self.episode,
+                start: a,
+                end: b + 1,
+            },
+            _ => Window {
+                episode: self.episode,
+                start: 0,
+                end: 0,
+            },
         }
     }
 }
@@ -257,7 +302,9 @@ pub fn dep_update(
         let (e, i) = (w.episode, w.robot);
         for (kw, k) in ks[s].clone().enumerate() {
             let tr = &e.dep[i][k];
-            let o = e.decisions[e.dep_at[i][k]].robots[i].as_ref().expect("a deciding robot's observation");
+            let o = e.decisions[e.dep_at[i][k]].robots[i]
+                .as_ref()
+                .expect("a deciding robot's observation");
             let idx = s * time + kw;
             unpack_bits(&o.map, &mut seq.maps[idx * map_len..(idx + 1) * map_len]);
             seq.obs[idx * obs_dim..(idx + 1) * obs_dim].copy_from_slice(&o.vec);
@@ -291,16 +338,21 @@ pub fn dep_update(
                         let j = e.dep_at[i][k + 1];
                         let d = &e.decisions[j];
                         let j = j - span.start;
-                        let fixed: Vec<Option<usize>> =
-                            (0..p.team).map(|r| (!d.decided[r]).then_some(d.actions[r])).collect();
+                        let fixed: Vec<Option<usize>> = (0..p.team)
+                            .map(|r| (!d.decided[r]).then_some(d.actions[r]))
+                            .collect();
                         let masks = &d.joint.as_ref().expect("joint observation").masks;
                         let row = (s * ctime + j) * couts..(s * ctime + j + 1) * couts;
-                        let ja = conditional_argmax(&cq[row], masks, &fixed).expect("admissible joint action");
+                        let ja = conditional_argmax(&cq[row], masks, &fixed)
+                            .expect("admissible joint action");
                         joint_actions(ja, p.team, p.goals)[i]
                     }
                     None => {
-                        let o = e.decisions[e.dep_at[i][k + 1]].robots[i].as_ref().expect("observation");
-                        masked_argmax_slice(&qv[(idx + 1) * outputs..(idx + 2) * outputs], &o.mask).expect("valid action")
+                        let o = e.decisions[e.dep_at[i][k + 1]].robots[i]
+                            .as_ref()
+                            .expect("observation");
+                        masked_argmax_slice(&qv[(idx + 1) * outputs..(idx + 2) * outputs], &o.mask)
+                            .expect("valid action")
                     }
                 };
                 y += p.gamma * qt[(idx + 1) * outputs + a];

@@ -31,7 +31,11 @@ pub use madenet_agent::action_mask;
 
 /// Robot `view.id`'s DEP input.
 pub fn robot_obs(view: &AgentView<'_>) -> RobotObs {
-    RobotObs { map: pack_bits(&view.map_image()), vec: view.macro_observation(), mask: action_mask(view) }
+    RobotObs {
+        map: pack_bits(&view.map_image()),
+        vec: view.macro_observation(),
+        mask: action_mask(view),
+    }
 }
 
 /// The CEP's joint input from every robot's view and the team's merged map (row-major, the
@@ -45,7 +49,11 @@ pub fn joint_obs(views: &[AgentView<'_>], team_map: &[Occupancy]) -> JointObs {
         vec.extend(v.macro_observation());
         masks.push(action_mask(v));
     }
-    JointObs { map: pack_bits(&map), vec, masks }
+    JointObs {
+        map: pack_bits(&map),
+        vec,
+        masks,
+    }
 }
 
 /// Which non-map observation vector a DEP reads: the one definition of its layout, used by
@@ -78,7 +86,10 @@ impl Observation {
         let mut z = view.macro_observation();
         if self == Observation::CandidateFeatures {
             let base = z.len();
-            z.resize(base + AgentView::candidate_features_len(view.candidates().slots), 0.0);
+            z.resize(
+                base + AgentView::candidate_features_len(view.candidates().slots),
+                0.0,
+            );
             view.write_candidate_features(sensing_range, &mut z[base..]);
         }
         z

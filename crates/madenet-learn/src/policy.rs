@@ -22,7 +22,16 @@ pub struct DepPolicy {
 impl DepPolicy {
     /// A fresh policy (zero LSTM state) running `net` under registry name `name`.
     pub fn new(name: &str, net: Arc<QNet>) -> Self {
-        DepPolicy { name: name.to_string(), net, state: None, device: crate::cpu(), observation: Observation::Paper, sensing_range: 4, recurrent: true, spread_margin: None }
+        DepPolicy {
+            name: name.to_string(),
+            net,
+            state: None,
+            device: crate::cpu(),
+            observation: Observation::Paper,
+            sensing_range: 4,
+            recurrent: true,
+            spread_margin: None,
+        }
     }
 
     /// Whether the LSTM state is carried from decision to decision (the paper's DEP) or every
@@ -60,10 +69,14 @@ impl Policy for DepPolicy {
         let vec = self.observation.vector(view, self.sensing_range);
         let mask = action_mask(view);
         let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
-        let obs = Tensor::<2>::from_data(TensorData::new(vec.clone(), [1, vec.len()]), &self.device);
+        let obs =
+            Tensor::<2>::from_data(TensorData::new(vec.clone(), [1, vec.len()]), &self.device);
         let (q, state) = self.net.act(maps, obs, self.state.take());
         self.state = self.recurrent.then_some(state);
-        let q = q.into_data().try_into_vec_as::<f32>().expect("Q values readable as f32");
+        let q = q
+            .into_data()
+            .try_into_vec_as::<f32>()
+            .expect("Q values readable as f32");
         // The state advances at every decision, as in training; with no valid candidate the
         // mask offers slot 0 alone, which leaves the robot without a goal (it stays).
         if !view.candidates().valid_mask().contains(&true) {
@@ -72,7 +85,11 @@ impl Policy for DepPolicy {
         let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
         if let Some(margin) = self.spread_margin {
             let spread = madenet_agent::Spread::new(self.sensing_range).scores(view);
-            let anchor = spread.iter().enumerate().filter_map(|(k, s)| s.map(|s| (k, s))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            let anchor = spread
+                .iter()
+                .enumerate()
+                .filter_map(|(k, s)| s.map(|s| (k, s)))
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
             if let Some((k, _)) = anchor {
                 if q[greedy] - q[k] < margin {
                     return Decision::Candidate(k);

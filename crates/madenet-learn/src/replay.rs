@@ -42,7 +42,12 @@ pub struct MacroTransition {
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ReplayError {
     #[error("step {step}: {what} has {got} entries for {robots} robots")]
-    Ragged { step: usize, what: &'static str, got: usize, robots: usize },
+    Ragged {
+        step: usize,
+        what: &'static str,
+        got: usize,
+        robots: usize,
+    },
     #[error("the first step must be a decision of every robot (robot {robot} did not decide)")]
     NoInitialDecision { robot: usize },
     #[error("robot {robot} is out of range for a team of {robots}")]
@@ -52,9 +57,18 @@ pub enum ReplayError {
 fn check(steps: &[PrimitiveStep]) -> Result<usize, ReplayError> {
     let n = steps.first().map_or(0, |s| s.decided.len());
     for (i, s) in steps.iter().enumerate() {
-        for (what, got) in [("decided", s.decided.len()), ("actions", s.actions.len()), ("robot_rewards", s.robot_rewards.len())] {
+        for (what, got) in [
+            ("decided", s.decided.len()),
+            ("actions", s.actions.len()),
+            ("robot_rewards", s.robot_rewards.len()),
+        ] {
             if got != n {
-                return Err(ReplayError::Ragged { step: i, what, got, robots: n });
+                return Err(ReplayError::Ragged {
+                    step: i,
+                    what,
+                    got,
+                    robots: n,
+                });
             }
         }
     }
@@ -82,13 +96,22 @@ fn squeeze(
             let to = starts.get(k + 1).copied();
             let end = to.unwrap_or(len);
             let (actions, decided) = make(from);
-            MacroTransition { from, to, actions, decided, reward: (from..end).map(&reward).sum() }
+            MacroTransition {
+                from,
+                to,
+                actions,
+                decided,
+                reward: (from..end).map(&reward).sum(),
+            }
         })
         .collect()
 }
 
 /// The DEP transitions of `robot`: one per macro action it chose, rewards r_i summed.
-pub fn squeeze_robot(steps: &[PrimitiveStep], robot: usize) -> Result<Vec<MacroTransition>, ReplayError> {
+pub fn squeeze_robot(
+    steps: &[PrimitiveStep],
+    robot: usize,
+) -> Result<Vec<MacroTransition>, ReplayError> {
     let n = check(steps)?;
     if robot >= n && !steps.is_empty() {
         return Err(ReplayError::NoSuchRobot { robot, robots: n });
@@ -117,7 +140,12 @@ mod tests {
     use super::*;
 
     fn step(decided: [bool; 2], actions: [usize; 2], r: [f32; 2], team: f32) -> PrimitiveStep {
-        PrimitiveStep { decided: decided.to_vec(), actions: actions.to_vec(), robot_rewards: r.to_vec(), team_reward: team }
+        PrimitiveStep {
+            decided: decided.to_vec(),
+            actions: actions.to_vec(),
+            robot_rewards: r.to_vec(),
+            team_reward: team,
+        }
     }
 
     /// Robot 0 decides at 0 and 3, robot 1 at 0 and 2; five steps.
@@ -136,18 +164,31 @@ mod tests {
         let e = episode();
         let r0 = squeeze_robot(&e, 0).unwrap();
         assert_eq!(r0.len(), 2);
-        assert_eq!((r0[0].from, r0[0].to, r0[0].actions.clone(), r0[0].reward), (0, Some(3), vec![1], 6.0));
-        assert_eq!((r0[1].from, r0[1].to, r0[1].actions.clone(), r0[1].reward), (3, None, vec![3], 9.0));
+        assert_eq!(
+            (r0[0].from, r0[0].to, r0[0].actions.clone(), r0[0].reward),
+            (0, Some(3), vec![1], 6.0)
+        );
+        assert_eq!(
+            (r0[1].from, r0[1].to, r0[1].actions.clone(), r0[1].reward),
+            (3, None, vec![3], 9.0)
+        );
         let r1 = squeeze_robot(&e, 1).unwrap();
         assert_eq!((r1[0].from, r1[0].to, r1[0].reward), (0, Some(2), 30.0));
-        assert_eq!((r1[1].from, r1[1].to, r1[1].actions.clone(), r1[1].reward), (2, None, vec![0], 120.0));
+        assert_eq!(
+            (r1[1].from, r1[1].to, r1[1].actions.clone(), r1[1].reward),
+            (2, None, vec![0], 120.0)
+        );
     }
 
     #[test]
     fn team_macro_steps_at_joint_valid_steps() {
         let t = squeeze_team(&episode()).unwrap();
-        let spans: Vec<(usize, Option<usize>, f32)> = t.iter().map(|m| (m.from, m.to, m.reward)).collect();
-        assert_eq!(spans, vec![(0, Some(2), 300.0), (2, Some(3), 300.0), (3, None, 900.0)]);
+        let spans: Vec<(usize, Option<usize>, f32)> =
+            t.iter().map(|m| (m.from, m.to, m.reward)).collect();
+        assert_eq!(
+            spans,
+            vec![(0, Some(2), 300.0), (2, Some(3), 300.0), (3, None, 900.0)]
+        );
         // At step 2 only robot 1 decided: robot 0's action stays fixed (conditional argmax).
         assert_eq!(t[1].decided, vec![false, true]);
         assert_eq!(t[1].actions, vec![1, 0]);
@@ -160,11 +201,27 @@ mod tests {
     fn bad_episodes() {
         let mut e = episode();
         e[0].decided[1] = false;
-        assert_eq!(squeeze_team(&e), Err(ReplayError::NoInitialDecision { robot: 1 }));
+        assert_eq!(
+            squeeze_team(&e),
+            Err(ReplayError::NoInitialDecision { robot: 1 })
+        );
         let mut e = episode();
         e[3].actions.pop();
-        assert!(matches!(squeeze_robot(&e, 0), Err(ReplayError::Ragged { step: 3, what: "actions", .. })));
-        assert_eq!(squeeze_robot(&episode(), 2), Err(ReplayError::NoSuchRobot { robot: 2, robots: 2 }));
+        assert!(matches!(
+            squeeze_robot(&e, 0),
+            Err(ReplayError::Ragged {
+                step: 3,
+                what: "actions",
+                ..
+            })
+        ));
+        assert_eq!(
+            squeeze_robot(&episode(), 2),
+            Err(ReplayError::NoSuchRobot {
+                robot: 2,
+                robots: 2
+            })
+        );
         assert_eq!(squeeze_team(&[]), Ok(vec![]));
     }
 }

@@ -31,7 +31,10 @@
 
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
 use crate::policy::DepPolicy;
-use crate::train::{io_err, prepare_run, replace_dir, write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
+use crate::train::{
+    io_err, prepare_run, replace_dir, write_atomic, Method, Model, ModelInfo, NetConfigToml,
+    TrainError,
+};
 use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
@@ -172,30 +175,111 @@ impl RolloutTrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: Self = toml::from_str(&text).map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
-        cfg.validate().map_err(|m| TrainError::Config { path: path.display().to_string(), message: m })?;
+        let cfg: Self = toml::from_str(&text).map_err(|e| TrainError::Config {
+            path: path.display().to_string(),
+            message: e.message().to_string(),
+        })?;
+        cfg.validate().map_err(|m| TrainError::Config {
+            path: path.display().to_string(),
+            message: m,
+        })?;
         Ok(cfg)
     }
 
     /// Checks every field; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
-        self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
+        self.scenario
+            .validate()
+            .map_err(|e| format!("scenario: {e}"))?;
         let unit = |x: f64| (0.0..=1.0).contains(&x);
         let checks: [(bool, &str, &str); 14] = [
-            (self.method == METHOD, "method", "must be `made-net-rollout` in this config"),
-            (self.episodes >= self.iterations.max(1), "episodes", "must be at least `iterations`"),
-            (self.iterations >= 1 && self.iterations <= 1000, "iterations", "must be in 1..=1000"),
-            (self.max_minutes >= 0.0 && self.max_minutes.is_finite(), "max_minutes", "must be ≥ 0"),
-            (self.map_height >= crate::MIN_MAP_SIDE && self.map_width >= crate::MIN_MAP_SIDE && self.map_height <= 200 && self.map_width <= 200, "map_height/map_width", "must be in 12..=200"),
-            (0.0 <= self.density_min && self.density_min <= self.density_max && self.density_max < 0.9, "density_min/density_max", "need 0 ≤ density_min ≤ density_max < 0.9"),
-            (unit(self.corner_start_prob) && unit(self.csp_extreme_prob) && unit(self.behaviour_epsilon), "corner_start_prob/csp_extreme_prob/behaviour_epsilon", "must be in [0, 1]"),
-            (self.rollouts >= 1 && self.rollouts <= 64, "rollouts", "must be in 1..=64"),
-            (self.batch_size >= 1 && self.batch_size <= 1024 && self.trace_len >= 1 && self.trace_len <= 1024, "batch_size/trace_len", "must be in 1..=1024"),
-            (self.learning_rate > 0.0 && self.learning_rate.is_finite(), "learning_rate", "must be positive"),
-            (self.grad_clip_norm > 0.0 && self.label_scale > 0.0 && self.label_scale.is_finite(), "grad_clip_norm/label_scale", "must be positive"),
-            (self.validation_csp.iter().all(|&p| unit(p)) && self.spread_margins.iter().all(|m| m.is_finite() && *m >= 0.0) && self.spread_margins.len() <= 32, "validation_csp/spread_margins", "CSPs must be in [0, 1], margins finite and ≥ 0 (at most 32)"),
-            (self.threads >= 1 && self.threads <= 256, "threads", "must be in 1..=256"),
-            (self.validation_maps >= 1 && self.validation_maps <= 100_000 && !self.validation_csp.is_empty(), "validation_maps/validation_csp", "need at least one map and one CSP"),
+            (
+                self.method == METHOD,
+                "method",
+                "must be `made-net-rollout` in this config",
+            ),
+            (
+                self.episodes >= self.iterations.max(1),
+                "episodes",
+                "must be at least `iterations`",
+            ),
+            (
+                self.iterations >= 1 && self.iterations <= 1000,
+                "iterations",
+                "must be in 1..=1000",
+            ),
+            (
+                self.max_minutes >= 0.0 && self.max_minutes.is_finite(),
+                "max_minutes",
+                "must be ≥ 0",
+            ),
+            (
+                self.map_height >= crate::MIN_MAP_SIDE
+                    && self.map_width >= crate::MIN_MAP_SIDE
+                    && self.map_height <= 200
+                    && self.map_width <= 200,
+                "map_height/map_width",
+                "must be in 12..=200",
+            ),
+            (
+                0.0 <= self.density_min
+                    && self.density_min <= self.density_max
+                    && self.density_max < 0.9,
+                "density_min/density_max",
+                "need 0 ≤ density_min ≤ density_max < 0.9",
+            ),
+            (
+                unit(self.corner_start_prob)
+                    && unit(self.csp_extreme_prob)
+                    && unit(self.behaviour_epsilon),
+                "corner_start_prob/csp_extreme_prob/behaviour_epsilon",
+                "must be in [0, 1]",
+            ),
+            (
+                self.rollouts >= 1 && self.rollouts <= 64,
+                "rollouts",
+                "must be in 1..=64",
+            ),
+            (
+                self.batch_size >= 1
+                    && self.batch_size <= 1024
+                    && self.trace_len >= 1
+                    && self.trace_len <= 1024,
+                "batch_size/trace_len",
+                "must be in 1..=1024",
+            ),
+            (
+                self.learning_rate > 0.0 && self.learning_rate.is_finite(),
+                "learning_rate",
+                "must be positive",
+            ),
+            (
+                self.grad_clip_norm > 0.0 && self.label_scale > 0.0 && self.label_scale.is_finite(),
+                "grad_clip_norm/label_scale",
+                "must be positive",
+            ),
+            (
+                self.validation_csp.iter().all(|&p| unit(p))
+                    && self
+                        .spread_margins
+                        .iter()
+                        .all(|m| m.is_finite() && *m >= 0.0)
+                    && self.spread_margins.len() <= 32,
+                "validation_csp/spread_margins",
+                "CSPs must be in [0, 1], margins finite and ≥ 0 (at most 32)",
+            ),
+            (
+                self.threads >= 1 && self.threads <= 256,
+                "threads",
+                "must be in 1..=256",
+            ),
+            (
+                self.validation_maps >= 1
+                    && self.validation_maps <= 100_000
+                    && !self.validation_csp.is_empty(),
+                "validation_maps/validation_csp",
+                "need at least one map and one CSP",
+            ),
         ];
         for (ok, field, msg) in checks {
             if !ok {
@@ -203,30 +287,55 @@ impl RolloutTrainConfig {
             }
         }
         if self.scenario.num_robots > 3 && self.corner_start_prob > 0.0 {
-            return Err("field `corner_start_prob`: corner starts hold 3 robots; set 0 for larger teams".into());
+            return Err(
+                "field `corner_start_prob`: corner starts hold 3 robots; set 0 for larger teams"
+                    .into(),
+            );
         }
         let builtin = PolicyRegistry::builtin();
         if !builtin.names().contains(&self.base_policy) {
-            return Err(format!("field `base_policy`: unknown `{}`; known: {}", self.base_policy, builtin.names().join(", ")));
+            return Err(format!(
+                "field `base_policy`: unknown `{}`; known: {}",
+                self.base_policy,
+                builtin.names().join(", ")
+            ));
         }
-        let ctx = madenet_sim::PolicyContext { seed: 0, robot: 0, config: &self.scenario, height: self.map_height, width: self.map_width };
-        if builtin.make(&self.base_policy, &ctx).map_err(|e| format!("field `base_policy`: {e}"))?.mode() != DecisionMode::OnTermination {
+        let ctx = madenet_sim::PolicyContext {
+            seed: 0,
+            robot: 0,
+            config: &self.scenario,
+            height: self.map_height,
+            width: self.map_width,
+        };
+        if builtin
+            .make(&self.base_policy, &ctx)
+            .map_err(|e| format!("field `base_policy`: {e}"))?
+            .mode()
+            != DecisionMode::OnTermination
+        {
             return Err(format!("field `base_policy`: `{}` re-decides every step; the teacher needs a rule that chooses among goal candidates (e.g. spread)", self.base_policy));
         }
         if self.goals() < 2 {
-            return Err(format!("field `scenario.goal_count`: |G| = {} leaves no choice to learn; need at least 2", self.goals()));
+            return Err(format!(
+                "field `scenario.goal_count`: |G| = {} leaves no choice to learn; need at least 2",
+                self.goals()
+            ));
         }
         Ok(())
     }
 
     /// |G| on the training maps (Eq. 3 unless the scenario sets it).
     pub fn goals(&self) -> usize {
-        self.scenario.goal_count_for(self.map_height * self.map_width)
+        self.scenario
+            .goal_count_for(self.map_height * self.map_width)
     }
 
     fn net_config(&self) -> NetConfig {
         let (team, goals) = (self.scenario.num_robots, self.goals());
-        NetConfig { obs_dim: self.observation.dim(team, goals), ..NetConfig::dep(self.map_height, self.map_width, team, goals) }
+        NetConfig {
+            obs_dim: self.observation.dim(team, goals),
+            ..NetConfig::dep(self.map_height, self.map_width, team, goals)
+        }
     }
 
     fn episodes_per_iteration(&self) -> u64 {
@@ -248,16 +357,30 @@ pub fn generated_scenario(
     seed: u64,
 ) -> Result<(OccGrid, Vec<Pos>), TrainError> {
     let mut rng = stream(seed, "scenario", 0);
-    let corner = (team <= 3 && rng.random::<f64>() < corner_start_prob).then(|| Corner::ALL[rng.random_range(0..4)]);
-    let keep_free = corner.map_or(Vec::new(), |c| c.start_cells(height, width)[..team].to_vec());
-    let gen = GeneratorConfig { height, width, density_min: density.0, density_max: density.1, keep_free: keep_free.clone() };
-    let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), movement).map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
+    let corner = (team <= 3 && rng.random::<f64>() < corner_start_prob)
+        .then(|| Corner::ALL[rng.random_range(0..4)]);
+    let keep_free = corner.map_or(Vec::new(), |c| {
+        c.start_cells(height, width)[..team].to_vec()
+    });
+    let gen = GeneratorConfig {
+        height,
+        width,
+        density_min: density.0,
+        density_max: density.1,
+        keep_free: keep_free.clone(),
+    };
+    let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), movement)
+        .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
     if !keep_free.is_empty() {
         return Ok((map, keep_free));
     }
     random_starts(&map, team, movement, derive_seed(seed, "starts", 0))
         .map(|starts| (map, starts))
-        .ok_or_else(|| TrainError::Other(format!("generated map {seed}: fewer than {team} connected free cells")))
+        .ok_or_else(|| {
+            TrainError::Other(format!(
+                "generated map {seed}: fewer than {team} connected free cells"
+            ))
+        })
 }
 
 /// Episode `index`'s trial spec (policy left empty): its map, starts, CSP and seed.
@@ -285,7 +408,10 @@ fn episode_spec(cfg: &RolloutTrainConfig, name: &str, index: u64) -> Result<Tria
         map,
         map_name: format!("{name}_{index}"),
         starts,
-        config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..cfg.scenario.clone()
+        },
         policy: String::new(),
         seed,
     })
@@ -339,11 +465,20 @@ pub struct Collected {
 
 /// Runs training episode `index` under `behaviour` (a registry holding policy "behaviour") and
 /// labels every decision with a choice.
-fn collect_episode(cfg: &RolloutTrainConfig, index: u64, behaviour: &PolicyRegistry) -> Result<Collected, TrainError> {
-    let spec = TrialSpec { policy: "behaviour".into(), ..episode_spec(cfg, "train", index)? };
+fn collect_episode(
+    cfg: &RolloutTrainConfig,
+    index: u64,
+    behaviour: &PolicyRegistry,
+) -> Result<Collected, TrainError> {
+    let spec = TrialSpec {
+        policy: "behaviour".into(),
+        ..episode_spec(cfg, "train", index)?
+    };
     let seed = spec.seed;
     let base = PolicyRegistry::builtin();
-    let mut trial = Trial::with_registry(spec, behaviour).map_err(|e| TrainError::Other(e.to_string()))?.timed(false);
+    let mut trial = Trial::with_registry(spec, behaviour)
+        .map_err(|e| TrainError::Other(e.to_string()))?
+        .timed(false);
     let n = trial.agents().len();
     let mut robots = vec![Vec::new(); n];
     let mut rollouts = 0;
@@ -356,7 +491,11 @@ fn collect_episode(cfg: &RolloutTrainConfig, index: u64, behaviour: &PolicyRegis
             }
             let (map, vec, mask) = {
                 let mut view = trial.agent_mut(i).view(true);
-                (pack_bits(&view.map_image()), cfg.observation.vector(&mut view, ds), action_mask(&view))
+                (
+                    pack_bits(&view.map_image()),
+                    cfg.observation.vector(&mut view, ds),
+                    action_mask(&view),
+                )
             };
             let valid = mask.iter().filter(|&&m| m).count();
             let mut target = vec![0.0; mask.len()];
@@ -364,9 +503,18 @@ fn collect_episode(cfg: &RolloutTrainConfig, index: u64, behaviour: &PolicyRegis
             if valid >= 2 && trial.agents()[i].candidates().cells.len() >= 2 {
                 let salts: Vec<Future> = match cfg.futures {
                     Futures::Noiseless => vec![Future::Noiseless],
-                    Futures::Salted => (0..cfg.rollouts as u64).map(|s| Future::Salted(derive_seed(seed, "future", (t * 64 + i as u64) * 64 + s))).collect(),
+                    Futures::Salted => (0..cfg.rollouts as u64)
+                        .map(|s| {
+                            Future::Salted(derive_seed(
+                                seed,
+                                "future",
+                                (t * 64 + i as u64) * 64 + s,
+                            ))
+                        })
+                        .collect(),
                 };
-                let values = candidate_values(&trial, i, &[], &cfg.base_policy, &base, &salts).map_err(|e| TrainError::Other(e.to_string()))?;
+                let values = candidate_values(&trial, i, &[], &cfg.base_policy, &base, &salts)
+                    .map_err(|e| TrainError::Other(e.to_string()))?;
                 rollouts += valid * salts.len();
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
@@ -378,39 +526,74 @@ fn collect_episode(cfg: &RolloutTrainConfig, index: u64, behaviour: &PolicyRegis
                     }
                 }
             }
-            robots[i].push(Labelled { map, vec, train_mask, target });
+            robots[i].push(Labelled {
+                map,
+                vec,
+                train_mask,
+                target,
+            });
         }
         trial.decide_with(&vec![None; n]);
         trial.finish_step();
     }
     let steps = trial.world().t();
-    Ok(Collected { robots, steps, rollouts })
+    Ok(Collected {
+        robots,
+        steps,
+        rollouts,
+    })
 }
 
 /// A registry whose policy "behaviour" is the base rule (no student yet) or the student DEP,
 /// each with ε-random candidates from a stream of the episode's seed and robot.
 fn behaviour_registry(cfg: &RolloutTrainConfig, student: Option<Arc<QNet>>) -> PolicyRegistry {
     let mut r = PolicyRegistry::default();
-    let (base, eps, obs, recurrent) = (PolicyRegistry::builtin(), cfg.behaviour_epsilon, cfg.observation, cfg.recurrent);
+    let (base, eps, obs, recurrent) = (
+        PolicyRegistry::builtin(),
+        cfg.behaviour_epsilon,
+        cfg.observation,
+        cfg.recurrent,
+    );
     let name = cfg.base_policy.clone();
     r.register("behaviour", "data collection", move |ctx| {
         let inner: Box<dyn Policy> = match &student {
-            Some(net) => Box::new(DepPolicy::new("student", Arc::clone(net)).with_observation(obs, ctx.config.sensing_range).with_recurrence(recurrent)),
-            None => base.make(&name, ctx).expect("the base policy is a built-in (validated)"),
+            Some(net) => Box::new(
+                DepPolicy::new("student", Arc::clone(net))
+                    .with_observation(obs, ctx.config.sensing_range)
+                    .with_recurrence(recurrent),
+            ),
+            None => base
+                .make(&name, ctx)
+                .expect("the base policy is a built-in (validated)"),
         };
-        Box::new(Behaviour { inner, epsilon: eps, rng: stream(ctx.seed, "behaviour", ctx.robot as u64) })
+        Box::new(Behaviour {
+            inner,
+            epsilon: eps,
+            rng: stream(ctx.seed, "behaviour", ctx.robot as u64),
+        })
     });
     r
 }
 
 /// One Adam step on a batch of robot windows: masked MSE between the DEP's centred Q values and
 /// the teacher's advantages. Returns the loss.
-fn update(net: QNet, optim: &mut ModuleOptimizer, cfg: &RolloutTrainConfig, windows: &[&[Labelled]]) -> (QNet, f32) {
+fn update(
+    net: QNet,
+    optim: &mut ModuleOptimizer,
+    cfg: &RolloutTrainConfig,
+    windows: &[&[Labelled]],
+) -> (QNet, f32) {
     let (h, w) = (cfg.map_height, cfg.map_width);
     let map_len = 4 * h * w;
-    let (b, t) = (windows.len(), windows.iter().map(|s| s.len()).max().unwrap_or(1).max(1));
+    let (b, t) = (
+        windows.len(),
+        windows.iter().map(|s| s.len()).max().unwrap_or(1).max(1),
+    );
     let g = cfg.goals();
-    let d = windows.iter().find_map(|s| s.first()).map_or(1, |l| l.vec.len());
+    let d = windows
+        .iter()
+        .find_map(|s| s.first())
+        .map_or(1, |l| l.vec.len());
     let (mut maps, mut obs) = (vec![0.0f32; b * t * map_len], vec![0.0f32; b * t * d]);
     let (mut target, mut mask) = (vec![0.0f32; b * t * g], vec![0.0f32; b * t * g]);
     for (bi, seq) in windows.iter().enumerate() {
@@ -435,8 +618,16 @@ fn update(net: QNet, optim: &mut ModuleOptimizer, cfg: &RolloutTrainConfig, wind
     let n = m.clone().sum_dim(2).clamp_min(1.0);
     let mean = q.clone().mul(m.clone()).sum_dim(2).div(n).repeat_dim(2, g);
     let centred = (q - mean).mul(m.clone());
-    let loss = (centred - y).powf_scalar(2.0).mul(m).sum().div_scalar(count);
-    let value = loss.clone().into_data().try_into_vec_as::<f32>().expect("loss readable")[0];
+    let loss = (centred - y)
+        .powf_scalar(2.0)
+        .mul(m)
+        .sum()
+        .div_scalar(count);
+    let value = loss
+        .clone()
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .expect("loss readable")[0];
     let grads = GradientsParams::from_grads(loss.backward(), &net);
     (optim.step(cfg.learning_rate, net, grads), value)
 }
@@ -444,20 +635,41 @@ fn update(net: QNet, optim: &mut ModuleOptimizer, cfg: &RolloutTrainConfig, wind
 /// Mean TNS (and completions) of registry policy `policy` on the validation set: maps and
 /// seeds of their own (`validation` stream), every validation CSP; trials run in parallel and
 /// are summed in order.
-pub fn validate(cfg: &RolloutTrainConfig, registry: &PolicyRegistry, policy: &str) -> Result<(f64, usize, usize), TrainError> {
+pub fn validate(
+    cfg: &RolloutTrainConfig,
+    registry: &PolicyRegistry,
+    policy: &str,
+) -> Result<(f64, usize, usize), TrainError> {
     let specs: Vec<TrialSpec> = (0..cfg.validation_maps as u64)
         .map(|m| episode_spec(cfg, "validation", m))
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
-        .flat_map(|s| cfg.validation_csp.iter().map(move |&csp| TrialSpec { config: ScenarioConfig { comm_success_prob: csp, ..s.config.clone() }, policy: policy.to_string(), ..s.clone() }))
+        .flat_map(|s| {
+            cfg.validation_csp.iter().map(move |&csp| TrialSpec {
+                config: ScenarioConfig {
+                    comm_success_prob: csp,
+                    ..s.config.clone()
+                },
+                policy: policy.to_string(),
+                ..s.clone()
+            })
+        })
         .collect();
     let results: Vec<(usize, bool)> = specs
         .into_par_iter()
-        .map(|s| Trial::with_registry(s, registry).map(|t| t.timed(false).run().metrics).map(|m| (m.tns, m.completed)))
+        .map(|s| {
+            Trial::with_registry(s, registry)
+                .map(|t| t.timed(false).run().metrics)
+                .map(|m| (m.tns, m.completed))
+        })
         .collect::<Result<_, _>>()
         .map_err(|e| TrainError::Other(e.to_string()))?;
     let n = results.len();
-    Ok((results.iter().map(|r| r.0 as f64).sum::<f64>() / n as f64, results.iter().filter(|r| r.1).count(), n))
+    Ok((
+        results.iter().map(|r| r.0 as f64).sum::<f64>() / n as f64,
+        results.iter().filter(|r| r.1).count(),
+        n,
+    ))
 }
 
 /// Counters of a run, checkpointed.
@@ -504,10 +716,21 @@ pub struct Progress {
     pub base_steps: f64,
 }
 
-fn model_info(cfg: &RolloutTrainConfig, state: &State, validation_steps: Option<f64>, spread_margin: Option<f32>) -> ModelInfo {
+fn model_info(
+    cfg: &RolloutTrainConfig,
+    state: &State,
+    validation_steps: Option<f64>,
+    spread_margin: Option<f32>,
+) -> ModelInfo {
     ModelInfo {
         method: Method::MadeNetRollout,
-        dep: NetConfigToml { map_height: cfg.map_height, map_width: cfg.map_width, team_size: cfg.scenario.num_robots, goal_count: cfg.goals(), concat_fc: false },
+        dep: NetConfigToml {
+            map_height: cfg.map_height,
+            map_width: cfg.map_width,
+            team_size: cfg.scenario.num_robots,
+            goal_count: cfg.goals(),
+            concat_fc: false,
+        },
         deps: vec!["dep0.bpk".into()],
         episode: state.episodes,
         updates: state.updates,
@@ -521,7 +744,13 @@ fn model_info(cfg: &RolloutTrainConfig, state: &State, validation_steps: Option<
 fn save_model(dir: &Path, net: &QNet, info: &ModelInfo) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
         let p = tmp.join("dep0.bpk");
-        net.valid().into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+        net.valid()
+            .into_record()
+            .save(&p)
+            .map_err(|e| TrainError::Io {
+                path: p.display().to_string(),
+                message: e.to_string(),
+            })?;
         let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
     })
@@ -530,32 +759,67 @@ fn save_model(dir: &Path, net: &QNet, info: &ModelInfo) -> Result<(), TrainError
 /// Trains into `run_dir` (created; a run directory with a checkpoint resumes from it with its
 /// saved config, which `cfg` may change only in `max_minutes`: the episodes per iteration define
 /// the run). `progress` is called after every iteration.
-pub fn train(run_dir: &Path, cfg: Option<RolloutTrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
-    let (cfg, resuming) = prepare_run(run_dir, cfg, RolloutTrainConfig::from_toml_file, RolloutTrainConfig::validate, |given, saved| {
-        RolloutTrainConfig { max_minutes: saved.max_minutes, ..given.clone() } == *saved
-    })?;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(cfg.threads).build().map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
+pub fn train(
+    run_dir: &Path,
+    cfg: Option<RolloutTrainConfig>,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
+    let (cfg, resuming) = prepare_run(
+        run_dir,
+        cfg,
+        RolloutTrainConfig::from_toml_file,
+        RolloutTrainConfig::validate,
+        |given, saved| {
+            RolloutTrainConfig {
+                max_minutes: saved.max_minutes,
+                ..given.clone()
+            } == *saved
+        },
+    )?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(cfg.threads)
+        .build()
+        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
     pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
 }
 
-fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+fn train_loop(
+    run_dir: &Path,
+    cfg: &RolloutTrainConfig,
+    resuming: bool,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
     let ckpt = run_dir.join("checkpoint");
     let device = cpu_autodiff();
     device.seed(cfg.seed);
     let mut net = cfg.net_config().init(&device)?;
-    let mut optim: ModuleOptimizer = AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm))).init();
+    let mut optim: ModuleOptimizer = AdamConfig::new()
+        .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
+        .init();
     let (mut state, mut data): (State, Vec<Vec<Labelled>>) = if resuming {
         let sp = ckpt.join("state.json");
         let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-        let state = serde_json::from_str(&text).map_err(|e| TrainError::Config { path: sp.display().to_string(), message: e.to_string() })?;
+        let state = serde_json::from_str(&text).map_err(|e| TrainError::Config {
+            path: sp.display().to_string(),
+            message: e.to_string(),
+        })?;
         let dp = ckpt.join("data.bin");
         let bytes = std::fs::read(&dp).map_err(io_err(&dp))?;
-        let data = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config { path: dp.display().to_string(), message: e.to_string() })?;
+        let data = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
+            path: dp.display().to_string(),
+            message: e.to_string(),
+        })?;
         let np = ckpt.join("dep0.bpk");
-        let rec = ModuleRecord::load(&np).map_err(|e| TrainError::Io { path: np.display().to_string(), message: e.to_string() })?;
+        let rec = ModuleRecord::load(&np).map_err(|e| TrainError::Io {
+            path: np.display().to_string(),
+            message: e.to_string(),
+        })?;
         net = net.load_record(rec);
         let op = ckpt.join("optim.bpk");
-        optim = optim.load(&op).map_err(|e| TrainError::Io { path: op.display().to_string(), message: e.to_string() })?;
+        optim = optim.load(&op).map_err(|e| TrainError::Io {
+            path: op.display().to_string(),
+            message: e.to_string(),
+        })?;
         (state, data)
     } else {
         (State::default(), Vec::new())
@@ -563,7 +827,15 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
     // The log keeps what the checkpoint has seen.
     let log_path = run_dir.join("iterations.csv");
     let mut rows: Vec<IterationRow> = if resuming && log_path.exists() {
-        csv::Reader::from_path(&log_path).map_err(|e| TrainError::Io { path: log_path.display().to_string(), message: e.to_string() })?.deserialize().filter_map(Result::ok).filter(|r: &IterationRow| r.iteration < state.iteration).collect()
+        csv::Reader::from_path(&log_path)
+            .map_err(|e| TrainError::Io {
+                path: log_path.display().to_string(),
+                message: e.to_string(),
+            })?
+            .deserialize()
+            .filter_map(Result::ok)
+            .filter(|r: &IterationRow| r.iteration < state.iteration)
+            .collect()
     } else {
         Vec::new()
     };
@@ -578,11 +850,23 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
         let behaviour = behaviour_registry(cfg, student);
         let per = cfg.episodes_per_iteration();
         let first = state.iteration * per;
-        let collected: Vec<Collected> = (first..first + per).into_par_iter().map(|e| collect_episode(cfg, e, &behaviour)).collect::<Result<_, _>>()?;
-        let decisions: usize = collected.iter().map(|c| c.robots.iter().map(Vec::len).sum::<usize>()).sum();
+        let collected: Vec<Collected> = (first..first + per)
+            .into_par_iter()
+            .map(|e| collect_episode(cfg, e, &behaviour))
+            .collect::<Result<_, _>>()?;
+        let decisions: usize = collected
+            .iter()
+            .map(|c| c.robots.iter().map(Vec::len).sum::<usize>())
+            .sum();
         let rollouts: usize = collected.iter().map(|c| c.rollouts).sum();
-        let behaviour_steps = collected.iter().map(|c| c.steps as f64).sum::<f64>() / collected.len().max(1) as f64;
-        data.extend(collected.into_iter().flat_map(|c| c.robots).filter(|s| !s.is_empty()));
+        let behaviour_steps =
+            collected.iter().map(|c| c.steps as f64).sum::<f64>() / collected.len().max(1) as f64;
+        data.extend(
+            collected
+                .into_iter()
+                .flat_map(|c| c.robots)
+                .filter(|s| !s.is_empty()),
+        );
         if data.is_empty() {
             return Err(TrainError::Other("no robot decided in any training episode so far (are the maps seen whole from the start?)".into()));
         }
@@ -595,7 +879,11 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
             let windows: Vec<&[Labelled]> = (0..cfg.batch_size)
                 .map(|_| {
                     let seq = &data[rng.random_range(0..data.len())];
-                    let start = if seq.len() > trace_len { rng.random_range(0..=seq.len() - trace_len) } else { 0 };
+                    let start = if seq.len() > trace_len {
+                        rng.random_range(0..=seq.len() - trace_len)
+                    } else {
+                        0
+                    };
                     &seq[start..(start + trace_len).min(seq.len())]
                 })
                 .collect();
@@ -608,17 +896,28 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
         // 5. Validate the greedy DEP and each conservative margin; keep the best.
         let mut tried = Vec::new();
         for margin in std::iter::once(None).chain(cfg.spread_margins.iter().copied().map(Some)) {
-            let model = Model { info: model_info(cfg, &state, None, margin), deps: vec![Arc::new(net.valid())] };
+            let model = Model {
+                info: model_info(cfg, &state, None, margin),
+                deps: vec![Arc::new(net.valid())],
+            };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEP being trained");
             let (steps, completed, trials) = validate(cfg, &registry, "candidate")?;
             tried.push((margin, steps, completed, trials));
         }
-        let (margin, steps, completed, trials) = tried.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1)).expect("the greedy DEP is tried");
+        let (margin, steps, completed, trials) = tried
+            .iter()
+            .copied()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("the greedy DEP is tried");
         let greedy_steps = tried[0].1;
         if state.best_validation.is_none_or(|b| steps < b) {
             state.best_validation = Some(steps);
-            save_model(&run_dir.join("best"), &net.valid(), &model_info(cfg, &state, Some(steps), margin))?;
+            save_model(
+                &run_dir.join("best"),
+                &net.valid(),
+                &model_info(cfg, &state, Some(steps), margin),
+            )?;
         }
         state.wall_s = wall0 + started.elapsed().as_secs_f64();
         rows.push(IterationRow {
@@ -639,23 +938,51 @@ fn train_loop(run_dir: &Path, cfg: &RolloutTrainConfig, resuming: bool, progress
         });
         let mut w = csv::Writer::from_writer(Vec::new());
         for r in &rows {
-            w.serialize(r).map_err(|e| TrainError::Other(e.to_string()))?;
+            w.serialize(r)
+                .map_err(|e| TrainError::Other(e.to_string()))?;
         }
-        write_atomic(&log_path, &w.into_inner().map_err(|e| TrainError::Other(e.to_string()))?)?;
+        write_atomic(
+            &log_path,
+            &w.into_inner()
+                .map_err(|e| TrainError::Other(e.to_string()))?,
+        )?;
         // Checkpoint: counters, dataset, net, optimizer.
         replace_dir(&ckpt, |tmp| {
-            let bytes = postcard::to_stdvec(&data).map_err(|e| TrainError::Other(format!("dataset encoding: {e}")))?;
+            let bytes = postcard::to_stdvec(&data)
+                .map_err(|e| TrainError::Other(format!("dataset encoding: {e}")))?;
             std::fs::write(tmp.join("data.bin"), bytes).map_err(io_err(&tmp.join("data.bin")))?;
             let p = tmp.join("dep0.bpk");
-            net.clone().into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+            net.clone()
+                .into_record()
+                .save(&p)
+                .map_err(|e| TrainError::Io {
+                    path: p.display().to_string(),
+                    message: e.to_string(),
+                })?;
             let p = tmp.join("optim.bpk");
-            optim.save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
-            let text = serde_json::to_string_pretty(&state).map_err(|e| TrainError::Other(e.to_string()))?;
+            optim.save(&p).map_err(|e| TrainError::Io {
+                path: p.display().to_string(),
+                message: e.to_string(),
+            })?;
+            let text = serde_json::to_string_pretty(&state)
+                .map_err(|e| TrainError::Other(e.to_string()))?;
             std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
         })?;
-        save_model(&run_dir.join("last"), &net.valid(), &model_info(cfg, &state, Some(steps), margin))?;
+        save_model(
+            &run_dir.join("last"),
+            &net.valid(),
+            &model_info(cfg, &state, Some(steps), margin),
+        )?;
         let r = rows.last().expect("just pushed");
-        progress(&Progress { iteration: state.iteration, iterations: cfg.iterations, episodes: state.episodes, decisions, loss: r.loss, validation_steps: steps, base_steps });
+        progress(&Progress {
+            iteration: state.iteration,
+            iterations: cfg.iterations,
+            episodes: state.episodes,
+            decisions,
+            loss: r.loss,
+            validation_steps: steps,
+            base_steps,
+        });
         if cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0 {
             break;
         }
@@ -676,14 +1003,19 @@ mod tests {
         let cfg = RolloutTrainConfig::default();
         let behaviour = behaviour_registry(&cfg, None);
         let collect = |r: std::ops::Range<u64>| -> Vec<Vec<Labelled>> {
-            r.into_par_iter().map(|e| collect_episode(&cfg, e, &behaviour).unwrap()).flat_map_iter(|c| c.robots).collect()
+            r.into_par_iter()
+                .map(|e| collect_episode(&cfg, e, &behaviour).unwrap())
+                .flat_map_iter(|c| c.robots)
+                .collect()
         };
         let train = collect(0..600);
         let test = collect(1000..1040);
         let device = cpu_autodiff();
         device.seed(1);
         let mut net = cfg.net_config().init(&device).unwrap();
-        let mut optim: ModuleOptimizer = AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(10.0))).init();
+        let mut optim: ModuleOptimizer = AdamConfig::new()
+            .with_grad_clipping(Some(GradientClippingConfig::Norm(10.0)))
+            .init();
         let regret = |net: &QNet| {
             let (mut agree, mut n, mut reg, mut reg0, mut reg_s) = (0, 0, 0.0, 0.0, 0.0);
             let plain = net.valid();
@@ -696,14 +1028,26 @@ mod tests {
                     let mut m = vec![0.0; 4 * h * w];
                     unpack_bits(&l.map, &mut m);
                     let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &cpu());
-                    let obs = Tensor::<2>::from_data(TensorData::new(l.vec.clone(), [1, l.vec.len()]), &cpu());
-                    let q = plain.act(maps, obs, None).0.into_data().try_into_vec_as::<f32>().unwrap();
+                    let obs = Tensor::<2>::from_data(
+                        TensorData::new(l.vec.clone(), [1, l.vec.len()]),
+                        &cpu(),
+                    );
+                    let q = plain
+                        .act(maps, obs, None)
+                        .0
+                        .into_data()
+                        .try_into_vec_as::<f32>()
+                        .unwrap();
                     let pick = crate::masked_argmax_slice(&q, &l.train_mask).unwrap();
                     let best = crate::masked_argmax_slice(&l.target, &l.train_mask).unwrap();
                     // nearest = rank feature 0
                     let base = crate::obs_dim_for(3, 4);
-                    let near = (0..4).find(|&k| l.train_mask[k] && l.vec[base + k * 9 + 6] == 0.0).unwrap_or(0);
-                    let sp = (0..4).find(|&k| l.train_mask[k] && l.vec[base + k * 9 + 8] == 1.0).unwrap_or(0);
+                    let near = (0..4)
+                        .find(|&k| l.train_mask[k] && l.vec[base + k * 9 + 6] == 0.0)
+                        .unwrap_or(0);
+                    let sp = (0..4)
+                        .find(|&k| l.train_mask[k] && l.vec[base + k * 9 + 8] == 1.0)
+                        .unwrap_or(0);
                     reg_s += (l.target[best] - l.target[sp]) / cfg.label_scale;
                     agree += (pick == best) as usize;
                     n += 1;
@@ -711,9 +1055,20 @@ mod tests {
                     reg0 += (l.target[best] - l.target[near]) / cfg.label_scale;
                 }
             }
-            (agree as f64 / n as f64, reg / n as f32, reg0 / n as f32, reg_s / n as f32, n)
+            (
+                agree as f64 / n as f64,
+                reg / n as f32,
+                reg0 / n as f32,
+                reg_s / n as f32,
+                n,
+            )
         };
-        eprintln!("train seqs {} test seqs {}; before: {:?}", train.len(), test.len(), regret(&net));
+        eprintln!(
+            "train seqs {} test seqs {}; before: {:?}",
+            train.len(),
+            test.len(),
+            regret(&net)
+        );
         for u in 0..3000u64 {
             let mut rng = stream(1, "sample", u);
             let windows: Vec<&[Labelled]> = (0..128)
@@ -726,7 +1081,10 @@ mod tests {
             let (next, loss) = update(net, &mut optim, &cfg, &windows);
             net = next;
             if u % 500 == 499 {
-                eprintln!("update {u}: loss {loss:.4}; (agree, regret, nearest regret, n) {:?}", regret(&net));
+                eprintln!(
+                    "update {u}: loss {loss:.4}; (agree, regret, nearest regret, n) {:?}",
+                    regret(&net)
+                );
             }
         }
     }

@@ -34,10 +34,12 @@ pub fn names() -> Vec<&'static str> {
 
 /// Loads shipped model `name`.
 pub fn model(name: &str) -> Result<Model, TrainError> {
-    let (_, _, toml, weights) = SHIPPED
-        .iter()
-        .find(|s| s.0 == name)
-        .ok_or_else(|| TrainError::Other(format!("no shipped model `{name}`; shipped: {}", names().join(", "))))?;
+    let (_, _, toml, weights) = SHIPPED.iter().find(|s| s.0 == name).ok_or_else(|| {
+        TrainError::Other(format!(
+            "no shipped model `{name}`; shipped: {}",
+            names().join(", ")
+        ))
+    })?;
     Model::from_bytes(toml, &[weights], &format!("models/{name}/model.toml"))
 }
 

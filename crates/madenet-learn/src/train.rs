@@ -29,7 +29,6 @@ use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParam
 use crate::obs::Observation;
 use crate::policy::DepPolicy;
 use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
-use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
@@ -37,6 +36,7 @@ use burn::store::ModuleRecord;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -196,16 +196,24 @@ pub enum TrainError {
 
 /// An I/O error naming `path`.
 pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
-    move |e| TrainError::Io { path: path.display().to_string(), message: e.to_string() }
+    move |e| TrainError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
 }
 
 impl TrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: TrainConfig = toml::from_str(&text)
-            .map_err(|e| TrainError::Config { path: path.display().to_string(), message: e.message().to_string() })?;
-        cfg.validate().map_err(|m| TrainError::Config { path: path.display().to_string(), message: m })?;
+        let cfg: TrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config {
+            path: path.display().to_string(),
+            message: e.message().to_string(),
+        })?;
+        cfg.validate().map_err(|m| TrainError::Config {
+            path: path.display().to_string(),
+            message: m,
+        })?;
         Ok(cfg)
     }
 
@@ -214,22 +222,79 @@ impl TrainConfig {
         if self.method == Method::MadeNetRollout {
             return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", crate::rollout_train::METHOD));
         }
-        self.scenario.validate().map_err(|e| format!("scenario: {e}"))?;
+        self.scenario
+            .validate()
+            .map_err(|e| format!("scenario: {e}"))?;
         let checks: [(bool, &str, String); 14] = [
             (self.episodes >= 1, "episodes", "must be at least 1".into()),
-            (self.max_minutes >= 0.0 && self.max_minutes.is_finite(), "max_minutes", "must be ≥ 0".into()),
-            (self.map_height >= crate::MIN_MAP_SIDE && self.map_width >= crate::MIN_MAP_SIDE, "map_height/map_width", format!("must be at least {}", crate::MIN_MAP_SIDE)),
-            (0.0 <= self.density_min && self.density_min <= self.density_max && self.density_max < 0.9, "density_min/density_max", "need 0 ≤ density_min ≤ density_max < 0.9".into()),
-            ((0.0..=1.0).contains(&self.gamma), "gamma", "must be in [0, 1]".into()),
-            (self.batch_size >= 1 && self.trace_len >= 1, "batch_size/trace_len", "must be at least 1".into()),
-            (self.learning_rate > 0.0 && self.learning_rate.is_finite(), "learning_rate", "must be positive".into()),
-            (self.grad_clip_norm > 0.0, "grad_clip_norm", "must be positive".into()),
-            (self.reward_scale > 0.0 && self.reward_scale.is_finite(), "reward_scale", "must be positive".into()),
-            (self.replay_episodes >= self.batch_size, "replay_episodes", "must be at least batch_size".into()),
-            (self.target_update_every >= 1, "target_update_every", "must be at least 1".into()),
-            ((0.0..=1.0).contains(&self.epsilon_start) && (0.0..=1.0).contains(&self.epsilon_end), "epsilon_start/epsilon_end", "must be in [0, 1]".into()),
-            (self.validation_csp.iter().all(|p| (0.0..=1.0).contains(p)), "validation_csp", "every CSP must be in [0, 1]".into()),
-            (self.threads >= 1 && self.checkpoint_every >= 1, "threads/checkpoint_every", "must be at least 1".into()),
+            (
+                self.max_minutes >= 0.0 && self.max_minutes.is_finite(),
+                "max_minutes",
+                "must be ≥ 0".into(),
+            ),
+            (
+                self.map_height >= crate::MIN_MAP_SIDE && self.map_width >= crate::MIN_MAP_SIDE,
+                "map_height/map_width",
+                format!("must be at least {}", crate::MIN_MAP_SIDE),
+            ),
+            (
+                0.0 <= self.density_min
+                    && self.density_min <= self.density_max
+                    && self.density_max < 0.9,
+                "density_min/density_max",
+                "need 0 ≤ density_min ≤ density_max < 0.9".into(),
+            ),
+            (
+                (0.0..=1.0).contains(&self.gamma),
+                "gamma",
+                "must be in [0, 1]".into(),
+            ),
+            (
+                self.batch_size >= 1 && self.trace_len >= 1,
+                "batch_size/trace_len",
+                "must be at least 1".into(),
+            ),
+            (
+                self.learning_rate > 0.0 && self.learning_rate.is_finite(),
+                "learning_rate",
+                "must be positive".into(),
+            ),
+            (
+                self.grad_clip_norm > 0.0,
+                "grad_clip_norm",
+                "must be positive".into(),
+            ),
+            (
+                self.reward_scale > 0.0 && self.reward_scale.is_finite(),
+                "reward_scale",
+                "must be positive".into(),
+            ),
+            (
+                self.replay_episodes >= self.batch_size,
+                "replay_episodes",
+                "must be at least batch_size".into(),
+            ),
+            (
+                self.target_update_every >= 1,
+                "target_update_every",
+                "must be at least 1".into(),
+            ),
+            (
+                (0.0..=1.0).contains(&self.epsilon_start)
+                    && (0.0..=1.0).contains(&self.epsilon_end),
+                "epsilon_start/epsilon_end",
+                "must be in [0, 1]".into(),
+            ),
+            (
+                self.validation_csp.iter().all(|p| (0.0..=1.0).contains(p)),
+                "validation_csp",
+                "every CSP must be in [0, 1]".into(),
+            ),
+            (
+                self.threads >= 1 && self.checkpoint_every >= 1,
+                "threads/checkpoint_every",
+                "must be at least 1".into(),
+            ),
         ];
         for (ok, field, msg) in checks {
             if !ok {
@@ -237,14 +302,17 @@ impl TrainConfig {
             }
         }
         if self.validate_every > 0 && self.validation_maps == 0 {
-            return Err("field `validation_maps`: must be at least 1 when validate_every > 0".into());
+            return Err(
+                "field `validation_maps`: must be at least 1 when validate_every > 0".into(),
+            );
         }
         Ok(())
     }
 
     /// |G| on the training maps.
     pub fn goals(&self) -> usize {
-        self.scenario.goal_count_for(self.map_height * self.map_width)
+        self.scenario
+            .goal_count_for(self.map_height * self.map_width)
     }
 
     fn team(&self) -> usize {
@@ -253,12 +321,14 @@ impl TrainConfig {
 
     /// The CEP's network config.
     pub fn cep_config(&self) -> NetConfig {
-        NetConfig::cep(self.map_height, self.map_width, self.team(), self.goals()).with_concat_fc(self.concat_fc)
+        NetConfig::cep(self.map_height, self.map_width, self.team(), self.goals())
+            .with_concat_fc(self.concat_fc)
     }
 
     /// A DEP's network config.
     pub fn dep_config(&self) -> NetConfig {
-        NetConfig::dep(self.map_height, self.map_width, self.team(), self.goals()).with_concat_fc(self.concat_fc)
+        NetConfig::dep(self.map_height, self.map_width, self.team(), self.goals())
+            .with_concat_fc(self.concat_fc)
     }
 
     /// ε after `episode` episodes.
@@ -304,9 +374,18 @@ pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<P
         .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
     let team = cfg.team();
     // The anchor is the first draw of the `scenario` stream, as it always was.
-    random_starts(&map, team, cfg.scenario.movement, derive_seed(seed, "scenario", 0))
-        .map(|starts| (map, starts))
-        .ok_or_else(|| TrainError::Other(format!("training map {seed}: fewer than {team} connected free cells")))
+    random_starts(
+        &map,
+        team,
+        cfg.scenario.movement,
+        derive_seed(seed, "scenario", 0),
+    )
+    .map(|starts| (map, starts))
+    .ok_or_else(|| {
+        TrainError::Other(format!(
+            "training map {seed}: fewer than {team} connected free cells"
+        ))
+    })
 }
 
 /// What [`train`] reports after each iteration (for a progress bar).
@@ -349,23 +428,43 @@ impl Replay {
     /// `n` windows of `trace_len + 1` joint decisions (the CEP's): episodes drawn uniformly
     /// with replacement; each window's start uniform in `−trace_len..len` and clipped at 0, so
     /// that every decision, the first ones included, is in the same number of windows.
-    fn sample(&self, n: usize, trace_len: usize, rng: &mut madenet_world::rng::Rng) -> Vec<Window<'_>> {
+    fn sample(
+        &self,
+        n: usize,
+        trace_len: usize,
+        rng: &mut madenet_world::rng::Rng,
+    ) -> Vec<Window<'_>> {
         (0..n)
             .map(|_| {
                 let e = &self.episodes[rng.random_range(0..self.episodes.len())];
-                Window::new(e, window_start(e.decisions.len(), trace_len, rng), trace_len)
+                Window::new(
+                    e,
+                    window_start(e.decisions.len(), trace_len, rng),
+                    trace_len,
+                )
             })
             .collect()
     }
 
     /// `n` windows of `trace_len + 1` decisions of one robot of `robots` (drawn uniformly), for
     /// a DEP; starts drawn like [`Replay::sample`]'s in the robot's own decisions.
-    fn sample_robots(&self, n: usize, trace_len: usize, robots: &[usize], rng: &mut madenet_world::rng::Rng) -> Vec<RobotWindow<'_>> {
+    fn sample_robots(
+        &self,
+        n: usize,
+        trace_len: usize,
+        robots: &[usize],
+        rng: &mut madenet_world::rng::Rng,
+    ) -> Vec<RobotWindow<'_>> {
         (0..n)
             .map(|_| {
                 let e = &self.episodes[rng.random_range(0..self.episodes.len())];
                 let robot = robots[rng.random_range(0..robots.len())];
-                RobotWindow::new(e, robot, window_start(e.dep[robot].len(), trace_len, rng), trace_len)
+                RobotWindow::new(
+                    e,
+                    robot,
+                    window_start(e.dep[robot].len(), trace_len, rng),
+                    trace_len,
+                )
             })
             .collect()
     }
@@ -387,7 +486,9 @@ impl Nets {
         let device = cpu_autodiff();
         device.seed(cfg.seed);
         let optim = || {
-            AdamConfig::new().with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm))).init()
+            AdamConfig::new()
+                .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
+                .init()
         };
         let cep = match cfg.method {
             Method::MadeNet => {
@@ -426,11 +527,20 @@ impl Nets {
     fn save(&self, dir: &Path) -> Result<(), TrainError> {
         let save_net = |net: &QNet, stem: &str| -> Result<(), TrainError> {
             let path = dir.join(format!("{stem}.bpk"));
-            net.clone().into_record().save(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+            net.clone()
+                .into_record()
+                .save(&path)
+                .map_err(|e| TrainError::Io {
+                    path: path.display().to_string(),
+                    message: e.to_string(),
+                })
         };
         let save_opt = |op: &ModuleOptimizer, stem: &str| -> Result<(), TrainError> {
             let path = dir.join(format!("{stem}.bpk"));
-            op.save(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+            op.save(&path).map_err(|e| TrainError::Io {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })
         };
         if let Some((o, t, op)) = &self.cep {
             save_net(o, "cep")?;
@@ -448,18 +558,32 @@ impl Nets {
     fn load(mut self, dir: &Path) -> Result<Self, TrainError> {
         let rec = |stem: &str| -> Result<ModuleRecord, TrainError> {
             let path = dir.join(format!("{stem}.bpk"));
-            ModuleRecord::load(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+            ModuleRecord::load(&path).map_err(|e| TrainError::Io {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })
         };
         let opt = |op: ModuleOptimizer, stem: &str| -> Result<ModuleOptimizer, TrainError> {
             let path = dir.join(format!("{stem}.bpk"));
-            op.load(&path).map_err(|e| TrainError::Io { path: path.display().to_string(), message: e.to_string() })
+            op.load(&path).map_err(|e| TrainError::Io {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })
         };
         if let Some((o, t, op)) = self.cep.take() {
-            self.cep = Some((o.load_record(rec("cep")?), t.load_record(rec("cep_target")?), opt(op, "cep_optim")?));
+            self.cep = Some((
+                o.load_record(rec("cep")?),
+                t.load_record(rec("cep_target")?),
+                opt(op, "cep_optim")?,
+            ));
         }
         let deps = std::mem::take(&mut self.deps);
         for (k, (o, t, op)) in deps.into_iter().enumerate() {
-            self.deps.push((o.load_record(rec(&format!("dep{k}"))?), t.load_record(rec(&format!("dep{k}_target"))?), opt(op, &format!("dep{k}_optim"))?));
+            self.deps.push((
+                o.load_record(rec(&format!("dep{k}"))?),
+                t.load_record(rec(&format!("dep{k}_target"))?),
+                opt(op, &format!("dep{k}_optim"))?,
+            ));
         }
         Ok(self)
     }
@@ -521,36 +645,66 @@ impl Model {
         let mut files = Vec::new();
         for f in &info.deps {
             let p = dir.join(f);
-            files.push((p.display().to_string(), std::fs::read(&p).map_err(io_err(&p))?));
+            files.push((
+                p.display().to_string(),
+                std::fs::read(&p).map_err(io_err(&p))?,
+            ));
         }
         Self::from_parts(info, files, &path.display().to_string())
     }
 
     /// A model from the text of its `model.toml` and its weight files' bytes, in the order of
     /// its `deps` list (`label` names it in errors).
-    pub fn from_bytes(model_toml: &str, weights: &[&[u8]], label: &str) -> Result<Self, TrainError> {
+    pub fn from_bytes(
+        model_toml: &str,
+        weights: &[&[u8]],
+        label: &str,
+    ) -> Result<Self, TrainError> {
         let info = Self::parse_info(model_toml, label)?;
-        let files = info.deps.iter().cloned().zip(weights.iter().map(|w| w.to_vec())).collect();
+        let files = info
+            .deps
+            .iter()
+            .cloned()
+            .zip(weights.iter().map(|w| w.to_vec()))
+            .collect();
         Self::from_parts(info, files, label)
     }
 
     fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
-        toml::from_str(text).map_err(|e| TrainError::Config { path: label.to_string(), message: e.message().to_string() })
+        toml::from_str(text).map_err(|e| TrainError::Config {
+            path: label.to_string(),
+            message: e.message().to_string(),
+        })
     }
 
-    fn from_parts(info: ModelInfo, files: Vec<(String, Vec<u8>)>, label: &str) -> Result<Self, TrainError> {
+    fn from_parts(
+        info: ModelInfo,
+        files: Vec<(String, Vec<u8>)>,
+        label: &str,
+    ) -> Result<Self, TrainError> {
         let d = &info.dep;
         let cfg = NetConfig {
             obs_dim: info.observation.dim(d.team_size, d.goal_count),
-            ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count).with_concat_fc(d.concat_fc)
+            ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count)
+                .with_concat_fc(d.concat_fc)
         };
         if files.len() != info.deps.len() || files.is_empty() {
-            return Err(TrainError::Config { path: label.to_string(), message: format!("field `deps`: {} weight files listed, {} given", info.deps.len(), files.len()) });
+            return Err(TrainError::Config {
+                path: label.to_string(),
+                message: format!(
+                    "field `deps`: {} weight files listed, {} given",
+                    info.deps.len(),
+                    files.len()
+                ),
+            });
         }
         let mut deps = Vec::new();
         for (name, bytes) in files {
             let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
-                .map_err(|e| TrainError::Io { path: name.clone(), message: e.to_string() })?;
+                .map_err(|e| TrainError::Io {
+                    path: name.clone(),
+                    message: e.to_string(),
+                })?;
             deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
         }
         Ok(Model { info, deps })
@@ -558,10 +712,17 @@ impl Model {
 
     /// Why this model cannot act in a scenario, if it cannot: the networks are built for one
     /// map size, team size and |G| (the paper trains one model per environment and team).
-    pub fn check(&self, height: usize, width: usize, scenario: &ScenarioConfig) -> Result<(), String> {
+    pub fn check(
+        &self,
+        height: usize,
+        width: usize,
+        scenario: &ScenarioConfig,
+    ) -> Result<(), String> {
         let d = &self.info.dep;
         let goals = scenario.goal_count_for(height * width);
-        if (height, width, scenario.num_robots, goals) != (d.map_height, d.map_width, d.team_size, d.goal_count) {
+        if (height, width, scenario.num_robots, goals)
+            != (d.map_height, d.map_width, d.team_size, d.goal_count)
+        {
             return Err(format!(
                 "the model was trained for {}×{} maps, {} robots and |G| = {}; this scenario has {height}×{width}, {} robots and |G| = {goals} (train a model for it with `madenet train`)",
                 d.map_height, d.map_width, d.team_size, d.goal_count, scenario.num_robots
@@ -575,12 +736,35 @@ impl Model {
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
         let deps = self.deps.clone();
         let owned = name.to_string();
-        let info = Model { info: self.info.clone(), deps: Vec::new() };
-        let (observation, recurrent, margin) = (self.info.observation, self.info.recurrent, self.info.spread_margin);
-        registry.register_checked(name, about, move |ctx| info.check(ctx.height, ctx.width, ctx.config), move |ctx| {
-            let net = Arc::clone(&deps[if deps.len() == 1 { 0 } else { ctx.robot.min(deps.len() - 1) }]);
-            Box::new(DepPolicy::new(&owned, net).with_observation(observation, ctx.config.sensing_range).with_recurrence(recurrent).with_spread_margin(margin))
-        });
+        let info = Model {
+            info: self.info.clone(),
+            deps: Vec::new(),
+        };
+        let (observation, recurrent, margin) = (
+            self.info.observation,
+            self.info.recurrent,
+            self.info.spread_margin,
+        );
+        registry.register_checked(
+            name,
+            about,
+            move |ctx| info.check(ctx.height, ctx.width, ctx.config),
+            move |ctx| {
+                let net = Arc::clone(
+                    &deps[if deps.len() == 1 {
+                        0
+                    } else {
+                        ctx.robot.min(deps.len() - 1)
+                    }],
+                );
+                Box::new(
+                    DepPolicy::new(&owned, net)
+                        .with_observation(observation, ctx.config.sensing_range)
+                        .with_recurrence(recurrent)
+                        .with_spread_margin(margin),
+                )
+            },
+        );
     }
 }
 
@@ -588,13 +772,18 @@ impl Model {
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
     let tmp = path.with_extension("tmp");
     let mut f = std::fs::File::create(&tmp).map_err(io_err(&tmp))?;
-    f.write_all(bytes).and_then(|_| f.sync_all()).map_err(io_err(&tmp))?;
+    f.write_all(bytes)
+        .and_then(|_| f.sync_all())
+        .map_err(io_err(&tmp))?;
     std::fs::rename(&tmp, path).map_err(io_err(path))
 }
 
 /// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
 /// half-written `dir`: the old one is moved to `dir.old` first and removed last.
-pub fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError>) -> Result<(), TrainError> {
+pub fn replace_dir(
+    dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), TrainError>,
+) -> Result<(), TrainError> {
     let tmp = dir.with_extension("tmp");
     let old = dir.with_extension("old");
     if tmp.exists() {
@@ -617,7 +806,11 @@ pub fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<(), TrainError
 
 /// Validation: the greedy DEPs, decentralized, on the fixed generated validation maps at each
 /// validation CSP. Returns (mean steps, mean team return, completed, trials).
-pub fn validate_policy(cfg: &TrainConfig, registry: &PolicyRegistry, policy: &str) -> Result<(f64, f64, usize, usize), TrainError> {
+pub fn validate_policy(
+    cfg: &TrainConfig,
+    registry: &PolicyRegistry,
+    policy: &str,
+) -> Result<(f64, f64, usize, usize), TrainError> {
     let (mut steps, mut ret, mut done, mut n) = (0.0, 0.0, 0, 0);
     for m in 0..cfg.validation_maps {
         let seed = derive_seed(cfg.seed, "validation", m as u64);
@@ -627,11 +820,15 @@ pub fn validate_policy(cfg: &TrainConfig, registry: &PolicyRegistry, policy: &st
                 map: map.clone(),
                 map_name: format!("validation_{m}"),
                 starts: starts.clone(),
-                config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+                config: ScenarioConfig {
+                    comm_success_prob: csp,
+                    ..cfg.scenario.clone()
+                },
                 policy: policy.to_string(),
                 seed,
             };
-            let mut trial = Trial::with_registry(spec, registry).map_err(|e| TrainError::Other(e.to_string()))?;
+            let mut trial = Trial::with_registry(spec, registry)
+                .map_err(|e| TrainError::Other(e.to_string()))?;
             let mut team = 0.0;
             while trial.step() {
                 team += trial.rewards().team;
@@ -674,7 +871,10 @@ pub fn prepare_run<C: Default + Serialize>(
         write_atomic(&cfg_path, text.as_bytes())
     };
     let checked = |cfg: C| -> Result<C, TrainError> {
-        validate(&cfg).map_err(|m| TrainError::Config { path: "train config".into(), message: m })?;
+        validate(&cfg).map_err(|m| TrainError::Config {
+            path: "train config".into(),
+            message: m,
+        })?;
         save(&cfg)?;
         Ok(cfg)
     };
@@ -697,13 +897,23 @@ pub fn prepare_run<C: Default + Serialize>(
     Ok((cfg, resuming))
 }
 
-pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+pub fn train(
+    run_dir: &Path,
+    cfg: Option<TrainConfig>,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
     let (cfg, resuming) = prepare_run(
         run_dir,
         cfg,
         TrainConfig::from_toml_file,
         TrainConfig::validate,
-        |given, saved| TrainConfig { episodes: saved.episodes, max_minutes: saved.max_minutes, ..given.clone() } == *saved,
+        |given, saved| {
+            TrainConfig {
+                episodes: saved.episodes,
+                max_minutes: saved.max_minutes,
+                ..given.clone()
+            } == *saved
+        },
     )?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cfg.threads)
@@ -712,18 +922,29 @@ pub fn train(run_dir: &Path, cfg: Option<TrainConfig>, progress: &mut (dyn FnMut
     pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
 }
 
-fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut (dyn FnMut(&Progress) + Send)) -> Result<(), TrainError> {
+fn train_loop(
+    run_dir: &Path,
+    cfg: &TrainConfig,
+    resuming: bool,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+) -> Result<(), TrainError> {
     let ckpt_dir = run_dir.join("checkpoint");
     let mut nets = Nets::init(cfg)?;
     let (mut state, mut cen, mut dec) = if resuming {
         let sp = ckpt_dir.join("state.json");
         let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-        let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config { path: sp.display().to_string(), message: e.to_string() })?;
+        let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config {
+            path: sp.display().to_string(),
+            message: e.to_string(),
+        })?;
         nets = nets.load(&ckpt_dir)?;
         let rp = ckpt_dir.join("replay.bin");
         let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
         let (cen, dec): (Replay, Replay) =
-            postcard::from_bytes(&bytes).map_err(|e| TrainError::Config { path: rp.display().to_string(), message: e.to_string() })?;
+            postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
+                path: rp.display().to_string(),
+                message: e.to_string(),
+            })?;
         (state, cen, dec)
     } else {
         (State::default(), Replay::default(), Replay::default())
@@ -736,7 +957,9 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     let seen = state.episode * per_iter;
     let log_path = |name: &str| run_dir.join(name);
     truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < seen)?;
-    truncate_rows::<UpdateRow>(&log_path(UpdateRow::FILE_NAME), |r| r.update < state.updates)?;
+    truncate_rows::<UpdateRow>(&log_path(UpdateRow::FILE_NAME), |r| {
+        r.update < state.updates
+    })?;
     truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= seen)?;
     // TensorBoard's curves likewise (`loss/*` steps count updates from 1).
     madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
@@ -754,7 +977,11 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
     let wall0 = state.wall_s;
     let wall = |started: &Instant| wall0 + started.elapsed().as_secs_f64();
     // TensorBoard's wall-clock axis wants Unix seconds.
-    let unix = || std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
+    let unix = || {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64())
+    };
     let params = cfg.update_params();
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
@@ -778,11 +1005,22 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 map,
                 map_name: format!("train_{}_{e}", kind.short()),
                 starts,
-                config: ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() },
+                config: ScenarioConfig {
+                    comm_success_prob: csp,
+                    ..cfg.scenario.clone()
+                },
                 policy: String::new(),
                 seed,
             };
-            let actor = Actor::new(kind, actor_nets.clone(), epsilon, cfg.cen_explore, cfg.goals(), cfg.team(), stream(seed, "actor", 0));
+            let actor = Actor::new(
+                kind,
+                actor_nets.clone(),
+                epsilon,
+                cfg.cen_explore,
+                cfg.goals(),
+                cfg.team(),
+                stream(seed, "actor", 0),
+            );
             let ep = run_episode(spec, actor)?;
             let id = e * per_iter + k as u64;
             ep_log.append(&EpisodeRow {
@@ -796,8 +1034,20 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 updates: state.updates,
                 wall_s: wall(&started),
             })?;
-            tb.add_scalar(&format!("episode/{}_team_reward", kind.short()), ep.team_return as f32, id as i64, unix()).map_err(io_err(run_dir))?;
-            tb.add_scalar(&format!("episode/{}_steps", kind.short()), ep.len() as f32, id as i64, unix()).map_err(io_err(run_dir))?;
+            tb.add_scalar(
+                &format!("episode/{}_team_reward", kind.short()),
+                ep.team_return as f32,
+                id as i64,
+                unix(),
+            )
+            .map_err(io_err(run_dir))?;
+            tb.add_scalar(
+                &format!("episode/{}_steps", kind.short()),
+                ep.len() as f32,
+                id as i64,
+                unix(),
+            )
+            .map_err(io_err(run_dir))?;
             reward_sum += ep.team_return;
             steps_sum += ep.len() as f64;
             match kind {
@@ -823,7 +1073,14 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 let deps = std::mem::take(&mut nets.deps);
                 for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
                     let batch = dec.sample_robots(cfg.batch_size, cfg.trace_len, robots, &mut rng);
-                    let (online, loss) = dep_update(online, &target, &mut optim, cep_plain.as_ref(), &batch, &params);
+                    let (online, loss) = dep_update(
+                        online,
+                        &target,
+                        &mut optim,
+                        cep_plain.as_ref(),
+                        &batch,
+                        &params,
+                    );
                     dep_loss += loss / groups.len() as f32;
                     nets.deps.push((online, target, optim));
                 }
@@ -831,15 +1088,28 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 if state.updates % cfg.target_update_every == 0 {
                     nets.sync_targets();
                 }
-                up_log.append(&UpdateRow { update: state.updates - 1, cep_loss: cep_loss.into(), dep_loss: dep_loss.into() })?;
+                up_log.append(&UpdateRow {
+                    update: state.updates - 1,
+                    cep_loss: cep_loss.into(),
+                    dep_loss: dep_loss.into(),
+                })?;
                 if cep_loss.is_finite() {
-                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
+                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix())
+                        .map_err(io_err(run_dir))?;
                 }
-                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix()).map_err(io_err(run_dir))?;
+                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix())
+                    .map_err(io_err(run_dir))?;
             }
         }
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
-            let model = Model { info: model_info(cfg, &state, None), deps: nets.deps.iter().map(|(o, _, _)| Arc::new(target_of(o))).collect() };
+            let model = Model {
+                info: model_info(cfg, &state, None),
+                deps: nets
+                    .deps
+                    .iter()
+                    .map(|(o, _, _)| Arc::new(target_of(o)))
+                    .collect(),
+            };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
             let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
@@ -852,8 +1122,10 @@ fn train_loop(run_dir: &Path, cfg: &TrainConfig, resuming: bool, progress: &mut 
                 completed: done as u32,
                 trials: n as u32,
             })?;
-            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix()).map_err(io_err(run_dir))?;
-            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix()).map_err(io_err(run_dir))?;
+            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix())
+                .map_err(io_err(run_dir))?;
+            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix())
+                .map_err(io_err(run_dir))?;
             last_validation = Some(steps);
             if state.best_validation.is_none_or(|b| steps < b) {
                 state.best_validation = Some(steps);
@@ -889,8 +1161,16 @@ fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -
     let d = cfg.dep_config();
     ModelInfo {
         method: cfg.method,
-        dep: NetConfigToml { map_height: d.map_height, map_width: d.map_width, team_size: d.team_size, goal_count: d.goal_count, concat_fc: d.concat_fc },
-        deps: (0..cfg.dep_groups().len()).map(|k| format!("dep{k}.bpk")).collect(),
+        dep: NetConfigToml {
+            map_height: d.map_height,
+            map_width: d.map_width,
+            team_size: d.team_size,
+            goal_count: d.goal_count,
+            concat_fc: d.concat_fc,
+        },
+        deps: (0..cfg.dep_groups().len())
+            .map(|k| format!("dep{k}.bpk"))
+            .collect(),
         episode: state.episode,
         updates: state.updates,
         validation_steps,
@@ -905,23 +1185,43 @@ fn save_model(dir: &Path, nets: &Nets, info: &ModelInfo) -> Result<(), TrainErro
     replace_dir(dir, |tmp| {
         for (k, (o, _, _)) in nets.deps.iter().enumerate() {
             let p = tmp.join(format!("dep{k}.bpk"));
-            target_of(o).into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+            target_of(o)
+                .into_record()
+                .save(&p)
+                .map_err(|e| TrainError::Io {
+                    path: p.display().to_string(),
+                    message: e.to_string(),
+                })?;
         }
         if let Some((o, _, _)) = &nets.cep {
             let p = tmp.join("cep.bpk");
-            target_of(o).into_record().save(&p).map_err(|e| TrainError::Io { path: p.display().to_string(), message: e.to_string() })?;
+            target_of(o)
+                .into_record()
+                .save(&p)
+                .map_err(|e| TrainError::Io {
+                    path: p.display().to_string(),
+                    message: e.to_string(),
+                })?;
         }
         let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
     })
 }
 
-fn checkpoint(dir: &Path, nets: &Nets, state: &State, cen: &Replay, dec: &Replay) -> Result<(), TrainError> {
+fn checkpoint(
+    dir: &Path,
+    nets: &Nets,
+    state: &State,
+    cen: &Replay,
+    dec: &Replay,
+) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
         nets.save(tmp)?;
-        let bytes = postcard::to_stdvec(&(cen, dec)).map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
+        let bytes = postcard::to_stdvec(&(cen, dec))
+            .map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
         std::fs::write(tmp.join("replay.bin"), bytes).map_err(io_err(&tmp.join("replay.bin")))?;
-        let text = serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
+        let text =
+            serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
     })
 }
@@ -932,7 +1232,12 @@ mod tests {
 
     #[test]
     fn epsilon_decays_linearly_then_stays() {
-        let cfg = TrainConfig { epsilon_start: 1.0, epsilon_end: 0.1, epsilon_decay_episodes: 10, ..TrainConfig::default() };
+        let cfg = TrainConfig {
+            epsilon_start: 1.0,
+            epsilon_end: 0.1,
+            epsilon_decay_episodes: 10,
+            ..TrainConfig::default()
+        };
         assert_eq!(cfg.epsilon(0), 1.0);
         assert!((cfg.epsilon(5) - 0.55).abs() < 1e-6);
         assert!((cfg.epsilon(10) - 0.1).abs() < 1e-6 && (cfg.epsilon(1000) - 0.1).abs() < 1e-6);

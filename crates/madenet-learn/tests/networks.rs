@@ -297,7 +297,10 @@ fn joint_index_round_trip_and_order() {
     // CentralizedEnv (madenet_agent::joint_encode).
     assert_eq!(joint_index(&[1, 2, 3], 4), 1 + 2 * 4 + 3 * 16);
     assert_eq!(joint_actions(57, 3, 4), vec![1, 2, 3]);
-    assert_eq!(joint_index(&[1, 2, 3], 4), madenet_agent::joint_encode(&[1, 2, 3], 4));
+    assert_eq!(
+        joint_index(&[1, 2, 3], 4),
+        madenet_agent::joint_encode(&[1, 2, 3], 4)
+    );
     for (team, goals) in [(1, 4), (3, 4), (2, 7), (4, 5)] {
         let count = joint_action_count(team, goals);
         for index in 0..count {

@@ -38,16 +38,25 @@ fn q_of(dir: &Path) -> Vec<f32> {
     let model = Model::load(dir).unwrap();
     let net = &model.deps[0];
     let device = madenet_learn::cpu();
-    let maps: Vec<f32> = (0..4 * 400).map(|i| ((i * 7) % 3 == 0) as u8 as f32).collect();
+    let maps: Vec<f32> = (0..4 * 400)
+        .map(|i| ((i * 7) % 3 == 0) as u8 as f32)
+        .collect();
     let maps = Tensor::<4>::from_data(TensorData::new(maps, [1, 4, 20, 20]), &device);
     let obs: Vec<f32> = (0..net.obs_dim).map(|i| (i as f32 * 0.37).sin()).collect();
     let obs = Tensor::<2>::from_data(TensorData::new(obs, [1, net.obs_dim]), &device);
-    net.act(maps, obs, None).0.into_data().try_into_vec_as::<f32>().unwrap()
+    net.act(maps, obs, None)
+        .0
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .unwrap()
 }
 
 /// iterations.csv without the wall-time column (the last).
 fn log_without_time(dir: &Path) -> Vec<String> {
-    read(&dir.join("iterations.csv")).lines().map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string()).collect()
+    read(&dir.join("iterations.csv"))
+        .lines()
+        .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string())
+        .collect()
 }
 
 #[test]
@@ -61,40 +70,83 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     let log = log_without_time(&a);
     assert_eq!(log.len(), 3, "header + one row per iteration: {log:?}");
     assert!(log[0].starts_with("iteration,episodes,decisions,rollouts"));
-    for f in ["config.toml", "best/model.toml", "best/dep0.bpk", "last/model.toml", "last/dep0.bpk", "checkpoint/state.json", "checkpoint/data.bin"] {
+    for f in [
+        "config.toml",
+        "best/model.toml",
+        "best/dep0.bpk",
+        "last/model.toml",
+        "last/dep0.bpk",
+        "checkpoint/state.json",
+        "checkpoint/data.bin",
+    ] {
         assert!(a.join(f).exists(), "{f}");
     }
     // Labelled decisions and teacher rollouts were made.
     let row: Vec<&str> = log[1].split(',').collect();
-    assert!(row[2].parse::<usize>().unwrap() > 0 && row[3].parse::<usize>().unwrap() > 0, "{row:?}");
+    assert!(
+        row[2].parse::<usize>().unwrap() > 0 && row[3].parse::<usize>().unwrap() > 0,
+        "{row:?}"
+    );
 
     // The model loads, says what it reads, and plays a whole trial as a registered policy.
     let model = Model::load(&a.join("best")).unwrap();
-    assert_eq!(model.info.observation, madenet_learn::obs::Observation::CandidateFeatures);
+    assert_eq!(
+        model.info.observation,
+        madenet_learn::obs::Observation::CandidateFeatures
+    );
     assert!(!model.info.recurrent);
     let mut registry = PolicyRegistry::builtin();
     model.register(&mut registry, "student", "the tiny run's model");
     let grid = madenet_map::paper::paper_map(3).unwrap();
-    let starts = madenet_map::paper::Corner::TopLeft.start_cells(20, 20).to_vec();
-    let spec = TrialSpec { map: grid, map_name: "test_3".into(), starts, config: Default::default(), policy: "student".into(), seed: 1 };
+    let starts = madenet_map::paper::Corner::TopLeft
+        .start_cells(20, 20)
+        .to_vec();
+    let spec = TrialSpec {
+        map: grid,
+        map_name: "test_3".into(),
+        starts,
+        config: Default::default(),
+        policy: "student".into(),
+        seed: 1,
+    };
     let r = Trial::with_registry(spec, &registry).unwrap().run();
     assert!(r.metrics.tns > 0 && r.timing.decisions > 0);
 
     // Same seed, same run: logs and weights.
     train(&b, Some(tiny()), &mut |_| {}).unwrap();
     assert_eq!(log_without_time(&b), log);
-    assert!(q_of(&b.join("last")) == q_of(&a.join("last")), "same seed, same weights");
+    assert!(
+        q_of(&b.join("last")) == q_of(&a.join("last")),
+        "same seed, same weights"
+    );
 
     // Stopped at the first iteration boundary (a time limit that is always exceeded), then
     // resumed: the uninterrupted run's logs and weights.
-    train(&c, Some(RolloutTrainConfig { max_minutes: 1e-9, ..tiny() }), &mut |_| {}).unwrap();
+    train(
+        &c,
+        Some(RolloutTrainConfig {
+            max_minutes: 1e-9,
+            ..tiny()
+        }),
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(log_without_time(&c).len(), 2, "stopped after one iteration");
     train(&c, Some(tiny()), &mut |_| {}).unwrap();
     assert_eq!(log_without_time(&c), log);
-    assert!(q_of(&c.join("last")) == q_of(&a.join("last")), "resumed, the uninterrupted run's weights");
+    assert!(
+        q_of(&c.join("last")) == q_of(&a.join("last")),
+        "resumed, the uninterrupted run's weights"
+    );
 
     // A resumed run may change only its time limit.
-    let e = train(&c, Some(RolloutTrainConfig { seed: 2, ..tiny() }), &mut |_| {}).unwrap_err().to_string();
+    let e = train(
+        &c,
+        Some(RolloutTrainConfig { seed: 2, ..tiny() }),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("different config"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }
@@ -102,7 +154,10 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
 #[test]
 fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/train-rollout.toml");
-    assert_eq!(RolloutTrainConfig::from_toml_file(&path).unwrap(), RolloutTrainConfig::default());
+    assert_eq!(
+        RolloutTrainConfig::from_toml_file(&path).unwrap(),
+        RolloutTrainConfig::default()
+    );
     let dir = std::env::temp_dir().join(format!("madenet-rollout-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     for (text, needle) in [
@@ -117,8 +172,13 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
     ] {
         let p = dir.join("bad.toml");
         std::fs::write(&p, text).unwrap();
-        let e = RolloutTrainConfig::from_toml_file(&p).unwrap_err().to_string();
-        assert!(e.contains("bad.toml") && e.contains(needle), "{text:?} gave {e}");
+        let e = RolloutTrainConfig::from_toml_file(&p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.toml") && e.contains(needle),
+            "{text:?} gave {e}"
+        );
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

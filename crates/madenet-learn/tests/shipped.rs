@@ -12,7 +12,9 @@ fn shipped_models_play_and_refuse_other_sizes() {
     for name in madenet_learn::shipped::names() {
         let map = madenet_map::paper::paper_map(3).unwrap();
         let spec = TrialSpec {
-            starts: Corner::TopLeft.start_cells(map.height(), map.width()).to_vec(),
+            starts: Corner::TopLeft
+                .start_cells(map.height(), map.width())
+                .to_vec(),
             map,
             map_name: "test_3".into(),
             config: ScenarioConfig::default(),
@@ -23,12 +25,22 @@ fn shipped_models_play_and_refuse_other_sizes() {
         assert!(r.metrics.completed, "{name} did not complete paper map 3");
         // Four robots: the model was built for three.
         let four = TrialSpec {
-            starts: vec![madenet_map::Pos::new(0, 0), madenet_map::Pos::new(0, 1), madenet_map::Pos::new(1, 0), madenet_map::Pos::new(1, 1)],
-            config: ScenarioConfig { num_robots: 4, ..ScenarioConfig::default() },
+            starts: vec![
+                madenet_map::Pos::new(0, 0),
+                madenet_map::Pos::new(0, 1),
+                madenet_map::Pos::new(1, 0),
+                madenet_map::Pos::new(1, 1),
+            ],
+            config: ScenarioConfig {
+                num_robots: 4,
+                ..ScenarioConfig::default()
+            },
             ..spec
         };
         match Trial::with_registry(four, &registry) {
-            Err(e @ SimError::PolicyUnavailable { .. }) => assert!(e.to_string().contains("3 robots"), "{e}"),
+            Err(e @ SimError::PolicyUnavailable { .. }) => {
+                assert!(e.to_string().contains("3 robots"), "{e}")
+            }
             Err(e) => panic!("unexpected error {e}"),
             Ok(_) => panic!("{name} accepted 4 robots"),
         }

@@ -46,24 +46,59 @@ fn episodes_without_time(dir: &Path) -> Vec<String> {
 fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     let root = std::env::temp_dir().join(format!("madenet-train-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
-    let (straight, again, resumed) = (root.join("straight"), root.join("again"), root.join("resumed"));
+    let (straight, again, resumed) = (
+        root.join("straight"),
+        root.join("again"),
+        root.join("resumed"),
+    );
 
     train(&straight, Some(tiny(6)), &mut |_| {}).unwrap();
     // Files of a run directory.
-    for f in ["config.toml", "episodes.csv", "updates.csv", "validation.csv", "checkpoint/state.json", "checkpoint/replay.bin", "best/model.toml", "last/dep0.bpk", "last/cep.bpk"] {
+    for f in [
+        "config.toml",
+        "episodes.csv",
+        "updates.csv",
+        "validation.csv",
+        "checkpoint/state.json",
+        "checkpoint/replay.bin",
+        "best/model.toml",
+        "last/dep0.bpk",
+        "last/cep.bpk",
+    ] {
         assert!(straight.join(f).exists(), "{f} missing");
     }
-    assert!(std::fs::read_dir(&straight).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().starts_with("events.out.tfevents.")));
+    assert!(std::fs::read_dir(&straight).unwrap().any(|e| e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .starts_with("events.out.tfevents.")));
     let eps = episodes_without_time(&straight);
     assert_eq!(eps.len(), 1 + 12, "header + 6 iterations × 2 environments");
     let cols = |l: &str| l.split(',').map(String::from).collect::<Vec<_>>();
     let (first, second) = (cols(&eps[1]), cols(&eps[2]));
-    assert_eq!((first[0].as_str(), first[1].as_str(), first[2].parse::<f64>().unwrap()), ("0", "cen", 1.0));
+    assert_eq!(
+        (
+            first[0].as_str(),
+            first[1].as_str(),
+            first[2].parse::<f64>().unwrap()
+        ),
+        ("0", "cen", 1.0)
+    );
     assert_eq!((second[0].as_str(), second[1].as_str()), ("1", "dec"));
     let updates = read(&straight.join("updates.csv"));
-    assert_eq!(updates.lines().count(), 1 + 5, "updates from iteration 2 to 6");
-    assert!(updates.lines().skip(1).all(|l| l.split(',').skip(1).all(|v| v.parse::<f32>().is_ok_and(f32::is_finite))));
-    assert_eq!(read(&straight.join("validation.csv")).lines().count(), 1 + 2);
+    assert_eq!(
+        updates.lines().count(),
+        1 + 5,
+        "updates from iteration 2 to 6"
+    );
+    assert!(updates.lines().skip(1).all(|l| l
+        .split(',')
+        .skip(1)
+        .all(|v| v.parse::<f32>().is_ok_and(f32::is_finite))));
+    assert_eq!(
+        read(&straight.join("validation.csv")).lines().count(),
+        1 + 2
+    );
 
     // Same seed ⇒ the same episodes and the same updates.
     train(&again, Some(tiny(6)), &mut |_| {}).unwrap();
@@ -80,18 +115,36 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     train(&scratch, Some(tiny(2)), &mut |_| {}).unwrap();
     copy_dir(&scratch.join("checkpoint"), &resumed.join("checkpoint"));
     train(&resumed, Some(tiny(6)), &mut |_| {}).unwrap();
-    assert_eq!(episodes_without_time(&resumed), eps, "resumed run differs in its episodes");
-    assert_eq!(read(&resumed.join("updates.csv")), updates, "resumed run differs in its updates");
-    assert!(q_of(&resumed.join("last")) == q_of(&straight.join("last")), "resumed run ends with other weights");
+    assert_eq!(
+        episodes_without_time(&resumed),
+        eps,
+        "resumed run differs in its episodes"
+    );
+    assert_eq!(
+        read(&resumed.join("updates.csv")),
+        updates,
+        "resumed run differs in its updates"
+    );
+    assert!(
+        q_of(&resumed.join("last")) == q_of(&straight.join("last")),
+        "resumed run ends with other weights"
+    );
     // TensorBoard holds each scalar once: the resumed run dropped what it wrote after the
     // checkpoint before writing it again.
     let scalars = |dir: &Path| {
-        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir).unwrap().into_iter().map(|(t, step, v)| (t, step, v.to_bits())).collect();
+        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
+            .unwrap()
+            .into_iter()
+            .map(|(t, step, v)| (t, step, v.to_bits()))
+            .collect();
         s.sort();
         s
     };
     let want = scalars(&straight);
-    assert!(want.iter().any(|s| s.0.starts_with("loss/")) && want.iter().any(|s| s.0.starts_with("validation/")));
+    assert!(
+        want.iter().any(|s| s.0.starts_with("loss/"))
+            && want.iter().any(|s| s.0.starts_with("validation/"))
+    );
     assert_eq!(scalars(&resumed), want, "resumed run's TensorBoard scalars");
 
     // The saved model loads and plays.
@@ -103,9 +156,15 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     assert!(steps > 0.0 && steps <= 40.0);
 
     // A changed config on resume is refused; extending `episodes` is not.
-    let other = TrainConfig { learning_rate: 0.5, ..tiny(6) };
+    let other = TrainConfig {
+        learning_rate: 0.5,
+        ..tiny(6)
+    };
     let err = train(&straight, Some(other), &mut |_| {}).unwrap_err();
-    assert!(matches!(&err, TrainError::Config { path, .. } if path.ends_with("config.toml")), "{err}");
+    assert!(
+        matches!(&err, TrainError::Config { path, .. } if path.ends_with("config.toml")),
+        "{err}"
+    );
     train(&straight, Some(tiny(7)), &mut |_| {}).unwrap();
     assert_eq!(episodes_without_time(&straight).len(), 1 + 14);
     std::fs::remove_dir_all(&root).unwrap();
@@ -118,7 +177,11 @@ fn q_of(model_dir: &Path) -> Vec<f32> {
     let net = &model.deps[0];
     let maps = Tensor::<4>::ones([1, 4, 20, 20], &device);
     let obs = Tensor::<2>::ones([1, net.obs_dim], &device);
-    net.act(maps, obs, None).0.into_data().try_into_vec_as::<f32>().unwrap()
+    net.act(maps, obs, None)
+        .0
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .unwrap()
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -143,7 +206,10 @@ fn bad_train_configs_name_file_and_field() {
         let p = dir.join("bad.toml");
         std::fs::write(&p, text).unwrap();
         let e = TrainConfig::from_toml_file(&p).unwrap_err().to_string();
-        assert!(e.contains("bad.toml") && e.contains(needle), "{text:?} gave {e}");
+        assert!(
+            e.contains("bad.toml") && e.contains(needle),
+            "{text:?} gave {e}"
+        );
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -151,7 +217,13 @@ fn bad_train_configs_name_file_and_field() {
 #[test]
 fn shipped_train_config_is_the_default() {
     for name in ["train.toml", "train-paper.toml"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs").join(name);
-        assert_eq!(TrainConfig::from_toml_file(&path).unwrap(), TrainConfig::default(), "{name}");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../configs")
+            .join(name);
+        assert_eq!(
+            TrainConfig::from_toml_file(&path).unwrap(),
+            TrainConfig::default(),
+            "{name}"
+        );
     }
 }

@@ -4,7 +4,9 @@
 
 use burn::optim::AdamConfig;
 use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
+use madenet_learn::learner::{
+    cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
+};
 use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
@@ -18,11 +20,23 @@ fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<E
                 map,
                 map_name: "t".into(),
                 starts,
-                config: madenet_world::ScenarioConfig { comm_success_prob: 0.5, step_cap: 60, ..cfg.scenario.clone() },
+                config: madenet_world::ScenarioConfig {
+                    comm_success_prob: 0.5,
+                    step_cap: 60,
+                    ..cfg.scenario.clone()
+                },
                 policy: String::new(),
                 seed: k,
             };
-            let actor = Actor::new(kind, nets.clone(), 1.0, false, cfg.goals(), 3, stream(k, "test-actor", 0));
+            let actor = Actor::new(
+                kind,
+                nets.clone(),
+                1.0,
+                false,
+                cfg.goals(),
+                3,
+                stream(k, "test-actor", 0),
+            );
             run_episode(spec, actor).unwrap()
         })
         .collect()
@@ -39,21 +53,38 @@ fn losses_fall_on_a_fixed_batch() {
     let cfg = TrainConfig::default();
     let device = cpu_autodiff();
     device.seed(7);
-    let p = UpdateParams { gamma: 1.0, learning_rate: 1e-3, reward_scale: 0.01, map_height: 20, map_width: 20, team: 3, goals: cfg.goals() };
+    let p = UpdateParams {
+        gamma: 1.0,
+        learning_rate: 1e-3,
+        reward_scale: 0.01,
+        map_height: 20,
+        map_width: 20,
+        team: 3,
+        goals: cfg.goals(),
+    };
     let mut cep = cfg.cep_config().init(&device).unwrap();
     let mut dep = cfg.dep_config().init(&device).unwrap();
-    let nets = ActorNets { cep: Some(target_of(&cep)), deps: vec![target_of(&dep)] };
+    let nets = ActorNets {
+        cep: Some(target_of(&cep)),
+        deps: vec![target_of(&dep)],
+    };
     let cen = episodes(&cfg, &nets, EnvKind::Centralized, 3);
     let dec = episodes(&cfg, &nets, EnvKind::Decentralized, 3);
     // Episodes are consistent: every decision step is a primitive step with a decision.
     for e in cen.iter().chain(&dec) {
         assert_eq!(e.cep.len(), e.decisions.len());
-        assert!(e.decisions.iter().all(|d| e.steps[d.t].decided.contains(&true)));
+        assert!(e
+            .decisions
+            .iter()
+            .all(|d| e.steps[d.t].decided.contains(&true)));
         let total: f32 = e.steps.iter().map(|s| s.team_reward).sum();
         assert!((total - e.team_return as f32).abs() < 1e-2 * total.abs().max(1.0));
     }
     let cen_w: Vec<Window<'_>> = cen.iter().map(|e| Window::new(e, 2, 10)).collect();
-    let dec_r: Vec<RobotWindow<'_>> = dec.iter().flat_map(|e| (0..3).map(move |i| RobotWindow::new(e, i, 0, 10))).collect();
+    let dec_r: Vec<RobotWindow<'_>> = dec
+        .iter()
+        .flat_map(|e| (0..3).map(move |i| RobotWindow::new(e, i, 0, 10)))
+        .collect();
     let dt_r: Vec<RobotWindow<'_>> = dec.iter().map(|e| RobotWindow::new(e, 1, 1, 10)).collect();
 
     let cep_target = target_of(&cep);

@@ -34,8 +34,15 @@ pub const WIDE_DENSITY: (f64, f64) = (0.15, 0.60);
 
 /// `team` start cells around a free cell of `map` drawn with `seed`: the free cells nearest to it
 /// by moves (breadth-first under `movement`), or `None` if fewer than `team` are connected to it.
-pub fn random_starts(map: &OccGrid, team: usize, movement: Movement, seed: u64) -> Option<Vec<Pos>> {
-    let free: Vec<usize> = (0..map.len()).filter(|&i| map.cells()[i] == Occupancy::Free).collect();
+pub fn random_starts(
+    map: &OccGrid,
+    team: usize,
+    movement: Movement,
+    seed: u64,
+) -> Option<Vec<Pos>> {
+    let free: Vec<usize> = (0..map.len())
+        .filter(|&i| map.cells()[i] == Occupancy::Free)
+        .collect();
     if free.len() < team || free.is_empty() {
         return None;
     }
@@ -50,7 +57,16 @@ pub fn random_starts(map: &OccGrid, team: usize, movement: Movement, seed: u64) 
         if starts.len() == team {
             return Some(starts);
         }
-        for (dr, dc) in [(-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1)] {
+        for (dr, dc) in [
+            (-1, 0),
+            (0, 1),
+            (1, 0),
+            (0, -1),
+            (-1, -1),
+            (-1, 1),
+            (1, 1),
+            (1, -1),
+        ] {
             let q = Pos::new(p.row + dr, p.col + dc);
             if map.in_bounds(q) && !seen[map.index(q)] && map.can_step_with(p, q, movement) {
                 seen[map.index(q)] = true;

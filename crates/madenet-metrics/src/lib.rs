@@ -70,12 +70,23 @@ pub struct MetricsRecorder {
 impl MetricsRecorder {
     /// Starts with the state before the first move (distance 0).
     pub fn new(initial_explored: f64) -> Self {
-        MetricsRecorder { explored: vec![initial_explored], distance: vec![0.0], noli: 0, noli_authors: 0 }
+        MetricsRecorder {
+            explored: vec![initial_explored],
+            distance: vec![0.0],
+            noli: 0,
+            noli_authors: 0,
+        }
     }
 
     /// Records the state after a timestep: `pairs_in_contact` within d_s with line of sight,
     /// of which `pairs_closer` strictly closer than d_s.
-    pub fn record(&mut self, explored: f64, team_distance: f64, pairs_in_contact: usize, pairs_closer: usize) {
+    pub fn record(
+        &mut self,
+        explored: f64,
+        team_distance: f64,
+        pairs_in_contact: usize,
+        pairs_closer: usize,
+    ) {
         self.explored.push(explored);
         self.distance.push(team_distance);
         self.noli += pairs_in_contact;
@@ -195,13 +206,23 @@ mod tests {
         assert_eq!(m.steps_to[8], Some(2));
         // D(p): 0.1 -> 0 (skipped); p in (0.1, 0.5]: 10 (first moving step); p in (0.5, 1]:
         // 10 + 10·(p−0.5)/0.5.
-        assert_eq!(distance_at(0.3, &m.explored_per_step, &m.distance_per_step), Some(10.0));
-        assert!((distance_at(0.75, &m.explored_per_step, &m.distance_per_step).unwrap() - 15.0).abs() < 1e-12);
+        assert_eq!(
+            distance_at(0.3, &m.explored_per_step, &m.distance_per_step),
+            Some(10.0)
+        );
+        assert!(
+            (distance_at(0.75, &m.explored_per_step, &m.distance_per_step).unwrap() - 15.0).abs()
+                < 1e-12
+        );
         // OFV by a direct sum with the closed-form D(p).
         let mut want = 0.0;
         for k in 1..=9000 {
             let p = 0.1 + k as f64 * 1e-4;
-            let d = if p <= 0.5 { 10.0 } else { 10.0 + 20.0 * (p - 0.5) };
+            let d = if p <= 0.5 {
+                10.0
+            } else {
+                10.0 + 20.0 * (p - 0.5)
+            };
             want += p / d;
         }
         assert!((m.ofv - want).abs() < 1e-6 * want, "{} vs {want}", m.ofv);

@@ -49,7 +49,11 @@ impl Dijkstra {
             seen: vec![0; n],
             settled: vec![0; n],
             generation: 0,
-            buckets: [Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n)],
+            buckets: [
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+                Vec::with_capacity(n),
+            ],
             source: None,
         }
     }
@@ -80,7 +84,13 @@ impl Dijkstra {
     ) -> Option<Pos> {
         let w = self.width;
         let at = move |i: usize| Pos::new((i / w) as i32, (i % w) as i32);
-        self.run_indexed(source, move |i| passable(at(i)), movement, |i, _| stop(at(i))).map(at)
+        self.run_indexed(
+            source,
+            move |i| passable(at(i)),
+            movement,
+            |i, _| stop(at(i)),
+        )
+        .map(at)
     }
 
     /// [`Dijkstra::run`] with cells as row-major indices: the hot loop of the classical
@@ -143,7 +153,11 @@ impl Dijkstra {
                     if !passable(v) {
                         continue;
                     }
-                    if strict && dr != 0 && dc != 0 && !(passable((r * w + nc) as usize) && passable((nr * w + c) as usize)) {
+                    if strict
+                        && dr != 0
+                        && dc != 0
+                        && !(passable((r * w + nc) as usize) && passable((nr * w + c) as usize))
+                    {
                         continue;
                     }
                     let nd = d + cost;

@@ -58,10 +58,14 @@ pub fn cost_to_cells(cost: u32) -> f64 {
 
 /// Moves allowed from `p` under the world's movement rule on `passable` cells (no `Stay`).
 #[inline]
-pub fn neighbours(p: Pos, passable: impl Fn(Pos) -> bool + Copy, movement: Movement) -> impl Iterator<Item = (Pos, u32)> {
-    Move::ALL[1..]
-        .iter()
-        .filter_map(move |&m| step_allowed(passable, p, m, movement).then(|| (m.apply(p), move_cost(m))))
+pub fn neighbours(
+    p: Pos,
+    passable: impl Fn(Pos) -> bool + Copy,
+    movement: Movement,
+) -> impl Iterator<Item = (Pos, u32)> {
+    Move::ALL[1..].iter().filter_map(move |&m| {
+        step_allowed(passable, p, m, movement).then(|| (m.apply(p), move_cost(m)))
+    })
 }
 
 /// A* from `start` to `goal` over `passable` cells (8-connected under `movement`, octile
@@ -87,8 +91,15 @@ pub fn astar(
 /// The cost of reaching `goal` from `start` in one allowed step (`None` if it takes more or
 /// cannot be done): then `[goal]` is [`astar`]'s path, found without a search.
 #[inline]
-pub fn one_step(start: Pos, goal: Pos, passable: impl Fn(Pos) -> bool + Copy, movement: Movement) -> Option<u32> {
-    Move::between(start, goal).filter(|&m| m != Move::Stay && step_allowed(passable, start, m, movement)).map(move_cost)
+pub fn one_step(
+    start: Pos,
+    goal: Pos,
+    passable: impl Fn(Pos) -> bool + Copy,
+    movement: Movement,
+) -> Option<u32> {
+    Move::between(start, goal)
+        .filter(|&m| m != Move::Stay && step_allowed(passable, start, m, movement))
+        .map(move_cost)
 }
 
 /// [`astar`] without its one-step shortcut: the `pathfinding` crate's A* (for tests).
@@ -116,7 +127,9 @@ pub fn path_length(start: Pos, path: &[Pos]) -> f64 {
     let mut prev = start;
     let mut len = 0.0;
     for &p in path {
-        len += Move::between(prev, p).map(|m| m.length()).unwrap_or(f64::NAN);
+        len += Move::between(prev, p)
+            .map(|m| m.length())
+            .unwrap_or(f64::NAN);
         prev = p;
     }
     len

@@ -26,7 +26,14 @@ pub struct Reservations {
 impl Reservations {
     pub fn new(height: usize, width: usize, horizon: usize) -> Self {
         // The table is allocated on the first reservation.
-        Reservations { width, height, horizon, stamp: Vec::new(), generation: 1, count: 0 }
+        Reservations {
+            width,
+            height,
+            horizon,
+            stamp: Vec::new(),
+            generation: 1,
+            count: 0,
+        }
     }
 
     pub fn horizon(&self) -> usize {
@@ -51,8 +58,12 @@ impl Reservations {
     /// a robot until the horizon writes one run of memory).
     #[inline]
     fn slot(&self, p: Pos, t: usize) -> Option<usize> {
-        let inb = p.row >= 0 && p.col >= 0 && (p.row as usize) < self.height && (p.col as usize) < self.width;
-        (inb && t <= self.horizon).then(|| (p.row as usize * self.width + p.col as usize) * (self.horizon + 1) + t)
+        let inb = p.row >= 0
+            && p.col >= 0
+            && (p.row as usize) < self.height
+            && (p.col as usize) < self.width;
+        (inb && t <= self.horizon)
+            .then(|| (p.row as usize * self.width + p.col as usize) * (self.horizon + 1) + t)
     }
 
     fn allocate(&mut self) {
@@ -81,7 +92,10 @@ impl Reservations {
 
     #[inline]
     pub fn is_reserved(&self, p: Pos, t: usize) -> bool {
-        self.count > 0 && self.slot(p, t).is_some_and(|s| self.stamp[s] == self.generation)
+        self.count > 0
+            && self
+                .slot(p, t)
+                .is_some_and(|s| self.stamp[s] == self.generation)
     }
 
     /// Reserve a robot's plan: `start` at t = 0, `path[k]` at t = k + 1, and the last cell
@@ -141,7 +155,9 @@ pub fn space_time_astar(
 ) -> Option<Vec<Pos>> {
     let mut planner = SpaceTimePlanner::new(res.height, res.width, res.horizon);
     let mut out = Vec::new();
-    planner.plan(start, goal, passable, movement, res, &mut out).then_some(out)
+    planner
+        .plan(start, goal, passable, movement, res, &mut out)
+        .then_some(out)
 }
 
 /// Reusable buffers for [`space_time_astar`] over a fixed grid and horizon.
@@ -197,7 +213,10 @@ impl SpaceTimePlanner {
         res: &Reservations,
         out: &mut Vec<Pos>,
     ) -> bool {
-        assert!(res.width == self.width && res.height == self.height && res.horizon == self.horizon, "planner and reservations differ in size");
+        assert!(
+            res.width == self.width && res.height == self.height && res.horizon == self.horizon,
+            "planner and reservations differ in size"
+        );
         out.clear();
         if start == goal {
             return true;
@@ -275,9 +294,15 @@ impl SpaceTimePlanner {
                 if !res.step_free(p, q, t) {
                     continue;
                 }
-                let Some(hq) = self.to_goal.settled_cost(q) else { continue };
+                let Some(hq) = self.to_goal.settled_cost(q) else {
+                    continue;
+                };
                 let ns = state(q, nt) as usize;
-                let ng = g + if m == Move::Stay { WAIT_COST } else { move_cost(m) };
+                let ng = g + if m == Move::Stay {
+                    WAIT_COST
+                } else {
+                    move_cost(m)
+                };
                 if self.closed[ns] != gen && (self.seen[ns] != gen || ng < self.g[ns]) {
                     self.seen[ns] = gen;
                     self.g[ns] = ng;

@@ -3,8 +3,8 @@
 
 use madenet_map::{Movement, Pos};
 use madenet_nav::{
-    astar, astar_search, move_cost, octile, path_length, space_time_astar, Dijkstra, Reservations, DIAGONAL, STRAIGHT,
-    WAIT_COST,
+    astar, astar_search, move_cost, octile, path_length, space_time_astar, Dijkstra, Reservations,
+    DIAGONAL, STRAIGHT, WAIT_COST,
 };
 use madenet_world::{step_allowed, Move};
 use proptest::prelude::*;
@@ -24,7 +24,10 @@ impl Grid {
     fn from_rows(rows: &[&str]) -> Grid {
         let h = rows.len();
         let w = rows[0].len();
-        let free = rows.iter().flat_map(|r| r.chars().map(|c| c != '#')).collect();
+        let free = rows
+            .iter()
+            .flat_map(|r| r.chars().map(|c| c != '#'))
+            .collect();
         Grid { h, w, free }
     }
     fn in_bounds(&self, p: Pos) -> bool {
@@ -37,22 +40,35 @@ impl Grid {
         Pos::new((i / self.w) as i32, (i % self.w) as i32)
     }
     fn free_cells(&self) -> Vec<Pos> {
-        (0..self.h * self.w).map(|i| self.pos(i)).filter(|&p| self.passable(p)).collect()
+        (0..self.h * self.w)
+            .map(|i| self.pos(i))
+            .filter(|&p| self.passable(p))
+            .collect()
     }
 }
 
 /// Checks that `path` is a sequence of legal single steps from `start` ending at `goal` and
 /// returns its integer cost. Waits (repeated cells) are allowed only when `allow_wait`.
-fn check_path(grid: &Grid, start: Pos, goal: Pos, path: &[Pos], movement: Movement, allow_wait: bool) -> Result<u32, String> {
+fn check_path(
+    grid: &Grid,
+    start: Pos,
+    goal: Pos,
+    path: &[Pos],
+    movement: Movement,
+    allow_wait: bool,
+) -> Result<u32, String> {
     let mut prev = start;
     let mut cost = 0;
     for (k, &p) in path.iter().enumerate() {
-        let m = Move::between(prev, p).ok_or_else(|| format!("step {k}: {prev} -> {p} is not a king move"))?;
+        let m = Move::between(prev, p)
+            .ok_or_else(|| format!("step {k}: {prev} -> {p} is not a king move"))?;
         if m == Move::Stay && !allow_wait {
             return Err(format!("step {k}: wait at {p} in a spatial path"));
         }
         if !step_allowed(|q| grid.passable(q), prev, m, movement) {
-            return Err(format!("step {k}: {prev} -> {p} ({m:?}) not allowed under {movement:?}"));
+            return Err(format!(
+                "step {k}: {prev} -> {p} ({m:?}) not allowed under {movement:?}"
+            ));
         }
         cost += move_cost(m);
         prev = p;
@@ -65,7 +81,11 @@ fn check_path(grid: &Grid, start: Pos, goal: Pos, path: &[Pos], movement: Moveme
 
 fn grid_strategy(max: usize, max_density: f64) -> impl Strategy<Value = Grid> {
     (1usize..=max, 1usize..=max, 0.0f64..max_density).prop_flat_map(|(h, w, density)| {
-        prop::collection::vec(0.0f64..1.0, h * w).prop_map(move |u| Grid { h, w, free: u.iter().map(|&x| x >= density).collect() })
+        prop::collection::vec(0.0f64..1.0, h * w).prop_map(move |u| Grid {
+            h,
+            w,
+            free: u.iter().map(|&x| x >= density).collect(),
+        })
     })
 }
 
@@ -173,9 +193,18 @@ fn octile_values() {
     assert_eq!(octile(Pos::new(0, 0), Pos::new(0, 0)), 0);
     assert_eq!(octile(Pos::new(0, 0), Pos::new(3, 0)), 3 * STRAIGHT);
     assert_eq!(octile(Pos::new(0, 0), Pos::new(2, 2)), 2 * DIAGONAL);
-    assert_eq!(octile(Pos::new(5, 1), Pos::new(2, 8)), 3 * DIAGONAL + 4 * STRAIGHT);
-    assert_eq!(octile(Pos::new(2, 8), Pos::new(5, 1)), 3 * DIAGONAL + 4 * STRAIGHT);
-    assert_eq!(DIAGONAL, (std::f64::consts::SQRT_2 * STRAIGHT as f64).floor() as u32);
+    assert_eq!(
+        octile(Pos::new(5, 1), Pos::new(2, 8)),
+        3 * DIAGONAL + 4 * STRAIGHT
+    );
+    assert_eq!(
+        octile(Pos::new(2, 8), Pos::new(5, 1)),
+        3 * DIAGONAL + 4 * STRAIGHT
+    );
+    assert_eq!(
+        DIAGONAL,
+        (std::f64::consts::SQRT_2 * STRAIGHT as f64).floor() as u32
+    );
 }
 
 #[test]
@@ -183,15 +212,29 @@ fn astar_hand_cases() {
     // A wall with one gap: the path must go through (2,3) for both rules.
     let grid = Grid::from_rows(&[
         "...#...", //
-        "...#...",
-        ".......",
-        "...#...",
-        "...#...",
+        "...#...", ".......", "...#...", "...#...",
     ]);
     for movement in RULES {
-        let (path, cost) = astar(Pos::new(0, 0), Pos::new(0, 6), |p| grid.passable(p), movement).unwrap();
+        let (path, cost) = astar(
+            Pos::new(0, 0),
+            Pos::new(0, 6),
+            |p| grid.passable(p),
+            movement,
+        )
+        .unwrap();
         assert!(path.contains(&Pos::new(2, 3)), "{path:?}");
-        assert_eq!(check_path(&grid, Pos::new(0, 0), Pos::new(0, 6), &path, movement, false).unwrap(), cost);
+        assert_eq!(
+            check_path(
+                &grid,
+                Pos::new(0, 0),
+                Pos::new(0, 6),
+                &path,
+                movement,
+                false
+            )
+            .unwrap(),
+            cost
+        );
         // (0,0) -> (2,3) -> (0,6): corner cutting: 2 diag + 1 straight each side.
         if movement == Movement::CornerCutting {
             assert_eq!(cost, 4 * DIAGONAL + 2 * STRAIGHT);
@@ -199,13 +242,37 @@ fn astar_hand_cases() {
     }
     // A diagonal squeeze: passable only with corner cutting.
     let squeeze = Grid::from_rows(&[".#", "#."]);
-    let cut = astar(Pos::new(0, 0), Pos::new(1, 1), |p| squeeze.passable(p), Movement::CornerCutting);
+    let cut = astar(
+        Pos::new(0, 0),
+        Pos::new(1, 1),
+        |p| squeeze.passable(p),
+        Movement::CornerCutting,
+    );
     assert_eq!(cut, Some((vec![Pos::new(1, 1)], DIAGONAL)));
-    assert_eq!(astar(Pos::new(0, 0), Pos::new(1, 1), |p| squeeze.passable(p), Movement::NoCornerCutting), None);
+    assert_eq!(
+        astar(
+            Pos::new(0, 0),
+            Pos::new(1, 1),
+            |p| squeeze.passable(p),
+            Movement::NoCornerCutting
+        ),
+        None
+    );
     // Start equals goal.
-    assert_eq!(astar(Pos::new(0, 0), Pos::new(0, 0), |p| squeeze.passable(p), Movement::CornerCutting), Some((vec![], 0)));
+    assert_eq!(
+        astar(
+            Pos::new(0, 0),
+            Pos::new(0, 0),
+            |p| squeeze.passable(p),
+            Movement::CornerCutting
+        ),
+        Some((vec![], 0))
+    );
     // path_length in cells.
-    let len = path_length(Pos::new(0, 0), &[Pos::new(1, 1), Pos::new(1, 2), Pos::new(1, 2)]);
+    let len = path_length(
+        Pos::new(0, 0),
+        &[Pos::new(1, 1), Pos::new(1, 2), Pos::new(1, 2)],
+    );
     assert!((len - (1.0 + std::f64::consts::SQRT_2)).abs() < 1e-12);
 }
 
@@ -219,7 +286,9 @@ fn at(start: Pos, path: &[Pos], t: usize) -> Pos {
     if t == 0 {
         start
     } else {
-        path.get(t - 1).copied().unwrap_or_else(|| path.last().copied().unwrap_or(start))
+        path.get(t - 1)
+            .copied()
+            .unwrap_or_else(|| path.last().copied().unwrap_or(start))
     }
 }
 
@@ -227,9 +296,19 @@ fn at(start: Pos, path: &[Pos], t: usize) -> Pos {
 #[derive(Debug, PartialEq)]
 enum Conflict {
     /// Two robots in one cell at time t.
-    Vertex { t: usize, a: usize, b: usize, cell: Pos },
+    Vertex {
+        t: usize,
+        a: usize,
+        b: usize,
+        cell: Pos,
+    },
     /// Robot `a` entered at t a cell robot `b` held at t − 1 (the world forbids it).
-    Follow { t: usize, a: usize, b: usize, cell: Pos },
+    Follow {
+        t: usize,
+        a: usize,
+        b: usize,
+        cell: Pos,
+    },
 }
 
 fn conflicts(starts: &[Pos], plans: &[Vec<Pos>], until: usize) -> Vec<Conflict> {
@@ -244,7 +323,10 @@ fn conflicts(starts: &[Pos], plans: &[Vec<Pos>], until: usize) -> Vec<Conflict> 
                 if a < b && pa == at(starts[b], &plans[b], t) {
                     out.push(Conflict::Vertex { t, a, b, cell: pa });
                 }
-                if t > 0 && pa != at(starts[a], &plans[a], t - 1) && pa == at(starts[b], &plans[b], t - 1) {
+                if t > 0
+                    && pa != at(starts[a], &plans[a], t - 1)
+                    && pa == at(starts[b], &plans[b], t - 1)
+                {
                     out.push(Conflict::Follow { t, a, b, cell: pa });
                 }
             }
@@ -272,7 +354,10 @@ fn plan_team(
             panic!("robot {k}: {e}");
         }
         // A plan never violates the reservations it was planned against.
-        assert!(!res.conflicts(s, &path), "robot {k}'s plan conflicts with the reservations it avoided");
+        assert!(
+            !res.conflicts(s, &path),
+            "robot {k}'s plan conflicts with the reservations it avoided"
+        );
         res.reserve_path(s, &path);
         plans.push(path);
     }
@@ -280,19 +365,38 @@ fn plan_team(
 }
 
 fn team_strategy() -> impl Strategy<Value = (Grid, Vec<Pos>, Vec<Pos>, Movement, usize)> {
-    (grid_strategy(9, 0.3), 2usize..=4, any::<bool>(), 6usize..=20, prop::collection::vec(any::<prop::sample::Index>(), 8))
-        .prop_filter_map("not enough free cells", |(grid, k, strict, horizon, picks)| {
-            let mut free = grid.free_cells();
-            if free.len() < 2 * k {
-                return None;
-            }
-            let mut cells = Vec::new();
-            for ix in picks.iter().take(2 * k) {
-                cells.push(free.remove(ix.index(free.len())));
-            }
-            let movement = if strict { Movement::NoCornerCutting } else { Movement::CornerCutting };
-            Some((grid, cells[..k].to_vec(), cells[k..].to_vec(), movement, horizon))
-        })
+    (
+        grid_strategy(9, 0.3),
+        2usize..=4,
+        any::<bool>(),
+        6usize..=20,
+        prop::collection::vec(any::<prop::sample::Index>(), 8),
+    )
+        .prop_filter_map(
+            "not enough free cells",
+            |(grid, k, strict, horizon, picks)| {
+                let mut free = grid.free_cells();
+                if free.len() < 2 * k {
+                    return None;
+                }
+                let mut cells = Vec::new();
+                for ix in picks.iter().take(2 * k) {
+                    cells.push(free.remove(ix.index(free.len())));
+                }
+                let movement = if strict {
+                    Movement::NoCornerCutting
+                } else {
+                    Movement::CornerCutting
+                };
+                Some((
+                    grid,
+                    cells[..k].to_vec(),
+                    cells[k..].to_vec(),
+                    movement,
+                    horizon,
+                ))
+            },
+        )
 }
 
 proptest! {
@@ -320,7 +424,10 @@ fn parked_robot_is_not_run_over() {
     for movement in RULES {
         let plans = plan_team(&grid, &starts, &goals, movement, 10).expect("both plans exist");
         let c = conflicts(&starts, &plans, 10);
-        assert!(c.is_empty(), "{movement:?}: plans {plans:?} give conflicts {c:?}");
+        assert!(
+            c.is_empty(),
+            "{movement:?}: plans {plans:?} give conflicts {c:?}"
+        );
     }
 }
 
@@ -339,11 +446,15 @@ fn corridor_head_on_plain_astar_collides_space_time_resolves() {
     let goals = [Pos::new(0, 6), Pos::new(0, 0)];
     for movement in RULES {
         let pass = |p: Pos| grid.passable(p);
-        let plain: Vec<Vec<Pos>> =
-            (0..2).map(|k| astar(starts[k], goals[k], pass, movement).unwrap().0).collect();
+        let plain: Vec<Vec<Pos>> = (0..2)
+            .map(|k| astar(starts[k], goals[k], pass, movement).unwrap().0)
+            .collect();
         assert_eq!(plain[0].len(), 6);
         assert!(!plain[0].contains(&Pos::new(1, 4)) && !plain[1].contains(&Pos::new(1, 4)));
-        assert!(!conflicts(&starts, &plain, 12).is_empty(), "plain A* head-on paths must collide");
+        assert!(
+            !conflicts(&starts, &plain, 12).is_empty(),
+            "plain A* head-on paths must collide"
+        );
 
         let horizon = 16;
         let mut res = Reservations::new(grid.h, grid.w, horizon);
@@ -351,13 +462,24 @@ fn corridor_head_on_plain_astar_collides_space_time_resolves() {
         let p0 = space_time_astar(starts[0], goals[0], pass, movement, &res).unwrap();
         assert_eq!(p0, plain[0], "robot 0 meets no reservation on its way");
         res.reserve_path(starts[0], &p0);
-        assert!(res.conflicts(starts[1], &plain[1]), "robot 1's plain path crosses robot 0's reservations");
-        let p1 = space_time_astar(starts[1], goals[1], pass, movement, &res).expect("robot 1 can dodge into the pocket");
+        assert!(
+            res.conflicts(starts[1], &plain[1]),
+            "robot 1's plain path crosses robot 0's reservations"
+        );
+        let p1 = space_time_astar(starts[1], goals[1], pass, movement, &res)
+            .expect("robot 1 can dodge into the pocket");
         assert!(!res.conflicts(starts[1], &p1));
         check_path(&grid, starts[1], goals[1], &p1, movement, true).unwrap();
-        assert!(p1.contains(&Pos::new(1, 4)), "robot 1 must use the pocket: {p1:?}");
+        assert!(
+            p1.contains(&Pos::new(1, 4)),
+            "robot 1 must use the pocket: {p1:?}"
+        );
         let plans = vec![p0, p1.clone()];
-        assert_eq!(conflicts(&starts, &plans, horizon), vec![], "{movement:?}: {plans:?}");
+        assert_eq!(
+            conflicts(&starts, &plans, horizon),
+            vec![],
+            "{movement:?}: {plans:?}"
+        );
         // Robot 1 waits in the pocket while robot 0 passes (a repeated cell is a wait) or
         // otherwise takes longer than the 6 free-corridor steps.
         assert!(p1.len() > 6, "{p1:?}");
@@ -371,7 +493,11 @@ fn st_cost(start: Pos, path: &[Pos]) -> u32 {
     let mut cost = 0;
     for &p in path {
         let m = Move::between(prev, p).expect("king move");
-        cost += if m == Move::Stay { WAIT_COST } else { move_cost(m) };
+        cost += if m == Move::Stay {
+            WAIT_COST
+        } else {
+            move_cost(m)
+        };
         prev = p;
     }
     cost
@@ -379,7 +505,13 @@ fn st_cost(start: Pos, path: &[Pos]) -> u32 {
 
 /// Reference space-time search: plain Dijkstra over (cell, t) states, t saturating at the
 /// horizon, the transitions of `space_time_astar`'s documentation. Returns the optimal cost.
-fn reference_space_time(grid: &Grid, start: Pos, goal: Pos, movement: Movement, res: &Reservations) -> Option<u32> {
+fn reference_space_time(
+    grid: &Grid,
+    start: Pos,
+    goal: Pos,
+    movement: Movement,
+    res: &Reservations,
+) -> Option<u32> {
     let h = res.horizon();
     let cells = grid.h * grid.w;
     let idx = |p: Pos, t: usize| t * cells + p.row as usize * grid.w + p.col as usize;
@@ -407,7 +539,11 @@ fn reference_space_time(grid: &Grid, start: Pos, goal: Pos, movement: Movement, 
                 continue;
             }
             let nt = (t + 1).min(h);
-            let nd = d + if m == Move::Stay { WAIT_COST } else { move_cost(m) };
+            let nd = d + if m == Move::Stay {
+                WAIT_COST
+            } else {
+                move_cost(m)
+            };
             if nd < dist[idx(q, nt)] {
                 dist[idx(q, nt)] = nd;
                 heap.push(Reverse((nd, q.row, q.col, nt)));
@@ -417,39 +553,53 @@ fn reference_space_time(grid: &Grid, start: Pos, goal: Pos, movement: Movement, 
     None
 }
 
-fn space_time_case() -> impl Strategy<Value = (Grid, Pos, Pos, Vec<(Pos, Vec<Pos>)>, Movement, usize)> {
+fn space_time_case(
+) -> impl Strategy<Value = (Grid, Pos, Pos, Vec<(Pos, Vec<Pos>)>, Movement, usize)> {
     (
         grid_strategy(9, 0.3),
         any::<bool>(),
         3usize..=14,
         prop::collection::vec(any::<prop::sample::Index>(), 2),
-        prop::collection::vec((any::<prop::sample::Index>(), prop::collection::vec(0usize..9, 0..16)), 1..=3),
+        prop::collection::vec(
+            (
+                any::<prop::sample::Index>(),
+                prop::collection::vec(0usize..9, 0..16),
+            ),
+            1..=3,
+        ),
     )
-        .prop_filter_map("too few free cells", |(grid, strict, horizon, ends, others)| {
-            let free = grid.free_cells();
-            if free.len() < 2 {
-                return None;
-            }
-            let movement = if strict { Movement::NoCornerCutting } else { Movement::CornerCutting };
-            // Other robots: random walks of legal moves and waits.
-            let mut walks = Vec::new();
-            for (ix, moves) in others {
-                let s = free[ix.index(free.len())];
-                let mut at = s;
-                let mut path = Vec::new();
-                for m in moves {
-                    let m = Move::ALL[m];
-                    if step_allowed(|q| grid.passable(q), at, m, movement) {
-                        at = m.apply(at);
-                    }
-                    path.push(at);
+        .prop_filter_map(
+            "too few free cells",
+            |(grid, strict, horizon, ends, others)| {
+                let free = grid.free_cells();
+                if free.len() < 2 {
+                    return None;
                 }
-                walks.push((s, path));
-            }
-            let start = free[ends[0].index(free.len())];
-            let goal = free[ends[1].index(free.len())];
-            Some((grid, start, goal, walks, movement, horizon))
-        })
+                let movement = if strict {
+                    Movement::NoCornerCutting
+                } else {
+                    Movement::CornerCutting
+                };
+                // Other robots: random walks of legal moves and waits.
+                let mut walks = Vec::new();
+                for (ix, moves) in others {
+                    let s = free[ix.index(free.len())];
+                    let mut at = s;
+                    let mut path = Vec::new();
+                    for m in moves {
+                        let m = Move::ALL[m];
+                        if step_allowed(|q| grid.passable(q), at, m, movement) {
+                            at = m.apply(at);
+                        }
+                        path.push(at);
+                    }
+                    walks.push((s, path));
+                }
+                let start = free[ends[0].index(free.len())];
+                let goal = free[ends[1].index(free.len())];
+                Some((grid, start, goal, walks, movement, horizon))
+            },
+        )
 }
 
 proptest! {
@@ -487,24 +637,53 @@ proptest! {
 fn space_time_with_no_reservations_matches_astar_cost() {
     let grid = Grid::from_rows(&[
         "........", //
-        ".####...",
-        "....#.#.",
-        "..#.#...",
-        "........",
+        ".####...", "....#.#.", "..#.#...", "........",
     ]);
     let res = Reservations::new(grid.h, grid.w, 20);
     for movement in RULES {
-        let (a, cost) = astar(Pos::new(0, 0), Pos::new(3, 5), |p| grid.passable(p), movement).unwrap();
-        let st = space_time_astar(Pos::new(0, 0), Pos::new(3, 5), |p| grid.passable(p), movement, &res).unwrap();
-        let st_cost = check_path(&grid, Pos::new(0, 0), Pos::new(3, 5), &st, movement, false).unwrap();
+        let (a, cost) = astar(
+            Pos::new(0, 0),
+            Pos::new(3, 5),
+            |p| grid.passable(p),
+            movement,
+        )
+        .unwrap();
+        let st = space_time_astar(
+            Pos::new(0, 0),
+            Pos::new(3, 5),
+            |p| grid.passable(p),
+            movement,
+            &res,
+        )
+        .unwrap();
+        let st_cost =
+            check_path(&grid, Pos::new(0, 0), Pos::new(3, 5), &st, movement, false).unwrap();
         assert_eq!(st_cost, cost, "{movement:?}: {st:?} vs {a:?}");
     }
     // Unreachable goal: no plan.
     let walled = Grid::from_rows(&["..#..", "..#..", "..#.."]);
     let res = Reservations::new(3, 5, 8);
-    assert_eq!(space_time_astar(Pos::new(0, 0), Pos::new(0, 4), |p| walled.passable(p), Movement::CornerCutting, &res), None);
+    assert_eq!(
+        space_time_astar(
+            Pos::new(0, 0),
+            Pos::new(0, 4),
+            |p| walled.passable(p),
+            Movement::CornerCutting,
+            &res
+        ),
+        None
+    );
     // start == goal: empty plan.
-    assert_eq!(space_time_astar(Pos::new(0, 0), Pos::new(0, 0), |p| walled.passable(p), Movement::CornerCutting, &res), Some(vec![]));
+    assert_eq!(
+        space_time_astar(
+            Pos::new(0, 0),
+            Pos::new(0, 0),
+            |p| walled.passable(p),
+            Movement::CornerCutting,
+            &res
+        ),
+        Some(vec![])
+    );
 }
 
 #[test]
@@ -518,13 +697,27 @@ fn space_time_waits_for_a_crossing_robot() {
     assert!(res.is_reserved(Pos::new(1, 1), 0) && res.is_reserved(Pos::new(1, 1), 1));
     assert!(!res.is_reserved(Pos::new(1, 1), 2));
     assert!(res.is_reserved(Pos::new(2, 1), 1) && res.is_reserved(Pos::new(2, 1), 10));
-    assert!(!res.is_reserved(Pos::new(2, 1), 11), "beyond the horizon nothing is reserved");
+    assert!(
+        !res.is_reserved(Pos::new(2, 1), 11),
+        "beyond the horizon nothing is reserved"
+    );
     for movement in RULES {
-        let path = space_time_astar(Pos::new(1, 0), Pos::new(1, 2), |p| grid.passable(p), movement, &res).unwrap();
+        let path = space_time_astar(
+            Pos::new(1, 0),
+            Pos::new(1, 2),
+            |p| grid.passable(p),
+            movement,
+            &res,
+        )
+        .unwrap();
         check_path(&grid, Pos::new(1, 0), Pos::new(1, 2), &path, movement, true).unwrap();
         assert!(!res.conflicts(Pos::new(1, 0), &path));
         let plans = vec![vec![Pos::new(1, 1), Pos::new(2, 1)], path.clone()];
-        assert_eq!(conflicts(&[Pos::new(0, 1), Pos::new(1, 0)], &plans, 10), vec![], "{path:?}");
+        assert_eq!(
+            conflicts(&[Pos::new(0, 1), Pos::new(1, 0)], &plans, 10),
+            vec![],
+            "{path:?}"
+        );
         // (1,1) is held at t = 1, so it can be neither occupied at t = 1 nor entered at t = 2.
         assert_ne!(path.first(), Some(&Pos::new(1, 1)));
         assert_ne!(path.get(1), Some(&Pos::new(1, 1)));
@@ -538,19 +731,49 @@ fn reservations_conflicts_detects_reserved_cells() {
     res.reserve(Pos::new(2, 2), 3);
     assert!(!res.is_empty());
     // Path in (2,2) at t = 3: conflict.
-    let path_at_3 = [Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 2), Pos::new(2, 3)];
-    assert!(res.conflicts(Pos::new(2, 0), &path_at_3), "in (2,2) at t = 3");
+    let path_at_3 = [
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 2),
+        Pos::new(2, 3),
+    ];
+    assert!(
+        res.conflicts(Pos::new(2, 0), &path_at_3),
+        "in (2,2) at t = 3"
+    );
     // Entering (2,2) at t = 4 means entering a cell held at t = 3: conflict as well.
-    let path_at_4 = [Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 2)];
-    assert!(res.conflicts(Pos::new(2, 0), &path_at_4), "entering (2,2) at t = 4");
+    let path_at_4 = [
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 2),
+    ];
+    assert!(
+        res.conflicts(Pos::new(2, 0), &path_at_4),
+        "entering (2,2) at t = 4"
+    );
     // In (2,2) at t = 2 and gone at t = 3: fine.
     let path_at_2 = [Pos::new(2, 1), Pos::new(2, 2), Pos::new(2, 3)];
     assert!(!res.conflicts(Pos::new(2, 0), &path_at_2));
     // Entering at t = 5: fine.
-    let path_at_5 = [Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 1), Pos::new(2, 2)];
+    let path_at_5 = [
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 1),
+        Pos::new(2, 2),
+    ];
     assert!(!res.conflicts(Pos::new(2, 0), &path_at_5));
     // Never touching it: fine.
-    assert!(!res.conflicts(Pos::new(0, 0), &[Pos::new(0, 1), Pos::new(0, 2), Pos::new(0, 3), Pos::new(0, 4)]));
+    assert!(!res.conflicts(
+        Pos::new(0, 0),
+        &[
+            Pos::new(0, 1),
+            Pos::new(0, 2),
+            Pos::new(0, 3),
+            Pos::new(0, 4)
+        ]
+    ));
     // Reservations beyond the horizon are ignored; clear() forgets everything.
     res.reserve(Pos::new(0, 0), 7);
     assert!(!res.is_reserved(Pos::new(0, 0), 7));
@@ -564,11 +787,19 @@ fn reservations_conflicts_detects_reserved_cells() {
         .flat_map(|t| (0..25).map(move |i| (Pos::new(i / 5, i % 5), t)))
         .filter(|&(p, t)| res.is_reserved(p, t))
         .collect();
-    let mut want = vec![(Pos::new(0, 0), 0), (Pos::new(0, 1), 0), (Pos::new(0, 1), 1), (Pos::new(0, 2), 1)];
+    let mut want = vec![
+        (Pos::new(0, 0), 0),
+        (Pos::new(0, 1), 0),
+        (Pos::new(0, 1), 1),
+        (Pos::new(0, 2), 1),
+    ];
     want.extend((2..=6).map(|t| (Pos::new(0, 2), t)));
     want.sort_by_key(|&(p, t)| (t, p));
     assert_eq!(reserved, want);
     // A head-on path down the same row conflicts; a path that stays below does not.
     assert!(res.conflicts(Pos::new(0, 4), &[Pos::new(0, 3), Pos::new(0, 2)]));
-    assert!(!res.conflicts(Pos::new(1, 4), &[Pos::new(1, 3), Pos::new(1, 2), Pos::new(1, 1)]));
+    assert!(!res.conflicts(
+        Pos::new(1, 4),
+        &[Pos::new(1, 3), Pos::new(1, 2), Pos::new(1, 1)]
+    ));
 }

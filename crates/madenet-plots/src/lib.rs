@@ -234,9 +234,17 @@ pub fn bar_panels(
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let png = with_ext(stem, "png");
-    let invalid = |reason| PlotError::InvalidInput { path: png.clone(), reason };
+    let invalid = |reason| PlotError::InvalidInput {
+        path: png.clone(),
+        reason,
+    };
     validate_bars(panels, cols).map_err(invalid)?;
-    let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
+    let names = legend_names(
+        panels
+            .iter()
+            .map(|p| p.series.iter().map(|s| s.name.as_str())),
+    )
+    .map_err(invalid)?;
     let fig = Figure {
         colours: (0..names.len()).collect(),
         names: &names,
@@ -275,9 +283,17 @@ pub fn line_panels(
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let png = with_ext(stem, "png");
-    let invalid = |reason| PlotError::InvalidInput { path: png.clone(), reason };
+    let invalid = |reason| PlotError::InvalidInput {
+        path: png.clone(),
+        reason,
+    };
     validate_lines(panels, cols).map_err(invalid)?;
-    let names = legend_names(panels.iter().map(|p| p.series.iter().map(|s| s.name.as_str()))).map_err(invalid)?;
+    let names = legend_names(
+        panels
+            .iter()
+            .map(|p| p.series.iter().map(|s| s.name.as_str())),
+    )
+    .map_err(invalid)?;
     let fig = Figure {
         colours: (0..names.len()).collect(),
         faint: faint_series(panels, names.len()),
@@ -369,12 +385,15 @@ pub fn styled_line_panels(
     for (pi, p) in panels.iter().enumerate() {
         let mut panel_looks = Vec::with_capacity(p.series.len());
         for ser in &p.series {
-            let st = styles.iter().find(|st| st.name == ser.name).ok_or_else(|| {
-                invalid(format!(
-                    "panel {pi} ({:?}): series {:?} has no line style",
-                    p.title, ser.name
-                ))
-            })?;
+            let st = styles
+                .iter()
+                .find(|st| st.name == ser.name)
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "panel {pi} ({:?}): series {:?} has no line style",
+                        p.title, ser.name
+                    ))
+                })?;
             panel_looks.push(Look {
                 colour: st.colour,
                 faint: st.faint,

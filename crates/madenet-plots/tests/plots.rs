@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use madenet_plots::{
-    bar_panels, ewma, line_panels, styled_line_panels, BarPanel, BarSeries, LinePanel,
-    LineSeries, LineStyle, PlotError,
+    bar_panels, ewma, line_panels, styled_line_panels, BarPanel, BarSeries, LinePanel, LineSeries,
+    LineStyle, PlotError,
 };
 
 /// A fresh, empty directory for one test.
@@ -291,8 +291,15 @@ fn styled_line_panels_write_one_file_and_match_series_by_name() {
     let img = image::open(&png).unwrap().to_rgb8();
     assert_eq!(img.width(), 1600);
     assert!(count_colour(&img, [0x00, 0x72, 0xB2]) > 500, "no blue EWMA");
-    assert!(count_colour(&img, [0x00, 0x9E, 0x73]) > 200, "no green validation");
-    assert_eq!(count_colour(&img, [0xD5, 0x5E, 0x00]), 0, "vermillion unused");
+    assert!(
+        count_colour(&img, [0x00, 0x9E, 0x73]) > 200,
+        "no green validation"
+    );
+    assert_eq!(
+        count_colour(&img, [0xD5, 0x5E, 0x00]),
+        0,
+        "vermillion unused"
+    );
 
     let svg = d.join("fig2.SVG");
     styled_line_panels(&svg, &panels, 2, &styles).unwrap();
@@ -316,9 +323,18 @@ fn styled_line_panels_write_one_file_and_match_series_by_name() {
     };
     err(&d.join("fig2.jpg"), &styles, ".png or .svg");
     err(&d.join("fig2"), &styles, ".png or .svg");
-    err(&d.join("bad.png"), &styles[..2], "\"validation\" has no line style");
+    err(
+        &d.join("bad.png"),
+        &styles[..2],
+        "\"validation\" has no line style",
+    );
     err(&d.join("bad.png"), &[], "no line styles");
-    let twice = [styles[0].clone(), styles[1].clone(), styles[2].clone(), styles[0].clone()];
+    let twice = [
+        styles[0].clone(),
+        styles[1].clone(),
+        styles[2].clone(),
+        styles[0].clone(),
+    ];
     err(&d.join("bad.png"), &twice, "two line styles");
     assert_eq!(files_in(&d), vec!["fig2.SVG", "fig2.png"]);
 }

@@ -29,25 +29,43 @@ pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
 pub(crate) fn scenario(config: Option<&str>, overrides: &str) -> PyResult<ScenarioConfig> {
     let mut table = match config {
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
-            text.parse::<toml::Table>().map_err(|e| value_error(format!("{path}: {}", e.message())))?
+            let text =
+                std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
+            text.parse::<toml::Table>()
+                .map_err(|e| value_error(format!("{path}: {}", e.message())))?
         }
         None => toml::Table::new(),
     };
-    let extra = overrides.parse::<toml::Table>().map_err(|e| value_error(format!("keyword arguments: {}", e.message())))?;
+    let extra = overrides
+        .parse::<toml::Table>()
+        .map_err(|e| value_error(format!("keyword arguments: {}", e.message())))?;
     table.extend(extra);
     let text = toml::to_string(&table).map_err(value_error)?;
-    ScenarioConfig::from_toml_str(&text).map_err(|e| value_error(format!("{}: {e}", config.unwrap_or("scenario"))))
+    ScenarioConfig::from_toml_str(&text)
+        .map_err(|e| value_error(format!("{}: {e}", config.unwrap_or("scenario"))))
 }
 
 /// Map, start cells and scenario from the Python arguments.
-pub(crate) fn setup(map: &str, start: &str, config: Option<&str>, overrides: &str) -> PyResult<(OccGrid, String, Vec<Pos>, ScenarioConfig)> {
+pub(crate) fn setup(
+    map: &str,
+    start: &str,
+    config: Option<&str>,
+    overrides: &str,
+) -> PyResult<(OccGrid, String, Vec<Pos>, ScenarioConfig)> {
     let scenario = scenario(config, overrides)?;
     let source = MapSource::from_str(map).map_err(|e| value_error(format!("map: {e}")))?;
-    let grid = source.load(&scenario).map_err(|e| value_error(format!("map: {e}")))?;
-    let starts = StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?.cells(&grid, scenario.num_robots, scenario.movement);
+    let grid = source
+        .load(&scenario)
+        .map_err(|e| value_error(format!("map: {e}")))?;
+    let starts = StartSpec::from_str(start)
+        .map_err(|e| value_error(format!("start: {e}")))?
+        .cells(&grid, scenario.num_robots, scenario.movement);
     if starts.is_empty() {
-        return Err(value_error(format!("start: `random`: map {} has no {} connected free cells around the cell drawn from it", source.name(), scenario.num_robots)));
+        return Err(value_error(format!(
+            "start: `random`: map {} has no {} connected free cells around the cell drawn from it",
+            source.name(),
+            scenario.num_robots
+        )));
     }
     Ok((grid, source.name(), starts, scenario))
 }
@@ -56,7 +74,9 @@ pub(crate) fn action_mode(mode: &str) -> PyResult<ActionMode> {
     match mode {
         "macro" => Ok(ActionMode::Macro),
         "primitive" => Ok(ActionMode::Primitive),
-        other => Err(value_error(format!("mode: `{other}` (expected `macro` or `primitive`)"))),
+        other => Err(value_error(format!(
+            "mode: `{other}` (expected `macro` or `primitive`)"
+        ))),
     }
 }
 
@@ -64,7 +84,11 @@ pub(crate) fn action_mode(mode: &str) -> PyResult<ActionMode> {
 pub(crate) fn registry() -> PyResult<&'static PolicyRegistry> {
     static REGISTRY: OnceLock<Result<PolicyRegistry, String>> = OnceLock::new();
     REGISTRY
-        .get_or_init(|| madenet_study::StudyConfig::default().registry().map_err(|e| e.to_string()))
+        .get_or_init(|| {
+            madenet_study::StudyConfig::default()
+                .registry()
+                .map_err(|e| e.to_string())
+        })
         .as_ref()
         .map_err(value_error)
 }
@@ -79,11 +103,28 @@ fn policies() -> PyResult<Vec<(String, String)>> {
 #[pyfunction]
 #[pyo3(signature = (map, start, policy, seed, config = None, overrides = "", trajectory = false))]
 #[allow(clippy::too_many_arguments)]
-fn run_trial(py: Python<'_>, map: &str, start: &str, policy: &str, seed: u64, config: Option<&str>, overrides: &str, trajectory: bool) -> PyResult<String> {
+fn run_trial(
+    py: Python<'_>,
+    map: &str,
+    start: &str,
+    policy: &str,
+    seed: u64,
+    config: Option<&str>,
+    overrides: &str,
+    trajectory: bool,
+) -> PyResult<String> {
     let (grid, map_name, starts, scenario) = setup(map, start, config, overrides)?;
     let registry = registry()?;
-    let spec = TrialSpec { map: grid, map_name, starts, config: scenario, policy: policy.to_string(), seed };
-    let trial = Trial::with_registry(spec, registry).map_err(|e| value_error(format!("policy / map / start: {e}")))?;
+    let spec = TrialSpec {
+        map: grid,
+        map_name,
+        starts,
+        config: scenario,
+        policy: policy.to_string(),
+        seed,
+    };
+    let trial = Trial::with_registry(spec, registry)
+        .map_err(|e| value_error(format!("policy / map / start: {e}")))?;
     let result = py.detach(|| trial.record_trajectory(trajectory).run());
     serde_json::to_string(&result).map_err(value_error)
 }
@@ -95,11 +136,19 @@ fn decision(obj: &Bound<'_, PyAny>) -> PyResult<Decision> {
         return Ok(Decision::Idle);
     }
     if let Ok(t) = obj.cast::<PyTuple>() {
-        let (r, c): (i32, i32) = t.extract().map_err(|_| value_error("a goal action is a (row, col) pair of ints"))?;
+        let (r, c): (i32, i32) = t
+            .extract()
+            .map_err(|_| value_error("a goal action is a (row, col) pair of ints"))?;
         return Ok(Decision::Goal(Pos::new(r, c)));
     }
-    let k: i64 = obj.extract().map_err(|_| value_error(format!("action {obj}: expected an int, None or a (row, col) goal")))?;
-    usize::try_from(k).map(Decision::Candidate).map_err(|_| value_error(format!("action {k}: negative")))
+    let k: i64 = obj.extract().map_err(|_| {
+        value_error(format!(
+            "action {obj}: expected an int, None or a (row, col) goal"
+        ))
+    })?;
+    usize::try_from(k)
+        .map(Decision::Candidate)
+        .map_err(|_| value_error(format!("action {k}: negative")))
 }
 
 fn decision_to_py(py: Python<'_>, d: Decision) -> PyResult<Py<PyAny>> {
@@ -113,7 +162,11 @@ fn decision_to_py(py: Python<'_>, d: Decision) -> PyResult<Py<PyAny>> {
 /// Largest picture scale: 20 × 20 maps at 64 px per cell are ≈ 2.6 k pixels wide already.
 const MAX_CELL_PX: u32 = 64;
 
-type Observation<'py> = (Bound<'py, PyArray3<f32>>, Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<i8>>);
+type Observation<'py> = (
+    Bound<'py, PyArray3<f32>>,
+    Bound<'py, PyArray1<f32>>,
+    Bound<'py, PyArray1<i8>>,
+);
 
 /// One environment (see `madenet_env`): `map` is `paper:N`, `generate:SEED` or a map file,
 /// `start` a corner name or `r,c;r,c;…`, `mode` `macro` or `primitive`.
@@ -127,13 +180,24 @@ pub struct CoreEnv {
 impl CoreEnv {
     #[new]
     #[pyo3(signature = (map = "paper:1", start = "top-left", mode = "macro", config = None, overrides = "", candidates = false, record = false))]
-    fn new(map: &str, start: &str, mode: &str, config: Option<&str>, overrides: &str, candidates: bool, record: bool) -> PyResult<Self> {
+    fn new(
+        map: &str,
+        start: &str,
+        mode: &str,
+        config: Option<&str>,
+        overrides: &str,
+        candidates: bool,
+        record: bool,
+    ) -> PyResult<Self> {
         let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
         let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?)
             .map_err(value_error)?
             .observing_candidates(candidates)
             .recording(record);
-        Ok(CoreEnv { env, map_name: name })
+        Ok(CoreEnv {
+            env,
+            map_name: name,
+        })
     }
 
     #[getter]
@@ -166,7 +230,9 @@ impl CoreEnv {
     }
     #[getter]
     fn joint_action_count(&self) -> PyResult<usize> {
-        self.env.joint_action_count().ok_or_else(|| value_error("num_robots: |G|^|I| joint actions overflow"))
+        self.env
+            .joint_action_count()
+            .ok_or_else(|| value_error("num_robots: |G|^|I| joint actions overflow"))
     }
     #[getter]
     fn map_name(&self) -> String {
@@ -197,10 +263,16 @@ impl CoreEnv {
         let mut map = vec![0.0f32; self.env.map_len()];
         let mut vector = vec![0.0f32; self.env.vector_len()];
         let mut mask = vec![0u8; self.env.action_count()];
-        self.env.observe_into(robot, &mut map, &mut vector, &mut mask).map_err(value_error)?;
+        self.env
+            .observe_into(robot, &mut map, &mut vector, &mut mask)
+            .map_err(value_error)?;
         let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
         let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
-        Ok((map, PyArray1::from_vec(py, vector), PyArray1::from_vec(py, mask)))
+        Ok((
+            map,
+            PyArray1::from_vec(py, vector),
+            PyArray1::from_vec(py, mask),
+        ))
     }
 
     /// The centralized observation: merged map image `[4, H, W]`, every robot's vector, the
@@ -211,28 +283,56 @@ impl CoreEnv {
         let mut map = vec![0.0f32; self.env.map_len()];
         let mut vector = vec![0.0f32; self.env.joint_vector_len()];
         let mut mask = vec![0u8; count];
-        self.env.observe_joint_into(&mut map, &mut vector, &mut mask).map_err(value_error)?;
+        self.env
+            .observe_joint_into(&mut map, &mut vector, &mut mask)
+            .map_err(value_error)?;
         let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
         let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
-        Ok((map, PyArray1::from_vec(py, vector), PyArray1::from_vec(py, mask)))
+        Ok((
+            map,
+            PyArray1::from_vec(py, vector),
+            PyArray1::from_vec(py, mask),
+        ))
     }
 
     /// Applies one action per robot; returns (rewards, team reward, timesteps, terminated,
     /// truncated). Each action is an int (candidate / move index), `None` (idle) or a
     /// `(row, col)` goal cell.
-    fn step(&mut self, py: Python<'_>, actions: Vec<Bound<'_, PyAny>>) -> PyResult<(Vec<f64>, f64, usize, bool, bool)> {
+    fn step(
+        &mut self,
+        py: Python<'_>,
+        actions: Vec<Bound<'_, PyAny>>,
+    ) -> PyResult<(Vec<f64>, f64, usize, bool, bool)> {
         let count = self.env.action_count();
         let decisions = actions.iter().map(decision).collect::<PyResult<Vec<_>>>()?;
         let env = &mut self.env;
-        let r: StepResult = if decisions.iter().all(|d| matches!(d, Decision::Candidate(_))) {
-            let idx: Vec<usize> = decisions.iter().map(|d| if let Decision::Candidate(k) = d { *k } else { 0 }).collect();
+        let r: StepResult = if decisions
+            .iter()
+            .all(|d| matches!(d, Decision::Candidate(_)))
+        {
+            let idx: Vec<usize> = decisions
+                .iter()
+                .map(|d| {
+                    if let Decision::Candidate(k) = d {
+                        *k
+                    } else {
+                        0
+                    }
+                })
+                .collect();
             if let Some(a) = idx.iter().find(|&&a| a >= count) {
                 return Err(value_error(format!("action {a}: expected 0..{count}")));
             }
             py.detach(|| env.step(&idx))
         } else {
-            if env.mode() == ActionMode::Primitive && decisions.iter().any(|d| matches!(d, Decision::Candidate(_))) {
-                return Err(value_error("actions: in primitive mode move indices cannot be mixed with goals or None"));
+            if env.mode() == ActionMode::Primitive
+                && decisions
+                    .iter()
+                    .any(|d| matches!(d, Decision::Candidate(_)))
+            {
+                return Err(value_error(
+                    "actions: in primitive mode move indices cannot be mixed with goals or None",
+                ));
             }
             py.detach(|| env.step_decisions(&decisions))
         }
@@ -242,7 +342,8 @@ impl CoreEnv {
 
     /// Applies joint action a = Σ k_i·|G|^i.
     fn step_joint(&mut self, py: Python<'_>, action: i64) -> PyResult<(f64, usize, bool, bool)> {
-        let a = usize::try_from(action).map_err(|_| value_error(format!("action {action}: negative")))?;
+        let a = usize::try_from(action)
+            .map_err(|_| value_error(format!("action {action}: negative")))?;
         let env = &mut self.env;
         let r = py.detach(|| env.step_joint(a)).map_err(value_error)?;
         Ok((r.team_reward, r.steps, r.terminated, r.truncated))
@@ -251,26 +352,46 @@ impl CoreEnv {
     /// What shipped policy `name` decides now for each robot (int, `(row, col)` or `None`).
     fn policy_actions(&mut self, py: Python<'_>, name: &str) -> PyResult<Vec<Py<PyAny>>> {
         // An unknown name is the registry's error, naming the known policies.
-        let decisions = self.env.policy_decisions(name, registry()?).map_err(value_error)?;
-        decisions.into_iter().map(|d| decision_to_py(py, d)).collect()
+        let decisions = self
+            .env
+            .policy_decisions(name, registry()?)
+            .map_err(value_error)?;
+        decisions
+            .into_iter()
+            .map(|d| decision_to_py(py, d))
+            .collect()
     }
 
     /// The frame `madenet run --render` draws, as an RGB array `[height, width, 3]` uint8.
     fn render<'py>(&self, py: Python<'py>, cell_px: u32) -> PyResult<Bound<'py, PyArray3<u8>>> {
         if !(1..=MAX_CELL_PX).contains(&cell_px) {
-            return Err(value_error(format!("cell_px: {cell_px} is not in 1..={MAX_CELL_PX}")));
+            return Err(value_error(format!(
+                "cell_px: {cell_px} is not in 1..={MAX_CELL_PX}"
+            )));
         }
         let frame = self.env.frame().map_err(value_error)?;
-        let img = madenet_render::render(&frame, &madenet_render::RenderOptions { cell_px, ..Default::default() });
+        let img = madenet_render::render(
+            &frame,
+            &madenet_render::RenderOptions {
+                cell_px,
+                ..Default::default()
+            },
+        );
         let (w, h) = (img.width() as usize, img.height() as usize);
-        let rgb: Vec<u8> = img.pixels().flat_map(|p| [p.0[0], p.0[1], p.0[2]]).collect();
+        let rgb: Vec<u8> = img
+            .pixels()
+            .flat_map(|p| [p.0[0], p.0[1], p.0[2]])
+            .collect();
         PyArray1::from_vec(py, rgb).reshape([h, w, 3])
     }
 
     /// The episode's result as `madenet run --json` prints it (a JSON string; the trajectory
     /// if the environment records); ends the episode.
     fn finish(&mut self) -> PyResult<String> {
-        let result = self.env.finish().ok_or_else(|| value_error("no episode: call reset() first"))?;
+        let result = self
+            .env
+            .finish()
+            .ok_or_else(|| value_error("no episode: call reset() first"))?;
         serde_json::to_string(&result).map_err(value_error)
     }
 }

@@ -22,16 +22,26 @@ pub struct CoreStudy {
 fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyConfig> {
     let mut table = match config {
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
-            text.parse::<toml::Table>().map_err(|e| value_error(format!("{path}: {}", e.message())))?
+            let text =
+                std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
+            text.parse::<toml::Table>()
+                .map_err(|e| value_error(format!("{path}: {}", e.message())))?
         }
         None => toml::Table::new(),
     };
-    let extra: serde_json::Value = serde_json::from_str(overrides_json).map_err(|e| value_error(format!("keyword arguments: {e}")))?;
-    let extra: toml::Table = toml::Table::try_from(extra).map_err(|e| value_error(format!("keyword arguments: {e}")))?;
+    let extra: serde_json::Value = serde_json::from_str(overrides_json)
+        .map_err(|e| value_error(format!("keyword arguments: {e}")))?;
+    let extra: toml::Table =
+        toml::Table::try_from(extra).map_err(|e| value_error(format!("keyword arguments: {e}")))?;
     table.extend(extra);
     let text = toml::to_string(&table).map_err(value_error)?;
-    toml::from_str(&text).map_err(|e| value_error(format!("{}: {}", config.unwrap_or("study"), e.message().trim())))
+    toml::from_str(&text).map_err(|e| {
+        value_error(format!(
+            "{}: {}",
+            config.unwrap_or("study"),
+            e.message().trim()
+        ))
+    })
 }
 
 fn outcome_dict<'py>(py: Python<'py>, o: &TrialOutcome) -> PyResult<Bound<'py, PyDict>> {
@@ -66,7 +76,11 @@ impl CoreStudy {
     fn new(config: Option<&str>, overrides: &str) -> PyResult<Self> {
         let mut config = study_config(config, overrides)?;
         // Map files by absolute path, so that the study means the same in a worker elsewhere.
-        for m in config.maps.iter_mut().filter(|m| *m != "paper" && !m.starts_with("paper:") && !m.starts_with("generate:")) {
+        for m in config
+            .maps
+            .iter_mut()
+            .filter(|m| *m != "paper" && !m.starts_with("paper:") && !m.starts_with("generate:"))
+        {
             if let Ok(abs) = std::fs::canonicalize(&*m) {
                 *m = abs.display().to_string();
             }
@@ -77,7 +91,10 @@ impl CoreStudy {
     /// The study from the TOML text `toml_text()` returned (how Ray workers rebuild it).
     #[staticmethod]
     fn from_toml(text: &str) -> PyResult<Self> {
-        Self::build(toml::from_str(text).map_err(|e| value_error(format!("study: {}", e.message().trim())))?)
+        Self::build(
+            toml::from_str(text)
+                .map_err(|e| value_error(format!("study: {}", e.message().trim())))?,
+        )
     }
 
     /// The full configuration as TOML (every field, defaults included).
@@ -100,10 +117,18 @@ impl CoreStudy {
     /// `None`) with the GIL released; returns one dict per trial (the columns of
     /// `trials.csv`), in the order of `indices`.
     #[pyo3(signature = (indices = None, threads = None))]
-    fn run<'py>(&self, py: Python<'py>, indices: Option<Vec<usize>>, threads: Option<usize>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        indices: Option<Vec<usize>>,
+        threads: Option<usize>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
         let indices = indices.unwrap_or_else(|| (0..self.planned.len()).collect());
         if let Some(&bad) = indices.iter().find(|&&i| i >= self.planned.len()) {
-            return Err(value_error(format!("indices: {bad} is not a trial of this study ({} planned)", self.planned.len())));
+            return Err(value_error(format!(
+                "indices: {bad} is not a trial of this study ({} planned)",
+                self.planned.len()
+            )));
         }
         let mut pool = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {
@@ -113,19 +138,41 @@ impl CoreStudy {
         let (planned, registry) = (&self.planned, &self.registry);
         let outcomes: Result<Vec<TrialOutcome>, _> = py.detach(|| {
             use rayon::prelude::*;
-            pool.install(|| indices.par_iter().map(|&i| runner::run_one(&planned[i].0, &planned[i].1, registry)).collect())
+            pool.install(|| {
+                indices
+                    .par_iter()
+                    .map(|&i| runner::run_one(&planned[i].0, &planned[i].1, registry))
+                    .collect()
+            })
         });
-        outcomes.map_err(value_error)?.iter().map(|o| outcome_dict(py, o)).collect()
+        outcomes
+            .map_err(value_error)?
+            .iter()
+            .map(|o| outcome_dict(py, o))
+            .collect()
     }
 
     /// Runs the whole study into folder `out` exactly as `madenet compare --out OUT` does
     /// (trials.csv, curves, summary, statistics, figures, report.md; resumable); returns the
     /// path of report.md and one dict per trial.
     #[pyo3(signature = (out, fresh = false))]
-    fn run_to<'py>(&self, py: Python<'py>, out: std::path::PathBuf, fresh: bool) -> PyResult<(String, Vec<Bound<'py, PyDict>>)> {
+    fn run_to<'py>(
+        &self,
+        py: Python<'py>,
+        out: std::path::PathBuf,
+        fresh: bool,
+    ) -> PyResult<(String, Vec<Bound<'py, PyDict>>)> {
         let cfg = &self.config;
-        let (report, outcomes) = py.detach(|| madenet_study::run_study(cfg, &out, fresh, &|_, _| {})).map_err(value_error)?;
-        Ok((report.display().to_string(), outcomes.iter().map(|o| outcome_dict(py, o)).collect::<PyResult<_>>()?))
+        let (report, outcomes) = py
+            .detach(|| madenet_study::run_study(cfg, &out, fresh, &|_, _| {}))
+            .map_err(value_error)?;
+        Ok((
+            report.display().to_string(),
+            outcomes
+                .iter()
+                .map(|o| outcome_dict(py, o))
+                .collect::<PyResult<_>>()?,
+        ))
     }
 }
 
@@ -134,6 +181,10 @@ impl CoreStudy {
         let registry = config.registry().map_err(value_error)?;
         let (maps, starts) = config.validate(&registry).map_err(value_error)?;
         let planned = runner::plan(&config, &maps, &starts);
-        Ok(CoreStudy { config, registry, planned })
+        Ok(CoreStudy {
+            config,
+            registry,
+            planned,
+        })
     }
 }

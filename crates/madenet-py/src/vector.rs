@@ -47,7 +47,12 @@ macro_rules! slice_mut {
 
 impl CoreVecEnv {
     /// Runs `f` on the buffers with the GIL released.
-    fn with_buffers(&mut self, py: Python<'_>, f: impl FnOnce(&mut VecEnv, &[usize], VecBuffers<'_>) -> Result<(), madenet_env::EnvError> + Send) -> PyResult<()> {
+    fn with_buffers(
+        &mut self,
+        py: Python<'_>,
+        f: impl FnOnce(&mut VecEnv, &[usize], VecBuffers<'_>) -> Result<(), madenet_env::EnvError>
+            + Send,
+    ) -> PyResult<()> {
         slice_mut!(m, self.maps, py);
         slice_mut!(v, self.vectors, py);
         slice_mut!(k, self.masks, py);
@@ -65,7 +70,8 @@ impl CoreVecEnv {
             truncated: tr.as_slice_mut().map_err(value_error)?,
         };
         let (inner, actions) = (&mut self.inner, &self.actions[..]);
-        py.detach(move || f(inner, actions, out)).map_err(value_error)
+        py.detach(move || f(inner, actions, out))
+            .map_err(value_error)
     }
 }
 
@@ -74,18 +80,49 @@ impl CoreVecEnv {
     #[new]
     #[pyo3(signature = (num_envs, map = "paper:1", start = "top-left", mode = "primitive", config = None, overrides = "", seed = 0, candidates = false))]
     #[allow(clippy::too_many_arguments)]
-    fn new(py: Python<'_>, num_envs: usize, map: &str, start: &str, mode: &str, config: Option<&str>, overrides: &str, seed: u64, candidates: bool) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        num_envs: usize,
+        map: &str,
+        start: &str,
+        mode: &str,
+        config: Option<&str>,
+        overrides: &str,
+        seed: u64,
+        candidates: bool,
+    ) -> PyResult<Self> {
         let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
-        let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?).map_err(value_error)?.observing_candidates(candidates);
-        let (r, h, w, vl, al) = (env.num_robots(), env.height(), env.width(), env.vector_len(), env.action_count());
+        let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?)
+            .map_err(value_error)?
+            .observing_candidates(candidates);
+        let (r, h, w, vl, al) = (
+            env.num_robots(),
+            env.height(),
+            env.width(),
+            env.vector_len(),
+            env.action_count(),
+        );
         if num_envs > MAX_ENVS {
-            return Err(value_error(format!("num_envs: {num_envs} is more than {MAX_ENVS}")));
+            return Err(value_error(format!(
+                "num_envs: {num_envs} is more than {MAX_ENVS}"
+            )));
         }
-        let bytes = [4 * h * w * 4, vl * 4, al].iter().map(|&per_robot| per_robot.checked_mul(r).and_then(|b| b.checked_mul(num_envs))).try_fold(0usize, |acc, b| b.and_then(|b| acc.checked_add(b)));
+        let bytes = [4 * h * w * 4, vl * 4, al]
+            .iter()
+            .map(|&per_robot| {
+                per_robot
+                    .checked_mul(r)
+                    .and_then(|b| b.checked_mul(num_envs))
+            })
+            .try_fold(0usize, |acc, b| b.and_then(|b| acc.checked_add(b)));
         if bytes.is_none_or(|b| b > MAX_BUFFER_BYTES) {
-            return Err(value_error(format!("num_envs: {num_envs} environments' observations would exceed {} GiB", MAX_BUFFER_BYTES >> 30)));
+            return Err(value_error(format!(
+                "num_envs: {num_envs} environments' observations would exceed {} GiB",
+                MAX_BUFFER_BYTES >> 30
+            )));
         }
-        let inner = VecEnv::new(env, num_envs, seed).map_err(|e| value_error(format!("num_envs: {e}")))?;
+        let inner =
+            VecEnv::new(env, num_envs, seed).map_err(|e| value_error(format!("num_envs: {e}")))?;
         Ok(CoreVecEnv {
             inner,
             actions: vec![0; num_envs * r],
@@ -132,13 +169,21 @@ impl CoreVecEnv {
     fn step(&mut self, py: Python<'_>, actions: &Bound<'_, PyArrayDyn<i64>>) -> PyResult<()> {
         let count = self.inner.first().action_count();
         if actions.shape() != [self.inner.len(), self.num_robots()] {
-            return Err(value_error(format!("actions: shape {:?}, expected [{}, {}] (environments × robots)", actions.shape(), self.inner.len(), self.num_robots())));
+            return Err(value_error(format!(
+                "actions: shape {:?}, expected [{}, {}] (environments × robots)",
+                actions.shape(),
+                self.inner.len(),
+                self.num_robots()
+            )));
         }
         {
             let ro = actions.try_readonly().map_err(value_error)?;
             let arr = ro.as_array();
             for (o, &a) in self.actions.iter_mut().zip(arr.iter()) {
-                *o = usize::try_from(a).ok().filter(|&a| a < count).ok_or_else(|| value_error(format!("actions: {a} is not in 0..{count}")))?;
+                *o = usize::try_from(a)
+                    .ok()
+                    .filter(|&a| a < count)
+                    .ok_or_else(|| value_error(format!("actions: {a} is not in 0..{count}")))?;
             }
         }
         self.with_buffers(py, |inner, actions, out| inner.step(actions, out))

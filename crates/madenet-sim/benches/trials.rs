@@ -20,7 +20,10 @@ fn specs(csp: f64) -> Vec<TrialSpec> {
                 starts: c.start_cells(20, 20).to_vec(),
                 map: map.clone(),
                 map_name: format!("test_{n}"),
-                config: ScenarioConfig { comm_success_prob: csp, ..Default::default() },
+                config: ScenarioConfig {
+                    comm_success_prob: csp,
+                    ..Default::default()
+                },
                 policy: "nf".into(),
                 seed: 1,
             });
@@ -39,11 +42,23 @@ fn bench(c: &mut Criterion) {
         })
     });
     let one = all[4 * 4].clone(); // test_5, top-left
-    c.bench_function("nf_trial/test_5", |b| b.iter(|| black_box(Trial::new(one.clone()).expect("trial").run())));
-    let world = World::new(paper_map(5).expect("map"), &Corner::TopLeft.start_cells(20, 20), ScenarioConfig::default(), 1).expect("world");
+    c.bench_function("nf_trial/test_5", |b| {
+        b.iter(|| black_box(Trial::new(one.clone()).expect("trial").run()))
+    });
+    let world = World::new(
+        paper_map(5).expect("map"),
+        &Corner::TopLeft.start_cells(20, 20),
+        ScenarioConfig::default(),
+        1,
+    )
+    .expect("world");
     let moves = [Move::E, Move::S, Move::SE];
     c.bench_function("world_step", |b| {
-        b.iter_batched_ref(|| world.clone(), |w| w.step(black_box(&moves)), criterion::BatchSize::SmallInput)
+        b.iter_batched_ref(
+            || world.clone(),
+            |w| w.step(black_box(&moves)),
+            criterion::BatchSize::SmallInput,
+        )
     });
 }
 

@@ -32,10 +32,16 @@ impl PolicyRegistry {
     /// candidate away from teammates, [`Spread`]).
     pub fn builtin() -> Self {
         let mut r = PolicyRegistry::default();
-        r.register("nf", "nearest frontier (Yamauchi 1997), re-decided every timestep", |_| Box::new(NearestFrontier));
-        r.register("random", "uniformly random goal candidate at each macro termination", |c| {
-            Box::new(RandomCandidate::new(c.seed, c.robot))
-        });
+        r.register(
+            "nf",
+            "nearest frontier (Yamauchi 1997), re-decided every timestep",
+            |_| Box::new(NearestFrontier),
+        );
+        r.register(
+            "random",
+            "uniformly random goal candidate at each macro termination",
+            |c| Box::new(RandomCandidate::new(c.seed, c.robot)),
+        );
         r.register("spread", "nearest goal candidate, penalised 2·d_s per teammate whose goal or position is within d_s (the simple rule)", |c| {
             Box::new(Spread::new(c.config.sensing_range))
         });
@@ -48,7 +54,8 @@ impl PolicyRegistry {
         about: &str,
         f: impl Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync + 'static,
     ) {
-        self.factories.insert(name.to_string(), (about.to_string(), Arc::new(f)));
+        self.factories
+            .insert(name.to_string(), (about.to_string(), Arc::new(f)));
         self.checks.remove(name);
     }
 
@@ -68,20 +75,33 @@ impl PolicyRegistry {
     /// Whether `name` exists and can run in `ctx` (checked before any trial by studies).
     pub fn check(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<(), crate::SimError> {
         if !self.factories.contains_key(name) {
-            return Err(crate::SimError::UnknownPolicy { name: name.to_string(), known: self.names().join(", ") });
+            return Err(crate::SimError::UnknownPolicy {
+                name: name.to_string(),
+                known: self.names().join(", "),
+            });
         }
         match self.checks.get(name) {
-            Some(check) => check(ctx).map_err(|reason| crate::SimError::PolicyUnavailable { name: name.to_string(), reason }),
+            Some(check) => check(ctx).map_err(|reason| crate::SimError::PolicyUnavailable {
+                name: name.to_string(),
+                reason,
+            }),
             None => Ok(()),
         }
     }
 
     /// Builds robot `ctx.robot`'s policy, or an error listing the known names.
-    pub fn make(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<Box<dyn Policy>, crate::SimError> {
+    pub fn make(
+        &self,
+        name: &str,
+        ctx: &PolicyContext<'_>,
+    ) -> Result<Box<dyn Policy>, crate::SimError> {
         self.check(name, ctx)?;
         match self.factories.get(name) {
             Some((_, f)) => Ok(f(ctx)),
-            None => Err(crate::SimError::UnknownPolicy { name: name.to_string(), known: self.names().join(", ") }),
+            None => Err(crate::SimError::UnknownPolicy {
+                name: name.to_string(),
+                known: self.names().join(", "),
+            }),
         }
     }
 
@@ -91,6 +111,9 @@ impl PolicyRegistry {
 
     /// (name, description) pairs.
     pub fn describe(&self) -> Vec<(String, String)> {
-        self.factories.iter().map(|(k, (a, _))| (k.clone(), a.clone())).collect()
+        self.factories
+            .iter()
+            .map(|(k, (a, _))| (k.clone(), a.clone()))
+            .collect()
     }
 }

@@ -53,7 +53,9 @@ impl RewardConfig {
     /// Eq. (7) for one robot: `new` cells it observed that it had not explored, `reobserved`
     /// that it had, and `rho` consecutive steps in local interaction.
     pub fn robot(&self, new: usize, reobserved: usize, rho: u32) -> f64 {
-        self.new_cell * new as f64 + self.reobserved_cell * reobserved as f64 + self.interaction_penalty(rho)
+        self.new_cell * new as f64
+            + self.reobserved_cell * reobserved as f64
+            + self.interaction_penalty(rho)
     }
 
     /// Eq. (8) for the team: distinct cells observed that the team had not known (`new`) and

@@ -48,7 +48,13 @@ pub fn candidate_values(
 
 /// Steps left when the deciding robots of `trial` take `fixed` (or ask `base`) now and everyone
 /// follows `base` afterwards, living `future`.
-pub fn continuation(trial: &Trial, fixed: &[Option<Decision>], base: &str, registry: &PolicyRegistry, future: Future) -> Result<f64, SimError> {
+pub fn continuation(
+    trial: &Trial,
+    fixed: &[Option<Decision>],
+    base: &str,
+    registry: &PolicyRegistry,
+    future: Future,
+) -> Result<f64, SimError> {
     let now = trial.world().t() as f64;
     let mut fork = trial.fork(base, registry, future)?;
     fork.decide_with(fixed);
@@ -82,7 +88,12 @@ pub enum OracleKind {
 /// A trial of `spec` (its `policy` is the base rule) in which `kind`'s oracle makes every
 /// decision with two or more candidates; robots decide in index order, each seeing the
 /// oracle's choices for the robots before it.
-pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, futures: usize) -> Result<TrialResult, SimError> {
+pub fn run_oracle(
+    spec: TrialSpec,
+    registry: &PolicyRegistry,
+    kind: OracleKind,
+    futures: usize,
+) -> Result<TrialResult, SimError> {
     let base = spec.policy.clone();
     let seed = spec.seed;
     let mut trial = Trial::with_registry(spec, registry)?.timed(false);
@@ -100,7 +111,15 @@ pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, 
                 continue;
             }
             decision += 1;
-            let salts: Vec<Future> = (0..futures.max(1) as u64).map(|s| Future::Salted(madenet_world::rng::derive_seed(seed, "oracle", decision * 4096 + s))).collect();
+            let salts: Vec<Future> = (0..futures.max(1) as u64)
+                .map(|s| {
+                    Future::Salted(madenet_world::rng::derive_seed(
+                        seed,
+                        "oracle",
+                        decision * 4096 + s,
+                    ))
+                })
+                .collect();
             match kind {
                 OracleKind::Replay | OracleKind::Averaged | OracleKind::Noiseless => {
                     let futures = match kind {
@@ -109,7 +128,11 @@ pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, 
                         _ => salts,
                     };
                     let values = candidate_values(&trial, i, &fixed, &base, registry, &futures)?;
-                    let best = values.iter().enumerate().filter_map(|(k, v)| v.map(|v| (k, v))).min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+                    let best = values
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(k, v)| v.map(|v| (k, v)))
+                        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
                     fixed[i] = best.map(|(k, _)| Decision::Candidate(k));
                 }
                 OracleKind::Placebo if placebo_done => {}
@@ -118,7 +141,9 @@ pub fn run_oracle(spec: TrialSpec, registry: &PolicyRegistry, kind: OracleKind, 
                     placebo_done = true;
                     let mut best: Option<(u64, f64)> = None;
                     for future in salts {
-                        let Future::Salted(salt) = future else { continue };
+                        let Future::Salted(salt) = future else {
+                            continue;
+                        };
                         let v = continuation(&trial, &fixed, &base, registry, future)?;
                         if best.is_none_or(|(_, b)| v < b) {
                             best = Some((salt, v));

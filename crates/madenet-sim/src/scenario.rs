@@ -1,7 +1,9 @@
 //! Naming a scenario on a command line or in a config: where the map comes from and where
 //! the robots start.
 
-use madenet_map::generate::{generate, generate_with_movement, random_starts, GeneratorConfig, WIDE_DENSITY};
+use madenet_map::generate::{
+    generate, generate_with_movement, random_starts, GeneratorConfig, WIDE_DENSITY,
+};
 use madenet_map::io::{load, LoadOptions};
 use madenet_map::paper::{paper_map, paper_map_name, Corner, PAPER_MAP_COUNT};
 use madenet_map::{MapError, OccGrid, Pos};
@@ -25,15 +27,21 @@ impl FromStr for MapSource {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         if let Some(n) = s.strip_prefix("paper:") {
-            let n: usize = n.parse().map_err(|_| format!("`{s}`: expected paper:N with N in 1..={PAPER_MAP_COUNT}"))?;
+            let n: usize = n
+                .parse()
+                .map_err(|_| format!("`{s}`: expected paper:N with N in 1..={PAPER_MAP_COUNT}"))?;
             if !(1..=PAPER_MAP_COUNT).contains(&n) {
                 return Err(format!("`{s}`: the paper has maps 1..={PAPER_MAP_COUNT}"));
             }
             Ok(MapSource::Paper(n))
         } else if let Some(seed) = s.strip_prefix("generate-wide:") {
-            seed.parse().map(MapSource::GeneratedWide).map_err(|_| format!("`{s}`: expected generate-wide:SEED with an integer seed"))
+            seed.parse()
+                .map(MapSource::GeneratedWide)
+                .map_err(|_| format!("`{s}`: expected generate-wide:SEED with an integer seed"))
         } else if let Some(seed) = s.strip_prefix("generate:") {
-            seed.parse().map(MapSource::Generated).map_err(|_| format!("`{s}`: expected generate:SEED with an integer seed"))
+            seed.parse()
+                .map(MapSource::Generated)
+                .map_err(|_| format!("`{s}`: expected generate:SEED with an integer seed"))
         } else {
             Ok(MapSource::File(PathBuf::from(s)))
         }
@@ -47,10 +55,20 @@ impl MapSource {
             MapSource::Paper(n) => paper_map(*n),
             MapSource::Generated(seed) => generate(&GeneratorConfig::default(), *seed),
             MapSource::GeneratedWide(seed) => {
-                let gen = GeneratorConfig { density_min: WIDE_DENSITY.0, density_max: WIDE_DENSITY.1, ..GeneratorConfig::default() };
+                let gen = GeneratorConfig {
+                    density_min: WIDE_DENSITY.0,
+                    density_max: WIDE_DENSITY.1,
+                    ..GeneratorConfig::default()
+                };
                 generate_with_movement(&gen, *seed, cfg.movement)
             }
-            MapSource::File(p) => load(p, &LoadOptions { cell_size: cfg.cell_size, discretize: cfg.discretize }),
+            MapSource::File(p) => load(
+                p,
+                &LoadOptions {
+                    cell_size: cfg.cell_size,
+                    discretize: cfg.discretize,
+                },
+            ),
         }
     }
 
@@ -60,7 +78,10 @@ impl MapSource {
             MapSource::Paper(n) => paper_map_name(*n),
             MapSource::Generated(seed) => format!("generated_{seed}"),
             MapSource::GeneratedWide(seed) => format!("generated_wide_{seed}"),
-            MapSource::File(p) => p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string()),
+            MapSource::File(p) => p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| p.display().to_string()),
         }
     }
 }
@@ -94,7 +115,9 @@ impl FromStr for StartSpec {
                 .collect::<Result<Vec<_>, _>>()?;
             Ok(StartSpec::Cells(cells))
         } else {
-            Corner::from_str(s).map(StartSpec::Corner).map_err(|e| e.to_string())
+            Corner::from_str(s)
+                .map(StartSpec::Corner)
+                .map_err(|e| e.to_string())
         }
     }
 }
@@ -109,7 +132,9 @@ impl StartSpec {
             StartSpec::Cells(v) => v.clone(),
             StartSpec::Random => {
                 // The map's own cells seed the draw (FNV-1a), so every method meets the same starts.
-                let seed = map.cells().iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &c| (h ^ c as u64).wrapping_mul(0x0100_0000_01b3));
+                let seed = map.cells().iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &c| {
+                    (h ^ c as u64).wrapping_mul(0x0100_0000_01b3)
+                });
                 random_starts(map, team, movement, seed).unwrap_or_default()
             }
         }
@@ -118,7 +143,11 @@ impl StartSpec {
     pub fn name(&self) -> String {
         match self {
             StartSpec::Corner(c) => c.name().to_string(),
-            StartSpec::Cells(v) => v.iter().map(|p| format!("{},{}", p.row, p.col)).collect::<Vec<_>>().join(";"),
+            StartSpec::Cells(v) => v
+                .iter()
+                .map(|p| format!("{},{}", p.row, p.col))
+                .collect::<Vec<_>>()
+                .join(";"),
             StartSpec::Random => "random".to_string(),
         }
     }
@@ -132,9 +161,18 @@ mod tests {
     fn parse_sources_and_starts() {
         assert_eq!("paper:3".parse::<MapSource>().unwrap(), MapSource::Paper(3));
         assert!("paper:11".parse::<MapSource>().is_err());
-        assert_eq!("generate:7".parse::<MapSource>().unwrap(), MapSource::Generated(7));
-        assert_eq!("maps/x.yaml".parse::<MapSource>().unwrap(), MapSource::File("maps/x.yaml".into()));
-        assert_eq!("top-left".parse::<StartSpec>().unwrap(), StartSpec::Corner(Corner::TopLeft));
+        assert_eq!(
+            "generate:7".parse::<MapSource>().unwrap(),
+            MapSource::Generated(7)
+        );
+        assert_eq!(
+            "maps/x.yaml".parse::<MapSource>().unwrap(),
+            MapSource::File("maps/x.yaml".into())
+        );
+        assert_eq!(
+            "top-left".parse::<StartSpec>().unwrap(),
+            StartSpec::Corner(Corner::TopLeft)
+        );
         assert_eq!(
             "0,0; 1,2".parse::<StartSpec>().unwrap(),
             StartSpec::Cells(vec![Pos::new(0, 0), Pos::new(1, 2)])
@@ -142,12 +180,21 @@ mod tests {
         assert!("0,0;x".parse::<StartSpec>().is_err());
         assert!("middle".parse::<StartSpec>().is_err());
         assert_eq!("random".parse::<StartSpec>().unwrap(), StartSpec::Random);
-        assert_eq!("generate-wide:9".parse::<MapSource>().unwrap(), MapSource::GeneratedWide(9));
+        assert_eq!(
+            "generate-wide:9".parse::<MapSource>().unwrap(),
+            MapSource::GeneratedWide(9)
+        );
         let cfg = ScenarioConfig::default();
         let map = MapSource::GeneratedWide(9).load(&cfg).unwrap();
         let starts = StartSpec::Random.cells(&map, 3, cfg.movement);
         assert_eq!(starts.len(), 3);
-        assert!(starts.iter().all(|&p| map.get(p) == madenet_map::Occupancy::Free));
-        assert_eq!(starts, StartSpec::Random.cells(&map, 3, cfg.movement), "the same map, the same starts");
+        assert!(starts
+            .iter()
+            .all(|&p| map.get(p) == madenet_map::Occupancy::Free));
+        assert_eq!(
+            starts,
+            StartSpec::Random.cells(&map, 3, cfg.movement),
+            "the same map, the same starts"
+        );
     }
 }

@@ -108,9 +108,19 @@ impl Trial {
         let cfg = spec.config.clone();
         let mut agents = Vec::with_capacity(cfg.num_robots);
         for i in 0..cfg.num_robots.min(spec.starts.len()) {
-            let ctx = PolicyContext { seed: spec.seed, robot: i, config: &cfg, height: h, width: w };
+            let ctx = PolicyContext {
+                seed: spec.seed,
+                robot: i,
+                config: &cfg,
+                height: h,
+                width: w,
+            };
             let policy = registry.make(&spec.policy, &ctx)?;
-            agents.push(Agent::new(AgentConfig::from_scenario(&cfg, i, h, w), spec.starts[i], policy));
+            agents.push(Agent::new(
+                AgentConfig::from_scenario(&cfg, i, h, w),
+                spec.starts[i],
+                policy,
+            ));
         }
         let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
         let n = agents.len();
@@ -131,10 +141,28 @@ impl Trial {
             joint: None,
             reward_config: RewardConfig::default(),
             interaction_run: vec![0; n],
-            rewards: StepRewards { robots: vec![0.0; n], team: 0.0 },
-            outbox: (0..n).map(|i| Beta { from: i, t: 0, prev_goal: None, pos: Pos::new(0, 0), goal: None, map: Vec::new(), explored: 0 }).collect(),
+            rewards: StepRewards {
+                robots: vec![0.0; n],
+                team: 0.0,
+            },
+            outbox: (0..n)
+                .map(|i| Beta {
+                    from: i,
+                    t: 0,
+                    prev_goal: None,
+                    pos: Pos::new(0, 0),
+                    goal: None,
+                    map: Vec::new(),
+                    explored: 0,
+                })
+                .collect(),
             composed: vec![false; n],
-            plan_message: PlanMessage { from: 0, t: 0, start: Pos::new(0, 0), path: Vec::new() },
+            plan_message: PlanMessage {
+                from: 0,
+                t: 0,
+                start: Pos::new(0, 0),
+                path: Vec::new(),
+            },
         })
     }
 
@@ -148,7 +176,13 @@ impl Trial {
         let n = self.agents.len();
         let old = std::mem::take(&mut self.agents);
         for (i, agent) in old.into_iter().enumerate() {
-            let ctx = PolicyContext { seed, robot: i, config: &cfg, height: h, width: w };
+            let ctx = PolicyContext {
+                seed,
+                robot: i,
+                config: &cfg,
+                height: h,
+                width: w,
+            };
             let policy = registry.make(&self.policy, &ctx)?;
             self.agents.push(agent.restarted(self.starts[i], policy));
         }
@@ -161,7 +195,10 @@ impl Trial {
         self.moves.fill(Move::Stay);
         self.joint = None;
         self.interaction_run.fill(0);
-        self.rewards = StepRewards { robots: vec![0.0; n], team: 0.0 };
+        self.rewards = StepRewards {
+            robots: vec![0.0; n],
+            team: 0.0,
+        };
         Ok(self)
     }
 
@@ -171,12 +208,23 @@ impl Trial {
     /// from now on by registry policy `policy` (instances made with this trial's seed), without
     /// recording, living `future` (see [`Future`]). Metrics continue from the present (TNS
     /// counts from t = 0). How rollouts evaluate a decision.
-    pub fn fork(&self, policy: &str, registry: &PolicyRegistry, future: Future) -> Result<Self, SimError> {
+    pub fn fork(
+        &self,
+        policy: &str,
+        registry: &PolicyRegistry,
+        future: Future,
+    ) -> Result<Self, SimError> {
         let cfg = self.world.config();
         let (h, w) = (self.world.truth().height(), self.world.truth().width());
         let mut agents = Vec::with_capacity(self.agents.len());
         for (i, a) in self.agents.iter().enumerate() {
-            let ctx = PolicyContext { seed: self.seed, robot: i, config: cfg, height: h, width: w };
+            let ctx = PolicyContext {
+                seed: self.seed,
+                robot: i,
+                config: cfg,
+                height: h,
+                width: w,
+            };
             agents.push(a.fork(registry.make(policy, &ctx)?));
         }
         let mut world = self.world.clone();
@@ -230,11 +278,22 @@ impl Trial {
     /// A trial whose robots are driven by one centralized policy (e.g. the CEP of centralized
     /// training): at each step the robots whose macro action terminated get their decision
     /// from `joint`, which sees every robot's view and the team's merged map.
-    pub fn with_joint_policy(spec: TrialSpec, joint: Box<dyn JointPolicy>) -> Result<Self, SimError> {
+    pub fn with_joint_policy(
+        spec: TrialSpec,
+        joint: Box<dyn JointPolicy>,
+    ) -> Result<Self, SimError> {
         let mut registry = PolicyRegistry::default();
-        registry.register("external", "decisions from a joint policy", |_| Box::new(External));
+        registry.register("external", "decisions from a joint policy", |_| {
+            Box::new(External)
+        });
         let name = joint.name().to_string();
-        let mut trial = Self::with_registry(TrialSpec { policy: "external".into(), ..spec }, &registry)?;
+        let mut trial = Self::with_registry(
+            TrialSpec {
+                policy: "external".into(),
+                ..spec
+            },
+            &registry,
+        )?;
         trial.policy = name;
         trial.joint = Some(joint);
         Ok(trial)
@@ -422,8 +481,18 @@ impl Trial {
         self.world.step(&self.moves);
         let team_distance: f64 = self.world.distances().iter().sum();
         let (pos, ds) = (self.world.positions(), self.world.config().sensing_range);
-        let closer = self.world.contacts().iter().filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds).count();
-        self.recorder.record(self.world.explored_fraction(), team_distance, self.world.contacts().len(), closer);
+        let closer = self
+            .world
+            .contacts()
+            .iter()
+            .filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds)
+            .count();
+        self.recorder.record(
+            self.world.explored_fraction(),
+            team_distance,
+            self.world.contacts().len(),
+            closer,
+        );
         self.compute_rewards();
         self.add_elapsed(started);
         if self.record {
@@ -451,14 +520,27 @@ impl Trial {
             let seen = &self.world.observation(i).seen;
             // Seen cells lie on the map: index the belief directly (no bounds test per cell).
             let (map, w) = (belief.map(), belief.width());
-            let new = seen.iter().filter(|(p, _)| map[p.row as usize * w + p.col as usize] == madenet_map::Occupancy::Unknown).count();
+            let new = seen
+                .iter()
+                .filter(|(p, _)| {
+                    map[p.row as usize * w + p.col as usize] == madenet_map::Occupancy::Unknown
+                })
+                .count();
             let interacting = self.world.contacts().iter().any(|&(a, b)| a == i || b == i);
-            self.interaction_run[i] = if interacting { self.interaction_run[i] + 1 } else { 0 };
-            self.rewards.robots[i] = self.reward_config.robot(new, seen.len() - new, self.interaction_run[i]);
+            self.interaction_run[i] = if interacting {
+                self.interaction_run[i] + 1
+            } else {
+                0
+            };
+            self.rewards.robots[i] =
+                self.reward_config
+                    .robot(new, seen.len() - new, self.interaction_run[i]);
         }
         let new = self.world.team_newly_observed();
         let seen = self.world.team_observed();
-        self.rewards.team = self.reward_config.team(new, seen - new, self.world.is_complete());
+        self.rewards.team = self
+            .reward_config
+            .team(new, seen - new, self.world.is_complete());
     }
 
     /// Runs to completion or the step cap.
@@ -470,7 +552,11 @@ impl Trial {
     /// The result so far.
     pub fn finish(self) -> TrialResult {
         let decisions: usize = self.agents.iter().map(|a| a.stats().decisions).sum();
-        let decision_s: f64 = self.agents.iter().map(|a| a.stats().decision_time.as_secs_f64()).sum();
+        let decision_s: f64 = self
+            .agents
+            .iter()
+            .map(|a| a.stats().decision_time.as_secs_f64())
+            .sum();
         TrialResult {
             map: self.spec_map,
             policy: self.policy,
@@ -482,7 +568,11 @@ impl Trial {
             timing: Timing {
                 trial_s: self.elapsed.as_secs_f64(),
                 decisions,
-                per_decision_s: if decisions > 0 { decision_s / decisions as f64 } else { 0.0 },
+                per_decision_s: if decisions > 0 {
+                    decision_s / decisions as f64
+                } else {
+                    0.0
+                },
             },
         }
     }

@@ -9,12 +9,17 @@ use madenet_world::ScenarioConfig;
 
 fn spec(policy: &str, csp: f64) -> TrialSpec {
     let grid = paper_map(4).unwrap();
-    let starts = Corner::TopLeft.start_cells(grid.height(), grid.width()).to_vec();
+    let starts = Corner::TopLeft
+        .start_cells(grid.height(), grid.width())
+        .to_vec();
     TrialSpec {
         map: grid,
         map_name: paper_map_name(4),
         starts,
-        config: ScenarioConfig { comm_success_prob: csp, ..Default::default() },
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..Default::default()
+        },
         policy: policy.to_string(),
         seed: 5,
     }
@@ -42,7 +47,10 @@ fn external(spec: TrialSpec, mut policies: Vec<Box<dyn Policy>>) -> madenet_sim:
 #[test]
 fn external_decisions_reproduce_the_policies_own_trial() {
     for (name, csp) in [("nf", 1.0), ("nf", 0.3), ("random", 0.5)] {
-        let own = Trial::new(spec(name, csp)).unwrap().record_trajectory(true).run();
+        let own = Trial::new(spec(name, csp))
+            .unwrap()
+            .record_trajectory(true)
+            .run();
         let policies: Vec<Box<dyn Policy>> = (0..3)
             .map(|i| -> Box<dyn Policy> {
                 match name {

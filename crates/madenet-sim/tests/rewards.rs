@@ -71,7 +71,11 @@ fn interaction_penalty_grows_with_consecutive_contact() {
     assert_eq!(rewards[0], -seen); // ρ = 1: no penalty
     for (k, r) in rewards.iter().enumerate().skip(1) {
         let rho = k as f64 + 1.0;
-        let expect = if rho <= 7.0 { -seen - (rho.exp() / 5.0).sqrt() } else { -seen - 15.0 };
+        let expect = if rho <= 7.0 {
+            -seen - (rho.exp() / 5.0).sqrt()
+        } else {
+            -seen - 15.0
+        };
         assert!((r - expect).abs() < 1e-9, "step {k}: {r} vs {expect}");
     }
     // The team re-observes the union of both windows (9 × 10 = 90 cells), pays −1 per step.
@@ -88,15 +92,26 @@ fn completion_bonus_once() {
         map: OccGrid::new(5, 14, Occupancy::Free),
         map_name: "corridor".into(),
         starts: vec![Pos::new(2, 2)],
-        config: ScenarioConfig { num_robots: 1, sensor_miss_prob: 0.0, motion_success_prob: 1.0, ..Default::default() },
+        config: ScenarioConfig {
+            num_robots: 1,
+            sensor_miss_prob: 0.0,
+            motion_success_prob: 1.0,
+            ..Default::default()
+        },
         policy: "east".into(),
         seed: 1,
     };
-    let mut t = Trial::with_registry(spec, &reg).unwrap().record_trajectory(true);
+    let mut t = Trial::with_registry(spec, &reg)
+        .unwrap()
+        .record_trajectory(true);
     while t.step() {}
     let r = t.finish();
     assert!(r.metrics.completed);
-    let bonuses = r.trajectory.iter().filter(|s| s.rewards.team > 50.0).count();
+    let bonuses = r
+        .trajectory
+        .iter()
+        .filter(|s| s.rewards.team > 50.0)
+        .count();
     assert_eq!(bonuses, 1);
     let last = r.trajectory.last().unwrap();
     // Columns 2 + 4 + k: each step east reveals one new column of 5 cells and re-sees 40.

@@ -14,7 +14,10 @@ fn spec(map: usize, corner: Corner, policy: &str, csp: f64, seed: u64) -> TrialS
         map: grid,
         map_name: paper_map_name(map),
         starts,
-        config: ScenarioConfig { comm_success_prob: csp, ..Default::default() },
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..Default::default()
+        },
         policy: policy.to_string(),
         seed,
     }
@@ -47,17 +50,33 @@ fn nf_completes_every_paper_map_and_corner() {
                 sum_noli += m.noli as f64;
             }
         }
-        eprintln!("NF CSP {csp}: mean TNS {:.1}, TTD {:.1} m, NOLI {:.1}", sum_tns / 40.0, sum_ttd / 40.0, sum_noli / 40.0);
+        eprintln!(
+            "NF CSP {csp}: mean TNS {:.1}, TTD {:.1} m, NOLI {:.1}",
+            sum_tns / 40.0,
+            sum_ttd / 40.0,
+            sum_noli / 40.0
+        );
     }
-    assert!(failures.is_empty(), "{} trials did not complete:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} trials did not complete:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
     let mean = tns.iter().sum::<usize>() as f64 / tns.len() as f64;
     // The paper's NF needs tens of steps on these maps (Fig. 4); a sane NF is far below the cap.
     assert!(mean > 10.0 && mean < 150.0, "mean TNS {mean}");
-    eprintln!("80 NF trials in {:?}, mean TNS {mean:.1}", started.elapsed());
+    eprintln!(
+        "80 NF trials in {:?}, mean TNS {mean:.1}",
+        started.elapsed()
+    );
 }
 
 fn json(r: &TrialResult) -> (String, String) {
-    (serde_json::to_string(&r.metrics).unwrap(), serde_json::to_string(&r.trajectory).unwrap())
+    (
+        serde_json::to_string(&r.metrics).unwrap(),
+        serde_json::to_string(&r.trajectory).unwrap(),
+    )
 }
 
 #[test]
@@ -66,10 +85,18 @@ fn same_seed_byte_identical_different_seed_differs() {
         let a = run(spec(4, Corner::BottomRight, policy, csp, 7));
         let b = run(spec(4, Corner::BottomRight, policy, csp, 7));
         assert!(!a.trajectory.is_empty());
-        assert_eq!(json(&a), json(&b), "{policy}: same seed must give byte-identical output");
+        assert_eq!(
+            json(&a),
+            json(&b),
+            "{policy}: same seed must give byte-identical output"
+        );
         assert_eq!(a.trajectory, b.trajectory);
         let c = run(spec(4, Corner::BottomRight, policy, csp, 8));
-        assert_ne!(json(&a).1, json(&c).1, "{policy}: a different seed should change the trajectory");
+        assert_ne!(
+            json(&a).1,
+            json(&c).1,
+            "{policy}: a different seed should change the trajectory"
+        );
     }
 }
 
@@ -79,7 +106,9 @@ fn pairs_in_contact(truth: &OccGrid, positions: &[Pos], cfg: &ScenarioConfig) ->
     for i in 0..positions.len() {
         for j in i + 1..positions.len() {
             let (a, b) = (positions[i], positions[j]);
-            if a.chebyshev(b) <= cfg.sensing_range && line_of_sight(|q| !truth.is_free(q), a, b, cfg.movement) {
+            if a.chebyshev(b) <= cfg.sensing_range
+                && line_of_sight(|q| !truth.is_free(q), a, b, cfg.movement)
+            {
                 n += 1;
             }
         }
@@ -90,22 +119,37 @@ fn pairs_in_contact(truth: &OccGrid, positions: &[Pos], cfg: &ScenarioConfig) ->
 fn check_metrics(s: &TrialSpec, r: &TrialResult) {
     let m = &r.metrics;
     let tr = &r.trajectory;
-    let label = format!("{} {:?} {} CSP {}", s.map_name, s.starts[0], s.policy, s.config.comm_success_prob);
+    let label = format!(
+        "{} {:?} {} CSP {}",
+        s.map_name, s.starts[0], s.policy, s.config.comm_success_prob
+    );
     assert_eq!(m.tns, tr.len(), "{label}: tns vs trajectory length");
     assert_eq!(m.explored_per_step.len(), tr.len() + 1);
     assert_eq!(m.distance_per_step.len(), tr.len() + 1);
     assert_eq!(m.distance_per_step[0], 0.0);
     for w in m.explored_per_step.windows(2) {
-        assert!(w[1] >= w[0], "{label}: explored fraction decreased: {:?}", m.explored_per_step);
+        assert!(
+            w[1] >= w[0],
+            "{label}: explored fraction decreased: {:?}",
+            m.explored_per_step
+        );
     }
     for w in m.distance_per_step.windows(2) {
         assert!(w[1] >= w[0], "{label}: team distance decreased");
     }
-    assert!(m.explored_per_step.iter().all(|&e| (0.0..=1.0).contains(&e)));
+    assert!(m
+        .explored_per_step
+        .iter()
+        .all(|&e| (0.0..=1.0).contains(&e)));
     if m.completed {
         assert_eq!(*m.explored_per_step.last().unwrap(), 1.0, "{label}");
         assert_eq!(m.explored, 1.0);
-        assert!(m.explored_per_step[..m.explored_per_step.len() - 1].iter().all(|&e| e < 1.0), "{label}: ran past completion");
+        assert!(
+            m.explored_per_step[..m.explored_per_step.len() - 1]
+                .iter()
+                .all(|&e| e < 1.0),
+            "{label}: ran past completion"
+        );
     } else {
         assert_eq!(m.tns, s.config.step_cap);
     }
@@ -117,24 +161,40 @@ fn check_metrics(s: &TrialSpec, r: &TrialResult) {
         assert_eq!(rec.t, k + 1);
         assert_eq!(rec.explored, m.explored_per_step[k + 1]);
         for i in 0..prev.len() {
-            assert_eq!(rec.moves[i].apply(prev[i]), rec.positions[i], "{label}: robot {i} at t {}", rec.t);
+            assert_eq!(
+                rec.moves[i].apply(prev[i]),
+                rec.positions[i],
+                "{label}: robot {i} at t {}",
+                rec.t
+            );
             assert!(s.map.is_free(rec.positions[i]));
             ttd += rec.moves[i].length() * s.config.cell_size;
         }
         for i in 0..prev.len() {
             for j in i + 1..prev.len() {
-                assert_ne!(rec.positions[i], rec.positions[j], "{label}: robots {i} and {j} share a cell at t {}", rec.t);
+                assert_ne!(
+                    rec.positions[i], rec.positions[j],
+                    "{label}: robots {i} and {j} share a cell at t {}",
+                    rec.t
+                );
             }
         }
         noli += pairs_in_contact(&s.map, &rec.positions, &s.config);
         assert!((m.distance_per_step[k + 1] - ttd).abs() < 1e-9);
         prev = rec.positions.clone();
     }
-    assert!((m.ttd - ttd).abs() < 1e-9, "{label}: ttd {} vs summed moves {ttd}", m.ttd);
+    assert!(
+        (m.ttd - ttd).abs() < 1e-9,
+        "{label}: ttd {} vs summed moves {ttd}",
+        m.ttd
+    );
     assert_eq!(m.noli, noli, "{label}: noli");
     // steps_to: first step reaching each level.
     for (k, &lvl) in madenet_metrics::COVERAGE_LEVELS.iter().enumerate() {
-        let want = m.explored_per_step.iter().position(|&e| e >= lvl as f64 / 100.0 - 1e-12);
+        let want = m
+            .explored_per_step
+            .iter()
+            .position(|&e| e >= lvl as f64 / 100.0 - 1e-12);
         assert_eq!(m.steps_to[k], want, "{label}: steps_to {lvl} %");
     }
     assert!(m.ofv > 0.0 || m.ttd == 0.0);
@@ -173,7 +233,11 @@ fn step_cap_stops_an_unfinished_trial() {
 fn random_policy_decides_only_at_terminations_and_picks_candidates() {
     let mut total_decisions = 0;
     let mut total_robot_steps = 0;
-    for (map, corner, seed) in [(2, Corner::TopLeft, 1), (6, Corner::BottomRight, 2), (8, Corner::TopRight, 3)] {
+    for (map, corner, seed) in [
+        (2, Corner::TopLeft, 1),
+        (6, Corner::BottomRight, 2),
+        (8, Corner::TopRight, 3),
+    ] {
         let s = spec(map, corner, "random", 1.0, seed);
         let mut trial = Trial::new(s.clone()).unwrap().record_trajectory(true);
         let n = trial.agents().len();
@@ -185,9 +249,16 @@ fn random_policy_decides_only_at_terminations_and_picks_candidates() {
                 flags.push(decided);
                 if decided {
                     if let Some(g) = a.goal() {
-                        assert!(a.candidates().cells.contains(&g), "robot {i} chose {g}, not a candidate of {:?}", a.candidates().cells);
+                        assert!(
+                            a.candidates().cells.contains(&g),
+                            "robot {i} chose {g}, not a candidate of {:?}",
+                            a.candidates().cells
+                        );
                     } else {
-                        assert!(a.candidates().cells.is_empty(), "robot {i} idles with candidates available");
+                        assert!(
+                            a.candidates().cells.is_empty(),
+                            "robot {i} idles with candidates available"
+                        );
                     }
                     assert!(a.candidates().cells.len() <= a.candidates().slots);
                 }
@@ -196,7 +267,11 @@ fn random_policy_decides_only_at_terminations_and_picks_candidates() {
         }
         let r = trial.finish();
         check_metrics(&s, &r);
-        let decisions: usize = r.trajectory.iter().map(|rec| rec.decided.iter().filter(|&&d| d).count()).sum();
+        let decisions: usize = r
+            .trajectory
+            .iter()
+            .map(|rec| rec.decided.iter().filter(|&&d| d).count())
+            .sum();
         assert_eq!(decisions, r.timing.decisions);
         for (rec, flags) in r.trajectory.iter().zip(&decided_here) {
             assert_eq!(&rec.decided, flags);
@@ -205,34 +280,53 @@ fn random_policy_decides_only_at_terminations_and_picks_candidates() {
         for w in r.trajectory.windows(2) {
             for i in 0..n {
                 if !w[1].decided[i] {
-                    assert_eq!(w[1].goals[i], w[0].goals[i], "robot {i} changed goal at t {} without deciding", w[1].t);
+                    assert_eq!(
+                        w[1].goals[i], w[0].goals[i],
+                        "robot {i} changed goal at t {} without deciding",
+                        w[1].t
+                    );
                 }
             }
         }
         // Everyone decides at t = 1 (no goal yet).
         assert!(r.trajectory[0].decided.iter().all(|&d| d));
         let robot_steps = n * r.trajectory.len();
-        assert!(decisions < robot_steps, "{decisions} decisions in {robot_steps} robot-steps");
+        assert!(
+            decisions < robot_steps,
+            "{decisions} decisions in {robot_steps} robot-steps"
+        );
         total_decisions += decisions;
         total_robot_steps += robot_steps;
     }
     // Macro actions last several steps on average.
-    assert!(2 * total_decisions < total_robot_steps, "{total_decisions} decisions in {total_robot_steps} robot-steps");
+    assert!(
+        2 * total_decisions < total_robot_steps,
+        "{total_decisions} decisions in {total_robot_steps} robot-steps"
+    );
 }
 
 #[test]
 fn nf_decides_every_step() {
     let s = spec(1, Corner::TopLeft, "nf", 1.0, 1);
     let r = run(s);
-    assert!(r.trajectory.iter().all(|rec| rec.decided.iter().all(|&d| d)));
+    assert!(r
+        .trajectory
+        .iter()
+        .all(|rec| rec.decided.iter().all(|&d| d)));
     assert_eq!(r.timing.decisions, 3 * r.trajectory.len());
 }
 
 #[test]
 fn bad_specs_are_errors() {
     let mut s = spec(1, Corner::TopLeft, "no-such-policy", 1.0, 1);
-    let e = Trial::new(s.clone()).err().expect("unknown policy").to_string();
-    assert!(e.contains("no-such-policy") && e.contains("nf") && e.contains("random"), "{e}");
+    let e = Trial::new(s.clone())
+        .err()
+        .expect("unknown policy")
+        .to_string();
+    assert!(
+        e.contains("no-such-policy") && e.contains("nf") && e.contains("random"),
+        "{e}"
+    );
     s.policy = "nf".into();
     s.config.comm_success_prob = 1.5;
     let e = Trial::new(s.clone()).err().expect("bad CSP").to_string();
@@ -259,7 +353,10 @@ fn no_livelock_between_robots_that_cannot_talk() {
                 s.config.motion_success_prob = 1.0;
                 let m = Trial::new(s).unwrap().run().metrics;
                 if !m.completed {
-                    failures.push(format!("{policy} test_{map} {corner}: {} steps, explored {:.4}", m.tns, m.explored));
+                    failures.push(format!(
+                        "{policy} test_{map} {corner}: {} steps, explored {:.4}",
+                        m.tns, m.explored
+                    ));
                 }
             }
         }
@@ -279,7 +376,11 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
     let registry = PolicyRegistry::builtin();
     let mut checked = 0;
     let mut salted_differs = false;
-    for (map, corner, csp) in [(3, Corner::TopLeft, 1.0), (7, Corner::BottomRight, 0.5), (5, Corner::TopRight, 0.0)] {
+    for (map, corner, csp) in [
+        (3, Corner::TopLeft, 1.0),
+        (7, Corner::BottomRight, 0.5),
+        (5, Corner::TopRight, 0.0),
+    ] {
         let s = spec(map, corner, "spread", csp, 4);
         let mut trial = Trial::new(s.clone()).unwrap();
         // Walk to the third step at which robot 0 decides with a choice.
@@ -297,9 +398,13 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
             trial.decide_with(&[]);
             trial.finish_step();
         }
-        assert_eq!(seen, 3, "test_{map}: robot 0 decided with a choice three times");
+        assert_eq!(
+            seen, 3,
+            "test_{map}: robot 0 decided with a choice three times"
+        );
         let values = candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Own]).unwrap();
-        let salted = candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Salted(7)]).unwrap();
+        let salted =
+            candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Salted(7)]).unwrap();
         salted_differs |= salted != values;
         let now = trial.world().t();
         for (k, v) in values.iter().enumerate() {
@@ -316,17 +421,29 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
             real.decide_with(&fixed);
             real.finish_step();
             while real.step() {}
-            assert_eq!(*v, (real.finish().metrics.tns - now) as f64, "test_{map} candidate {k}");
+            assert_eq!(
+                *v,
+                (real.finish().metrics.tns - now) as f64,
+                "test_{map} candidate {k}"
+            );
             checked += 1;
         }
         // The noiseless future never slips: every executed move is the planned one.
         let mut quiet = trial.fork("spread", &registry, Future::Noiseless).unwrap();
         quiet.decide_with(&[]);
         quiet.finish_step();
-        assert!(quiet.world().config().motion_success_prob == 1.0 && quiet.world().config().sensor_miss_prob == 0.0);
+        assert!(
+            quiet.world().config().motion_success_prob == 1.0
+                && quiet.world().config().sensor_miss_prob == 0.0
+        );
         // Oracles complete and are deterministic.
         let a = run_oracle(s.clone(), &registry, OracleKind::Noiseless, 1).unwrap();
-        assert_eq!(a.metrics, run_oracle(s.clone(), &registry, OracleKind::Noiseless, 1).unwrap().metrics);
+        assert_eq!(
+            a.metrics,
+            run_oracle(s.clone(), &registry, OracleKind::Noiseless, 1)
+                .unwrap()
+                .metrics
+        );
         assert!(a.metrics.completed);
     }
     assert!(checked >= 6, "{checked} candidates checked");

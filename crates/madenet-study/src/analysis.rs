@@ -47,7 +47,11 @@ pub fn mean_sd(v: &[f64]) -> (f64, f64) {
         return (f64::NAN, f64::NAN);
     }
     let m = v.iter().sum::<f64>() / n;
-    let sd = if v.len() > 1 { (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() } else { 0.0 };
+    let sd = if v.len() > 1 {
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    } else {
+        0.0
+    };
     (m, sd)
 }
 
@@ -66,7 +70,10 @@ pub fn csps(outcomes: &[TrialOutcome]) -> Vec<(f64, String)> {
 
 /// Outcomes of one method at one CSP, in plan order.
 pub fn select<'a>(outcomes: &'a [TrialOutcome], method: &str, csp: &str) -> Vec<&'a TrialOutcome> {
-    outcomes.iter().filter(|o| o.row.key.method == method && o.row.key.csp == csp).collect()
+    outcomes
+        .iter()
+        .filter(|o| o.row.key.method == method && o.row.key.csp == csp)
+        .collect()
 }
 
 /// One cell of the summary table.
@@ -91,7 +98,10 @@ pub fn summary(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<SummaryRow>
             if sel.is_empty() {
                 continue;
             }
-            let metrics = Metric::ALL.iter().map(|&k| mean_sd(&sel.iter().map(|o| k.of(o)).collect::<Vec<_>>())).collect();
+            let metrics = Metric::ALL
+                .iter()
+                .map(|&k| mean_sd(&sel.iter().map(|o| k.of(o)).collect::<Vec<_>>()))
+                .collect();
             rows.push(SummaryRow {
                 method: m.clone(),
                 csp: csp.clone(),
@@ -99,7 +109,10 @@ pub fn summary(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<SummaryRow>
                 completed: sel.iter().filter(|o| o.row.completed).count(),
                 metrics,
                 trial_s: mean_sd(&sel.iter().map(|o| o.row.trial_s).collect::<Vec<_>>()).0,
-                per_decision_s: mean_sd(&sel.iter().map(|o| o.row.per_decision_s).collect::<Vec<_>>()).0,
+                per_decision_s: mean_sd(
+                    &sel.iter().map(|o| o.row.per_decision_s).collect::<Vec<_>>(),
+                )
+                .0,
             });
         }
     }
@@ -125,16 +138,24 @@ pub fn statistics(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<MetricSt
     }
     for (_, csp) in csps(outcomes) {
         // Blocks present for every method.
-        let mut by_block: BTreeMap<(String, String, u64), Vec<Option<&TrialOutcome>>> = BTreeMap::new();
+        let mut by_block: BTreeMap<(String, String, u64), Vec<Option<&TrialOutcome>>> =
+            BTreeMap::new();
         for (mi, m) in methods.iter().enumerate() {
             for o in select(outcomes, m, &csp) {
                 let k = &o.row.key;
-                by_block.entry((k.map.clone(), k.start.clone(), k.seed)).or_insert_with(|| vec![None; methods.len()])[mi] = Some(o);
+                by_block
+                    .entry((k.map.clone(), k.start.clone(), k.seed))
+                    .or_insert_with(|| vec![None; methods.len()])[mi] = Some(o);
             }
         }
-        let blocks: Vec<Vec<&TrialOutcome>> = by_block.into_values().filter_map(|v| v.into_iter().collect::<Option<Vec<_>>>()).collect();
+        let blocks: Vec<Vec<&TrialOutcome>> = by_block
+            .into_values()
+            .filter_map(|v| v.into_iter().collect::<Option<Vec<_>>>())
+            .collect();
         for metric in Metric::ALL {
-            let groups: Vec<Vec<f64>> = (0..methods.len()).map(|g| blocks.iter().map(|b| metric.of(b[g])).collect()).collect();
+            let groups: Vec<Vec<f64>> = (0..methods.len())
+                .map(|g| blocks.iter().map(|b| metric.of(b[g])).collect())
+                .collect();
             let refs: Vec<&[f64]> = groups.iter().map(|g| g.as_slice()).collect();
             out.push(MetricStats {
                 metric,
@@ -152,12 +173,18 @@ pub fn statistics(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<MetricSt
 /// Each trial's curve is read at distances 0, step, 2·step, … (linear interpolation; after
 /// the trial ended, its final coverage), then averaged.
 pub fn mean_curve(outcomes: &[&TrialOutcome], step: f64) -> Vec<(f64, f64)> {
-    let max_d = outcomes.iter().filter_map(|o| o.curve.distance.last().copied()).fold(0.0, f64::max);
+    let max_d = outcomes
+        .iter()
+        .filter_map(|o| o.curve.distance.last().copied())
+        .fold(0.0, f64::max);
     let n = (max_d / step).ceil() as usize + 1;
     (0..n)
         .map(|i| {
             let d = i as f64 * step;
-            let sum: f64 = outcomes.iter().map(|o| explored_at(&o.curve.distance, &o.curve.explored, d)).sum();
+            let sum: f64 = outcomes
+                .iter()
+                .map(|o| explored_at(&o.curve.distance, &o.curve.explored, d))
+                .sum();
             (d, 100.0 * sum / outcomes.len().max(1) as f64)
         })
         .collect()

@@ -6,10 +6,22 @@ use crate::runner::TrialOutcome;
 
 /// The authors' per-run CSVs, embedded: (failure probability %, text).
 const REFERENCE: [(u32, &str); 4] = [
-    (0, include_str!("../../../reference/baseline_runs_failure_prob_0.csv")),
-    (20, include_str!("../../../reference/baseline_runs_failure_prob_20.csv")),
-    (50, include_str!("../../../reference/baseline_runs_failure_prob_50.csv")),
-    (100, include_str!("../../../reference/baseline_runs_failure_prob_100.csv")),
+    (
+        0,
+        include_str!("../../../reference/baseline_runs_failure_prob_0.csv"),
+    ),
+    (
+        20,
+        include_str!("../../../reference/baseline_runs_failure_prob_20.csv"),
+    ),
+    (
+        50,
+        include_str!("../../../reference/baseline_runs_failure_prob_50.csv"),
+    ),
+    (
+        100,
+        include_str!("../../../reference/baseline_runs_failure_prob_100.csv"),
+    ),
 ];
 
 /// Their algorithm names for ours.
@@ -65,8 +77,17 @@ pub fn conventions(method: &str, metric: &str, csp: f64) -> Vec<Convention> {
         v.push(Convention::Blackout);
     }
     match metric {
-        "steps" => v.extend([Convention::ScanLag, Convention::Cap100, Convention::Completion]),
-        "distance" => v.extend([Convention::ScanLag, Convention::KingMetric, Convention::Cap100, Convention::Navigation]),
+        "steps" => v.extend([
+            Convention::ScanLag,
+            Convention::Cap100,
+            Convention::Completion,
+        ]),
+        "distance" => v.extend([
+            Convention::ScanLag,
+            Convention::KingMetric,
+            Convention::Cap100,
+            Convention::Navigation,
+        ]),
         _ => v.push(Convention::Navigation),
     }
     match method {
@@ -105,7 +126,12 @@ fn reference_means(algorithm: &str, fp: u32) -> Option<(f64, f64, f64, usize)> {
     let mut rdr = csv::Reader::from_reader(text.as_bytes());
     let headers = rdr.headers().ok()?.clone();
     let col = |name: &str| headers.iter().position(|h| h == name);
-    let (a, s, d, l) = (col("Algorithm")?, col("to_100")?, col("total_dist")?, col("local_int")?);
+    let (a, s, d, l) = (
+        col("Algorithm")?,
+        col("to_100")?,
+        col("total_dist")?,
+        col("local_int")?,
+    );
     let mut acc = (0.0, 0.0, 0.0, 0usize);
     for rec in rdr.records().flatten() {
         if rec.get(a) != Some(algorithm) {
@@ -116,7 +142,14 @@ fn reference_means(algorithm: &str, fp: u32) -> Option<(f64, f64, f64, usize)> {
             acc = (acc.0 + x, acc.1 + y, acc.2 + z, acc.3 + 1);
         }
     }
-    (acc.3 > 0).then(|| (acc.0 / acc.3 as f64, acc.1 / acc.3 as f64, acc.2 / acc.3 as f64, acc.3))
+    (acc.3 > 0).then(|| {
+        (
+            acc.0 / acc.3 as f64,
+            acc.1 / acc.3 as f64,
+            acc.2 / acc.3 as f64,
+            acc.3,
+        )
+    })
 }
 
 /// Our NF/UB/PB means against theirs wherever the study has the same method and CSP, on the
@@ -131,17 +164,39 @@ pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparis
             let sel: Vec<&TrialOutcome> = outcomes
                 .iter()
                 .filter(|o| o.row.key.method == ours && paper_maps.contains(&o.row.key.map))
-                .filter(|o| o.row.key.csp.parse::<f64>().is_ok_and(|c| (c - csp).abs() < 1e-9))
+                .filter(|o| {
+                    o.row
+                        .key
+                        .csp
+                        .parse::<f64>()
+                        .is_ok_and(|c| (c - csp).abs() < 1e-9)
+                })
                 .collect();
-            let Some((t_steps, t_dist, t_int, runs)) = reference_means(theirs, fp) else { continue };
+            let Some((t_steps, t_dist, t_int, runs)) = reference_means(theirs, fp) else {
+                continue;
+            };
             if sel.is_empty() {
                 continue;
             }
             let n = sel.len() as f64;
             let mean = |f: &dyn Fn(&TrialOutcome) -> f64| sel.iter().map(|o| f(o)).sum::<f64>() / n;
             let _ = runs;
-            out.push(Comparison { method: ours.into(), csp, metric: "steps", ours: mean(&|o| (o.row.tns as f64).min(100.0)), theirs: t_steps, runs: sel.len() });
-            out.push(Comparison { method: ours.into(), csp, metric: "distance", ours: mean(&|o| o.row.ttd), theirs: t_dist, runs: sel.len() });
+            out.push(Comparison {
+                method: ours.into(),
+                csp,
+                metric: "steps",
+                ours: mean(&|o| (o.row.tns as f64).min(100.0)),
+                theirs: t_steps,
+                runs: sel.len(),
+            });
+            out.push(Comparison {
+                method: ours.into(),
+                csp,
+                metric: "distance",
+                ours: mean(&|o| o.row.ttd),
+                theirs: t_dist,
+                runs: sel.len(),
+            });
             out.push(Comparison {
                 method: ours.into(),
                 csp,

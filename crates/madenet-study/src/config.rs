@@ -33,7 +33,18 @@ pub struct StudyConfig {
 impl Default for StudyConfig {
     fn default() -> Self {
         StudyConfig {
-            methods: ["nf", "ub", "pb", "spread", "made-net", "made-net-paper", "made-net-dt", "dme-drl"].map(String::from).to_vec(),
+            methods: [
+                "nf",
+                "ub",
+                "pb",
+                "spread",
+                "made-net",
+                "made-net-paper",
+                "made-net-dt",
+                "dme-drl",
+            ]
+            .map(String::from)
+            .to_vec(),
             maps: vec!["paper".into()],
             starts: Corner::ALL.iter().map(|c| c.name().to_string()).collect(),
             csp: vec![0.0, 0.5, 0.8, 1.0],
@@ -51,13 +62,19 @@ pub enum StudyError {
     #[error("{path}: {message}")]
     File { path: String, message: String },
     #[error("study field `{field}`: {message}")]
-    Field { field: &'static str, message: String },
+    Field {
+        field: &'static str,
+        message: String,
+    },
     #[error("{0}")]
     Other(String),
 }
 
 fn field(field: &'static str, message: impl Into<String>) -> StudyError {
-    StudyError::Field { field, message: message.into() }
+    StudyError::Field {
+        field,
+        message: message.into(),
+    }
 }
 
 /// A map of the study, loaded.
@@ -72,10 +89,14 @@ pub struct StudyMap {
 
 impl StudyConfig {
     pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| StudyError::File { path: path.display().to_string(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path).map_err(|e| StudyError::File {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
         toml::from_str(&text).map_err(|e| {
-            let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
             StudyError::File {
                 path: path.display().to_string(),
                 message: match line {
@@ -97,21 +118,35 @@ impl StudyConfig {
     }
 
     /// Checks everything that can be checked before a trial runs, and loads the maps.
-    pub fn validate(&self, registry: &PolicyRegistry) -> Result<(Vec<StudyMap>, Vec<StartSpec>), StudyError> {
+    pub fn validate(
+        &self,
+        registry: &PolicyRegistry,
+    ) -> Result<(Vec<StudyMap>, Vec<StartSpec>), StudyError> {
         if self.methods.is_empty() {
             return Err(field("methods", "is empty"));
         }
         let known = registry.names();
         for m in &self.methods {
             if !known.contains(m) {
-                return Err(field("methods", format!("unknown method `{m}`; known: {}", known.join(", "))));
+                return Err(field(
+                    "methods",
+                    format!("unknown method `{m}`; known: {}", known.join(", ")),
+                ));
             }
         }
-        if let Some(d) = self.methods.iter().enumerate().find(|(i, m)| self.methods[..*i].contains(m)) {
+        if let Some(d) = self
+            .methods
+            .iter()
+            .enumerate()
+            .find(|(i, m)| self.methods[..*i].contains(m))
+        {
             return Err(field("methods", format!("`{}` is listed twice", d.1)));
         }
         if self.csp.is_empty() {
-            return Err(field("csp", "is empty: list at least one communication success probability"));
+            return Err(field(
+                "csp",
+                "is empty: list at least one communication success probability",
+            ));
         }
         for &c in &self.csp {
             if !(0.0..=1.0).contains(&c) {
@@ -121,7 +156,9 @@ impl StudyConfig {
         if self.seeds == 0 {
             return Err(field("seeds", "must be at least 1"));
         }
-        self.scenario.validate().map_err(|e| field("scenario", e.to_string()))?;
+        self.scenario
+            .validate()
+            .map_err(|e| field("scenario", e.to_string()))?;
         let maps = self.load_maps()?;
         if self.starts.is_empty() {
             return Err(field("starts", "is empty"));
@@ -132,7 +169,11 @@ impl StudyConfig {
             .map(|s| s.parse::<StartSpec>().map_err(|e| field("starts", e)))
             .collect::<Result<Vec<_>, _>>()?;
         for map in &maps {
-            if starts.contains(&StartSpec::Random) && StartSpec::Random.cells(&map.grid, self.scenario.num_robots, self.scenario.movement).is_empty() {
+            if starts.contains(&StartSpec::Random)
+                && StartSpec::Random
+                    .cells(&map.grid, self.scenario.num_robots, self.scenario.movement)
+                    .is_empty()
+            {
                 return Err(field("starts", format!("`random`: map {} has no {} connected free cells around any cell drawn from it", map.name, self.scenario.num_robots)));
             }
         }
@@ -146,7 +187,9 @@ impl StudyConfig {
                     height: map.grid.height(),
                     width: map.grid.width(),
                 };
-                registry.check(m, &ctx).map_err(|e| field("methods", format!("{e} (map {})", map.name)))?;
+                registry
+                    .check(m, &ctx)
+                    .map_err(|e| field("methods", format!("{e} (map {})", map.name)))?;
             }
         }
         Ok((maps, starts))
@@ -162,26 +205,37 @@ impl StudyConfig {
                 (1..=PAPER_MAP_COUNT).map(MapSource::Paper).collect()
             } else if !m.contains(':') && Path::new(m).is_dir() {
                 let mut files: Vec<PathBuf> = std::fs::read_dir(m)
-                    .map_err(|e| StudyError::File { path: m.clone(), message: e.to_string() })?
+                    .map_err(|e| StudyError::File {
+                        path: m.clone(),
+                        message: e.to_string(),
+                    })?
                     .filter_map(|e| e.ok().map(|e| e.path()))
                     .filter(|p| p.extension().is_some_and(|x| x == "yaml" || x == "yml"))
                     .collect();
                 files.sort();
                 if files.is_empty() {
-                    return Err(StudyError::File { path: m.clone(), message: "folder holds no .yaml maps (field `maps`)".into() });
+                    return Err(StudyError::File {
+                        path: m.clone(),
+                        message: "folder holds no .yaml maps (field `maps`)".into(),
+                    });
                 }
                 files.into_iter().map(MapSource::File).collect()
             } else {
                 let src = m.parse::<MapSource>().map_err(|e| field("maps", e))?;
                 if let MapSource::File(p) = &src {
                     if !p.exists() {
-                        return Err(StudyError::File { path: p.display().to_string(), message: "no such map file or folder (field `maps`)".into() });
+                        return Err(StudyError::File {
+                            path: p.display().to_string(),
+                            message: "no such map file or folder (field `maps`)".into(),
+                        });
                     }
                 }
                 vec![src]
             };
             for src in sources {
-                let grid = src.load(&self.scenario).map_err(|e| StudyError::Other(format!("{e} (field `maps`)")))?;
+                let grid = src
+                    .load(&self.scenario)
+                    .map_err(|e| StudyError::Other(format!("{e} (field `maps`)")))?;
                 let name = src.name();
                 if out.iter().any(|x: &StudyMap| x.name == name) {
                     return Err(field("maps", format!("two maps are named `{name}`")));
@@ -202,6 +256,9 @@ mod tests {
     #[test]
     fn shipped_example_equals_defaults() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/study.toml");
-        assert_eq!(StudyConfig::from_toml_file(&path).expect("parses"), StudyConfig::default());
+        assert_eq!(
+            StudyConfig::from_toml_file(&path).expect("parses"),
+            StudyConfig::default()
+        );
     }
 }

@@ -35,7 +35,10 @@ pub fn run_study(
 ) -> Result<(PathBuf, Vec<TrialOutcome>), StudyError> {
     let registry = cfg.registry()?;
     let (maps, starts) = cfg.validate(&registry)?;
-    let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };
+    let io = |e: std::io::Error| StudyError::File {
+        path: out.display().to_string(),
+        message: e.to_string(),
+    };
     std::fs::create_dir_all(out).map_err(io)?;
     let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
     let cfg_path = out.join("study.toml");
@@ -55,7 +58,11 @@ pub fn run_study(
     let started = std::time::Instant::now();
     let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
-    let paper_maps: Vec<String> = maps.iter().filter(|m| m.paper).map(|m| m.name.clone()).collect();
+    let paper_maps: Vec<String> = maps
+        .iter()
+        .filter(|m| m.paper)
+        .map(|m| m.name.clone())
+        .collect();
     let report = report::write_all(cfg, &outcomes, &paper_maps, out, wall)?;
     Ok((report, outcomes))
 }

@@ -1,6 +1,8 @@
 //! Writing the study's outputs: summary tables, statistics, figures and `report.md`.
 
-use crate::analysis::{csps, mean_curve, select, statistics, summary, Metric, MetricStats, SummaryRow};
+use crate::analysis::{
+    csps, mean_curve, select, statistics, summary, Metric, MetricStats, SummaryRow,
+};
 use crate::calibration::{compare, conventions, Comparison};
 use crate::config::{StudyConfig, StudyError};
 use crate::runner::{write_atomic, TrialOutcome};
@@ -9,17 +11,31 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 fn pct(csp: &str) -> String {
-    csp.parse::<f64>().map(|c| format!("{:.0} %", 100.0 * c)).unwrap_or_else(|_| csp.to_string())
+    csp.parse::<f64>()
+        .map(|c| format!("{:.0} %", 100.0 * c))
+        .unwrap_or_else(|_| csp.to_string())
 }
 
 fn summary_md(rows: &[SummaryRow]) -> String {
     let mut s = String::from("| method | CSP | trials | completed | TNS | TTD (m) | NOLI | OFV | CT per trial (ms) | CT per decision (µs) |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows {
-        let _ = write!(s, "| {} | {} | {} | {} |", r.method, pct(&r.csp), r.trials, r.completed);
+        let _ = write!(
+            s,
+            "| {} | {} | {} | {} |",
+            r.method,
+            pct(&r.csp),
+            r.trials,
+            r.completed
+        );
         for (m, sd) in &r.metrics {
             let _ = write!(s, " {m:.1} ± {sd:.1} |");
         }
-        let _ = writeln!(s, " {:.3} | {:.1} |", r.trial_s * 1e3, r.per_decision_s * 1e6);
+        let _ = writeln!(
+            s,
+            " {:.3} | {:.1} |",
+            r.trial_s * 1e3,
+            r.per_decision_s * 1e6
+        );
     }
     s
 }
@@ -46,22 +62,45 @@ fn robustness_md(rows: &[SummaryRow], cs: &[(f64, String)], methods: &[String]) 
             at.iter()
                 .min_by(|a, b| {
                     let (x, y) = (a.metrics[k].0, b.metrics[k].0);
-                    if lower { x.total_cmp(&y) } else { y.total_cmp(&x) }
+                    if lower {
+                        x.total_cmp(&y)
+                    } else {
+                        y.total_cmp(&x)
+                    }
                 })
-                .map_or(String::new(), |r| format!("{} ({:.1})", r.method, r.metrics[k].0))
+                .map_or(String::new(), |r| {
+                    format!("{} ({:.1})", r.method, r.metrics[k].0)
+                })
         };
-        let _ = writeln!(s, "| {} | {} | {} | {} | {} |", pct(c), best(0, true), best(1, true), best(2, true), best(3, false));
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} |",
+            pct(c),
+            best(0, true),
+            best(1, true),
+            best(2, true),
+            best(3, false)
+        );
     }
     if let (Some((_, lo)), Some((_, hi))) = (cs.first(), cs.last()) {
         if lo != hi {
-            let _ = writeln!(s, "\nChange from CSP {} to CSP {} (mean; positive = worse for TNS and TTD):\n", pct(hi), pct(lo));
+            let _ = writeln!(
+                s,
+                "\nChange from CSP {} to CSP {} (mean; positive = worse for TNS and TTD):\n",
+                pct(hi),
+                pct(lo)
+            );
             s.push_str("| method | TNS | TTD (m) |\n|---|---|---|\n");
             for m in methods {
                 let get = |c: &String| rows.iter().find(|r| &r.method == m && &r.csp == c);
                 if let (Some(a), Some(b)) = (get(hi), get(lo)) {
                     let d = |k: usize| {
                         let (x, y) = (a.metrics[k].0, b.metrics[k].0);
-                        format!("{:+.1} ({:+.1} %)", y - x, 100.0 * (y - x) / x.abs().max(1e-9))
+                        format!(
+                            "{:+.1} ({:+.1} %)",
+                            y - x,
+                            100.0 * (y - x) / x.abs().max(1e-9)
+                        )
                     };
                     let _ = writeln!(s, "| {m} | {} | {} |", d(0), d(1));
                 }
@@ -82,14 +121,31 @@ fn fmt_p(p: f64) -> String {
 fn statistics_md(stats: &[MetricStats], alpha: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "Friedman test across methods, then two-sided Wilcoxon signed-rank tests between every pair of methods, Bonferroni-corrected over the pairs; blocks are (map, start, seed). Significant: corrected p < {alpha}.\n");
-    let _ = writeln!(s, "| CSP | metric | blocks | Friedman χ² | p |\n|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "| CSP | metric | blocks | Friedman χ² | p |\n|---|---|---|---|---|"
+    );
     for st in stats {
         match &st.friedman {
             Ok(f) => {
-                let _ = writeln!(s, "| {} | {} | {} | {:.2} | {} |", pct(&st.csp), st.metric.name(), st.blocks, f.statistic, fmt_p(f.p_value));
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {:.2} | {} |",
+                    pct(&st.csp),
+                    st.metric.name(),
+                    st.blocks,
+                    f.statistic,
+                    fmt_p(f.p_value)
+                );
             }
             Err(e) => {
-                let _ = writeln!(s, "| {} | {} | {} | — | {e} |", pct(&st.csp), st.metric.name(), st.blocks);
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | — | {e} |",
+                    pct(&st.csp),
+                    st.metric.name(),
+                    st.blocks
+                );
             }
         }
     }
@@ -120,11 +176,30 @@ fn statistics_csv(stats: &[MetricStats]) -> String {
     let mut s = String::from("csp,metric,test,a,b,statistic,n,p,p_corrected\n");
     for st in stats {
         if let Ok(f) = &st.friedman {
-            let _ = writeln!(s, "{},{},friedman,,,{:.9},{},{:.9e},", st.csp, st.metric.name(), f.statistic, st.blocks, f.p_value);
+            let _ = writeln!(
+                s,
+                "{},{},friedman,,,{:.9},{},{:.9e},",
+                st.csp,
+                st.metric.name(),
+                f.statistic,
+                st.blocks,
+                f.p_value
+            );
         }
         if let Ok(pairs) = &st.pairs {
             for p in pairs {
-                let _ = writeln!(s, "{},{},wilcoxon,{},{},{:.3},{},{:.9e},{:.9e}", st.csp, st.metric.name(), p.a, p.b, p.test.statistic, p.test.n, p.test.p_value, p.p_corrected);
+                let _ = writeln!(
+                    s,
+                    "{},{},wilcoxon,{},{},{:.3},{},{:.9e},{:.9e}",
+                    st.csp,
+                    st.metric.name(),
+                    p.a,
+                    p.b,
+                    p.test.statistic,
+                    p.test.n,
+                    p.test.p_value,
+                    p.p_corrected
+                );
             }
         }
     }
@@ -139,16 +214,39 @@ fn calibration_md(cmp: &[Comparison]) -> String {
     for c in cmp {
         let rel = c.relative();
         let flag = if rel.abs() > 0.15 { " **>15 %**" } else { "" };
-        let _ = writeln!(s, "| {} | {:.0} % | {} | {:.1} | {:.1} | {:+.0} %{flag} |", c.method, 100.0 * c.csp, c.metric, c.ours, c.theirs, 100.0 * rel);
+        let _ = writeln!(
+            s,
+            "| {} | {:.0} % | {} | {:.1} | {:.1} | {:+.0} %{flag} |",
+            c.method,
+            100.0 * c.csp,
+            c.metric,
+            c.ours,
+            c.theirs,
+            100.0 * rel
+        );
     }
     let flagged: Vec<&Comparison> = cmp.iter().filter(|c| c.relative().abs() > 0.15).collect();
     if !flagged.is_empty() {
         s.push_str("\nEach difference above 15 % and the convention differences that act on it (described below the list):\n\n");
         for c in &flagged {
-            let names: Vec<&str> = conventions(&c.method, c.metric, c.csp).iter().map(|v| v.name()).collect();
-            let _ = writeln!(s, "- {} at CSP {:.0} %, {} ({:+.0} %): {}.", c.method, 100.0 * c.csp, c.metric, 100.0 * c.relative(), names.join(", "));
+            let names: Vec<&str> = conventions(&c.method, c.metric, c.csp)
+                .iter()
+                .map(|v| v.name())
+                .collect();
+            let _ = writeln!(
+                s,
+                "- {} at CSP {:.0} %, {} ({:+.0} %): {}.",
+                c.method,
+                100.0 * c.csp,
+                c.metric,
+                100.0 * c.relative(),
+                names.join(", ")
+            );
         }
-        let mut all: Vec<crate::calibration::Convention> = flagged.iter().flat_map(|c| conventions(&c.method, c.metric, c.csp)).collect();
+        let mut all: Vec<crate::calibration::Convention> = flagged
+            .iter()
+            .flat_map(|c| conventions(&c.method, c.metric, c.csp))
+            .collect();
         all.dedup();
         let mut seen = Vec::new();
         s.push('\n');
@@ -175,8 +273,14 @@ pub fn write_all(
     write_atomic(&out.join("summary.md"), summary_md(&rows).as_bytes())?;
     write_atomic(&out.join("summary.csv"), summary_csv(&rows).as_bytes())?;
     let stats = statistics(outcomes, &cfg.methods);
-    write_atomic(&out.join("statistics.md"), statistics_md(&stats, alpha).as_bytes())?;
-    write_atomic(&out.join("statistics.csv"), statistics_csv(&stats).as_bytes())?;
+    write_atomic(
+        &out.join("statistics.md"),
+        statistics_md(&stats, alpha).as_bytes(),
+    )?;
+    write_atomic(
+        &out.join("statistics.csv"),
+        statistics_csv(&stats).as_bytes(),
+    )?;
     let plot_err = |e: madenet_plots::PlotError| StudyError::Other(e.to_string());
     // Fig. 4: grouped bars per metric, methods × CSP, error bars one standard deviation.
     let cs = csps(outcomes);
@@ -193,9 +297,18 @@ pub fn write_all(
                 .map(|method| {
                     let (means, errors) = cs
                         .iter()
-                        .map(|(_, c)| rows.iter().find(|r| &r.method == method && &r.csp == c).map(|r| r.metrics[k]).unwrap_or((0.0, 0.0)))
+                        .map(|(_, c)| {
+                            rows.iter()
+                                .find(|r| &r.method == method && &r.csp == c)
+                                .map(|r| r.metrics[k])
+                                .unwrap_or((0.0, 0.0))
+                        })
                         .unzip();
-                    BarSeries { name: method.to_uppercase(), means, errors }
+                    BarSeries {
+                        name: method.to_uppercase(),
+                        means,
+                        errors,
+                    }
                 })
                 .collect(),
         })
@@ -210,12 +323,24 @@ pub fn write_all(
             title: format!("CSP {}", pct(c)),
             x_label: "team distance travelled (m)".into(),
             y_label: "explored (%)".into(),
-            series: cfg.methods.iter().map(|m| LineSeries { name: m.to_uppercase(), points: mean_curve(&select(outcomes, m, c), 2.0) }).collect(),
+            series: cfg
+                .methods
+                .iter()
+                .map(|m| LineSeries {
+                    name: m.to_uppercase(),
+                    points: mean_curve(&select(outcomes, m, c), 2.0),
+                })
+                .collect(),
         })
         .collect();
     let mut fig5 = false;
     if !curve_panels.is_empty() {
-        line_panels(&out.join("fig5_exploration"), &curve_panels, curve_panels.len()).map_err(plot_err)?;
+        line_panels(
+            &out.join("fig5_exploration"),
+            &curve_panels,
+            curve_panels.len(),
+        )
+        .map_err(plot_err)?;
         fig5 = true;
     }
     let cmp = compare(outcomes, paper_maps);
@@ -240,9 +365,17 @@ pub fn write_all(
     if fig5 {
         let _ = writeln!(r, "![Fig. 5](fig5_exploration.png)\n\n*Fig. 5 — mean explored % against team distance travelled (`fig5_exploration.svg`).*\n");
     }
-    let _ = writeln!(r, "## Best method per CSP, and robustness to dropouts\n\n{}", robustness_md(&rows, &cs, &cfg.methods));
+    let _ = writeln!(
+        r,
+        "## Best method per CSP, and robustness to dropouts\n\n{}",
+        robustness_md(&rows, &cs, &cfg.methods)
+    );
     let _ = writeln!(r, "## Statistics\n\n{}", statistics_md(&stats, alpha));
-    let _ = writeln!(r, "## Calibration against the authors' code\n\n{}", calibration_md(&cmp));
+    let _ = writeln!(
+        r,
+        "## Calibration against the authors' code\n\n{}",
+        calibration_md(&cmp)
+    );
     let path = out.join("report.md");
     write_atomic(&path, r.as_bytes())?;
     Ok(path)

@@ -56,8 +56,21 @@ pub struct TrialOutcome {
 }
 
 const FIXED_HEADER: [&str; 15] = [
-    "method", "map", "start", "csp", "seed", "completed", "tns", "ttd_m", "noli", "noli_authors", "ofv", "explored",
-    "trial_s", "decisions", "per_decision_s",
+    "method",
+    "map",
+    "start",
+    "csp",
+    "seed",
+    "completed",
+    "tns",
+    "ttd_m",
+    "noli",
+    "noli_authors",
+    "ofv",
+    "explored",
+    "trial_s",
+    "decisions",
+    "per_decision_s",
 ];
 
 /// The columns of `trials.csv`.
@@ -87,8 +100,14 @@ impl TrialRow {
             self.decisions.to_string(),
             format!("{:.9}", self.per_decision_s),
         ];
-        f.extend(self.steps_to.iter().map(|s| s.map(|v| v.to_string()).unwrap_or_default()));
-        let mut w = csv::WriterBuilder::new().has_headers(false).from_writer(Vec::new());
+        f.extend(
+            self.steps_to
+                .iter()
+                .map(|s| s.map(|v| v.to_string()).unwrap_or_default()),
+        );
+        let mut w = csv::WriterBuilder::new()
+            .has_headers(false)
+            .from_writer(Vec::new());
         w.write_record(&f).expect("writing to memory");
         String::from_utf8(w.into_inner().expect("writing to memory")).expect("utf-8")
     }
@@ -132,8 +151,14 @@ impl TrialRow {
 
 /// Writes `contents` to `path` atomically (temp file in the same folder, then rename).
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), StudyError> {
-    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
-    let io = |e: std::io::Error| StudyError::File { path: path.display().to_string(), message: e.to_string() };
+    let tmp = path.with_extension(format!(
+        "{}.tmp",
+        path.extension().and_then(|e| e.to_str()).unwrap_or("")
+    ));
+    let io = |e: std::io::Error| StudyError::File {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
     let mut f = std::fs::File::create(&tmp).map_err(io)?;
     f.write_all(contents).map_err(io)?;
     f.sync_all().map_err(io)?;
@@ -152,7 +177,9 @@ fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
     let mut rows = HashMap::new();
     if let Ok(text) = std::fs::read_to_string(out.join("trials.csv")) {
         let text = whole_lines(&text);
-        let mut rdr = csv::ReaderBuilder::new().flexible(true).from_reader(text.as_bytes());
+        let mut rdr = csv::ReaderBuilder::new()
+            .flexible(true)
+            .from_reader(text.as_bytes());
         for rec in rdr.records().flatten() {
             if let Some(row) = TrialRow::from_record(&rec) {
                 rows.insert(row.key.clone(), row);
@@ -168,7 +195,11 @@ fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
         }
     }
     rows.into_iter()
-        .filter_map(|(k, row)| curves.remove(&k).map(|curve| (k, TrialOutcome { row, curve })))
+        .filter_map(|(k, row)| {
+            curves
+                .remove(&k)
+                .map(|curve| (k, TrialOutcome { row, curve }))
+        })
         .collect()
 }
 
@@ -177,7 +208,11 @@ fn csp_label(c: f64) -> String {
 }
 
 /// Everything the study runs, in output order.
-pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(TrialKey, TrialSpec)> {
+pub fn plan(
+    cfg: &StudyConfig,
+    maps: &[StudyMap],
+    starts: &[StartSpec],
+) -> Vec<(TrialKey, TrialSpec)> {
     let mut v = Vec::new();
     for method in &cfg.methods {
         for m in maps {
@@ -185,12 +220,25 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(
                 for &csp in &cfg.csp {
                     for k in 0..cfg.seeds {
                         let seed = cfg.seed_base + k;
-                        let key = TrialKey { method: method.clone(), map: m.name.clone(), start: s.name(), csp: csp_label(csp), seed };
-                        let config = madenet_world::ScenarioConfig { comm_success_prob: csp, ..cfg.scenario.clone() };
+                        let key = TrialKey {
+                            method: method.clone(),
+                            map: m.name.clone(),
+                            start: s.name(),
+                            csp: csp_label(csp),
+                            seed,
+                        };
+                        let config = madenet_world::ScenarioConfig {
+                            comm_success_prob: csp,
+                            ..cfg.scenario.clone()
+                        };
                         let spec = TrialSpec {
                             map: m.grid.clone(),
                             map_name: m.name.clone(),
-                            starts: s.cells(&m.grid, cfg.scenario.num_robots, cfg.scenario.movement),
+                            starts: s.cells(
+                                &m.grid,
+                                cfg.scenario.num_robots,
+                                cfg.scenario.movement,
+                            ),
                             config,
                             policy: method.clone(),
                             seed,
@@ -206,8 +254,14 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<(
 
 /// Runs one planned trial (its outcome depends only on `key` and `spec`, never on which
 /// thread, process or machine runs it).
-pub fn run_one(key: &TrialKey, spec: &TrialSpec, registry: &PolicyRegistry) -> Result<TrialOutcome, StudyError> {
-    let result = Trial::with_registry(spec.clone(), registry).map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?.run();
+pub fn run_one(
+    key: &TrialKey,
+    spec: &TrialSpec,
+    registry: &PolicyRegistry,
+) -> Result<TrialOutcome, StudyError> {
+    let result = Trial::with_registry(spec.clone(), registry)
+        .map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?
+        .run();
     let m = &result.metrics;
     Ok(TrialOutcome {
         row: TrialRow {
@@ -224,7 +278,11 @@ pub fn run_one(key: &TrialKey, spec: &TrialSpec, registry: &PolicyRegistry) -> R
             decisions: result.timing.decisions,
             per_decision_s: result.timing.per_decision_s,
         },
-        curve: Curve { key: key.clone(), explored: m.explored_per_step.clone(), distance: m.distance_per_step.clone() },
+        curve: Curve {
+            key: key.clone(),
+            explored: m.explored_per_step.clone(),
+            distance: m.distance_per_step.clone(),
+        },
     })
 }
 
@@ -242,8 +300,9 @@ pub fn run(
     // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
     for (key, spec) in &planned {
         if key.seed == cfg.seed_base {
-            Trial::with_registry(spec.clone(), registry)
-                .map_err(|e| StudyError::Other(format!("map {}, start {}: {e}", key.map, key.start)))?;
+            Trial::with_registry(spec.clone(), registry).map_err(|e| {
+                StudyError::Other(format!("map {}, start {}: {e}", key.map, key.start))
+            })?;
         }
     }
     let mut done = load_done(out);
@@ -256,10 +315,16 @@ pub fn run(
         std::fs::OpenOptions::new()
             .append(true)
             .open(out.join(name))
-            .map_err(|e| StudyError::File { path: out.join(name).display().to_string(), message: e.to_string() })
+            .map_err(|e| StudyError::File {
+                path: out.join(name).display().to_string(),
+                message: e.to_string(),
+            })
     };
     let files = Mutex::new((open("trials.csv")?, open("curves.jsonl")?));
-    let todo: Vec<&(TrialKey, TrialSpec)> = planned.iter().filter(|(k, _)| !done.contains_key(k)).collect();
+    let todo: Vec<&(TrialKey, TrialSpec)> = planned
+        .iter()
+        .filter(|(k, _)| !done.contains_key(k))
+        .collect();
     let total = planned.len();
     let counter = std::sync::atomic::AtomicUsize::new(done.len());
     progress(done.len(), total);
@@ -269,12 +334,16 @@ pub fn run(
             let outcome = run_one(key, spec, registry)?;
             {
                 let mut f = files.lock().expect("no panics while holding the lock");
-                let io = |e: std::io::Error| StudyError::File { path: out.display().to_string(), message: e.to_string() };
+                let io = |e: std::io::Error| StudyError::File {
+                    path: out.display().to_string(),
+                    message: e.to_string(),
+                };
                 let mut line = serde_json::to_string(&outcome.curve).expect("curve serializes");
                 line.push('\n');
                 f.1.write_all(line.as_bytes()).map_err(io)?;
                 f.1.flush().map_err(io)?;
-                f.0.write_all(outcome.row.to_line().as_bytes()).map_err(io)?;
+                f.0.write_all(outcome.row.to_line().as_bytes())
+                    .map_err(io)?;
                 f.0.flush().map_err(io)?;
             }
             let n = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
@@ -286,7 +355,10 @@ pub fn run(
         let o = r?;
         done.insert(o.row.key.clone(), o);
     }
-    let all: Vec<TrialOutcome> = planned.iter().map(|(k, _)| done.remove(k).expect("every planned trial ran")).collect();
+    let all: Vec<TrialOutcome> = planned
+        .iter()
+        .map(|(k, _)| done.remove(k).expect("every planned trial ran"))
+        .collect();
     // Final files in plan order: the same bytes whatever the thread count or interruptions
     // (but for the wall-clock columns).
     write_records(out, &all.iter().collect::<Vec<_>>())?;
@@ -300,7 +372,11 @@ fn write_records(out: &Path, outcomes: &[&TrialOutcome]) -> Result<(), StudyErro
     let mut curves = Vec::new();
     for o in outcomes {
         csv_bytes.extend_from_slice(o.row.to_line().as_bytes());
-        curves.extend_from_slice(serde_json::to_string(&o.curve).expect("curve serializes").as_bytes());
+        curves.extend_from_slice(
+            serde_json::to_string(&o.curve)
+                .expect("curve serializes")
+                .as_bytes(),
+        );
         curves.push(b'\n');
     }
     write_atomic(&out.join("curves.jsonl"), &curves)?;

@@ -70,11 +70,17 @@ type StudyResult = Result<(PathBuf, Vec<TrialOutcome>), madenet_study::StudyErro
 /// Runs the study, recording every progress callback.
 fn run(cfg: &StudyConfig, out: &Path, fresh: bool) -> (StudyResult, Vec<(usize, usize)>) {
     let calls = Mutex::new(Vec::new());
-    let r = run_study(cfg, out, fresh, &|done, total| calls.lock().unwrap().push((done, total)));
+    let r = run_study(cfg, out, fresh, &|done, total| {
+        calls.lock().unwrap().push((done, total))
+    });
     (r, calls.into_inner().unwrap())
 }
 
-fn run_ok(cfg: &StudyConfig, out: &Path, fresh: bool) -> (PathBuf, Vec<TrialOutcome>, Vec<(usize, usize)>) {
+fn run_ok(
+    cfg: &StudyConfig,
+    out: &Path,
+    fresh: bool,
+) -> (PathBuf, Vec<TrialOutcome>, Vec<(usize, usize)>) {
     let (r, calls) = run(cfg, out, fresh);
     let (report, outcomes) = r.unwrap_or_else(|e| panic!("study failed: {e}"));
     (report, outcomes, calls)
@@ -89,25 +95,40 @@ struct Table {
 
 impl Table {
     fn read(path: &Path) -> Table {
-        let mut rdr = csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut rdr =
+            csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let header = rdr.headers().unwrap().iter().map(String::from).collect();
-        let rows = rdr.records().map(|r| r.unwrap().iter().map(String::from).collect()).collect();
+        let rows = rdr
+            .records()
+            .map(|r| r.unwrap().iter().map(String::from).collect())
+            .collect();
         Table { header, rows }
     }
     fn col(&self, name: &str) -> usize {
-        self.header.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column `{name}` in {:?}", self.header))
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column `{name}` in {:?}", self.header))
     }
     fn get<'a>(&self, row: &'a [String], name: &str) -> &'a str {
         &row[self.col(name)]
     }
     fn num(&self, row: &[String], name: &str) -> f64 {
         let v = self.get(row, name);
-        v.parse().unwrap_or_else(|_| panic!("column `{name}`: `{v}` is not a number"))
+        v.parse()
+            .unwrap_or_else(|_| panic!("column `{name}`: `{v}` is not a number"))
     }
     /// Header and rows without the named columns.
     fn without(&self, drop: &[&str]) -> (Vec<String>, Vec<Vec<String>>) {
-        let keep: Vec<usize> = (0..self.header.len()).filter(|&i| !drop.contains(&self.header[i].as_str())).collect();
-        assert_eq!(keep.len() + drop.len(), self.header.len(), "every dropped column exists: {drop:?} in {:?}", self.header);
+        let keep: Vec<usize> = (0..self.header.len())
+            .filter(|&i| !drop.contains(&self.header[i].as_str()))
+            .collect();
+        assert_eq!(
+            keep.len() + drop.len(),
+            self.header.len(),
+            "every dropped column exists: {drop:?} in {:?}",
+            self.header
+        );
         let pick = |r: &Vec<String>| keep.iter().map(|&i| r[i].clone()).collect::<Vec<_>>();
         (pick(&self.header), self.rows.iter().map(pick).collect())
     }
@@ -131,9 +152,18 @@ fn assert_refused(bad: &StudyConfig, needles: &[&str]) {
     for n in needles {
         assert!(msg.contains(n), "`{n}` missing from: {msg}");
     }
-    assert!(calls.is_empty(), "progress reported before refusing: {calls:?}");
-    assert!(!out.join("trials.csv").exists(), "trials.csv written although the study was refused");
-    assert!(!out.join("curves.jsonl").exists(), "curves.jsonl written although the study was refused");
+    assert!(
+        calls.is_empty(),
+        "progress reported before refusing: {calls:?}"
+    );
+    assert!(
+        !out.join("trials.csv").exists(),
+        "trials.csv written although the study was refused"
+    );
+    assert!(
+        !out.join("curves.jsonl").exists(),
+        "curves.jsonl written although the study was refused"
+    );
     // With `fresh` too.
     let (r, calls) = run(bad, &out, true);
     assert!(r.is_err() && calls.is_empty() && !out.join("trials.csv").exists());
@@ -144,7 +174,10 @@ fn assert_refused(bad: &StudyConfig, needles: &[&str]) {
 
 #[test]
 fn unknown_method_is_refused_naming_field_and_method() {
-    assert_refused(&small(&["nf", "teleport"], &[1.0], 1), &["methods", "teleport"]);
+    assert_refused(
+        &small(&["nf", "teleport"], &[1.0], 1),
+        &["methods", "teleport"],
+    );
 }
 
 #[test]
@@ -213,11 +246,23 @@ fn malformed_study_toml_names_file_and_line() {
     let dir = Scratch::new("toml");
     let cases: [(&str, &str, &[&str]); 4] = [
         // A value of the wrong type on line 3.
-        ("type.toml", "methods = [\"nf\"]\nmaps = [\"paper:1\"]\nseeds = \"two\"\n", &["line 3"]),
+        (
+            "type.toml",
+            "methods = [\"nf\"]\nmaps = [\"paper:1\"]\nseeds = \"two\"\n",
+            &["line 3"],
+        ),
         // A syntax error on line 2.
-        ("syntax.toml", "methods = [\"nf\"]\ncsp = = [1.0]\nseeds = 1\n", &["line 2"]),
+        (
+            "syntax.toml",
+            "methods = [\"nf\"]\ncsp = = [1.0]\nseeds = 1\n",
+            &["line 2"],
+        ),
         // An unknown field (typo) on line 4.
-        ("unknown.toml", "methods = [\"nf\"]\nmaps = [\"paper:1\"]\nseeds = 1\nmethds = [\"ub\"]\n", &["line 4", "methds"]),
+        (
+            "unknown.toml",
+            "methods = [\"nf\"]\nmaps = [\"paper:1\"]\nseeds = 1\nmethds = [\"ub\"]\n",
+            &["line 4", "methds"],
+        ),
         // A negative seed count on line 1.
         ("negative.toml", "seeds = -3\n", &["line 1"]),
     ];
@@ -229,14 +274,19 @@ fn malformed_study_toml_names_file_and_line() {
             Err(e) => e.to_string(),
         };
         assert!(!msg.contains('\n'), "one line expected: {msg}");
-        assert!(msg.contains(&path.display().to_string()), "file missing from: {msg}");
+        assert!(
+            msg.contains(&path.display().to_string()),
+            "file missing from: {msg}"
+        );
         for n in needles {
             assert!(msg.contains(n), "{name}: `{n}` missing from: {msg}");
         }
     }
     // A missing study file names the file.
     let missing = dir.path().join("missing.toml");
-    let msg = StudyConfig::from_toml_file(&missing).unwrap_err().to_string();
+    let msg = StudyConfig::from_toml_file(&missing)
+        .unwrap_err()
+        .to_string();
     assert!(msg.contains(&missing.display().to_string()), "{msg}");
 }
 
@@ -245,15 +295,26 @@ fn study_toml_values_are_validated_after_parsing() {
     // Well-formed TOML with values the study cannot run: parsing succeeds, validation refuses.
     let dir = Scratch::new("toml-values");
     let path = dir.path().join("study.toml");
-    std::fs::write(&path, "methods = [\"nf\", \"teleport\"]\nmaps = [\"paper:1\"]\ncsp = [0.5]\nseeds = 1\n").unwrap();
+    std::fs::write(
+        &path,
+        "methods = [\"nf\", \"teleport\"]\nmaps = [\"paper:1\"]\ncsp = [0.5]\nseeds = 1\n",
+    )
+    .unwrap();
     let cfg = StudyConfig::from_toml_file(&path).unwrap();
     assert_eq!(cfg.methods, strings(&["nf", "teleport"]));
     assert_eq!(cfg.csp, vec![0.5]);
     // Unset fields take the defaults.
     assert_eq!(cfg.starts, StudyConfig::default().starts);
     assert_refused(&cfg, &["methods", "teleport"]);
-    std::fs::write(&path, "methods = [\"nf\"]\nmaps = [\"paper:1\"]\ncsp = [0.5, 1.2]\nseeds = 1\n").unwrap();
-    assert_refused(&StudyConfig::from_toml_file(&path).unwrap(), &["csp", "1.2"]);
+    std::fs::write(
+        &path,
+        "methods = [\"nf\"]\nmaps = [\"paper:1\"]\ncsp = [0.5, 1.2]\nseeds = 1\n",
+    )
+    .unwrap();
+    assert_refused(
+        &StudyConfig::from_toml_file(&path).unwrap(),
+        &["csp", "1.2"],
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -265,15 +326,24 @@ fn is_png(path: &Path) -> bool {
 
 /// The rows of the calibration table in `report.md`: (method, CSP, metric).
 fn calibration_rows(report: &str) -> Vec<(String, String, String)> {
-    let start = report.find("## Calibration").expect("a Calibration section in report.md");
+    let start = report
+        .find("## Calibration")
+        .expect("a Calibration section in report.md");
     let section = &report[start..];
-    let end = section[3..].find("\n## ").map(|i| i + 3).unwrap_or(section.len());
+    let end = section[3..]
+        .find("\n## ")
+        .map(|i| i + 3)
+        .unwrap_or(section.len());
     section[..end]
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| method") && !l.starts_with("|---"))
         .map(|l| {
             let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
-            (cells[0].to_string(), cells[1].to_string(), cells[2].to_string())
+            (
+                cells[0].to_string(),
+                cells[1].to_string(),
+                cells[2].to_string(),
+            )
         })
         .collect()
 }
@@ -297,8 +367,25 @@ fn small_study_writes_every_output_consistently() {
     // trials.csv: header with every column, one row per planned trial, in plan order.
     let trials = Table::read(&out.join("trials.csv"));
     for c in [
-        "method", "map", "start", "csp", "seed", "completed", "tns", "ttd_m", "noli", "noli_authors", "ofv", "explored",
-        "trial_s", "decisions", "per_decision_s", "to_20", "to_50", "to_90", "to_100",
+        "method",
+        "map",
+        "start",
+        "csp",
+        "seed",
+        "completed",
+        "tns",
+        "ttd_m",
+        "noli",
+        "noli_authors",
+        "ofv",
+        "explored",
+        "trial_s",
+        "decisions",
+        "per_decision_s",
+        "to_20",
+        "to_50",
+        "to_90",
+        "to_100",
     ] {
         trials.col(c);
     }
@@ -306,14 +393,26 @@ fn small_study_writes_every_output_consistently() {
     let mut keys = BTreeSet::new();
     for r in &trials.rows {
         assert_eq!(r.len(), trials.header.len());
-        keys.insert((trials.get(r, "method").to_string(), trials.get(r, "map").to_string(), trials.get(r, "start").to_string(), trials.get(r, "csp").to_string(), trials.get(r, "seed").to_string()));
-        assert!(["true", "false"].contains(&trials.get(r, "completed")), "{r:?}");
+        keys.insert((
+            trials.get(r, "method").to_string(),
+            trials.get(r, "map").to_string(),
+            trials.get(r, "start").to_string(),
+            trials.get(r, "csp").to_string(),
+            trials.get(r, "seed").to_string(),
+        ));
+        assert!(
+            ["true", "false"].contains(&trials.get(r, "completed")),
+            "{r:?}"
+        );
         let tns = trials.num(r, "tns");
         assert!(tns >= 1.0 && tns <= cfg.scenario.step_cap as f64, "{r:?}");
         let e = trials.num(r, "explored");
         assert!((0.0..=1.0 + 1e-9).contains(&e), "{r:?}");
         assert!(trials.num(r, "ttd_m") > 0.0 && trials.num(r, "ofv") >= 0.0);
-        assert!(trials.num(r, "noli_authors") <= trials.num(r, "noli"), "{r:?}");
+        assert!(
+            trials.num(r, "noli_authors") <= trials.num(r, "noli"),
+            "{r:?}"
+        );
         assert!(trials.num(r, "trial_s") >= 0.0 && trials.num(r, "decisions") >= 1.0);
     }
     let expected: BTreeSet<_> = methods
@@ -321,17 +420,37 @@ fn small_study_writes_every_output_consistently() {
         .flat_map(|m| {
             ["test_1", "test_2"].into_iter().flat_map(move |map| {
                 ["top-left", "bottom-right"].into_iter().flat_map(move |s| {
-                    ["1", "0"].into_iter().flat_map(move |c| ["1", "2"].into_iter().map(move |seed| (m.to_string(), map.to_string(), s.to_string(), c.to_string(), seed.to_string())))
+                    ["1", "0"].into_iter().flat_map(move |c| {
+                        ["1", "2"].into_iter().map(move |seed| {
+                            (
+                                m.to_string(),
+                                map.to_string(),
+                                s.to_string(),
+                                c.to_string(),
+                                seed.to_string(),
+                            )
+                        })
+                    })
                 })
             })
         })
         .collect();
-    assert_eq!(keys, expected, "one row per (method, map, start, csp, seed)");
+    assert_eq!(
+        keys, expected,
+        "one row per (method, map, start, csp, seed)"
+    );
     // Plan order: methods in config order, first method first.
     assert_eq!(trials.get(&trials.rows[0], "method"), "nf");
     assert_eq!(trials.get(&trials.rows[total - 1], "method"), "pb");
     // Completion agrees with coverage for most trials on these small maps.
-    assert!(trials.rows.iter().filter(|r| trials.get(r, "completed") == "true").count() > total / 2);
+    assert!(
+        trials
+            .rows
+            .iter()
+            .filter(|r| trials.get(r, "completed") == "true")
+            .count()
+            > total / 2
+    );
 
     // curves.jsonl: one line per trial, same order, consistent with the row.
     let curves = read(&out.join("curves.jsonl"));
@@ -344,18 +463,42 @@ fn small_study_writes_every_output_consistently() {
         assert_eq!(key["map"], trials.get(r, "map"));
         assert_eq!(key["start"], trials.get(r, "start"));
         assert_eq!(key["csp"], trials.get(r, "csp"));
-        assert_eq!(key["seed"].as_u64().unwrap().to_string(), trials.get(r, "seed"));
-        let ex: Vec<f64> = v["explored"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-        let di: Vec<f64> = v["distance"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        assert_eq!(
+            key["seed"].as_u64().unwrap().to_string(),
+            trials.get(r, "seed")
+        );
+        let ex: Vec<f64> = v["explored"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let di: Vec<f64> = v["distance"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
         assert_eq!(ex.len(), di.len());
-        assert_eq!(ex.len() as f64, trials.num(r, "tns") + 1.0, "a sample before the first move and after every step");
-        assert!(di.windows(2).all(|w| w[1] >= w[0]), "distance never decreases");
+        assert_eq!(
+            ex.len() as f64,
+            trials.num(r, "tns") + 1.0,
+            "a sample before the first move and after every step"
+        );
+        assert!(
+            di.windows(2).all(|w| w[1] >= w[0]),
+            "distance never decreases"
+        );
         assert_eq!(di[0], 0.0);
         assert!((ex.last().unwrap() - trials.num(r, "explored")).abs() < 1e-6);
         assert!((di.last().unwrap() - trials.num(r, "ttd_m")).abs() < 1e-6);
         // to_N: first timestep at which coverage reached N %.
         for n in [20u32, 50, 100] {
-            let want = ex.iter().position(|&e| e >= n as f64 / 100.0 - 1e-12).map(|i| i.to_string()).unwrap_or_default();
+            let want = ex
+                .iter()
+                .position(|&e| e >= n as f64 / 100.0 - 1e-12)
+                .map(|i| i.to_string())
+                .unwrap_or_default();
             assert_eq!(trials.get(r, &format!("to_{n}")), want, "to_{n} of {r:?}");
         }
     }
@@ -365,60 +508,117 @@ fn small_study_writes_every_output_consistently() {
     assert_eq!(summary.rows.len(), 3 * 2);
     for s in &summary.rows {
         let (m, c) = (summary.get(s, "method"), summary.get(s, "csp"));
-        let sel: Vec<&Vec<String>> = trials.rows.iter().filter(|r| trials.get(r, "method") == m && trials.get(r, "csp") == c).collect();
+        let sel: Vec<&Vec<String>> = trials
+            .rows
+            .iter()
+            .filter(|r| trials.get(r, "method") == m && trials.get(r, "csp") == c)
+            .collect();
         assert_eq!(summary.num(s, "trials"), sel.len() as f64);
         assert_eq!(sel.len(), 8);
-        assert_eq!(summary.num(s, "completed"), sel.iter().filter(|r| trials.get(r, "completed") == "true").count() as f64);
-        for (col, sum_col) in [("tns", "tns"), ("ttd_m", "ttd"), ("noli", "noli"), ("ofv", "ofv")] {
+        assert_eq!(
+            summary.num(s, "completed"),
+            sel.iter()
+                .filter(|r| trials.get(r, "completed") == "true")
+                .count() as f64
+        );
+        for (col, sum_col) in [
+            ("tns", "tns"),
+            ("ttd_m", "ttd"),
+            ("noli", "noli"),
+            ("ofv", "ofv"),
+        ] {
             let v: Vec<f64> = sel.iter().map(|r| trials.num(r, col)).collect();
             let mean = v.iter().sum::<f64>() / v.len() as f64;
-            let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
-            assert!((summary.num(s, &format!("{sum_col}_mean")) - mean).abs() < 1e-4, "{m} {c} {col} mean");
-            assert!((summary.num(s, &format!("{sum_col}_sd")) - sd).abs() < 1e-4, "{m} {c} {col} sd");
+            let sd =
+                (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
+            assert!(
+                (summary.num(s, &format!("{sum_col}_mean")) - mean).abs() < 1e-4,
+                "{m} {c} {col} mean"
+            );
+            assert!(
+                (summary.num(s, &format!("{sum_col}_sd")) - sd).abs() < 1e-4,
+                "{m} {c} {col} sd"
+            );
         }
     }
     let md = read(&out.join("summary.md"));
-    assert_eq!(md.lines().filter(|l| l.starts_with("| ") && l.contains('±')).count(), 6, "{md}");
+    assert_eq!(
+        md.lines()
+            .filter(|l| l.starts_with("| ") && l.contains('±'))
+            .count(),
+        6,
+        "{md}"
+    );
 
     // statistics.csv: Friedman per metric per CSP; Wilcoxon per pair per metric per CSP,
     // Bonferroni over the 3 pairs.
     let stats = Table::read(&out.join("statistics.csv"));
-    let friedman: Vec<&Vec<String>> = stats.rows.iter().filter(|r| stats.get(r, "test") == "friedman").collect();
-    let wilcoxon: Vec<&Vec<String>> = stats.rows.iter().filter(|r| stats.get(r, "test") == "wilcoxon").collect();
+    let friedman: Vec<&Vec<String>> = stats
+        .rows
+        .iter()
+        .filter(|r| stats.get(r, "test") == "friedman")
+        .collect();
+    let wilcoxon: Vec<&Vec<String>> = stats
+        .rows
+        .iter()
+        .filter(|r| stats.get(r, "test") == "wilcoxon")
+        .collect();
     assert_eq!(friedman.len(), 4 * 2, "{stats:?}");
     assert_eq!(wilcoxon.len(), 3 * 4 * 2, "{stats:?}");
     assert_eq!(stats.rows.len(), friedman.len() + wilcoxon.len());
     for c in ["1", "0"] {
         for m in METRICS {
-            let f: Vec<_> = friedman.iter().filter(|r| stats.get(r, "csp") == c && stats.get(r, "metric") == m).collect();
+            let f: Vec<_> = friedman
+                .iter()
+                .filter(|r| stats.get(r, "csp") == c && stats.get(r, "metric") == m)
+                .collect();
             assert_eq!(f.len(), 1, "Friedman {m} at CSP {c}");
-            assert_eq!(stats.num(f[0], "n"), 8.0, "blocks: 2 maps × 2 starts × 2 seeds");
+            assert_eq!(
+                stats.num(f[0], "n"),
+                8.0,
+                "blocks: 2 maps × 2 starts × 2 seeds"
+            );
             let pairs: BTreeSet<(String, String)> = wilcoxon
                 .iter()
                 .filter(|r| stats.get(r, "csp") == c && stats.get(r, "metric") == m)
                 .map(|r| (stats.get(r, "a").to_string(), stats.get(r, "b").to_string()))
                 .collect();
-            let want: BTreeSet<(String, String)> = [("nf", "ub"), ("nf", "pb"), ("ub", "pb")].iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+            let want: BTreeSet<(String, String)> = [("nf", "ub"), ("nf", "pb"), ("ub", "pb")]
+                .iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect();
             assert_eq!(pairs, want, "{m} at CSP {c}");
         }
     }
     for r in &friedman {
         let p = stats.num(r, "p");
-        assert!((0.0..=1.0).contains(&p) && stats.num(r, "statistic") >= 0.0, "{r:?}");
+        assert!(
+            (0.0..=1.0).contains(&p) && stats.num(r, "statistic") >= 0.0,
+            "{r:?}"
+        );
     }
     for r in &wilcoxon {
         let (p, pc) = (stats.num(r, "p"), stats.num(r, "p_corrected"));
         assert!((0.0..=1.0).contains(&p), "{r:?}");
         assert!(pc >= p && pc <= 1.0, "corrected p ≥ raw p: {r:?}");
-        assert!((pc - (3.0 * p).min(1.0)).abs() <= 1e-6 * pc.max(1e-300), "Bonferroni over 3 pairs: {r:?}");
+        assert!(
+            (pc - (3.0 * p).min(1.0)).abs() <= 1e-6 * pc.max(1e-300),
+            "Bonferroni over 3 pairs: {r:?}"
+        );
         assert!(stats.num(r, "n") <= 8.0);
     }
     let smd = read(&out.join("statistics.md"));
-    assert!(smd.contains("Friedman") && smd.contains("nf vs ub"), "{smd}");
+    assert!(
+        smd.contains("Friedman") && smd.contains("nf vs ub"),
+        "{smd}"
+    );
 
     // Figures.
     for f in ["fig4_metrics", "fig5_exploration"] {
-        assert!(is_png(&out.join(format!("{f}.png"))), "{f}.png is not a PNG");
+        assert!(
+            is_png(&out.join(format!("{f}.png"))),
+            "{f}.png is not a PNG"
+        );
         let svg = read(&out.join(format!("{f}.svg")));
         assert!(svg.contains("<svg"), "{f}.svg");
         for m in ["NF", "UB", "PB"] {
@@ -428,10 +628,20 @@ fn small_study_writes_every_output_consistently() {
 
     // report.md ties them together.
     let text = read(&report);
-    for needle in ["fig4_metrics.png", "fig5_exploration.png", "## Summary", "## Statistics", "## Calibration", "trials.csv"] {
+    for needle in [
+        "fig4_metrics.png",
+        "fig5_exploration.png",
+        "## Summary",
+        "## Statistics",
+        "## Calibration",
+        "trials.csv",
+    ] {
         assert!(text.contains(needle), "report.md lacks `{needle}`");
     }
-    assert!(text.contains(&format!("{total} trials")), "report states the trial count");
+    assert!(
+        text.contains(&format!("{total} trials")),
+        "report states the trial count"
+    );
     // Calibration: nf, ub, pb at the two CSPs of this study × steps, distance, local interactions.
     let cal = calibration_rows(&text);
     assert_eq!(cal.len(), 3 * 2 * 3, "{cal:?}");
@@ -457,13 +667,19 @@ fn calibration_only_for_baselines_on_paper_maps() {
     assert_eq!(outcomes.len(), 2 * 2 * 2);
     let cal = calibration_rows(&read(&report));
     assert_eq!(cal.len(), 3, "nf at CSP 100 % only: {cal:?}");
-    assert!(cal.iter().all(|(m, c, _)| m == "nf" && c == "100 %"), "{cal:?}");
+    assert!(
+        cal.iter().all(|(m, c, _)| m == "nf" && c == "100 %"),
+        "{cal:?}"
+    );
 
     let mut cfg = small(&["nf"], &[1.0], 1);
     cfg.maps = vec!["generate:7".into()];
     let (report, _, _) = run_ok(&cfg, dir.path(), true);
     let text = read(&report);
-    assert!(calibration_rows(&text).is_empty(), "no calibration rows without paper maps");
+    assert!(
+        calibration_rows(&text).is_empty(),
+        "no calibration rows without paper maps"
+    );
     // Fig. 5 still drawn at CSP 1.0; only one method, so no statistics rows.
     let stats = Table::read(&dir.path().join("statistics.csv"));
     assert!(stats.rows.is_empty(), "{stats:?}");
@@ -491,7 +707,11 @@ fn assert_curves_close(got: &str, want: &str) {
             assert_eq!(x.len(), y.len(), "{f} of {}", a["key"]);
             for (p, q) in x.iter().zip(y) {
                 let (p, q) = (p.as_f64().unwrap(), q.as_f64().unwrap());
-                assert!((p - q).abs() <= 1e-12 * q.abs().max(1.0), "{f} of {}: {p} vs {q}", a["key"]);
+                assert!(
+                    (p - q).abs() <= 1e-12 * q.abs().max(1.0),
+                    "{f} of {}: {p} vs {q}",
+                    a["key"]
+                );
             }
         }
     }
@@ -521,23 +741,48 @@ fn interrupted_study_resumes_with_only_complete_consistent_trials() {
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     let torn = &lines[1 + k_rows][..lines[1 + k_rows].len() / 2];
     assert!(!torn.contains('\n'));
-    std::fs::write(out.join("trials.csv"), format!("{}{torn}", first_lines(&trials_full, 1 + k_rows))).unwrap();
-    std::fs::write(out.join("curves.jsonl"), first_lines(&curves_full, k_curves)).unwrap();
+    std::fs::write(
+        out.join("trials.csv"),
+        format!("{}{torn}", first_lines(&trials_full, 1 + k_rows)),
+    )
+    .unwrap();
+    std::fs::write(
+        out.join("curves.jsonl"),
+        first_lines(&curves_full, k_curves),
+    )
+    .unwrap();
 
     let (_, second, calls) = run_ok(&cfg, out, false);
     assert_eq!(second.len(), total);
-    assert_eq!(calls.first(), Some(&(k_curves, total)), "progress starts at the complete, consistent trials: {calls:?}");
-    assert_eq!(calls.len(), 1 + total - k_curves, "trials actually run: {calls:?}");
+    assert_eq!(
+        calls.first(),
+        Some(&(k_curves, total)),
+        "progress starts at the complete, consistent trials: {calls:?}"
+    );
+    assert_eq!(
+        calls.len(),
+        1 + total - k_curves,
+        "trials actually run: {calls:?}"
+    );
     assert_eq!(calls.iter().map(|c| c.0).max(), Some(total));
 
     // Same results as the uninterrupted run, but for the wall-clock columns …
-    assert_eq!(deterministic_trials(out), Table::read_str(&trials_full).without(&WALL_CLOCK));
+    assert_eq!(
+        deterministic_trials(out),
+        Table::read_str(&trials_full).without(&WALL_CLOCK)
+    );
     assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
-    assert_eq!(Table::read(&out.join("summary.csv")).without(&SUMMARY_CT), summary_full);
+    assert_eq!(
+        Table::read(&out.join("summary.csv")).without(&SUMMARY_CT),
+        summary_full
+    );
     assert_eq!(read(&out.join("statistics.csv")), stats_full);
     // … and the trials kept were not run again: their rows are byte-identical, timings included.
     let kept = first_lines(&trials_full, 1 + k_curves);
-    assert!(read(&out.join("trials.csv")).starts_with(&kept), "the first {k_curves} rows were kept as recorded");
+    assert!(
+        read(&out.join("trials.csv")).starts_with(&kept),
+        "the first {k_curves} rows were kept as recorded"
+    );
     assert!(trials_full.ends_with('\n') && read(&out.join("trials.csv")).ends_with('\n'));
 
     // Resuming a finished study runs nothing and changes nothing.
@@ -561,13 +806,26 @@ fn resume_drops_a_row_torn_inside_its_last_field() {
     let curves_full = read(&out.join("curves.jsonl"));
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     // The first row whose last field (to_100) is not empty.
-    let i = (1..lines.len()).find(|&i| !lines[i].ends_with(",\n")).expect("a trial that reached 100 %");
+    let i = (1..lines.len())
+        .find(|&i| !lines[i].ends_with(",\n"))
+        .expect("a trial that reached 100 %");
     let torn = &lines[i][..lines[i].len() - 2]; // drop the newline and the last digit
-    std::fs::write(out.join("trials.csv"), format!("{}{torn}", first_lines(&trials_full, i))).unwrap();
+    std::fs::write(
+        out.join("trials.csv"),
+        format!("{}{torn}", first_lines(&trials_full, i)),
+    )
+    .unwrap();
     // Curves of every trial survive, so only the torn row decides whether trial i reruns.
     let (_, _, calls) = run_ok(&cfg, out, false);
-    assert_eq!(calls.first(), Some(&(i - 1, total)), "the torn row is run again: {calls:?}");
-    assert_eq!(deterministic_trials(out), Table::read_str(&trials_full).without(&WALL_CLOCK));
+    assert_eq!(
+        calls.first(),
+        Some(&(i - 1, total)),
+        "the torn row is run again: {calls:?}"
+    );
+    assert_eq!(
+        deterministic_trials(out),
+        Table::read_str(&trials_full).without(&WALL_CLOCK)
+    );
     assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
 }
 
@@ -575,7 +833,10 @@ impl Table {
     fn read_str(text: &str) -> Table {
         let mut rdr = csv::Reader::from_reader(text.as_bytes());
         let header = rdr.headers().unwrap().iter().map(String::from).collect();
-        let rows = rdr.records().map(|r| r.unwrap().iter().map(String::from).collect()).collect();
+        let rows = rdr
+            .records()
+            .map(|r| r.unwrap().iter().map(String::from).collect())
+            .collect();
         Table { header, rows }
     }
 }
@@ -592,14 +853,29 @@ fn resume_ignores_records_outside_the_plan_and_garbage_lines() {
     // A line of garbage in each file, and a well-formed record of a trial this study does not plan.
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     let alien = lines[1].replacen("nf,", "ub,", 1);
-    let alien_curve = curves_full.lines().next().unwrap().replacen("\"nf\"", "\"ub\"", 1);
-    std::fs::write(out.join("trials.csv"), format!("{}{}not,a,row\n{alien}", lines[0], lines[1])).unwrap();
-    std::fs::write(out.join("curves.jsonl"), format!("{}{{garbage\n{alien_curve}\n", first_lines(&curves_full, 1))).unwrap();
+    let alien_curve = curves_full
+        .lines()
+        .next()
+        .unwrap()
+        .replacen("\"nf\"", "\"ub\"", 1);
+    std::fs::write(
+        out.join("trials.csv"),
+        format!("{}{}not,a,row\n{alien}", lines[0], lines[1]),
+    )
+    .unwrap();
+    std::fs::write(
+        out.join("curves.jsonl"),
+        format!("{}{{garbage\n{alien_curve}\n", first_lines(&curves_full, 1)),
+    )
+    .unwrap();
     let (_, outcomes, calls) = run_ok(&cfg, out, false);
     assert_eq!(calls.first(), Some(&(1, total)), "{calls:?}");
     assert_eq!(outcomes.len(), total);
     assert!(outcomes.iter().all(|o| o.row.key.method == "nf"));
-    assert_eq!(deterministic_trials(out), Table::read_str(&trials_full).without(&WALL_CLOCK));
+    assert_eq!(
+        deterministic_trials(out),
+        Table::read_str(&trials_full).without(&WALL_CLOCK)
+    );
     assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
 }
 
@@ -634,19 +910,40 @@ fn resumed_curves_are_byte_identical() {
 fn different_config_in_same_folder_is_refused_unless_fresh() {
     let dir = Scratch::new("different");
     let out = dir.path().join("study out");
-    let a = StudyConfig { maps: vec!["paper:1".into()], starts: vec!["top-left".into()], ..small(&["nf"], &[1.0], 1) };
+    let a = StudyConfig {
+        maps: vec!["paper:1".into()],
+        starts: vec!["top-left".into()],
+        ..small(&["nf"], &[1.0], 1)
+    };
     run_ok(&a, &out, false);
     let trials_a = read(&out.join("trials.csv"));
     let study_a = read(&out.join("study.toml"));
 
-    let b = StudyConfig { seeds: 2, ..a.clone() };
+    let b = StudyConfig {
+        seeds: 2,
+        ..a.clone()
+    };
     let (r, calls) = run(&b, &out, false);
-    let msg = r.err().expect("a different config must be refused").to_string();
-    assert!(msg.contains(&out.display().to_string()), "folder missing from: {msg}");
+    let msg = r
+        .err()
+        .expect("a different config must be refused")
+        .to_string();
+    assert!(
+        msg.contains(&out.display().to_string()),
+        "folder missing from: {msg}"
+    );
     assert!(msg.contains("fresh"), "the remedy is named: {msg}");
     assert!(calls.is_empty(), "{calls:?}");
-    assert_eq!(read(&out.join("trials.csv")), trials_a, "old results untouched");
-    assert_eq!(read(&out.join("study.toml")), study_a, "old configuration untouched");
+    assert_eq!(
+        read(&out.join("trials.csv")),
+        trials_a,
+        "old results untouched"
+    );
+    assert_eq!(
+        read(&out.join("study.toml")),
+        study_a,
+        "old configuration untouched"
+    );
     // Also a change of the scenario alone.
     let mut c = a.clone();
     c.scenario.step_cap = 200;
@@ -659,7 +956,10 @@ fn different_config_in_same_folder_is_refused_unless_fresh() {
     assert_eq!(toml_cfg(&out.join("study.toml")), b);
     // The first row is the same trial as before (seed 1) with the same results.
     let (_, rows_b) = deterministic_trials(&out);
-    assert_eq!(rows_b[0], Table::read_str(&trials_a).without(&WALL_CLOCK).1[0]);
+    assert_eq!(
+        rows_b[0],
+        Table::read_str(&trials_a).without(&WALL_CLOCK).1[0]
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -674,7 +974,10 @@ fn results_do_not_depend_on_thread_count() {
         .iter()
         .map(|&n| {
             let out = dir.path().join(format!("threads-{n}"));
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap();
             let (_, outcomes, _) = pool.install(|| run_ok(&cfg, &out, false));
             assert_eq!(outcomes.len(), 24);
             out
@@ -682,10 +985,22 @@ fn results_do_not_depend_on_thread_count() {
         .collect();
     let (one, two) = (&outs[0], &outs[1]);
     assert_eq!(deterministic_trials(one), deterministic_trials(two));
-    assert_eq!(read(&one.join("curves.jsonl")), read(&two.join("curves.jsonl")));
-    assert_eq!(Table::read(&one.join("summary.csv")).without(&SUMMARY_CT), Table::read(&two.join("summary.csv")).without(&SUMMARY_CT));
-    assert_eq!(read(&one.join("statistics.csv")), read(&two.join("statistics.csv")));
-    assert_eq!(read(&one.join("statistics.md")), read(&two.join("statistics.md")));
+    assert_eq!(
+        read(&one.join("curves.jsonl")),
+        read(&two.join("curves.jsonl"))
+    );
+    assert_eq!(
+        Table::read(&one.join("summary.csv")).without(&SUMMARY_CT),
+        Table::read(&two.join("summary.csv")).without(&SUMMARY_CT)
+    );
+    assert_eq!(
+        read(&one.join("statistics.csv")),
+        read(&two.join("statistics.csv"))
+    );
+    assert_eq!(
+        read(&one.join("statistics.md")),
+        read(&two.join("statistics.md"))
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -698,17 +1013,46 @@ fn statistics_have_one_friedman_per_metric_and_every_pair() {
     let (_, outcomes, _) = run_ok(&cfg, dir.path(), false);
     assert_eq!(outcomes.len(), 3 * 2 * 2 * 3);
     let stats = Table::read(&dir.path().join("statistics.csv"));
-    assert_eq!(stats.header, strings(&["csp", "metric", "test", "a", "b", "statistic", "n", "p", "p_corrected"]));
-    let friedman: Vec<_> = stats.rows.iter().filter(|r| stats.get(r, "test") == "friedman").collect();
-    let wilcoxon: Vec<_> = stats.rows.iter().filter(|r| stats.get(r, "test") == "wilcoxon").collect();
+    assert_eq!(
+        stats.header,
+        strings(&[
+            "csp",
+            "metric",
+            "test",
+            "a",
+            "b",
+            "statistic",
+            "n",
+            "p",
+            "p_corrected"
+        ])
+    );
+    let friedman: Vec<_> = stats
+        .rows
+        .iter()
+        .filter(|r| stats.get(r, "test") == "friedman")
+        .collect();
+    let wilcoxon: Vec<_> = stats
+        .rows
+        .iter()
+        .filter(|r| stats.get(r, "test") == "wilcoxon")
+        .collect();
     assert_eq!(friedman.len(), 4, "{stats:?}");
     assert_eq!(wilcoxon.len(), 3 * 4, "{stats:?}");
     assert!(stats.rows.iter().all(|r| stats.get(r, "csp") == "0.5"));
     let metrics: BTreeSet<&str> = friedman.iter().map(|r| stats.get(r, "metric")).collect();
     assert_eq!(metrics, METRICS.into_iter().collect());
     for r in &friedman {
-        assert_eq!(stats.num(r, "n"), 12.0, "blocks: 2 maps × 2 starts × 3 seeds");
-        assert!(stats.get(r, "a").is_empty() && stats.get(r, "b").is_empty() && stats.get(r, "p_corrected").is_empty());
+        assert_eq!(
+            stats.num(r, "n"),
+            12.0,
+            "blocks: 2 maps × 2 starts × 3 seeds"
+        );
+        assert!(
+            stats.get(r, "a").is_empty()
+                && stats.get(r, "b").is_empty()
+                && stats.get(r, "p_corrected").is_empty()
+        );
     }
     for r in &wilcoxon {
         let (p, pc) = (stats.num(r, "p"), stats.num(r, "p_corrected"));
@@ -717,18 +1061,33 @@ fn statistics_have_one_friedman_per_metric_and_every_pair() {
     }
     // The statistics are a function of trials.csv: recompute the TNS Friedman statistic by hand.
     let trials = Table::read(&dir.path().join("trials.csv"));
-    let f_tns = friedman.iter().find(|r| stats.get(r, "metric") == "TNS").unwrap();
+    let f_tns = friedman
+        .iter()
+        .find(|r| stats.get(r, "metric") == "TNS")
+        .unwrap();
     let chi2 = friedman_by_hand(&trials, "tns", &["nf", "ub", "pb"]);
-    assert!((stats.num(f_tns, "statistic") - chi2).abs() < 1e-6, "Friedman χ² {} vs by hand {chi2}", stats.num(f_tns, "statistic"));
+    assert!(
+        (stats.num(f_tns, "statistic") - chi2).abs() < 1e-6,
+        "Friedman χ² {} vs by hand {chi2}",
+        stats.num(f_tns, "statistic")
+    );
 }
 
 /// Friedman χ² with tie correction (scipy's `friedmanchisquare`), blocks (map, start, seed).
 fn friedman_by_hand(t: &Table, col: &str, methods: &[&str]) -> f64 {
-    let mut blocks: std::collections::BTreeMap<(String, String, String), Vec<Option<f64>>> = Default::default();
+    let mut blocks: std::collections::BTreeMap<(String, String, String), Vec<Option<f64>>> =
+        Default::default();
     for r in &t.rows {
-        let mi = methods.iter().position(|m| *m == t.get(r, "method")).unwrap();
+        let mi = methods
+            .iter()
+            .position(|m| *m == t.get(r, "method"))
+            .unwrap();
         blocks
-            .entry((t.get(r, "map").into(), t.get(r, "start").into(), t.get(r, "seed").into()))
+            .entry((
+                t.get(r, "map").into(),
+                t.get(r, "start").into(),
+                t.get(r, "seed").into(),
+            ))
             .or_insert_with(|| vec![None; methods.len()])[mi] = Some(t.num(r, col));
     }
     let k = methods.len() as f64;
@@ -775,19 +1134,46 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
     let registry = StudyConfig::default().registry().unwrap();
     let spec = |policy: &str, seed: u64| {
         let map = paper_map(4).unwrap();
-        let starts = Corner::BottomRight.start_cells(map.height(), map.width()).to_vec();
-        let config = madenet_world::ScenarioConfig { comm_success_prob: 0.5, ..Default::default() };
-        TrialSpec { map, map_name: "test_4".into(), starts, config, policy: policy.into(), seed }
+        let starts = Corner::BottomRight
+            .start_cells(map.height(), map.width())
+            .to_vec();
+        let config = madenet_world::ScenarioConfig {
+            comm_success_prob: 0.5,
+            ..Default::default()
+        };
+        TrialSpec {
+            map,
+            map_name: "test_4".into(),
+            starts,
+            config,
+            policy: policy.into(),
+            seed,
+        }
     };
     let untimed = |mut r: TrialResult| {
         (r.timing.trial_s, r.timing.per_decision_s) = (0.0, 0.0);
         r
     };
-    for policy in ["nf", "ub", "pb", "random", "spread", "made-net", "made-net-paper", "made-net-dt", "dme-drl"] {
-        let mut first = Trial::with_registry(spec(policy, 11), &registry).unwrap().record_trajectory(true);
+    for policy in [
+        "nf",
+        "ub",
+        "pb",
+        "random",
+        "spread",
+        "made-net",
+        "made-net-paper",
+        "made-net-dt",
+        "dme-drl",
+    ] {
+        let mut first = Trial::with_registry(spec(policy, 11), &registry)
+            .unwrap()
+            .record_trajectory(true);
         while first.step() {}
         let restarted = first.restart(12, &registry).unwrap().run();
-        let fresh = Trial::with_registry(spec(policy, 12), &registry).unwrap().record_trajectory(true).run();
+        let fresh = Trial::with_registry(spec(policy, 12), &registry)
+            .unwrap()
+            .record_trajectory(true)
+            .run();
         assert!(!fresh.trajectory.is_empty());
         assert_eq!(untimed(restarted), untimed(fresh), "{policy}");
     }

@@ -113,7 +113,10 @@ mod log;
 mod plot;
 mod tfevents;
 
-pub use log::{read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, UpdateRow, ValidationRow};
+pub use log::{
+    read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter,
+    MaddpgUpdateRow, UpdateRow, ValidationRow,
+};
 pub use plot::{plot_training, DEFAULT_FIGURE, EWMA_ALPHA};
 pub use tfevents::{masked_crc32c, read_scalars, truncate_events, TfEventWriter, FILE_VERSION};
 

@@ -142,7 +142,8 @@ fn unit(name: &str, v: f64) -> Result<(), String> {
 
 impl LogRow for EpisodeRow {
     const FILE_NAME: &'static str = "episodes.csv";
-    const HEADER: &'static str = "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s";
+    const HEADER: &'static str =
+        "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s";
     const EXAMPLE: &'static str = "0,cen,1,1,0,0,0,0,0";
 
     fn check(&self) -> Result<(), String> {
@@ -169,7 +170,10 @@ impl LogRow for ValidationRow {
             return Err("trials is 0".into());
         }
         if self.completed > self.trials {
-            return Err(format!("completed ({}) exceeds trials ({})", self.completed, self.trials));
+            return Err(format!(
+                "completed ({}) exceeds trials ({})",
+                self.completed, self.trials
+            ));
         }
         Ok(())
     }
@@ -206,22 +210,39 @@ impl LogRow for MaddpgUpdateRow {
 /// # Errors
 ///
 /// As [`read_rows`], and [`TrainLogError::Io`] if the new file cannot be written.
-pub fn truncate_rows<R: LogRow>(path: &Path, keep: impl Fn(&R) -> bool) -> Result<(), TrainLogError> {
+pub fn truncate_rows<R: LogRow>(
+    path: &Path,
+    keep: impl Fn(&R) -> bool,
+) -> Result<(), TrainLogError> {
     if !path.exists() {
         return Ok(());
     }
     let rows: Vec<R> = read_rows(path)?;
     let tmp = path.with_extension("tmp");
-    let io = |source| TrainLogError::Io { action: "write", path: tmp.clone(), source };
+    let io = |source| TrainLogError::Io {
+        action: "write",
+        path: tmp.clone(),
+        source,
+    };
     let mut file = File::create(&tmp).map_err(io)?;
-    file.write_all(format!("{}\n", R::HEADER).as_bytes()).map_err(io)?;
-    let mut out = csv::WriterBuilder::new().has_headers(false).from_writer(file);
+    file.write_all(format!("{}\n", R::HEADER).as_bytes())
+        .map_err(io)?;
+    let mut out = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(file);
     for r in rows.iter().filter(|r| keep(r)) {
-        out.serialize(r).map_err(|e| io(std::io::Error::other(e.to_string())))?;
+        out.serialize(r)
+            .map_err(|e| io(std::io::Error::other(e.to_string())))?;
     }
-    let file = out.into_inner().map_err(|e| io(std::io::Error::other(e.to_string())))?;
+    let file = out
+        .into_inner()
+        .map_err(|e| io(std::io::Error::other(e.to_string())))?;
     file.sync_all().map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|source| TrainLogError::Io { action: "replace", path: path.to_path_buf(), source })
+    std::fs::rename(&tmp, path).map_err(|source| TrainLogError::Io {
+        action: "replace",
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Reads `episodes.csv` (see [`read_rows`]).
@@ -256,15 +277,24 @@ pub fn read_validation(path: impl AsRef<Path>) -> Result<Vec<ValidationRow>, Tra
 /// does not parse, has the wrong number of fields, or fails
 /// [`LogRow::check`].
 pub fn read_rows<R: LogRow>(path: &Path) -> Result<Vec<R>, TrainLogError> {
-    let bytes =
-        std::fs::read(path).map_err(|source| TrainLogError::Io { action: "read", path: path.to_path_buf(), source })?;
+    let bytes = std::fs::read(path).map_err(|source| TrainLogError::Io {
+        action: "read",
+        path: path.to_path_buf(),
+        source,
+    })?;
     // The 1-based line of an unterminated last line, if any.
     let partial_line = match bytes.last() {
         Some(&b) if b != b'\n' => Some(bytes.iter().filter(|&&c| c == b'\n').count() as u64 + 1),
         _ => None,
     };
-    let row_err = |line: u64, message: String| TrainLogError::Row { path: path.to_path_buf(), line, message };
-    let mut rdr = csv::ReaderBuilder::new().has_headers(false).from_reader(&bytes[..]);
+    let row_err = |line: u64, message: String| TrainLogError::Row {
+        path: path.to_path_buf(),
+        line,
+        message,
+    };
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(&bytes[..]);
     let mut records = rdr.records();
     let header = match records.next() {
         None => return Ok(Vec::new()),
@@ -276,7 +306,11 @@ pub fn read_rows<R: LogRow>(path: &Path) -> Result<Vec<R>, TrainLogError> {
         if partial_line == Some(1) && R::HEADER.starts_with(&found) {
             return Ok(Vec::new()); // the header is still being written
         }
-        return Err(TrainLogError::Header { path: path.to_path_buf(), found, expected: R::HEADER });
+        return Err(TrainLogError::Header {
+            path: path.to_path_buf(),
+            found,
+            expected: R::HEADER,
+        });
     }
     let columns: Vec<&str> = R::HEADER.split(',').collect();
     let mut rows = Vec::new();
@@ -285,9 +319,15 @@ pub fn read_rows<R: LogRow>(path: &Path) -> Result<Vec<R>, TrainLogError> {
             Ok(rec) => {
                 let line = rec.position().map_or(0, csv::Position::line);
                 let parsed = if rec.len() == columns.len() {
-                    rec.deserialize::<R>(None).map_err(|e| describe::<R>(&e, &rec, &columns))
+                    rec.deserialize::<R>(None)
+                        .map_err(|e| describe::<R>(&e, &rec, &columns))
                 } else {
-                    Err(format!("{} fields, expected {} ({})", rec.len(), columns.len(), R::HEADER))
+                    Err(format!(
+                        "{} fields, expected {} ({})",
+                        rec.len(),
+                        columns.len(),
+                        R::HEADER
+                    ))
                 };
                 (line, parsed.and_then(|r| r.check().map(|()| r)))
             }
@@ -313,14 +353,19 @@ fn describe<R: LogRow>(e: &csv::Error, rec: &csv::StringRecord, columns: &[&str]
     let csv::ErrorKind::Deserialize { err, .. } = e.kind() else {
         return csv_message(e);
     };
-    let column = err.field().and_then(|i| usize::try_from(i).ok()).or_else(|| {
-        let example: Vec<&str> = R::EXAMPLE.split(',').collect();
-        (0..columns.len().min(example.len())).find(|&i| {
-            let mut probe = example.clone();
-            probe[i] = rec.get(i).unwrap_or("");
-            csv::StringRecord::from(probe).deserialize::<R>(None).is_err()
-        })
-    });
+    let column = err
+        .field()
+        .and_then(|i| usize::try_from(i).ok())
+        .or_else(|| {
+            let example: Vec<&str> = R::EXAMPLE.split(',').collect();
+            (0..columns.len().min(example.len())).find(|&i| {
+                let mut probe = example.clone();
+                probe[i] = rec.get(i).unwrap_or("");
+                csv::StringRecord::from(probe)
+                    .deserialize::<R>(None)
+                    .is_err()
+            })
+        });
     match column {
         Some(i) => {
             let name = columns.get(i).copied().unwrap_or("?");
@@ -334,7 +379,9 @@ fn describe<R: LogRow>(e: &csv::Error, rec: &csv::StringRecord, columns: &[&str]
 fn csv_message(e: &csv::Error) -> String {
     match e.kind() {
         csv::ErrorKind::Utf8 { .. } => "not valid UTF-8".into(),
-        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => {
             format!("{len} fields, expected {expected_len}")
         }
         _ => e.to_string(),
@@ -379,7 +426,11 @@ impl<R: LogRow> LogWriter<R> {
     /// written; [`TrainLogError::Header`] if it has another header.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, TrainLogError> {
         let path = path.as_ref().to_path_buf();
-        let io = |source| TrainLogError::Io { action: "append to", path: path.clone(), source };
+        let io = |source| TrainLogError::Io {
+            action: "append to",
+            path: path.clone(),
+            source,
+        };
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|source| TrainLogError::Io {
                 action: "create",
@@ -387,8 +438,13 @@ impl<R: LogRow> LogWriter<R> {
                 source,
             })?;
         }
-        let mut file =
-            OpenOptions::new().read(true).write(true).create(true).truncate(false).open(&path).map_err(io)?;
+        let mut file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(io)?;
         let mut text = Vec::new();
         file.read_to_end(&mut text).map_err(io)?;
         // Keep the whole lines; check the header.
@@ -401,17 +457,28 @@ impl<R: LogRow> LogWriter<R> {
             first == R::HEADER
         };
         if !header_ok {
-            return Err(TrainLogError::Header { path: path.clone(), found: first.into_owned(), expected: R::HEADER });
+            return Err(TrainLogError::Header {
+                path: path.clone(),
+                found: first.into_owned(),
+                expected: R::HEADER,
+            });
         }
         if keep < text.len() {
             file.set_len(keep as u64).map_err(io)?;
         }
         file.seek(SeekFrom::End(0)).map_err(io)?;
         if keep == 0 {
-            file.write_all(format!("{}\n", R::HEADER).as_bytes()).map_err(io)?;
+            file.write_all(format!("{}\n", R::HEADER).as_bytes())
+                .map_err(io)?;
         }
-        let out = csv::WriterBuilder::new().has_headers(false).from_writer(file);
-        Ok(LogWriter { out, path, _row: PhantomData })
+        let out = csv::WriterBuilder::new()
+            .has_headers(false)
+            .from_writer(file);
+        Ok(LogWriter {
+            out,
+            path,
+            _row: PhantomData,
+        })
     }
 
     /// The file being written.
@@ -427,7 +494,10 @@ impl<R: LogRow> LogWriter<R> {
     /// [`TrainLogError::BadRow`] if the row fails [`LogRow::check`] (nothing
     /// is written), [`TrainLogError::Io`] if writing fails.
     pub fn append(&mut self, row: &R) -> Result<(), TrainLogError> {
-        row.check().map_err(|message| TrainLogError::BadRow { path: self.path.clone(), message })?;
+        row.check().map_err(|message| TrainLogError::BadRow {
+            path: self.path.clone(),
+            message,
+        })?;
         let io = |e: csv::Error| TrainLogError::Io {
             action: "write",
             path: self.path.clone(),
@@ -437,7 +507,11 @@ impl<R: LogRow> LogWriter<R> {
             },
         };
         self.out.serialize(row).map_err(io)?;
-        self.out.flush().map_err(|source| TrainLogError::Io { action: "write", path: self.path.clone(), source })
+        self.out.flush().map_err(|source| TrainLogError::Io {
+            action: "write",
+            path: self.path.clone(),
+            source,
+        })
     }
 }
 
@@ -454,7 +528,10 @@ mod zero_one {
         match u8::deserialize(d)? {
             0 => Ok(false),
             1 => Ok(true),
-            n => Err(de::Error::invalid_value(de::Unexpected::Unsigned(u64::from(n)), &"0 or 1")),
+            n => Err(de::Error::invalid_value(
+                de::Unexpected::Unsigned(u64::from(n)),
+                &"0 or 1",
+            )),
         }
     }
 }

@@ -61,7 +61,9 @@ pub fn plot_training(run_dir: &Path, out: &Path) -> Result<PathBuf, TrainLogErro
     }
     let val_path = run_dir.join(ValidationRow::FILE_NAME);
     let validation = match read_validation(&val_path) {
-        Err(TrainLogError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+        Err(TrainLogError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+            Vec::new()
+        }
         r => last_per_episode(r?, |r| r.episode),
     };
 
@@ -89,7 +91,11 @@ pub fn plot_training(run_dir: &Path, out: &Path) -> Result<PathBuf, TrainLogErro
         smooth_reward.push(series(&ewma_name, &ewma(&r, EWMA_ALPHA)));
         smooth_steps.push(series(&ewma_name, &ewma(&s, EWMA_ALPHA)));
         for (name, faint) in [(ewma_name, false), (raw_name, true)] {
-            styles.push(LineStyle { name, colour: colour(env), faint });
+            styles.push(LineStyle {
+                name,
+                colour: colour(env),
+                faint,
+            });
         }
     }
     // The smoothed curves on top of all raw values.
@@ -101,18 +107,37 @@ pub fn plot_training(run_dir: &Path, out: &Path) -> Result<PathBuf, TrainLogErro
         y_label: y_label.into(),
         series,
     };
-    let mut panels =
-        vec![panel("Team reward per episode", "Team reward", reward), panel("Steps per episode", "Steps", steps)];
+    let mut panels = vec![
+        panel("Team reward per episode", "Team reward", reward),
+        panel("Steps per episode", "Steps", steps),
+    ];
     if !validation.is_empty() {
         let trials = validation[0].trials;
         let name = if validation.iter().all(|v| v.trials == trials) {
-            format!("validation: mean of {trials} trial{}", if trials == 1 { "" } else { "s" })
+            format!(
+                "validation: mean of {trials} trial{}",
+                if trials == 1 { "" } else { "s" }
+            )
         } else {
             "validation: mean over trials".to_string()
         };
-        let points = validation.iter().map(|v| (v.episode as f64, v.mean_steps)).collect();
-        panels.push(panel("Validation", "Mean steps", vec![LineSeries { name: name.clone(), points }]));
-        styles.push(LineStyle { name, colour: VALIDATION_COLOUR, faint: false });
+        let points = validation
+            .iter()
+            .map(|v| (v.episode as f64, v.mean_steps))
+            .collect();
+        panels.push(panel(
+            "Validation",
+            "Mean steps",
+            vec![LineSeries {
+                name: name.clone(),
+                points,
+            }],
+        ));
+        styles.push(LineStyle {
+            name,
+            colour: VALIDATION_COLOUR,
+            faint: false,
+        });
     }
     let cols = panels.len();
     Ok(styled_line_panels(out, &panels, cols, &styles)?)

@@ -59,20 +59,30 @@ impl TfEventWriter {
     /// first record.
     pub fn create(dir: impl AsRef<Path>) -> io::Result<Self> {
         let dir = dir.as_ref();
-        std::fs::create_dir_all(dir)
-            .map_err(|e| io::Error::new(e.kind(), format!("cannot create {}: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir).map_err(|e| {
+            io::Error::new(e.kind(), format!("cannot create {}: {e}", dir.display()))
+        })?;
         let now = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_err(|e| io::Error::other(format!("system clock before 1970: {e}")))?;
         let base = format!("events.out.tfevents.{}.madenet", now.as_secs());
         let mut n = 0u32;
         let (file, path) = loop {
-            let name = if n == 0 { base.clone() } else { format!("{base}.{n}") };
+            let name = if n == 0 {
+                base.clone()
+            } else {
+                format!("{base}.{n}")
+            };
             let path = dir.join(name);
             match OpenOptions::new().write(true).create_new(true).open(&path) {
                 Ok(f) => break (f, path),
                 Err(e) if e.kind() == io::ErrorKind::AlreadyExists && n < 10_000 => n += 1,
-                Err(e) => return Err(io::Error::new(e.kind(), format!("cannot create {}: {e}", path.display()))),
+                Err(e) => {
+                    return Err(io::Error::new(
+                        e.kind(),
+                        format!("cannot create {}: {e}", path.display()),
+                    ))
+                }
             }
         };
         let mut w = TfEventWriter {
@@ -103,7 +113,13 @@ impl TfEventWriter {
     ///
     /// Any I/O error writing to the file (buffered: an error may also only
     /// surface at the next write or [`flush`](Self::flush)).
-    pub fn add_scalar(&mut self, tag: &str, value: f32, step: i64, wall_time: f64) -> io::Result<()> {
+    pub fn add_scalar(
+        &mut self,
+        tag: &str,
+        value: f32,
+        step: i64,
+        wall_time: f64,
+    ) -> io::Result<()> {
         // Summary.Value { tag = 1, simple_value = 2 }
         self.scratch.clear();
         put_bytes(&mut self.scratch, 1, tag.as_bytes());
@@ -136,7 +152,8 @@ impl TfEventWriter {
         self.out.write_all(&len)?;
         self.out.write_all(&masked_crc32c(&len).to_le_bytes())?;
         self.out.write_all(&self.event)?;
-        self.out.write_all(&masked_crc32c(&self.event).to_le_bytes())
+        self.out
+            .write_all(&masked_crc32c(&self.event).to_le_bytes())
     }
 }
 
@@ -152,7 +169,10 @@ impl TfEventWriter {
 /// # Errors
 ///
 /// Any I/O error reading, writing or renaming, naming the file.
-pub fn truncate_events(dir: impl AsRef<Path>, keep: impl Fn(&str, i64) -> bool) -> io::Result<usize> {
+pub fn truncate_events(
+    dir: impl AsRef<Path>,
+    keep: impl Fn(&str, i64) -> bool,
+) -> io::Result<usize> {
     let dir = dir.as_ref();
     let named = |e: io::Error, p: &Path| io::Error::new(e.kind(), format!("{}: {e}", p.display()));
     let entries = match std::fs::read_dir(dir) {
@@ -187,7 +207,12 @@ pub fn truncate_events(dir: impl AsRef<Path>, keep: impl Fn(&str, i64) -> bool) 
             std::fs::remove_file(&path).map_err(|e| named(e, &path))?;
         } else if changed {
             // Not named like an event file: a crash mid-rewrite leaves nothing TensorBoard reads.
-            let tmp = dir.join(format!(".{}.truncating", path.file_name().and_then(|n| n.to_str()).unwrap_or("events")));
+            let tmp = dir.join(format!(
+                ".{}.truncating",
+                path.file_name()
+                    .and_then(|n| n.to_str())
+                    .unwrap_or("events")
+            ));
             std::fs::write(&tmp, &kept).map_err(|e| named(e, &tmp))?;
             std::fs::rename(&tmp, &path).map_err(|e| named(e, &path))?;
         }
@@ -200,7 +225,12 @@ fn event_files(entries: std::fs::ReadDir) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = entries
         .filter_map(Result::ok)
         .map(|e| e.path())
-        .filter(|p| p.is_file() && p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("events.out.tfevents.")))
+        .filter(|p| {
+            p.is_file()
+                && p.file_name()
+                    .and_then(|n| n.to_str())
+                    .is_some_and(|n| n.starts_with("events.out.tfevents."))
+        })
         .collect();
     files.sort();
     files
@@ -284,7 +314,12 @@ fn proto_fields(b: &[u8]) -> Option<Vec<ProtoField<'_>>> {
         let size = match wire {
             WIRE_VARINT => {
                 let varint = read_varint(b, &mut at)?;
-                out.push(ProtoField { num, wire, varint, bytes: &[] });
+                out.push(ProtoField {
+                    num,
+                    wire,
+                    varint,
+                    bytes: &[],
+                });
                 continue;
             }
             WIRE_FIXED64 => 8,
@@ -293,7 +328,12 @@ fn proto_fields(b: &[u8]) -> Option<Vec<ProtoField<'_>>> {
             _ => return None,
         };
         let payload = b.get(at..at.checked_add(size)?)?;
-        out.push(ProtoField { num, wire, varint: 0, bytes: payload });
+        out.push(ProtoField {
+            num,
+            wire,
+            varint: 0,
+            bytes: payload,
+        });
         at += size;
     }
     Some(out)
@@ -304,13 +344,23 @@ fn proto_fields(b: &[u8]) -> Option<Vec<ProtoField<'_>>> {
 /// for any other record (the file-version event, or bytes that do not decode).
 fn scalar_event(event: &[u8]) -> Option<(&str, i64, f32)> {
     let fields = proto_fields(event)?;
-    let step = fields.iter().find(|f| f.is(2, WIRE_VARINT)).map_or(0, |f| f.varint as i64);
+    let step = fields
+        .iter()
+        .find(|f| f.is(2, WIRE_VARINT))
+        .map_or(0, |f| f.varint as i64);
     let summary = fields.iter().find(|f| f.is(5, WIRE_LEN))?.bytes;
-    let value = proto_fields(summary)?.into_iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
+    let value = proto_fields(summary)?
+        .into_iter()
+        .find(|f| f.is(1, WIRE_LEN))?
+        .bytes;
     let value = proto_fields(value)?;
     let tag = value.iter().find(|f| f.is(1, WIRE_LEN))?.bytes;
     let x = value.iter().find(|f| f.is(2, WIRE_FIXED32))?.bytes;
-    Some((std::str::from_utf8(tag).ok()?, step, f32::from_le_bytes(x.try_into().ok()?)))
+    Some((
+        std::str::from_utf8(tag).ok()?,
+        step,
+        f32::from_le_bytes(x.try_into().ok()?),
+    ))
 }
 
 /// The CRC-32C (Castagnoli) of `data`, masked as TFRecord stores it (a CRC
@@ -415,13 +465,17 @@ mod tests {
         let mut at = 0;
         let mut out = Vec::new();
         while at < file.len() {
-            assert!(file.len() - at >= 16, "truncated record header at byte {at}");
+            assert!(
+                file.len() - at >= 16,
+                "truncated record header at byte {at}"
+            );
             let len_bytes = &file[at..at + 8];
             let len = u64::from_le_bytes(len_bytes.try_into().unwrap()) as usize;
             let len_crc = u32::from_le_bytes(file[at + 8..at + 12].try_into().unwrap());
             assert_eq!(len_crc, masked_crc32c(len_bytes), "length CRC at byte {at}");
             let data = &file[at + 12..at + 12 + len];
-            let data_crc = u32::from_le_bytes(file[at + 12 + len..at + 16 + len].try_into().unwrap());
+            let data_crc =
+                u32::from_le_bytes(file[at + 12 + len..at + 16 + len].try_into().unwrap());
             assert_eq!(data_crc, masked_crc32c(data), "data CRC at byte {at}");
             out.push(data.to_vec());
             at += 16 + len;
@@ -432,7 +486,8 @@ mod tests {
     /// A decoded scalar event: (wall_time, step, tag, value).
     fn scalar(event: &[u8]) -> (f64, i64, String, f32) {
         let f = fields(event);
-        let [Field::Fixed64(1, wall), Field::Varint(2, step), Field::Len(5, summary)] = &f[..] else {
+        let [Field::Fixed64(1, wall), Field::Varint(2, step), Field::Len(5, summary)] = &f[..]
+        else {
             panic!("not a scalar event: {f:?}");
         };
         let s = fields(summary);
@@ -443,11 +498,17 @@ mod tests {
         let [Field::Len(1, tag), Field::Fixed32(2, x)] = &v[..] else {
             panic!("not a simple value: {v:?}");
         };
-        (f64::from_le_bytes(*wall), *step as i64, String::from_utf8(tag.clone()).unwrap(), f32::from_le_bytes(*x))
+        (
+            f64::from_le_bytes(*wall),
+            *step as i64,
+            String::from_utf8(tag.clone()).unwrap(),
+            f32::from_le_bytes(*x),
+        )
     }
 
     fn temp_dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("madenet-trainlog-tf-{}-{name}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("madenet-trainlog-tf-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         d
     }
@@ -480,7 +541,10 @@ mod tests {
         assert_eq!(enc(300), [0xac, 0x02]);
         assert_eq!(enc(u64::MAX).len(), 10);
         // int64 −1 is ten bytes of two's complement.
-        assert_eq!(enc(-1i64 as u64), [0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]);
+        assert_eq!(
+            enc(-1i64 as u64),
+            [0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01]
+        );
     }
 
     #[test]
@@ -514,11 +578,19 @@ mod tests {
     #[test]
     fn written_files_decode_to_the_version_and_the_scalars() {
         let dir = temp_dir("decode").join("nested");
-        let before = SystemTime::now().duration_since(UNIX_EPOCH).unwrap().as_secs_f64();
+        let before = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64();
         let mut w = TfEventWriter::create(&dir).unwrap();
         let name = w.path().file_name().unwrap().to_str().unwrap().to_string();
-        assert!(name.starts_with("events.out.tfevents.") && name.ends_with(".madenet"), "{name}");
-        let secs: u64 = name["events.out.tfevents.".len()..name.len() - ".madenet".len()].parse().unwrap();
+        assert!(
+            name.starts_with("events.out.tfevents.") && name.ends_with(".madenet"),
+            "{name}"
+        );
+        let secs: u64 = name["events.out.tfevents.".len()..name.len() - ".madenet".len()]
+            .parse()
+            .unwrap();
         assert!(secs as f64 >= before.floor());
 
         let long_tag = "validation/".repeat(20); // a length that needs a two-byte varint
@@ -563,10 +635,16 @@ mod tests {
         b.add_scalar("x", 2.0, 1, 2.0).unwrap();
         drop(a); // dropping flushes
         b.flush().unwrap();
-        let mut names: Vec<PathBuf> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+        let mut names: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
         names.sort();
         assert_eq!(names.len(), 2);
-        let values: Vec<f32> = names.iter().map(|p| scalar(&records(&std::fs::read(p).unwrap())[1]).3).collect();
+        let values: Vec<f32> = names
+            .iter()
+            .map(|p| scalar(&records(&std::fs::read(p).unwrap())[1]).3)
+            .collect();
         assert_eq!(values, [1.0, 2.0], "names sort in creation order");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -604,23 +682,58 @@ mod tests {
             _ => true,
         };
         let dropped = truncate_events(&dir, keep).unwrap();
-        assert_eq!(dropped, 2 + 2 + 1, "episodes 4 and 5, losses 3 and 4, episode 8");
-        let mut names: Vec<PathBuf> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+        assert_eq!(
+            dropped,
+            2 + 2 + 1,
+            "episodes 4 and 5, losses 3 and 4, episode 8"
+        );
+        let mut names: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
         names.sort();
-        assert_eq!(names.len(), 2, "the file left without scalars is gone: {names:?}");
+        assert_eq!(
+            names.len(),
+            2,
+            "the file left without scalars is gone: {names:?}"
+        );
         assert_eq!(names[1], second);
-        assert_eq!(std::fs::read(&second).unwrap(), whole, "the torn tail is cut off");
+        assert_eq!(
+            std::fs::read(&second).unwrap(),
+            whole,
+            "the torn tail is cut off"
+        );
         let recs = records(&std::fs::read(&names[0]).unwrap());
-        assert!(matches!(fields(&recs[0])[..], [Field::Fixed64(1, _), Field::Len(3, _)]), "the version record stays first");
-        let left: Vec<(String, i64)> = recs[1..].iter().map(|r| scalar(r)).map(|(_, step, tag, _)| (tag, step)).collect();
+        assert!(
+            matches!(
+                fields(&recs[0])[..],
+                [Field::Fixed64(1, _), Field::Len(3, _)]
+            ),
+            "the version record stays first"
+        );
+        let left: Vec<(String, i64)> = recs[1..]
+            .iter()
+            .map(|r| scalar(r))
+            .map(|(_, step, tag, _)| (tag, step))
+            .collect();
         let want: Vec<(String, i64)> = (0..4)
             .map(|e| ("episode/reward".to_string(), e))
             .chain((1..=2).map(|u| ("loss/dep".to_string(), u)))
             .chain([("other/x".to_string(), 99)])
             .collect();
         assert_eq!(left, want);
-        let read: Vec<(String, i64)> = read_scalars(&dir).unwrap().into_iter().map(|(tag, step, _)| (tag, step)).collect();
-        assert_eq!(read, want.iter().cloned().chain([("other/y".to_string(), 1)]).collect::<Vec<_>>());
+        let read: Vec<(String, i64)> = read_scalars(&dir)
+            .unwrap()
+            .into_iter()
+            .map(|(tag, step, _)| (tag, step))
+            .collect();
+        assert_eq!(
+            read,
+            want.iter()
+                .cloned()
+                .chain([("other/y".to_string(), 1)])
+                .collect::<Vec<_>>()
+        );
         assert_eq!(read_scalars(&dir).unwrap()[0].2, 0.0);
         // Nothing more to drop: the file is left as it is.
         let before = std::fs::read(&names[0]).unwrap();
@@ -638,7 +751,9 @@ mod tests {
         std::fs::write(&file, b"x").unwrap();
         let err = TfEventWriter::create(&file).unwrap_err().to_string();
         assert!(err.contains(&file.display().to_string()), "{err}");
-        let err = TfEventWriter::create(file.join("below")).unwrap_err().to_string();
+        let err = TfEventWriter::create(file.join("below"))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("not-a-dir"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

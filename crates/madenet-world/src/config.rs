@@ -100,38 +100,55 @@ pub enum ConfigError {
     #[error("{path}: {message}")]
     File { path: String, message: String },
     #[error("config field `{field}`: {message}")]
-    Field { field: &'static str, message: String },
+    Field {
+        field: &'static str,
+        message: String,
+    },
 }
 
 fn field(field: &'static str, message: impl Into<String>) -> ConfigError {
-    ConfigError::Field { field, message: message.into() }
+    ConfigError::Field {
+        field,
+        message: message.into(),
+    }
 }
 
 fn check_prob(name: &'static str, p: f64) -> Result<(), ConfigError> {
     if (0.0..=1.0).contains(&p) {
         Ok(())
     } else {
-        Err(field(name, format!("must be a probability in [0, 1], got {p}")))
+        Err(field(
+            name,
+            format!("must be a probability in [0, 1], got {p}"),
+        ))
     }
 }
 
 impl ScenarioConfig {
     /// Reads a TOML file; errors name the file and the offending key.
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| ConfigError::File { path: path.display().to_string(), message: e.to_string() })?;
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError::File {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
         Self::from_toml_str(&text).map_err(|e| match e {
-            ConfigError::File { message, .. } => ConfigError::File { path: path.display().to_string(), message },
-            ConfigError::Field { field, message } => {
-                ConfigError::File { path: path.display().to_string(), message: format!("field `{field}`: {message}") }
-            }
+            ConfigError::File { message, .. } => ConfigError::File {
+                path: path.display().to_string(),
+                message,
+            },
+            ConfigError::Field { field, message } => ConfigError::File {
+                path: path.display().to_string(),
+                message: format!("field `{field}`: {message}"),
+            },
         })
     }
 
     /// Parses TOML text and validates it.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        let cfg: ScenarioConfig = toml::from_str(text)
-            .map_err(|e| ConfigError::File { path: "<toml>".into(), message: describe_toml_error(text, &e) })?;
+        let cfg: ScenarioConfig = toml::from_str(text).map_err(|e| ConfigError::File {
+            path: "<toml>".into(),
+            message: describe_toml_error(text, &e),
+        })?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -142,10 +159,16 @@ impl ScenarioConfig {
             return Err(field("num_robots", "must be at least 1"));
         }
         if self.num_robots > MAX_ROBOTS {
-            return Err(field("num_robots", format!("at most {MAX_ROBOTS}, got {}", self.num_robots)));
+            return Err(field(
+                "num_robots",
+                format!("at most {MAX_ROBOTS}, got {}", self.num_robots),
+            ));
         }
         if self.sensing_range < 1 {
-            return Err(field("sensing_range", format!("must be at least 1, got {}", self.sensing_range)));
+            return Err(field(
+                "sensing_range",
+                format!("must be at least 1, got {}", self.sensing_range),
+            ));
         }
         check_prob("sensor_miss_prob", self.sensor_miss_prob)?;
         check_prob("motion_success_prob", self.motion_success_prob)?;
@@ -154,10 +177,19 @@ impl ScenarioConfig {
             return Err(field("step_cap", "must be at least 1"));
         }
         if !(self.cell_size > 0.0 && self.cell_size.is_finite()) {
-            return Err(field("cell_size", format!("must be a positive number of metres, got {}", self.cell_size)));
+            return Err(field(
+                "cell_size",
+                format!(
+                    "must be a positive number of metres, got {}",
+                    self.cell_size
+                ),
+            ));
         }
         check_prob("discretize.occupied_prob", self.discretize.occupied_prob)?;
-        check_prob("discretize.obstacle_fraction", self.discretize.obstacle_fraction)?;
+        check_prob(
+            "discretize.obstacle_fraction",
+            self.discretize.obstacle_fraction,
+        )?;
         if self.goal_count == Some(0) {
             return Err(field("goal_count", "must be at least 1"));
         }
@@ -174,8 +206,9 @@ impl ScenarioConfig {
     /// only when the sensor window fits the map (2·d_s+1 ≤ √|X|); on smaller maps |G| is its
     /// minimum, |I| ("to provide each robot with a unique location to explore").
     pub fn goal_count_for(&self, cells: usize) -> usize {
-        self.goal_count
-            .unwrap_or_else(|| goal_count_eq3(cells, self.sensing_range, self.num_robots).unwrap_or(self.num_robots))
+        self.goal_count.unwrap_or_else(|| {
+            goal_count_eq3(cells, self.sensing_range, self.num_robots).unwrap_or(self.num_robots)
+        })
     }
 }
 
@@ -203,7 +236,10 @@ fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
     let start = span.start.min(text.len());
     let line_no = text[..start].matches('\n').count() + 1;
     let line = text.lines().nth(line_no - 1).unwrap_or("");
-    let key = line.split_once('=').map(|(k, _)| k.trim().trim_matches('"').to_string()).filter(|k| !k.is_empty());
+    let key = line
+        .split_once('=')
+        .map(|(k, _)| k.trim().trim_matches('"').to_string())
+        .filter(|k| !k.is_empty());
     let table = text
         .lines()
         .take(line_no - 1)
@@ -234,14 +270,23 @@ mod tests {
 
     #[test]
     fn toml_round_trip_and_errors() {
-        let cfg = ScenarioConfig { comm_success_prob: 0.5, ..Default::default() };
+        let cfg = ScenarioConfig {
+            comm_success_prob: 0.5,
+            ..Default::default()
+        };
         let text = toml::to_string(&cfg).unwrap();
         assert_eq!(ScenarioConfig::from_toml_str(&text).unwrap(), cfg);
-        let e = ScenarioConfig::from_toml_str("comm_success_prob = 1.5").unwrap_err().to_string();
+        let e = ScenarioConfig::from_toml_str("comm_success_prob = 1.5")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("comm_success_prob"), "{e}");
-        let e = ScenarioConfig::from_toml_str("sensing_rnage = 3").unwrap_err().to_string();
+        let e = ScenarioConfig::from_toml_str("sensing_rnage = 3")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("sensing_rnage"), "{e}");
-        let e = ScenarioConfig::from_toml_str("step_cap = \"x\"").unwrap_err().to_string();
+        let e = ScenarioConfig::from_toml_str("step_cap = \"x\"")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("line 1"), "{e}");
     }
 }

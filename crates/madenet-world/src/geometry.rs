@@ -20,7 +20,17 @@ pub enum Move {
 
 impl Move {
     /// All nine moves, `Stay` first; the order is the index used by primitive-action APIs.
-    pub const ALL: [Move; 9] = [Move::Stay, Move::N, Move::NE, Move::E, Move::SE, Move::S, Move::SW, Move::W, Move::NW];
+    pub const ALL: [Move; 9] = [
+        Move::Stay,
+        Move::N,
+        Move::NE,
+        Move::E,
+        Move::SE,
+        Move::S,
+        Move::SW,
+        Move::W,
+        Move::NW,
+    ];
 
     /// (Δrow, Δcol); north is up (row − 1).
     pub const fn delta(self) -> (i32, i32) {
@@ -70,7 +80,12 @@ impl Move {
 /// The movement rule: the target must be passable; under [`Movement::NoCornerCutting`] a
 /// diagonal step also needs both orthogonal neighbours passable. `Stay` is always allowed.
 #[inline]
-pub fn step_allowed(passable: impl Fn(Pos) -> bool, from: Pos, m: Move, movement: Movement) -> bool {
+pub fn step_allowed(
+    passable: impl Fn(Pos) -> bool,
+    from: Pos,
+    m: Move,
+    movement: Movement,
+) -> bool {
     let to = m.apply(from);
     if m == Move::Stay {
         return true;
@@ -113,7 +128,11 @@ pub fn bresenham_cells(from: Pos, to: Pos) -> impl ExactSizeIterator<Item = Pos>
             err -= 2 * major;
         }
         err += 2 * minor;
-        let (r, c) = if swap { (k * sr, m * sc) } else { (m * sr, k * sc) };
+        let (r, c) = if swap {
+            (k * sr, m * sc)
+        } else {
+            (m * sr, k * sc)
+        };
         Pos::new(from.row + r, from.col + c)
     })
 }
@@ -142,12 +161,20 @@ pub fn ray_clear(blocked: impl Fn(Pos) -> bool, from: Pos, to: Pos, movement: Mo
 /// A diagonal step from `a` to `b` passes between two blocked cells touching at a corner.
 #[inline]
 pub fn squeezed(blocked: impl Fn(Pos) -> bool, a: Pos, b: Pos) -> bool {
-    a.row != b.row && a.col != b.col && blocked(Pos::new(a.row, b.col)) && blocked(Pos::new(b.row, a.col))
+    a.row != b.row
+        && a.col != b.col
+        && blocked(Pos::new(a.row, b.col))
+        && blocked(Pos::new(b.row, a.col))
 }
 
 /// Line of sight between two cells: the ray from either end reaches the other (symmetric by
 /// construction; the two rays differ only on exact ties).
-pub fn line_of_sight(blocked: impl Fn(Pos) -> bool + Copy, a: Pos, b: Pos, movement: Movement) -> bool {
+pub fn line_of_sight(
+    blocked: impl Fn(Pos) -> bool + Copy,
+    a: Pos,
+    b: Pos,
+    movement: Movement,
+) -> bool {
     ray_clear(blocked, a, b, movement) || ray_clear(blocked, b, a, movement)
 }
 
@@ -189,7 +216,10 @@ impl ViewPattern {
                     for &p in &line {
                         let corners = (squeeze_blocks && prev.row != p.row && prev.col != p.col)
                             .then_some(((prev.row, p.col), (p.row, prev.col)));
-                        steps.push(RayStep { cell: (p.row, p.col), corners });
+                        steps.push(RayStep {
+                            cell: (p.row, p.col),
+                            corners,
+                        });
                         prev = p;
                     }
                     targets.push((dr, dc));
@@ -197,7 +227,12 @@ impl ViewPattern {
                 }
             }
         }
-        ViewPattern { radius, targets, start, steps }
+        ViewPattern {
+            radius,
+            targets,
+            start,
+            steps,
+        }
     }
 
     pub fn radius(&self) -> i32 {
@@ -259,13 +294,21 @@ mod tests {
     #[test]
     fn moves_and_corner_rule() {
         for m in Move::ALL {
-            assert_eq!(Move::between(Pos::new(5, 5), m.apply(Pos::new(5, 5))), Some(m));
+            assert_eq!(
+                Move::between(Pos::new(5, 5), m.apply(Pos::new(5, 5))),
+                Some(m)
+            );
         }
         // Obstacle at (0,1): the diagonal (0,0) -> (1,1) cuts its corner.
         let passable = |p: Pos| p != Pos::new(0, 1) && p.row >= 0 && p.col >= 0;
         let strict = Movement::NoCornerCutting;
         assert!(!step_allowed(passable, Pos::new(0, 0), Move::SE, strict));
-        assert!(step_allowed(passable, Pos::new(0, 0), Move::SE, Movement::CornerCutting));
+        assert!(step_allowed(
+            passable,
+            Pos::new(0, 0),
+            Move::SE,
+            Movement::CornerCutting
+        ));
         assert!(step_allowed(passable, Pos::new(0, 0), Move::S, strict));
         assert!(!step_allowed(passable, Pos::new(0, 0), Move::E, strict));
     }
@@ -277,7 +320,12 @@ mod tests {
         v.for_each_visible(Pos::new(10, 10), |_| true, |_| false, |_| n += 1);
         assert_eq!(n, 80); // 9×9 window minus the robot's own cell
         let mut corner = 0;
-        v.for_each_visible(Pos::new(0, 0), |p| p.row >= 0 && p.col >= 0, |_| false, |_| corner += 1);
+        v.for_each_visible(
+            Pos::new(0, 0),
+            |p| p.row >= 0 && p.col >= 0,
+            |_| false,
+            |_| corner += 1,
+        );
         assert_eq!(corner, 24);
     }
 }

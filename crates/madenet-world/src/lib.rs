@@ -23,5 +23,7 @@ pub mod rng;
 pub mod world;
 
 pub use config::{goal_count_eq3, CandidateRule, ConfigError, ScenarioConfig};
-pub use geometry::{bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern};
+pub use geometry::{
+    bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern,
+};
 pub use world::{Observation, ScenarioError, Visibility, World};

@@ -40,8 +40,14 @@ mod tests {
 
     #[test]
     fn streams_are_reproducible_and_distinct() {
-        let a: Vec<u64> = (0..4).map(|_| 0).scan(stream(7, "motion", 0), |r, _: u64| Some(r.random::<u64>())).collect();
-        let b: Vec<u64> = (0..4).map(|_| 0).scan(stream(7, "motion", 0), |r, _: u64| Some(r.random::<u64>())).collect();
+        let a: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(stream(7, "motion", 0), |r, _: u64| Some(r.random::<u64>()))
+            .collect();
+        let b: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(stream(7, "motion", 0), |r, _: u64| Some(r.random::<u64>()))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(derive_seed(7, "motion", 0), derive_seed(7, "motion", 1));
         assert_ne!(derive_seed(7, "motion", 0), derive_seed(7, "sensor", 0));

@@ -1,12 +1,12 @@
 //! The world: ground truth, robot poses, and the per-timestep pipeline
 //! motion → sensing → contact & communication.
 
-use std::sync::Arc;
 use crate::config::{ConfigError, ScenarioConfig};
 use crate::geometry::{line_of_sight, step_allowed, Move, ViewPattern};
 use crate::rng::{stream, Rng};
 use madenet_map::{OccGrid, Occupancy, Pos};
 use rand::{Rng as _, RngExt};
+use std::sync::Arc;
 
 /// Why a scenario cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -14,7 +14,11 @@ pub enum ScenarioError {
     #[error(transparent)]
     Config(#[from] ConfigError),
     #[error("start cell {pos} of robot {robot} is {what}")]
-    BadStart { robot: usize, pos: Pos, what: &'static str },
+    BadStart {
+        robot: usize,
+        pos: Pos,
+        what: &'static str,
+    },
     #[error("{robots} robots but {starts} start cells (config field `num_robots`)")]
     StartCount { robots: usize, starts: usize },
 }
@@ -88,25 +92,49 @@ pub struct Visibility {
 
 impl World {
     /// Builds the world and performs the initial sensing and contact stage (t = 0).
-    pub fn new(truth: OccGrid, starts: &[Pos], cfg: ScenarioConfig, seed: u64) -> Result<Self, ScenarioError> {
+    pub fn new(
+        truth: OccGrid,
+        starts: &[Pos],
+        cfg: ScenarioConfig,
+        seed: u64,
+    ) -> Result<Self, ScenarioError> {
         cfg.validate()?;
         let n = cfg.num_robots;
         if starts.len() < n {
-            return Err(ScenarioError::StartCount { robots: n, starts: starts.len() });
+            return Err(ScenarioError::StartCount {
+                robots: n,
+                starts: starts.len(),
+            });
         }
         let starts = &starts[..n];
         for (i, &p) in starts.iter().enumerate() {
             if !truth.in_bounds(p) {
-                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "outside the map" });
+                return Err(ScenarioError::BadStart {
+                    robot: i,
+                    pos: p,
+                    what: "outside the map",
+                });
             }
             if truth.get(p) != Occupancy::Free {
-                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "not free" });
+                return Err(ScenarioError::BadStart {
+                    robot: i,
+                    pos: p,
+                    what: "not free",
+                });
             }
             if starts[..i].contains(&p) {
-                return Err(ScenarioError::BadStart { robot: i, pos: p, what: "shared with another robot" });
+                return Err(ScenarioError::BadStart {
+                    robot: i,
+                    pos: p,
+                    what: "shared with another robot",
+                });
             }
         }
-        let blocked: Vec<bool> = truth.cells().iter().map(|&c| c != Occupancy::Free).collect();
+        let blocked: Vec<bool> = truth
+            .cells()
+            .iter()
+            .map(|&c| c != Occupancy::Free)
+            .collect();
         let view = ViewPattern::new(cfg.sensing_range, cfg.movement);
         let cells = truth.len();
         let mut w = World {
@@ -118,7 +146,12 @@ impl World {
             known: 0,
             explorable: vec![false; cells],
             explorable_count: 0,
-            obs: (0..n).map(|i| Observation { robot: i, ..Default::default() }).collect(),
+            obs: (0..n)
+                .map(|i| Observation {
+                    robot: i,
+                    ..Default::default()
+                })
+                .collect(),
             contacts: Vec::new(),
             exchanges: Vec::new(),
             executed: vec![Move::Stay; n],
@@ -177,7 +210,10 @@ impl World {
         self.team_map.fill(Occupancy::Unknown);
         self.known = 0;
         for (i, o) in self.obs.iter_mut().enumerate() {
-            *o = Observation { robot: i, ..Default::default() };
+            *o = Observation {
+                robot: i,
+                ..Default::default()
+            };
         }
         self.contacts.clear();
         self.exchanges.clear();
@@ -229,7 +265,9 @@ impl World {
             let p = self.truth.pos(i);
             for m in &Move::ALL[1..] {
                 let q = m.apply(p);
-                if self.truth.in_bounds(q) && !(strict && crate::geometry::squeezed(|c| self.is_blocked(c), p, q)) {
+                if self.truth.in_bounds(q)
+                    && !(strict && crate::geometry::squeezed(|c| self.is_blocked(c), p, q))
+                {
                     explorable[self.truth.index(q)] = true;
                 }
             }
@@ -270,14 +308,31 @@ impl World {
         targets.extend_from_slice(&self.positions);
         for i in 0..n {
             let at = self.positions[i];
-            let (positions, blocked, truth, movement) = (&self.positions, &self.blocked, &self.truth, self.cfg.movement);
+            let (positions, blocked, truth, movement) = (
+                &self.positions,
+                &self.blocked,
+                &self.truth,
+                self.cfg.movement,
+            );
             // Obstacles make corners; robots only block the cell they hold.
             let legal = |m: Move| {
                 let to = m.apply(at);
-                step_allowed(|q| truth.in_bounds(q) && !blocked[truth.index(q)], at, m, movement)
-                    && (m == Move::Stay || !positions.iter().enumerate().any(|(j, &pj)| j != i && pj == to))
+                step_allowed(
+                    |q| truth.in_bounds(q) && !blocked[truth.index(q)],
+                    at,
+                    m,
+                    movement,
+                ) && (m == Move::Stay
+                    || !positions
+                        .iter()
+                        .enumerate()
+                        .any(|(j, &pj)| j != i && pj == to))
             };
-            let intent = if legal(intents[i]) { intents[i] } else { Move::Stay };
+            let intent = if legal(intents[i]) {
+                intents[i]
+            } else {
+                Move::Stay
+            };
             // Always two draws per robot and step, so streams stay aligned across policies.
             let slip = self.rng_motion[i].random::<f64>() >= self.cfg.motion_success_prob;
             let pick = self.rng_motion[i].random::<f64>();
@@ -392,7 +447,10 @@ impl World {
                 self.visible_from(self.truth.pos(i));
             }
         }
-        let v = Arc::new(Visibility { range: std::mem::take(&mut self.visible_range), cells: std::mem::take(&mut self.visible) });
+        let v = Arc::new(Visibility {
+            range: std::mem::take(&mut self.visible_range),
+            cells: std::mem::take(&mut self.visible),
+        });
         self.shared_visible = Some(v.clone());
         v
     }
@@ -415,9 +473,12 @@ impl World {
         if self.visible_range[i] == NOT_CAST {
             let start = self.visible.len() as u32;
             let (truth, blocked, visible) = (&self.truth, &self.blocked, &mut self.visible);
-            self.view.for_each_visible(at, |q| truth.in_bounds(q), |q| blocked[truth.index(q)], |q| {
-                visible.push((q, truth.get(q), truth.index(q) as u32))
-            });
+            self.view.for_each_visible(
+                at,
+                |q| truth.in_bounds(q),
+                |q| blocked[truth.index(q)],
+                |q| visible.push((q, truth.get(q), truth.index(q) as u32)),
+            );
             self.visible_range[i] = (start, self.visible.len() as u32);
         }
         self.visible_range[i]
@@ -444,7 +505,9 @@ impl World {
                     self.dropout[k] -= 1;
                 }
                 let (a, b) = (self.positions[i], self.positions[j]);
-                if a.chebyshev(b) > ds || !line_of_sight(|q| self.is_blocked(q), a, b, self.cfg.movement) {
+                if a.chebyshev(b) > ds
+                    || !line_of_sight(|q| self.is_blocked(q), a, b, self.cfg.movement)
+                {
                     continue;
                 }
                 self.contacts.push((i, j));

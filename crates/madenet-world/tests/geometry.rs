@@ -36,9 +36,14 @@ impl Grid {
     }
     fn visible(&self, view: &ViewPattern, at: Pos) -> BTreeSet<Pos> {
         let mut out = BTreeSet::new();
-        view.for_each_visible(at, |q| self.in_bounds(q), |q| self.is_blocked(q), |q| {
-            assert!(out.insert(q), "cell {q} visited twice");
-        });
+        view.for_each_visible(
+            at,
+            |q| self.in_bounds(q),
+            |q| self.is_blocked(q),
+            |q| {
+                assert!(out.insert(q), "cell {q} visited twice");
+            },
+        );
         out
     }
 }
@@ -46,7 +51,10 @@ impl Grid {
 fn from_rows(rows: &[&str]) -> Grid {
     let n = rows.len();
     assert!(rows.iter().all(|r| r.len() == n), "square grids only");
-    let blocked = rows.iter().flat_map(|r| r.chars().map(|c| c == '#')).collect();
+    let blocked = rows
+        .iter()
+        .flat_map(|r| r.chars().map(|c| c == '#'))
+        .collect();
     Grid { n, blocked }
 }
 
@@ -160,7 +168,17 @@ fn picture(grid: &Grid, at: Pos, movement: Movement) -> Vec<String> {
     let view = ViewPattern::new(4, movement);
     let seen = grid.visible(&view, at);
     (0..grid.n as i32)
-        .map(|r| (0..grid.n as i32).map(|c| if seen.contains(&Pos::new(r, c)) { 'V' } else { '.' }).collect())
+        .map(|r| {
+            (0..grid.n as i32)
+                .map(|c| {
+                    if seen.contains(&Pos::new(r, c)) {
+                        'V'
+                    } else {
+                        '.'
+                    }
+                })
+                .collect()
+        })
         .collect()
 }
 
@@ -181,17 +199,40 @@ fn wall_in_front_blocks_cells_behind_but_is_itself_visible() {
     for movement in RULES {
         let view = ViewPattern::new(4, movement);
         let seen = grid.visible(&view, at);
-        assert!(seen.contains(&Pos::new(4, 5)), "the wall cell itself is seen ({movement:?})");
+        assert!(
+            seen.contains(&Pos::new(4, 5)),
+            "the wall cell itself is seen ({movement:?})"
+        );
         for c in 6..=8 {
-            assert!(!seen.contains(&Pos::new(4, c)), "(4,{c}) is behind the wall ({movement:?})");
-            assert!(!ray_clear(|p| grid.is_blocked(p), at, Pos::new(4, c), movement));
+            assert!(
+                !seen.contains(&Pos::new(4, c)),
+                "(4,{c}) is behind the wall ({movement:?})"
+            );
+            assert!(!ray_clear(
+                |p| grid.is_blocked(p),
+                at,
+                Pos::new(4, c),
+                movement
+            ));
         }
         // The exact shadow. Bresenham ties never step the minor axis, so rays to (±1, +2),
         // (±1, +3), (±1, +4) and (±2, +4) (offsets from the robot) all pass the wall first.
-        let hidden: BTreeSet<Pos> = [(0, 2), (0, 3), (0, 4), (1, 2), (1, 3), (1, 4), (-1, 2), (-1, 3), (-1, 4), (2, 4), (-2, 4)]
-            .iter()
-            .map(|&(dr, dc)| Pos::new(at.row + dr, at.col + dc))
-            .collect();
+        let hidden: BTreeSet<Pos> = [
+            (0, 2),
+            (0, 3),
+            (0, 4),
+            (1, 2),
+            (1, 3),
+            (1, 4),
+            (-1, 2),
+            (-1, 3),
+            (-1, 4),
+            (2, 4),
+            (-2, 4),
+        ]
+        .iter()
+        .map(|&(dr, dc)| Pos::new(at.row + dr, at.col + dc))
+        .collect();
         let mut want = BTreeSet::new();
         for r in 0..9 {
             for c in 0..9 {
@@ -224,7 +265,10 @@ fn full_wall_hides_the_far_side() {
     for movement in RULES {
         let seen = grid.visible(&ViewPattern::new(4, movement), at);
         for r in 0..9 {
-            assert!(seen.contains(&Pos::new(r, 6)), "wall cell ({r},6) seen ({movement:?})");
+            assert!(
+                seen.contains(&Pos::new(r, 6)),
+                "wall cell ({r},6) seen ({movement:?})"
+            );
             assert!(!seen.contains(&Pos::new(r, 7)) && !seen.contains(&Pos::new(r, 8)));
         }
         // 9 rows × 7 columns (0..=6) minus the robot's own cell.
@@ -253,8 +297,14 @@ fn diagonal_squeeze_blocks_only_without_corner_cutting() {
     let strict = grid.visible(&ViewPattern::new(4, Movement::NoCornerCutting), at);
     let cutting = grid.visible(&ViewPattern::new(4, Movement::CornerCutting), at);
     for &p in &ne {
-        assert!(!strict.contains(&p), "{p} must be hidden behind the squeeze");
-        assert!(cutting.contains(&p), "{p} must be visible through the squeeze with corner cutting");
+        assert!(
+            !strict.contains(&p),
+            "{p} must be hidden behind the squeeze"
+        );
+        assert!(
+            cutting.contains(&p),
+            "{p} must be visible through the squeeze with corner cutting"
+        );
         assert!(!ray_clear(blocked, at, p, Movement::NoCornerCutting));
         assert!(ray_clear(blocked, at, p, Movement::CornerCutting));
         assert!(!line_of_sight(blocked, at, p, Movement::NoCornerCutting));
@@ -266,8 +316,18 @@ fn diagonal_squeeze_blocks_only_without_corner_cutting() {
     }
     // The robot can step through the squeeze only with corner cutting, like the light.
     let passable = |p: Pos| grid.in_bounds(p) && !grid.is_blocked(p);
-    assert!(!step_allowed(passable, at, Move::NE, Movement::NoCornerCutting));
-    assert!(step_allowed(passable, at, Move::NE, Movement::CornerCutting));
+    assert!(!step_allowed(
+        passable,
+        at,
+        Move::NE,
+        Movement::NoCornerCutting
+    ));
+    assert!(step_allowed(
+        passable,
+        at,
+        Move::NE,
+        Movement::CornerCutting
+    ));
     // A single obstacle at a corner (no squeeze) does not block the diagonal under either rule.
     let single = from_rows(&[
         ".........",
@@ -288,7 +348,17 @@ fn diagonal_squeeze_blocks_only_without_corner_cutting() {
 
 #[test]
 fn window_is_clipped_at_the_grid_edge() {
-    let grid = from_rows(&[".........", ".........", ".........", ".........", ".........", ".........", ".........", ".........", "........."]);
+    let grid = from_rows(&[
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+        ".........",
+    ]);
     for movement in RULES {
         let view = ViewPattern::new(4, movement);
         // Corner: 5×5 minus itself; edge middle: 9×5 minus itself.

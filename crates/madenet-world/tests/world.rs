@@ -19,7 +19,13 @@ fn grid(rows: &[&str]) -> OccGrid {
         .iter()
         .flat_map(|r| {
             assert_eq!(r.len(), w);
-            r.chars().map(|c| if c == '#' { Occupancy::Obstacle } else { Occupancy::Free })
+            r.chars().map(|c| {
+                if c == '#' {
+                    Occupancy::Obstacle
+                } else {
+                    Occupancy::Free
+                }
+            })
         })
         .collect();
     OccGrid::from_cells(h, w, cells)
@@ -31,7 +37,12 @@ fn open(h: usize, w: usize) -> OccGrid {
 
 /// Deterministic motion and perfect sensing.
 fn exact(n: usize) -> ScenarioConfig {
-    ScenarioConfig { num_robots: n, motion_success_prob: 1.0, sensor_miss_prob: 0.0, ..Default::default() }
+    ScenarioConfig {
+        num_robots: n,
+        motion_success_prob: 1.0,
+        sensor_miss_prob: 0.0,
+        ..Default::default()
+    }
 }
 
 fn p(r: i32, c: i32) -> Pos {
@@ -63,11 +74,17 @@ fn moving_into_an_obstacle_or_off_the_map_stays() {
 fn diagonal_past_a_corner_depends_on_the_movement_rule() {
     // (0,1) is an obstacle: (0,0) -> (1,1) cuts its corner; (1,0) is free.
     let truth = grid(&[".#.", "...", "..."]);
-    let cut = ScenarioConfig { movement: Movement::CornerCutting, ..exact(1) };
+    let cut = ScenarioConfig {
+        movement: Movement::CornerCutting,
+        ..exact(1)
+    };
     let mut w = World::new(truth.clone(), &[p(0, 0)], cut, 1).unwrap();
     w.step(&[Move::SE]);
     assert_eq!(w.positions(), &[p(1, 1)]);
-    let strict = ScenarioConfig { movement: Movement::NoCornerCutting, ..exact(1) };
+    let strict = ScenarioConfig {
+        movement: Movement::NoCornerCutting,
+        ..exact(1)
+    };
     let mut w = World::new(truth, &[p(0, 0)], strict, 1).unwrap();
     w.step(&[Move::SE]);
     assert_eq!(w.positions(), &[p(0, 0)]);
@@ -148,7 +165,10 @@ fn distances_are_one_per_straight_and_sqrt2_per_diagonal_step() {
     assert!((d[0] - (3.0 + 2.0 * SQRT2)).abs() < 1e-12, "{d:?}");
     assert!((d[1] - (3.0 + 2.0 * SQRT2)).abs() < 1e-12, "{d:?}");
     // Metres: cell_size scales the distance.
-    let cfg = ScenarioConfig { cell_size: 2.5, ..exact(1) };
+    let cfg = ScenarioConfig {
+        cell_size: 2.5,
+        ..exact(1)
+    };
     let mut w = World::new(open(4, 4), &[p(0, 0)], cfg, 1).unwrap();
     w.step(&[Move::SE]);
     w.step(&[Move::E]);
@@ -160,7 +180,11 @@ fn legal(truth: &OccGrid, positions: &[Pos], i: usize, m: Move, movement: Moveme
     let at = positions[i];
     let to = m.apply(at);
     step_allowed(|q| truth.is_free(q), at, m, movement)
-        && (m == Move::Stay || !positions.iter().enumerate().any(|(j, &pj)| j != i && pj == to))
+        && (m == Move::Stay
+            || !positions
+                .iter()
+                .enumerate()
+                .any(|(j, &pj)| j != i && pj == to))
 }
 
 #[test]
@@ -170,24 +194,39 @@ fn failed_motion_never_reaches_the_intended_cell_and_stays_legal() {
             let mut gen = GeneratorConfig::for_size(14, 14);
             gen.keep_free = vec![p(0, 0), p(0, 13), p(13, 0)];
             let truth = generate_with_movement(&gen, seed, movement).unwrap();
-            let cfg = ScenarioConfig { motion_success_prob: 0.0, movement, ..exact(3) };
+            let cfg = ScenarioConfig {
+                motion_success_prob: 0.0,
+                movement,
+                ..exact(3)
+            };
             let mut w = World::new(truth.clone(), &gen.keep_free, cfg, seed).unwrap();
             let mut intents_rng = stream(seed, "test/intents", 0);
             let mut moved_by_slip = 0;
             for _ in 0..150 {
                 let before = w.positions().to_vec();
-                let intents: Vec<Move> = (0..3).map(|_| Move::ALL[intents_rng.random_range(0..9)]).collect();
+                let intents: Vec<Move> = (0..3)
+                    .map(|_| Move::ALL[intents_rng.random_range(0..9)])
+                    .collect();
                 w.step(&intents);
                 let after = w.positions().to_vec();
                 for i in 0..3 {
                     let ex = w.executed_moves()[i];
                     assert_eq!(Some(ex), Move::between(before[i], after[i]));
-                    assert!(legal(&truth, &before, i, ex, movement), "illegal executed move {ex:?} of robot {i} at {}", before[i]);
-                    if intents[i] == Move::Stay || !legal(&truth, &before, i, intents[i], movement) {
+                    assert!(
+                        legal(&truth, &before, i, ex, movement),
+                        "illegal executed move {ex:?} of robot {i} at {}",
+                        before[i]
+                    );
+                    if intents[i] == Move::Stay || !legal(&truth, &before, i, intents[i], movement)
+                    {
                         // A robot that does not (legally) try to move does not slip by default.
                         assert_eq!(after[i], before[i], "robot {i} intent {:?}", intents[i]);
                     } else {
-                        assert_ne!(after[i], intents[i].apply(before[i]), "robot {i} reached its intended cell");
+                        assert_ne!(
+                            after[i],
+                            intents[i].apply(before[i]),
+                            "robot {i} reached its intended cell"
+                        );
                         moved_by_slip += (ex != Move::Stay) as usize;
                     }
                 }
@@ -201,7 +240,10 @@ fn failed_motion_never_reaches_the_intended_cell_and_stays_legal() {
 
 #[test]
 fn slip_picks_every_other_legal_move_uniformly() {
-    let cfg = ScenarioConfig { motion_success_prob: 0.0, ..exact(1) };
+    let cfg = ScenarioConfig {
+        motion_success_prob: 0.0,
+        ..exact(1)
+    };
     let mut w = World::new(open(81, 81), &[p(40, 40)], cfg, 5).unwrap();
     let mut counts: BTreeMap<(Move, Move), usize> = BTreeMap::new();
     let mut per_intent: BTreeMap<Move, usize> = BTreeMap::new();
@@ -228,7 +270,10 @@ fn slip_picks_every_other_legal_move_uniformly() {
             } else {
                 // Uniform over the 8 other moves (Stay included).
                 let expect = total as f64 / 8.0;
-                assert!((c as f64 - expect).abs() < 0.5 * expect, "intent {intent:?}: {m:?} {c} of {total}: {counts:?}");
+                assert!(
+                    (c as f64 - expect).abs() < 0.5 * expect,
+                    "intent {intent:?}: {m:?} {c} of {total}: {counts:?}"
+                );
             }
         }
     }
@@ -236,13 +281,20 @@ fn slip_picks_every_other_legal_move_uniformly() {
 
 #[test]
 fn slip_when_staying_moves_a_staying_robot() {
-    let off = ScenarioConfig { motion_success_prob: 0.0, ..exact(1) };
+    let off = ScenarioConfig {
+        motion_success_prob: 0.0,
+        ..exact(1)
+    };
     let mut w = World::new(open(9, 9), &[p(4, 4)], off, 2).unwrap();
     for _ in 0..30 {
         w.step(&[Move::Stay]);
     }
     assert_eq!(w.positions(), &[p(4, 4)]);
-    let on = ScenarioConfig { motion_success_prob: 0.0, slip_when_staying: true, ..exact(1) };
+    let on = ScenarioConfig {
+        motion_success_prob: 0.0,
+        slip_when_staying: true,
+        ..exact(1)
+    };
     let mut w = World::new(open(9, 9), &[p(4, 4)], on, 2).unwrap();
     for _ in 0..30 {
         w.step(&[Move::Stay]);
@@ -256,21 +308,47 @@ fn slip_when_staying_moves_a_staying_robot() {
 
 fn visible_from(truth: &OccGrid, view: &ViewPattern, at: Pos) -> BTreeSet<Pos> {
     let mut out = BTreeSet::new();
-    view.for_each_visible(at, |q| truth.in_bounds(q), |q| !truth.is_free(q), |q| {
-        out.insert(q);
-    });
+    view.for_each_visible(
+        at,
+        |q| truth.in_bounds(q),
+        |q| !truth.is_free(q),
+        |q| {
+            out.insert(q);
+        },
+    );
     out
 }
 
 fn random_world_strategy() -> impl Strategy<Value = (OccGrid, Vec<Pos>, Movement, i32)> {
-    (5usize..=14, 5usize..=14, 0.0f64..0.5, 1usize..=3, any::<bool>(), 1i32..=4).prop_flat_map(
-        |(h, w, density, n, strict, ds)| {
-            (prop::collection::vec(0.0f64..1.0, h * w), prop::collection::vec(any::<prop::sample::Index>(), n)).prop_map(
-                move |(u, picks)| {
-                    let cells: Vec<Occupancy> =
-                        u.iter().map(|&x| if x < density { Occupancy::Obstacle } else { Occupancy::Free }).collect();
+    (
+        5usize..=14,
+        5usize..=14,
+        0.0f64..0.5,
+        1usize..=3,
+        any::<bool>(),
+        1i32..=4,
+    )
+        .prop_flat_map(|(h, w, density, n, strict, ds)| {
+            (
+                prop::collection::vec(0.0f64..1.0, h * w),
+                prop::collection::vec(any::<prop::sample::Index>(), n),
+            )
+                .prop_map(move |(u, picks)| {
+                    let cells: Vec<Occupancy> = u
+                        .iter()
+                        .map(|&x| {
+                            if x < density {
+                                Occupancy::Obstacle
+                            } else {
+                                Occupancy::Free
+                            }
+                        })
+                        .collect();
                     let truth = OccGrid::from_cells(h, w, cells);
-                    let mut free: Vec<Pos> = (0..h * w).map(|i| truth.pos(i)).filter(|&q| truth.is_free(q)).collect();
+                    let mut free: Vec<Pos> = (0..h * w)
+                        .map(|i| truth.pos(i))
+                        .filter(|&q| truth.is_free(q))
+                        .collect();
                     let mut starts = Vec::new();
                     for ix in picks {
                         if free.is_empty() {
@@ -278,12 +356,14 @@ fn random_world_strategy() -> impl Strategy<Value = (OccGrid, Vec<Pos>, Movement
                         }
                         starts.push(free.remove(ix.index(free.len())));
                     }
-                    let movement = if strict { Movement::NoCornerCutting } else { Movement::CornerCutting };
+                    let movement = if strict {
+                        Movement::NoCornerCutting
+                    } else {
+                        Movement::CornerCutting
+                    };
                     (truth, starts, movement, ds)
-                },
-            )
-        },
-    )
+                })
+        })
 }
 
 /// Explorable cells recomputed independently: BFS with `OccGrid::can_step_with`, then the
@@ -409,12 +489,18 @@ fn always_missing_sensor_knows_only_the_robots_cells() {
     let mut gen = GeneratorConfig::for_size(16, 16);
     gen.keep_free = vec![p(0, 0), p(0, 1), p(1, 0)];
     let truth = generate_with_movement(&gen, 4, Movement::CornerCutting).unwrap();
-    let cfg = ScenarioConfig { sensor_miss_prob: 1.0, ..exact(3) };
+    let cfg = ScenarioConfig {
+        sensor_miss_prob: 1.0,
+        ..exact(3)
+    };
     let mut w = World::new(truth.clone(), &gen.keep_free, cfg, 9).unwrap();
     let mut visited: BTreeSet<Pos> = gen.keep_free.iter().copied().collect();
     let mut rng = stream(9, "test/intents", 2);
     for step in 0..40 {
-        let known: BTreeSet<Pos> = (0..truth.len()).filter(|&k| w.team_map()[k].is_known()).map(|k| truth.pos(k)).collect();
+        let known: BTreeSet<Pos> = (0..truth.len())
+            .filter(|&k| w.team_map()[k].is_known())
+            .map(|k| truth.pos(k))
+            .collect();
         assert_eq!(known, visited, "step {step}");
         assert_eq!(w.known_count(), visited.len());
         for i in 0..3 {
@@ -439,7 +525,16 @@ fn explorable_of_a_walled_pocket() {
         "........#....",
         "........#....",
     ]);
-    let w = World::new(truth.clone(), &[p(2, 2)], ScenarioConfig { sensing_range: 6, ..exact(1) }, 1).unwrap();
+    let w = World::new(
+        truth.clone(),
+        &[p(2, 2)],
+        ScenarioConfig {
+            sensing_range: 6,
+            ..exact(1)
+        },
+        1,
+    )
+    .unwrap();
     let want = explorable_reference(&truth, &[p(2, 2)], Movement::CornerCutting, 6);
     assert_eq!(w.explorable(), &want[..]);
     // 5 rows × 9 columns (0..=8, wall included).
@@ -449,13 +544,31 @@ fn explorable_of_a_walled_pocket() {
     }
     // A diagonal wall seals under NoCornerCutting only.
     let diag = grid(&["..#", ".#.", "#.."]);
-    let cut = World::new(diag.clone(), &[p(0, 0)], ScenarioConfig { sensing_range: 1, ..exact(1) }, 1).unwrap();
+    let cut = World::new(
+        diag.clone(),
+        &[p(0, 0)],
+        ScenarioConfig {
+            sensing_range: 1,
+            ..exact(1)
+        },
+        1,
+    )
+    .unwrap();
     assert_eq!(cut.explorable_count(), 9);
-    let strict = ScenarioConfig { sensing_range: 1, movement: Movement::NoCornerCutting, ..exact(1) };
+    let strict = ScenarioConfig {
+        sensing_range: 1,
+        movement: Movement::NoCornerCutting,
+        ..exact(1)
+    };
     let w = World::new(diag, &[p(0, 0)], strict, 1).unwrap();
     // Reachable (0,0),(0,1),(1,0); from them radius 1 sees the three wall cells, and (1,1).
-    let explorable: BTreeSet<Pos> = (0..9).filter(|&k| w.explorable()[k]).map(|k| Pos::new(k as i32 / 3, k as i32 % 3)).collect();
-    let want: BTreeSet<Pos> = [p(0, 0), p(0, 1), p(1, 0), p(1, 1), p(0, 2), p(2, 0)].into_iter().collect();
+    let explorable: BTreeSet<Pos> = (0..9)
+        .filter(|&k| w.explorable()[k])
+        .map(|k| Pos::new(k as i32 / 3, k as i32 % 3))
+        .collect();
+    let want: BTreeSet<Pos> = [p(0, 0), p(0, 1), p(1, 0), p(1, 1), p(0, 2), p(2, 0)]
+        .into_iter()
+        .collect();
     assert_eq!(explorable, want);
 }
 
@@ -464,7 +577,11 @@ fn explorable_of_a_walled_pocket() {
 // ---------------------------------------------------------------------------------------
 
 fn comm_cfg(csp: f64) -> ScenarioConfig {
-    ScenarioConfig { num_robots: 2, comm_success_prob: csp, ..exact(2) }
+    ScenarioConfig {
+        num_robots: 2,
+        comm_success_prob: csp,
+        ..exact(2)
+    }
 }
 
 #[test]
@@ -524,7 +641,11 @@ fn dropout_after_a_failure_lasts_exactly_dropout_steps() {
                 found = Some(w.t());
                 break;
             }
-            assert_eq!(w.exchanges(), &[(0, 1)], "with no dropout running an exchange either succeeds or fails");
+            assert_eq!(
+                w.exchanges(),
+                &[(0, 1)],
+                "with no dropout running an exchange either succeeds or fails"
+            );
             w.step(&[Move::Stay, Move::Stay]);
         }
         let Some(t) = found else { continue };
@@ -532,15 +653,26 @@ fn dropout_after_a_failure_lasts_exactly_dropout_steps() {
             w.step(&[Move::Stay, Move::Stay]);
             assert_eq!(w.t(), t + k as usize);
             assert_eq!(w.contacts(), &[(0, 1)], "still in contact");
-            assert!(w.exchanges().is_empty(), "seed {seed}: exchange during dropout at t + {k}");
-            assert_eq!(w.observation(0).teammates, vec![(1, starts[1])], "detection works during dropout");
+            assert!(
+                w.exchanges().is_empty(),
+                "seed {seed}: exchange during dropout at t + {k}"
+            );
+            assert_eq!(
+                w.observation(0).teammates,
+                vec![(1, starts[1])],
+                "detection works during dropout"
+            );
             assert_eq!(w.dropout_remaining(0, 1), 7 - k, "seed {seed}, t + {k}");
             assert_eq!(w.dropout_remaining(1, 0), 7 - k);
         }
         // t + 8: the pair tries again: either it exchanges or a new dropout starts.
         w.step(&[Move::Stay, Move::Stay]);
         let tried = w.exchanges() == [(0, 1)] || w.dropout_remaining(0, 1) == 7;
-        assert!(tried, "seed {seed}: no exchange attempt at t + 8 (remaining {})", w.dropout_remaining(0, 1));
+        assert!(
+            tried,
+            "seed {seed}: no exchange attempt at t + 8 (remaining {})",
+            w.dropout_remaining(0, 1)
+        );
         checked += 1;
         if checked >= 10 {
             break;
@@ -551,7 +683,10 @@ fn dropout_after_a_failure_lasts_exactly_dropout_steps() {
 
 #[test]
 fn dropout_counts_down_out_of_contact() {
-    let cfg = ScenarioConfig { comm_success_prob: 0.0, ..comm_cfg(0.0) };
+    let cfg = ScenarioConfig {
+        comm_success_prob: 0.0,
+        ..comm_cfg(0.0)
+    };
     let mut w = World::new(open(12, 12), &[p(5, 2), p(5, 6)], cfg, 1).unwrap();
     assert_eq!(w.dropout_remaining(0, 1), 7);
     w.step(&[Move::Stay, Move::E]); // now 5 apart: out of range
@@ -566,7 +701,10 @@ fn dropout_counts_down_out_of_contact() {
 
 #[test]
 fn dropout_steps_config_is_used() {
-    let cfg = ScenarioConfig { dropout_steps: 3, ..comm_cfg(0.0) };
+    let cfg = ScenarioConfig {
+        dropout_steps: 3,
+        ..comm_cfg(0.0)
+    };
     let mut w = World::new(open(12, 12), &[p(5, 3), p(5, 5)], cfg, 1).unwrap();
     let mut remaining = Vec::new();
     for _ in 0..9 {
@@ -582,7 +720,10 @@ fn out_of_range_or_without_line_of_sight_never_talks() {
     for (a, b) in [(p(5, 1), p(5, 6)), (p(1, 1), p(6, 3)), (p(0, 0), p(5, 5))] {
         let mut w = World::new(open(12, 12), &[a, b], comm_cfg(1.0), 1).unwrap();
         for _ in 0..10 {
-            assert!(w.contacts().is_empty() && w.exchanges().is_empty(), "{a} {b}");
+            assert!(
+                w.contacts().is_empty() && w.exchanges().is_empty(),
+                "{a} {b}"
+            );
             assert!(w.observation(0).teammates.is_empty() && w.observation(1).teammates.is_empty());
             w.step(&[Move::Stay, Move::Stay]);
         }
@@ -605,7 +746,12 @@ fn out_of_range_or_without_line_of_sight_never_talks() {
         assert!(w.observation(0).teammates.is_empty());
         w.step(&[Move::Stay, Move::Stay]);
     }
-    assert!(!line_of_sight(|q| !walled.is_free(q), p(2, 4), p(2, 8), Movement::CornerCutting));
+    assert!(!line_of_sight(
+        |q| !walled.is_free(q),
+        p(2, 4),
+        p(2, 8),
+        Movement::CornerCutting
+    ));
 }
 
 #[test]
@@ -614,9 +760,27 @@ fn diagonal_squeeze_blocks_contact_only_without_corner_cutting() {
     // The ray (0,4) -> (3,1) is a pure diagonal through (1,3), (2,2); its step (1,3) -> (2,2)
     // squeezes between the obstacles (1,2) and (2,3).
     let (a, b) = (p(0, 4), p(3, 1));
-    let cut = World::new(truth.clone(), &[a, b], ScenarioConfig { movement: Movement::CornerCutting, ..comm_cfg(1.0) }, 1).unwrap();
+    let cut = World::new(
+        truth.clone(),
+        &[a, b],
+        ScenarioConfig {
+            movement: Movement::CornerCutting,
+            ..comm_cfg(1.0)
+        },
+        1,
+    )
+    .unwrap();
     assert_eq!(cut.contacts(), &[(0, 1)]);
-    let strict = World::new(truth, &[a, b], ScenarioConfig { movement: Movement::NoCornerCutting, ..comm_cfg(1.0) }, 1).unwrap();
+    let strict = World::new(
+        truth,
+        &[a, b],
+        ScenarioConfig {
+            movement: Movement::NoCornerCutting,
+            ..comm_cfg(1.0)
+        },
+        1,
+    )
+    .unwrap();
     assert!(strict.contacts().is_empty());
     assert!(strict.observation(0).teammates.is_empty());
 }
@@ -640,7 +804,10 @@ fn run_world(seed: u64, intents_seed: u64) -> Vec<Snapshot> {
     let mut gen = GeneratorConfig::for_size(20, 20);
     gen.keep_free = vec![p(0, 0), p(1, 0), p(0, 1)];
     let truth = generate_with_movement(&gen, 77, Movement::CornerCutting).unwrap();
-    let cfg = ScenarioConfig { comm_success_prob: 0.5, ..Default::default() };
+    let cfg = ScenarioConfig {
+        comm_success_prob: 0.5,
+        ..Default::default()
+    };
     let mut w = World::new(truth, &gen.keep_free, cfg, seed).unwrap();
     let mut rng = stream(intents_seed, "test/intents", 0);
     let mut out = Vec::new();
@@ -654,7 +821,9 @@ fn run_world(seed: u64, intents_seed: u64) -> Vec<Snapshot> {
             exchanges: w.exchanges().to_vec(),
             executed: w.executed_moves().to_vec(),
             distances: w.distances().to_vec(),
-            dropout: w.dropout_remaining(0, 1) + 100 * w.dropout_remaining(0, 2) + 10_000 * w.dropout_remaining(1, 2),
+            dropout: w.dropout_remaining(0, 1)
+                + 100 * w.dropout_remaining(0, 2)
+                + 10_000 * w.dropout_remaining(1, 2),
         });
     }
     out
@@ -668,7 +837,10 @@ fn same_seed_same_world_different_seed_differs() {
     let c = run_world(6, 1);
     assert_ne!(a, c);
     // Positions alone differ too (slip with p = 0.1 over 150 robot-steps).
-    assert!(a.iter().zip(&c).any(|(x, y)| x.positions != y.positions || x.obs != y.obs));
+    assert!(a
+        .iter()
+        .zip(&c)
+        .any(|(x, y)| x.positions != y.positions || x.obs != y.obs));
     // Cloning mid-trial continues identically.
     let mut gen = GeneratorConfig::for_size(20, 20);
     gen.keep_free = vec![p(0, 0), p(1, 0), p(0, 1)];
@@ -705,15 +877,23 @@ fn every_invalid_field_is_named() {
         ("motion_success_prob", |c| c.motion_success_prob = f64::NAN),
         ("comm_success_prob", |c| c.comm_success_prob = 2.0),
         ("comm_success_prob", |c| c.comm_success_prob = f64::NAN),
-        ("comm_success_prob", |c| c.comm_success_prob = f64::NEG_INFINITY),
+        ("comm_success_prob", |c| {
+            c.comm_success_prob = f64::NEG_INFINITY
+        }),
         ("step_cap", |c| c.step_cap = 0),
         ("cell_size", |c| c.cell_size = 0.0),
         ("cell_size", |c| c.cell_size = -1.0),
         ("cell_size", |c| c.cell_size = f64::NAN),
         ("cell_size", |c| c.cell_size = f64::INFINITY),
-        ("discretize.occupied_prob", |c| c.discretize.occupied_prob = 1.2),
-        ("discretize.occupied_prob", |c| c.discretize.occupied_prob = f64::NAN),
-        ("discretize.obstacle_fraction", |c| c.discretize.obstacle_fraction = -0.5),
+        ("discretize.occupied_prob", |c| {
+            c.discretize.occupied_prob = 1.2
+        }),
+        ("discretize.occupied_prob", |c| {
+            c.discretize.occupied_prob = f64::NAN
+        }),
+        ("discretize.obstacle_fraction", |c| {
+            c.discretize.obstacle_fraction = -0.5
+        }),
         ("goal_count", |c| c.goal_count = Some(0)),
         ("plan_horizon", |c| c.plan_horizon = 0),
     ];
@@ -722,7 +902,10 @@ fn every_invalid_field_is_named() {
         cfg.validate().expect("defaults are valid");
         edit(&mut cfg);
         let e = cfg.validate().expect_err(field).to_string();
-        assert!(e.contains(&format!("`{field}`")), "error for {field} does not name it: {e}");
+        assert!(
+            e.contains(&format!("`{field}`")),
+            "error for {field} does not name it: {e}"
+        );
         // Every other field name is absent (the message names the right field only).
         for (other, _) in &cases {
             if other != field && !field.contains(other) && !other.contains(field) {
@@ -730,7 +913,9 @@ fn every_invalid_field_is_named() {
             }
         }
         // The world refuses it too, with the same field name.
-        let err = World::new(open(10, 10), &[p(0, 0), p(0, 1), p(0, 2)], cfg.clone(), 1).err().expect("World::new accepts an invalid config");
+        let err = World::new(open(10, 10), &[p(0, 0), p(0, 1), p(0, 2)], cfg.clone(), 1)
+            .err()
+            .expect("World::new accepts an invalid config");
         assert!(err.to_string().contains(field), "{err}");
     }
     // Edge values are valid.
@@ -764,13 +949,23 @@ fn toml_errors_name_the_field() {
         ("cell_size = 0.0", "cell_size"),
         ("goal_count = 0", "goal_count"),
         ("plan_horizon = 0", "plan_horizon"),
-        ("[discretize]\noccupied_prob = 3.0", "discretize.occupied_prob"),
+        (
+            "[discretize]\noccupied_prob = 3.0",
+            "discretize.occupied_prob",
+        ),
         ("dropout_step = 3", "dropout_step"),
     ] {
-        let e = ScenarioConfig::from_toml_str(text).expect_err(text).to_string();
-        assert!(e.contains(field), "TOML {text:?}: error does not name {field}: {e}");
+        let e = ScenarioConfig::from_toml_str(text)
+            .expect_err(text)
+            .to_string();
+        assert!(
+            e.contains(field),
+            "TOML {text:?}: error does not name {field}: {e}"
+        );
     }
-    let cfg = ScenarioConfig::from_toml_str("movement = \"no-corner-cutting\"\ncomm_success_prob = 0.5").unwrap();
+    let cfg =
+        ScenarioConfig::from_toml_str("movement = \"no-corner-cutting\"\ncomm_success_prob = 0.5")
+            .unwrap();
     assert_eq!(cfg.movement, Movement::NoCornerCutting);
     assert_eq!(cfg.comm_success_prob, 0.5);
     assert_eq!(cfg.num_robots, 3);
@@ -786,23 +981,41 @@ fn toml_type_errors_name_the_field() {
         ("sensor_miss_prob = true", "sensor_miss_prob"),
         ("[discretize]\noccupied_prob = \"high\"", "occupied_prob"),
     ] {
-        let e = ScenarioConfig::from_toml_str(text).expect_err(text).to_string();
+        let e = ScenarioConfig::from_toml_str(text)
+            .expect_err(text)
+            .to_string();
         if !e.contains(field) {
             unnamed.push(format!("{text:?} -> {e}"));
         }
     }
-    assert!(unnamed.is_empty(), "errors not naming their field:\n{}", unnamed.join("\n"));
+    assert!(
+        unnamed.is_empty(),
+        "errors not naming their field:\n{}",
+        unnamed.join("\n")
+    );
 }
 
 #[test]
 fn start_errors_are_reported() {
     let truth = grid(&["..#", "...", "..."]);
-    let e = World::new(truth.clone(), &[p(0, 0), p(0, 2), p(1, 1)], exact(3), 1).err().unwrap().to_string();
+    let e = World::new(truth.clone(), &[p(0, 0), p(0, 2), p(1, 1)], exact(3), 1)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("not free") && e.contains("robot 1"), "{e}");
-    let e = World::new(truth.clone(), &[p(0, 0), p(0, 0), p(1, 1)], exact(3), 1).err().unwrap().to_string();
+    let e = World::new(truth.clone(), &[p(0, 0), p(0, 0), p(1, 1)], exact(3), 1)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("shared"), "{e}");
-    let e = World::new(truth.clone(), &[p(0, 0), p(5, 0), p(1, 1)], exact(3), 1).err().unwrap().to_string();
+    let e = World::new(truth.clone(), &[p(0, 0), p(5, 0), p(1, 1)], exact(3), 1)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("outside"), "{e}");
-    let e = World::new(truth, &[p(0, 0)], exact(3), 1).err().unwrap().to_string();
+    let e = World::new(truth, &[p(0, 0)], exact(3), 1)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("num_robots"), "{e}");
 }

@@ -46,19 +46,38 @@ pub struct BatchArgs {
 pub fn run(a: BatchArgs) -> Result<()> {
     let registry = crate::registry(a.model.as_deref())?;
     if !registry.names().contains(&a.policy) {
-        bail!("unknown policy `{}` (field `--policy`); known policies: {}", a.policy, registry.names().join(", "));
+        bail!(
+            "unknown policy `{}` (field `--policy`); known policies: {}",
+            a.policy,
+            registry.names().join(", ")
+        );
     }
-    let specs = plan(&a.maps, &a.starts, &a.csp, a.seeds, a.seed_base, a.config.as_deref(), &a.policy)?;
+    let specs = plan(
+        &a.maps,
+        &a.starts,
+        &a.csp,
+        a.seeds,
+        a.seed_base,
+        a.config.as_deref(),
+        &a.policy,
+    )?;
     let bar = ProgressBar::new(specs.len() as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}").expect("valid template"));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build()?;
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
+            .expect("valid template"),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()?;
     let started = std::time::Instant::now();
     let results: Vec<Result<(String, TrialResult)>> = pool.install(|| {
         specs
             .into_par_iter()
             .map(|(start, spec)| {
                 let label = format!("map {}, start {start}", spec.map_name);
-                let r = Trial::with_registry(spec, &registry).with_context(|| label)?.run();
+                let r = Trial::with_registry(spec, &registry)
+                    .with_context(|| label)?
+                    .run();
                 bar.inc(1);
                 Ok((start, r))
             })
@@ -68,9 +87,18 @@ pub fn run(a: BatchArgs) -> Result<()> {
     let elapsed = started.elapsed();
     let results: Vec<(String, TrialResult)> = results.into_iter().collect::<Result<_>>()?;
     write_csv(&a.out, &results)?;
-    out!("{} trials in {:.2} s → {}", results.len(), elapsed.as_secs_f64(), a.out.display())?;
+    out!(
+        "{} trials in {:.2} s → {}",
+        results.len(),
+        elapsed.as_secs_f64(),
+        a.out.display()
+    )?;
     for &csp in &a.csp {
-        let sel: Vec<&TrialResult> = results.iter().map(|(_, r)| r).filter(|r| r.comm_success_prob == csp).collect();
+        let sel: Vec<&TrialResult> = results
+            .iter()
+            .map(|(_, r)| r)
+            .filter(|r| r.comm_success_prob == csp)
+            .collect();
         let n = sel.len().max(1) as f64;
         let mean = |f: &dyn Fn(&TrialResult) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
         out!(
@@ -102,7 +130,11 @@ pub fn plan(
         if m == "paper" {
             maps.extend((1..=PAPER_MAP_COUNT).map(MapSource::Paper));
         } else {
-            maps.push(m.parse::<MapSource>().map_err(anyhow::Error::msg).context("--maps")?);
+            maps.push(
+                m.parse::<MapSource>()
+                    .map_err(anyhow::Error::msg)
+                    .context("--maps")?,
+            );
         }
     }
     let mut starts = Vec::new();
@@ -110,7 +142,11 @@ pub fn plan(
         if s == "all" {
             starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
         } else {
-            starts.push(s.parse::<StartSpec>().map_err(anyhow::Error::msg).context("--starts")?);
+            starts.push(
+                s.parse::<StartSpec>()
+                    .map_err(anyhow::Error::msg)
+                    .context("--starts")?,
+            );
         }
     }
     let mut specs = Vec::new();
@@ -148,8 +184,21 @@ pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> R
     let tmp = path.with_extension("csv.tmp");
     let file = std::fs::File::create(&tmp).with_context(|| format!("{}", tmp.display()))?;
     let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
-    let mut header: Vec<String> =
-        ["map", "start", "policy", "csp", "seed", "completed", "tns", "ttd", "noli", "ofv", "explored"].map(String::from).to_vec();
+    let mut header: Vec<String> = [
+        "map",
+        "start",
+        "policy",
+        "csp",
+        "seed",
+        "completed",
+        "tns",
+        "ttd",
+        "noli",
+        "ofv",
+        "explored",
+    ]
+    .map(String::from)
+    .to_vec();
     header.extend(COVERAGE_LEVELS.iter().map(|n| format!("to_{n}")));
     header.extend(["trial_s", "decisions", "per_decision_s"].map(String::from));
     w.write_record(&header)?;
@@ -168,11 +217,21 @@ pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> R
             format!("{:.6}", m.ofv),
             format!("{:.6}", m.explored),
         ];
-        row.extend(m.steps_to.iter().map(|s| s.map(|v| v.to_string()).unwrap_or_default()));
-        row.extend([format!("{:.6}", r.timing.trial_s), r.timing.decisions.to_string(), format!("{:.9}", r.timing.per_decision_s)]);
+        row.extend(
+            m.steps_to
+                .iter()
+                .map(|s| s.map(|v| v.to_string()).unwrap_or_default()),
+        );
+        row.extend([
+            format!("{:.6}", r.timing.trial_s),
+            r.timing.decisions.to_string(),
+            format!("{:.9}", r.timing.per_decision_s),
+        ]);
         w.write_record(&row)?;
     }
-    let mut inner = w.into_inner().map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
+    let mut inner = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
     inner.flush()?;
     drop(inner);
     std::fs::rename(&tmp, path).with_context(|| format!("{}", path.display()))?;

@@ -14,14 +14,18 @@ mod compare;
 mod map_cmd;
 mod oracle;
 mod plot_training;
-mod train_cmd;
 mod run;
+mod train_cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "madenet", version, about = "Decentralized multi-robot exploration with macro actions (MADE-Net) — simulator, baselines and tools")]
+#[command(
+    name = "madenet",
+    version,
+    about = "Decentralized multi-robot exploration with macro actions (MADE-Net) — simulator, baselines and tools"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -59,15 +63,18 @@ fn main() -> ExitCode {
         Command::Train(a) => train_cmd::run(a),
         Command::Oracle(a) => oracle::run(a),
         Command::Policies => registry(None).and_then(|r| {
-            r.describe()
-            .into_iter()
-            .try_for_each(|(name, about)| out!("{name:<12} {about}").map_err(anyhow::Error::from))
+            r.describe().into_iter().try_for_each(|(name, about)| {
+                out!("{name:<12} {about}").map_err(anyhow::Error::from)
+            })
         }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         // A closed pipe (`madenet … | head`) is a normal end, not an error.
-        Err(e) if e.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) => {
+        Err(e)
+            if e.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
+        {
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -79,7 +86,9 @@ fn main() -> ExitCode {
 
 /// Every policy the CLI knows: built-ins, baselines, the shipped learned models, and the model
 /// in `model_dir` as `model`.
-pub fn registry(model_dir: Option<&std::path::Path>) -> anyhow::Result<madenet_sim::PolicyRegistry> {
+pub fn registry(
+    model_dir: Option<&std::path::Path>,
+) -> anyhow::Result<madenet_sim::PolicyRegistry> {
     let mut r = madenet_study::StudyConfig::default().registry()?;
     if let Some(dir) = model_dir {
         // A DME-DRL model says so in its model.toml; anything else is a MADE-Net model.
@@ -87,12 +96,24 @@ pub fn registry(model_dir: Option<&std::path::Path>) -> anyhow::Result<madenet_s
         let is_dme = std::fs::read_to_string(&toml_path)
             .ok()
             .and_then(|t| t.parse::<toml::Table>().ok())
-            .and_then(|t| t.get("method").and_then(|m| m.as_str()).map(|m| m == madenet_dme::train::METHOD))
+            .and_then(|t| {
+                t.get("method")
+                    .and_then(|m| m.as_str())
+                    .map(|m| m == madenet_dme::train::METHOD)
+            })
             .unwrap_or(false);
         if is_dme {
-            madenet_dme::train::Model::load(dir)?.register(&mut r, "model", "the model given with --model");
+            madenet_dme::train::Model::load(dir)?.register(
+                &mut r,
+                "model",
+                "the model given with --model",
+            );
         } else {
-            madenet_learn::Model::load(dir)?.register(&mut r, "model", "the model given with --model");
+            madenet_learn::Model::load(dir)?.register(
+                &mut r,
+                "model",
+                "the model given with --model",
+            );
         }
     }
     Ok(r)
@@ -121,7 +142,9 @@ fn one_line(e: &anyhow::Error) -> String {
 }
 
 /// Reads the scenario config file if given, else the paper's defaults.
-pub fn load_config(path: Option<&std::path::Path>) -> anyhow::Result<madenet_world::ScenarioConfig> {
+pub fn load_config(
+    path: Option<&std::path::Path>,
+) -> anyhow::Result<madenet_world::ScenarioConfig> {
     Ok(match path {
         Some(p) => madenet_world::ScenarioConfig::from_toml_file(p)?,
         None => madenet_world::ScenarioConfig::default(),

@@ -49,17 +49,43 @@ pub enum MapCommand {
 
 pub fn run(c: MapCommand) -> Result<()> {
     match c {
-        MapCommand::Convert { input, output, config } => {
+        MapCommand::Convert {
+            input,
+            output,
+            config,
+        } => {
             let cfg = crate::load_config(config.as_deref())?;
             let grid = input.load(&cfg)?;
             save(&grid, &output)?;
-            out!("wrote {} ({}×{})", output.display(), grid.height(), grid.width())?;
+            out!(
+                "wrote {} ({}×{})",
+                output.display(),
+                grid.height(),
+                grid.width()
+            )?;
         }
-        MapCommand::Generate { seed, height, width, density_min, density_max, output } => {
-            let cfg = GeneratorConfig { density_min, density_max, ..GeneratorConfig::for_size(height, width) };
+        MapCommand::Generate {
+            seed,
+            height,
+            width,
+            density_min,
+            density_max,
+            output,
+        } => {
+            let cfg = GeneratorConfig {
+                density_min,
+                density_max,
+                ..GeneratorConfig::for_size(height, width)
+            };
             let grid = generate(&cfg, seed).context("map generate")?;
             save(&grid, &output)?;
-            out!("wrote {} ({}×{}, obstacle density {:.2})", output.display(), height, width, grid.obstacle_density())?;
+            out!(
+                "wrote {} ({}×{}, obstacle density {:.2})",
+                output.display(),
+                height,
+                width,
+                grid.obstacle_density()
+            )?;
         }
         MapCommand::Show { input, config } => {
             let cfg = crate::load_config(config.as_deref())?;

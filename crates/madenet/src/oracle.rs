@@ -25,7 +25,11 @@ enum Kind {
 #[derive(Args, Debug)]
 pub struct OracleArgs {
     /// Maps (comma-separated): `paper`, `paper:N`, `generate:SEED`, `generate-wide:SEED`, or files.
-    #[arg(long, value_delimiter = ',', default_value = "generate:1,generate:2,generate:3,generate:4,generate:5")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "generate:1,generate:2,generate:3,generate:4,generate:5"
+    )]
     maps: Vec<String>,
     /// Starts (comma-separated): `all` for the four corners, corner names, or `random`.
     #[arg(long, value_delimiter = ',', default_value = "all")]
@@ -67,15 +71,35 @@ pub fn run(a: OracleArgs) -> Result<()> {
     }
     let registry = crate::registry(None)?;
     if !registry.names().contains(&a.base) {
-        bail!("unknown policy `{}` (field `--base`); known policies: {}", a.base, registry.names().join(", "));
+        bail!(
+            "unknown policy `{}` (field `--base`); known policies: {}",
+            a.base,
+            registry.names().join(", ")
+        );
     }
-    let specs = crate::batch::plan(&a.maps, &a.starts, &a.csp, a.seeds, a.seed_base, a.config.as_deref(), &a.base)?;
+    let specs = crate::batch::plan(
+        &a.maps,
+        &a.starts,
+        &a.csp,
+        a.seeds,
+        a.seed_base,
+        a.config.as_deref(),
+        &a.base,
+    )?;
     if let Some((_, s)) = specs.first() {
         let probe = Trial::with_registry(s.clone(), &registry)?;
-        if probe.agents().first().is_some_and(|ag| ag.config().goal_count < 2) {
+        if probe
+            .agents()
+            .first()
+            .is_some_and(|ag| ag.config().goal_count < 2)
+        {
             bail!("--base: the oracle needs at least 2 goal candidates per decision");
         }
-        if probe.agents().first().is_some_and(|ag| ag.policy_mode() != madenet_agent::DecisionMode::OnTermination) {
+        if probe
+            .agents()
+            .first()
+            .is_some_and(|ag| ag.policy_mode() != madenet_agent::DecisionMode::OnTermination)
+        {
             bail!("--base {}: re-decides every step; the oracle needs a rule that chooses among goal candidates (e.g. spread, random, made-net)", a.base);
         }
     }
@@ -86,40 +110,72 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Noiseless => OracleKind::Noiseless,
     };
     let bar = ProgressBar::new(specs.len() as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}").expect("valid template"));
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(a.threads.unwrap_or(0)).build()?;
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
+            .expect("valid template"),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()?;
     let started = std::time::Instant::now();
     let results: Vec<Result<(String, TrialResult, TrialResult)>> = pool.install(|| {
         specs
             .into_par_iter()
             .map(|(start, spec)| {
                 let label = format!("map {}, start {start}", spec.map_name);
-                let base = Trial::with_registry(spec.clone(), &registry).with_context(|| label.clone())?.timed(false).run();
-                let mut oracle = run_oracle(spec, &registry, kind, a.futures).with_context(|| label)?;
-                oracle.policy = format!("oracle-{}({})", format!("{:?}", a.kind).to_lowercase(), a.base);
+                let base = Trial::with_registry(spec.clone(), &registry)
+                    .with_context(|| label.clone())?
+                    .timed(false)
+                    .run();
+                let mut oracle =
+                    run_oracle(spec, &registry, kind, a.futures).with_context(|| label)?;
+                oracle.policy = format!(
+                    "oracle-{}({})",
+                    format!("{:?}", a.kind).to_lowercase(),
+                    a.base
+                );
                 bar.inc(1);
                 Ok((start, base, oracle))
             })
             .collect()
     });
     bar.finish_and_clear();
-    let results: Vec<(String, TrialResult, TrialResult)> = results.into_iter().collect::<Result<_>>()?;
+    let results: Vec<(String, TrialResult, TrialResult)> =
+        results.into_iter().collect::<Result<_>>()?;
     if let Some(path) = &a.out {
-        let rows: Vec<(String, TrialResult)> = results.iter().map(|(s, _, o)| (s.clone(), o.clone())).collect();
+        let rows: Vec<(String, TrialResult)> = results
+            .iter()
+            .map(|(s, _, o)| (s.clone(), o.clone()))
+            .collect();
         crate::batch::write_csv(path, &rows)?;
     }
     let futures = match a.kind {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
         Kind::Replay | Kind::Noiseless => String::new(),
     };
-    out!("{} trials in {:.1} s; oracle {:?} over base `{}`{futures}", results.len(), started.elapsed().as_secs_f64(), a.kind, a.base)?;
+    out!(
+        "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}",
+        results.len(),
+        started.elapsed().as_secs_f64(),
+        a.kind,
+        a.base
+    )?;
     for &csp in &a.csp {
-        let sel: Vec<&(String, TrialResult, TrialResult)> = results.iter().filter(|r| r.1.comm_success_prob == csp).collect();
+        let sel: Vec<&(String, TrialResult, TrialResult)> = results
+            .iter()
+            .filter(|r| r.1.comm_success_prob == csp)
+            .collect();
         let n = sel.len().max(1) as f64;
         let base: f64 = sel.iter().map(|r| r.1.metrics.tns as f64).sum::<f64>() / n;
         let oracle: f64 = sel.iter().map(|r| r.2.metrics.tns as f64).sum::<f64>() / n;
-        let wins = sel.iter().filter(|r| r.2.metrics.tns < r.1.metrics.tns).count();
-        let losses = sel.iter().filter(|r| r.2.metrics.tns > r.1.metrics.tns).count();
+        let wins = sel
+            .iter()
+            .filter(|r| r.2.metrics.tns < r.1.metrics.tns)
+            .count();
+        let losses = sel
+            .iter()
+            .filter(|r| r.2.metrics.tns > r.1.metrics.tns)
+            .count();
         out!("csp {csp:.2}: base TNS {base:.1}  oracle TNS {oracle:.1}  ({:+.1} %)  oracle better on {wins}, worse on {losses} of {}", 100.0 * (oracle / base - 1.0), sel.len())?;
     }
     Ok(())

@@ -33,14 +33,33 @@ pub fn run(a: PlotTrainingArgs) -> Result<()> {
 /// A rollout-teacher run's curves: validation mean steps per iteration (the DEP as it acts, the
 /// greedy DEP, the base rule), the training loss per iteration in the title.
 fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
-    let mut rd = csv::Reader::from_path(csv_path).with_context(|| csv_path.display().to_string())?;
-    let headers = rd.headers().with_context(|| csv_path.display().to_string())?.clone();
-    let col = |name: &str| headers.iter().position(|h| h == name).with_context(|| format!("{}: no column `{name}`", csv_path.display()));
-    let (it, val, greedy, base, loss) = (col("iteration")?, col("validation_steps")?, col("greedy_steps")?, col("base_steps")?, col("loss")?);
+    let mut rd =
+        csv::Reader::from_path(csv_path).with_context(|| csv_path.display().to_string())?;
+    let headers = rd
+        .headers()
+        .with_context(|| csv_path.display().to_string())?
+        .clone();
+    let col = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h == name)
+            .with_context(|| format!("{}: no column `{name}`", csv_path.display()))
+    };
+    let (it, val, greedy, base, loss) = (
+        col("iteration")?,
+        col("validation_steps")?,
+        col("greedy_steps")?,
+        col("base_steps")?,
+        col("loss")?,
+    );
     let (mut v, mut g, mut b, mut l) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for rec in rd.records() {
         let rec = rec.with_context(|| csv_path.display().to_string())?;
-        let num = |k: usize| -> Result<f64> { rec[k].parse::<f64>().with_context(|| format!("{}: `{}` is not a number", csv_path.display(), &rec[k])) };
+        let num = |k: usize| -> Result<f64> {
+            rec[k]
+                .parse::<f64>()
+                .with_context(|| format!("{}: `{}` is not a number", csv_path.display(), &rec[k]))
+        };
         let x = num(it)? + 1.0;
         v.push((x, num(val)?));
         if num(greedy)? > 0.0 {
@@ -50,11 +69,27 @@ fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
         l.push((x, num(loss)?));
     }
     anyhow::ensure!(!v.is_empty(), "{}: no iterations yet", csv_path.display());
-    let mut steps = vec![LineSeries { name: "DEP as it acts (validation)".into(), points: v }, LineSeries { name: "base rule".into(), points: b }];
+    let mut steps = vec![
+        LineSeries {
+            name: "DEP as it acts (validation)".into(),
+            points: v,
+        },
+        LineSeries {
+            name: "base rule".into(),
+            points: b,
+        },
+    ];
     if !g.is_empty() {
-        steps.push(LineSeries { name: "greedy DEP".into(), points: g });
+        steps.push(LineSeries {
+            name: "greedy DEP".into(),
+            points: g,
+        });
     }
-    let losses = l.iter().map(|(x, y)| format!("{x:.0}: {y:.3}")).collect::<Vec<_>>().join(", ");
+    let losses = l
+        .iter()
+        .map(|(x, y)| format!("{x:.0}: {y:.3}"))
+        .collect::<Vec<_>>()
+        .join(", ");
     let panels = [LinePanel {
         title: format!("Validation mean steps (loss by iteration: {losses})"),
         x_label: "DAgger iteration".into(),
@@ -64,5 +99,8 @@ fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
     let stem = out.with_extension("");
     let written = line_panels(&stem, &panels, 1)?;
     let want = out.extension().and_then(|e| e.to_str()).unwrap_or("png");
-    Ok(written.into_iter().find(|p| p.extension().and_then(|e| e.to_str()) == Some(want)).unwrap_or_else(|| out.to_path_buf()))
+    Ok(written
+        .into_iter()
+        .find(|p| p.extension().and_then(|e| e.to_str()) == Some(want))
+        .unwrap_or_else(|| out.to_path_buf()))
 }

@@ -62,7 +62,11 @@ pub fn run(a: RunArgs) -> Result<()> {
     let map = source.load(&cfg)?;
     let starts = a.start.cells(&map, cfg.num_robots, cfg.movement);
     if starts.is_empty() {
-        anyhow::bail!("--start random: map {} has no {} connected free cells around the cell drawn from it", source.name(), cfg.num_robots);
+        anyhow::bail!(
+            "--start random: map {} has no {} connected free cells around the cell drawn from it",
+            source.name(),
+            cfg.num_robots
+        );
     }
     let spec = TrialSpec {
         starts,
@@ -75,7 +79,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut trial = Trial::with_registry(spec, &crate::registry(a.model.as_deref())?)
         .with_context(|| format!("map {}, start {}", source.name(), a.start.name()))?
         .record_trajectory(a.trajectory);
-    let opts = RenderOptions { cell_px: a.cell_px, ..Default::default() };
+    let opts = RenderOptions {
+        cell_px: a.cell_px,
+        ..Default::default()
+    };
     let mut gif = match &a.render {
         Some(p) => Some(GifWriter::new(p, &opts, a.delay_ms)?),
         None => None,
@@ -99,14 +106,26 @@ pub fn run(a: RunArgs) -> Result<()> {
         out!("{}", serde_json::to_string_pretty(&result)?)?;
     } else {
         let m = &result.metrics;
-        out!("map {}  start {}  policy {}  csp {}  seed {}", result.map, a.start.name(), result.policy, result.comm_success_prob, result.seed)?;
+        out!(
+            "map {}  start {}  policy {}  csp {}  seed {}",
+            result.map,
+            a.start.name(),
+            result.policy,
+            result.comm_success_prob,
+            result.seed
+        )?;
         out!("completed  {}", m.completed)?;
         out!("TNS        {} steps", m.tns)?;
         out!("TTD        {:.2} m", m.ttd)?;
         out!("NOLI       {}", m.noli)?;
         out!("OFV        {:.3}", m.ofv)?;
         out!("explored   {:.1} %", 100.0 * m.explored)?;
-        out!("CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)", 1e3 * result.timing.trial_s, 1e6 * result.timing.per_decision_s, result.timing.decisions)?;
+        out!(
+            "CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)",
+            1e3 * result.timing.trial_s,
+            1e6 * result.timing.per_decision_s,
+            result.timing.decisions
+        )?;
         for p in a.render.iter().chain(a.snapshot.iter()) {
             out!("wrote      {}", p.display())?;
         }

@@ -40,9 +40,14 @@ pub struct TrainArgs {
 
 /// The `method` key of a training config file, if it has one.
 fn method_of(path: &Path) -> Result<Option<String>> {
-    let text = std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let value: toml::Table = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
-    Ok(value.get("method").and_then(|m| m.as_str()).map(str::to_string))
+    let text =
+        std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let value: toml::Table = toml::from_str(&text)
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+    Ok(value
+        .get("method")
+        .and_then(|m| m.as_str())
+        .map(str::to_string))
 }
 
 /// What `madenet train` sets in either learner's config.
@@ -85,11 +90,17 @@ learner_config!(madenet_learn::rollout_train::RolloutTrainConfig);
 
 /// The run directory and the config to train with (`None`: resume with the run's saved one),
 /// from the arguments; `set_method` applies `--method` to a new run's config.
-fn run_dir_and_config<C: LearnerConfig>(a: &TrainArgs, set_method: impl FnOnce(&mut C) -> Result<()>) -> Result<(PathBuf, Option<C>)> {
+fn run_dir_and_config<C: LearnerConfig>(
+    a: &TrainArgs,
+    set_method: impl FnOnce(&mut C) -> Result<()>,
+) -> Result<(PathBuf, Option<C>)> {
     match (&a.out, &a.resume) {
         (_, Some(dir)) => {
             if !dir.join("config.toml").exists() {
-                bail!("{}: not a training run directory (no config.toml)", dir.display());
+                bail!(
+                    "{}: not a training run directory (no config.toml)",
+                    dir.display()
+                );
             }
             if a.config.is_some() || a.method.is_some() || a.seed.is_some() || a.threads.is_some() {
                 bail!("--resume continues with the run's saved config; only --episodes and --max-minutes may extend it");
@@ -104,7 +115,10 @@ fn run_dir_and_config<C: LearnerConfig>(a: &TrainArgs, set_method: impl FnOnce(&
         }
         (Some(dir), None) => {
             if dir.join("config.toml").exists() {
-                bail!("{}: already holds a training run; use --resume {0} or another --out", dir.display());
+                bail!(
+                    "{}: already holds a training run; use --resume {0} or another --out",
+                    dir.display()
+                );
             }
             let mut cfg = match &a.config {
                 Some(p) => C::from_file(p)?,
@@ -115,7 +129,8 @@ fn run_dir_and_config<C: LearnerConfig>(a: &TrainArgs, set_method: impl FnOnce(&
             *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
             *cfg.seed() = a.seed.unwrap_or(*cfg.seed());
             *cfg.threads() = a.threads.unwrap_or(*cfg.threads());
-            cfg.check().map_err(|m| anyhow::anyhow!("train config: {m}"))?;
+            cfg.check()
+                .map_err(|m| anyhow::anyhow!("train config: {m}"))?;
             Ok((dir.clone(), Some(cfg)))
         }
         (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
@@ -124,12 +139,20 @@ fn run_dir_and_config<C: LearnerConfig>(a: &TrainArgs, set_method: impl FnOnce(&
 
 pub fn run(a: TrainArgs) -> Result<()> {
     // Which learner: --method, else the config's (the run's own on --resume), else MADE-Net.
-    let source = a.resume.as_ref().map(|d| d.join("config.toml")).or_else(|| a.config.clone());
+    let source = a
+        .resume
+        .as_ref()
+        .map(|d| d.join("config.toml"))
+        .or_else(|| a.config.clone());
     let from_file = match &source {
         Some(p) if p.exists() => method_of(p)?,
         _ => None,
     };
-    let chosen = if a.resume.is_some() { from_file.as_deref() } else { a.method.as_deref().or(from_file.as_deref()) };
+    let chosen = if a.resume.is_some() {
+        from_file.as_deref()
+    } else {
+        a.method.as_deref().or(from_file.as_deref())
+    };
     if chosen == Some(madenet_dme::train::METHOD) {
         return run_dme(a);
     }
@@ -150,8 +173,13 @@ pub fn run(a: TrainArgs) -> Result<()> {
     let mut on_progress = |p: &madenet_learn::Progress| {
         bar.set_length(p.episodes);
         bar.set_position(p.episode);
-        let val = p.validation_steps.map_or(String::new(), |v| format!("  val steps {v:.1}"));
-        bar.set_message(format!("ε {:.2}  reward {:.0}  steps {:.0}  updates {}{val}", p.epsilon, p.team_reward, p.steps, p.updates));
+        let val = p
+            .validation_steps
+            .map_or(String::new(), |v| format!("  val steps {v:.1}"));
+        bar.set_message(format!(
+            "ε {:.2}  reward {:.0}  steps {:.0}  updates {}{val}",
+            p.epsilon, p.team_reward, p.steps, p.updates
+        ));
     };
     madenet_learn::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
@@ -160,7 +188,11 @@ pub fn run(a: TrainArgs) -> Result<()> {
 }
 
 fn progress_bar(quiet: bool) -> ProgressBar {
-    let bar = if quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0)
+    };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} episodes  {msg}")
             .expect("valid template")
@@ -177,8 +209,13 @@ fn run_dme(a: TrainArgs) -> Result<()> {
     let mut on_progress = |p: &madenet_dme::train::Progress| {
         bar.set_length(p.episodes);
         bar.set_position(p.episode);
-        let val = p.validation_steps.map_or(String::new(), |v| format!("  val steps {v:.1}"));
-        bar.set_message(format!("reward {:.2}  steps {}  updates {}{val}", p.reward, p.steps, p.updates));
+        let val = p
+            .validation_steps
+            .map_or(String::new(), |v| format!("  val steps {v:.1}"));
+        bar.set_message(format!(
+            "reward {:.2}  steps {}  updates {}{val}",
+            p.reward, p.steps, p.updates
+        ));
     };
     madenet_dme::train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
@@ -189,8 +226,13 @@ fn run_dme(a: TrainArgs) -> Result<()> {
 /// `madenet train --method made-net-rollout` (or such a config or run directory): the DEP
 /// trained from the centralized rollout teacher (`madenet_learn::rollout_train`).
 fn run_rollout(a: TrainArgs) -> Result<()> {
-    let (dir, cfg) = run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, |_| Ok(()))?;
-    let bar = if a.quiet { ProgressBar::hidden() } else { ProgressBar::new(0) };
+    let (dir, cfg) =
+        run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, |_| Ok(()))?;
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0)
+    };
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} iterations  {msg}")
             .expect("valid template")
@@ -206,7 +248,10 @@ fn run_rollout(a: TrainArgs) -> Result<()> {
         if a.quiet {
             return;
         }
-        bar.println(format!("iteration {}: val steps {:.2} (base {:.2}), loss {:.4}", p.iteration, p.validation_steps, p.base_steps, p.loss));
+        bar.println(format!(
+            "iteration {}: val steps {:.2} (base {:.2}), loss {:.4}",
+            p.iteration, p.validation_steps, p.base_steps, p.loss
+        ));
     };
     madenet_learn::rollout_train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();

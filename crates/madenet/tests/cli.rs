@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+    Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args)
+        .output()
+        .expect("run madenet")
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -33,11 +36,26 @@ fn run_prints_metrics_and_writes_pictures() {
     let gif = dir.join("trial.gif");
     let png = dir.join("trial.png");
     let out = madenet(&[
-        "run", "--map", "paper:3", "--start", "top-right", "--csp", "0.8", "--seed", "7",
-        "--render", gif.to_str().unwrap(), "--snapshot", png.to_str().unwrap(),
+        "run",
+        "--map",
+        "paper:3",
+        "--start",
+        "top-right",
+        "--csp",
+        "0.8",
+        "--seed",
+        "7",
+        "--render",
+        gif.to_str().unwrap(),
+        "--snapshot",
+        png.to_str().unwrap(),
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(text.contains("completed  true"), "{text}");
     assert!(text.contains("TNS"), "{text}");
     assert!(std::fs::metadata(&gif).unwrap().len() > 1000);
@@ -49,12 +67,27 @@ fn image_size(path: &std::path::Path) -> (u32, u32) {
     // PNG IHDR: width and height are the big-endian u32s at bytes 16..24.
     let b = std::fs::read(path).expect("png");
     assert_eq!(&b[1..4], b"PNG");
-    (u32::from_be_bytes(b[16..20].try_into().unwrap()), u32::from_be_bytes(b[20..24].try_into().unwrap()))
+    (
+        u32::from_be_bytes(b[16..20].try_into().unwrap()),
+        u32::from_be_bytes(b[20..24].try_into().unwrap()),
+    )
 }
 
 #[test]
 fn json_output_is_deterministic() {
-    let args = ["run", "--generate", "11", "--start", "bottom-left", "--csp", "0.5", "--seed", "3", "--json", "--trajectory"];
+    let args = [
+        "run",
+        "--generate",
+        "11",
+        "--start",
+        "bottom-left",
+        "--csp",
+        "0.5",
+        "--seed",
+        "3",
+        "--json",
+        "--trajectory",
+    ];
     let a = madenet(&args);
     let b = madenet(&args);
     assert!(a.status.success());
@@ -72,18 +105,38 @@ fn map_convert_generate_show_round_trip() {
     let dir = scratch("maps");
     let yaml = dir.join("gen.yaml");
     let txt = dir.join("gen.txt");
-    assert!(madenet(&["map", "generate", "--seed", "5", yaml.to_str().unwrap()]).status.success());
-    assert!(madenet(&["map", "convert", yaml.to_str().unwrap(), txt.to_str().unwrap()]).status.success());
+    assert!(
+        madenet(&["map", "generate", "--seed", "5", yaml.to_str().unwrap()])
+            .status
+            .success()
+    );
+    assert!(madenet(&[
+        "map",
+        "convert",
+        yaml.to_str().unwrap(),
+        txt.to_str().unwrap()
+    ])
+    .status
+    .success());
     let from_yaml = madenet(&["map", "show", yaml.to_str().unwrap()]);
     let from_txt = madenet(&["map", "show", txt.to_str().unwrap()]);
-    let grid = |o: &Output| String::from_utf8_lossy(&o.stdout).lines().take(20).collect::<Vec<_>>().join("\n");
+    let grid = |o: &Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .take(20)
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
     assert_eq!(grid(&from_yaml), grid(&from_txt));
     assert_eq!(grid(&from_yaml).lines().count(), 20);
 }
 
 #[test]
 fn missing_map_file() {
-    assert_clean_error(&madenet(&["run", "--map", "no/such/map.yaml"]), &["no/such/map.yaml"]);
+    assert_clean_error(
+        &madenet(&["run", "--map", "no/such/map.yaml"]),
+        &["no/such/map.yaml"],
+    );
 }
 
 #[test]
@@ -91,7 +144,10 @@ fn malformed_yaml_names_file_and_field() {
     let dir = scratch("bad-yaml");
     let yaml = dir.join("bad.yaml");
     std::fs::write(&yaml, "image: x.pgm\nresolution: fast\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n").unwrap();
-    assert_clean_error(&madenet(&["run", "--map", yaml.to_str().unwrap()]), &["bad.yaml", "resolution"]);
+    assert_clean_error(
+        &madenet(&["run", "--map", yaml.to_str().unwrap()]),
+        &["bad.yaml", "resolution"],
+    );
 }
 
 #[test]
@@ -99,16 +155,24 @@ fn truncated_pgm_names_the_image() {
     let dir = scratch("bad-pgm");
     std::fs::write(dir.join("m.pgm"), b"P5\n20 20\n255\n\x00\x00").unwrap();
     std::fs::write(dir.join("m.yaml"), "image: m.pgm\nresolution: 1.0\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n").unwrap();
-    assert_clean_error(&madenet(&["run", "--map", dir.join("m.yaml").to_str().unwrap()]), &["m.pgm"]);
+    assert_clean_error(
+        &madenet(&["run", "--map", dir.join("m.yaml").to_str().unwrap()]),
+        &["m.pgm"],
+    );
 }
 
 #[test]
 fn start_in_obstacle() {
     // (0, 9) is an obstacle on test_1.
     let map = madenet_map::paper::paper_map(1).unwrap();
-    let blocked = (0..20).find(|&c| !map.is_free(madenet_map::Pos::new(0, c))).expect("an obstacle in row 0");
+    let blocked = (0..20)
+        .find(|&c| !map.is_free(madenet_map::Pos::new(0, c)))
+        .expect("an obstacle in row 0");
     let start = format!("0,{blocked};1,0;0,1");
-    assert_clean_error(&madenet(&["run", "--start", &start]), &[&format!("(0, {blocked})"), "not free"]);
+    assert_clean_error(
+        &madenet(&["run", "--start", &start]),
+        &[&format!("(0, {blocked})"), "not free"],
+    );
 }
 
 #[test]
@@ -116,12 +180,18 @@ fn more_robots_than_start_cells() {
     let dir = scratch("robots");
     let cfg = dir.join("four.toml");
     std::fs::write(&cfg, "num_robots = 4\n").unwrap();
-    assert_clean_error(&madenet(&["run", "--config", cfg.to_str().unwrap()]), &["num_robots"]);
+    assert_clean_error(
+        &madenet(&["run", "--config", cfg.to_str().unwrap()]),
+        &["num_robots"],
+    );
 }
 
 #[test]
 fn unknown_policy() {
-    assert_clean_error(&madenet(&["run", "--policy", "teleport"]), &["teleport", "nf"]);
+    assert_clean_error(
+        &madenet(&["run", "--policy", "teleport"]),
+        &["teleport", "nf"],
+    );
 }
 
 #[test]
@@ -131,36 +201,80 @@ fn bad_config_values() {
         ("comm_success_prob = 1.5\n", "comm_success_prob"),
         ("sensing_rnage = 4\n", "sensing_rnage"),
         ("movement = \"teleport\"\n", "movement"),
-        ("[discretize]\noccupied_prob = \"high\"\n", "discretize.occupied_prob"),
+        (
+            "[discretize]\noccupied_prob = \"high\"\n",
+            "discretize.occupied_prob",
+        ),
     ];
     for (i, (text, field)) in cases.iter().enumerate() {
         let cfg = dir.join(format!("c{i}.toml"));
         std::fs::write(&cfg, text).unwrap();
-        assert_clean_error(&madenet(&["run", "--config", cfg.to_str().unwrap()]), &[&format!("c{i}.toml"), field]);
+        assert_clean_error(
+            &madenet(&["run", "--config", cfg.to_str().unwrap()]),
+            &[&format!("c{i}.toml"), field],
+        );
     }
     assert_clean_error(&madenet(&["run", "--csp=-0.1"]), &["comm_success_prob"]);
 }
 
 #[test]
 fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
-    let out = madenet(&["oracle", "--maps", "generate-wide:5", "--starts", "top-left,random", "--kind", "noiseless", "--csp", "1"]);
+    let out = madenet(&[
+        "oracle",
+        "--maps",
+        "generate-wide:5",
+        "--starts",
+        "top-left,random",
+        "--kind",
+        "noiseless",
+        "--csp",
+        "1",
+    ]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(text.contains("2 trials") && text.contains("oracle Noiseless over base `spread`") && text.contains("base TNS"), "{text}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("2 trials")
+            && text.contains("oracle Noiseless over base `spread`")
+            && text.contains("base TNS"),
+        "{text}"
+    );
     assert_clean_error(&madenet(&["oracle", "--seeds", "0"]), &["--seeds"]);
     assert_clean_error(&madenet(&["oracle", "--futures", "0"]), &["--futures"]);
-    assert_clean_error(&madenet(&["oracle", "--base", "nf", "--maps", "paper:3"]), &["--base", "nf"]);
+    assert_clean_error(
+        &madenet(&["oracle", "--base", "nf", "--maps", "paper:3"]),
+        &["--base", "nf"],
+    );
     assert_clean_error(&madenet(&["oracle", "--base", "nope"]), &["--base", "nope"]);
 }
 
 #[test]
 fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
-    let out = madenet(&["run", "--map", "generate-wide:5", "--start", "random", "--policy", "spread", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = madenet(&[
+        "run",
+        "--map",
+        "generate-wide:5",
+        "--start",
+        "random",
+        "--policy",
+        "spread",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("\"policy\": \"spread\""));
     // A map whose free cells are single pockets: no three connected free cells anywhere.
     let dir = scratch("pockets");
     let map = dir.join("pockets.txt");
     std::fs::write(&map, ".#.#.#\n######\n.#.#.#\n######\n.#.#.#\n######\n").unwrap();
-    assert_clean_error(&madenet(&["run", "--map", map.to_str().unwrap(), "--start", "random"]), &["random"]);
+    assert_clean_error(
+        &madenet(&["run", "--map", map.to_str().unwrap(), "--start", "random"]),
+        &["random"],
+    );
 }

@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+    Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args)
+        .output()
+        .expect("run madenet")
 }
 
 /// A temp folder removed on drop.
@@ -14,7 +17,10 @@ struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(name: &str) -> Self {
-        let p = std::env::temp_dir().join(format!("madenet-compare-test-{}-{name}", std::process::id()));
+        let p = std::env::temp_dir().join(format!(
+            "madenet-compare-test-{}-{name}",
+            std::process::id()
+        ));
         let _ = std::fs::remove_dir_all(&p);
         std::fs::create_dir_all(&p).expect("temp dir");
         Scratch(p)
@@ -61,7 +67,9 @@ fn assert_clean_error(out: &Output, needles: &[&str]) {
 fn deterministic_rows(path: &Path) -> Vec<Vec<String>> {
     let mut rdr = csv::Reader::from_path(path).unwrap();
     let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
-    let keep: Vec<usize> = (0..header.len()).filter(|&i| header[i] != "trial_s" && header[i] != "per_decision_s").collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i] != "trial_s" && header[i] != "per_decision_s")
+        .collect();
     assert_eq!(keep.len(), header.len() - 2, "{header:?}");
     let mut rows = vec![keep.iter().map(|&i| header[i].clone()).collect::<Vec<_>>()];
     for r in rdr.records() {
@@ -83,7 +91,11 @@ fn assert_curves_close(got: &str, want: &str) {
             assert_eq!(x.len(), y.len());
             for (p, q) in x.iter().zip(y) {
                 let (p, q) = (p.as_f64().unwrap(), q.as_f64().unwrap());
-                assert!((p - q).abs() <= 1e-12 * q.abs().max(1.0), "{f} of {}: {p} vs {q}", a["key"]);
+                assert!(
+                    (p - q).abs() <= 1e-12 * q.abs().max(1.0),
+                    "{f} of {}: {p} vs {q}",
+                    a["key"]
+                );
             }
         }
     }
@@ -94,14 +106,42 @@ fn compare_writes_the_study_and_a_second_run_resumes_without_rerunning() {
     let dir = Scratch::new("ok");
     let cfg = write(&dir.path().join("study.toml"), SMALL);
     let out = dir.path().join("results");
-    let args = ["compare", "--config", &cfg, "--out", out.to_str().unwrap(), "--threads", "2"];
+    let args = [
+        "compare",
+        "--config",
+        &cfg,
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "2",
+    ];
     let first = madenet(&args);
     let stdout = String::from_utf8_lossy(&first.stdout);
-    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
     let report = out.join("report.md");
-    assert!(stdout.contains(&report.display().to_string()), "the report's path is printed: {stdout}");
+    assert!(
+        stdout.contains(&report.display().to_string()),
+        "the report's path is printed: {stdout}"
+    );
     assert!(stdout.contains("32 trials"), "{stdout}");
-    for f in ["trials.csv", "curves.jsonl", "summary.md", "summary.csv", "statistics.md", "statistics.csv", "fig4_metrics.png", "fig4_metrics.svg", "fig5_exploration.png", "fig5_exploration.svg", "report.md", "study.toml"] {
+    for f in [
+        "trials.csv",
+        "curves.jsonl",
+        "summary.md",
+        "summary.csv",
+        "statistics.md",
+        "statistics.csv",
+        "fig4_metrics.png",
+        "fig4_metrics.svg",
+        "fig5_exploration.png",
+        "fig5_exploration.svg",
+        "report.md",
+        "study.toml",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let rows = deterministic_rows(&out.join("trials.csv"));
@@ -113,21 +153,55 @@ fn compare_writes_the_study_and_a_second_run_resumes_without_rerunning() {
     // Again, identically: every trial is already recorded, so none runs, and trials.csv is
     // byte-identical, wall-clock columns included (a rerun trial would have new timings).
     let second = madenet(&args);
-    assert!(second.status.success(), "{}", String::from_utf8_lossy(&second.stderr));
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
     assert!(String::from_utf8_lossy(&second.stdout).contains(&report.display().to_string()));
     assert_eq!(deterministic_rows(&out.join("trials.csv")), rows);
-    assert_eq!(std::fs::read(out.join("trials.csv")).unwrap(), trials_1, "no trial ran again");
+    assert_eq!(
+        std::fs::read(out.join("trials.csv")).unwrap(),
+        trials_1,
+        "no trial ran again"
+    );
     // Same curves; compared as numbers because resuming may change the last digit of a float
     // (madenet-study tests/study.rs `resumed_curves_are_byte_identical`, a known bug).
-    assert_curves_close(&std::fs::read_to_string(out.join("curves.jsonl")).unwrap(), &curves_1);
+    assert_curves_close(
+        &std::fs::read_to_string(out.join("curves.jsonl")).unwrap(),
+        &curves_1,
+    );
 
     // A different study into the same folder is refused, naming the folder …
-    let refused = madenet(&["compare", "--config", &cfg, "--out", out.to_str().unwrap(), "--seeds", "3"]);
+    let refused = madenet(&[
+        "compare",
+        "--config",
+        &cfg,
+        "--out",
+        out.to_str().unwrap(),
+        "--seeds",
+        "3",
+    ]);
     assert_clean_error(&refused, &[out.to_str().unwrap()]);
     assert_eq!(std::fs::read(out.join("trials.csv")).unwrap(), trials_1);
     // … unless --fresh.
-    let fresh = madenet(&["compare", "--config", &cfg, "--out", out.to_str().unwrap(), "--methods", "nf", "--seeds", "1", "--fresh"]);
-    assert!(fresh.status.success(), "{}", String::from_utf8_lossy(&fresh.stderr));
+    let fresh = madenet(&[
+        "compare",
+        "--config",
+        &cfg,
+        "--out",
+        out.to_str().unwrap(),
+        "--methods",
+        "nf",
+        "--seeds",
+        "1",
+        "--fresh",
+    ]);
+    assert!(
+        fresh.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fresh.stderr)
+    );
     assert_eq!(deterministic_rows(&out.join("trials.csv")).len(), 1 + 8);
 }
 
@@ -139,24 +213,51 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
     let bad = |name: &str, text: &str| write(&dir.path().join(name), text);
 
     let f = bad("method.toml", &SMALL.replace("\"ub\"", "\"teleport\""));
-    assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &["methods", "teleport"]);
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &["methods", "teleport"],
+    );
 
     let missing = dir.path().join("no_such_maps");
-    let f = bad("maps.toml", &SMALL.replace("\"paper:2\"", &format!("{:?}", missing.display().to_string())));
-    assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &[missing.to_str().unwrap()]);
+    let f = bad(
+        "maps.toml",
+        &SMALL.replace(
+            "\"paper:2\"",
+            &format!("{:?}", missing.display().to_string()),
+        ),
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &[missing.to_str().unwrap()],
+    );
 
     let f = bad("csp.toml", &SMALL.replace("csp = [1.0, 0.0]", "csp = []"));
     assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &["csp"]);
 
-    let f = bad("csp2.toml", &SMALL.replace("csp = [1.0, 0.0]", "csp = [1.0, 2.0]"));
-    assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &["csp", "2"]);
+    let f = bad(
+        "csp2.toml",
+        &SMALL.replace("csp = [1.0, 0.0]", "csp = [1.0, 2.0]"),
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &["csp", "2"],
+    );
 
     let f = bad("seeds.toml", &SMALL.replace("seeds = 2", "seeds = 0"));
-    assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &["seeds"]);
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &["seeds"],
+    );
 
     // Malformed TOML: the file and the line (line 4: `csp = [1.0,, 0.0]`).
-    let f = bad("syntax.toml", &SMALL.replace("csp = [1.0, 0.0]", "csp = [1.0,, 0.0]"));
-    assert_clean_error(&madenet(&["compare", "--config", &f, "--out", o]), &[&f, "line 4"]);
+    let f = bad(
+        "syntax.toml",
+        &SMALL.replace("csp = [1.0, 0.0]", "csp = [1.0,, 0.0]"),
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &[&f, "line 4"],
+    );
 
     // A missing config file names the file.
     let f = dir.path().join("absent.toml").display().to_string();
@@ -164,10 +265,27 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
 
     // Overrides on the command line are validated the same way.
     let good = bad("good.toml", SMALL);
-    assert_clean_error(&madenet(&["compare", "--config", &good, "--out", o, "--methods", "nf,teleport"]), &["methods", "teleport"]);
-    assert_clean_error(&madenet(&["compare", "--config", &good, "--out", o, "--seeds", "0"]), &["seeds"]);
+    assert_clean_error(
+        &madenet(&[
+            "compare",
+            "--config",
+            &good,
+            "--out",
+            o,
+            "--methods",
+            "nf,teleport",
+        ]),
+        &["methods", "teleport"],
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &good, "--out", o, "--seeds", "0"]),
+        &["seeds"],
+    );
 
     // Nothing ran.
-    assert!(!out.join("trials.csv").exists(), "trials.csv written by a refused study");
+    assert!(
+        !out.join("trials.csv").exists(),
+        "trials.csv written by a refused study"
+    );
     assert!(!out.join("curves.jsonl").exists());
 }

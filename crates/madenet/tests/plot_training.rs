@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+    Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args)
+        .output()
+        .expect("run madenet")
 }
 
 /// A temp folder removed on drop.
@@ -13,7 +16,10 @@ struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(name: &str) -> Self {
-        let p = std::env::temp_dir().join(format!("madenet-plot-training-test-{}-{name}", std::process::id()));
+        let p = std::env::temp_dir().join(format!(
+            "madenet-plot-training-test-{}-{name}",
+            std::process::id()
+        ));
         let _ = std::fs::remove_dir_all(&p);
         std::fs::create_dir_all(&p).expect("temp dir");
         Scratch(p)
@@ -56,7 +62,10 @@ fn png_size(path: &Path) -> (u32, u32) {
     // PNG IHDR: width and height are the big-endian u32s at bytes 16..24.
     let b = std::fs::read(path).expect("png");
     assert_eq!(&b[1..4], b"PNG");
-    (u32::from_be_bytes(b[16..20].try_into().unwrap()), u32::from_be_bytes(b[20..24].try_into().unwrap()))
+    (
+        u32::from_be_bytes(b[16..20].try_into().unwrap()),
+        u32::from_be_bytes(b[20..24].try_into().unwrap()),
+    )
 }
 
 #[test]
@@ -67,10 +76,21 @@ fn plot_training_writes_the_png_and_prints_its_path() {
     std::fs::write(dir.join("episodes.csv"), EPISODES).unwrap();
 
     let out = madenet(&["plot-training", dir.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let png = dir.join("fig2_training.png");
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), png.display().to_string());
-    assert_eq!(png_size(&png), (1600, 564), "two panels side by side under the legend");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        png.display().to_string()
+    );
+    assert_eq!(
+        png_size(&png),
+        (1600, 564),
+        "two panels side by side under the legend"
+    );
 
     // With validation rows, a third panel; --out puts the figure elsewhere.
     std::fs::write(
@@ -79,8 +99,17 @@ fn plot_training_writes_the_png_and_prints_its_path() {
     )
     .unwrap();
     let other = s.path().join("figs").join("training.png");
-    let out = madenet(&["plot-training", dir.to_str().unwrap(), "--out", other.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = madenet(&[
+        "plot-training",
+        dir.to_str().unwrap(),
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert_eq!(png_size(&other).0, 2400);
 }
 
@@ -92,11 +121,19 @@ fn plot_training_bad_input_is_one_line_naming_the_file() {
     assert_clean_error(&out, &[&dir.join("episodes.csv").display().to_string()]);
 
     let dir = s.path();
-    std::fs::write(dir.join("episodes.csv"), "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s\n").unwrap();
+    std::fs::write(
+        dir.join("episodes.csv"),
+        "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s\n",
+    )
+    .unwrap();
     let out = madenet(&["plot-training", dir.to_str().unwrap()]);
     assert_clean_error(&out, &["episodes.csv", "no episodes"]);
 
-    std::fs::write(dir.join("episodes.csv"), EPISODES.replace("2,dec,0.5,180", "2,dec,0.5,many")).unwrap();
+    std::fs::write(
+        dir.join("episodes.csv"),
+        EPISODES.replace("2,dec,0.5,180", "2,dec,0.5,many"),
+    )
+    .unwrap();
     let out = madenet(&["plot-training", dir.to_str().unwrap()]);
     assert_clean_error(&out, &["episodes.csv:4:", "column `steps` = \"many\""]);
 

@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet")).args(args).output().expect("run madenet")
+    Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args)
+        .output()
+        .expect("run madenet")
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -17,7 +20,13 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn error_line(o: &Output) -> String {
-    assert_eq!(o.status.code(), Some(2), "stdout {} stderr {}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "stdout {} stderr {}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert_eq!(err.lines().count(), 1, "one line: {err}");
     assert!(err.starts_with("error: "), "{err}");
@@ -33,18 +42,48 @@ fn tiny_run_resume_and_model() {
     std::fs::write(&cfg, TINY).unwrap();
     let run = dir.join("run");
     let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
-    let o = madenet(&["train", "--config", c, "--out", r, "--method", "made-net-dt", "-q"]);
+    let o = madenet(&[
+        "train",
+        "--config",
+        c,
+        "--out",
+        r,
+        "--method",
+        "made-net-dt",
+        "-q",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 3);
+    assert_eq!(
+        std::fs::read_to_string(run.join("episodes.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        1 + 3
+    );
     // A second --out into the same folder is refused; --resume with --episodes extends the run.
     let e = error_line(&madenet(&["train", "--config", c, "--out", r, "-q"]));
     assert!(e.contains("--resume"), "{e}");
     let o = madenet(&["train", "--resume", r, "--episodes", "4", "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 4);
+    assert_eq!(
+        std::fs::read_to_string(run.join("episodes.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        1 + 4
+    );
     // The trained model plays a generated map.
     let best = run.join("best");
-    let o = madenet(&["run", "--map", "generate:2", "--policy", "model", "--model", best.to_str().unwrap(), "--json"]);
+    let o = madenet(&[
+        "run",
+        "--map",
+        "generate:2",
+        "--policy",
+        "model",
+        "--model",
+        best.to_str().unwrap(),
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -56,16 +95,42 @@ fn bad_training_input_is_one_line() {
     let cfg = dir.join("bad.toml");
     std::fs::write(&cfg, "gamma = 2.0\n").unwrap();
     let out = dir.join("out");
-    let e = error_line(&madenet(&["train", "--config", cfg.to_str().unwrap(), "--out", out.to_str().unwrap()]));
+    let e = error_line(&madenet(&[
+        "train",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
     assert!(e.contains("bad.toml") && e.contains("gamma"), "{e}");
-    let e = error_line(&madenet(&["train", "--resume", dir.join("nothing").to_str().unwrap()]));
+    let e = error_line(&madenet(&[
+        "train",
+        "--resume",
+        dir.join("nothing").to_str().unwrap(),
+    ]));
     assert!(e.contains("nothing") && e.contains("config.toml"), "{e}");
-    let e = error_line(&madenet(&["train", "--out", out.to_str().unwrap(), "--method", "dqn"]));
+    let e = error_line(&madenet(&[
+        "train",
+        "--out",
+        out.to_str().unwrap(),
+        "--method",
+        "dqn",
+    ]));
     assert!(e.contains("dqn"), "{e}");
     // A learned model refuses a team size it was not trained for.
     let four = dir.join("four.toml");
     std::fs::write(&four, "num_robots = 4\n").unwrap();
-    let e = error_line(&madenet(&["run", "--map", "paper:1", "--policy", "made-net", "--start", "0,0;0,1;1,0;1,1", "--config", four.to_str().unwrap()]));
+    let e = error_line(&madenet(&[
+        "run",
+        "--map",
+        "paper:1",
+        "--policy",
+        "made-net",
+        "--start",
+        "0,0;0,1;1,0;1,1",
+        "--config",
+        four.to_str().unwrap(),
+    ]));
     assert!(e.contains("made-net") && e.contains("3 robots"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -80,25 +145,57 @@ fn dme_drl_tiny_run_resume_model_and_bad_input() {
     let run = dir.join("run");
     let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
     // The config's `method` picks the learner; --method dme-drl says the same.
-    let o = madenet(&["train", "--config", c, "--out", r, "--method", "dme-drl", "-q"]);
+    let o = madenet(&[
+        "train", "--config", c, "--out", r, "--method", "dme-drl", "-q",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let updates = std::fs::read_to_string(run.join("updates.csv")).unwrap();
-    assert!(updates.starts_with("update,critic_loss,actor_loss"), "{updates}");
+    assert!(
+        updates.starts_with("update,critic_loss,actor_loss"),
+        "{updates}"
+    );
     let o = madenet(&["train", "--resume", r, "--episodes", "3", "-q"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(std::fs::read_to_string(run.join("episodes.csv")).unwrap().lines().count(), 1 + 3);
+    assert_eq!(
+        std::fs::read_to_string(run.join("episodes.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        1 + 3
+    );
     let o = madenet(&["plot-training", r]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = madenet(&["run", "--map", "generate:2", "--policy", "model", "--model", run.join("last").to_str().unwrap(), "--json"]);
+    let o = madenet(&[
+        "run",
+        "--map",
+        "generate:2",
+        "--policy",
+        "model",
+        "--model",
+        run.join("last").to_str().unwrap(),
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
     // Bad DME-DRL input: the file and field named, exit 2.
     let bad = dir.join("bad-dme.toml");
     std::fs::write(&bad, "method = \"dme-drl\"\ntau = 0.0\n").unwrap();
-    let e = error_line(&madenet(&["train", "--config", bad.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]));
+    let e = error_line(&madenet(&[
+        "train",
+        "--config",
+        bad.to_str().unwrap(),
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]));
     assert!(e.contains("bad-dme.toml") && e.contains("tau"), "{e}");
     std::fs::write(&bad, "method = \"dme-drl\"\ntrace_len = 4\n").unwrap();
-    let e = error_line(&madenet(&["train", "--config", bad.to_str().unwrap(), "--out", dir.join("x").to_str().unwrap()]));
+    let e = error_line(&madenet(&[
+        "train",
+        "--config",
+        bad.to_str().unwrap(),
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]));
     assert!(e.contains("bad-dme.toml") && e.contains("trace_len"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
