@@ -3,8 +3,8 @@
 
 use crate::value_error;
 use madenet_metrics::COVERAGE_LEVELS;
-use madenet_sim::{PolicyRegistry, TrialSpec};
-use madenet_study::runner::{self, TrialKey, TrialOutcome};
+use madenet_sim::PolicyRegistry;
+use madenet_study::runner::{self, TrialOutcome};
 use madenet_study::StudyConfig;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 pub struct CoreStudy {
     config: StudyConfig,
     registry: PolicyRegistry,
-    planned: Vec<(TrialKey, TrialSpec)>,
+    planned: Vec<runner::Planned>,
 }
 
 /// `config` (a study TOML file, optional) with `overrides` (a JSON object of top-level fields)
@@ -141,7 +141,7 @@ impl CoreStudy {
             pool.install(|| {
                 indices
                     .par_iter()
-                    .map(|&i| runner::run_one(&planned[i].0, &planned[i].1, registry))
+                    .map(|&i| runner::run_one(&planned[i], registry))
                     .collect()
             })
         });

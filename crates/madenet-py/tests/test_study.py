@@ -9,7 +9,7 @@ import pytest
 import madenet
 
 SMALL = dict(methods=["nf", "random"], maps=["paper:3", "generate:5"], starts=["top-left", "bottom-right"],
-             csp=[1.0, 0.5], seeds=2)
+             csp=[1.0, 0.5], seeds=2, oracles=[])
 
 
 def assert_same_table(a: dict, b: dict):
@@ -23,7 +23,7 @@ def assert_same_table(a: dict, b: dict):
 def test_compare_matches_the_command_line(cli, tmp_path):
     config = tmp_path / "study.toml"
     config.write_text('methods = ["nf", "random"]\nmaps = ["paper:3", "generate:5"]\nstarts = ["top-left", "bottom-right"]\n'
-                      'csp = [1.0, 0.5]\nseeds = 2\n')
+                      'csp = [1.0, 0.5]\nseeds = 2\noracles = []\n')
     subprocess.run([cli, "compare", "--config", str(config), "--out", str(tmp_path / "cli")], check=True, capture_output=True)
     with open(tmp_path / "cli" / "trials.csv") as f:
         rows = list(csv.DictReader(f))

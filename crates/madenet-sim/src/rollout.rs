@@ -85,6 +85,49 @@ pub enum OracleKind {
     Placebo,
 }
 
+impl OracleKind {
+    pub const ALL: [OracleKind; 4] = [
+        OracleKind::Replay,
+        OracleKind::Averaged,
+        OracleKind::Noiseless,
+        OracleKind::Placebo,
+    ];
+
+    /// The name in configs and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            OracleKind::Replay => "replay",
+            OracleKind::Averaged => "averaged",
+            OracleKind::Noiseless => "noiseless",
+            OracleKind::Placebo => "placebo",
+        }
+    }
+
+    /// Whether `futures` matters (the placebo and averaged oracles draw that many futures).
+    pub fn uses_futures(self) -> bool {
+        matches!(self, OracleKind::Averaged | OracleKind::Placebo)
+    }
+}
+
+/// Why `spec`'s policy cannot be an oracle's base rule, if it cannot: the oracle needs a rule
+/// that chooses among two or more goal candidates when its robot's goal ends.
+pub fn check_base(spec: &TrialSpec, registry: &PolicyRegistry) -> Result<(), String> {
+    let probe = Trial::with_registry(spec.clone(), registry).map_err(|e| e.to_string())?;
+    let Some(agent) = probe.agents().first() else {
+        return Ok(());
+    };
+    if agent.config().goal_count < 2 {
+        return Err("the oracle needs at least 2 goal candidates per decision (goal_count)".into());
+    }
+    if agent.policy_mode() != madenet_agent::DecisionMode::OnTermination {
+        return Err(format!(
+            "`{}` re-decides every step; the oracle needs a rule that chooses among goal candidates (e.g. spread, random, made-net)",
+            spec.policy
+        ));
+    }
+    Ok(())
+}
+
 /// A trial of `spec` (its `policy` is the base rule) in which `kind`'s oracle makes every
 /// decision with two or more candidates; robots decide in index order, each seeing the
 /// oracle's choices for the robots before it.

@@ -2,6 +2,7 @@
 
 use madenet_baselines::BaselineParams;
 use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
+use madenet_sim::rollout::OracleKind;
 use madenet_sim::{MapSource, PolicyRegistry, StartSpec};
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
@@ -26,6 +27,16 @@ pub struct StudyConfig {
     pub seed_base: u64,
     /// The scenario of every trial (its `comm_success_prob` is replaced by each CSP).
     pub scenario: ScenarioConfig,
+    /// Rollout oracles run beside the methods on the same trials (`madenet oracle`): the
+    /// ceiling a method is judged against (`noiseless`: knows the map, not the noise) and the
+    /// part of a replay's gain that is luck (`placebo`). Reported in their own section of
+    /// `report.md`, never ranked with the methods. `[]` runs none.
+    pub oracles: Vec<OracleKind>,
+    /// The base rule the oracles' continuations follow (a policy choosing among goal
+    /// candidates); its own trials run too, listed among the methods or not.
+    pub oracle_base: String,
+    /// Futures per decision of the `placebo` and `averaged` oracles (1–64).
+    pub oracle_futures: usize,
     /// Parameters of the classical baselines.
     pub baselines: BaselineParams,
 }
@@ -51,6 +62,9 @@ impl Default for StudyConfig {
             seeds: 5,
             seed_base: 1,
             scenario: ScenarioConfig::default(),
+            oracles: vec![OracleKind::Placebo, OracleKind::Noiseless],
+            oracle_base: "spread".into(),
+            oracle_futures: 4,
             baselines: BaselineParams::default(),
         }
     }
@@ -87,7 +101,22 @@ pub struct StudyMap {
     pub paper: bool,
 }
 
+/// The method name of an oracle's trials in `trials.csv`.
+pub fn oracle_method(kind: OracleKind) -> String {
+    format!("oracle-{}", kind.name())
+}
+
 impl StudyConfig {
+    /// Every policy whose own trials run: the methods, then the oracles' base rule if it is
+    /// not one of them.
+    pub fn policies_run(&self) -> Vec<String> {
+        let mut v = self.methods.clone();
+        if !self.oracles.is_empty() && !v.contains(&self.oracle_base) {
+            v.push(self.oracle_base.clone());
+        }
+        v
+    }
+
     pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
         let text = std::fs::read_to_string(path).map_err(|e| StudyError::File {
             path: path.display().to_string(),
@@ -142,6 +171,35 @@ impl StudyConfig {
         {
             return Err(field("methods", format!("`{}` is listed twice", d.1)));
         }
+        if let Some(d) = self
+            .oracles
+            .iter()
+            .enumerate()
+            .find(|(i, o)| self.oracles[..*i].contains(o))
+        {
+            return Err(field(
+                "oracles",
+                format!("`{}` is listed twice", d.1.name()),
+            ));
+        }
+        if !self.oracles.is_empty() {
+            if !known.contains(&self.oracle_base) {
+                return Err(field(
+                    "oracle_base",
+                    format!(
+                        "unknown policy `{}`; known: {}",
+                        self.oracle_base,
+                        known.join(", ")
+                    ),
+                ));
+            }
+            if !(1..=64).contains(&self.oracle_futures) {
+                return Err(field(
+                    "oracle_futures",
+                    format!("{} is not in 1..=64", self.oracle_futures),
+                ));
+            }
+        }
         if self.csp.is_empty() {
             return Err(field(
                 "csp",
@@ -178,7 +236,7 @@ impl StudyConfig {
             }
         }
         // Learned models run only on the map and team sizes they were trained for.
-        for m in &self.methods {
+        for m in &self.policies_run() {
             for map in &maps {
                 let ctx = madenet_sim::PolicyContext {
                     seed: 0,
@@ -190,6 +248,24 @@ impl StudyConfig {
                 registry
                     .check(m, &ctx)
                     .map_err(|e| field("methods", format!("{e} (map {})", map.name)))?;
+            }
+        }
+        if let (Some(map), Some(start)) = (maps.first(), starts.first()) {
+            if !self.oracles.is_empty() {
+                let spec = madenet_sim::TrialSpec {
+                    map: map.grid.clone(),
+                    map_name: map.name.clone(),
+                    starts: start.cells(
+                        &map.grid,
+                        self.scenario.num_robots,
+                        self.scenario.movement,
+                    ),
+                    config: self.scenario.clone(),
+                    policy: self.oracle_base.clone(),
+                    seed: self.seed_base,
+                };
+                madenet_sim::rollout::check_base(&spec, registry)
+                    .map_err(|e| field("oracle_base", e))?;
             }
         }
         Ok((maps, starts))

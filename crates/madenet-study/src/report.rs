@@ -4,7 +4,7 @@ use crate::analysis::{
     csps, mean_curve, select, statistics, summary, Metric, MetricStats, SummaryRow,
 };
 use crate::calibration::{compare, conventions, Comparison};
-use crate::config::{StudyConfig, StudyError};
+use crate::config::{oracle_method, StudyConfig, StudyError};
 use crate::runner::{write_atomic, TrialOutcome};
 use madenet_plots::{bar_panels, line_panels, BarPanel, BarSeries, LinePanel, LineSeries};
 use std::fmt::Write as _;
@@ -106,6 +106,78 @@ fn robustness_md(rows: &[SummaryRow], cs: &[(f64, String)], methods: &[String]) 
                 }
             }
         }
+    }
+    s
+}
+
+/// The ceiling: mean TNS per CSP of the oracles' base rule, each oracle and each method, each
+/// against the base rule and as a share of the noiseless oracle's gain over it.
+fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]) -> String {
+    let base = &cfg.oracle_base;
+    let oracles: Vec<String> = cfg.oracles.iter().map(|&k| oracle_method(k)).collect();
+    let mut runs = vec![base.clone()];
+    runs.extend(oracles.iter().cloned());
+    runs.extend(cfg.methods.iter().filter(|m| *m != base).cloned());
+    let rows = summary(outcomes, &runs);
+    let tns = |m: &str, c: &str| {
+        rows.iter()
+            .find(|r| r.method == m && r.csp == c)
+            .map(|r| r.metrics[0].0)
+    };
+    let mut s = format!(
+        "Rollout oracles over the base rule `{base}` on the same trials (`madenet oracle`; \
+         `madenet_sim::rollout`): at every decision with two or more goal candidates the oracle \
+         scores each candidate by continuing the trial with it under `{base}`, and takes the best. \
+         Oracles are never ranked with the methods.\n\n"
+    );
+    for kind in &cfg.oracles {
+        use madenet_sim::rollout::OracleKind;
+        let f = cfg.oracle_futures;
+        let text = match kind {
+            OracleKind::Noiseless => "scores in the noiseless future: it knows the map but not the noise to come — what the best choice among these candidates is worth, the ceiling of a policy that learns to choose".to_string(),
+            OracleKind::Placebo => format!("keeps `{base}`'s own choice and lives the luckiest of {f} futures of the noise: its gain is luck that no policy can learn"),
+            OracleKind::Replay => "scores in the trial's own future: it knows the map and the luck to come (an upper bound that includes luck)".to_string(),
+            OracleKind::Averaged => format!("scores over {f} other futures: it knows the map, its scores carry the futures' luck"),
+        };
+        let _ = writeln!(s, "- **{}** {text}.", oracle_method(*kind));
+    }
+    s.push_str("\nMean TNS (change against the base rule; for methods, the share of the noiseless oracle's gain over the base rule they reach):\n\n");
+    s.push_str("| run |");
+    for (_, c) in cs {
+        let _ = write!(s, " CSP {} |", pct(c));
+    }
+    s.push_str("\n|---|");
+    s.push_str(&"---|".repeat(cs.len()));
+    s.push('\n');
+    let noiseless = oracle_method(madenet_sim::rollout::OracleKind::Noiseless);
+    for m in &runs {
+        let role = if m == base {
+            " (base)"
+        } else if oracles.contains(m) {
+            " (oracle)"
+        } else {
+            ""
+        };
+        let _ = write!(s, "| {m}{role} |");
+        for (_, c) in cs {
+            let (Some(v), Some(b)) = (tns(m, c), tns(base, c)) else {
+                s.push_str(" — |");
+                continue;
+            };
+            if m == base {
+                let _ = write!(s, " {v:.1} |");
+                continue;
+            }
+            let _ = write!(s, " {v:.1} ({:+.1} %", 100.0 * (v / b - 1.0));
+            match tns(&noiseless, c) {
+                Some(o) if !oracles.contains(m) && b - o > 1e-9 => {
+                    let _ = write!(s, "; {:.0} % of the gain", 100.0 * (b - v) / (b - o));
+                }
+                _ => {}
+            }
+            s.push_str(") |");
+        }
+        s.push('\n');
     }
     s
 }
@@ -348,8 +420,17 @@ pub fn write_all(
     let _ = writeln!(r, "# madenet comparison study\n");
     let _ = writeln!(
         r,
-        "Methods {} on {} maps × {} starts × CSP {{{}}} × {} seeds (seed {}…): {} trials, step cap {}, simulated in {:.1} s on this machine. Configuration: `study.toml`; every trial: `trials.csv` (exploration curves: `curves.jsonl`).\n",
+        "Methods {}{} on {} maps × {} starts × CSP {{{}}} × {} seeds (seed {}…): {} trials, step cap {}, simulated in {:.1} s on this machine. Configuration: `study.toml`; every trial: `trials.csv` (exploration curves: `curves.jsonl`).\n",
         cfg.methods.join(", "),
+        if cfg.oracles.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " and the oracles {} over `{}`",
+                cfg.oracles.iter().map(|o| o.name()).collect::<Vec<_>>().join(", "),
+                cfg.oracle_base
+            )
+        },
         outcomes.iter().map(|o| &o.row.key.map).collect::<std::collections::BTreeSet<_>>().len(),
         cfg.starts.len(),
         cfg.csp.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(", "),
@@ -370,6 +451,13 @@ pub fn write_all(
         "## Best method per CSP, and robustness to dropouts\n\n{}",
         robustness_md(&rows, &cs, &cfg.methods)
     );
+    if !cfg.oracles.is_empty() {
+        let _ = writeln!(
+            r,
+            "## The ceiling: rollout oracles\n\n{}",
+            ceiling_md(cfg, outcomes, &cs)
+        );
+    }
     let _ = writeln!(r, "## Statistics\n\n{}", statistics_md(&stats, alpha));
     let _ = writeln!(
         r,

@@ -1,7 +1,8 @@
 //! Running the trials: in parallel, appended as whole lines as they finish, resumable.
 
-use crate::config::{StudyConfig, StudyError, StudyMap};
+use crate::config::{oracle_method, StudyConfig, StudyError, StudyMap};
 use madenet_metrics::COVERAGE_LEVELS;
+use madenet_sim::rollout::{run_oracle, OracleKind};
 use madenet_sim::{PolicyRegistry, StartSpec, Trial, TrialSpec};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -207,14 +208,32 @@ fn csp_label(c: f64) -> String {
     format!("{c}")
 }
 
-/// Everything the study runs, in output order.
-pub fn plan(
-    cfg: &StudyConfig,
-    maps: &[StudyMap],
-    starts: &[StartSpec],
-) -> Vec<(TrialKey, TrialSpec)> {
+/// A trial the study runs: its key, its spec, and the oracle that makes its decisions (`None`:
+/// the spec's policy does).
+#[derive(Clone, Debug)]
+pub struct Planned {
+    pub key: TrialKey,
+    pub spec: TrialSpec,
+    /// The oracle and its number of futures.
+    pub oracle: Option<(OracleKind, usize)>,
+}
+
+/// Everything the study runs, in output order: each policy of
+/// [`StudyConfig::policies_run`], then each oracle (over `oracle_base`).
+pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<Planned> {
+    let runs = cfg
+        .policies_run()
+        .into_iter()
+        .map(|m| (m.clone(), m, None))
+        .chain(cfg.oracles.iter().map(|&k| {
+            (
+                oracle_method(k),
+                cfg.oracle_base.clone(),
+                Some((k, cfg.oracle_futures)),
+            )
+        }));
     let mut v = Vec::new();
-    for method in &cfg.methods {
+    for (method, policy, oracle) in runs {
         for m in maps {
             for s in starts {
                 for &csp in &cfg.csp {
@@ -240,10 +259,10 @@ pub fn plan(
                                 cfg.scenario.movement,
                             ),
                             config,
-                            policy: method.clone(),
+                            policy: policy.clone(),
                             seed,
                         };
-                        v.push((key, spec));
+                        v.push(Planned { key, spec, oracle });
                     }
                 }
             }
@@ -252,16 +271,19 @@ pub fn plan(
     v
 }
 
-/// Runs one planned trial (its outcome depends only on `key` and `spec`, never on which
+/// Runs one planned trial (its outcome depends only on what was planned, never on which
 /// thread, process or machine runs it).
-pub fn run_one(
-    key: &TrialKey,
-    spec: &TrialSpec,
-    registry: &PolicyRegistry,
-) -> Result<TrialOutcome, StudyError> {
-    let result = Trial::with_registry(spec.clone(), registry)
-        .map_err(|e| StudyError::Other(format!("{key:?}: {e}")))?
-        .run();
+pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, StudyError> {
+    let (key, spec) = (&p.key, &p.spec);
+    let failed = |e: madenet_sim::SimError| StudyError::Other(format!("{key:?}: {e}"));
+    let result = match p.oracle {
+        None => Trial::with_registry(spec.clone(), registry)
+            .map_err(failed)?
+            .run(),
+        Some((kind, futures)) => {
+            run_oracle(spec.clone(), registry, kind, futures).map_err(failed)?
+        }
+    };
     let m = &result.metrics;
     Ok(TrialOutcome {
         row: TrialRow {
@@ -298,15 +320,15 @@ pub fn run(
 ) -> Result<Vec<TrialOutcome>, StudyError> {
     let planned = plan(cfg, maps, starts);
     // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
-    for (key, spec) in &planned {
-        if key.seed == cfg.seed_base {
-            Trial::with_registry(spec.clone(), registry).map_err(|e| {
-                StudyError::Other(format!("map {}, start {}: {e}", key.map, key.start))
+    for p in &planned {
+        if p.key.seed == cfg.seed_base {
+            Trial::with_registry(p.spec.clone(), registry).map_err(|e| {
+                StudyError::Other(format!("map {}, start {}: {e}", p.key.map, p.key.start))
             })?;
         }
     }
     let mut done = load_done(out);
-    done.retain(|k, _| planned.iter().any(|(p, _)| p == k));
+    done.retain(|k, _| planned.iter().any(|p| &p.key == k));
     // Rewrite the record files with exactly the complete trials, then append.
     let mut kept: Vec<&TrialOutcome> = done.values().collect();
     kept.sort_by(|a, b| a.row.key.cmp(&b.row.key));
@@ -321,17 +343,17 @@ pub fn run(
             })
     };
     let files = Mutex::new((open("trials.csv")?, open("curves.jsonl")?));
-    let todo: Vec<&(TrialKey, TrialSpec)> = planned
+    let todo: Vec<&Planned> = planned
         .iter()
-        .filter(|(k, _)| !done.contains_key(k))
+        .filter(|p| !done.contains_key(&p.key))
         .collect();
     let total = planned.len();
     let counter = std::sync::atomic::AtomicUsize::new(done.len());
     progress(done.len(), total);
     let fresh: Vec<Result<TrialOutcome, StudyError>> = todo
         .par_iter()
-        .map(|(key, spec)| {
-            let outcome = run_one(key, spec, registry)?;
+        .map(|p| {
+            let outcome = run_one(p, registry)?;
             {
                 let mut f = files.lock().expect("no panics while holding the lock");
                 let io = |e: std::io::Error| StudyError::File {
@@ -357,7 +379,7 @@ pub fn run(
     }
     let all: Vec<TrialOutcome> = planned
         .iter()
-        .map(|(k, _)| done.remove(k).expect("every planned trial ran"))
+        .map(|p| done.remove(&p.key).expect("every planned trial ran"))
         .collect();
     // Final files in plan order: the same bytes whatever the thread count or interruptions
     // (but for the wall-clock columns).

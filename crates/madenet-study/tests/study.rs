@@ -61,6 +61,7 @@ fn small(methods: &[&str], csp: &[f64], seeds: u64) -> StudyConfig {
         starts: strings(&["top-left", "bottom-right"]),
         csp: csp.to_vec(),
         seeds,
+        oracles: vec![],
         ..StudyConfig::default()
     }
 }
@@ -1177,4 +1178,108 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
         assert!(!fresh.trajectory.is_empty());
         assert_eq!(untimed(restarted), untimed(fresh), "{policy}");
     }
+}
+
+/// Oracles run beside the methods on the same trials: their rows are what
+/// `madenet_sim::rollout::run_oracle` gives for the same spec, their base rule runs although it
+/// is not a method, and they appear in the report's ceiling section only — never in the
+/// summary, the statistics or the figures' ranking.
+#[test]
+fn oracles_run_beside_the_methods_and_are_reported_apart() {
+    use madenet_sim::rollout::{run_oracle, OracleKind};
+    let dir = Scratch::new("oracles");
+    let out = dir.path();
+    let cfg = StudyConfig {
+        maps: strings(&["paper:1"]),
+        oracles: vec![OracleKind::Noiseless, OracleKind::Placebo],
+        oracle_futures: 2,
+        ..small(&["nf"], &[1.0, 0.0], 1)
+    };
+    let (report, outcomes, _) = run_ok(&cfg, out, false);
+    let per_run = 2 * 2; // starts × CSPs
+    let methods: Vec<&str> = outcomes.iter().map(|o| o.row.key.method.as_str()).collect();
+    for m in ["nf", "spread", "oracle-noiseless", "oracle-placebo"] {
+        assert_eq!(methods.iter().filter(|x| **x == m).count(), per_run, "{m}");
+    }
+    assert_eq!(outcomes.len(), 4 * per_run);
+    // Each oracle row is the oracle's own trial.
+    let registry = cfg.registry().unwrap();
+    let (maps, starts) = cfg.validate(&registry).unwrap();
+    let planned = madenet_study::runner::plan(&cfg, &maps, &starts);
+    for p in planned.iter().filter(|p| p.oracle.is_some()) {
+        let (kind, futures) = p.oracle.unwrap();
+        assert_eq!(p.spec.policy, "spread");
+        let direct = run_oracle(p.spec.clone(), &registry, kind, futures).unwrap();
+        let row = &outcomes.iter().find(|o| o.row.key == p.key).unwrap().row;
+        assert_eq!(row.tns, direct.metrics.tns, "{:?}", p.key);
+        assert_eq!(row.noli, direct.metrics.noli, "{:?}", p.key);
+    }
+    // Only the methods are summarised and tested.
+    let summary = read(&out.join("summary.csv"));
+    let stats = read(&out.join("statistics.csv"));
+    for text in [&summary, &stats] {
+        assert!(
+            !text.contains("oracle") && !text.contains("spread"),
+            "{text}"
+        );
+    }
+    assert!(summary.contains("\nnf,"));
+    let report = read(&report);
+    let ceiling = report
+        .split("## The ceiling: rollout oracles")
+        .nth(1)
+        .expect("a ceiling section")
+        .split("\n## ")
+        .next()
+        .unwrap();
+    for needle in [
+        "| spread (base) |",
+        "| oracle-noiseless (oracle) |",
+        "| oracle-placebo (oracle) |",
+        "| nf |",
+        "CSP 0 %",
+        "CSP 100 %",
+    ] {
+        assert!(
+            ceiling.contains(needle),
+            "`{needle}` missing from: {ceiling}"
+        );
+    }
+}
+
+#[test]
+fn bad_oracle_fields_are_refused() {
+    use madenet_sim::rollout::OracleKind;
+    let base = StudyConfig {
+        oracles: vec![OracleKind::Noiseless],
+        ..small(&["nf"], &[1.0], 1)
+    };
+    assert_refused(
+        &StudyConfig {
+            oracles: vec![OracleKind::Noiseless, OracleKind::Noiseless],
+            ..base.clone()
+        },
+        &["oracles", "noiseless", "twice"],
+    );
+    assert_refused(
+        &StudyConfig {
+            oracle_base: "nf".into(),
+            ..base.clone()
+        },
+        &["oracle_base", "re-decides every step"],
+    );
+    assert_refused(
+        &StudyConfig {
+            oracle_base: "teleport".into(),
+            ..base.clone()
+        },
+        &["oracle_base", "teleport"],
+    );
+    assert_refused(
+        &StudyConfig {
+            oracle_futures: 0,
+            ..base.clone()
+        },
+        &["oracle_futures", "0"],
+    );
 }

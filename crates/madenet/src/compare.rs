@@ -3,13 +3,15 @@
 use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
+use madenet_sim::rollout::OracleKind;
 use madenet_study::{run_study, StudyConfig};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct CompareArgs {
-    /// Study config (TOML, see configs/study.toml); defaults: nf, ub, pb × the 10 paper maps ×
-    /// 4 corners × CSP {0, 0.5, 0.8, 1} × 5 seeds.
+    /// Study config (TOML, see configs/study.toml); defaults: every shipped method, the placebo
+    /// and noiseless oracles over spread × the 10 paper maps × 4 corners × CSP {0, 0.5, 0.8, 1}
+    /// × 5 seeds.
     #[arg(long)]
     config: Option<PathBuf>,
     /// Output folder (created; an interrupted study there resumes).
@@ -21,12 +23,30 @@ pub struct CompareArgs {
     /// Methods, overriding the config (comma-separated policy names).
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
+    /// Rollout oracles beside the methods, overriding the config (comma-separated: replay,
+    /// averaged, noiseless, placebo; `none` for none).
+    #[arg(long, value_delimiter = ',', value_parser = parse_oracle)]
+    oracles: Option<Vec<Option<OracleKind>>>,
     /// Seeds per trial, overriding the config.
     #[arg(long)]
     seeds: Option<u64>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+}
+
+fn parse_oracle(s: &str) -> Result<Option<OracleKind>, String> {
+    if s == "none" {
+        return Ok(None);
+    }
+    OracleKind::ALL
+        .into_iter()
+        .find(|k| k.name() == s)
+        .map(Some)
+        .ok_or_else(|| {
+            let names: Vec<&str> = OracleKind::ALL.iter().map(|k| k.name()).collect();
+            format!("unknown oracle `{s}`; known: {}, none", names.join(", "))
+        })
 }
 
 pub fn run(a: CompareArgs) -> Result<()> {
@@ -36,6 +56,9 @@ pub fn run(a: CompareArgs) -> Result<()> {
     };
     if let Some(m) = a.methods {
         cfg.methods = m;
+    }
+    if let Some(o) = a.oracles {
+        cfg.oracles = o.into_iter().flatten().collect();
     }
     if let Some(s) = a.seeds {
         cfg.seeds = s;

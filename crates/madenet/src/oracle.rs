@@ -5,7 +5,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use madenet_sim::rollout::{run_oracle, OracleKind};
+use madenet_sim::rollout::{check_base, run_oracle, OracleKind};
 use madenet_sim::{Trial, TrialResult};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -87,21 +87,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         &a.base,
     )?;
     if let Some((_, s)) = specs.first() {
-        let probe = Trial::with_registry(s.clone(), &registry)?;
-        if probe
-            .agents()
-            .first()
-            .is_some_and(|ag| ag.config().goal_count < 2)
-        {
-            bail!("--base: the oracle needs at least 2 goal candidates per decision");
-        }
-        if probe
-            .agents()
-            .first()
-            .is_some_and(|ag| ag.policy_mode() != madenet_agent::DecisionMode::OnTermination)
-        {
-            bail!("--base {}: re-decides every step; the oracle needs a rule that chooses among goal candidates (e.g. spread, random, made-net)", a.base);
-        }
+        check_base(s, &registry).map_err(|e| anyhow::anyhow!("--base {}: {e}", a.base))?;
     }
     let kind = match a.kind {
         Kind::Replay => OracleKind::Replay,

@@ -43,6 +43,7 @@ maps = ["paper:1", "paper:2"]
 starts = ["top-left", "bottom-right"]
 csp = [1.0, 0.0]
 seeds = 2
+oracles = []
 "#;
 
 fn write(path: &Path, text: &str) -> String {
@@ -242,6 +243,30 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
         &madenet(&["compare", "--config", &f, "--out", o]),
         &["csp", "2"],
     );
+
+    let f = bad(
+        "oracle.toml",
+        &SMALL.replace("oracles = []", "oracles = [\"psychic\"]"),
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &[&f, "psychic", "line 6"],
+    );
+    let f = bad(
+        "oracle_base.toml",
+        &SMALL.replace(
+            "oracles = []",
+            "oracles = [\"placebo\"]\noracle_base = \"nf\"",
+        ),
+    );
+    assert_clean_error(
+        &madenet(&["compare", "--config", &f, "--out", o]),
+        &["oracle_base", "re-decides every step"],
+    );
+    let flag = madenet(&["compare", "--oracles", "psychic", "--out", o]);
+    assert_eq!(flag.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&flag.stderr)
+        .contains("unknown oracle `psychic`; known: replay, averaged, noiseless, placebo, none"));
 
     let f = bad("seeds.toml", &SMALL.replace("seeds = 2", "seeds = 0"));
     assert_clean_error(
