@@ -224,8 +224,10 @@ const GIVE_UP_AFTER: usize = 150;
 /// so the density never overshoots the target (the target is rounded to whole cells, so the
 /// density is at most `density_max + 0.5 / cells`). After a bounded number of consecutive
 /// rejections the generator stops with the densest map reached, which can then fall short of
-/// the target (rarely, for dense targets on small grids). The cost is
-/// O(additions × cells).
+/// the target (rarely, for dense targets on small grids). Each addition's connectivity check
+/// searches outward from the free cells around the new ones only until they are known to be
+/// joined (or one part is found closed off), so it costs about the area of the detour or of the
+/// smaller part rather than of the whole grid.
 ///
 /// The grid has 1 m cells and a zero origin. Errors come from [`GeneratorConfig::validate`].
 pub fn generate(cfg: &GeneratorConfig, seed: u64) -> Result<OccGrid, MapError> {
@@ -257,8 +259,9 @@ pub fn generate_with_movement(
         protected[grid.index(*p)] = true;
     }
     let mut obstacles: Vec<Pos> = Vec::with_capacity(target);
-    let mut scratch = Bfs::default();
+    let mut cut = CutCheck::default();
     let mut shape = Vec::with_capacity(16);
+    let mut seen = Vec::with_capacity(16);
     let mut failures = 0;
 
     while obstacles.len() < target && failures < GIVE_UP_AFTER {
@@ -271,7 +274,7 @@ pub fn generate_with_movement(
         );
         // Keep the new cells, in shape order, up to the target.
         let remaining = target - obstacles.len();
-        let mut seen = Vec::with_capacity(shape.len());
+        seen.clear();
         for &p in &shape {
             if grid.is_free(p) && !seen.contains(&p) && seen.len() < remaining {
                 seen.push(p);
@@ -294,17 +297,10 @@ pub fn generate_with_movement(
                 for &p in &seen {
                     grid.set(p, Occupancy::Obstacle);
                 }
-                let free_left = n - obstacles.len() - seen.len();
-                // Count from a cell that is certainly free: a kept cell, else the first free one.
-                let anchor = cfg.keep_free.first().copied().or_else(|| {
-                    grid.cells()
-                        .iter()
-                        .position(|&c| c == Occupancy::Free)
-                        .map(|i| grid.pos(i))
-                });
-                let ok = anchor.map_or(free_left == 0, |a| {
-                    scratch.reach_count(&grid, a, movement) == free_left
-                });
+                // The free space was one component before this addition (it starts whole and
+                // every accepted addition keeps it so), so only the new cells' surroundings
+                // need checking rather than the whole grid.
+                let ok = cut.still_connected(&grid, &seen, movement);
                 if !ok {
                     for &p in &seen {
                         grid.set(p, Occupancy::Free);
@@ -394,6 +390,155 @@ fn random_shape(
                 }
             }
         }
+    }
+}
+
+/// Decides whether blocking a few cells split a free space that was one connected component,
+/// without searching the whole grid.
+///
+/// Hand-written for the generator: every part the free space could fall into must contain a
+/// free cell bordering the blocked ones (a path from any free cell to a blocked one enters it
+/// from such a border cell), so the free space is still one component exactly when all the
+/// border cells are still connected to one another. One search per border cell grows in turn,
+/// one cell at a time; searches that meet are merged (union-find). The answer is yes once a
+/// single merged search is left and no once some merged search runs out of cells (it has
+/// enclosed a part without the others). Either way the work is about the size of the detour
+/// around the blocked cells, or of the smallest enclosed part, times the few searches.
+#[derive(Default)]
+struct CutCheck {
+    /// Per cell (row-major): the label of the search that reached it. Labels only grow, so
+    /// those below the current search's first label are stale and the array never needs
+    /// clearing.
+    label: Vec<u32>,
+    /// The first label not yet handed out.
+    next: u32,
+    /// The free cells bordering the blocked ones; search `g` starts from `border[g]`.
+    border: Vec<Pos>,
+    /// Cells reached by search `g` and not yet expanded.
+    queues: Vec<VecDeque<Pos>>,
+    /// Union-find forest over the searches.
+    parent: Vec<usize>,
+    /// Per root search: cells of its merged search not yet expanded.
+    pending: Vec<usize>,
+}
+
+impl CutCheck {
+    /// Whether the free cells of `grid` are one component (under `movement`, see the module
+    /// docs), given that they were before the cells `blocked` became obstacles.
+    fn still_connected(&mut self, grid: &OccGrid, blocked: &[Pos], movement: Movement) -> bool {
+        // Without corner cutting, reachability is exactly 4-connectivity (see module docs).
+        let dirs = match movement {
+            Movement::NoCornerCutting => &DIRS[..4],
+            Movement::CornerCutting => &DIRS[..],
+        };
+        self.border.clear();
+        for p in blocked {
+            for (dr, dc) in dirs {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if grid.is_free(q) && !self.border.contains(&q) {
+                    self.border.push(q);
+                }
+            }
+        }
+        // No border cell: nothing is left free. One: everything left is connected to it.
+        let k = self.border.len();
+        if k <= 1 {
+            return true;
+        }
+
+        if self.label.len() != grid.len() {
+            self.label = vec![0; grid.len()];
+            self.next = 1;
+        }
+        if self.next.checked_add(k as u32).is_none() {
+            self.label.fill(0);
+            self.next = 1;
+        }
+        let base = self.next;
+        self.next += k as u32;
+        self.parent.clear();
+        self.parent.extend(0..k);
+        self.pending.clear();
+        self.pending.resize(k, 1);
+        if self.queues.len() < k {
+            self.queues.resize_with(k, VecDeque::new);
+        }
+        for (g, &p) in self.border.iter().enumerate() {
+            self.label[grid.index(p)] = base + g as u32;
+            self.queues[g].clear();
+            self.queues[g].push_back(p);
+        }
+
+        let mut searches = k;
+        // Border cells next to each other are connected without searching.
+        for a in 0..k {
+            for b in a + 1..k {
+                let (pa, pb) = (self.border[a], self.border[b]);
+                let (dr, dc) = ((pa.row - pb.row).abs(), (pa.col - pb.col).abs());
+                let adjacent = match movement {
+                    Movement::NoCornerCutting => dr + dc == 1,
+                    Movement::CornerCutting => dr.max(dc) == 1,
+                };
+                if adjacent && self.union(a, b) {
+                    searches -= 1;
+                }
+            }
+        }
+        if searches == 1 {
+            return true;
+        }
+
+        loop {
+            for g in 0..k {
+                let Some(p) = self.queues[g].pop_front() else {
+                    continue;
+                };
+                let root = self.find(g);
+                self.pending[root] -= 1;
+                for (dr, dc) in dirs {
+                    let q = Pos::new(p.row + dr, p.col + dc);
+                    if !grid.is_free(q) {
+                        continue;
+                    }
+                    let i = grid.index(q);
+                    let l = self.label[i];
+                    if l < base {
+                        self.label[i] = base + g as u32;
+                        self.queues[g].push_back(q);
+                        let root = self.find(g);
+                        self.pending[root] += 1;
+                    } else if self.union(g, (l - base) as usize) {
+                        searches -= 1;
+                        if searches == 1 {
+                            return true;
+                        }
+                    }
+                }
+                let root = self.find(g);
+                if self.pending[root] == 0 {
+                    return false;
+                }
+            }
+        }
+    }
+
+    fn find(&mut self, mut x: usize) -> usize {
+        while self.parent[x] != x {
+            self.parent[x] = self.parent[self.parent[x]];
+            x = self.parent[x];
+        }
+        x
+    }
+
+    /// Merges the searches of `a` and `b`; false if they were already one.
+    fn union(&mut self, a: usize, b: usize) -> bool {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra == rb {
+            return false;
+        }
+        self.parent[rb] = ra;
+        self.pending[ra] += self.pending[rb];
+        true
     }
 }
 
@@ -554,6 +699,444 @@ mod tests {
             let g = OccGrid::from_cells(8, 8, cells);
             let s = g.pos(start);
             prop_assert_eq!(reachable_from(&g, s), reachable_literal(&g, s));
+        }
+    }
+
+    /// The generator as it was before its connectivity check became local (a full
+    /// breadth-first count of the free cells after every addition), kept to show the maps did
+    /// not change: every result stream of the project is built on them.
+    fn reference_generate(
+        cfg: &GeneratorConfig,
+        seed: u64,
+        movement: Movement,
+    ) -> Result<OccGrid, MapError> {
+        cfg.validate()?;
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let (h, w) = (cfg.height, cfg.width);
+        let n = h * w;
+        let density = if cfg.density_min < cfg.density_max {
+            rng.random_range(cfg.density_min..=cfg.density_max)
+        } else {
+            cfg.density_min
+        };
+        let target = ((density * n as f64).round() as usize).min(n);
+
+        let mut grid = OccGrid::new(h, w, Occupancy::Free);
+        let mut protected = vec![false; n];
+        for p in &cfg.keep_free {
+            protected[grid.index(*p)] = true;
+        }
+        let mut obstacles: Vec<Pos> = Vec::with_capacity(target);
+        let mut scratch = Bfs::default();
+        let mut shape = Vec::with_capacity(16);
+        let mut failures = 0;
+
+        while obstacles.len() < target && failures < GIVE_UP_AFTER {
+            random_shape(
+                &mut rng,
+                &grid,
+                &obstacles,
+                failures >= SHRINK_AFTER,
+                &mut shape,
+            );
+            let remaining = target - obstacles.len();
+            let mut seen = Vec::with_capacity(shape.len());
+            for &p in &shape {
+                if grid.is_free(p) && !seen.contains(&p) && seen.len() < remaining {
+                    seen.push(p);
+                }
+            }
+            let touches = || {
+                seen.iter().any(|p| {
+                    DIRS.iter().any(|(dr, dc)| {
+                        grid.get(Pos::new(p.row + dr, p.col + dc)) == Occupancy::Obstacle
+                            && grid.in_bounds(Pos::new(p.row + dr, p.col + dc))
+                    })
+                })
+            };
+            let accepted = !seen.is_empty()
+                && !seen.iter().any(|&p| protected[grid.index(p)])
+                && (failures >= TOUCH_RELAX_AFTER || !touches() || rng.random_bool(TOUCH_ACCEPT))
+                && {
+                    for &p in &seen {
+                        grid.set(p, Occupancy::Obstacle);
+                    }
+                    let free_left = n - obstacles.len() - seen.len();
+                    let anchor = cfg.keep_free.first().copied().or_else(|| {
+                        grid.cells()
+                            .iter()
+                            .position(|&c| c == Occupancy::Free)
+                            .map(|i| grid.pos(i))
+                    });
+                    let ok = anchor.map_or(free_left == 0, |a| {
+                        scratch.reach_count(&grid, a, movement) == free_left
+                    });
+                    if !ok {
+                        for &p in &seen {
+                            grid.set(p, Occupancy::Free);
+                        }
+                    }
+                    ok
+                };
+            if accepted {
+                obstacles.extend_from_slice(&seen);
+                failures = 0;
+            } else {
+                failures += 1;
+            }
+        }
+        Ok(grid)
+    }
+
+    /// The density ranges and `keep_free` variants the identity tests cover: the default,
+    /// the wide range of `generate-wide` and training, dense targets, a fixed density (no
+    /// density draw), and no kept cells (the old check then counted from the first free cell).
+    const MODES: [&str; 6] = [
+        "default",
+        "wide",
+        "dense",
+        "fixed30",
+        "nokeep-wide",
+        "nokeep-dense",
+    ];
+
+    fn mode_config(mode: &str, h: usize, w: usize) -> GeneratorConfig {
+        let mut c = GeneratorConfig::for_size(h, w);
+        (c.density_min, c.density_max) = match mode {
+            "default" => (c.density_min, c.density_max),
+            "wide" | "nokeep-wide" => WIDE_DENSITY,
+            "dense" => (0.5, 0.85),
+            "fixed30" => (0.3, 0.3),
+            "nokeep-dense" => (0.6, 0.85),
+            _ => unreachable!("unknown mode {mode}"),
+        };
+        if mode.starts_with("nokeep") {
+            c.keep_free.clear();
+        }
+        c
+    }
+
+    const MOVEMENTS: [Movement; 2] = [Movement::NoCornerCutting, Movement::CornerCutting];
+
+    /// FNV-1a over the cells of the maps, one separator byte after each map.
+    fn feed_hash(hash: &mut u64, g: &OccGrid) {
+        for &c in g.cells() {
+            let b = match c {
+                Occupancy::Free => 0u64,
+                Occupancy::Obstacle => 1,
+                Occupancy::Unknown => 2,
+            };
+            *hash = (*hash ^ b).wrapping_mul(0x100_0000_01b3);
+        }
+        *hash = (*hash ^ 0xff).wrapping_mul(0x100_0000_01b3);
+    }
+
+    #[test]
+    fn same_maps_as_the_reference_generator() {
+        let sizes = [
+            (3, 3),
+            (3, 4),
+            (4, 3),
+            (3, 11),
+            (11, 3),
+            (5, 7),
+            (9, 9),
+            (12, 30),
+            (30, 12),
+            (20, 20),
+            (33, 27),
+            (48, 48),
+        ];
+        let mut maps = 0;
+        for mode in MODES {
+            for movement in MOVEMENTS {
+                for &(h, w) in &sizes {
+                    let cfg = mode_config(mode, h, w);
+                    let seeds = if h * w <= 400 { 0..16 } else { 100..104 };
+                    for seed in seeds {
+                        let new = generate_with_movement(&cfg, seed, movement).expect("new");
+                        let old = reference_generate(&cfg, seed, movement).expect("old");
+                        assert!(
+                            new == old,
+                            "{mode} {movement:?} {h}×{w} seed {seed}:\nnew\n{}\nold\n{}",
+                            to_text(&new),
+                            to_text(&old)
+                        );
+                        maps += 1;
+                    }
+                }
+            }
+        }
+        println!("{maps} maps identical");
+    }
+
+    /// Hashes of maps made by the generator before its connectivity check became local,
+    /// recorded with that code (commit 5328b0a): (mode, movement, height, width, seeds 0..N, hash
+    /// of the N maps).
+    const RECORDED: &[(&str, Movement, usize, usize, u64, u64)] = &[
+        (
+            "default",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            32,
+            0x4a99b1faa674bfeb,
+        ),
+        (
+            "default",
+            Movement::CornerCutting,
+            20,
+            20,
+            32,
+            0x00549b0b983ca499,
+        ),
+        (
+            "wide",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            32,
+            0x65d1b0ef96ca73f4,
+        ),
+        (
+            "wide",
+            Movement::CornerCutting,
+            20,
+            20,
+            32,
+            0x7fdf442b0cbacb0a,
+        ),
+        (
+            "dense",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            16,
+            0xdc69a2b60bf0d2ba,
+        ),
+        (
+            "dense",
+            Movement::CornerCutting,
+            20,
+            20,
+            16,
+            0xa590aa8b989dee61,
+        ),
+        (
+            "fixed30",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            16,
+            0x2e3d527247649e8b,
+        ),
+        (
+            "fixed30",
+            Movement::CornerCutting,
+            20,
+            20,
+            16,
+            0xca0e31b5572af981,
+        ),
+        (
+            "nokeep-wide",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            16,
+            0x4c85887b55f1f6bb,
+        ),
+        (
+            "nokeep-wide",
+            Movement::CornerCutting,
+            20,
+            20,
+            16,
+            0xd9c0bbe8c2b90f67,
+        ),
+        (
+            "nokeep-dense",
+            Movement::NoCornerCutting,
+            20,
+            20,
+            16,
+            0x21b8bcf918ca6820,
+        ),
+        (
+            "nokeep-dense",
+            Movement::CornerCutting,
+            20,
+            20,
+            16,
+            0xe93bd439ea5c0715,
+        ),
+        (
+            "default",
+            Movement::NoCornerCutting,
+            33,
+            33,
+            8,
+            0xe59371c8b7cb7e17,
+        ),
+        (
+            "default",
+            Movement::CornerCutting,
+            33,
+            33,
+            8,
+            0x829e05110e146111,
+        ),
+        (
+            "wide",
+            Movement::NoCornerCutting,
+            40,
+            60,
+            8,
+            0xaf0e29afd77d45fd,
+        ),
+        (
+            "wide",
+            Movement::CornerCutting,
+            40,
+            60,
+            8,
+            0x0d23e29d143a2905,
+        ),
+        (
+            "dense",
+            Movement::NoCornerCutting,
+            48,
+            48,
+            4,
+            0xa5951d1ecb32b70e,
+        ),
+        (
+            "dense",
+            Movement::CornerCutting,
+            48,
+            48,
+            4,
+            0x32e113426b9487b3,
+        ),
+        (
+            "default",
+            Movement::NoCornerCutting,
+            100,
+            100,
+            2,
+            0xa58184ab17e038a5,
+        ),
+        (
+            "default",
+            Movement::CornerCutting,
+            100,
+            100,
+            2,
+            0x79a25adf8cce4bbd,
+        ),
+        (
+            "wide",
+            Movement::NoCornerCutting,
+            100,
+            100,
+            2,
+            0x7c56eae435e9e00a,
+        ),
+        (
+            "wide",
+            Movement::CornerCutting,
+            100,
+            100,
+            2,
+            0xa10d1d81bf317682,
+        ),
+        (
+            "nokeep-dense",
+            Movement::NoCornerCutting,
+            64,
+            80,
+            2,
+            0xa67ab7502e867eff,
+        ),
+        (
+            "nokeep-dense",
+            Movement::CornerCutting,
+            64,
+            80,
+            2,
+            0x4f1f216410cacde0,
+        ),
+        (
+            "default",
+            Movement::NoCornerCutting,
+            200,
+            200,
+            1,
+            0x3a877bf1d8342722,
+        ),
+        (
+            "default",
+            Movement::CornerCutting,
+            200,
+            200,
+            1,
+            0x5cfa948cbc4a5b78,
+        ),
+        (
+            "wide",
+            Movement::NoCornerCutting,
+            200,
+            200,
+            1,
+            0x8eaacd5cce158f46,
+        ),
+        (
+            "wide",
+            Movement::CornerCutting,
+            200,
+            200,
+            1,
+            0x5275a515479b3c3c,
+        ),
+    ];
+
+    #[test]
+    fn same_maps_as_recorded_from_the_old_generator() {
+        assert!(!RECORDED.is_empty());
+        let mut wrong = Vec::new();
+        for &(mode, movement, h, w, seeds, want) in RECORDED {
+            let cfg = mode_config(mode, h, w);
+            let mut hash = 0xcbf2_9ce4_8422_2325u64;
+            for seed in 0..seeds {
+                feed_hash(
+                    &mut hash,
+                    &generate_with_movement(&cfg, seed, movement).expect("generate"),
+                );
+            }
+            if hash != want {
+                wrong.push(format!("{mode} {movement:?} {h}×{w} seeds 0..{seeds}"));
+            }
+        }
+        assert!(wrong.is_empty(), "maps changed: {wrong:#?}");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn same_maps_as_the_reference_for_random_sizes(
+            seed in any::<u64>(),
+            h in 3usize..40,
+            w in 3usize..40,
+            mode in 0usize..MODES.len(),
+            cut in any::<bool>(),
+        ) {
+            let cfg = mode_config(MODES[mode], h, w);
+            let movement = MOVEMENTS[usize::from(cut)];
+            prop_assert_eq!(
+                generate_with_movement(&cfg, seed, movement).expect("new"),
+                reference_generate(&cfg, seed, movement).expect("old")
+            );
         }
     }
 
