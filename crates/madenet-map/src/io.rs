@@ -53,7 +53,10 @@ use serde::de::{self, Deserialize, Deserializer, IgnoredAny, MapAccess, SeqAcces
 use std::collections::BTreeMap;
 use std::fmt;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+#[cfg(test)]
+use std::path::PathBuf;
+#[cfg(test)]
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Options for [`load`].
@@ -94,6 +97,36 @@ fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// The file formats [`load`] reads, by extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MapFormat {
+    Yaml,
+    Pgm,
+    Png,
+    Text,
+}
+
+/// The format of `path` by its extension, or [`MapError::Format`] naming the supported ones.
+fn map_format(path: &Path) -> Result<MapFormat, MapError> {
+    match extension(path).as_str() {
+        "yaml" | "yml" => Ok(MapFormat::Yaml),
+        "pgm" => Ok(MapFormat::Pgm),
+        "png" => Ok(MapFormat::Png),
+        "txt" | "map" => Ok(MapFormat::Text),
+        other => Err(format_err(
+            path,
+            format!(
+                "unsupported map file extension {:?}; supported: {SUPPORTED}",
+                if other.is_empty() {
+                    "(none)".to_string()
+                } else {
+                    format!(".{other}")
+                }
+            ),
+        )),
+    }
+}
+
 /// Reads a map, choosing the format from the extension (see the [module docs](self)).
 ///
 /// Errors name the file and the field or line at fault: [`MapError::Io`] when a file cannot
@@ -102,40 +135,49 @@ fn extension(path: &Path) -> String {
 /// [`MapError::Invalid`] for bad `opts`.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<OccGrid, MapError> {
     check_options(opts)?;
-    match extension(path).as_str() {
-        "yaml" | "yml" => {
-            let text = fs::read_to_string(path).map_err(|e| io_err(path, e))?;
-            load_map_server_with(&text, path, opts, |image| {
-                fs::read(image).map_err(|e| io_err(image, e))
-            })
-        }
-        "pgm" => {
-            let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
-            let raster = decode_pgm(&bytes, path)?;
+    // An unsupported extension is reported without touching the file.
+    map_format(path)?;
+    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
+    load_bytes(&bytes, path, opts, |image| {
+        fs::read(image).map_err(|e| io_err(image, e))
+    })
+}
+
+/// Reads a map from `bytes`, the contents of the file `path` (which [`load`] reads and passes
+/// here): the format is chosen from `path`'s extension and errors name it as [`load`]'s do. A
+/// YAML map's image path (resolved against `path`'s folder) is given to `read_image`, which
+/// returns the image's bytes. No file is touched except through `read_image`.
+pub fn load_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &LoadOptions,
+    read_image: impl FnOnce(&Path) -> Result<Vec<u8>, MapError>,
+) -> Result<OccGrid, MapError> {
+    check_options(opts)?;
+    // Text formats must be UTF-8; the error is an I/O one, as `fs::read_to_string`'s was.
+    let text = || {
+        std::str::from_utf8(bytes).map_err(|e| {
+            io_err(
+                path,
+                std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+            )
+        })
+    };
+    match map_format(path)? {
+        MapFormat::Yaml => load_map_server_with(text()?, path, opts, read_image),
+        MapFormat::Pgm => {
+            let raster = decode_pgm(bytes, path)?;
             raster_to_grid(&raster, &MapMeta::bare(), path, path, opts)
         }
-        "png" => {
-            let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
-            let raster = decode_image(&bytes, path, Some(image::ImageFormat::Png))?;
+        MapFormat::Png => {
+            let raster = decode_image(bytes, path, Some(image::ImageFormat::Png))?;
             raster_to_grid(&raster, &MapMeta::bare(), path, path, opts)
         }
-        "txt" | "map" => {
-            let text = fs::read_to_string(path).map_err(|e| io_err(path, e))?;
-            let mut grid = parse_text(&text, path)?;
+        MapFormat::Text => {
+            let mut grid = parse_text(text()?, path)?;
             grid.resolution = opts.cell_size;
             Ok(grid)
         }
-        other => Err(MapError::Format {
-            path: path.to_path_buf(),
-            message: format!(
-                "unsupported map file extension {:?}; supported: {SUPPORTED}",
-                if other.is_empty() {
-                    "(none)".to_string()
-                } else {
-                    format!(".{other}")
-                }
-            ),
-        }),
     }
 }
 
@@ -899,27 +941,10 @@ pub fn to_text(grid: &OccGrid) -> String {
 // Writing
 // ---------------------------------------------------------------------------------------------
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same folder, then a rename.
+/// Writes `bytes` to `path` ([`madenet_files::write_atomic`]: atomic for regular files,
+/// through symlinks, streamed into devices).
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), MapError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = path
-        .file_name()
-        .ok_or_else(|| format_err(path, "not a file path (no file name)"))?
-        .to_string_lossy();
-    let tmp_name = format!(
-        ".{name}.tmp-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    );
-    let tmp = match path.parent() {
-        Some(dir) => dir.join(tmp_name),
-        None => PathBuf::from(tmp_name),
-    };
-    let result = fs::write(&tmp, bytes).and_then(|()| fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = fs::remove_file(&tmp);
-        io_err(path, e)
-    })
+    madenet_files::write_atomic(path, bytes).map_err(|e| io_err(path, e))
 }
 
 fn pixel_of(c: Occupancy) -> u8 {

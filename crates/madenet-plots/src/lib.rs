@@ -73,7 +73,6 @@
 
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
@@ -575,16 +574,6 @@ fn with_ext(stem: &Path, ext: &str) -> PathBuf {
 
 /// A temporary path next to `target` that keeps its extension (plotters'
 /// bitmap backend picks the encoder from the extension).
-fn temp_path(target: &Path, ext: &str) -> PathBuf {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let name = target
-        .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    target.with_file_name(format!(".{name}.{}-{n}.tmp.{ext}", std::process::id()))
-}
-
 fn ensure_font(path: &Path) -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
@@ -741,21 +730,25 @@ fn write_one<P: Panels>(
     let size = (fig.width(), fig.height());
     match target {
         Target::Bitmap => {
-            // plotters writes the file itself on `present`; render to a
-            // temporary name and rename.
-            let tmp = temp_path(path, "png");
-            let result = {
-                let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-                render(&root, fig, draw_panel, target).and_then(|()| root.present().map_err(s))
-            };
-            if let Err(message) = result {
-                let _ = std::fs::remove_file(&tmp);
+            // plotters writes the file itself on `present`: it draws into a temporary path
+            // that `madenet_files` then puts at `path`.
+            let mut drawing = None;
+            let written = madenet_files::write_via_path(path, |tmp: &Path| {
+                let root = BitMapBackend::new(tmp, size).into_drawing_area();
+                if let Err(message) =
+                    render(&root, fig, draw_panel, target).and_then(|()| root.present().map_err(s))
+                {
+                    drawing = Some(message);
+                    return Err(std::io::Error::other("drawing failed"));
+                }
+                Ok(())
+            });
+            if let Some(message) = drawing {
                 return Err(draw_err(path)(message));
             }
-            rename(&tmp, path)
+            written.map_err(io_err(path))
         }
         Target::Vector => {
-            // Render to a string, write it to a temporary file, rename.
             let mut text = String::new();
             {
                 let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
@@ -763,27 +756,16 @@ fn write_one<P: Panels>(
                     .and_then(|()| root.present().map_err(s))
                     .map_err(draw_err(path))?;
             }
-            let tmp = temp_path(path, "svg");
-            if let Err(source) = std::fs::write(&tmp, text.as_bytes()) {
-                let _ = std::fs::remove_file(&tmp);
-                return Err(PlotError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                });
-            }
-            rename(&tmp, path)
+            madenet_files::write_atomic(path, text.as_bytes()).map_err(io_err(path))
         }
     }
 }
 
-fn rename(from: &Path, to: &Path) -> Result<(), PlotError> {
-    std::fs::rename(from, to).map_err(|source| {
-        let _ = std::fs::remove_file(from);
-        PlotError::Io {
-            path: to.to_path_buf(),
-            source,
-        }
-    })
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> PlotError + '_ {
+    move |source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Panels of one kind, drawable on any backend.

@@ -218,13 +218,12 @@ pub fn truncate_rows<R: LogRow>(
         return Ok(());
     }
     let rows: Vec<R> = read_rows(path)?;
-    let tmp = path.with_extension("tmp");
     let io = |source| TrainLogError::Io {
         action: "write",
-        path: tmp.clone(),
+        path: path.to_path_buf(),
         source,
     };
-    let mut file = File::create(&tmp).map_err(io)?;
+    let mut file = madenet_files::AtomicFile::create(path).map_err(io)?;
     file.write_all(format!("{}\n", R::HEADER).as_bytes())
         .map_err(io)?;
     let mut out = csv::WriterBuilder::new()
@@ -237,8 +236,7 @@ pub fn truncate_rows<R: LogRow>(
     let file = out
         .into_inner()
         .map_err(|e| io(std::io::Error::other(e.to_string())))?;
-    file.sync_all().map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|source| TrainLogError::Io {
+    file.commit().map_err(|source| TrainLogError::Io {
         action: "replace",
         path: path.to_path_buf(),
         source,

@@ -206,15 +206,9 @@ pub fn truncate_events(
         if scalars == 0 {
             std::fs::remove_file(&path).map_err(|e| named(e, &path))?;
         } else if changed {
-            // Not named like an event file: a crash mid-rewrite leaves nothing TensorBoard reads.
-            let tmp = dir.join(format!(
-                ".{}.truncating",
-                path.file_name()
-                    .and_then(|n| n.to_str())
-                    .unwrap_or("events")
-            ));
-            std::fs::write(&tmp, &kept).map_err(|e| named(e, &tmp))?;
-            std::fs::rename(&tmp, &path).map_err(|e| named(e, &path))?;
+            // The temporary file is not named like an event file: a crash mid-rewrite leaves
+            // nothing TensorBoard reads.
+            madenet_files::write_atomic(&path, &kept).map_err(|e| named(e, &path))?;
         }
     }
     Ok(dropped)

@@ -1,0 +1,200 @@
+//! One home for writing output files (every crate of madenet that writes one uses it).
+//!
+//! What a user points an output at is respected:
+//!
+//! * a **regular file** (or a path that does not exist yet) is replaced atomically: the bytes go
+//!   to a temporary file in the same folder, are synced, and the temporary file is renamed over
+//!   the target, so an interrupted run leaves either the old file or the new one, never half of
+//!   one;
+//! * a **symlink** is followed to its final target, which is replaced as above — the link itself
+//!   stays a link (`--out latest.csv` pointing into a results folder updates that file);
+//! * anything else that exists — a **device or a pipe** such as `/dev/stdout` or a FIFO — is
+//!   written to directly (streamed), never replaced by a regular file;
+//! * a **folder** is refused with a clear error.
+//!
+//! ```
+//! let dir = tempfile::tempdir().unwrap();
+//! let path = dir.path().join("out.csv");
+//! madenet_files::write_atomic(&path, b"a,b\n1,2\n").unwrap();
+//! assert_eq!(std::fs::read(&path).unwrap(), b"a,b\n1,2\n");
+//! ```
+//!
+//! Errors are `std::io::Error`s; callers name the path (and the flag or field) in their own error.
+
+use std::fs::{File, OpenOptions};
+use std::io::{self, Write};
+use std::path::{Path, PathBuf};
+
+/// Symlink hops followed before giving up (Linux's own limit is 40).
+const MAX_LINKS: usize = 40;
+
+/// Writes `bytes` to `path` as described in the crate doc.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes)?;
+    f.commit()
+}
+
+/// Lets `fill` write a file by path (for libraries that only write to a path, such as plotters'
+/// backends), then puts it at `path` as [`write_atomic`] does. `fill` gets a temporary path
+/// with the same extension as `path`.
+pub fn write_via_path<E: From<io::Error>>(
+    path: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
+    let target = Target::resolve(path)?;
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    match &target {
+        Target::Replace(final_path) => {
+            let tmp = temp_builder(&ext).tempfile_in(parent_dir(final_path))?;
+            fill(tmp.path())?;
+            tmp.as_file().sync_all()?;
+            tmp.persist(final_path).map_err(|e| e.error)?;
+        }
+        Target::Stream(device) => {
+            let tmp = temp_builder(&ext).tempfile()?;
+            fill(tmp.path())?;
+            let bytes = std::fs::read(tmp.path())?;
+            let mut out = OpenOptions::new().write(true).open(device)?;
+            out.write_all(&bytes)?;
+            out.flush()?;
+        }
+    }
+    Ok(())
+}
+
+/// A file being written: [`Write`] into it, then [`AtomicFile::commit`]. Dropped without a
+/// commit, a replacement leaves the target as it was (the temporary file is removed); a
+/// stream keeps what was written.
+pub struct AtomicFile {
+    inner: Inner,
+}
+
+enum Inner {
+    Replace {
+        tmp: tempfile::NamedTempFile,
+        target: PathBuf,
+    },
+    Stream(File),
+}
+
+impl AtomicFile {
+    /// Starts writing `path` (see the crate doc for what each kind of target gets).
+    pub fn create(path: &Path) -> io::Result<AtomicFile> {
+        let inner = match Target::resolve(path)? {
+            Target::Replace(target) => Inner::Replace {
+                tmp: temp_builder("").tempfile_in(parent_dir(&target))?,
+                target,
+            },
+            Target::Stream(device) => Inner::Stream(OpenOptions::new().write(true).open(device)?),
+        };
+        Ok(AtomicFile { inner })
+    }
+
+    /// Finishes the file: syncs and renames a replacement over its target, flushes a stream.
+    pub fn commit(self) -> io::Result<()> {
+        match self.inner {
+            Inner::Replace { tmp, target } => {
+                tmp.as_file().sync_all()?;
+                tmp.persist(&target).map_err(|e| e.error)?;
+                Ok(())
+            }
+            Inner::Stream(mut f) => f.flush(),
+        }
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match &mut self.inner {
+            Inner::Replace { tmp, .. } => tmp.write(buf),
+            Inner::Stream(f) => f.write(buf),
+        }
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.inner {
+            Inner::Replace { tmp, .. } => tmp.flush(),
+            Inner::Stream(f) => f.flush(),
+        }
+    }
+}
+
+/// What writing a path means.
+enum Target {
+    /// Replace this regular file (or create it).
+    Replace(PathBuf),
+    /// Write into this existing non-regular file (device, pipe).
+    Stream(PathBuf),
+}
+
+impl Target {
+    fn resolve(path: &Path) -> io::Result<Target> {
+        if path.file_name().is_none() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                "not a file path (no file name)",
+            ));
+        }
+        // What the kernel finds at the end of every link first: a device or pipe reached
+        // through a link the chain below cannot spell out (`/dev/stdout` → `/proc/self/fd/1`
+        // → `pipe:[…]`) is streamed through the path as given.
+        if let Ok(meta) = std::fs::metadata(path) {
+            let kind = meta.file_type();
+            if !kind.is_file() && !kind.is_dir() {
+                return Ok(Target::Stream(path.to_path_buf()));
+            }
+        }
+        let mut p = path.to_path_buf();
+        for _ in 0..MAX_LINKS {
+            let meta = match std::fs::symlink_metadata(&p) {
+                Ok(m) => m,
+                Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Target::Replace(p)),
+                Err(e) => return Err(e),
+            };
+            let kind = meta.file_type();
+            if kind.is_symlink() {
+                let link = std::fs::read_link(&p)?;
+                p = if link.is_absolute() {
+                    link
+                } else {
+                    parent_dir(&p).join(link)
+                };
+            } else if kind.is_dir() {
+                return Err(io::Error::new(
+                    io::ErrorKind::IsADirectory,
+                    "is a folder, not a file",
+                ));
+            } else if kind.is_file() {
+                return Ok(Target::Replace(p));
+            } else {
+                return Ok(Target::Stream(p));
+            }
+        }
+        Err(io::Error::other(format!(
+            "more than {MAX_LINKS} symbolic links to follow"
+        )))
+    }
+}
+
+fn parent_dir(p: &Path) -> PathBuf {
+    match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Temporary files readable like any file the user creates (tempfile's default is 0600; the
+/// mode given here is still masked by the umask, as `File::create`'s 0666 is).
+fn temp_builder(suffix: &str) -> tempfile::Builder<'_, '_> {
+    let mut b = tempfile::Builder::new();
+    b.prefix(".madenet-").suffix(suffix);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        b.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    b
+}

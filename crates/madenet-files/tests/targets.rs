@@ -1,0 +1,127 @@
+//! What each kind of target gets: regular files replaced atomically, symlinks followed,
+//! devices and pipes streamed into, folders refused.
+
+use madenet_files::{write_atomic, write_via_path, AtomicFile};
+use std::io::Write;
+use std::path::Path;
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_regular_file_is_replaced_and_no_temporary_file_is_left() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("out.csv");
+    write_atomic(&p, b"old").unwrap();
+    write_atomic(&p, b"new").unwrap();
+    assert_eq!(std::fs::read(&p).unwrap(), b"new");
+    assert_eq!(names(dir.path()), ["out.csv"]);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+        assert_ne!(
+            mode & 0o044,
+            0,
+            "readable by others like File::create's files: {mode:o}"
+        );
+    }
+}
+
+#[test]
+fn an_uncommitted_file_leaves_the_target_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("out.txt");
+    write_atomic(&p, b"kept").unwrap();
+    {
+        let mut f = AtomicFile::create(&p).unwrap();
+        f.write_all(b"half").unwrap();
+    }
+    assert_eq!(std::fs::read(&p).unwrap(), b"kept");
+    assert_eq!(names(dir.path()), ["out.txt"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_symlink_stays_a_link_and_its_target_is_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("results")).unwrap();
+    let target = dir.path().join("results/run1.csv");
+    std::fs::write(&target, b"old").unwrap();
+    let link = dir.path().join("latest.csv");
+    std::os::unix::fs::symlink("results/run1.csv", &link).unwrap();
+    // and a link to that link
+    let link2 = dir.path().join("latest2.csv");
+    std::os::unix::fs::symlink(&link, &link2).unwrap();
+    write_atomic(&link2, b"new").unwrap();
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert!(std::fs::symlink_metadata(&link2)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(std::fs::read(&target).unwrap(), b"new");
+    assert_eq!(names(&dir.path().join("results")), ["run1.csv"]);
+    // A dangling link creates its target.
+    let dangling = dir.path().join("next.csv");
+    std::os::unix::fs::symlink("results/run2.csv", &dangling).unwrap();
+    write_via_path::<std::io::Error>(&dangling, |tmp| std::fs::write(tmp, b"via path")).unwrap();
+    assert!(std::fs::symlink_metadata(&dangling)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        std::fs::read(dir.path().join("results/run2.csv")).unwrap(),
+        b"via path"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn a_device_or_pipe_is_written_into_not_replaced() {
+    // /dev/null stays a character device.
+    write_atomic(Path::new("/dev/null"), b"discarded").unwrap();
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata("/dev/null")
+        .unwrap()
+        .file_type()
+        .is_char_device());
+    // A FIFO gets the bytes, and stays a FIFO.
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let ok = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(&fifo).unwrap())
+    };
+    write_via_path::<std::io::Error>(&fifo, |tmp| std::fs::write(tmp, b"streamed")).unwrap();
+    assert_eq!(reader.join().unwrap(), b"streamed");
+    assert!(std::fs::symlink_metadata(&fifo)
+        .unwrap()
+        .file_type()
+        .is_fifo());
+    assert_eq!(names(dir.path()), ["pipe"]);
+}
+
+#[test]
+fn a_folder_is_refused_and_left_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("out");
+    std::fs::create_dir(&sub).unwrap();
+    let e = write_atomic(&sub, b"x").unwrap_err();
+    assert!(e.to_string().contains("folder"), "{e}");
+    assert!(sub.is_dir());
+    assert_eq!(names(dir.path()), ["out"]);
+}
