@@ -82,6 +82,9 @@ pub fn header() -> Vec<String> {
 }
 
 impl TrialRow {
+    /// The row as a CSV line. Numbers are written in Rust's shortest form that reads back as
+    /// the same `f64`, so a resumed study computes its statistics from exactly the values a
+    /// fresh one holds.
     fn to_line(&self) -> String {
         let k = &self.key;
         let mut f = vec![
@@ -92,14 +95,14 @@ impl TrialRow {
             k.seed.to_string(),
             self.completed.to_string(),
             self.tns.to_string(),
-            format!("{:.6}", self.ttd),
+            self.ttd.to_string(),
             self.noli.to_string(),
             self.noli_authors.to_string(),
-            format!("{:.6}", self.ofv),
-            format!("{:.6}", self.explored),
-            format!("{:.6}", self.trial_s),
+            self.ofv.to_string(),
+            self.explored.to_string(),
+            self.trial_s.to_string(),
             self.decisions.to_string(),
-            format!("{:.9}", self.per_decision_s),
+            self.per_decision_s.to_string(),
         ];
         f.extend(
             self.steps_to
@@ -150,20 +153,12 @@ impl TrialRow {
     }
 }
 
-/// Writes `contents` to `path` atomically (temp file in the same folder, then rename).
+/// Writes `contents` to `path` ([`madenet_files::write_atomic`]).
 pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<(), StudyError> {
-    let tmp = path.with_extension(format!(
-        "{}.tmp",
-        path.extension().and_then(|e| e.to_str()).unwrap_or("")
-    ));
-    let io = |e: std::io::Error| StudyError::File {
+    madenet_files::write_atomic(path, contents).map_err(|e| StudyError::File {
         path: path.display().to_string(),
         message: e.to_string(),
-    };
-    let mut f = std::fs::File::create(&tmp).map_err(io)?;
-    f.write_all(contents).map_err(io)?;
-    f.sync_all().map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
+    })
 }
 
 /// The text up to and including its last newline: a line torn by an interruption is dropped

@@ -314,3 +314,134 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
     );
     assert!(!out.join("curves.jsonl").exists());
 }
+
+/// `summary.csv` without its wall-clock columns (computation time differs between runs).
+fn summary_without_ct(path: &Path) -> Vec<Vec<String>> {
+    let mut rdr = csv::Reader::from_path(path).unwrap();
+    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    let keep: Vec<usize> = (0..header.len())
+        .filter(|&i| header[i] != "trial_s" && header[i] != "per_decision_s")
+        .collect();
+    let mut rows = vec![keep.iter().map(|&i| header[i].clone()).collect::<Vec<_>>()];
+    for r in rdr.records() {
+        let r = r.unwrap();
+        rows.push(keep.iter().map(|&i| r[i].to_string()).collect());
+    }
+    rows
+}
+
+#[test]
+fn a_study_killed_twice_and_resumed_writes_the_files_of_an_uninterrupted_one() {
+    // Enough trials (160) that TTD sums of √2 steps fill every decimal and the statistics
+    // notice any rounding of the values read back on resume.
+    const STUDY: &str = r#"methods = ["nf", "ub"]
+maps = ["paper:1", "paper:2"]
+starts = ["top-left", "top-right", "bottom-left", "bottom-right"]
+csp = [1.0, 0.0]
+seeds = 5
+oracles = []
+"#;
+    let dir = Scratch::new("kill");
+    let cfg = dir.path().join("study.toml");
+    std::fs::write(&cfg, STUDY).unwrap();
+    let cfg = cfg.to_str().unwrap().to_string();
+    let (whole, killed) = (dir.path().join("whole"), dir.path().join("killed"));
+    let args = |out: &Path, threads: &str| -> Vec<String> {
+        [
+            "compare",
+            "--config",
+            &cfg,
+            "--out",
+            out.to_str().unwrap(),
+            "--threads",
+            threads,
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let ok = |out: Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    ok(Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args(&whole, "2"))
+        .output()
+        .unwrap());
+
+    // Killed (SIGKILL: no clean-up runs) twice, once a tenth and once half of the trials are in.
+    let rows =
+        |p: &Path| std::fs::read_to_string(p.join("trials.csv")).map_or(0, |t| t.lines().count());
+    for at in [17, 80] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(args(&killed, "1"))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = std::time::Instant::now();
+        while rows(&killed) < at && child.try_wait().unwrap().is_none() {
+            assert!(t0.elapsed().as_secs() < 300, "the study did not progress");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        child.kill().unwrap();
+        let status = child.wait().unwrap();
+        assert!(
+            !status.success(),
+            "killed before it finished (at {at} rows)"
+        );
+    }
+    assert!(rows(&killed) < 161, "the study was interrupted");
+    ok(Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args(&killed, "2"))
+        .output()
+        .unwrap());
+
+    assert_eq!(
+        deterministic_rows(&killed.join("trials.csv")),
+        deterministic_rows(&whole.join("trials.csv"))
+    );
+    for f in ["statistics.csv", "statistics.md", "curves.jsonl"] {
+        let (a, b) = (
+            std::fs::read_to_string(killed.join(f)).unwrap(),
+            std::fs::read_to_string(whole.join(f)).unwrap(),
+        );
+        assert!(a == b, "{f} differs from the uninterrupted study's");
+    }
+    assert_eq!(
+        summary_without_ct(&killed.join("summary.csv")),
+        summary_without_ct(&whole.join("summary.csv"))
+    );
+
+    // Re-running on the finished folder runs nothing and changes none of these files.
+    let before: Vec<Vec<u8>> = [
+        "trials.csv",
+        "statistics.csv",
+        "summary.csv",
+        "curves.jsonl",
+    ]
+    .iter()
+    .map(|f| std::fs::read(whole.join(f)).unwrap())
+    .collect();
+    ok(Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args(&whole, "2"))
+        .output()
+        .unwrap());
+    for (f, b) in [
+        "trials.csv",
+        "statistics.csv",
+        "summary.csv",
+        "curves.jsonl",
+    ]
+    .iter()
+    .zip(&before)
+    {
+        assert!(
+            &std::fs::read(whole.join(f)).unwrap() == b,
+            "{f} changed by a rerun"
+        );
+    }
+}
