@@ -33,6 +33,52 @@ pub struct BaselineParams {
     pub pb: PbParams,
 }
 
+impl BaselineParams {
+    /// Checks every parameter's range; the error names the field (`pb.discount`, …).
+    pub fn validate(&self) -> Result<(), String> {
+        fn at_least(name: &str, v: f64, min: f64) -> Result<(), String> {
+            if v.is_finite() && v >= min {
+                Ok(())
+            } else {
+                Err(format!("{name}: must be a finite number ≥ {min}, got {v}"))
+            }
+        }
+        fn within(name: &str, v: usize, lo: usize, hi: usize) -> Result<(), String> {
+            if (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err(format!("{name}: must be in {lo}..={hi}, got {v}"))
+            }
+        }
+        if let Some(b) = self.ub.beta {
+            at_least("ub.beta", b, 0.0)?;
+        }
+        if let Some(r) = self.ub.coordination_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(format!(
+                    "ub.coordination_radius: must be a positive number of cells, got {r}"
+                ));
+            }
+        }
+        let pb = &self.pb;
+        // The MDP covers (2·horizon + 1)² cells around the robot.
+        within("pb.horizon", pb.horizon, 1, 256)?;
+        within("pb.iterations", pb.iterations, 1, 100_000)?;
+        within("pb.reach_radius", pb.reach_radius, 0, 1024)?;
+        at_least("pb.tolerance", pb.tolerance as f64, 0.0)?;
+        if !(pb.discount > 0.0 && pb.discount <= 1.0) {
+            return Err(format!(
+                "pb.discount: the discount γ must be in (0, 1], got {}",
+                pb.discount
+            ));
+        }
+        at_least("pb.teammate_weight", pb.teammate_weight as f64, 0.0)?;
+        at_least("pb.crowding_weight", pb.crowding_weight as f64, 0.0)?;
+        at_least("pb.stuck_threshold", pb.stuck_threshold as f64, 0.0)?;
+        Ok(())
+    }
+}
+
 /// Registers `ub` and `pb` with these parameters.
 pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
     let ub = params.ub.clone();

@@ -233,10 +233,10 @@ impl DmeTrainConfig {
         if self.checkpoint_every == 0 {
             return bad("checkpoint_every", "must be at least 1");
         }
-        if self.threads == 0 {
-            return bad("threads", "must be at least 1");
+        if !(1..=256).contains(&self.threads) {
+            return bad("threads", "must be in 1..=256");
         }
-        if !(self.max_minutes >= 0.0) {
+        if self.max_minutes.is_nan() || self.max_minutes < 0.0 {
             return bad("max_minutes", "must be 0 (no limit) or positive");
         }
         if self.validation_csp.iter().any(|c| !(0.0..=1.0).contains(c)) {

@@ -42,7 +42,6 @@ use madenet_world::ScenarioConfig;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
-use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -225,7 +224,7 @@ impl TrainConfig {
         self.scenario
             .validate()
             .map_err(|e| format!("scenario: {e}"))?;
-        let checks: [(bool, &str, String); 14] = [
+        let checks: [(bool, &str, String); 15] = [
             (self.episodes >= 1, "episodes", "must be at least 1".into()),
             (
                 self.max_minutes >= 0.0 && self.max_minutes.is_finite(),
@@ -291,8 +290,13 @@ impl TrainConfig {
                 "every CSP must be in [0, 1]".into(),
             ),
             (
-                self.threads >= 1 && self.checkpoint_every >= 1,
-                "threads/checkpoint_every",
+                (1..=256).contains(&self.threads),
+                "threads",
+                format!("must be in 1..=256, got {}", self.threads),
+            ),
+            (
+                self.checkpoint_every >= 1,
+                "checkpoint_every",
                 "must be at least 1".into(),
             ),
         ];
@@ -768,14 +772,9 @@ impl Model {
     }
 }
 
-/// Writes `bytes` to `path` through a synced temporary file and a rename.
+/// Writes `bytes` to `path` ([`madenet_files::write_atomic`]).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
-    let tmp = path.with_extension("tmp");
-    let mut f = std::fs::File::create(&tmp).map_err(io_err(&tmp))?;
-    f.write_all(bytes)
-        .and_then(|_| f.sync_all())
-        .map_err(io_err(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(io_err(path))
+    madenet_files::write_atomic(path, bytes).map_err(io_err(path))
 }
 
 /// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a

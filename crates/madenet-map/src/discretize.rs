@@ -31,6 +31,44 @@ impl Default for DiscretizeParams {
     }
 }
 
+/// A built-in grid (the paper's maps and generated maps: cells of `grid.resolution` metres,
+/// 1 m) at robot cell size `cell_size` metres: each cell is read as a pixel (obstacle: occupancy
+/// probability 1; free and unknown: 0) and blocks are merged with [`discretize`], exactly as a
+/// map file at that resolution would be. `cell_size` must be a whole multiple of the grid's
+/// cells; the same grid comes back when they are equal.
+/// Errors name `name` (e.g. `paper:3`) and the field `cell_size`.
+pub fn coarsen(
+    grid: &OccGrid,
+    cell_size: f64,
+    params: &DiscretizeParams,
+    name: &str,
+) -> Result<OccGrid, crate::MapError> {
+    let ratio = cell_size / grid.resolution;
+    let factor = ratio.round();
+    if !(factor >= 1.0 && (ratio - factor).abs() <= 1e-6 && factor <= u32::MAX as f64) {
+        return Err(crate::MapError::Field {
+            path: name.into(),
+            field: "cell_size".into(),
+            message: format!(
+                "built-in maps have cells of {} m; the robot cell size must be a whole multiple of that, got {cell_size} m",
+                grid.resolution
+            ),
+        });
+    }
+    if factor == 1.0 {
+        return Ok(grid.clone());
+    }
+    let probs: Vec<f64> = grid
+        .cells()
+        .iter()
+        .map(|&c| if c == Occupancy::Obstacle { 1.0 } else { 0.0 })
+        .collect();
+    let mut out = discretize(&probs, grid.height(), grid.width(), factor as usize, params);
+    out.resolution = cell_size;
+    out.origin = grid.origin;
+    Ok(out)
+}
+
 /// Discretizes a row-major image of per-pixel occupancy probabilities (`px_height` rows of
 /// `px_width` pixels, row 0 at the top) into cells of `factor × factor` pixels.
 ///

@@ -24,7 +24,7 @@ mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};
 pub use rewards::{RewardConfig, StepRewards};
-pub use scenario::{MapSource, StartSpec};
+pub use scenario::{check_trial_set_size, MapSource, StartSpec, MAX_PLANNED_CELLS, MAX_TRIALS};
 pub use trial::{Future, StepRecord, Trial, TrialResult, TrialSpec};
 
 /// Errors setting up a trial; messages name the field at fault.

@@ -51,7 +51,7 @@ impl FromStr for MapSource {
 impl MapSource {
     /// Loads or generates the map (discretized to the config's cell size).
     pub fn load(&self, cfg: &ScenarioConfig) -> Result<OccGrid, MapError> {
-        match self {
+        let builtin = match self {
             MapSource::Paper(n) => paper_map(*n),
             MapSource::Generated(seed) => generate(&GeneratorConfig::default(), *seed),
             MapSource::GeneratedWide(seed) => {
@@ -62,14 +62,24 @@ impl MapSource {
                 };
                 generate_with_movement(&gen, *seed, cfg.movement)
             }
-            MapSource::File(p) => load(
-                p,
-                &LoadOptions {
-                    cell_size: cfg.cell_size,
-                    discretize: cfg.discretize,
-                },
-            ),
-        }
+            MapSource::File(p) => {
+                return load(
+                    p,
+                    &LoadOptions {
+                        cell_size: cfg.cell_size,
+                        discretize: cfg.discretize,
+                    },
+                )
+            }
+        }?;
+        // Built-in maps are grids of 1 m cells, read at the robot cell size like a map file.
+        let label = match self {
+            MapSource::Paper(n) => format!("paper:{n}"),
+            MapSource::Generated(seed) => format!("generate:{seed}"),
+            MapSource::GeneratedWide(seed) => format!("generate-wide:{seed}"),
+            MapSource::File(p) => p.display().to_string(),
+        };
+        madenet_map::discretize::coarsen(&builtin, cfg.cell_size, &cfg.discretize, &label)
     }
 
     /// A short label for outputs.
@@ -140,6 +150,20 @@ impl StartSpec {
         }
     }
 
+    /// Refuses explicit cells whose count is not the team size (`team` robots); corners and
+    /// `random` always fit. The message names the start as written and both counts.
+    pub fn check_team(&self, team: usize) -> Result<(), String> {
+        match self {
+            StartSpec::Cells(cells) if cells.len() != team => Err(format!(
+                "`{}` gives {} cells for {} robots (num_robots)",
+                self.name(),
+                cells.len(),
+                team
+            )),
+            _ => Ok(()),
+        }
+    }
+
     pub fn name(&self) -> String {
         match self {
             StartSpec::Corner(c) => c.name().to_string(),
@@ -153,9 +177,90 @@ impl StartSpec {
     }
 }
 
+/// Most trials one trial set (a study, `madenet batch`, `madenet oracle`) may plan: every
+/// planned and finished trial is held in memory (a few KB each, with its curves).
+pub const MAX_TRIALS: u64 = 100_000;
+/// Most map cells the plan of one trial set may hold in all (each planned trial carries its
+/// map: 2³⁰ cells ≈ 1 GB).
+pub const MAX_PLANNED_CELLS: u64 = 1 << 30;
+
+/// Checks the size of a trial set of `runs` × (`cells` per map, one entry per map) × `starts`
+/// × `csps` × `seeds` trials against [`MAX_TRIALS`] and [`MAX_PLANNED_CELLS`]; the error says
+/// how many trials it would be and the bound.
+pub fn check_trial_set_size(
+    runs: u64,
+    cells: &[u64],
+    starts: u64,
+    csps: u64,
+    seeds: u64,
+) -> Result<(), String> {
+    let per_map = runs
+        .checked_mul(starts)
+        .and_then(|v| v.checked_mul(csps))
+        .and_then(|v| v.checked_mul(seeds));
+    let trials = per_map.and_then(|p| p.checked_mul(cells.len() as u64));
+    let planned_cells = per_map.and_then(|p| {
+        cells
+            .iter()
+            .try_fold(0u64, |acc, &c| acc.checked_add(p.checked_mul(c)?))
+    });
+    let describe = || match trials {
+        Some(t) => format!("{t} trials"),
+        None => "more than 2^64 trials".to_string(),
+    };
+    if trials.is_none_or(|t| t > MAX_TRIALS) {
+        return Err(format!(
+            "{} ({runs} runs × {} maps × {starts} starts × {csps} CSPs × {seeds} seeds): at most {MAX_TRIALS} trials per set; split it into several",
+            describe(),
+            cells.len()
+        ));
+    }
+    if planned_cells.is_none_or(|c| c > MAX_PLANNED_CELLS) {
+        return Err(format!(
+            "{} on these maps hold more than {MAX_PLANNED_CELLS} map cells in all; use fewer seeds or smaller maps",
+            describe()
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn built_in_maps_are_read_at_the_robot_cell_size() {
+        // One meaning of cell_size: built-in maps (1 m cells) are merged like a map file.
+        let mut cfg = madenet_world::ScenarioConfig::default();
+        let one = MapSource::Paper(3).load(&cfg).unwrap();
+        assert_eq!((one.height(), one.width(), one.resolution), (20, 20, 1.0));
+        cfg.cell_size = 2.0;
+        for source in [MapSource::Paper(3), MapSource::Generated(5)] {
+            let two = source.load(&cfg).unwrap();
+            assert_eq!((two.height(), two.width(), two.resolution), (10, 10, 2.0));
+        }
+        // A 2 m cell is an obstacle when more than the discretize fraction of its four 1 m
+        // cells are: check against the 1 m map.
+        let two = MapSource::Paper(3).load(&cfg).unwrap();
+        for r in 0..10 {
+            for c in 0..10 {
+                let blocked = (0..4)
+                    .filter(|k| {
+                        one.get(madenet_map::Pos::new(2 * r + k / 2, 2 * c + k % 2))
+                            == madenet_map::Occupancy::Obstacle
+                    })
+                    .count() as f64;
+                assert_eq!(
+                    two.get(madenet_map::Pos::new(r, c)) == madenet_map::Occupancy::Obstacle,
+                    blocked / 4.0 > cfg.discretize.obstacle_fraction,
+                    "cell {r},{c}"
+                );
+            }
+        }
+        cfg.cell_size = 1.5;
+        let e = MapSource::Paper(3).load(&cfg).unwrap_err().to_string();
+        assert!(e.contains("paper:3") && e.contains("cell_size"), "{e}");
+    }
 
     #[test]
     fn parse_sources_and_starts() {

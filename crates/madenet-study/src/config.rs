@@ -211,12 +211,31 @@ impl StudyConfig {
                 return Err(field("csp", format!("{c} is not a probability")));
             }
         }
+        for (i, &c) in self.csp.iter().enumerate() {
+            if self.csp[..i].contains(&c) {
+                return Err(field("csp", format!("{c} is listed twice")));
+            }
+        }
         if self.seeds == 0 {
             return Err(field("seeds", "must be at least 1"));
+        }
+        if self.seed_base.checked_add(self.seeds - 1).is_none() {
+            return Err(field(
+                "seed_base",
+                format!(
+                    "{} + {} seeds runs past the largest seed, {}",
+                    self.seed_base,
+                    self.seeds,
+                    u64::MAX
+                ),
+            ));
         }
         self.scenario
             .validate()
             .map_err(|e| field("scenario", e.to_string()))?;
+        self.baselines
+            .validate()
+            .map_err(|e| field("baselines", e))?;
         let maps = self.load_maps()?;
         if self.starts.is_empty() {
             return Err(field("starts", "is empty"));
@@ -226,6 +245,21 @@ impl StudyConfig {
             .iter()
             .map(|s| s.parse::<StartSpec>().map_err(|e| field("starts", e)))
             .collect::<Result<Vec<_>, _>>()?;
+        for (i, s) in starts.iter().enumerate() {
+            if let Some(j) = starts[..i].iter().position(|t| t.name() == s.name()) {
+                return Err(field(
+                    "starts",
+                    format!(
+                        "`{}` and `{}` are the same start ({})",
+                        self.starts[j],
+                        self.starts[i],
+                        s.name()
+                    ),
+                ));
+            }
+            s.check_team(self.scenario.num_robots)
+                .map_err(|e| field("starts", e))?;
+        }
         for map in &maps {
             if starts.contains(&StartSpec::Random)
                 && StartSpec::Random
@@ -235,6 +269,17 @@ impl StudyConfig {
                 return Err(field("starts", format!("`random`: map {} has no {} connected free cells around any cell drawn from it", map.name, self.scenario.num_robots)));
             }
         }
+        madenet_sim::check_trial_set_size(
+            (self.policies_run().len() + self.oracles.len()) as u64,
+            &maps
+                .iter()
+                .map(|m| m.grid.cells().len() as u64)
+                .collect::<Vec<_>>(),
+            starts.len() as u64,
+            self.csp.len() as u64,
+            self.seeds,
+        )
+        .map_err(|e| field("seeds", e))?;
         // Learned models run only on the map and team sizes they were trained for.
         for m in &self.policies_run() {
             for map in &maps {

@@ -53,7 +53,9 @@ pub struct ScenarioConfig {
     pub dropout_steps: u32,
     /// Maximum number of timesteps of a trial (paper: 300, Sec. V.A.4).
     pub step_cap: usize,
-    /// Robot cell size in metres (paper: 1 m cells).
+    /// Robot cell size in metres (paper: 1 m cells). Every map is read at it: a map file of
+    /// resolution r and the built-in maps (1 m cells) are merged into cells of this size by the
+    /// `discretize` rule, so it must be a whole multiple of r (of 1 m for built-in maps).
     pub cell_size: f64,
     /// Rule for maps finer than `cell_size` (paper, Sec. V.B.1: a cell is an obstacle when
     /// more than 25 % of its pixels have occupancy probability above 0.65).
@@ -164,17 +166,23 @@ impl ScenarioConfig {
                 format!("at most {MAX_ROBOTS}, got {}", self.num_robots),
             ));
         }
-        if self.sensing_range < 1 {
+        if !(1..=MAX_SENSING_RANGE).contains(&self.sensing_range) {
             return Err(field(
                 "sensing_range",
-                format!("must be at least 1, got {}", self.sensing_range),
+                format!(
+                    "must be in 1..={MAX_SENSING_RANGE} cells, got {}",
+                    self.sensing_range
+                ),
             ));
         }
         check_prob("sensor_miss_prob", self.sensor_miss_prob)?;
         check_prob("motion_success_prob", self.motion_success_prob)?;
         check_prob("comm_success_prob", self.comm_success_prob)?;
-        if self.step_cap == 0 {
-            return Err(field("step_cap", "must be at least 1"));
+        if !(1..=MAX_STEP_CAP).contains(&self.step_cap) {
+            return Err(field(
+                "step_cap",
+                format!("must be in 1..={MAX_STEP_CAP}, got {}", self.step_cap),
+            ));
         }
         if !(self.cell_size > 0.0 && self.cell_size.is_finite()) {
             return Err(field(
@@ -196,8 +204,14 @@ impl ScenarioConfig {
         if let Some(g) = self.goal_count.filter(|&g| g > MAX_GOALS) {
             return Err(field("goal_count", format!("at most {MAX_GOALS}, got {g}")));
         }
-        if self.plan_horizon == 0 {
-            return Err(field("plan_horizon", "must be at least 1"));
+        if !(1..=MAX_PLAN_HORIZON).contains(&self.plan_horizon) {
+            return Err(field(
+                "plan_horizon",
+                format!(
+                    "must be in 1..={MAX_PLAN_HORIZON} timesteps, got {}",
+                    self.plan_horizon
+                ),
+            ));
         }
         Ok(())
     }
@@ -216,6 +230,12 @@ impl ScenarioConfig {
 pub const MAX_ROBOTS: usize = 256;
 /// Largest configured |G|.
 pub const MAX_GOALS: usize = 4096;
+/// Largest d_s: the sensor's ray table grows as d_s⁴ (64 cells: ≈ 6 MB; 200: 0.6 GB).
+pub const MAX_SENSING_RANGE: i32 = 64;
+/// Largest space-time A* horizon: its reservation table holds cells × (horizon + 1) stamps.
+pub const MAX_PLAN_HORIZON: usize = 256;
+/// Largest step cap: a trial's per-step records grow with its steps.
+pub const MAX_STEP_CAP: usize = 100_000;
 
 /// Eq. (3): |G| = floor(4·log10(√|X| / (2·d_s+1))) + |I|, defined when 2·d_s+1 ≤ √|X|.
 pub fn goal_count_eq3(cells: usize, sensing_range: i32, robots: usize) -> Option<usize> {

@@ -7,7 +7,6 @@ use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::{MapSource, StartSpec, Trial, TrialResult, TrialSpec};
 use rayon::prelude::*;
-use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -39,11 +38,17 @@ pub struct BatchArgs {
     #[arg(long, default_value = "batch.csv")]
     out: PathBuf,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::threads_arg)]
     threads: Option<usize>,
 }
 
 pub fn run(a: BatchArgs) -> Result<()> {
+    if a.model.is_some() && a.policy != "model" {
+        bail!(
+            "--model is used only with --policy model (got --policy {})",
+            a.policy
+        );
+    }
     let registry = crate::registry(a.model.as_deref())?;
     if !registry.names().contains(&a.policy) {
         bail!(
@@ -124,6 +129,9 @@ pub fn plan(
     config: Option<&std::path::Path>,
     policy: &str,
 ) -> Result<Vec<(String, TrialSpec)>> {
+    if seeds == 0 {
+        bail!("--seeds 0: need at least one seed");
+    }
     let base = crate::load_config(config)?;
     let mut maps = Vec::new();
     for m in maps_arg {
@@ -142,22 +150,47 @@ pub fn plan(
         if s == "all" {
             starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
         } else {
-            starts.push(
-                s.parse::<StartSpec>()
-                    .map_err(anyhow::Error::msg)
-                    .context("--starts")?,
-            );
+            let start = s
+                .parse::<StartSpec>()
+                .map_err(anyhow::Error::msg)
+                .context("--starts")?;
+            start
+                .check_team(base.num_robots)
+                .map_err(anyhow::Error::msg)
+                .context("--starts")?;
+            starts.push(start);
         }
     }
+    let loaded = maps
+        .iter()
+        .map(|source| source.load(&base))
+        .collect::<Result<Vec<_>, _>>()?;
+    madenet_sim::check_trial_set_size(
+        1,
+        &loaded
+            .iter()
+            .map(|m| m.cells().len() as u64)
+            .collect::<Vec<_>>(),
+        starts.len() as u64,
+        csps.len() as u64,
+        seeds,
+    )
+    .map_err(anyhow::Error::msg)
+    .context("--seeds")?;
+    if seed_base.checked_add(seeds.saturating_sub(1)).is_none() {
+        bail!(
+            "--seed-base {seed_base}: with {seeds} seeds it runs past the largest seed, {}",
+            u64::MAX
+        );
+    }
     let mut specs = Vec::new();
-    for source in &maps {
-        let map = source.load(&base)?;
+    for (source, map) in maps.iter().zip(&loaded) {
         for start in &starts {
             for &csp in csps {
                 let mut cfg = base.clone();
                 cfg.comm_success_prob = csp;
                 cfg.validate().context("--csp")?;
-                let cells = start.cells(&map, cfg.num_robots, cfg.movement);
+                let cells = start.cells(map, cfg.num_robots, cfg.movement);
                 if cells.is_empty() {
                     bail!("--starts random: map {} has no {} connected free cells around the cell drawn from it", source.name(), cfg.num_robots);
                 }
@@ -181,8 +214,8 @@ pub fn plan(
 }
 
 pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> Result<()> {
-    let tmp = path.with_extension("csv.tmp");
-    let file = std::fs::File::create(&tmp).with_context(|| format!("{}", tmp.display()))?;
+    let file =
+        madenet_files::AtomicFile::create(path).with_context(|| format!("{}", path.display()))?;
     let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
     let mut header: Vec<String> = [
         "map",
@@ -229,11 +262,10 @@ pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> R
         ]);
         w.write_record(&row)?;
     }
-    let mut inner = w
+    w.into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
         .into_inner()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
-    inner.flush()?;
-    drop(inner);
-    std::fs::rename(&tmp, path).with_context(|| format!("{}", path.display()))?;
-    Ok(())
+        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.error()))?
+        .commit()
+        .with_context(|| format!("{}", path.display()))
 }

@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use madenet_sim::rollout::OracleKind;
-use madenet_study::{run_study, StudyConfig};
+use madenet_study::{run_study, StudyConfig, StudyError};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -31,7 +31,7 @@ pub struct CompareArgs {
     #[arg(long)]
     seeds: Option<u64>,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::threads_arg)]
     threads: Option<usize>,
 }
 
@@ -49,16 +49,34 @@ fn parse_oracle(s: &str) -> Result<Option<OracleKind>, String> {
         })
 }
 
+/// Names where a bad study field came from: the flag that set it, else the config file.
+fn name_source(e: StudyError, a: &CompareArgs) -> anyhow::Error {
+    let StudyError::Field { field, .. } = &e else {
+        return e.into();
+    };
+    let flag = match *field {
+        "methods" if a.methods.is_some() => Some("--methods"),
+        "oracles" if a.oracles.is_some() => Some("--oracles"),
+        "seeds" if a.seeds.is_some() => Some("--seeds"),
+        _ => None,
+    };
+    match (flag, &a.config) {
+        (Some(flag), _) => anyhow::anyhow!("{flag}: {e}"),
+        (None, Some(path)) => anyhow::anyhow!("{}: {e}", path.display()),
+        (None, None) => e.into(),
+    }
+}
+
 pub fn run(a: CompareArgs) -> Result<()> {
     let mut cfg = match &a.config {
         Some(p) => StudyConfig::from_toml_file(p)?,
         None => StudyConfig::default(),
     };
-    if let Some(m) = a.methods {
-        cfg.methods = m;
+    if let Some(m) = &a.methods {
+        cfg.methods = m.clone();
     }
-    if let Some(o) = a.oracles {
-        cfg.oracles = o.into_iter().flatten().collect();
+    if let Some(o) = &a.oracles {
+        cfg.oracles = o.iter().flatten().copied().collect();
     }
     if let Some(s) = a.seeds {
         cfg.seeds = s;
@@ -71,12 +89,14 @@ pub fn run(a: CompareArgs) -> Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()?;
-    let (report, outcomes) = pool.install(|| {
-        run_study(&cfg, &a.out, a.fresh, &|done, total| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
+    let (report, outcomes) = pool
+        .install(|| {
+            run_study(&cfg, &a.out, a.fresh, &|done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })
         })
-    })?;
+        .map_err(|e| name_source(e, &a))?;
     bar.finish_and_clear();
     out!("{} trials → {}", outcomes.len(), report.display())?;
     Ok(())

@@ -53,7 +53,18 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(), // --help, --version
+        Err(e) => {
+            // clap's message on one line (its usage hints follow on later lines).
+            let text = e.render().to_string();
+            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+            let first = first.strip_prefix("error: ").unwrap_or(first);
+            eprintln!("error: {first}");
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         Command::Run(a) => run::run(a),
         Command::Batch(a) => batch::run(a),
@@ -139,6 +150,22 @@ fn one_line(e: &anyhow::Error) -> String {
         msg.push_str(&text);
     }
     msg
+}
+
+/// Most worker threads a command starts (more only costs: the work is CPU-bound).
+pub const MAX_THREADS: usize = 256;
+
+/// `--threads`: 0 (all cores) up to [`MAX_THREADS`].
+pub fn threads_arg(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of threads"))?;
+    if n > MAX_THREADS {
+        return Err(format!(
+            "at most {MAX_THREADS} threads (0 = all cores), got {n}"
+        ));
+    }
+    Ok(n)
 }
 
 /// Reads the scenario config file if given, else the paper's defaults.

@@ -52,12 +52,41 @@ pub struct RunArgs {
     delay_ms: u32,
 }
 
+/// Refuses an output file whose extension names another picture format than the one written
+/// (`x.png` for the GIF, say); a path without an extension (`/dev/stdout`) is taken as is.
+fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -> Result<()> {
+    let Some(ext) = path.and_then(|p| p.extension()) else {
+        return Ok(());
+    };
+    let ext = ext.to_string_lossy().to_ascii_lowercase();
+    if ext != want {
+        anyhow::bail!(
+            "{flag}: writes a {} file, but {} ends in .{ext}: name it *.{want}",
+            want.to_uppercase(),
+            path.expect("has an extension").display()
+        );
+    }
+    Ok(())
+}
+
 pub fn run(a: RunArgs) -> Result<()> {
     let mut cfg = crate::load_config(a.config.as_deref())?;
     if let Some(csp) = a.csp {
         cfg.comm_success_prob = csp;
         cfg.validate().context("--csp")?;
     }
+    if a.model.is_some() && a.policy != "model" {
+        anyhow::bail!(
+            "--model is used only with --policy model (got --policy {})",
+            a.policy
+        );
+    }
+    a.start
+        .check_team(cfg.num_robots)
+        .map_err(anyhow::Error::msg)
+        .context("--start")?;
+    check_extension(a.render.as_deref(), "--render", "gif")?;
+    check_extension(a.snapshot.as_deref(), "--snapshot", "png")?;
     let source = a.generate.map(MapSource::Generated).unwrap_or(a.map);
     let map = source.load(&cfg)?;
     let starts = a.start.cells(&map, cfg.num_robots, cfg.movement);
@@ -67,6 +96,15 @@ pub fn run(a: RunArgs) -> Result<()> {
             source.name(),
             cfg.num_robots
         );
+    }
+    let opts = RenderOptions {
+        cell_px: a.cell_px,
+        ..Default::default()
+    };
+    if a.render.is_some() || a.snapshot.is_some() {
+        madenet_render::check_size(map.width(), map.height(), &opts)
+            .map_err(anyhow::Error::msg)
+            .context("--cell-px")?;
     }
     let spec = TrialSpec {
         starts,
@@ -79,10 +117,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut trial = Trial::with_registry(spec, &crate::registry(a.model.as_deref())?)
         .with_context(|| format!("map {}, start {}", source.name(), a.start.name()))?
         .record_trajectory(a.trajectory);
-    let opts = RenderOptions {
-        cell_px: a.cell_px,
-        ..Default::default()
-    };
+
     let mut gif = match &a.render {
         Some(p) => Some(GifWriter::new(p, &opts, a.delay_ms)?),
         None => None,
@@ -98,8 +133,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     if let Some(p) = &a.snapshot {
         madenet_render::save_png(&madenet_env::frame(&trial), &opts, p)?;
     }
+    let mut gif_summary = None;
     if let Some(g) = gif {
-        g.finish()?;
+        let frames = g.frames();
+        gif_summary = Some((frames, g.finish()?));
     }
     let result = trial.finish();
     if a.json {
@@ -126,7 +163,14 @@ pub fn run(a: RunArgs) -> Result<()> {
             1e6 * result.timing.per_decision_s,
             result.timing.decisions
         )?;
-        for p in a.render.iter().chain(a.snapshot.iter()) {
+        if let (Some(p), Some((frames, bytes))) = (&a.render, gif_summary) {
+            out!(
+                "wrote      {} ({frames} frames, {:.1} kB)",
+                p.display(),
+                bytes as f64 / 1e3
+            )?;
+        }
+        if let Some(p) = &a.snapshot {
             out!("wrote      {}", p.display())?;
         }
     }

@@ -31,7 +31,7 @@ pub struct TrainArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// Override the config's learner thread count.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::threads_arg)]
     threads: Option<usize>,
     /// No progress bar.
     #[arg(long, short)]
@@ -170,7 +170,9 @@ pub fn run(a: TrainArgs) -> Result<()> {
         Ok(())
     })?;
     let bar = progress_bar(a.quiet);
+    let mut progressed = false;
     let mut on_progress = |p: &madenet_learn::Progress| {
+        progressed = true;
         bar.set_length(p.episodes);
         bar.set_position(p.episode);
         let val = p
@@ -183,6 +185,24 @@ pub fn run(a: TrainArgs) -> Result<()> {
     };
     madenet_learn::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
+    finished(&a, &dir, progressed)
+}
+
+/// Prints the run directory; a resumed run that had nothing left to train says so on stderr
+/// (it already reached the `--episodes` or `--max-minutes` it was given or saved with), so
+/// `--resume DIR --episodes N` on a run past N is not mistaken for training.
+fn finished(a: &TrainArgs, dir: &Path, progressed: bool) -> Result<()> {
+    if a.resume.is_some() && !progressed {
+        eprintln!(
+            "{}: nothing left to train: the run already reached its length{}; give a larger --episodes or --max-minutes to continue it",
+            dir.display(),
+            match (a.episodes, a.max_minutes) {
+                (Some(e), _) => format!(" (it is past --episodes {e})"),
+                (None, Some(m)) => format!(" (it is past --max-minutes {m})"),
+                (None, None) => String::new(),
+            }
+        );
+    }
     out!("{}", dir.display())?;
     Ok(())
 }
@@ -206,7 +226,9 @@ fn run_dme(a: TrainArgs) -> Result<()> {
     // `--method dme-drl` is what brought us here: nothing more to set.
     let (dir, cfg) = run_dir_and_config::<madenet_dme::train::DmeTrainConfig>(&a, |_| Ok(()))?;
     let bar = progress_bar(a.quiet);
+    let mut progressed = false;
     let mut on_progress = |p: &madenet_dme::train::Progress| {
+        progressed = true;
         bar.set_length(p.episodes);
         bar.set_position(p.episode);
         let val = p
@@ -219,8 +241,7 @@ fn run_dme(a: TrainArgs) -> Result<()> {
     };
     madenet_dme::train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
-    out!("{}", dir.display())?;
-    Ok(())
+    finished(&a, &dir, progressed)
 }
 
 /// `madenet train --method made-net-rollout` (or such a config or run directory): the DEP
@@ -238,7 +259,9 @@ fn run_rollout(a: TrainArgs) -> Result<()> {
             .expect("valid template")
             .progress_chars("=> "),
     );
+    let mut progressed = false;
     let mut on_progress = |p: &madenet_learn::rollout_train::Progress| {
+        progressed = true;
         bar.set_length(p.iterations);
         bar.set_position(p.iteration);
         bar.set_message(format!(
@@ -255,6 +278,5 @@ fn run_rollout(a: TrainArgs) -> Result<()> {
     };
     madenet_learn::rollout_train::train(&dir, cfg, &mut on_progress)?;
     bar.finish();
-    out!("{}", dir.display())?;
-    Ok(())
+    finished(&a, &dir, progressed)
 }

@@ -72,6 +72,25 @@ fn tiny_run_resume_and_model() {
             .count(),
         1 + 4
     );
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("nothing left"),
+        "it trained"
+    );
+    // Resuming to a length the run is already past trains nothing and says so.
+    let o = madenet(&["train", "--resume", r, "--episodes", "2", "-q"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("nothing left to train") && e.contains("--episodes 2"),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(run.join("episodes.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        1 + 4
+    );
     // The trained model plays a generated map.
     let best = run.join("best");
     let o = madenet(&[
@@ -162,6 +181,12 @@ fn dme_drl_tiny_run_resume_model_and_bad_input() {
             .lines()
             .count(),
         1 + 3
+    );
+    let o = madenet(&["train", "--resume", r, "--episodes", "3", "-q"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && e.contains("nothing left to train"),
+        "{e}"
     );
     let o = madenet(&["plot-training", r]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
