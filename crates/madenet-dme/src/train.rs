@@ -101,6 +101,9 @@ pub struct DmeTrainConfig {
     pub validation_csp: Vec<f64>,
     /// Checkpoint every this many episodes.
     pub checkpoint_every: u64,
+    /// Also checkpoint when this many minutes passed since the last checkpoint; 0 = by
+    /// episodes only.
+    pub checkpoint_minutes: f64,
     /// Learner threads (burn's CPU kernels run on this rayon pool).
     pub threads: usize,
 }
@@ -136,6 +139,7 @@ impl Default for DmeTrainConfig {
             validation_maps: 12,
             validation_csp: vec![1.0, 0.5, 0.0],
             checkpoint_every: 100,
+            checkpoint_minutes: 10.0,
             threads: 2,
         }
     }
@@ -229,6 +233,9 @@ impl DmeTrainConfig {
         }
         if self.update_every == 0 {
             return bad("update_every", "must be at least 1");
+        }
+        if !(self.checkpoint_minutes.is_finite() && self.checkpoint_minutes >= 0.0) {
+            return bad("checkpoint_minutes", "must be ≥ 0 (0 = by episodes only)");
         }
         if self.checkpoint_every == 0 {
             return bad("checkpoint_every", "must be at least 1");
@@ -849,6 +856,7 @@ fn train_loop(
             .map_or(0.0, |d| d.as_secs_f64())
     };
     let started = Instant::now();
+    let mut last_checkpoint = started;
     let wall0 = state.wall_s;
     let params = cfg.update_params();
     let team = cfg.scenario.num_robots;
@@ -998,9 +1006,12 @@ fn train_loop(
         }
         let stopping = state.episode == cfg.episodes
             || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
-        if state.episode % cfg.checkpoint_every == 0 || stopping {
+        let ckpt_due = cfg.checkpoint_minutes > 0.0
+            && last_checkpoint.elapsed().as_secs_f64() >= cfg.checkpoint_minutes * 60.0;
+        if state.episode % cfg.checkpoint_every == 0 || stopping || ckpt_due {
             state.wall_s = wall0 + started.elapsed().as_secs_f64();
             checkpoint(&ckpt_dir, &nets, &state, &replay)?;
+            last_checkpoint = Instant::now();
             save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
         }
         tb.flush().map_err(io_err(run_dir))?;

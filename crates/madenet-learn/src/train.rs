@@ -135,6 +135,9 @@ pub struct TrainConfig {
     pub validation_csp: Vec<f64>,
     /// Checkpoint every this many episodes per environment.
     pub checkpoint_every: u64,
+    /// Also checkpoint when this many minutes passed since the last checkpoint (so a run
+    /// killed between episode checkpoints loses at most this much); 0 = by episodes only.
+    pub checkpoint_minutes: f64,
     /// Learner threads (burn's CPU kernels run on this rayon pool).
     pub threads: usize,
 }
@@ -171,6 +174,7 @@ impl Default for TrainConfig {
             validation_maps: 12,
             validation_csp: vec![1.0, 0.5, 0.0],
             checkpoint_every: 500,
+            checkpoint_minutes: 10.0,
             threads: 2,
         }
     }
@@ -224,7 +228,7 @@ impl TrainConfig {
         self.scenario
             .validate()
             .map_err(|e| format!("scenario: {e}"))?;
-        let checks: [(bool, &str, String); 15] = [
+        let checks: [(bool, &str, String); 16] = [
             (self.episodes >= 1, "episodes", "must be at least 1".into()),
             (
                 self.max_minutes >= 0.0 && self.max_minutes.is_finite(),
@@ -298,6 +302,11 @@ impl TrainConfig {
                 self.checkpoint_every >= 1,
                 "checkpoint_every",
                 "must be at least 1".into(),
+            ),
+            (
+                self.checkpoint_minutes.is_finite() && self.checkpoint_minutes >= 0.0,
+                "checkpoint_minutes",
+                "must be ≥ 0 (0 = by episodes only)".into(),
             ),
         ];
         for (ok, field, msg) in checks {
@@ -973,6 +982,7 @@ fn train_loop(
     let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
     let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
     let started = Instant::now();
+    let mut last_checkpoint = started;
     let wall0 = state.wall_s;
     let wall = |started: &Instant| wall0 + started.elapsed().as_secs_f64();
     // TensorBoard's wall-clock axis wants Unix seconds.
@@ -1134,9 +1144,12 @@ fn train_loop(
         }
         let stopping = state.episode == cfg.episodes
             || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
-        if state.episode % cfg.checkpoint_every == 0 || stopping {
+        let ckpt_due = cfg.checkpoint_minutes > 0.0
+            && last_checkpoint.elapsed().as_secs_f64() >= cfg.checkpoint_minutes * 60.0;
+        if state.episode % cfg.checkpoint_every == 0 || stopping || ckpt_due {
             state.wall_s = wall(&started);
             checkpoint(&ckpt_dir, &nets, &state, &cen, &dec)?;
+            last_checkpoint = Instant::now();
             save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
         }
         tb.flush().map_err(io_err(run_dir))?;
