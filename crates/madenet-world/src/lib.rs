@@ -22,7 +22,10 @@ pub mod geometry;
 pub mod rng;
 pub mod world;
 
-pub use config::{goal_count_eq3, CandidateRule, ConfigError, ScenarioConfig};
+pub use config::{
+    goal_count_eq3, CandidateRule, ConfigError, ScenarioConfig, MAX_GOALS, MAX_PLAN_HORIZON,
+    MAX_ROBOTS, MAX_SENSING_RANGE, MAX_STEP_CAP,
+};
 pub use geometry::{
     bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern,
 };
