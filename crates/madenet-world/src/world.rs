@@ -24,7 +24,7 @@ pub enum ScenarioError {
 }
 
 /// What one robot perceives in one timestep (its primitive observation o_i).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Observation {
     pub robot: usize,
     /// Timestep of the observation.

@@ -1,0 +1,51 @@
+//! How nodes reach each other: a [`Transport`] moves encoded envelopes between [`Node`]s. The
+//! in-memory [`ChannelBus`] (one `std::sync::mpsc` queue per node, each node on its own thread)
+//! is the first implementation; a network transport (Zenoh, one process per node) implements the
+//! same two calls.
+
+use crate::wire::Node;
+use std::collections::HashMap;
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
+use std::time::Duration;
+
+/// A node's connection: send bytes to another node, receive the next bytes sent to this one.
+pub trait Transport: Send {
+    /// Sends one encoded message to `to`; false if `to` is gone.
+    fn send(&self, to: Node, bytes: Vec<u8>) -> bool;
+    /// The next message for this node, or `None` after `timeout` (or once every sender is gone).
+    fn recv(&self, timeout: Duration) -> Option<Vec<u8>>;
+}
+
+/// In-memory transport for nodes on threads of one process.
+pub struct ChannelBus {
+    inboxes: HashMap<Node, Sender<Vec<u8>>>,
+    me: Receiver<Vec<u8>>,
+}
+
+impl ChannelBus {
+    /// One connected endpoint per node, in the order given.
+    pub fn connect(nodes: &[Node]) -> Vec<ChannelBus> {
+        let (senders, receivers): (Vec<_>, Vec<_>) = nodes.iter().map(|_| channel()).unzip();
+        let inboxes: HashMap<Node, Sender<Vec<u8>>> = nodes.iter().copied().zip(senders).collect();
+        receivers
+            .into_iter()
+            .map(|me| ChannelBus {
+                inboxes: inboxes.clone(),
+                me,
+            })
+            .collect()
+    }
+}
+
+impl Transport for ChannelBus {
+    fn send(&self, to: Node, bytes: Vec<u8>) -> bool {
+        self.inboxes.get(&to).is_some_and(|s| s.send(bytes).is_ok())
+    }
+
+    fn recv(&self, timeout: Duration) -> Option<Vec<u8>> {
+        match self.me.recv_timeout(timeout) {
+            Ok(b) => Some(b),
+            Err(RecvTimeoutError::Timeout | RecvTimeoutError::Disconnected) => None,
+        }
+    }
+}

@@ -1,0 +1,125 @@
+//! The runtime's nodes, talking only through encoded messages on their own threads, give
+//! exactly the in-process trial: the same positions at every timestep and the same metrics.
+
+use madenet_map::paper::{paper_map, Corner};
+use madenet_runtime::wire::{Body, Envelope, Node, WireError, PROTOCOL_VERSION};
+use madenet_runtime::{run_lockstep, RuntimeError};
+use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_world::{Move, ScenarioConfig};
+use std::sync::LazyLock;
+use std::time::Duration;
+
+/// Every shipped method (built-ins, baselines, learned models), as the study registers them.
+static REGISTRY: LazyLock<PolicyRegistry> = LazyLock::new(|| {
+    madenet_study::StudyConfig::default()
+        .registry()
+        .expect("the shipped models load")
+});
+
+fn spec(map: usize, corner: Corner, policy: &str, csp: f64, seed: u64) -> TrialSpec {
+    let grid = paper_map(map).unwrap();
+    TrialSpec {
+        starts: corner.start_cells(grid.height(), grid.width()).to_vec(),
+        map: grid,
+        map_name: format!("paper:{map}"),
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..Default::default()
+        },
+        policy: policy.into(),
+        seed,
+    }
+}
+
+#[test]
+fn nodes_over_messages_equal_the_in_process_trial() {
+    let mut exchanged = 0;
+    for policy in ["nf", "made-net", "spread", "pb"] {
+        for (map, corner) in [(3, Corner::TopRight), (8, Corner::BottomLeft)] {
+            for csp in [1.0, 0.5] {
+                for seed in [1, 2] {
+                    let s = spec(map, corner, policy, csp, seed);
+                    let apart = run_lockstep(s.clone(), &REGISTRY, Duration::from_secs(30))
+                        .unwrap_or_else(|e| panic!("{policy} map {map} csp {csp}: {e}"));
+                    let together = Trial::with_registry(s, &REGISTRY)
+                        .unwrap()
+                        .record_trajectory(true)
+                        .run();
+                    let case = format!("{policy} map {map} {corner:?} csp {csp} seed {seed}");
+                    assert_eq!(apart.metrics, together.metrics, "{case}");
+                    assert_eq!(apart.positions[0], together.starts, "{case}");
+                    assert_eq!(
+                        apart.positions.len(),
+                        together.trajectory.len() + 1,
+                        "{case}"
+                    );
+                    for (k, r) in together.trajectory.iter().enumerate() {
+                        assert_eq!(
+                            apart.positions[k + 1],
+                            r.positions,
+                            "{case}: step {}",
+                            k + 1
+                        );
+                    }
+                    exchanged += together
+                        .trajectory
+                        .iter()
+                        .map(|r| r.exchanges.len())
+                        .sum::<usize>();
+                }
+            }
+        }
+    }
+    assert!(
+        exchanged > 100,
+        "the runs exchanged β ({exchanged} exchanges)"
+    );
+}
+
+#[test]
+fn the_wire_format_round_trips_and_refuses_other_versions() {
+    let e = Envelope::new(5, Node::Robot(2), Body::Move(Move::Stay));
+    let bytes = e.encode();
+    assert_eq!(Envelope::decode(&bytes).unwrap(), e);
+    // The version is the first field: a future version is named, not misread.
+    let mut future = Envelope::new(5, Node::World, Body::Stop);
+    future.version = PROTOCOL_VERSION + 1;
+    match Envelope::decode(&future.encode()) {
+        Err(WireError::Version { got }) => assert_eq!(got, PROTOCOL_VERSION + 1),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        Envelope::decode(&bytes[..bytes.len() - 1]),
+        Err(WireError::Malformed(_))
+    ));
+    assert!(matches!(
+        Envelope::decode(&[]),
+        Err(WireError::Malformed(_))
+    ));
+}
+
+#[test]
+fn a_node_that_hears_nothing_times_out_naming_what_it_waited_for() {
+    use madenet_runtime::transport::ChannelBus;
+    let s = spec(3, Corner::TopLeft, "nf", 1.0, 1);
+    let world = madenet_world::World::new(s.map, &s.starts, s.config, 1).unwrap();
+    // Robots that never answer: their endpoints exist but nothing runs behind them.
+    let nodes = [Node::World, Node::Robot(0), Node::Robot(1), Node::Robot(2)];
+    let mut buses = ChannelBus::connect(&nodes).into_iter();
+    let world_bus = buses.next().unwrap();
+    let _silent: Vec<_> = buses.collect();
+    let err = madenet_runtime::run_world(world, world_bus, Duration::from_millis(200)).unwrap_err();
+    match &err {
+        RuntimeError::Timeout {
+            node, waiting_for, ..
+        } => {
+            assert_eq!(*node, Node::World);
+            assert!(waiting_for.contains("move"), "{err}");
+        }
+        other => panic!("{other}"),
+    }
+    assert!(
+        err.to_string().contains("World") && err.to_string().contains("200ms"),
+        "{err}"
+    );
+}
