@@ -87,11 +87,22 @@ struct Mailbox<T: Transport> {
     me: Node,
     pending: Vec<Envelope>,
     timeout: Duration,
+    sent: Traffic,
+}
+
+/// Messages and bytes a node sent.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Traffic {
+    pub messages: usize,
+    pub bytes: usize,
 }
 
 impl<T: Transport> Mailbox<T> {
-    fn send(&self, to: Node, e: &Envelope) -> Result<(), RuntimeError> {
-        if self.transport.send(to, e.encode()) {
+    fn send(&mut self, to: Node, e: &Envelope) -> Result<(), RuntimeError> {
+        let bytes = e.encode();
+        self.sent.messages += 1;
+        self.sent.bytes += bytes.len();
+        if self.transport.send(to, bytes) {
             Ok(())
         } else {
             Err(RuntimeError::Gone { node: self.me, to })
@@ -134,16 +145,21 @@ pub struct LockstepResult {
     pub metrics: TrialMetrics,
     /// Robot positions before the first move and after every timestep.
     pub positions: Vec<Vec<Pos>>,
-    /// Messages the world node sent and received (observations, moves, stops).
-    pub world_messages: usize,
+    /// What the world node sent (observations and stops).
+    pub world_sent: Traffic,
+    /// What the robot nodes sent: to the world (moves) and to each other (β and plans).
+    pub robots_sent: Traffic,
+    /// Of that, robot to robot: β and plans along successful exchanges.
+    pub between_robots: Traffic,
 }
 
-/// Runs robot `agent`'s node until the world says stop.
+/// Runs robot `agent`'s node until the world says stop; returns what it sent (all of it, and
+/// the part that went to teammates).
 pub fn run_robot<T: Transport>(
     mut agent: Agent,
     transport: T,
     timeout: Duration,
-) -> Result<(), RuntimeError> {
+) -> Result<(Traffic, Traffic), RuntimeError> {
     let i = agent.id();
     let me = Node::Robot(i);
     let mut mb = Mailbox {
@@ -151,13 +167,21 @@ pub fn run_robot<T: Transport>(
         me,
         pending: Vec::new(),
         timeout,
+        sent: Traffic::default(),
     };
+    let mut to_world = Traffic::default();
     loop {
         let e = mb.take("an observation from the world", |e| e.from == Node::World)?;
         let step = e.step;
         let obs = match e.body {
             Body::Observation(o) => o,
-            Body::Stop => return Ok(()),
+            Body::Stop => {
+                let between = Traffic {
+                    messages: mb.sent.messages - to_world.messages,
+                    bytes: mb.sent.bytes - to_world.bytes,
+                };
+                return Ok((mb.sent, between));
+            }
             _ => {
                 return Err(RuntimeError::Unexpected {
                     node: me,
@@ -213,10 +237,13 @@ pub fn run_robot<T: Transport>(
             }
         }
         // 5. act
+        let before = mb.sent;
         mb.send(
             Node::World,
             &Envelope::new(step, me, Body::Move(agent.next_move())),
         )?;
+        to_world.messages += mb.sent.messages - before.messages;
+        to_world.bytes += mb.sent.bytes - before.bytes;
     }
 }
 
@@ -233,10 +260,10 @@ pub fn run_world<T: Transport>(
         me: Node::World,
         pending: Vec::new(),
         timeout,
+        sent: Traffic::default(),
     };
     let mut recorder = MetricsRecorder::new(world.explored_fraction());
     let mut positions = vec![world.positions().to_vec()];
-    let mut messages = 0;
     let mut moves = vec![Move::Stay; n];
     while !world.is_done() {
         let step = world.t() as u64;
@@ -252,7 +279,6 @@ pub fn run_world<T: Transport>(
                 *m = mv;
             }
         }
-        messages += 2 * n;
         world.step(&moves);
         // The metrics exactly as the in-process trial records them.
         let team_distance: f64 = world.distances().iter().sum();
@@ -277,11 +303,12 @@ pub fn run_world<T: Transport>(
             &Envelope::new(step, Node::World, Body::Stop),
         )?;
     }
-    messages += n;
     Ok(LockstepResult {
         metrics: recorder.finish(world.is_complete()),
         positions,
-        world_messages: messages,
+        world_sent: mb.sent,
+        robots_sent: Traffic::default(),
+        between_robots: Traffic::default(),
     })
 }
 
@@ -325,9 +352,15 @@ pub fn run_lockstep(
             .zip(buses)
             .map(|(agent, bus)| s.spawn(move || run_robot(agent, bus, timeout)))
             .collect();
-        let result = run_world(world, world_bus, timeout);
+        let mut result = run_world(world, world_bus, timeout);
         for r in robots {
-            r.join().map_err(|_| RuntimeError::Panicked)??;
+            let (all, between) = r.join().map_err(|_| RuntimeError::Panicked)??;
+            if let Ok(res) = result.as_mut() {
+                res.robots_sent.messages += all.messages;
+                res.robots_sent.bytes += all.bytes;
+                res.between_robots.messages += between.messages;
+                res.between_robots.bytes += between.bytes;
+            }
         }
         result
     })

@@ -61,11 +61,23 @@ fn nodes_over_messages_equal_the_in_process_trial() {
                             k + 1
                         );
                     }
-                    exchanged += together
-                        .trajectory
-                        .iter()
-                        .map(|r| r.exchanges.len())
-                        .sum::<usize>();
+                    let exchanges: usize =
+                        together.trajectory.iter().map(|r| r.exchanges.len()).sum();
+                    exchanged += exchanges;
+                    // Traffic: one observation per robot and step plus a stop each from the
+                    // world; one move per robot and step, and two β per exchange, from robots.
+                    let (n, steps) = (3, together.trajectory.len());
+                    assert_eq!(apart.world_sent.messages, n * steps + n, "{case}");
+                    assert!(apart.between_robots.messages >= 2 * exchanges, "{case}");
+                    assert_eq!(
+                        apart.robots_sent.messages,
+                        n * steps + apart.between_robots.messages,
+                        "{case}"
+                    );
+                    assert!(
+                        apart.between_robots.bytes >= 2 * exchanges * 400,
+                        "{case}: β carries the 400-cell map"
+                    );
                 }
             }
         }

@@ -1,0 +1,59 @@
+//! `cargo bench -p madenet-runtime --bench lockstep`: one trial with the robots as message-passing
+//! nodes on their own threads (`lockstep/nodes`) against the same trial in one process
+//! (`lockstep/in_process`, the anchor): NF, paper map 3 from the top-left, CSP 1 and 0.5, seed 1.
+//! The traffic of each run (messages and bytes per β exchange) is printed once.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use madenet_map::paper::{paper_map, Corner};
+use madenet_runtime::run_lockstep;
+use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_world::ScenarioConfig;
+use std::time::Duration;
+
+fn spec(csp: f64) -> TrialSpec {
+    TrialSpec {
+        map: paper_map(3).expect("paper map"),
+        map_name: "paper:3".into(),
+        starts: Corner::TopLeft.start_cells(20, 20).to_vec(),
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..Default::default()
+        },
+        policy: "nf".into(),
+        seed: 1,
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let registry = PolicyRegistry::builtin();
+    let mut g = c.benchmark_group("lockstep");
+    for csp in [1.0, 0.5] {
+        let r = run_lockstep(spec(csp), &registry, Duration::from_secs(10)).expect("run");
+        let t = Trial::new(spec(csp))
+            .expect("trial")
+            .record_trajectory(true)
+            .run();
+        let exchanges: usize = t.trajectory.iter().map(|s| s.exchanges.len()).sum();
+        eprintln!(
+            "csp {csp}: {} steps, {exchanges} exchanges; world sent {} messages / {} B, robots {} / {} B, of which robot to robot {} / {} B ({:.0} B per exchange)",
+            t.metrics.tns,
+            r.world_sent.messages,
+            r.world_sent.bytes,
+            r.robots_sent.messages,
+            r.robots_sent.bytes,
+            r.between_robots.messages,
+            r.between_robots.bytes,
+            r.between_robots.bytes as f64 / exchanges.max(1) as f64
+        );
+        g.bench_with_input(BenchmarkId::new("in_process", csp), &csp, |b, &csp| {
+            b.iter(|| Trial::new(spec(csp)).expect("trial").run())
+        });
+        g.bench_with_input(BenchmarkId::new("nodes", csp), &csp, |b, &csp| {
+            b.iter(|| run_lockstep(spec(csp), &registry, Duration::from_secs(10)).expect("run"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
