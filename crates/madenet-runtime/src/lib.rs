@@ -45,10 +45,10 @@
 pub mod transport;
 pub mod wire;
 
-use madenet_agent::{Agent, AgentConfig};
+use madenet_agent::Agent;
 use madenet_map::Pos;
 use madenet_metrics::{MetricsRecorder, TrialMetrics};
-use madenet_sim::{PolicyContext, PolicyRegistry, TrialSpec};
+use madenet_sim::{PolicyRegistry, TrialSpec};
 use madenet_world::{Move, World};
 use std::time::Duration;
 use transport::{ChannelBus, Transport};
@@ -281,19 +281,7 @@ pub fn run_world<T: Transport>(
         }
         world.step(&moves);
         // The metrics exactly as the in-process trial records them.
-        let team_distance: f64 = world.distances().iter().sum();
-        let (pos, ds) = (world.positions(), world.config().sensing_range);
-        let closer = world
-            .contacts()
-            .iter()
-            .filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds)
-            .count();
-        recorder.record(
-            world.explored_fraction(),
-            team_distance,
-            world.contacts().len(),
-            closer,
-        );
+        madenet_sim::record_step(&mut recorder, &world);
         positions.push(world.positions().to_vec());
     }
     let step = world.t() as u64;
@@ -313,34 +301,15 @@ pub fn run_world<T: Transport>(
 }
 
 /// Runs `spec` with the world and every robot as separate nodes on their own threads, talking
-/// only through encoded messages over [`ChannelBus`]; the agents are built exactly as
-/// [`madenet_sim::Trial`] builds them, so the result equals the in-process trial's.
+/// only through encoded messages over [`ChannelBus`]; world and agents come from
+/// [`madenet_sim::build`], as for [`madenet_sim::Trial`], so the result equals the in-process trial's.
 pub fn run_lockstep(
     spec: TrialSpec,
     registry: &PolicyRegistry,
     timeout: Duration,
 ) -> Result<LockstepResult, RuntimeError> {
-    let (h, w) = (spec.map.height(), spec.map.width());
-    let cfg = spec.config.clone();
-    let n = cfg.num_robots.min(spec.starts.len());
-    let mut agents = Vec::with_capacity(n);
-    for i in 0..n {
-        let ctx = PolicyContext {
-            seed: spec.seed,
-            robot: i,
-            config: &cfg,
-            height: h,
-            width: w,
-        };
-        let policy = registry.make(&spec.policy, &ctx)?;
-        agents.push(Agent::new(
-            AgentConfig::from_scenario(&cfg, i, h, w),
-            spec.starts[i],
-            policy,
-        ));
-    }
-    let world =
-        World::new(spec.map, &spec.starts, cfg, spec.seed).map_err(madenet_sim::SimError::from)?;
+    let (world, agents) = madenet_sim::build(spec, registry)?;
+    let n = agents.len();
     let nodes: Vec<Node> = std::iter::once(Node::World)
         .chain((0..n).map(Node::Robot))
         .collect();

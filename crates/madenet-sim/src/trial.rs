@@ -97,6 +97,50 @@ pub struct Trial {
     plan_message: PlanMessage,
 }
 
+/// The world and the agents of `spec`, each agent with its own policy from `registry` (seeded
+/// by the trial seed and the robot's index): what [`Trial`] runs in one process and what the
+/// runtime runs as separate nodes.
+pub fn build(spec: TrialSpec, registry: &PolicyRegistry) -> Result<(World, Vec<Agent>), SimError> {
+    let (h, w) = (spec.map.height(), spec.map.width());
+    let cfg = spec.config;
+    let mut agents = Vec::with_capacity(cfg.num_robots);
+    for i in 0..cfg.num_robots.min(spec.starts.len()) {
+        let ctx = PolicyContext {
+            seed: spec.seed,
+            robot: i,
+            config: &cfg,
+            height: h,
+            width: w,
+        };
+        let policy = registry.make(&spec.policy, &ctx)?;
+        agents.push(Agent::new(
+            AgentConfig::from_scenario(&cfg, i, h, w),
+            spec.starts[i],
+            policy,
+        ));
+    }
+    let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
+    Ok((world, agents))
+}
+
+/// Records the timestep `world` just took in `recorder` (explored fraction, team distance, pairs
+/// in contact and, of those, strictly closer than d_s).
+pub fn record_step(recorder: &mut MetricsRecorder, world: &World) {
+    let team_distance: f64 = world.distances().iter().sum();
+    let (pos, ds) = (world.positions(), world.config().sensing_range);
+    let closer = world
+        .contacts()
+        .iter()
+        .filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds)
+        .count();
+    recorder.record(
+        world.explored_fraction(),
+        team_distance,
+        world.contacts().len(),
+        closer,
+    );
+}
+
 impl Trial {
     /// Builds the world and the agents with the built-in policies.
     pub fn new(spec: TrialSpec) -> Result<Self, SimError> {
@@ -104,32 +148,17 @@ impl Trial {
     }
 
     pub fn with_registry(spec: TrialSpec, registry: &PolicyRegistry) -> Result<Self, SimError> {
-        let (h, w) = (spec.map.height(), spec.map.width());
-        let cfg = spec.config.clone();
-        let mut agents = Vec::with_capacity(cfg.num_robots);
-        for i in 0..cfg.num_robots.min(spec.starts.len()) {
-            let ctx = PolicyContext {
-                seed: spec.seed,
-                robot: i,
-                config: &cfg,
-                height: h,
-                width: w,
-            };
-            let policy = registry.make(&spec.policy, &ctx)?;
-            agents.push(Agent::new(
-                AgentConfig::from_scenario(&cfg, i, h, w),
-                spec.starts[i],
-                policy,
-            ));
-        }
-        let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
+        let (map_name, policy, seed) = (spec.map_name.clone(), spec.policy.clone(), spec.seed);
+        let mut starts = spec.starts.clone();
+        let (world, agents) = build(spec, registry)?;
         let n = agents.len();
+        starts.truncate(n);
         Ok(Trial {
             recorder: MetricsRecorder::new(world.explored_fraction()),
-            starts: spec.starts[..n].to_vec(),
-            spec_map: spec.map_name,
-            policy: spec.policy,
-            seed: spec.seed,
+            starts,
+            spec_map: map_name,
+            policy,
+            seed,
             world,
             agents,
             trajectory: Vec::new(),
@@ -479,20 +508,7 @@ impl Trial {
             self.moves[i] = a.next_move();
         }
         self.world.step(&self.moves);
-        let team_distance: f64 = self.world.distances().iter().sum();
-        let (pos, ds) = (self.world.positions(), self.world.config().sensing_range);
-        let closer = self
-            .world
-            .contacts()
-            .iter()
-            .filter(|&&(i, j)| pos[i].chebyshev(pos[j]) < ds)
-            .count();
-        self.recorder.record(
-            self.world.explored_fraction(),
-            team_distance,
-            self.world.contacts().len(),
-            closer,
-        );
+        record_step(&mut self.recorder, &self.world);
         self.compute_rewards();
         self.add_elapsed(started);
         if self.record {

@@ -64,7 +64,8 @@ fn assert_clean_error(out: &Output, needles: &[&str]) {
     }
 }
 
-/// `trials.csv` rows without the wall-clock columns.
+/// The rows of a CSV file (header first) without the wall-clock columns `trial_s` and
+/// `per_decision_s`, which differ between runs.
 fn deterministic_rows(path: &Path) -> Vec<Vec<String>> {
     let mut rdr = csv::Reader::from_path(path).unwrap();
     let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
@@ -315,21 +316,6 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
     assert!(!out.join("curves.jsonl").exists());
 }
 
-/// `summary.csv` without its wall-clock columns (computation time differs between runs).
-fn summary_without_ct(path: &Path) -> Vec<Vec<String>> {
-    let mut rdr = csv::Reader::from_path(path).unwrap();
-    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
-    let keep: Vec<usize> = (0..header.len())
-        .filter(|&i| header[i] != "trial_s" && header[i] != "per_decision_s")
-        .collect();
-    let mut rows = vec![keep.iter().map(|&i| header[i].clone()).collect::<Vec<_>>()];
-    for r in rdr.records() {
-        let r = r.unwrap();
-        rows.push(keep.iter().map(|&i| r[i].to_string()).collect());
-    }
-    rows
-}
-
 #[test]
 fn a_study_killed_twice_and_resumed_writes_the_files_of_an_uninterrupted_one() {
     // Enough trials (160) that TTD sums of √2 steps fill every decimal and the statistics
@@ -412,8 +398,8 @@ oracles = []
         assert!(a == b, "{f} differs from the uninterrupted study's");
     }
     assert_eq!(
-        summary_without_ct(&killed.join("summary.csv")),
-        summary_without_ct(&whole.join("summary.csv"))
+        deterministic_rows(&killed.join("summary.csv")),
+        deterministic_rows(&whole.join("summary.csv"))
     );
 
     // Re-running on the finished folder runs nothing and changes none of these files.
