@@ -1,7 +1,6 @@
 //! How nodes reach each other: a [`Transport`] moves encoded envelopes between [`Node`]s. The
 //! in-memory [`ChannelBus`] (one `std::sync::mpsc` queue per node, each node on its own thread)
-//! is the first implementation; a network transport (Zenoh, one process per node) implements the
-//! same two calls.
+//! is one implementation; [`crate::ZenohBus`] (one process per node) implements the same calls.
 
 use crate::wire::Node;
 use std::collections::HashMap;
@@ -14,6 +13,12 @@ pub trait Transport: Send {
     fn send(&self, to: Node, bytes: Vec<u8>) -> bool;
     /// The next message for this node, or `None` after `timeout` (or once every sender is gone).
     fn recv(&self, timeout: Duration) -> Option<Vec<u8>>;
+    /// Waits until `peers` can be sent to (a network transport: their inboxes are subscribed
+    /// and reachable); an error names who is missing after `timeout`.
+    fn connect(&self, peers: &[Node], timeout: Duration) -> Result<(), String> {
+        let _ = (peers, timeout);
+        Ok(())
+    }
 }
 
 /// In-memory transport for nodes on threads of one process.

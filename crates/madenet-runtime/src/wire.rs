@@ -1,22 +1,36 @@
 //! The wire format: every message between nodes is one [`Envelope`], serialized with postcard.
 //!
 //! An envelope carries the protocol version (a node refuses any other), the timestep it belongs
-//! to, and its sender. The bodies are the data flow of a timestep: the world sends each robot its
-//! observation; robots send β to the teammates they exchanged with and plans to lower-priority
-//! ones; each robot sends the world its move; the world ends the run with `Stop`.
+//! to, its sender and its addressee. The bodies are the data flow of a timestep: the world sends
+//! each robot its observation and the radio the pairs in contact; the radio tells each robot in
+//! contact with whom its link is up; robots send β to those teammates and plans to the
+//! lower-priority ones — through the radio, which forwards only along links that are up; each
+//! robot sends the world its move; the world ends the run with `Stop`.
 
 use madenet_agent::{Beta, PlanMessage};
 use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
-/// Who sends or receives: the world (ground truth, motion, sensing, the radio model) or a robot.
+/// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
+/// communication model) or a robot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Node {
     World,
+    Radio,
     Robot(usize),
+}
+
+impl std::fmt::Display for Node {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Node::World => f.write_str("world"),
+            Node::Radio => f.write_str("radio"),
+            Node::Robot(i) => write!(f, "robot {i}"),
+        }
+    }
 }
 
 /// One message.
@@ -26,21 +40,29 @@ pub struct Envelope {
     /// The timestep the message belongs to (the world's t when the observation was made).
     pub step: u64,
     pub from: Node,
+    /// The addressee; a robot's message to a teammate travels through the radio.
+    pub to: Node,
     pub body: Body,
 }
 
 /// What a message says.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Body {
-    /// World → robot: its observation o_i of this timestep (with whom it exchanged β).
+    /// World → robot: its observation o_i of this timestep (the teammates it detects; with whom
+    /// it exchanges β is the radio's to say).
     Observation(Observation),
+    /// World → radio: the pairs (i < j) in contact this timestep (within d_s, in line of sight).
+    Contacts(Vec<(usize, usize)>),
+    /// Radio → robot in contact with a teammate: the teammates it exchanges with this timestep
+    /// (ascending), so it knows whose β to wait for.
+    Links(Vec<usize>),
     /// Robot → robot, along a successful exchange: β (paper Sec. III.C.1).
     Beta(Beta),
     /// Robot → lower-priority robot it exchanged with: its space-time plan.
     Plan(PlanMessage),
     /// Robot → world: the move it intends this timestep.
     Move(Move),
-    /// World → robot: the trial is over (complete or at the step cap).
+    /// World → robots and radio: the trial is over (complete or at the step cap).
     Stop,
 }
 
@@ -54,11 +76,12 @@ pub enum WireError {
 }
 
 impl Envelope {
-    pub fn new(step: u64, from: Node, body: Body) -> Self {
+    pub fn new(step: u64, from: Node, to: Node, body: Body) -> Self {
         Envelope {
             version: PROTOCOL_VERSION,
             step,
             from,
+            to,
             body,
         }
     }

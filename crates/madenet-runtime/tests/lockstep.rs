@@ -64,10 +64,22 @@ fn nodes_over_messages_equal_the_in_process_trial() {
                     let exchanges: usize =
                         together.trajectory.iter().map(|r| r.exchanges.len()).sum();
                     exchanged += exchanges;
-                    // Traffic: one observation per robot and step plus a stop each from the
-                    // world; one move per robot and step, and two β per exchange, from robots.
+                    // Traffic: one observation per robot and one contact list per step plus a
+                    // stop each from the world; one move per robot and step, and two β per
+                    // exchange, from robots; the radio forwards every robot-to-robot message
+                    // (all of them travel along links that are up) and sends links.
                     let (n, steps) = (3, together.trajectory.len());
-                    assert_eq!(apart.world_sent.messages, n * steps + n, "{case}");
+                    assert_eq!(apart.world_sent.messages, (n + 1) * steps + n + 1, "{case}");
+                    let links = apart.radio_sent.messages - apart.between_robots.messages;
+                    // Links go out at timesteps 0 … T−1; record k holds timestep k + 1.
+                    let steps_exchanging = together.trajectory[..steps - 1]
+                        .iter()
+                        .filter(|r| !r.exchanges.is_empty())
+                        .count();
+                    assert!(
+                        links >= 2 * steps_exchanging && links <= n * (steps + 1),
+                        "{case}: {links} link messages"
+                    );
                     assert!(apart.between_robots.messages >= 2 * exchanges, "{case}");
                     assert_eq!(
                         apart.robots_sent.messages,
@@ -90,11 +102,11 @@ fn nodes_over_messages_equal_the_in_process_trial() {
 
 #[test]
 fn the_wire_format_round_trips_and_refuses_other_versions() {
-    let e = Envelope::new(5, Node::Robot(2), Body::Move(Move::Stay));
+    let e = Envelope::new(5, Node::Robot(2), Node::World, Body::Move(Move::Stay));
     let bytes = e.encode();
     assert_eq!(Envelope::decode(&bytes).unwrap(), e);
     // The version is the first field: a future version is named, not misread.
-    let mut future = Envelope::new(5, Node::World, Body::Stop);
+    let mut future = Envelope::new(5, Node::World, Node::Radio, Body::Stop);
     future.version = PROTOCOL_VERSION + 1;
     match Envelope::decode(&future.encode()) {
         Err(WireError::Version { got }) => assert_eq!(got, PROTOCOL_VERSION + 1),
@@ -116,7 +128,13 @@ fn a_node_that_hears_nothing_times_out_naming_what_it_waited_for() {
     let s = spec(3, Corner::TopLeft, "nf", 1.0, 1);
     let world = madenet_world::World::new(s.map, &s.starts, s.config, 1).unwrap();
     // Robots that never answer: their endpoints exist but nothing runs behind them.
-    let nodes = [Node::World, Node::Robot(0), Node::Robot(1), Node::Robot(2)];
+    let nodes = [
+        Node::World,
+        Node::Radio,
+        Node::Robot(0),
+        Node::Robot(1),
+        Node::Robot(2),
+    ];
     let mut buses = ChannelBus::connect(&nodes).into_iter();
     let world_bus = buses.next().unwrap();
     let _silent: Vec<_> = buses.collect();
@@ -131,7 +149,57 @@ fn a_node_that_hears_nothing_times_out_naming_what_it_waited_for() {
         other => panic!("{other}"),
     }
     assert!(
-        err.to_string().contains("World") && err.to_string().contains("200ms"),
+        err.to_string().contains("world") && err.to_string().contains("200ms"),
         "{err}"
     );
+}
+
+#[test]
+fn nodes_over_zenoh_equal_the_in_process_trial() {
+    use madenet_runtime::zenoh_bus::loopback_endpoints;
+    use madenet_runtime::{nodes_of, run_threads, ZenohBus};
+    // Each node its own Zenoh session on its own loopback port, in one process.
+    let base = free_port_block(5);
+    for (policy, csp) in [("nf", 0.5), ("made-net", 1.0)] {
+        let s = spec(3, Corner::TopRight, policy, csp, 1);
+        let run = format!("test-{policy}");
+        let buses: Vec<ZenohBus> = nodes_of(3)
+            .into_iter()
+            .map(|node| {
+                let ep = loopback_endpoints(base, 3, node).unwrap();
+                ZenohBus::open(&run, node, &ep).unwrap()
+            })
+            .collect();
+        let apart = run_threads(s.clone(), &REGISTRY, Duration::from_secs(30), buses)
+            .unwrap_or_else(|e| panic!("{policy}: {e}"));
+        let together = Trial::with_registry(s, &REGISTRY)
+            .unwrap()
+            .record_trajectory(true)
+            .run();
+        assert_eq!(apart.metrics, together.metrics, "{policy}");
+        let steps: Vec<_> = together
+            .trajectory
+            .iter()
+            .map(|r| r.positions.clone())
+            .collect();
+        assert_eq!(apart.positions[1..], steps[..], "{policy}");
+        assert!(apart.between_robots.messages > 0, "{policy}: robots talked");
+    }
+}
+
+/// A base port with `n` free ports after it (the OS's choice for the first; retried if a later
+/// one is taken).
+fn free_port_block(n: u16) -> u16 {
+    for _ in 0..50 {
+        let first = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let base = first.local_addr().unwrap().port();
+        if base > u16::MAX - n {
+            continue;
+        }
+        drop(first);
+        if (0..n).all(|k| std::net::TcpListener::bind(("127.0.0.1", base + k)).is_ok()) {
+            return base;
+        }
+    }
+    panic!("no block of {n} free loopback ports");
 }

@@ -25,7 +25,9 @@ mod trial;
 pub use registry::{PolicyContext, PolicyRegistry};
 pub use rewards::{RewardConfig, StepRewards};
 pub use scenario::{check_trial_set_size, MapSource, StartSpec, MAX_PLANNED_CELLS, MAX_TRIALS};
-pub use trial::{build, record_step, Future, StepRecord, Trial, TrialResult, TrialSpec};
+pub use trial::{
+    build, build_agent, record_step, Future, StepRecord, Trial, TrialResult, TrialSpec,
+};
 
 /// Errors setting up a trial; messages name the field at fault.
 #[derive(Debug, thiserror::Error)]

@@ -101,26 +101,35 @@ pub struct Trial {
 /// by the trial seed and the robot's index): what [`Trial`] runs in one process and what the
 /// runtime runs as separate nodes.
 pub fn build(spec: TrialSpec, registry: &PolicyRegistry) -> Result<(World, Vec<Agent>), SimError> {
-    let (h, w) = (spec.map.height(), spec.map.width());
-    let cfg = spec.config;
-    let mut agents = Vec::with_capacity(cfg.num_robots);
-    for i in 0..cfg.num_robots.min(spec.starts.len()) {
-        let ctx = PolicyContext {
-            seed: spec.seed,
-            robot: i,
-            config: &cfg,
-            height: h,
-            width: w,
-        };
-        let policy = registry.make(&spec.policy, &ctx)?;
-        agents.push(Agent::new(
-            AgentConfig::from_scenario(&cfg, i, h, w),
-            spec.starts[i],
-            policy,
-        ));
-    }
-    let world = World::new(spec.map, &spec.starts, cfg, spec.seed)?;
+    let agents = (0..spec.config.num_robots.min(spec.starts.len()))
+        .map(|i| build_agent(&spec, registry, i))
+        .collect::<Result<Vec<_>, _>>()?;
+    let world = World::new(spec.map, &spec.starts, spec.config, spec.seed)?;
     Ok((world, agents))
+}
+
+/// Robot `robot`'s agent of the trial `spec`, as [`build`] makes it: what a robot's own process
+/// needs (of the map only its size; the agent never sees the ground truth).
+pub fn build_agent(
+    spec: &TrialSpec,
+    registry: &PolicyRegistry,
+    robot: usize,
+) -> Result<Agent, SimError> {
+    let (h, w) = (spec.map.height(), spec.map.width());
+    let cfg = &spec.config;
+    let ctx = PolicyContext {
+        seed: spec.seed,
+        robot,
+        config: cfg,
+        height: h,
+        width: w,
+    };
+    let policy = registry.make(&spec.policy, &ctx)?;
+    Ok(Agent::new(
+        AgentConfig::from_scenario(cfg, robot, h, w),
+        spec.starts[robot],
+        policy,
+    ))
 }
 
 /// Records the timestep `world` just took in `recorder` (explored fraction, team distance, pairs

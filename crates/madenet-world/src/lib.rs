@@ -11,7 +11,8 @@
 //!    (`sensor_miss_prob`);
 //! 3. **contact & communication** — robots within d_s and in line of sight detect each other and
 //!    exchange β with probability `comm_success_prob` (CSP), a failure starting a dropout of
-//!    `dropout_steps` for that pair.
+//!    `dropout_steps` for that pair (the [`Radio`], which a decentralized runtime runs as its
+//!    own node).
 //!
 //! Robots see the world only through [`Observation`]s and act only through [`Move`]s; the
 //! messages they exchange are delivered by the trial runner along [`World::exchanges`].
@@ -19,6 +20,7 @@
 
 pub mod config;
 pub mod geometry;
+pub mod radio;
 pub mod rng;
 pub mod world;
 
@@ -29,4 +31,5 @@ pub use config::{
 pub use geometry::{
     bresenham, line_of_sight, ray_clear, squeezed, step_allowed, Move, ViewPattern,
 };
+pub use radio::Radio;
 pub use world::{Observation, ScenarioError, Visibility, World};

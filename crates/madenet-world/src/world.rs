@@ -3,6 +3,7 @@
 
 use crate::config::{ConfigError, ScenarioConfig};
 use crate::geometry::{line_of_sight, step_allowed, Move, ViewPattern};
+use crate::radio::Radio;
 use crate::rng::{stream, Rng};
 use madenet_map::{OccGrid, Occupancy, Pos};
 use rand::{Rng as _, RngExt};
@@ -51,9 +52,8 @@ pub struct World {
     t: usize,
     rng_motion: Vec<Rng>,
     rng_sensor: Vec<Rng>,
-    rng_comm: Rng,
-    /// Remaining dropout steps per robot pair (i < j), indexed i·n + j.
-    dropout: Vec<u32>,
+    /// The communication model; `None` once [`World::detach_radio`] handed it to a radio node.
+    radio: Option<Radio>,
     team_map: Vec<Occupancy>,
     known: usize,
     explorable: Vec<bool>,
@@ -140,8 +140,7 @@ impl World {
         let mut w = World {
             rng_motion: (0..n).map(|i| stream(seed, "motion", i as u64)).collect(),
             rng_sensor: (0..n).map(|i| stream(seed, "sensor", i as u64)).collect(),
-            rng_comm: stream(seed, "comm", 0),
-            dropout: vec![0; n * n],
+            radio: Some(Radio::new(&cfg, n, seed)),
             team_map: vec![Occupancy::Unknown; cells],
             known: 0,
             explorable: vec![false; cells],
@@ -194,7 +193,9 @@ impl World {
         let k = |i: usize| salt.wrapping_mul(1 << 16).wrapping_add(i as u64);
         self.rng_motion = (0..n).map(|i| stream(seed, "fork/motion", k(i))).collect();
         self.rng_sensor = (0..n).map(|i| stream(seed, "fork/sensor", k(i))).collect();
-        self.rng_comm = stream(seed, "fork/comm", k(0));
+        if let Some(radio) = &mut self.radio {
+            radio.reseed(stream(seed, "fork/comm", k(0)));
+        }
     }
 
     /// The world of `World::new(truth, starts, cfg, seed)` for the same map, starts and
@@ -205,8 +206,9 @@ impl World {
         let n = self.positions.len();
         self.rng_motion = (0..n).map(|i| stream(seed, "motion", i as u64)).collect();
         self.rng_sensor = (0..n).map(|i| stream(seed, "sensor", i as u64)).collect();
-        self.rng_comm = stream(seed, "comm", 0);
-        self.dropout.fill(0);
+        if let Some(radio) = &mut self.radio {
+            radio.restart(seed);
+        }
         self.team_map.fill(Occupancy::Unknown);
         self.known = 0;
         for (i, o) in self.obs.iter_mut().enumerate() {
@@ -499,11 +501,6 @@ impl World {
         let ds = self.cfg.sensing_range;
         for i in 0..n {
             for j in i + 1..n {
-                let k = i * n + j;
-                let in_dropout = self.dropout[k] > 0;
-                if in_dropout {
-                    self.dropout[k] -= 1;
-                }
                 let (a, b) = (self.positions[i], self.positions[j]);
                 if a.chebyshev(b) > ds
                     || !line_of_sight(|q| self.is_blocked(q), a, b, self.cfg.movement)
@@ -513,18 +510,27 @@ impl World {
                 self.contacts.push((i, j));
                 self.obs[i].teammates.push((j, b));
                 self.obs[j].teammates.push((i, a));
-                if in_dropout {
-                    continue;
-                }
-                if self.rng_comm.random::<f64>() < self.cfg.comm_success_prob {
-                    self.exchanges.push((i, j));
-                    self.obs[i].exchanged_with.push(j);
-                    self.obs[j].exchanged_with.push(i);
-                } else {
-                    self.dropout[k] = self.cfg.dropout_steps;
-                }
             }
         }
+        if let Some(radio) = &mut self.radio {
+            radio.exchange(&self.contacts, &mut self.exchanges);
+            for &(i, j) in &self.exchanges {
+                self.obs[i].exchanged_with.push(j);
+                self.obs[j].exchanged_with.push(i);
+            }
+        }
+    }
+
+    /// Hands communication to someone else (the runtime's radio node): from now on this world
+    /// decides contacts only, [`World::exchanges`] stays empty and no observation lists
+    /// exchanges. The radio node runs its own [`Radio::new`] with the trial's seed, which decides
+    /// every timestep from 0 exactly as this world's radio would have.
+    pub fn detach_radio(&mut self) {
+        for o in &mut self.obs {
+            o.exchanged_with.clear();
+        }
+        self.exchanges.clear();
+        self.radio = None;
     }
 
     pub fn config(&self) -> &ScenarioConfig {
@@ -595,9 +601,8 @@ impl World {
     pub fn is_done(&self) -> bool {
         self.is_complete() || self.t >= self.cfg.step_cap
     }
-    /// Remaining dropout steps of pair (i, j).
+    /// Remaining dropout steps of pair (i, j) (0 once the radio is detached).
     pub fn dropout_remaining(&self, i: usize, j: usize) -> u32 {
-        let (a, b) = if i < j { (i, j) } else { (j, i) };
-        self.dropout[a * self.positions.len() + b]
+        self.radio.as_ref().map_or(0, |r| r.dropout_remaining(i, j))
     }
 }
