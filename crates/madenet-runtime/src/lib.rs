@@ -52,7 +52,7 @@ pub mod zenoh_bus;
 
 use madenet_agent::Agent;
 use madenet_map::Pos;
-use madenet_metrics::{MetricsRecorder, TrialMetrics};
+use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
 use madenet_sim::{PolicyRegistry, TrialSpec};
 use madenet_world::{Move, Radio, World};
 use std::time::Duration;
@@ -196,14 +196,27 @@ pub struct LockstepResult {
     pub between_robots: Traffic,
     /// What the radio node sent: links and the robots' messages it forwarded.
     pub radio_sent: Traffic,
+    /// The world's wall time from its first message to the stop, and the robots' decisions
+    /// (as they reported them when stopped).
+    pub timing: Timing,
 }
 
 /// Runs robot `agent`'s node until the world says stop; returns what it sent (all of it, and
 /// the part that went to teammates).
 pub fn run_robot<T: Transport>(
+    agent: Agent,
+    transport: T,
+    timeout: Duration,
+) -> Result<(Traffic, Traffic), RuntimeError> {
+    run_robot_with(agent, transport, timeout, |_, _| {})
+}
+
+/// [`run_robot`], calling `on_step(timestep, agent)` after each move it sends (progress).
+pub fn run_robot_with<T: Transport>(
     mut agent: Agent,
     transport: T,
     timeout: Duration,
+    mut on_step: impl FnMut(u64, &Agent),
 ) -> Result<(Traffic, Traffic), RuntimeError> {
     let i = agent.id();
     let me = Node::Robot(i);
@@ -220,6 +233,12 @@ pub fn run_robot<T: Transport>(
                     messages: mb.sent.messages - to_world.messages,
                     bytes: mb.sent.bytes - to_world.bytes,
                 };
+                let stats = agent.stats();
+                let done = Body::Done {
+                    decisions: stats.decisions,
+                    decision_s: stats.decision_time.as_secs_f64(),
+                };
+                mb.send(&Envelope::new(step, me, Node::World, done))?;
                 return Ok((mb.sent, between));
             }
             _ => {
@@ -291,6 +310,7 @@ pub fn run_robot<T: Transport>(
         mb.send(&Envelope::new(step, me, Node::World, mv))?;
         to_world.messages += mb.sent.messages - before.messages;
         to_world.bytes += mb.sent.bytes - before.bytes;
+        on_step(step, &agent);
     }
 }
 
@@ -383,9 +403,19 @@ pub fn run_radio<T: Transport>(
 /// at its step cap, then tells every robot and the radio to stop. The world's own radio is
 /// detached: the radio node decides the exchanges.
 pub fn run_world<T: Transport>(
+    world: World,
+    transport: T,
+    timeout: Duration,
+) -> Result<LockstepResult, RuntimeError> {
+    run_world_with(world, transport, timeout, |_| {})
+}
+
+/// [`run_world`], calling `on_step(world)` after each timestep (progress).
+pub fn run_world_with<T: Transport>(
     mut world: World,
     transport: T,
     timeout: Duration,
+    mut on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
     let n = world.positions().len();
@@ -395,6 +425,7 @@ pub fn run_world<T: Transport>(
         .chain((0..n).map(Node::Robot))
         .collect();
     mb.connect(&addressees)?;
+    let started = std::time::Instant::now();
     let mut recorder = MetricsRecorder::new(world.explored_fraction());
     let mut positions = vec![world.positions().to_vec()];
     let mut moves = vec![Move::Stay; n];
@@ -418,10 +449,26 @@ pub fn run_world<T: Transport>(
         // The metrics exactly as the in-process trial records them.
         madenet_sim::record_step(&mut recorder, &world);
         positions.push(world.positions().to_vec());
+        on_step(&world);
     }
     let step = world.t() as u64;
     for to in (0..n).map(Node::Robot).chain([Node::Radio]) {
         mb.send(&Envelope::new(step, me, to, Body::Stop))?;
+    }
+    let trial_s = started.elapsed().as_secs_f64();
+    let (mut decisions, mut decision_s) = (0, 0.0);
+    for i in 0..n {
+        let e = mb.take("a robot's report after the stop", |e| {
+            e.from == Node::Robot(i) && matches!(e.body, Body::Done { .. })
+        })?;
+        if let Body::Done {
+            decisions: d,
+            decision_s: s,
+        } = e.body
+        {
+            decisions += d;
+            decision_s += s;
+        }
     }
     Ok(LockstepResult {
         metrics: recorder.finish(world.is_complete()),
@@ -430,6 +477,15 @@ pub fn run_world<T: Transport>(
         robots_sent: Traffic::default(),
         between_robots: Traffic::default(),
         radio_sent: Traffic::default(),
+        timing: Timing {
+            trial_s,
+            decisions,
+            per_decision_s: if decisions > 0 {
+                decision_s / decisions as f64
+            } else {
+                0.0
+            },
+        },
     })
 }
 

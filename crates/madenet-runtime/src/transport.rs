@@ -52,3 +52,16 @@ impl Transport for ChannelBus {
         self.me.recv_timeout(timeout).ok()
     }
 }
+
+/// A borrowed transport is one (the owner can close it after the node returns).
+impl<T: Transport + Sync> Transport for &T {
+    fn send(&self, to: Node, bytes: Vec<u8>) -> bool {
+        (**self).send(to, bytes)
+    }
+    fn recv(&self, timeout: Duration) -> Option<Vec<u8>> {
+        (**self).recv(timeout)
+    }
+    fn connect(&self, peers: &[Node], timeout: Duration) -> Result<(), String> {
+        (**self).connect(peers, timeout)
+    }
+}

@@ -64,6 +64,8 @@ pub enum Body {
     Move(Move),
     /// World → robots and radio: the trial is over (complete or at the step cap).
     Stop,
+    /// Robot → world, answering `Stop`: its decisions and their total wall time, seconds.
+    Done { decisions: usize, decision_s: f64 },
 }
 
 /// A message that could not be read.

@@ -73,6 +73,23 @@ pub fn loopback_endpoints(base_port: u16, robots: usize, node: Node) -> Result<E
     })
 }
 
+/// A base port with `count` free loopback ports from it on, as the OS hands them out now (another
+/// program may still take one before the run binds it; the run then fails to listen, naming it).
+pub fn free_port_block(count: u16) -> Result<u16, String> {
+    for _ in 0..100 {
+        let first = std::net::TcpListener::bind("127.0.0.1:0").map_err(|e| e.to_string())?;
+        let base = first.local_addr().map_err(|e| e.to_string())?.port();
+        if base > u16::MAX - count {
+            continue;
+        }
+        drop(first);
+        if (0..count).all(|k| std::net::TcpListener::bind(("127.0.0.1", base + k)).is_ok()) {
+            return Ok(base);
+        }
+    }
+    Err(format!("no block of {count} free loopback ports found"))
+}
+
 /// The key expression of `node`'s inbox in run `run`.
 pub fn inbox_key(run: &str, node: Node) -> String {
     match node {

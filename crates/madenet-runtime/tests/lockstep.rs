@@ -83,9 +83,10 @@ fn nodes_over_messages_equal_the_in_process_trial() {
                     assert!(apart.between_robots.messages >= 2 * exchanges, "{case}");
                     assert_eq!(
                         apart.robots_sent.messages,
-                        n * steps + apart.between_robots.messages,
-                        "{case}"
+                        n * steps + n + apart.between_robots.messages,
+                        "{case}: a move per robot and step, a report at the stop"
                     );
+                    assert_eq!(apart.timing.decisions, together.timing.decisions, "{case}");
                     assert!(
                         apart.between_robots.bytes >= 2 * exchanges * 400,
                         "{case}: β carries the 400-cell map"
@@ -159,7 +160,7 @@ fn nodes_over_zenoh_equal_the_in_process_trial() {
     use madenet_runtime::zenoh_bus::loopback_endpoints;
     use madenet_runtime::{nodes_of, run_threads, ZenohBus};
     // Each node its own Zenoh session on its own loopback port, in one process.
-    let base = free_port_block(5);
+    let base = madenet_runtime::zenoh_bus::free_port_block(5).unwrap();
     for (policy, csp) in [("nf", 0.5), ("made-net", 1.0)] {
         let s = spec(3, Corner::TopRight, policy, csp, 1);
         let run = format!("test-{policy}");
@@ -185,21 +186,4 @@ fn nodes_over_zenoh_equal_the_in_process_trial() {
         assert_eq!(apart.positions[1..], steps[..], "{policy}");
         assert!(apart.between_robots.messages > 0, "{policy}: robots talked");
     }
-}
-
-/// A base port with `n` free ports after it (the OS's choice for the first; retried if a later
-/// one is taken).
-fn free_port_block(n: u16) -> u16 {
-    for _ in 0..50 {
-        let first = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        let base = first.local_addr().unwrap().port();
-        if base > u16::MAX - n {
-            continue;
-        }
-        drop(first);
-        if (0..n).all(|k| std::net::TcpListener::bind(("127.0.0.1", base + k)).is_ok()) {
-            return base;
-        }
-    }
-    panic!("no block of {n} free loopback ports");
 }

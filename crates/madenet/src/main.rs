@@ -12,9 +12,11 @@ macro_rules! out {
 mod batch;
 mod compare;
 mod map_cmd;
+mod nodes;
 mod oracle;
 mod plot_training;
 mod run;
+mod scenario_args;
 mod train_cmd;
 
 use clap::{Parser, Subcommand};
@@ -50,6 +52,14 @@ enum Command {
     PlotTraining(plot_training::PlotTrainingArgs),
     /// The rollout oracle (or its placebo) beside its base rule: the ceiling of candidate choice.
     Oracle(oracle::OracleArgs),
+    /// One trial as 3 + robots processes over Zenoh on loopback (world, radio, one agent per robot).
+    Launch(nodes::LaunchArgs),
+    /// The world node of a run over processes: ground truth, motion, sensing, metrics.
+    World(nodes::WorldArgs),
+    /// The radio node of a run over processes: the paper's communication model, forwarding robot-to-robot messages.
+    Radio(nodes::RadioArgs),
+    /// One robot's node of a run over processes: belief, goal candidates, policy, navigator.
+    Agent(nodes::AgentArgs),
 }
 
 fn main() -> ExitCode {
@@ -73,6 +83,10 @@ fn main() -> ExitCode {
         Command::PlotTraining(a) => plot_training::run(a),
         Command::Train(a) => train_cmd::run(a),
         Command::Oracle(a) => oracle::run(a),
+        Command::Launch(a) => nodes::launch(a),
+        Command::World(a) => nodes::world(a),
+        Command::Radio(a) => nodes::radio(a),
+        Command::Agent(a) => nodes::agent(a),
         Command::Policies => registry(None).and_then(|r| {
             r.describe().into_iter().try_for_each(|(name, about)| {
                 out!("{name:<12} {about}").map_err(anyhow::Error::from)

@@ -1,0 +1,385 @@
+//! `madenet world | radio | agent | launch`: a trial as separate processes over Zenoh
+//! (`madenet-runtime`). Each node is started with the same trial flags and builds only its own
+//! part; `launch` starts them all on loopback ports and collects the world's result.
+
+use crate::scenario_args::ScenarioArgs;
+use anyhow::{Context, Result};
+use clap::Args;
+use madenet_runtime::wire::Node;
+use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
+use madenet_runtime::{LockstepResult, ZenohBus};
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// Longest wait a node accepts (`--timeout-s`), seconds.
+const MAX_TIMEOUT_S: u64 = 3600;
+
+fn timeout_arg(s: &str) -> Result<u64, String> {
+    let t: u64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !(1..=MAX_TIMEOUT_S).contains(&t) {
+        return Err(format!("1 to {MAX_TIMEOUT_S} seconds, got {t}"));
+    }
+    Ok(t)
+}
+
+/// Where a node finds the others: the run's name and ports.
+#[derive(Args, Debug, Clone)]
+pub struct NodeArgs {
+    /// Name of the run: part of every key expression (`madenet/<run>/…`), so runs can share a network.
+    #[arg(long, default_value = "madenet")]
+    run: String,
+    /// First of the run's loopback ports: world on PORT, radio on PORT+1, robot i on PORT+2+i.
+    #[arg(long)]
+    port: u16,
+    /// Longest wait for any message before the node gives up, naming what it waited for.
+    #[arg(long, default_value_t = 30, value_parser = timeout_arg, value_name = "SECONDS")]
+    timeout_s: u64,
+    /// Print `progress …` lines on stderr (what `launch` shows).
+    #[arg(long)]
+    progress: bool,
+}
+
+impl NodeArgs {
+    fn bus(&self, node: Node, robots: usize) -> Result<ZenohBus> {
+        let ep = loopback_endpoints(self.port, robots, node).map_err(anyhow::Error::msg)?;
+        ZenohBus::open(&self.run, node, &ep)
+            .map_err(anyhow::Error::msg)
+            .context("--run/--port")
+    }
+    fn timeout(&self) -> Duration {
+        Duration::from_secs(self.timeout_s)
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct WorldArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    #[command(flatten)]
+    node: NodeArgs,
+    /// Write the result JSON (as `madenet run --json`) here instead of stdout.
+    #[arg(long, value_name = "JSON")]
+    out: Option<PathBuf>,
+    /// Add every timestep's robot positions to the JSON (`positions`).
+    #[arg(long)]
+    trajectory: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct RadioArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    #[command(flatten)]
+    node: NodeArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct AgentArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    #[command(flatten)]
+    node: NodeArgs,
+    /// Which robot this process is (0-based).
+    #[arg(long)]
+    robot: usize,
+}
+
+/// The JSON of a run over nodes: `madenet run --json`'s fields, and the positions when asked.
+fn result_json(
+    spec_map: &str,
+    scenario: &ScenarioArgs,
+    spec: &madenet_sim::TrialSpec,
+    r: LockstepResult,
+    trajectory: bool,
+) -> Result<String> {
+    let result = madenet_sim::TrialResult {
+        map: spec_map.to_string(),
+        policy: scenario.policy.clone(),
+        seed: spec.seed,
+        comm_success_prob: spec.config.comm_success_prob,
+        starts: spec.starts.clone(),
+        metrics: r.metrics,
+        trajectory: Vec::new(),
+        timing: r.timing,
+    };
+    /// `run --json`'s object, field order kept, with the positions after it.
+    #[derive(serde::Serialize)]
+    struct WithPositions {
+        #[serde(flatten)]
+        result: madenet_sim::TrialResult,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        positions: Option<Vec<Vec<madenet_map::Pos>>>,
+    }
+    let v = WithPositions {
+        result,
+        positions: trajectory.then_some(r.positions),
+    };
+    Ok(serde_json::to_string_pretty(&v)?)
+}
+
+pub fn world(a: WorldArgs) -> Result<()> {
+    let (spec, _) = a.scenario.spec()?;
+    let n = spec.starts.len();
+    let world = madenet_world::World::new(
+        spec.map.clone(),
+        &spec.starts,
+        spec.config.clone(),
+        spec.seed,
+    )
+    .with_context(|| a.scenario.label())?;
+    let bus = a.node.bus(Node::World, n)?;
+    let progress = a.node.progress;
+    let r = madenet_runtime::run_world_with(world, &bus, a.node.timeout(), |w| {
+        if progress {
+            eprintln!(
+                "progress step={} explored={:.3}",
+                w.t(),
+                w.explored_fraction()
+            );
+        }
+    })?;
+    bus.close();
+    let json = result_json(&spec.map_name, &a.scenario, &spec, r, a.trajectory)?;
+    match &a.out {
+        Some(p) => madenet_files::write_atomic(p, format!("{json}\n").as_bytes())
+            .with_context(|| format!("--out {}", p.display()))?,
+        None => out!("{json}")?,
+    }
+    Ok(())
+}
+
+pub fn radio(a: RadioArgs) -> Result<()> {
+    let (spec, _) = a.scenario.spec()?;
+    let n = spec.starts.len();
+    let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
+    let bus = a.node.bus(Node::Radio, n)?;
+    let sent = madenet_runtime::run_radio(radio, n, &bus, a.node.timeout())?;
+    bus.close();
+    if a.node.progress {
+        eprintln!(
+            "radio forwarded and sent {} messages, {} B",
+            sent.messages, sent.bytes
+        );
+    }
+    Ok(())
+}
+
+pub fn agent(a: AgentArgs) -> Result<()> {
+    let (spec, registry) = a.scenario.spec()?;
+    let n = spec.starts.len();
+    if a.robot >= n {
+        anyhow::bail!("--robot {}: the team has robots 0 to {}", a.robot, n - 1);
+    }
+    let agent =
+        madenet_sim::build_agent(&spec, &registry, a.robot).with_context(|| a.scenario.label())?;
+    let bus = a.node.bus(Node::Robot(a.robot), n)?;
+    let progress = a.node.progress;
+    madenet_runtime::run_robot_with(agent, &bus, a.node.timeout(), |step, agent| {
+        if progress {
+            match agent.goal() {
+                Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
+                None => eprintln!("progress step={step} goal=none"),
+            }
+        }
+    })?;
+    bus.close();
+    Ok(())
+}
+
+#[derive(Args, Debug)]
+pub struct LaunchArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// First loopback port of the run (world, radio, robots on consecutive ports); 0 picks free ones.
+    #[arg(long, default_value_t = 0)]
+    port: u16,
+    /// Longest wait of any node for any message, seconds.
+    #[arg(long, default_value_t = 30, value_parser = timeout_arg, value_name = "SECONDS")]
+    timeout_s: u64,
+    /// Print the result as JSON (as `madenet run --json`).
+    #[arg(long)]
+    json: bool,
+    /// Add every timestep's robot positions to the JSON (`positions`).
+    #[arg(long, requires = "json")]
+    trajectory: bool,
+}
+
+/// The node processes of a launch; dropping it kills any still running.
+struct Children(Vec<(Node, Child)>);
+
+impl Drop for Children {
+    fn drop(&mut self) {
+        for (_, c) in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+pub fn launch(a: LaunchArgs) -> Result<()> {
+    // Check the trial here once, so a bad flag is one error rather than five.
+    let (spec, _) = a.scenario.spec()?;
+    let n = spec.starts.len();
+    let port = match a.port {
+        0 => free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?,
+        p => {
+            loopback_endpoints(p, n, Node::Robot(n - 1))
+                .map_err(anyhow::Error::msg)
+                .context("--port")?;
+            p
+        }
+    };
+    let run = format!("launch-{}-{port}", std::process::id());
+    let dir = tempfile::tempdir().context("a folder for the world's result")?;
+    let result_path = dir.path().join("result.json");
+    let exe = std::env::current_exe().context("finding the madenet binary")?;
+    let common: Vec<String> = a
+        .scenario
+        .to_args()
+        .into_iter()
+        .chain([
+            "--run".into(),
+            run.clone(),
+            "--port".into(),
+            port.to_string(),
+            "--timeout-s".into(),
+            a.timeout_s.to_string(),
+            "--progress".into(),
+        ])
+        .collect();
+    let mut children = Children(Vec::new());
+    let (tx, rx) = std::sync::mpsc::channel::<(Node, String)>();
+    let nodes = madenet_runtime::nodes_of(n);
+    for &node in &nodes {
+        let mut cmd = Command::new(&exe);
+        match node {
+            Node::World => {
+                cmd.arg("world")
+                    .args(&common)
+                    .arg("--out")
+                    .arg(&result_path);
+                if a.trajectory {
+                    cmd.arg("--trajectory");
+                }
+            }
+            Node::Radio => {
+                cmd.arg("radio").args(&common);
+            }
+            Node::Robot(i) => {
+                cmd.arg("agent")
+                    .args(&common)
+                    .args(["--robot", &i.to_string()]);
+            }
+        }
+        let mut child = cmd
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .with_context(|| format!("starting the {node} process"))?;
+        let stderr = child.stderr.take().expect("piped");
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if tx.send((node, line)).is_err() {
+                    break;
+                }
+            }
+        });
+        children.0.push((node, child));
+    }
+    drop(tx);
+
+    let bars = indicatif::MultiProgress::new();
+    let style =
+        indicatif::ProgressStyle::with_template("{prefix:>8} {msg}").expect("a valid template");
+    let bar_of: Vec<indicatif::ProgressBar> = nodes
+        .iter()
+        .map(|node| {
+            bars.add(
+                indicatif::ProgressBar::new_spinner()
+                    .with_style(style.clone())
+                    .with_prefix(node.to_string())
+                    .with_message("starting"),
+            )
+        })
+        .collect();
+    let index = |node: Node| {
+        nodes
+            .iter()
+            .position(|&m| m == node)
+            .expect("a node of the run")
+    };
+    // Last words of each node that are not progress (an error explains a failure).
+    let mut said: Vec<Vec<String>> = vec![Vec::new(); nodes.len()];
+    let mut failures: Vec<String> = Vec::new();
+    let mut running = nodes.len();
+    while running > 0 {
+        match rx.recv_timeout(Duration::from_millis(100)) {
+            Ok((node, line)) => {
+                let k = index(node);
+                match line.strip_prefix("progress ") {
+                    Some(p) => bar_of[k].set_message(p.to_string()),
+                    None => {
+                        said[k].push(line);
+                        if said[k].len() > 5 {
+                            said[k].remove(0);
+                        }
+                    }
+                }
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {}
+        }
+        running = 0;
+        for (k, (node, child)) in children.0.iter_mut().enumerate() {
+            match child.try_wait()? {
+                None => running += 1,
+                Some(status) if !status.success() && !bar_of[k].is_finished() => {
+                    bar_of[k].finish_with_message("failed");
+                    failures.push(format!("{node} exited with {status}"));
+                }
+                Some(_) if !bar_of[k].is_finished() => bar_of[k].finish_with_message("done"),
+                Some(_) => {}
+            }
+        }
+        if !failures.is_empty() {
+            // One node failed: the others would only time out; stop them now.
+            break;
+        }
+    }
+    // Drain what the nodes said last.
+    drop(children);
+    while let Ok((node, line)) = rx.recv_timeout(Duration::from_millis(50)) {
+        if !line.starts_with("progress ") {
+            said[index(node)].push(line);
+        }
+    }
+    bars.clear().ok();
+    if !failures.is_empty() {
+        let mut msg = failures.join("; ");
+        for (k, node) in nodes.iter().enumerate() {
+            if let Some(last) = said[k].iter().rev().find(|l| l.starts_with("error")) {
+                msg.push_str(&format!("; {node}: {last}"));
+            }
+        }
+        anyhow::bail!("the run over processes failed: {msg}");
+    }
+    let json = std::fs::read_to_string(&result_path).context("the world's result")?;
+    if a.json {
+        out!("{}", json.trim_end())?;
+    } else {
+        let result: madenet_sim::TrialResult =
+            serde_json::from_str(&json).context("the world's result")?;
+        crate::run::print_summary(&result, &a.scenario.start.name())?;
+        out!(
+            "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
+            nodes.len()
+        )?;
+    }
+    Ok(())
+}

@@ -1,0 +1,118 @@
+//! The flags that name one trial (map, start, policy, CSP, seed, config): shared by `run` and by
+//! every node of a decentralized run (`world`, `radio`, `agent`, `launch`), so all of them build
+//! the same trial from the same words.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use madenet_sim::{MapSource, PolicyRegistry, StartSpec, TrialSpec};
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct ScenarioArgs {
+    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), `generate:SEED` or `generate-wide:SEED` (15–60 % obstacles).
+    #[arg(long, default_value = "paper:1", conflicts_with = "generate")]
+    pub map: MapSource,
+    /// Use a generated map with this seed (same as `--map generate:SEED`).
+    #[arg(long, value_name = "SEED")]
+    pub generate: Option<u64>,
+    /// Start: top-left, top-right, bottom-left, bottom-right, `random` (drawn from the map), or cells `r,c;r,c;r,c`.
+    #[arg(long, default_value = "top-left")]
+    pub start: StartSpec,
+    /// Policy name (see `madenet policies`).
+    #[arg(long, default_value = "nf")]
+    pub policy: String,
+    /// A trained model directory (`madenet train`'s `best/` or `last/`), usable as `--policy model`.
+    #[arg(long, value_name = "DIR")]
+    pub model: Option<PathBuf>,
+    /// Communication success probability (overrides the config).
+    #[arg(long)]
+    pub csp: Option<f64>,
+    /// Trial seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Scenario config (TOML); defaults are the paper's values.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
+
+impl ScenarioArgs {
+    /// The flags as command-line words (for starting the nodes of a run with the same trial).
+    pub fn to_args(&self) -> Vec<String> {
+        let mut v = vec![
+            "--map".to_string(),
+            match self.source() {
+                MapSource::Paper(n) => format!("paper:{n}"),
+                MapSource::Generated(seed) => format!("generate:{seed}"),
+                MapSource::GeneratedWide(seed) => format!("generate-wide:{seed}"),
+                MapSource::File(p) => p.display().to_string(),
+            },
+            "--start".into(),
+            self.start.name(),
+            "--policy".into(),
+            self.policy.clone(),
+            "--seed".into(),
+            self.seed.to_string(),
+        ];
+        if let Some(m) = &self.model {
+            v.extend(["--model".into(), m.display().to_string()]);
+        }
+        if let Some(csp) = self.csp {
+            v.extend(["--csp".into(), csp.to_string()]);
+        }
+        if let Some(c) = &self.config {
+            v.extend(["--config".into(), c.display().to_string()]);
+        }
+        v
+    }
+
+    fn source(&self) -> MapSource {
+        self.generate
+            .map(MapSource::Generated)
+            .unwrap_or_else(|| self.map.clone())
+    }
+
+    /// The trial these flags name, checked (each problem named by its flag), with the policies
+    /// it may use.
+    pub fn spec(&self) -> Result<(TrialSpec, PolicyRegistry)> {
+        let mut cfg = crate::load_config(self.config.as_deref())?;
+        if let Some(csp) = self.csp {
+            cfg.comm_success_prob = csp;
+            cfg.validate().context("--csp")?;
+        }
+        if self.model.is_some() && self.policy != "model" {
+            anyhow::bail!(
+                "--model is used only with --policy model (got --policy {})",
+                self.policy
+            );
+        }
+        self.start
+            .check_team(cfg.num_robots)
+            .map_err(anyhow::Error::msg)
+            .context("--start")?;
+        let source = self.source();
+        let map = source.load(&cfg)?;
+        let starts = self.start.cells(&map, cfg.num_robots, cfg.movement);
+        if starts.is_empty() {
+            anyhow::bail!(
+                "--start random: map {} has no {} connected free cells around the cell drawn from it",
+                source.name(),
+                cfg.num_robots
+            );
+        }
+        let registry = crate::registry(self.model.as_deref())?;
+        let spec = TrialSpec {
+            starts,
+            map_name: source.name(),
+            map,
+            config: cfg,
+            policy: self.policy.clone(),
+            seed: self.seed,
+        };
+        Ok((spec, registry))
+    }
+
+    /// A label for messages: map and start.
+    pub fn label(&self) -> String {
+        format!("map {}, start {}", self.source().name(), self.start.name())
+    }
+}
