@@ -1,11 +1,14 @@
-//! `cargo bench -p madenet-runtime --bench lockstep`: one trial with the robots as message-passing
-//! nodes on their own threads (`lockstep/nodes`) against the same trial in one process
+//! `cargo bench -p madenet-runtime --bench lockstep`: one trial with the world, the radio and the
+//! robots as message-passing nodes on their own threads, over in-memory channels
+//! (`lockstep/nodes`) and over Zenoh on loopback TCP, each node its own session
+//! (`lockstep/zenoh`, sessions opened outside the timing), against the same trial in one process
 //! (`lockstep/in_process`, the anchor): NF, paper map 3 from the top-left, CSP 1 and 0.5, seed 1.
 //! The traffic of each run (messages and bytes per β exchange) is printed once.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use madenet_map::paper::{paper_map, Corner};
-use madenet_runtime::run_lockstep;
+use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
+use madenet_runtime::{nodes_of, run_lockstep, run_threads, ZenohBus};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_world::ScenarioConfig;
 use std::time::Duration;
@@ -50,6 +53,27 @@ fn bench(c: &mut Criterion) {
         });
         g.bench_with_input(BenchmarkId::new("nodes", csp), &csp, |b, &csp| {
             b.iter(|| run_lockstep(spec(csp), &registry, Duration::from_secs(10)).expect("run"))
+        });
+        let base = free_port_block(5).expect("free ports");
+        let mut round = 0;
+        g.bench_with_input(BenchmarkId::new("zenoh", csp), &csp, |b, &csp| {
+            b.iter_batched(
+                || {
+                    // A fresh run name per iteration: no message of one run reaches the next.
+                    round += 1;
+                    nodes_of(3)
+                        .into_iter()
+                        .map(|node| {
+                            let ep = loopback_endpoints(base, 3, node).expect("ports");
+                            ZenohBus::open(&format!("bench{round}"), node, &ep).expect("session")
+                        })
+                        .collect::<Vec<_>>()
+                },
+                |buses| {
+                    run_threads(spec(csp), &registry, Duration::from_secs(10), buses).expect("run")
+                },
+                criterion::BatchSize::PerIteration,
+            )
         });
     }
     g.finish();

@@ -1,6 +1,6 @@
 //! `madenet`: the command line of the madenet workspace. Thin by design: every command is a
 //! few calls into the library crates (`madenet-sim` for trials, `madenet-map` for maps,
-//! `madenet-render` for pictures).
+//! `madenet-render` for pictures, `madenet-runtime` for trials as processes).
 
 /// `println!` that returns the write error instead of panicking (e.g. on a closed pipe).
 macro_rules! out {
