@@ -70,7 +70,13 @@ fn bench(c: &mut Criterion) {
                         .collect::<Vec<_>>()
                 },
                 |buses| {
-                    run_threads(spec(csp), &registry, Duration::from_secs(10), buses).expect("run")
+                    run_threads(
+                        spec(csp),
+                        &registry,
+                        madenet_runtime::Timeouts::new(Duration::from_secs(10)),
+                        buses,
+                    )
+                    .expect("run")
                 },
                 criterion::BatchSize::PerIteration,
             )

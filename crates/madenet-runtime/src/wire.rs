@@ -53,9 +53,10 @@ pub enum Body {
     Observation(Observation),
     /// World → radio: the pairs (i < j) in contact this timestep (within d_s, in line of sight).
     Contacts(Vec<(usize, usize)>),
-    /// Radio → robot in contact with a teammate: the teammates it exchanges with this timestep
-    /// (ascending), so it knows whose β to wait for.
-    Links(Vec<usize>),
+    /// Radio → each robot, every timestep: the teammates it exchanges with now (ascending), so
+    /// it knows whose β and plans to wait for, and those whose β will arrive late (a delaying
+    /// radio; send them β, do not wait).
+    Links { now: Vec<usize>, late: Vec<usize> },
     /// Robot → robot, along a successful exchange: β (paper Sec. III.C.1).
     Beta(Beta),
     /// Robot → lower-priority robot it exchanged with: its space-time plan.
@@ -64,6 +65,8 @@ pub enum Body {
     Move(Move),
     /// World → robots and radio: the trial is over (complete or at the step cap).
     Stop,
+    /// Robot → world when it starts: wait for my moves (again, after a restart).
+    Hello,
     /// Robot → world, answering `Stop`: its decisions and their total wall time, seconds.
     Done { decisions: usize, decision_s: f64 },
 }

@@ -54,15 +54,17 @@ pub fn loopback_endpoint(base_port: u16, node: Node) -> Result<String, String> {
 }
 
 /// The endpoints of `node` in a loopback run of `robots` robots: it listens on its own port and
-/// connects to the nodes it sends to (world → radio and robots; radio → robots; a robot is
-/// reached by both and connects to nobody).
+/// connects to every node it talks with (world ↔ radio, world ↔ robots, radio ↔ robots), so a
+/// restarted node reaches the others itself and is reached by them.
 pub fn loopback_endpoints(base_port: u16, robots: usize, node: Node) -> Result<Endpoints, String> {
     let connect_to: Vec<Node> = match node {
         Node::World => std::iter::once(Node::Radio)
             .chain((0..robots).map(Node::Robot))
             .collect(),
-        Node::Radio => (0..robots).map(Node::Robot).collect(),
-        Node::Robot(_) => Vec::new(),
+        Node::Radio => std::iter::once(Node::World)
+            .chain((0..robots).map(Node::Robot))
+            .collect(),
+        Node::Robot(_) => vec![Node::World, Node::Radio],
     };
     Ok(Endpoints {
         listen: vec![loopback_endpoint(base_port, node)?],

@@ -70,22 +70,19 @@ fn nodes_over_messages_equal_the_in_process_trial() {
                     // (all of them travel along links that are up) and sends links.
                     let (n, steps) = (3, together.trajectory.len());
                     assert_eq!(apart.world_sent.messages, (n + 1) * steps + n + 1, "{case}");
-                    let links = apart.radio_sent.messages - apart.between_robots.messages;
-                    // Links go out at timesteps 0 … T−1; record k holds timestep k + 1.
-                    let steps_exchanging = together.trajectory[..steps - 1]
-                        .iter()
-                        .filter(|r| !r.exchanges.is_empty())
-                        .count();
-                    assert!(
-                        links >= 2 * steps_exchanging && links <= n * (steps + 1),
-                        "{case}: {links} link messages"
+                    // Links: one per robot and timestep.
+                    assert_eq!(
+                        apart.radio_sent.messages,
+                        apart.between_robots.messages + n * steps,
+                        "{case}"
                     );
                     assert!(apart.between_robots.messages >= 2 * exchanges, "{case}");
                     assert_eq!(
                         apart.robots_sent.messages,
-                        n * steps + n + apart.between_robots.messages,
-                        "{case}: a move per robot and step, a report at the stop"
+                        n * steps + 2 * n + apart.between_robots.messages,
+                        "{case}: a move per robot and step, a hello at the start and a report at the stop"
                     );
+                    assert_eq!(apart.absent_robot_steps, 0, "{case}");
                     assert_eq!(apart.timing.decisions, together.timing.decisions, "{case}");
                     assert!(
                         apart.between_robots.bytes >= 2 * exchanges * 400,
@@ -139,13 +136,14 @@ fn a_node_that_hears_nothing_times_out_naming_what_it_waited_for() {
     let mut buses = ChannelBus::connect(&nodes).into_iter();
     let world_bus = buses.next().unwrap();
     let _silent: Vec<_> = buses.collect();
-    let err = madenet_runtime::run_world(world, world_bus, Duration::from_millis(200)).unwrap_err();
+    let timeouts = madenet_runtime::Timeouts::new(Duration::from_millis(200));
+    let err = madenet_runtime::run_world(world, world_bus, timeouts).unwrap_err();
     match &err {
         RuntimeError::Timeout {
             node, waiting_for, ..
         } => {
             assert_eq!(*node, Node::World);
-            assert!(waiting_for.contains("move"), "{err}");
+            assert!(waiting_for.contains("every robot is absent"), "{err}");
         }
         other => panic!("{other}"),
     }
@@ -171,7 +169,8 @@ fn nodes_over_zenoh_equal_the_in_process_trial() {
                 ZenohBus::open(&run, node, &ep).unwrap()
             })
             .collect();
-        let apart = run_threads(s.clone(), &REGISTRY, Duration::from_secs(30), buses)
+        let timeouts = madenet_runtime::Timeouts::new(Duration::from_secs(30));
+        let apart = run_threads(s.clone(), &REGISTRY, timeouts, buses)
             .unwrap_or_else(|e| panic!("{policy}: {e}"));
         let together = Trial::with_registry(s, &REGISTRY)
             .unwrap()

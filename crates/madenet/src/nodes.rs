@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use madenet_runtime::wire::Node;
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
-use madenet_runtime::{LockstepResult, ZenohBus};
+use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, ZenohBus};
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -50,9 +50,56 @@ impl NodeArgs {
             .map_err(anyhow::Error::msg)
             .context("--run/--port")
     }
-    fn timeout(&self) -> Duration {
-        Duration::from_secs(self.timeout_s)
+    fn timeouts(&self) -> Timeouts {
+        // The nodes' warnings (an absent robot, a silent teammate) go to stderr, one line each.
+        let _ = tracing_subscriber::fmt()
+            .with_writer(std::io::stderr)
+            .without_time()
+            .with_target(false)
+            .with_ansi(false)
+            // Ours at warn; Zenoh's own only when they are errors.
+            .with_env_filter(tracing_subscriber::EnvFilter::new(
+                "error,madenet_runtime=warn,madenet=warn",
+            ))
+            .try_init();
+        Timeouts::new(Duration::from_secs(self.timeout_s))
     }
+}
+
+/// `--loss`: a probability.
+fn loss_arg(s: &str) -> Result<f64, String> {
+    let p: f64 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a probability"))?;
+    if !(0.0..=1.0).contains(&p) {
+        return Err(format!("a probability in [0, 1], got {s}"));
+    }
+    Ok(p)
+}
+
+/// `--delay`: timesteps, bounded.
+fn delay_arg(s: &str) -> Result<u32, String> {
+    let d: u32 = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of timesteps"))?;
+    if d > madenet_runtime::MAX_DELAY_STEPS {
+        return Err(format!(
+            "at most {} timesteps, got {d}",
+            madenet_runtime::MAX_DELAY_STEPS
+        ));
+    }
+    Ok(d)
+}
+
+/// Faults the radio injects beyond the paper's model (for fault tests).
+#[derive(Args, Debug, Clone, Copy)]
+pub struct FaultArgs {
+    /// Extra loss: an exchange the paper's model lets through is lost with this probability.
+    #[arg(long, default_value_t = 0.0, value_parser = loss_arg, value_name = "P")]
+    loss: f64,
+    /// Extra delay: β reach teammates this many timesteps late (no plans over late links).
+    #[arg(long, default_value_t = 0, value_parser = delay_arg, value_name = "STEPS")]
+    delay: u32,
 }
 
 #[derive(Args, Debug)]
@@ -67,6 +114,9 @@ pub struct WorldArgs {
     /// Add every timestep's robot positions to the JSON (`positions`).
     #[arg(long)]
     trajectory: bool,
+    /// Take at least this long per timestep, milliseconds (real robots' pace; 0: as fast as the robots answer).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000), value_name = "MS")]
+    pace_ms: u64,
 }
 
 #[derive(Args, Debug)]
@@ -75,6 +125,8 @@ pub struct RadioArgs {
     scenario: ScenarioArgs,
     #[command(flatten)]
     node: NodeArgs,
+    #[command(flatten)]
+    faults: FaultArgs,
 }
 
 #[derive(Args, Debug)]
@@ -133,7 +185,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
     .with_context(|| a.scenario.label())?;
     let bus = a.node.bus(Node::World, n)?;
     let progress = a.node.progress;
-    let r = madenet_runtime::run_world_with(world, &bus, a.node.timeout(), |w| {
+    let r = madenet_runtime::run_world_with(world, &bus, a.node.timeouts(), |w| {
         if progress {
             eprintln!(
                 "progress step={} explored={:.3}",
@@ -157,7 +209,12 @@ pub fn radio(a: RadioArgs) -> Result<()> {
     let n = spec.starts.len();
     let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
     let bus = a.node.bus(Node::Radio, n)?;
-    let sent = madenet_runtime::run_radio(radio, n, &bus, a.node.timeout())?;
+    let faults = RadioFaults {
+        loss_prob: a.faults.loss,
+        delay_steps: a.faults.delay,
+        seed: spec.seed,
+    };
+    let sent = madenet_runtime::run_radio_with(radio, n, &bus, a.node.timeouts(), faults)?;
     bus.close();
     if a.node.progress {
         eprintln!(
@@ -174,20 +231,32 @@ pub fn agent(a: AgentArgs) -> Result<()> {
     if a.robot >= n {
         anyhow::bail!("--robot {}: the team has robots 0 to {}", a.robot, n - 1);
     }
-    let agent =
-        madenet_sim::build_agent(&spec, &registry, a.robot).with_context(|| a.scenario.label())?;
-    let bus = a.node.bus(Node::Robot(a.robot), n)?;
     let progress = a.node.progress;
-    madenet_runtime::run_robot_with(agent, &bus, a.node.timeout(), |step, agent| {
-        if progress {
-            match agent.goal() {
-                Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
-                None => eprintln!("progress step={step} goal=none"),
+    let timeouts = a.node.timeouts();
+    // A restarted agent sometimes gets no connection on its first session (seen in about one
+    // restart in ten on loopback); a fresh session connects.
+    const SESSIONS: usize = 3;
+    for session in 1..=SESSIONS {
+        let agent = madenet_sim::build_agent(&spec, &registry, a.robot)
+            .with_context(|| a.scenario.label())?;
+        let bus = a.node.bus(Node::Robot(a.robot), n)?;
+        let r = madenet_runtime::run_robot_with(agent, &bus, timeouts, |step, agent| {
+            if progress {
+                match agent.goal() {
+                    Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
+                    None => eprintln!("progress step={step} goal=none"),
+                }
             }
+        });
+        bus.close();
+        match r {
+            Err(e @ madenet_runtime::RuntimeError::Transport { .. }) if session < SESSIONS => {
+                tracing::warn!("{e}; opening a new session ({} of {SESSIONS})", session + 1);
+            }
+            r => return r.map(|_| ()).map_err(Into::into),
         }
-    })?;
-    bus.close();
-    Ok(())
+    }
+    unreachable!("the last session returns")
 }
 
 #[derive(Args, Debug)]
@@ -206,6 +275,8 @@ pub struct LaunchArgs {
     /// Add every timestep's robot positions to the JSON (`positions`).
     #[arg(long, requires = "json")]
     trajectory: bool,
+    #[command(flatten)]
+    faults: FaultArgs,
 }
 
 /// The node processes of a launch; dropping it kills any still running.
@@ -221,9 +292,11 @@ impl Drop for Children {
 }
 
 pub fn launch(a: LaunchArgs) -> Result<()> {
-    // Check the trial here once, so a bad flag is one error rather than five.
-    let (spec, _) = a.scenario.spec()?;
+    // Check the trial here once (world and every agent built), so a bad flag is one error
+    // rather than five.
+    let (spec, registry) = a.scenario.spec()?;
     let n = spec.starts.len();
+    madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
     let port = match a.port {
         0 => free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?,
         p => {
@@ -267,7 +340,12 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
                 }
             }
             Node::Radio => {
-                cmd.arg("radio").args(&common);
+                cmd.arg("radio").args(&common).args([
+                    "--loss".to_string(),
+                    a.faults.loss.to_string(),
+                    "--delay".into(),
+                    a.faults.delay.to_string(),
+                ]);
             }
             Node::Robot(i) => {
                 cmd.arg("agent")
@@ -325,6 +403,14 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
                 match line.strip_prefix("progress ") {
                     Some(p) => bar_of[k].set_message(p.to_string()),
                     None => {
+                        // Warnings of the nodes are shown as they come (errors end the run
+                        // and are in its one-line error).
+                        if line.starts_with("error") {
+                        } else if bars.is_hidden() {
+                            eprintln!("{node}: {line}");
+                        } else {
+                            bars.println(format!("{node}: {line}")).ok();
+                        }
                         said[k].push(line);
                         if said[k].len() > 5 {
                             said[k].remove(0);
@@ -364,6 +450,7 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
         let mut msg = failures.join("; ");
         for (k, node) in nodes.iter().enumerate() {
             if let Some(last) = said[k].iter().rev().find(|l| l.starts_with("error")) {
+                // Already shown above as it came; repeated in the one-line error.
                 msg.push_str(&format!("; {node}: {last}"));
             }
         }

@@ -1,0 +1,185 @@
+//! The robot node: one [`Agent`] that sees the world only through the observations it is sent,
+//! hears teammates only through the β and plans the radio forwards, and acts only by sending a
+//! move. A teammate (or the radio) that stays silent past [`Timeouts::peer`] is done without
+//! for that timestep; a β that arrives late is merged when it arrives.
+
+use crate::mailbox::{Mailbox, Traffic};
+use crate::transport::Transport;
+use crate::wire::{Body, Envelope, Node};
+use crate::{RuntimeError, Timeouts};
+use madenet_agent::{Agent, Beta};
+
+/// How often a robot says hello until the world answers.
+const HELLO_EVERY: std::time::Duration = std::time::Duration::from_millis(500);
+
+/// Runs robot `agent`'s node until the world says stop; returns what it sent (all of it, and
+/// the part that went to teammates).
+pub fn run_robot<T: Transport>(
+    agent: Agent,
+    transport: T,
+    timeouts: Timeouts,
+) -> Result<(Traffic, Traffic), RuntimeError> {
+    run_robot_with(agent, transport, timeouts, |_, _| {})
+}
+
+/// [`run_robot`], calling `on_step(timestep, agent)` after each move it sends (progress).
+pub fn run_robot_with<T: Transport>(
+    mut agent: Agent,
+    transport: T,
+    timeouts: Timeouts,
+    mut on_step: impl FnMut(u64, &Agent),
+) -> Result<(Traffic, Traffic), RuntimeError> {
+    let i = agent.id();
+    let me = Node::Robot(i);
+    let mut mb = Mailbox::new(transport, me);
+    mb.connect(&[Node::World, Node::Radio], timeouts.node)?;
+    // Say hello until the world answers: a world that has given up on this robot (it was
+    // killed and is now restarted) waits for its moves again.
+    let started = std::time::Instant::now();
+    loop {
+        mb.send(&Envelope::new(0, me, Node::World, Body::Hello))?;
+        if mb
+            .try_take(HELLO_EVERY, |e| e.from == Node::World)?
+            .is_some_and(|first| {
+                mb.pending.insert(0, first);
+                true
+            })
+        {
+            break;
+        }
+        if started.elapsed() > timeouts.world_silence() {
+            return Err(RuntimeError::Timeout {
+                node: me,
+                waiting_for: "the world's first message after hello".into(),
+                timeout: timeouts.world_silence(),
+            });
+        }
+    }
+    let mut to_world = mb.sent;
+    loop {
+        let e = mb.take(
+            "an observation from the world",
+            timeouts.world_silence(),
+            |e| e.from == Node::World,
+        )?;
+        let step = e.step;
+        let mut obs = match e.body {
+            Body::Observation(o) => o,
+            Body::Stop => {
+                let between = Traffic {
+                    messages: mb.sent.messages - to_world.messages,
+                    bytes: mb.sent.bytes - to_world.bytes,
+                };
+                let stats = agent.stats();
+                let done = Body::Done {
+                    decisions: stats.decisions,
+                    decision_s: stats.decision_time.as_secs_f64(),
+                };
+                mb.send(&Envelope::new(step, me, Node::World, done))?;
+                return Ok((mb.sent, between));
+            }
+            _ => {
+                return Err(RuntimeError::Unexpected {
+                    node: me,
+                    from: e.from,
+                    step,
+                    what: "the world sends observations and stop only",
+                })
+            }
+        };
+        // Behind (restarted, or slowed by silent teammates)? Skip to the newest observation.
+        mb.drain()?;
+        if mb
+            .pending
+            .iter()
+            .any(|p| p.from == Node::World && p.step > step)
+        {
+            continue;
+        }
+        // β that arrived after their timestep are merged now (a delaying radio, a slow
+        // teammate); everything else of past timesteps is over.
+        let mut late: Vec<Beta> = mb
+            .forget_before(step, |e| matches!(e.body, Body::Beta(_)))
+            .into_iter()
+            .filter_map(|e| match e.body {
+                Body::Beta(b) => Some(b),
+                _ => None,
+            })
+            .collect();
+        // 1–2. observe, with this timestep's links from the radio.
+        let links = mb.try_take(timeouts.peer, |e| {
+            e.step == step && e.from == Node::Radio && matches!(e.body, Body::Links { .. })
+        })?;
+        let (now, delayed) = match links.map(|e| e.body) {
+            Some(Body::Links { now, late }) => (now, late),
+            _ => {
+                tracing::warn!(
+                    "{me}: no links from the radio for timestep {step} within {:?}: exchanging with nobody",
+                    timeouts.peer
+                );
+                (Vec::new(), Vec::new())
+            }
+        };
+        obs.exchanged_with = now;
+        agent.observe(&obs);
+        // 3. β along this timestep's exchanges (and the delayed ones), merged in sender order.
+        let partners = agent.exchanged_with().to_vec();
+        if !partners.is_empty() || !delayed.is_empty() {
+            let beta = agent.beta();
+            for &j in partners.iter().chain(&delayed) {
+                let to = Node::Robot(j);
+                mb.send(&Envelope::new(step, me, to, Body::Beta(beta.clone())))?;
+            }
+        }
+        for &j in &partners {
+            let e = mb.try_take(timeouts.peer, |e| {
+                e.step == step && e.from == Node::Robot(j) && matches!(e.body, Body::Beta(_))
+            })?;
+            match e.map(|e| e.body) {
+                Some(Body::Beta(b)) => late.push(b),
+                _ => tracing::warn!(
+                    "{me}: no β from robot {j} for timestep {step} within {:?}",
+                    timeouts.peer
+                ),
+            }
+        }
+        late.sort_by_key(|b| b.from);
+        for b in &late {
+            agent.receive_beta(b);
+        }
+        // 4. decide (own policy) when the macro action ended
+        if agent.needs_decision() {
+            agent.decide();
+        }
+        // 5. plan in priority order: the plans of higher-priority partners first.
+        let mut higher: Vec<usize> = partners.iter().copied().filter(|&j| j < i).collect();
+        higher.sort_unstable();
+        for j in higher {
+            let e = mb.try_take(timeouts.peer, |e| {
+                e.step == step && e.from == Node::Robot(j) && matches!(e.body, Body::Plan(_))
+            })?;
+            match e.map(|e| e.body) {
+                Some(Body::Plan(p)) => agent.receive_plan(&p),
+                _ => tracing::warn!(
+                    "{me}: no plan from robot {j} for timestep {step} within {:?}",
+                    timeouts.peer
+                ),
+            }
+        }
+        agent.plan();
+        if partners.iter().any(|&j| j > i) {
+            let plan = agent.plan_message();
+            for &j in partners.iter().filter(|&&j| j > i) {
+                let to = Node::Robot(j);
+                mb.send(&Envelope::new(step, me, to, Body::Plan(plan.clone())))?;
+            }
+        }
+        // 6. act
+        let before = mb.sent;
+        let mv = Body::Move(agent.next_move());
+        mb.send(&Envelope::new(step, me, Node::World, mv))?;
+        to_world.messages += mb.sent.messages - before.messages;
+        to_world.bytes += mb.sent.bytes - before.bytes;
+        on_step(step, &agent);
+    }
+}

@@ -1,0 +1,163 @@
+//! The world node: ground truth, motion, sensing and the metrics. It sends each robot its
+//! observation and the radio the pairs in contact, and steps once it has every robot's move — or
+//! once [`Timeouts::node`] has passed: a robot that sent no move is absent (killed, hung,
+//! cut off). An absent robot stays where it is (an obstacle to the others), keeps being sent its
+//! observations, is left out of the radio's contacts, and is waited for again once it says hello
+//! (restarted).
+
+use crate::mailbox::{Mailbox, Traffic};
+use crate::transport::Transport;
+use crate::wire::{Body, Envelope, Node};
+use crate::{LockstepResult, RuntimeError, Timeouts};
+use madenet_metrics::{MetricsRecorder, Timing};
+use madenet_world::{Move, World};
+use std::time::{Duration, Instant};
+
+/// Runs the world node for its robots and a radio node until the trial is complete or at its
+/// step cap, then tells every robot and the radio to stop. The world's own radio is detached:
+/// the radio node decides the exchanges.
+pub fn run_world<T: Transport>(
+    world: World,
+    transport: T,
+    timeouts: Timeouts,
+) -> Result<LockstepResult, RuntimeError> {
+    run_world_with(world, transport, timeouts, |_| {})
+}
+
+/// [`run_world`], calling `on_step(world)` after each timestep (progress).
+pub fn run_world_with<T: Transport>(
+    mut world: World,
+    transport: T,
+    timeouts: Timeouts,
+    mut on_step: impl FnMut(&World),
+) -> Result<LockstepResult, RuntimeError> {
+    world.detach_radio();
+    let n = world.positions().len();
+    let me = Node::World;
+    let mut mb = Mailbox::new(transport, me);
+    let addressees: Vec<Node> = std::iter::once(Node::Radio)
+        .chain((0..n).map(Node::Robot))
+        .collect();
+    mb.connect(&addressees, timeouts.node)?;
+    let started = Instant::now();
+    let mut recorder = MetricsRecorder::new(world.explored_fraction());
+    let mut positions = vec![world.positions().to_vec()];
+    let mut moves = vec![Move::Stay; n];
+    let mut present = vec![true; n];
+    let mut absent_steps = 0usize;
+    while !world.is_done() {
+        let step = world.t() as u64;
+        // Hellos: robots that (re)joined are waited for from now on.
+        for e in mb.forget_before(step, |e| matches!(e.body, Body::Hello)) {
+            if let Node::Robot(j) = e.from {
+                if j < n && !present[j] {
+                    tracing::warn!("{me}: robot {j} said hello at timestep {step}: waiting for its moves again");
+                    present[j] = true;
+                }
+            }
+        }
+        if present.iter().all(|&p| !p) {
+            // Nobody to wait for: give a restarted robot the time to say hello, then give up.
+            let hello = mb.try_take(timeouts.node, |e| matches!(e.body, Body::Hello))?;
+            match hello.map(|e| e.from) {
+                Some(Node::Robot(j)) if j < n => present[j] = true,
+                _ => {
+                    return Err(RuntimeError::Timeout {
+                        node: me,
+                        waiting_for: "any robot (every robot is absent)".into(),
+                        timeout: timeouts.node,
+                    })
+                }
+            }
+        }
+        let in_contact: Vec<(usize, usize)> = world
+            .contacts()
+            .iter()
+            .copied()
+            .filter(|&(i, j)| present[i] && present[j])
+            .collect();
+        mb.send(&Envelope::new(
+            step,
+            me,
+            Node::Radio,
+            Body::Contacts(in_contact),
+        ))?;
+        for i in 0..n {
+            let obs = Body::Observation(world.observation(i).clone());
+            mb.send(&Envelope::new(step, me, Node::Robot(i), obs))?;
+        }
+        // Every present robot's move by one deadline; an absent robot's only if already here.
+        let deadline = Instant::now() + timeouts.node;
+        for (i, m) in moves.iter_mut().enumerate() {
+            let wait = if present[i] {
+                deadline.saturating_duration_since(Instant::now())
+            } else {
+                Duration::ZERO
+            };
+            let e = mb.try_take(wait, |e| {
+                e.step == step && e.from == Node::Robot(i) && matches!(e.body, Body::Move(_))
+            })?;
+            *m = match e.map(|e| e.body) {
+                Some(Body::Move(mv)) => {
+                    present[i] = true;
+                    mv
+                }
+                _ => {
+                    if present[i] {
+                        tracing::warn!(
+                            "{me}: robot {i} sent no move for timestep {step} within {:?}: it stays where it is until it says hello",
+                            timeouts.node
+                        );
+                        present[i] = false;
+                    }
+                    Move::Stay
+                }
+            };
+        }
+        absent_steps += present.iter().filter(|&&p| !p).count();
+        world.step(&moves);
+        // The metrics exactly as the in-process trial records them.
+        madenet_sim::record_step(&mut recorder, &world);
+        positions.push(world.positions().to_vec());
+        on_step(&world);
+    }
+    let step = world.t() as u64;
+    for to in (0..n).map(Node::Robot).chain([Node::Radio]) {
+        mb.send(&Envelope::new(step, me, to, Body::Stop))?;
+    }
+    let trial_s = started.elapsed().as_secs_f64();
+    let (mut decisions, mut decision_s) = (0, 0.0);
+    for i in (0..n).filter(|&i| present[i]) {
+        let e = mb.try_take(timeouts.node, |e| {
+            e.from == Node::Robot(i) && matches!(e.body, Body::Done { .. })
+        })?;
+        match e.map(|e| e.body) {
+            Some(Body::Done {
+                decisions: d,
+                decision_s: s,
+            }) => {
+                decisions += d;
+                decision_s += s;
+            }
+            _ => tracing::warn!("{me}: robot {i} did not report after the stop"),
+        }
+    }
+    Ok(LockstepResult {
+        metrics: recorder.finish(world.is_complete()),
+        positions,
+        world_sent: mb.sent,
+        robots_sent: Traffic::default(),
+        between_robots: Traffic::default(),
+        radio_sent: Traffic::default(),
+        timing: Timing {
+            trial_s,
+            decisions,
+            per_decision_s: if decisions > 0 {
+                decision_s / decisions as f64
+            } else {
+                0.0
+            },
+        },
+        absent_robot_steps: absent_steps,
+    })
+}
