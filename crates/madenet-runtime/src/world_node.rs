@@ -51,7 +51,7 @@ pub fn run_world_with<T: Transport>(
         for e in mb.forget_before(step, |e| matches!(e.body, Body::Hello)) {
             if let Node::Robot(j) = e.from {
                 if j < n && !present[j] {
-                    tracing::warn!("{me}: robot {j} said hello at timestep {step}: waiting for its moves again");
+                    tracing::warn!("{me}: robot {j} is back (it said hello) at timestep {step}: waiting for its moves again");
                     present[j] = true;
                 }
             }
@@ -99,7 +99,10 @@ pub fn run_world_with<T: Transport>(
             })?;
             *m = match e.map(|e| e.body) {
                 Some(Body::Move(mv)) => {
-                    present[i] = true;
+                    if !present[i] {
+                        tracing::warn!("{me}: robot {i} is back (its move arrived) at timestep {step}: waiting for its moves again");
+                        present[i] = true;
+                    }
                     mv
                 }
                 _ => {

@@ -53,18 +53,17 @@ pub fn loopback_endpoint(base_port: u16, node: Node) -> Result<String, String> {
     Ok(format!("tcp/127.0.0.1:{port}"))
 }
 
-/// The endpoints of `node` in a loopback run of `robots` robots: it listens on its own port and
-/// connects to every node it talks with (world ↔ radio, world ↔ robots, radio ↔ robots), so a
-/// restarted node reaches the others itself and is reached by them.
+/// The endpoints of `node` in a loopback run of `robots` robots: it listens on its own port, and
+/// each pair that talks has one connection, opened by one side (world → radio and robots, radio
+/// → robots): two peers dialling each other at once can refuse each other's link. Zenoh redials
+/// a configured endpoint whose link closed, so a restarted radio or robot is reached again.
 pub fn loopback_endpoints(base_port: u16, robots: usize, node: Node) -> Result<Endpoints, String> {
     let connect_to: Vec<Node> = match node {
         Node::World => std::iter::once(Node::Radio)
             .chain((0..robots).map(Node::Robot))
             .collect(),
-        Node::Radio => std::iter::once(Node::World)
-            .chain((0..robots).map(Node::Robot))
-            .collect(),
-        Node::Robot(_) => vec![Node::World, Node::Radio],
+        Node::Radio => (0..robots).map(Node::Robot).collect(),
+        Node::Robot(_) => Vec::new(),
     };
     Ok(Endpoints {
         listen: vec![loopback_endpoint(base_port, node)?],

@@ -185,14 +185,15 @@ pub fn world(a: WorldArgs) -> Result<()> {
     .with_context(|| a.scenario.label())?;
     let bus = a.node.bus(Node::World, n)?;
     let progress = a.node.progress;
+    let pace = Duration::from_millis(a.pace_ms);
+    let mut last = std::time::Instant::now();
     let r = madenet_runtime::run_world_with(world, &bus, a.node.timeouts(), |w| {
         if progress {
-            eprintln!(
-                "progress step={} explored={:.3}",
-                w.t(),
-                w.explored_fraction()
-            );
+            let explored = w.explored_fraction();
+            eprintln!("progress step={} explored={explored:.3}", w.t());
         }
+        std::thread::sleep(pace.saturating_sub(last.elapsed()));
+        last = std::time::Instant::now();
     })?;
     bus.close();
     let json = result_json(&spec.map_name, &a.scenario, &spec, r, a.trajectory)?;
@@ -231,32 +232,20 @@ pub fn agent(a: AgentArgs) -> Result<()> {
     if a.robot >= n {
         anyhow::bail!("--robot {}: the team has robots 0 to {}", a.robot, n - 1);
     }
+    let agent =
+        madenet_sim::build_agent(&spec, &registry, a.robot).with_context(|| a.scenario.label())?;
+    let bus = a.node.bus(Node::Robot(a.robot), n)?;
     let progress = a.node.progress;
-    let timeouts = a.node.timeouts();
-    // A restarted agent sometimes gets no connection on its first session (seen in about one
-    // restart in ten on loopback); a fresh session connects.
-    const SESSIONS: usize = 3;
-    for session in 1..=SESSIONS {
-        let agent = madenet_sim::build_agent(&spec, &registry, a.robot)
-            .with_context(|| a.scenario.label())?;
-        let bus = a.node.bus(Node::Robot(a.robot), n)?;
-        let r = madenet_runtime::run_robot_with(agent, &bus, timeouts, |step, agent| {
-            if progress {
-                match agent.goal() {
-                    Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
-                    None => eprintln!("progress step={step} goal=none"),
-                }
+    madenet_runtime::run_robot_with(agent, &bus, a.node.timeouts(), |step, agent| {
+        if progress {
+            match agent.goal() {
+                Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
+                None => eprintln!("progress step={step} goal=none"),
             }
-        });
-        bus.close();
-        match r {
-            Err(e @ madenet_runtime::RuntimeError::Transport { .. }) if session < SESSIONS => {
-                tracing::warn!("{e}; opening a new session ({} of {SESSIONS})", session + 1);
-            }
-            r => return r.map(|_| ()).map_err(Into::into),
         }
-    }
-    unreachable!("the last session returns")
+    })?;
+    bus.close();
+    Ok(())
 }
 
 #[derive(Args, Debug)]
