@@ -116,6 +116,16 @@ pub struct LockstepResult {
     pub timing: Timing,
     /// Robot-timesteps a robot was absent (sent no move in time; 0 in a run without faults).
     pub absent_robot_steps: usize,
+    /// The robots' latency from observation to move (waits for teammates included).
+    pub latency: Latency,
+}
+
+/// Wall time from a robot's observation to its move, over every robot and timestep it acted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Latency {
+    pub acted: usize,
+    pub mean_s: f64,
+    pub max_s: f64,
 }
 
 /// How long nodes wait.

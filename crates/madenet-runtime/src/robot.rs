@@ -8,9 +8,10 @@ use crate::transport::Transport;
 use crate::wire::{Body, Envelope, Node};
 use crate::{RuntimeError, Timeouts};
 use madenet_agent::{Agent, Beta};
+use std::time::Duration;
 
 /// How often a robot says hello until the world answers.
-const HELLO_EVERY: std::time::Duration = std::time::Duration::from_millis(500);
+const HELLO_EVERY: Duration = Duration::from_millis(500);
 
 /// Runs robot `agent`'s node until the world says stop; returns what it sent (all of it, and
 /// the part that went to teammates).
@@ -56,6 +57,8 @@ pub fn run_robot_with<T: Transport>(
         }
     }
     let mut to_world = mb.sent;
+    // Observation to move: timesteps acted, total and longest latency.
+    let (mut acted, mut latency, mut latency_max) = (0, Duration::ZERO, Duration::ZERO);
     loop {
         let e = mb.take(
             "an observation from the world",
@@ -63,6 +66,7 @@ pub fn run_robot_with<T: Transport>(
             |e| e.from == Node::World,
         )?;
         let step = e.step;
+        let observed = std::time::Instant::now();
         let mut obs = match e.body {
             Body::Observation(o) => o,
             Body::Stop => {
@@ -74,6 +78,9 @@ pub fn run_robot_with<T: Transport>(
                 let done = Body::Done {
                     decisions: stats.decisions,
                     decision_s: stats.decision_time.as_secs_f64(),
+                    acted,
+                    latency_s: latency.as_secs_f64(),
+                    latency_max_s: latency_max.as_secs_f64(),
                 };
                 mb.send(&Envelope::new(step, me, Node::World, done))?;
                 return Ok((mb.sent, between));
@@ -178,6 +185,10 @@ pub fn run_robot_with<T: Transport>(
         let before = mb.sent;
         let mv = Body::Move(agent.next_move());
         mb.send(&Envelope::new(step, me, Node::World, mv))?;
+        let took = observed.elapsed();
+        acted += 1;
+        latency += took;
+        latency_max = latency_max.max(took);
         to_world.messages += mb.sent.messages - before.messages;
         to_world.bytes += mb.sent.bytes - before.bytes;
         on_step(step, &agent);

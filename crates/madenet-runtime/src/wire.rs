@@ -67,8 +67,15 @@ pub enum Body {
     Stop,
     /// Robot → world when it starts: wait for my moves (again, after a restart).
     Hello,
-    /// Robot → world, answering `Stop`: its decisions and their total wall time, seconds.
-    Done { decisions: usize, decision_s: f64 },
+    /// Robot → world, answering `Stop`: its decisions and their total wall time, and its
+    /// latency from observation to move (timesteps acted, total and longest, seconds).
+    Done {
+        decisions: usize,
+        decision_s: f64,
+        acted: usize,
+        latency_s: f64,
+        latency_max_s: f64,
+    },
 }
 
 /// A message that could not be read.

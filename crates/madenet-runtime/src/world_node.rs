@@ -8,7 +8,7 @@
 use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
 use crate::wire::{Body, Envelope, Node};
-use crate::{LockstepResult, RuntimeError, Timeouts};
+use crate::{Latency, LockstepResult, RuntimeError, Timeouts};
 use madenet_metrics::{MetricsRecorder, Timing};
 use madenet_world::{Move, World};
 use std::time::{Duration, Instant};
@@ -130,6 +130,8 @@ pub fn run_world_with<T: Transport>(
     }
     let trial_s = started.elapsed().as_secs_f64();
     let (mut decisions, mut decision_s) = (0, 0.0);
+    let mut latency = Latency::default();
+    let mut latency_s = 0.0;
     for i in (0..n).filter(|&i| present[i]) {
         let e = mb.try_take(timeouts.node, |e| {
             e.from == Node::Robot(i) && matches!(e.body, Body::Done { .. })
@@ -138,9 +140,15 @@ pub fn run_world_with<T: Transport>(
             Some(Body::Done {
                 decisions: d,
                 decision_s: s,
+                acted,
+                latency_s: total,
+                latency_max_s,
             }) => {
                 decisions += d;
                 decision_s += s;
+                latency.acted += acted;
+                latency_s += total;
+                latency.max_s = latency.max_s.max(latency_max_s);
             }
             _ => tracing::warn!("{me}: robot {i} did not report after the stop"),
         }
@@ -162,5 +170,13 @@ pub fn run_world_with<T: Transport>(
             },
         },
         absent_robot_steps: absent_steps,
+        latency: Latency {
+            mean_s: if latency.acted > 0 {
+                latency_s / latency.acted as f64
+            } else {
+                0.0
+            },
+            ..latency
+        },
     })
 }

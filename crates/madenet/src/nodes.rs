@@ -140,6 +140,18 @@ pub struct AgentArgs {
     robot: usize,
 }
 
+/// What a run over processes adds to `run --json` (key `runtime`).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct RuntimeReport {
+    /// Robots' observation-to-move latency (waits for teammates included).
+    latency: madenet_runtime::Latency,
+    /// Robot-timesteps a robot was absent (sent no move in time).
+    absent_robot_steps: usize,
+    /// Messages and bytes the world sent (observations, contacts, stops).
+    world_messages: usize,
+    world_bytes: usize,
+}
+
 /// The JSON of a run over nodes: `madenet run --json`'s fields, and the positions when asked.
 fn result_json(
     spec_map: &str,
@@ -158,16 +170,24 @@ fn result_json(
         trajectory: Vec::new(),
         timing: r.timing,
     };
-    /// `run --json`'s object, field order kept, with the positions after it.
+    let runtime = RuntimeReport {
+        latency: r.latency,
+        absent_robot_steps: r.absent_robot_steps,
+        world_messages: r.world_sent.messages,
+        world_bytes: r.world_sent.bytes,
+    };
+    /// `run --json`'s object, field order kept, then what the run over processes adds.
     #[derive(serde::Serialize)]
     struct WithPositions {
         #[serde(flatten)]
         result: madenet_sim::TrialResult,
+        runtime: RuntimeReport,
         #[serde(skip_serializing_if = "Option::is_none")]
         positions: Option<Vec<Vec<madenet_map::Pos>>>,
     }
     let v = WithPositions {
         result,
+        runtime,
         positions: trajectory.then_some(r.positions),
     };
     Ok(serde_json::to_string_pretty(&v)?)
@@ -219,7 +239,7 @@ pub fn radio(a: RadioArgs) -> Result<()> {
     bus.close();
     if a.node.progress {
         eprintln!(
-            "radio forwarded and sent {} messages, {} B",
+            "progress done: sent {} messages, {} B",
             sent.messages, sent.bytes
         );
     }
@@ -452,6 +472,22 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
         let result: madenet_sim::TrialResult =
             serde_json::from_str(&json).context("the world's result")?;
         crate::run::print_summary(&result, &a.scenario.start.name())?;
+        #[derive(serde::Deserialize)]
+        struct Runtime {
+            runtime: RuntimeReport,
+        }
+        let rt = serde_json::from_str::<Runtime>(&json)
+            .context("the world's result")?
+            .runtime;
+        out!(
+            "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
+            1e3 * rt.latency.mean_s,
+            1e3 * rt.latency.max_s,
+            rt.latency.acted
+        )?;
+        if rt.absent_robot_steps > 0 {
+            out!("absent     {} robot-timesteps", rt.absent_robot_steps)?;
+        }
         out!(
             "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
             nodes.len()

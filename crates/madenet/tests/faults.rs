@@ -194,6 +194,10 @@ fn a_killed_agent_leaves_its_robot_where_it_stopped_and_the_others_finish() {
     run.wait_for("world", |l| l.contains("robot 1 sent no move"));
     let result = run.finish();
     assert_eq!(result["metrics"]["completed"], true, "{result}");
+    assert!(
+        result["runtime"]["absent_robot_steps"].as_u64().unwrap() > 5,
+        "{result}"
+    );
     let cells = cells_of(&result, 1);
     // From two timesteps after the kill on, robot 1 never moves again.
     let after = &cells[killed_at + 2..];

@@ -47,6 +47,13 @@ fn launch_over_processes_equals_the_in_process_run() {
                     .unwrap()
                     .remove("positions")
                     .expect("--trajectory adds positions");
+                let runtime = launched
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("runtime")
+                    .expect("what the processes add");
+                assert_eq!(runtime["absent_robot_steps"], 0, "{case}");
+                assert!(runtime["latency"]["acted"].as_u64().unwrap() > 0, "{case}");
                 let trajectory = std::mem::take(&mut ran["trajectory"]);
                 let steps = trajectory.as_array().unwrap();
                 let positions = positions.as_array().unwrap();
