@@ -5,10 +5,57 @@
 
 use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
-use crate::wire::{Body, Envelope, Node};
+use crate::wire::{BetaMessage, Body, Envelope, Node};
 use crate::{RuntimeError, Timeouts};
 use madenet_agent::{Agent, Beta};
+use madenet_map::Occupancy;
+use std::collections::{HashMap, HashSet};
 use std::time::Duration;
+
+/// What a robot node remembers of its map exchanges, to send each teammate only the changes.
+#[derive(Default)]
+struct MapExchanges {
+    /// Per teammate: the timestep and map of the last β sent to it.
+    sent_to: HashMap<usize, (usize, Vec<Occupancy>)>,
+    /// Per teammate: the timestep of the last map taken in whole (full, or changes that fitted).
+    heard_from: HashMap<usize, usize>,
+    /// Teammates whose last changes did not fit: ask them for their whole map.
+    want_full: HashSet<usize>,
+}
+
+impl MapExchanges {
+    fn outgoing(&mut self, beta: &Beta, to: usize) -> BetaMessage {
+        let base = self.sent_to.get(&to).map(|(t, m)| (*t, m.as_slice()));
+        let msg = BetaMessage::new(beta, base, self.want_full.remove(&to));
+        self.sent_to.insert(to, (beta.t, beta.map.clone()));
+        msg
+    }
+
+    fn incoming(
+        &mut self,
+        me: Node,
+        msg: &BetaMessage,
+        cells: usize,
+    ) -> Result<Beta, RuntimeError> {
+        let j = msg.from;
+        let (beta, fitted) = msg
+            .to_beta(self.heard_from.get(&j).copied(), cells)
+            .map_err(|source| RuntimeError::Wire { node: me, source })?;
+        if msg.want_full {
+            self.sent_to.remove(&j);
+        }
+        if fitted {
+            self.heard_from.insert(j, msg.t);
+        } else {
+            tracing::warn!(
+                "{me}: the map changes from robot {j} at timestep {} build on a map not received here: merged what came, asking for its whole map",
+                msg.t
+            );
+            self.want_full.insert(j);
+        }
+        Ok(beta)
+    }
+}
 
 /// How often a robot says hello until the world answers.
 const HELLO_EVERY: Duration = Duration::from_millis(500);
@@ -57,6 +104,8 @@ pub fn run_robot_with<T: Transport>(
         }
     }
     let mut to_world = mb.sent;
+    let cells = agent.beta().map.len();
+    let mut maps = MapExchanges::default();
     // Observation to move: timesteps acted, total and longest latency.
     let (mut acted, mut latency, mut latency_max) = (0, Duration::ZERO, Duration::ZERO);
     loop {
@@ -105,14 +154,12 @@ pub fn run_robot_with<T: Transport>(
         }
         // β that arrived after their timestep are merged now (a delaying radio, a slow
         // teammate); everything else of past timesteps is over.
-        let mut late: Vec<Beta> = mb
-            .forget_before(step, |e| matches!(e.body, Body::Beta(_)))
-            .into_iter()
-            .filter_map(|e| match e.body {
-                Body::Beta(b) => Some(b),
-                _ => None,
-            })
-            .collect();
+        let mut late: Vec<Beta> = Vec::new();
+        for e in mb.forget_before(step, |e| matches!(e.body, Body::Beta(_))) {
+            if let Body::Beta(m) = &e.body {
+                late.push(maps.incoming(me, m, cells)?);
+            }
+        }
         // 1–2. observe, with this timestep's links from the radio.
         let links = mb.try_take(timeouts.peer, |e| {
             e.step == step && e.from == Node::Radio && matches!(e.body, Body::Links { .. })
@@ -134,8 +181,8 @@ pub fn run_robot_with<T: Transport>(
         if !partners.is_empty() || !delayed.is_empty() {
             let beta = agent.beta();
             for &j in partners.iter().chain(&delayed) {
-                let to = Node::Robot(j);
-                mb.send(&Envelope::new(step, me, to, Body::Beta(beta.clone())))?;
+                let msg = Body::Beta(maps.outgoing(&beta, j));
+                mb.send(&Envelope::new(step, me, Node::Robot(j), msg))?;
             }
         }
         for &j in &partners {
@@ -143,7 +190,7 @@ pub fn run_robot_with<T: Transport>(
                 e.step == step && e.from == Node::Robot(j) && matches!(e.body, Body::Beta(_))
             })?;
             match e.map(|e| e.body) {
-                Some(Body::Beta(b)) => late.push(b),
+                Some(Body::Beta(m)) => late.push(maps.incoming(me, &m, cells)?),
                 _ => tracing::warn!(
                     "{me}: no β from robot {j} for timestep {step} within {:?}",
                     timeouts.peer

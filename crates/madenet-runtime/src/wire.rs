@@ -8,11 +8,12 @@
 //! robot sends the world its move; the world ends the run with `Stop`.
 
 use madenet_agent::{Beta, PlanMessage};
+use madenet_map::Occupancy;
 use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 2;
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -57,8 +58,9 @@ pub enum Body {
     /// it knows whose β and plans to wait for, and those whose β will arrive late (a delaying
     /// radio; send them β, do not wait).
     Links { now: Vec<usize>, late: Vec<usize> },
-    /// Robot → robot, along a successful exchange: β (paper Sec. III.C.1).
-    Beta(Beta),
+    /// Robot → robot, along a successful exchange: β (paper Sec. III.C.1), its map sent as the
+    /// changes since the last map sent to the same teammate.
+    Beta(BetaMessage),
     /// Robot → lower-priority robot it exchanged with: its space-time plan.
     Plan(PlanMessage),
     /// Robot → world: the move it intends this timestep.
@@ -85,6 +87,8 @@ pub enum WireError {
     Malformed(#[from] postcard::Error),
     #[error("message of protocol version {got}, this node speaks {PROTOCOL_VERSION}")]
     Version { got: u16 },
+    #[error("a β whose map does not fit this map's size")]
+    MapSize,
 }
 
 impl Envelope {
@@ -111,5 +115,95 @@ impl Envelope {
             return Err(WireError::Version { got: version });
         }
         Ok(postcard::from_bytes(bytes)?)
+    }
+}
+
+/// β on the wire: the paper's β with its local map m_j as a [`MapUpdate`] for this addressee.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BetaMessage {
+    pub from: usize,
+    pub t: usize,
+    pub prev_goal: Option<madenet_map::Pos>,
+    pub pos: madenet_map::Pos,
+    pub goal: Option<madenet_map::Pos>,
+    pub explored: usize,
+    pub map: MapUpdate,
+    /// The last changes this sender received from the addressee did not fit (a message was
+    /// lost, or the sender restarted): send the whole map next time.
+    pub want_full: bool,
+}
+
+/// A local map on the wire.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum MapUpdate {
+    /// The whole map, row-major (the first exchange with a teammate, or after a resync).
+    Full(Vec<Occupancy>),
+    /// The cells (row-major index, value) that differ from the map the sender sent to this
+    /// addressee at timestep `base`. A belief's merge copies only cells unknown to the
+    /// receiver, and a receiver that merged the base already knows every other cell, so
+    /// merging the changes leaves it exactly where merging the whole map would.
+    Changes {
+        base: usize,
+        cells: Vec<(u32, Occupancy)>,
+    },
+}
+
+impl BetaMessage {
+    /// `beta` for an addressee that last got `base` (timestep, map) from this robot.
+    pub fn new(beta: &Beta, base: Option<(usize, &[Occupancy])>, want_full: bool) -> Self {
+        let map = match base {
+            Some((t, old)) if old.len() == beta.map.len() => MapUpdate::Changes {
+                base: t,
+                cells: beta
+                    .map
+                    .iter()
+                    .zip(old)
+                    .enumerate()
+                    .filter(|(_, (new, old))| new != old)
+                    .map(|(k, (&new, _))| (k as u32, new))
+                    .collect(),
+            },
+            _ => MapUpdate::Full(beta.map.clone()),
+        };
+        BetaMessage {
+            from: beta.from,
+            t: beta.t,
+            prev_goal: beta.prev_goal,
+            pos: beta.pos,
+            goal: beta.goal,
+            explored: beta.explored,
+            map,
+            want_full,
+        }
+    }
+
+    /// The β to merge, for a receiver whose last map from this sender was of timestep
+    /// `heard`, with `cells` cells: the whole map, or the changes on an unknown background.
+    /// Also says whether the changes fitted (false: this receiver missed the base).
+    pub fn to_beta(&self, heard: Option<usize>, cells: usize) -> Result<(Beta, bool), WireError> {
+        let (map, fitted) = match &self.map {
+            MapUpdate::Full(m) if m.len() == cells => (m.clone(), true),
+            MapUpdate::Changes {
+                base,
+                cells: changes,
+            } => {
+                let mut m = vec![Occupancy::Unknown; cells];
+                for &(k, v) in changes {
+                    *m.get_mut(k as usize).ok_or(WireError::MapSize)? = v;
+                }
+                (m, heard == Some(*base))
+            }
+            MapUpdate::Full(_) => return Err(WireError::MapSize),
+        };
+        let beta = Beta {
+            from: self.from,
+            t: self.t,
+            prev_goal: self.prev_goal,
+            pos: self.pos,
+            goal: self.goal,
+            map,
+            explored: self.explored,
+        };
+        Ok((beta, fitted))
     }
 }
