@@ -30,6 +30,8 @@ fn spec(csp: f64) -> TrialSpec {
 fn bench(c: &mut Criterion) {
     let registry = PolicyRegistry::builtin();
     let mut g = c.benchmark_group("lockstep");
+    // A Zenoh run takes a fraction of a second: 20 samples keep the bench to a few minutes.
+    g.sample_size(20);
     for csp in [1.0, 0.5] {
         let r = run_lockstep(spec(csp), &registry, Duration::from_secs(10)).expect("run");
         let t = Trial::new(spec(csp))
@@ -38,7 +40,7 @@ fn bench(c: &mut Criterion) {
             .run();
         let exchanges: usize = t.trajectory.iter().map(|s| s.exchanges.len()).sum();
         eprintln!(
-            "csp {csp}: {} steps, {exchanges} exchanges; world sent {} messages / {} B, robots {} / {} B, of which robot to robot {} / {} B ({:.0} B per exchange)",
+            "csp {csp}: {} steps, {exchanges} exchanges; world sent {} messages / {} B, robots {} / {} B, of which robot to robot {} / {} B ({:.0} B per exchange), radio {} / {} B; latency {:.1} µs mean, {:.1} µs longest",
             t.metrics.tns,
             r.world_sent.messages,
             r.world_sent.bytes,
@@ -46,7 +48,29 @@ fn bench(c: &mut Criterion) {
             r.robots_sent.bytes,
             r.between_robots.messages,
             r.between_robots.bytes,
-            r.between_robots.bytes as f64 / exchanges.max(1) as f64
+            r.between_robots.bytes as f64 / exchanges.max(1) as f64,
+            r.radio_sent.messages,
+            r.radio_sent.bytes,
+            1e6 * r.latency.mean_s,
+            1e6 * r.latency.max_s
+        );
+        // One run over Zenoh: the world's time from its first message to the stop (sessions
+        // connected), and the robots' latency.
+        let base = free_port_block(5).expect("free ports");
+        let buses: Vec<ZenohBus> = nodes_of(3)
+            .into_iter()
+            .map(|node| {
+                let ep = loopback_endpoints(base, 3, node).expect("ports");
+                ZenohBus::open(&format!("probe{csp}"), node, &ep).expect("session")
+            })
+            .collect();
+        let timeouts = madenet_runtime::Timeouts::new(Duration::from_secs(10));
+        let z = run_threads(spec(csp), &registry, timeouts, buses).expect("run");
+        eprintln!(
+            "csp {csp} over zenoh: {:.2} ms from the world's first message to the stop; latency {:.1} µs mean, {:.1} µs longest",
+            1e3 * z.timing.trial_s,
+            1e6 * z.latency.mean_s,
+            1e6 * z.latency.max_s
         );
         g.bench_with_input(BenchmarkId::new("in_process", csp), &csp, |b, &csp| {
             b.iter(|| Trial::new(spec(csp)).expect("trial").run())

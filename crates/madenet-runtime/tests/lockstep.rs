@@ -238,5 +238,7 @@ fn map_changes_fit_only_on_the_map_they_build_on() {
     assert!(!m.to_beta(None, 4).unwrap().1);
     // A map of another size is refused, not merged.
     assert!(m.to_beta(Some(3), 1).is_err());
-    assert!(BetaMessage::new(&first, None, false).to_beta(None, 9).is_err());
+    assert!(BetaMessage::new(&first, None, false)
+        .to_beta(None, 9)
+        .is_err());
 }
