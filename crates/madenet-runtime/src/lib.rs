@@ -14,9 +14,9 @@
 //!
 //! 1. world → robot i: `Observation` (o_i with the teammates it detects); world → radio:
 //!    `Contacts`;
-//! 2. radio → each robot in contact: `Links` (with whom its exchange succeeds this timestep);
-//! 3. robot i → each of them, through the radio: `Beta`; robot i merges the β it receives in
-//!    sender order;
+//! 2. radio → each robot: `Links` (with whom its exchange succeeds this timestep);
+//! 3. robot i → each of them, through the radio: `Beta` (its map as the changes since the last
+//!    map it sent that teammate); robot i merges the β it receives in sender order;
 //! 4. robot i decides if its macro action ended (its own policy);
 //! 5. robot i waits for the plans of the higher-priority robots (lower index) it exchanged with,
 //!    plans, and sends its plan to the lower-priority ones (through the radio);
@@ -24,8 +24,11 @@
 //!
 //! The runtime is lockstep: with the same seed it gives exactly the in-process trial (tested
 //! for trajectories and metrics). [`run_lockstep`] runs every node on its own thread over the
-//! in-memory [`transport::ChannelBus`]; [`ZenohBus`] carries the same messages
-//! between processes. Every wait has a timeout that names the node and what it was waiting for.
+//! in-memory [`transport::ChannelBus`]; [`ZenohBus`] carries the same messages between
+//! processes. Every wait is bounded ([`Timeouts`]): a robot that sends no move in time is
+//! absent (it stays where it is) until it says hello again, a robot does without a silent
+//! teammate or radio for that timestep, and whatever cannot go on ends with an error naming the
+//! node and what it waited for. [`RadioFaults`] injects loss and delay for fault tests.
 //!
 //! ```
 //! use madenet_map::paper::{paper_map, Corner};

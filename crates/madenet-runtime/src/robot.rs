@@ -36,8 +36,17 @@ impl MapExchanges {
         me: Node,
         msg: &BetaMessage,
         cells: usize,
+        team: usize,
     ) -> Result<Beta, RuntimeError> {
         let j = msg.from;
+        if j >= team || Node::Robot(j) == me {
+            return Err(RuntimeError::Unexpected {
+                node: me,
+                from: Node::Robot(j),
+                step: msg.t as u64,
+                what: "a β from a teammate that does not exist",
+            });
+        }
         let (beta, fitted) = msg
             .to_beta(self.heard_from.get(&j).copied(), cells)
             .map_err(|source| RuntimeError::Wire { node: me, source })?;
@@ -55,6 +64,39 @@ impl MapExchanges {
         }
         Ok(beta)
     }
+}
+
+/// Checks what arrived before the agent takes it in: an observation for this robot, of cells and
+/// teammates that exist, so a malformed message ends the node with an error rather than a panic.
+fn check_observation(
+    me: Node,
+    step: u64,
+    cfg: &madenet_agent::AgentConfig,
+    obs: &madenet_world::Observation,
+) -> Result<(), RuntimeError> {
+    let inside = |p: madenet_map::Pos| {
+        p.row >= 0 && p.col >= 0 && (p.row as usize) < cfg.height && (p.col as usize) < cfg.width
+    };
+    let teammate = |j: usize| j < cfg.num_robots && j != cfg.id;
+    let what = if obs.robot != cfg.id {
+        "an observation of another robot"
+    } else if !inside(obs.pos) || obs.seen.iter().any(|&(p, _)| !inside(p)) {
+        "an observation of cells outside the map"
+    } else if obs
+        .teammates
+        .iter()
+        .any(|&(j, p)| !teammate(j) || !inside(p))
+    {
+        "an observation of a teammate that does not exist"
+    } else {
+        return Ok(());
+    };
+    Err(RuntimeError::Unexpected {
+        node: me,
+        from: Node::World,
+        step,
+        what,
+    })
 }
 
 /// How often a robot says hello until the world answers.
@@ -143,6 +185,7 @@ pub fn run_robot_with<T: Transport>(
                 })
             }
         };
+        check_observation(me, step, agent.config(), &obs)?;
         // Behind (restarted, or slowed by silent teammates)? Skip to the newest observation.
         mb.drain()?;
         if mb
@@ -157,15 +200,26 @@ pub fn run_robot_with<T: Transport>(
         let mut late: Vec<Beta> = Vec::new();
         for e in mb.forget_before(step, |e| matches!(e.body, Body::Beta(_))) {
             if let Body::Beta(m) = &e.body {
-                late.push(maps.incoming(me, m, cells)?);
+                late.push(maps.incoming(me, m, cells, agent.config().num_robots)?);
             }
         }
         // 1–2. observe, with this timestep's links from the radio.
         let links = mb.try_take(timeouts.peer, |e| {
             e.step == step && e.from == Node::Radio && matches!(e.body, Body::Links { .. })
         })?;
+        let n = agent.config().num_robots;
         let (now, delayed) = match links.map(|e| e.body) {
-            Some(Body::Links { now, late }) => (now, late),
+            Some(Body::Links { now, late }) => {
+                if now.iter().chain(&late).any(|&j| j >= n || j == i) {
+                    return Err(RuntimeError::Unexpected {
+                        node: me,
+                        from: Node::Radio,
+                        step,
+                        what: "links to a teammate that does not exist",
+                    });
+                }
+                (now, late)
+            }
             _ => {
                 tracing::warn!(
                     "{me}: no links from the radio for timestep {step} within {:?}: exchanging with nobody",
@@ -190,7 +244,7 @@ pub fn run_robot_with<T: Transport>(
                 e.step == step && e.from == Node::Robot(j) && matches!(e.body, Body::Beta(_))
             })?;
             match e.map(|e| e.body) {
-                Some(Body::Beta(m)) => late.push(maps.incoming(me, &m, cells)?),
+                Some(Body::Beta(m)) => late.push(maps.incoming(me, &m, cells, n)?),
                 _ => tracing::warn!(
                     "{me}: no β from robot {j} for timestep {step} within {:?}",
                     timeouts.peer

@@ -242,3 +242,51 @@ fn map_changes_fit_only_on_the_map_they_build_on() {
         .to_beta(None, 9)
         .is_err());
 }
+
+#[test]
+fn a_robot_refuses_malformed_messages_with_an_error() {
+    use madenet_runtime::transport::{ChannelBus, Transport};
+    use madenet_runtime::{run_robot, Timeouts};
+    use madenet_world::Observation;
+    let s = spec(3, Corner::TopLeft, "nf", 1.0, 1);
+    let bad_observations = [
+        Observation {
+            robot: 2, // robot 0's node gets robot 2's observation
+            ..Default::default()
+        },
+        Observation {
+            robot: 0,
+            pos: madenet_map::Pos::new(25, 3), // outside the 20 × 20 map
+            ..Default::default()
+        },
+        Observation {
+            robot: 0,
+            teammates: vec![(7, madenet_map::Pos::new(1, 1))], // a team of 3
+            ..Default::default()
+        },
+    ];
+    for obs in bad_observations {
+        let agent = madenet_sim::build_agent(&s, &REGISTRY, 0).unwrap();
+        let nodes = [Node::World, Node::Radio, Node::Robot(0)];
+        let mut buses = ChannelBus::connect(&nodes).into_iter();
+        let (world, _radio, robot) = (
+            buses.next().unwrap(),
+            buses.next().unwrap(),
+            buses.next().unwrap(),
+        );
+        let timeouts = Timeouts::new(Duration::from_secs(5));
+        let node = std::thread::spawn(move || run_robot(agent, robot, timeouts));
+        let e = Envelope::new(
+            0,
+            Node::World,
+            Node::Robot(0),
+            Body::Observation(obs.clone()),
+        );
+        assert!(world.send(Node::Robot(0), e.encode()));
+        let err = node.join().expect("no panic").unwrap_err();
+        assert!(
+            matches!(err, RuntimeError::Unexpected { .. }),
+            "{obs:?}: {err}"
+        );
+    }
+}

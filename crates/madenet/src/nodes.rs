@@ -1,6 +1,8 @@
 //! `madenet world | radio | agent | launch`: a trial as separate processes over Zenoh
 //! (`madenet-runtime`). Each node is started with the same trial flags and builds only its own
-//! part; `launch` starts them all on loopback ports and collects the world's result.
+//! part (an agent process reads the map flag for the map's size and the start cells only; what
+//! it knows of the map comes from its observations and teammates); `launch` starts them all on
+//! loopback ports and collects the world's result.
 
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
@@ -414,10 +416,10 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
                     None => {
                         // Warnings of the nodes are shown as they come (errors end the run
                         // and are in its one-line error).
-                        if line.starts_with("error") {
-                        } else if bars.is_hidden() {
+                        let warning = !line.starts_with("error");
+                        if warning && bars.is_hidden() {
                             eprintln!("{node}: {line}");
-                        } else {
+                        } else if warning {
                             bars.println(format!("{node}: {line}")).ok();
                         }
                         said[k].push(line);
