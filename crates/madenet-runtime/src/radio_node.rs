@@ -110,10 +110,11 @@ pub fn run_radio_with<T: Transport>(
                 if faults.loss_prob > 0.0 {
                     exchanges.retain(|_| loss.random::<f64>() >= faults.loss_prob);
                 }
+                let linked = std::mem::take(&mut exchanges);
                 let (now, late) = if faults.delay_steps > 0 {
-                    (Vec::new(), exchanges.clone())
+                    (Vec::new(), linked)
                 } else {
-                    (exchanges.clone(), Vec::new())
+                    (linked, Vec::new())
                 };
                 // Every robot hears its links each timestep, even none.
                 let mut per_robot = vec![(Vec::new(), Vec::new()); robots];

@@ -146,7 +146,7 @@ pub fn run_robot_with<T: Transport>(
         }
     }
     let mut to_world = mb.sent;
-    let cells = agent.beta().map.len();
+    let cells = agent.config().height * agent.config().width;
     let mut maps = MapExchanges::default();
     // Observation to move: timesteps acted, total and longest latency.
     let (mut acted, mut latency, mut latency_max) = (0, Duration::ZERO, Duration::ZERO);

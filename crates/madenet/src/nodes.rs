@@ -154,42 +154,41 @@ struct RuntimeReport {
     world_bytes: usize,
 }
 
-/// The JSON of a run over nodes: `madenet run --json`'s fields, and the positions when asked.
+/// What the world node writes: `run --json`'s object, field order kept, then what the run over
+/// processes adds (and the positions when asked); what `launch` reads back.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct WorldOutput {
+    #[serde(flatten)]
+    result: madenet_sim::TrialResult,
+    runtime: RuntimeReport,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    positions: Option<Vec<Vec<madenet_map::Pos>>>,
+}
+
+/// The JSON of a run over nodes.
 fn result_json(
-    spec_map: &str,
     scenario: &ScenarioArgs,
     spec: &madenet_sim::TrialSpec,
     r: LockstepResult,
     trajectory: bool,
 ) -> Result<String> {
-    let result = madenet_sim::TrialResult {
-        map: spec_map.to_string(),
-        policy: scenario.policy.clone(),
-        seed: spec.seed,
-        comm_success_prob: spec.config.comm_success_prob,
-        starts: spec.starts.clone(),
-        metrics: r.metrics,
-        trajectory: Vec::new(),
-        timing: r.timing,
-    };
-    let runtime = RuntimeReport {
-        latency: r.latency,
-        absent_robot_steps: r.absent_robot_steps,
-        world_messages: r.world_sent.messages,
-        world_bytes: r.world_sent.bytes,
-    };
-    /// `run --json`'s object, field order kept, then what the run over processes adds.
-    #[derive(serde::Serialize)]
-    struct WithPositions {
-        #[serde(flatten)]
-        result: madenet_sim::TrialResult,
-        runtime: RuntimeReport,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        positions: Option<Vec<Vec<madenet_map::Pos>>>,
-    }
-    let v = WithPositions {
-        result,
-        runtime,
+    let v = WorldOutput {
+        result: madenet_sim::TrialResult {
+            map: spec.map_name.clone(),
+            policy: scenario.policy.clone(),
+            seed: spec.seed,
+            comm_success_prob: spec.config.comm_success_prob,
+            starts: spec.starts.clone(),
+            metrics: r.metrics,
+            trajectory: Vec::new(),
+            timing: r.timing,
+        },
+        runtime: RuntimeReport {
+            latency: r.latency,
+            absent_robot_steps: r.absent_robot_steps,
+            world_messages: r.world_sent.messages,
+            world_bytes: r.world_sent.bytes,
+        },
         positions: trajectory.then_some(r.positions),
     };
     Ok(serde_json::to_string_pretty(&v)?)
@@ -218,7 +217,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
         last = std::time::Instant::now();
     })?;
     bus.close();
-    let json = result_json(&spec.map_name, &a.scenario, &spec, r, a.trajectory)?;
+    let json = result_json(&a.scenario, &spec, r, a.trajectory)?;
     match &a.out {
         Some(p) => madenet_files::write_atomic(p, format!("{json}\n").as_bytes())
             .with_context(|| format!("--out {}", p.display()))?,
@@ -471,16 +470,9 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     if a.json {
         out!("{}", json.trim_end())?;
     } else {
-        let result: madenet_sim::TrialResult =
-            serde_json::from_str(&json).context("the world's result")?;
-        crate::run::print_summary(&result, &a.scenario.start.name())?;
-        #[derive(serde::Deserialize)]
-        struct Runtime {
-            runtime: RuntimeReport,
-        }
-        let rt = serde_json::from_str::<Runtime>(&json)
-            .context("the world's result")?
-            .runtime;
+        let out: WorldOutput = serde_json::from_str(&json).context("the world's result")?;
+        crate::run::print_summary(&out.result, &a.scenario.start.name())?;
+        let rt = out.runtime;
         out!(
             "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
             1e3 * rt.latency.mean_s,
