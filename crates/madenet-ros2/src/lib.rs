@@ -1,0 +1,506 @@
+//! # madenet-ros2 — ROS 2 topics for madenet robots, without a ROS install
+//!
+//! Each robot's agent publishes what a ROS 2 user wants to see next to nav2 and RViz:
+//!
+//! | topic | type | QoS | what |
+//! | --- | --- | --- | --- |
+//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | reliable, transient local, depth 1 | the robot's belief m_i: 0 free, 100 occupied, −1 unknown |
+//! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | reliable, volatile | the centre of the robot's cell, frame `map` |
+//! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | reliable, volatile | the goal of its macro action, when it changes (the nav2 / RViz goal convention) |
+//!
+//! and [`RobotFeed`] reads a real robot's `/robot<i>/map` and `/robot<i>/pose` back into
+//! madenet cells ([`cells_from_grid`], [`MapFrame::cell_at`]).
+//!
+//! The wire format is rmw_zenoh's (ROS 2 Jazzy): key expressions
+//! `<domain>/<topic>/<type>/<RIHS01 type hash>`, CDR payloads, liveliness tokens for the ROS
+//! graph — written by the `hiroz` crate, which shares madenet's zenoh. A ROS 2 installation
+//! with `RMW_IMPLEMENTATION=rmw_zenoh_cpp` sees the topics through its router (`ros2 run
+//! rmw_zenoh_cpp rmw_zenohd`, `tcp/127.0.0.1:7447`, [`Ros2Options::default`]).
+//!
+//! ## Geometry
+//! A madenet grid's row 0 is the image's top row and its `origin` is the pose of the lower-left
+//! corner (the map_server convention), so cell `(row, col)` of an `H × W` grid with cells of
+//! `resolution` metres covers `x ∈ [col·res, (col+1)·res)`, `y ∈ [(H−1−row)·res, (H−row)·res)`
+//! in the grid's own frame, rotated by the origin's yaw and shifted by its x, y. An
+//! `OccupancyGrid`'s rows run the other way (row 0 at the origin), so rows are flipped.
+//!
+//! ```
+//! use madenet_map::{OccGrid, Occupancy, Pos};
+//! use madenet_ros2::{occupancy_grid, MapFrame};
+//!
+//! let mut grid = OccGrid::new(2, 3, Occupancy::Unknown);
+//! grid.set(Pos::new(0, 0), Occupancy::Obstacle); // top-left
+//! grid.set(Pos::new(1, 2), Occupancy::Free); // bottom-right
+//! let frame = MapFrame::of(&grid);
+//! let msg = occupancy_grid(&frame, grid.cells(), Default::default());
+//! assert_eq!((msg.info.height, msg.info.width), (2, 3));
+//! // ROS row 0 is madenet's bottom row.
+//! assert_eq!(msg.data, vec![-1, -1, 0, 100, -1, -1]);
+//! assert_eq!(frame.cell_at(2.5, 0.5), Some(Pos::new(1, 2)));
+//! ```
+#![deny(missing_docs)]
+
+use hiroz::msg::ZMessage;
+use hiroz::prelude::{Builder, ZContext, ZContextBuilder, ZNode, ZPub, ZSub};
+use hiroz::qos::{QosDurability, QosHistory, QosProfile, QosReliability};
+use hiroz_msgs::builtin_interfaces::Time;
+use hiroz_msgs::geometry_msgs::{Point, Pose, PoseStamped, Quaternion};
+use hiroz_msgs::nav_msgs::{MapMetaData, OccupancyGrid};
+use hiroz_msgs::std_msgs::Header;
+use madenet_map::{OccGrid, Occupancy, Pos};
+use std::num::NonZeroUsize;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+pub use hiroz_msgs;
+
+/// The frame every madenet topic is stamped with (REP 105's `map`).
+pub const FRAME_ID: &str = "map";
+
+/// What can go wrong talking ROS 2.
+#[derive(Debug, thiserror::Error)]
+pub enum Ros2Error {
+    /// The zenoh session, node, publisher or subscriber could not be made or used.
+    #[error("ROS 2 (rmw_zenoh) {what}: {source}")]
+    Middleware {
+        /// What was being done.
+        what: String,
+        /// hiroz's / zenoh's error.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// A received message that cannot be read as a map or pose.
+    #[error("{topic}: field `{field}`: {why}")]
+    BadMessage {
+        /// The topic it came on.
+        topic: String,
+        /// The message field at fault.
+        field: &'static str,
+        /// Why.
+        why: String,
+    },
+}
+
+fn middleware(what: impl Into<String>) -> impl FnOnce(zenoh::Error) -> Ros2Error {
+    let what = what.into();
+    move |source| Ros2Error::Middleware { what, source }
+}
+
+/// How to join the ROS 2 graph. The default: a zenoh client of rmw_zenoh's router on
+/// `tcp/127.0.0.1:7447` (a peer when it also listens), multicast scouting off, domain from
+/// `ROS_DOMAIN_ID` (0).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Ros2Options {
+    /// Zenoh endpoints to connect to (the rmw_zenoh router, or another peer).
+    pub connect: Vec<String>,
+    /// Zenoh endpoints to listen on (none: only the connections this side opens).
+    pub listen: Vec<String>,
+    /// ROS domain id; `None` reads `ROS_DOMAIN_ID` (default 0).
+    pub domain_id: Option<usize>,
+}
+
+impl Default for Ros2Options {
+    fn default() -> Self {
+        Ros2Options {
+            connect: vec!["tcp/127.0.0.1:7447".into()],
+            listen: Vec::new(),
+            domain_id: None,
+        }
+    }
+}
+
+impl Ros2Options {
+    /// Opens the zenoh session (peer mode, no multicast scouting) in the rmw_zenoh key format.
+    pub fn context(&self) -> Result<ZContext, Ros2Error> {
+        // A client of the router (or of the peer it connects to): it listens on no port of its
+        // own, so it cannot take one a madenet node is about to bind, and the router carries
+        // its data to every ROS 2 node.
+        let mut b = ZContextBuilder::default()
+            .with_mode(if self.listen.is_empty() {
+                "client"
+            } else {
+                "peer"
+            })
+            .disable_multicast_scouting()
+            .with_connect_endpoints(self.connect.iter().cloned())
+            .with_listen_endpoints(self.listen.iter().cloned());
+        if let Some(d) = self.domain_id {
+            b = b.with_domain_id(d);
+        }
+        b.build().map_err(middleware(format!(
+            "session (connect {:?}, listen {:?})",
+            self.connect, self.listen
+        )))
+    }
+}
+
+/// Where a madenet grid lies in the ROS `map` frame: its size, cell size and origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapFrame {
+    /// Rows.
+    pub height: usize,
+    /// Columns.
+    pub width: usize,
+    /// Metres per cell (the robot cell, ROS `resolution`).
+    pub resolution: f64,
+    /// Pose of the grid's lower-left corner: x, y (m), yaw (rad) (ROS `origin`).
+    pub origin: [f64; 3],
+}
+
+impl MapFrame {
+    /// The frame of `grid` (its size, `resolution` and `origin`).
+    pub fn of(grid: &OccGrid) -> Self {
+        MapFrame {
+            height: grid.height(),
+            width: grid.width(),
+            resolution: grid.resolution,
+            origin: grid.origin,
+        }
+    }
+
+    /// The centre of cell `p` in the `map` frame, metres.
+    pub fn cell_center(&self, p: Pos) -> (f64, f64) {
+        let lx = (p.col as f64 + 0.5) * self.resolution;
+        let ly = ((self.height as f64 - 1.0 - p.row as f64) + 0.5) * self.resolution;
+        let [x0, y0, yaw] = self.origin;
+        let (s, c) = yaw.sin_cos();
+        (x0 + lx * c - ly * s, y0 + lx * s + ly * c)
+    }
+
+    /// The cell that holds point `(x, y)` of the `map` frame, if it is on the grid.
+    pub fn cell_at(&self, x: f64, y: f64) -> Option<Pos> {
+        let [x0, y0, yaw] = self.origin;
+        let (s, c) = yaw.sin_cos();
+        let (dx, dy) = (x - x0, y - y0);
+        let lx = (dx * c + dy * s) / self.resolution;
+        let ly = (-dx * s + dy * c) / self.resolution;
+        if !(lx.is_finite() && ly.is_finite()) || lx < 0.0 || ly < 0.0 {
+            return None;
+        }
+        let (col, up) = (lx.floor() as usize, ly.floor() as usize);
+        (col < self.width && up < self.height)
+            .then(|| Pos::new((self.height - 1 - up) as i32, col as i32))
+    }
+
+    fn pose(&self, x: f64, y: f64, yaw: f64) -> Pose {
+        let (s, c) = (yaw / 2.0).sin_cos();
+        Pose {
+            position: Point { x, y, z: 0.0 },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: s,
+                w: c,
+            },
+        }
+    }
+}
+
+/// A ROS time stamp for `t` (wall clock: what TF and nav2 compare stamps against).
+pub fn stamp(t: SystemTime) -> Time {
+    let d = t.duration_since(UNIX_EPOCH).unwrap_or(Duration::ZERO);
+    Time {
+        sec: i32::try_from(d.as_secs()).unwrap_or(i32::MAX),
+        nanosec: d.subsec_nanos(),
+    }
+}
+
+fn header(t: Time) -> Header {
+    Header {
+        stamp: t,
+        frame_id: FRAME_ID.into(),
+    }
+}
+
+/// The ROS value of a madenet cell: 0 free, 100 occupied, −1 unknown.
+pub fn ros_value(o: Occupancy) -> i8 {
+    match o {
+        Occupancy::Unknown => -1,
+        Occupancy::Free => 0,
+        Occupancy::Obstacle => 100,
+    }
+}
+
+/// `cells` (row-major, madenet row 0 on top, `frame.height × frame.width`) as an
+/// `OccupancyGrid` in frame `map` stamped `t`.
+///
+/// # Panics
+/// If `cells.len()` is not `frame.height × frame.width` (a programming error).
+pub fn occupancy_grid(frame: &MapFrame, cells: &[Occupancy], t: Time) -> OccupancyGrid {
+    let (h, w) = (frame.height, frame.width);
+    assert_eq!(
+        cells.len(),
+        h * w,
+        "occupancy_grid: cells must be height × width"
+    );
+    let mut data = Vec::with_capacity(h * w);
+    for row in cells.chunks(w.max(1)).rev() {
+        data.extend(row.iter().map(|&o| ros_value(o)));
+    }
+    let [x0, y0, yaw] = frame.origin;
+    OccupancyGrid {
+        header: header(t),
+        info: MapMetaData {
+            map_load_time: t,
+            resolution: frame.resolution as f32,
+            width: w as u32,
+            height: h as u32,
+            origin: frame.pose(x0, y0, yaw),
+        },
+        data,
+    }
+}
+
+/// The centre of cell `p` as a `PoseStamped` in frame `map` stamped `t`, facing the grid's +x.
+pub fn pose_stamped(frame: &MapFrame, p: Pos, t: Time) -> PoseStamped {
+    let (x, y) = frame.cell_center(p);
+    PoseStamped {
+        header: header(t),
+        pose: frame.pose(x, y, frame.origin[2]),
+    }
+}
+
+/// Reads a real robot's `OccupancyGrid` (any resolution, origin and rotation) into the cells of
+/// `frame`, by the paper's rule over the pixels whose centres fall in each cell (Sec. V.B.1): a
+/// cell with no pixels, or more than half of them unknown (−1), is unknown; otherwise it is an
+/// obstacle when more than 25 % of its known pixels are above 65 (occupancy probability
+/// > 0.65), and free else. `topic` names the source in errors.
+pub fn cells_from_grid(
+    msg: &OccupancyGrid,
+    frame: &MapFrame,
+    topic: &str,
+) -> Result<Vec<Occupancy>, Ros2Error> {
+    let bad = |field, why: String| Ros2Error::BadMessage {
+        topic: topic.into(),
+        field,
+        why,
+    };
+    let (pw, ph) = (msg.info.width as usize, msg.info.height as usize);
+    let res = msg.info.resolution as f64;
+    if !(res.is_finite() && res > 0.0) {
+        return Err(bad("info.resolution", format!("must be > 0, got {res}")));
+    }
+    if pw.checked_mul(ph) != Some(msg.data.len()) {
+        return Err(bad(
+            "data",
+            format!("has {} values for a {pw} × {ph} grid", msg.data.len()),
+        ));
+    }
+    let o = &msg.info.origin;
+    let q = &o.orientation;
+    let yaw = (2.0 * (q.w * q.z + q.x * q.y)).atan2(1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    if ![o.position.x, o.position.y, yaw]
+        .iter()
+        .all(|v| v.is_finite())
+    {
+        return Err(bad("info.origin", "must be finite".into()));
+    }
+    let (s, c) = yaw.sin_cos();
+    // Per cell: pixels, unknown pixels, occupied pixels.
+    let mut counts = vec![[0u32; 3]; frame.height * frame.width];
+    for (r, row) in msg.data.chunks(pw.max(1)).enumerate() {
+        let ly = (r as f64 + 0.5) * res;
+        for (col, &v) in row.iter().enumerate() {
+            let lx = (col as f64 + 0.5) * res;
+            let x = o.position.x + lx * c - ly * s;
+            let y = o.position.y + lx * s + ly * c;
+            if let Some(p) = frame.cell_at(x, y) {
+                let k = &mut counts[p.row as usize * frame.width + p.col as usize];
+                k[0] += 1;
+                if v < 0 {
+                    k[1] += 1;
+                } else if v > 65 {
+                    k[2] += 1;
+                }
+            }
+        }
+    }
+    Ok(counts
+        .iter()
+        .map(|&[n, unknown, occupied]| {
+            let known = n - unknown;
+            if n == 0 || 2 * unknown > n {
+                Occupancy::Unknown
+            } else if occupied as f64 > 0.25 * known as f64 {
+                Occupancy::Obstacle
+            } else {
+                Occupancy::Free
+            }
+        })
+        .collect())
+}
+
+/// The topic names of robot `i`: `/robot<i>/map`, `/robot<i>/pose`, `/robot<i>/goal_pose`.
+pub fn topics(i: usize) -> [String; 3] {
+    ["map", "pose", "goal_pose"].map(|t| format!("/robot{i}/{t}"))
+}
+
+/// QoS of `/robot<i>/map`: reliable, transient local, keep last 1 — like map_server, so RViz
+/// and nav2 that start late still get the newest map.
+pub fn map_qos() -> QosProfile {
+    QosProfile {
+        reliability: QosReliability::Reliable,
+        durability: QosDurability::TransientLocal,
+        history: QosHistory::KeepLast(NonZeroUsize::MIN),
+        ..Default::default()
+    }
+}
+
+type Pub<T> = ZPub<T, <T as ZMessage>::Serdes>;
+type Sub<T> = ZSub<T, zenoh::sample::Sample, <T as ZMessage>::Serdes>;
+
+/// One robot's publishers: its belief as `/robot<i>/map`, its cell as `/robot<i>/pose`, its
+/// macro action's goal as `/robot<i>/goal_pose`.
+pub struct RobotTopics {
+    _node: ZNode,
+    frame: MapFrame,
+    map: Pub<OccupancyGrid>,
+    pose: Pub<PoseStamped>,
+    goal: Pub<PoseStamped>,
+    last_map: Option<Vec<Occupancy>>,
+    last_goal: Option<Pos>,
+    published: usize,
+}
+
+impl RobotTopics {
+    /// A node `madenet_robot<i>` on `ctx` with robot `i`'s three publishers; cells are placed
+    /// by `frame`.
+    pub fn new(ctx: &ZContext, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
+        let node = ctx
+            .create_node(format!("madenet_robot{i}"))
+            .build()
+            .map_err(middleware(format!("node madenet_robot{i}")))?;
+        let [map_t, pose_t, goal_t] = topics(i);
+        let map = node
+            .create_pub::<OccupancyGrid>(&map_t)
+            .with_qos(map_qos())
+            .build()
+            .map_err(middleware(format!("publisher {map_t}")))?;
+        let pose = node
+            .create_pub::<PoseStamped>(&pose_t)
+            .build()
+            .map_err(middleware(format!("publisher {pose_t}")))?;
+        let goal = node
+            .create_pub::<PoseStamped>(&goal_t)
+            .build()
+            .map_err(middleware(format!("publisher {goal_t}")))?;
+        Ok(RobotTopics {
+            _node: node,
+            frame,
+            map,
+            pose,
+            goal,
+            last_map: None,
+            last_goal: None,
+            published: 0,
+        })
+    }
+
+    /// Publishes the robot's pose at `pos`; its map `belief` when it changed since the last
+    /// one published; its goal when it changed to a new cell.
+    pub fn publish(
+        &mut self,
+        belief: &[Occupancy],
+        pos: Pos,
+        goal: Option<Pos>,
+    ) -> Result<(), Ros2Error> {
+        let t = stamp(SystemTime::now());
+        if self.last_map.as_deref() != Some(belief) {
+            let msg = occupancy_grid(&self.frame, belief, t);
+            self.map.publish(&msg).map_err(middleware("publish map"))?;
+            self.last_map = Some(belief.to_vec());
+            self.published += 1;
+        }
+        let msg = pose_stamped(&self.frame, pos, t);
+        self.pose
+            .publish(&msg)
+            .map_err(middleware("publish pose"))?;
+        self.published += 1;
+        if let Some(g) = goal.filter(|&g| Some(g) != self.last_goal) {
+            let msg = pose_stamped(&self.frame, g, t);
+            self.goal
+                .publish(&msg)
+                .map_err(middleware("publish goal"))?;
+            self.last_goal = Some(g);
+            self.published += 1;
+        }
+        Ok(())
+    }
+
+    /// Messages published so far (all three topics).
+    pub fn published(&self) -> usize {
+        self.published
+    }
+}
+
+/// A real robot's `/robot<i>/map` and `/robot<i>/pose`, read into madenet cells of `frame`:
+/// what a robot stack provides in place of madenet's simulated world.
+pub struct RobotFeed {
+    _node: ZNode,
+    frame: MapFrame,
+    topics: [String; 3],
+    map: Sub<OccupancyGrid>,
+    pose: Sub<PoseStamped>,
+    cells: Option<Vec<Occupancy>>,
+    at: Option<Pos>,
+}
+
+impl RobotFeed {
+    /// A node `madenet_feed<i>` on `ctx` subscribed to robot `i`'s map and pose.
+    pub fn new(ctx: &ZContext, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
+        let node = ctx
+            .create_node(format!("madenet_feed{i}"))
+            .build()
+            .map_err(middleware(format!("node madenet_feed{i}")))?;
+        let topics = topics(i);
+        let map = node
+            .create_sub::<OccupancyGrid>(&topics[0])
+            .with_qos(map_qos())
+            .build()
+            .map_err(middleware(format!("subscriber {}", topics[0])))?;
+        let pose = node
+            .create_sub::<PoseStamped>(&topics[1])
+            .build()
+            .map_err(middleware(format!("subscriber {}", topics[1])))?;
+        Ok(RobotFeed {
+            _node: node,
+            frame,
+            topics,
+            map,
+            pose,
+            cells: None,
+            at: None,
+        })
+    }
+
+    /// Takes what arrived (waiting up to `wait` for the first map and pose) and returns the
+    /// newest map in madenet cells and the robot's cell, once both have been heard. A pose off
+    /// the grid is an error naming the topic.
+    pub fn latest(&mut self, wait: Duration) -> Result<Option<(&[Occupancy], Pos)>, Ros2Error> {
+        let deadline = std::time::Instant::now() + wait;
+        loop {
+            while let Ok(m) = self.map.recv_timeout(Duration::ZERO) {
+                self.cells = Some(cells_from_grid(&m, &self.frame, &self.topics[0])?);
+            }
+            while let Ok(p) = self.pose.recv_timeout(Duration::ZERO) {
+                let (x, y) = (p.pose.position.x, p.pose.position.y);
+                self.at = Some(
+                    self.frame
+                        .cell_at(x, y)
+                        .ok_or_else(|| Ros2Error::BadMessage {
+                            topic: self.topics[1].clone(),
+                            field: "pose.position",
+                            why: format!("({x}, {y}) is off the map"),
+                        })?,
+                );
+            }
+            if self.cells.is_some() && self.at.is_some() {
+                break;
+            }
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                return Ok(None);
+            }
+            std::thread::sleep(left.min(Duration::from_millis(5)));
+        }
+        Ok(self.cells.as_deref().zip(self.at))
+    }
+}
