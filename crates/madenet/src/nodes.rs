@@ -140,6 +140,69 @@ pub struct AgentArgs {
     /// Which robot this process is (0-based).
     #[arg(long)]
     robot: usize,
+    #[command(flatten)]
+    ros2: Ros2Args,
+}
+
+/// ROS 2 topics of the robots (cargo feature `ros2`, on by default).
+#[derive(Args, Debug, Clone)]
+pub struct Ros2Args {
+    /// Publish each robot's /robot<i>/map, /robot<i>/pose and /robot<i>/goal_pose in the rmw_zenoh
+    /// format through this zenoh endpoint (bare `--ros2`: the rmw_zenoh router, tcp/127.0.0.1:7447).
+    #[arg(long, num_args = 0..=1, default_missing_value = "tcp/127.0.0.1:7447", value_name = "ENDPOINT")]
+    ros2: Option<String>,
+}
+
+impl Ros2Args {
+    fn to_args(&self) -> Vec<String> {
+        self.ros2
+            .iter()
+            .flat_map(|e| ["--ros2".to_string(), e.clone()])
+            .collect()
+    }
+}
+
+/// Robot `i`'s ROS 2 publishers, when `--ros2` asked for them.
+#[cfg(feature = "ros2")]
+struct Ros2Out(Option<(hiroz::prelude::ZContext, madenet_ros2::RobotTopics)>);
+
+#[cfg(feature = "ros2")]
+impl Ros2Out {
+    fn open(a: &Ros2Args, i: usize, map: &madenet_map::OccGrid) -> Result<Self> {
+        let Some(endpoint) = &a.ros2 else {
+            return Ok(Ros2Out(None));
+        };
+        let opts = madenet_ros2::Ros2Options {
+            connect: vec![endpoint.clone()],
+            ..Default::default()
+        };
+        let ctx = opts.context().context("--ros2")?;
+        let topics = madenet_ros2::RobotTopics::new(&ctx, i, madenet_ros2::MapFrame::of(map))
+            .context("--ros2")?;
+        Ok(Ros2Out(Some((ctx, topics))))
+    }
+
+    fn publish(&mut self, agent: &madenet_agent::Agent) {
+        if let Some((_, topics)) = &mut self.0 {
+            if let Err(e) = topics.publish(agent.belief().map(), agent.pos(), agent.goal()) {
+                tracing::warn!("robot {}: ROS 2: {e}", agent.id());
+            }
+        }
+    }
+}
+
+#[cfg(not(feature = "ros2"))]
+struct Ros2Out;
+
+#[cfg(not(feature = "ros2"))]
+impl Ros2Out {
+    fn open(a: &Ros2Args, _: usize, _: &madenet_map::OccGrid) -> Result<Self> {
+        if a.ros2.is_some() {
+            anyhow::bail!("--ros2: this madenet was built without the `ros2` feature");
+        }
+        Ok(Ros2Out)
+    }
+    fn publish(&mut self, _: &madenet_agent::Agent) {}
 }
 
 /// What a run over processes adds to `run --json` (key `runtime`).
@@ -255,9 +318,11 @@ pub fn agent(a: AgentArgs) -> Result<()> {
     }
     let agent =
         madenet_sim::build_agent(&spec, &registry, a.robot).with_context(|| a.scenario.label())?;
+    let mut ros2 = Ros2Out::open(&a.ros2, a.robot, &spec.map)?;
     let bus = a.node.bus(Node::Robot(a.robot), n)?;
     let progress = a.node.progress;
     madenet_runtime::run_robot_with(agent, &bus, a.node.timeouts(), |step, agent| {
+        ros2.publish(agent);
         if progress {
             match agent.goal() {
                 Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
@@ -287,6 +352,8 @@ pub struct LaunchArgs {
     trajectory: bool,
     #[command(flatten)]
     faults: FaultArgs,
+    #[command(flatten)]
+    ros2: Ros2Args,
 }
 
 /// The node processes of a launch; dropping it kills any still running.
@@ -360,7 +427,8 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             Node::Robot(i) => {
                 cmd.arg("agent")
                     .args(&common)
-                    .args(["--robot", &i.to_string()]);
+                    .args(["--robot", &i.to_string()])
+                    .args(a.ros2.to_args());
             }
         }
         let mut child = cmd

@@ -1,0 +1,98 @@
+//! `madenet launch --ros2 ENDPOINT`: every agent process publishes its robot's ROS 2 topics in
+//! the rmw_zenoh format. The subscriber is a plain zenoh router (as `rmw_zenohd`) that knows the
+//! message layouts only: each robot's poses, in order, are the trial's trajectory.
+#![cfg(feature = "ros2")]
+
+use madenet_map::Pos;
+use madenet_ros2::MapFrame;
+use serde_json::Value;
+use std::process::Command;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use zenoh::Wait;
+
+/// geometry_msgs/PoseStamped's x, y: after the CDR header (4 bytes), the stamp (8), the
+/// frame id "map" (4 + 4) comes the position, 8-aligned.
+fn pose_xy(cdr: &[u8]) -> (f64, f64) {
+    let b = &cdr[4..];
+    assert_eq!(&b[8..16], b"\x04\0\0\0map\0", "frame id");
+    let f = |at: usize| f64::from_le_bytes(b[at..at + 8].try_into().unwrap());
+    (f(16), f(24))
+}
+
+#[test]
+fn launched_agents_publish_their_trajectory_as_ros2_poses() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let mut c = zenoh::Config::default();
+    for (k, v) in [
+        ("mode", "\"router\"".to_string()),
+        ("scouting/multicast/enabled", "false".into()),
+        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
+    ] {
+        c.insert_json5(k, &v).unwrap();
+    }
+    let router = zenoh::open(c).wait().unwrap();
+    // (key expression, CDR payload) of every sample, in arrival order.
+    type Samples = Arc<Mutex<Vec<(String, Vec<u8>)>>>;
+    let got: Samples = Arc::default();
+    let sink = got.clone();
+    let _sub = router
+        .declare_subscriber("0/*/*/geometry_msgs::msg::dds_::PoseStamped_/*")
+        .callback(move |s| {
+            let key = s.key_expr().as_str().to_string();
+            sink.lock()
+                .unwrap()
+                .push((key, s.payload().to_bytes().to_vec()));
+        })
+        .wait()
+        .unwrap();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args([
+            "launch",
+            "--json",
+            "--trajectory",
+            "--map",
+            "paper:3",
+            "--policy",
+            "nf",
+        ])
+        .args(["--seed", "2", "--ros2", &endpoint])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::thread::sleep(Duration::from_millis(500));
+    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
+    let frame = MapFrame::of(&madenet_map::paper::paper_map(3).unwrap());
+    let got = got.lock().unwrap();
+    for i in 0..3 {
+        let poses: Vec<Pos> = got
+            .iter()
+            .filter(|(k, _)| k.starts_with(&format!("0/robot{i}/pose/")))
+            .map(|(_, b)| {
+                let (x, y) = pose_xy(b);
+                frame.cell_at(x, y).expect("on the map")
+            })
+            .collect();
+        // One pose per timestep the robot acted: where it was when it decided its move.
+        let expected: Vec<Pos> = positions[..positions.len() - 1]
+            .iter()
+            .map(|p| p[i])
+            .collect();
+        assert_eq!(poses, expected, "robot {i}");
+        let goals = got
+            .iter()
+            .filter(|(k, _)| k.starts_with(&format!("0/robot{i}/goal_pose/")))
+            .count();
+        assert!(goals >= 1, "robot {i} published no goal");
+    }
+}
