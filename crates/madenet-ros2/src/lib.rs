@@ -9,7 +9,9 @@
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | reliable, volatile | the goal of its macro action, when it changes (the nav2 / RViz goal convention) |
 //!
 //! and [`RobotFeed`] reads a real robot's `/robot<i>/map` and `/robot<i>/pose` back into
-//! madenet cells ([`cells_from_grid`], [`MapFrame::cell_at`]).
+//! madenet cells ([`cells_from_grid`], [`MapFrame::cell_at`]). [`RealRobots`] puts real robots
+//! in place of madenet's simulated world: the world node ([`madenet_runtime::run_ground_with`])
+//! observes them through their maps and poses and sends each move as `/robot<i>/goal_pose`.
 //!
 //! The wire format is rmw_zenoh's (ROS 2 Jazzy): key expressions
 //! `<domain>/<topic>/<type>/<RIHS01 type hash>`, CDR payloads, liveliness tokens for the ROS
@@ -51,7 +53,13 @@ use madenet_map::{OccGrid, Occupancy, Pos};
 use std::num::NonZeroUsize;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
+pub use hiroz;
 pub use hiroz_msgs;
+pub use real::RealRobots;
+pub use stand_in::run_stand_in;
+
+mod real;
+mod stand_in;
 
 /// The frame every madenet topic is stamped with (REP 105's `map`).
 pub const FRAME_ID: &str = "map";
@@ -79,7 +87,7 @@ pub enum Ros2Error {
     },
 }
 
-fn middleware(what: impl Into<String>) -> impl FnOnce(zenoh::Error) -> Ros2Error {
+pub(crate) fn middleware(what: impl Into<String>) -> impl FnOnce(zenoh::Error) -> Ros2Error {
     let what = what.into();
     move |source| Ros2Error::Middleware { what, source }
 }
@@ -344,7 +352,7 @@ pub fn map_qos() -> QosProfile {
     }
 }
 
-type Pub<T> = ZPub<T, <T as ZMessage>::Serdes>;
+pub(crate) type Pub<T> = ZPub<T, <T as ZMessage>::Serdes>;
 type Sub<T> = ZSub<T, zenoh::sample::Sample, <T as ZMessage>::Serdes>;
 
 /// One robot's publishers: its belief as `/robot<i>/map`, its cell as `/robot<i>/pose`, its

@@ -30,6 +30,10 @@
 //! teammate or radio for that timestep, and whatever cannot go on ends with an error naming the
 //! node and what it waited for. [`RadioFaults`] injects loss and delay for fault tests.
 //!
+//! The world node stands on a [`Ground`]: madenet's simulated [`madenet_world::World`]
+//! ([`run_world`]), or anything else that can say what each robot observes and carry out its
+//! moves — real robots through ROS 2 (`madenet_ros2::RealRobots`, [`run_ground_with`]).
+//!
 //! ```
 //! use madenet_map::paper::{paper_map, Corner};
 //! use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -60,7 +64,7 @@ pub mod zenoh_bus;
 pub use mailbox::Traffic;
 pub use radio_node::{run_radio, run_radio_with, RadioFaults, MAX_DELAY_STEPS};
 pub use robot::{run_robot, run_robot_with};
-pub use world_node::{run_world, run_world_with};
+pub use world_node::{run_ground_with, run_world, run_world_with, Ground};
 
 use madenet_map::Pos;
 use madenet_metrics::{Timing, TrialMetrics};
@@ -94,6 +98,9 @@ pub enum RuntimeError {
     Gone { node: Node, to: Node },
     #[error("{node}: {what}")]
     Transport { node: Node, what: String },
+    /// The ground truth failed (real robots: a feed went silent or sent a bad map).
+    #[error("{node}: {what}")]
+    Ground { node: Node, what: String },
     #[error(transparent)]
     Setup(#[from] madenet_sim::SimError),
     #[error("a node thread panicked")]

@@ -9,9 +9,71 @@ use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
 use crate::wire::{Body, Envelope, Node};
 use crate::{Latency, LockstepResult, RuntimeError, Timeouts};
+use madenet_map::Pos;
 use madenet_metrics::{MetricsRecorder, Timing};
-use madenet_world::{Move, World};
+use madenet_world::{Move, Observation, World};
 use std::time::{Duration, Instant};
+
+/// The ground truth a world node stands on: madenet's simulated [`World`], or real robots
+/// (`madenet_ros2::RealRobots`, fed by their own maps and poses). The node asks it, every
+/// timestep, for the pairs in contact and each robot's observation, then hands it the moves.
+pub trait Ground {
+    /// Number of robots.
+    fn robots(&self) -> usize;
+    /// The current timestep.
+    fn t(&self) -> usize;
+    /// Every robot's cell.
+    fn positions(&self) -> Vec<Pos>;
+    /// Whether the trial is over (complete, or at its step cap).
+    fn is_done(&self) -> bool;
+    /// Whether exploration is complete.
+    fn is_complete(&self) -> bool;
+    /// The explored fraction the metrics start from.
+    fn explored_fraction(&self) -> f64;
+    /// Pairs `(i, j)`, `i < j`, that can talk this timestep (within d_s, line of sight).
+    fn contacts(&mut self) -> Vec<(usize, usize)>;
+    /// Robot `i`'s observation o_i of this timestep.
+    fn observation(&mut self, i: usize) -> Observation;
+    /// Carries out one move per robot (`Stay` for an absent one) and ends the timestep.
+    fn step(&mut self, moves: &[Move]) -> Result<(), String>;
+    /// Records the timestep just ended into the metrics.
+    fn record(&self, recorder: &mut MetricsRecorder);
+}
+
+impl Ground for World {
+    fn robots(&self) -> usize {
+        World::positions(self).len()
+    }
+    fn t(&self) -> usize {
+        World::t(self)
+    }
+    fn positions(&self) -> Vec<Pos> {
+        World::positions(self).to_vec()
+    }
+    fn is_done(&self) -> bool {
+        World::is_done(self)
+    }
+    fn is_complete(&self) -> bool {
+        World::is_complete(self)
+    }
+    fn explored_fraction(&self) -> f64 {
+        World::explored_fraction(self)
+    }
+    fn contacts(&mut self) -> Vec<(usize, usize)> {
+        World::contacts(self).to_vec()
+    }
+    fn observation(&mut self, i: usize) -> Observation {
+        World::observation(self, i).clone()
+    }
+    fn step(&mut self, moves: &[Move]) -> Result<(), String> {
+        World::step(self, moves);
+        Ok(())
+    }
+    fn record(&self, recorder: &mut MetricsRecorder) {
+        // The metrics exactly as the in-process trial records them.
+        madenet_sim::record_step(recorder, self);
+    }
+}
 
 /// Runs the world node for its robots and a radio node until the trial is complete or at its
 /// step cap, then tells every robot and the radio to stop. The world's own radio is detached:
@@ -29,10 +91,20 @@ pub fn run_world_with<T: Transport>(
     mut world: World,
     transport: T,
     timeouts: Timeouts,
-    mut on_step: impl FnMut(&World),
+    on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
-    let n = world.positions().len();
+    run_ground_with(world, transport, timeouts, on_step)
+}
+
+/// The world node on any [`Ground`]: [`run_world_with`] for real robots.
+pub fn run_ground_with<G: Ground, T: Transport>(
+    mut world: G,
+    transport: T,
+    timeouts: Timeouts,
+    mut on_step: impl FnMut(&G),
+) -> Result<LockstepResult, RuntimeError> {
+    let n = world.robots();
     let me = Node::World;
     let mut mb = Mailbox::new(transport, me);
     let addressees: Vec<Node> = std::iter::once(Node::Radio)
@@ -41,7 +113,7 @@ pub fn run_world_with<T: Transport>(
     mb.connect(&addressees, timeouts.node)?;
     let started = Instant::now();
     let mut recorder = MetricsRecorder::new(world.explored_fraction());
-    let mut positions = vec![world.positions().to_vec()];
+    let mut positions = vec![world.positions()];
     let mut moves = vec![Move::Stay; n];
     let mut present = vec![true; n];
     let mut absent_steps = 0usize;
@@ -72,8 +144,7 @@ pub fn run_world_with<T: Transport>(
         }
         let in_contact: Vec<(usize, usize)> = world
             .contacts()
-            .iter()
-            .copied()
+            .into_iter()
             .filter(|&(i, j)| present[i] && present[j])
             .collect();
         mb.send(&Envelope::new(
@@ -83,7 +154,7 @@ pub fn run_world_with<T: Transport>(
             Body::Contacts(in_contact),
         ))?;
         for i in 0..n {
-            let obs = Body::Observation(world.observation(i).clone());
+            let obs = Body::Observation(world.observation(i));
             mb.send(&Envelope::new(step, me, Node::Robot(i), obs))?;
         }
         // Every present robot's move by one deadline; an absent robot's only if already here.
@@ -118,10 +189,11 @@ pub fn run_world_with<T: Transport>(
             };
         }
         absent_steps += present.iter().filter(|&&p| !p).count();
-        world.step(&moves);
-        // The metrics exactly as the in-process trial records them.
-        madenet_sim::record_step(&mut recorder, &world);
-        positions.push(world.positions().to_vec());
+        world
+            .step(&moves)
+            .map_err(|what| RuntimeError::Ground { node: me, what })?;
+        world.record(&mut recorder);
+        positions.push(world.positions());
         on_step(&world);
     }
     let step = world.t() as u64;

@@ -119,6 +119,36 @@ pub struct WorldArgs {
     /// Take at least this long per timestep, milliseconds (real robots' pace; 0: as fast as the robots answer).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000), value_name = "MS")]
     pace_ms: u64,
+    #[command(flatten)]
+    real: RealRobotArgs,
+}
+
+/// Real robots in place of the simulated world (cargo feature `ros2`).
+#[derive(Args, Debug, Clone)]
+pub struct RealRobotArgs {
+    /// Real robots instead of the simulation: each robot's /robot<i>/map and /robot<i>/pose are
+    /// read through this zenoh endpoint and its moves sent as /robot<i>/goal_pose (the map flag
+    /// gives the grid's size, cell size and origin only; bare flag: the rmw_zenoh router).
+    #[arg(long, num_args = 0..=1, default_missing_value = "tcp/127.0.0.1:7447", value_name = "ENDPOINT")]
+    ros2_robots: Option<String>,
+    /// With --ros2-robots: longest wait for the robots to reach a timestep's cells (and for their
+    /// first map and pose), seconds.
+    #[arg(long, default_value_t = 30, value_parser = timeout_arg, value_name = "SECONDS", requires = "ros2_robots")]
+    step_timeout_s: u64,
+}
+
+impl RealRobotArgs {
+    fn to_args(&self) -> Vec<String> {
+        match &self.ros2_robots {
+            Some(e) => vec![
+                "--ros2-robots".into(),
+                e.clone(),
+                "--step-timeout-s".into(),
+                self.step_timeout_s.to_string(),
+            ],
+            None => Vec::new(),
+        }
+    }
 }
 
 #[derive(Args, Debug)]
@@ -259,7 +289,9 @@ fn result_json(
 
 pub fn world(a: WorldArgs) -> Result<()> {
     let (spec, _) = a.scenario.spec()?;
-    let n = spec.starts.len();
+    if let Some(endpoint) = &a.real.ros2_robots {
+        return real_world(&a, &spec, endpoint);
+    }
     let world = madenet_world::World::new(
         spec.map.clone(),
         &spec.starts,
@@ -267,11 +299,55 @@ pub fn world(a: WorldArgs) -> Result<()> {
         spec.seed,
     )
     .with_context(|| a.scenario.label())?;
-    let bus = a.node.bus(Node::World, n)?;
+    serve_world(&a, &spec, |bus, timeouts, on_step| {
+        madenet_runtime::run_world_with(world, bus, timeouts, |w| on_step(w))
+    })
+}
+
+/// The world node on real robots' maps and poses (`--ros2-robots`).
+#[cfg(feature = "ros2")]
+fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> Result<()> {
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.to_string()],
+        ..Default::default()
+    };
+    let ctx = opts.context().context("--ros2-robots")?;
+    let wait = Duration::from_secs(a.real.step_timeout_s);
+    let real = madenet_ros2::RealRobots::new(
+        &ctx,
+        spec.starts.len(),
+        madenet_ros2::MapFrame::of(&spec.map),
+        spec.config.clone(),
+        wait,
+        wait,
+    )
+    .context("--ros2-robots")?;
+    serve_world(a, spec, |bus, timeouts, on_step| {
+        madenet_runtime::run_ground_with(real, bus, timeouts, |g| on_step(g))
+    })
+}
+
+#[cfg(not(feature = "ros2"))]
+fn real_world(_: &WorldArgs, _: &madenet_sim::TrialSpec, _: &str) -> Result<()> {
+    anyhow::bail!("--ros2-robots: this madenet was built without the `ros2` feature")
+}
+
+/// Runs a world node (`run` gets the bus, the timeouts and the progress callback) and writes
+/// its result.
+fn serve_world(
+    a: &WorldArgs,
+    spec: &madenet_sim::TrialSpec,
+    run: impl FnOnce(
+        &ZenohBus,
+        Timeouts,
+        &mut dyn FnMut(&dyn madenet_runtime::Ground),
+    ) -> Result<LockstepResult, madenet_runtime::RuntimeError>,
+) -> Result<()> {
+    let bus = a.node.bus(Node::World, spec.starts.len())?;
     let progress = a.node.progress;
     let pace = Duration::from_millis(a.pace_ms);
     let mut last = std::time::Instant::now();
-    let r = madenet_runtime::run_world_with(world, &bus, a.node.timeouts(), |w| {
+    let r = run(&bus, a.node.timeouts(), &mut |w| {
         if progress {
             let explored = w.explored_fraction();
             eprintln!("progress step={} explored={explored:.3}", w.t());
@@ -280,7 +356,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
         last = std::time::Instant::now();
     })?;
     bus.close();
-    let json = result_json(&a.scenario, &spec, r, a.trajectory)?;
+    let json = result_json(&a.scenario, spec, r, a.trajectory)?;
     match &a.out {
         Some(p) => madenet_files::write_atomic(p, format!("{json}\n").as_bytes())
             .with_context(|| format!("--out {}", p.display()))?,
@@ -354,6 +430,8 @@ pub struct LaunchArgs {
     faults: FaultArgs,
     #[command(flatten)]
     ros2: Ros2Args,
+    #[command(flatten)]
+    real: RealRobotArgs,
 }
 
 /// The node processes of a launch; dropping it kills any still running.
@@ -411,7 +489,8 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
                 cmd.arg("world")
                     .args(&common)
                     .arg("--out")
-                    .arg(&result_path);
+                    .arg(&result_path)
+                    .args(a.real.to_args());
                 if a.trajectory {
                     cmd.arg("--trajectory");
                 }

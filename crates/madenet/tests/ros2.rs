@@ -20,8 +20,8 @@ fn pose_xy(cdr: &[u8]) -> (f64, f64) {
     (f(16), f(24))
 }
 
-#[test]
-fn launched_agents_publish_their_trajectory_as_ros2_poses() {
+/// A zenoh router on a free loopback port (as `rmw_zenohd`), and its endpoint.
+fn router() -> (zenoh::Session, String) {
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -35,7 +35,15 @@ fn launched_agents_publish_their_trajectory_as_ros2_poses() {
     ] {
         c.insert_json5(k, &v).unwrap();
     }
-    let router = zenoh::open(c).wait().unwrap();
+    (
+        zenoh::open(c).wait().unwrap(),
+        format!("tcp/127.0.0.1:{port}"),
+    )
+}
+
+#[test]
+fn launched_agents_publish_their_trajectory_as_ros2_poses() {
+    let (router, endpoint) = router();
     // (key expression, CDR payload) of every sample, in arrival order.
     type Samples = Arc<Mutex<Vec<(String, Vec<u8>)>>>;
     let got: Samples = Arc::default();
@@ -50,7 +58,6 @@ fn launched_agents_publish_their_trajectory_as_ros2_poses() {
         })
         .wait()
         .unwrap();
-    let endpoint = format!("tcp/127.0.0.1:{port}");
     let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
         .args([
             "launch",
@@ -94,5 +101,61 @@ fn launched_agents_publish_their_trajectory_as_ros2_poses() {
             .filter(|(k, _)| k.starts_with(&format!("0/robot{i}/goal_pose/")))
             .count();
         assert!(goals >= 1, "robot {i} published no goal");
+    }
+}
+
+#[test]
+fn launch_on_real_robots_explores_through_their_maps_and_poses() {
+    // Three stand-in robot stacks (their own map, pose and goal topics) on paper map 3, started
+    // at the top-right corner; `launch --ros2-robots` runs radio and agents on them.
+    let (_router, endpoint) = router();
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.clone()],
+        ..Default::default()
+    };
+    let truth = madenet_map::paper::paper_map(3).unwrap();
+    let starts = madenet_map::paper::Corner::TopRight.start_cells(20, 20);
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let (out, paths) = std::thread::scope(|s| {
+        let stacks: Vec<_> = (0..3)
+            .map(|i| {
+                let (opts, truth, stop) = (&opts, &truth, &stop);
+                s.spawn(move || {
+                    madenet_ros2::run_stand_in(opts, i, truth, starts[i], 4, stop).unwrap()
+                })
+            })
+            .collect();
+        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(["launch", "--json", "--trajectory", "--map", "paper:3"])
+            .args([
+                "--start",
+                "top-right",
+                "--policy",
+                "nf",
+                "--ros2-robots",
+                &endpoint,
+            ])
+            .args(["--step-timeout-s", "10"])
+            .output()
+            .unwrap();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
+        (out, paths)
+    });
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
+    for (i, path) in paths.iter().enumerate() {
+        // The world's trajectory of robot i, without the timesteps it did not move, is the
+        // path its own stack drove.
+        let mut seen: Vec<Pos> = positions.iter().map(|p| p[i]).collect();
+        seen.dedup();
+        assert_eq!(&seen, path, "robot {i}");
+        assert!(path.len() > 5, "robot {i} hardly moved");
     }
 }

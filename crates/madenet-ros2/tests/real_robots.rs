@@ -1,0 +1,103 @@
+//! Real robots in place of `madenet world`: three stand-in robot stacks ([`run_stand_in`]), each
+//! its own ROS 2 node that publishes `/robot<i>/map` (what its own sensor has seen) and
+//! `/robot<i>/pose`, and moves only when a `/robot<i>/goal_pose` names a free neighbouring cell. The world node stands
+//! on [`RealRobots`]; the radio and the three nf agents are the runtime's own nodes. The team
+//! explores the whole map through ROS 2 alone.
+
+use madenet_map::paper::{paper_map, Corner};
+use madenet_map::Pos;
+use madenet_ros2::{run_stand_in, MapFrame, RealRobots, Ros2Options};
+use madenet_runtime::transport::ChannelBus;
+use madenet_runtime::{nodes_of, run_ground_with, run_radio, run_robot, Timeouts};
+use madenet_sim::{PolicyRegistry, TrialSpec};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+use zenoh::Wait;
+
+fn router() -> (zenoh::Session, Ros2Options) {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let mut c = zenoh::Config::default();
+    for (k, v) in [
+        ("mode", "\"router\"".to_string()),
+        ("scouting/multicast/enabled", "false".into()),
+        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
+    ] {
+        c.insert_json5(k, &v).unwrap();
+    }
+    let opts = Ros2Options {
+        connect: vec![format!("tcp/127.0.0.1:{port}")],
+        listen: Vec::new(),
+        domain_id: Some(0),
+    };
+    (zenoh::open(c).wait().unwrap(), opts)
+}
+
+#[test]
+fn nf_agents_explore_a_map_through_ros2_alone() {
+    let (_router, opts) = router();
+    let truth = paper_map(3).unwrap();
+    let spec = TrialSpec {
+        map: truth.clone(),
+        map_name: "paper:3".into(),
+        starts: Corner::TopLeft.start_cells(20, 20).to_vec(),
+        config: Default::default(),
+        policy: "nf".into(),
+        seed: 1,
+    };
+    let n = spec.starts.len();
+    let ds = spec.config.sensing_range;
+    let registry = PolicyRegistry::builtin();
+    let timeouts = Timeouts::new(Duration::from_secs(10));
+    let stop = AtomicBool::new(false);
+    let (result, paths) = std::thread::scope(|s| {
+        let stacks: Vec<_> = (0..n)
+            .map(|i| {
+                let (opts, truth, start, stop) = (&opts, &truth, spec.starts[i], &stop);
+                s.spawn(move || run_stand_in(opts, i, truth, start, ds, stop).unwrap())
+            })
+            .collect();
+        let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
+        let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
+        let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
+        s.spawn(move || run_radio(radio, n, radio_bus, timeouts).unwrap());
+        for (i, bus) in buses.enumerate() {
+            let agent = madenet_sim::build_agent(&spec, &registry, i).unwrap();
+            s.spawn(move || run_robot(agent, bus, timeouts).unwrap());
+        }
+        let ctx = opts.context().unwrap();
+        let real = RealRobots::new(
+            &ctx,
+            n,
+            MapFrame::of(&truth),
+            spec.config.clone(),
+            Duration::from_secs(2),
+            Duration::from_secs(20),
+        )
+        .unwrap();
+        let result = run_ground_with(real, world_bus, timeouts, |_| {});
+        stop.store(true, Ordering::Relaxed);
+        let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
+        (result, paths)
+    });
+    let r = result.unwrap();
+    eprintln!(
+        "real robots: {} timesteps, {:.1} m travelled, explored {:.3} of the grid",
+        r.metrics.tns, r.metrics.ttd, r.metrics.explored
+    );
+    assert!(r.metrics.completed, "no frontier left: {:?}", r.metrics);
+    assert!(r.metrics.tns < spec.config.step_cap, "{}", r.metrics.tns);
+    assert_eq!(r.absent_robot_steps, 0);
+    // The world node's trajectory is the stacks' own: every robot moved, one cell at a time,
+    // only through free cells, and ended where its stack says.
+    let last = r.positions.last().unwrap();
+    for (i, path) in paths.iter().enumerate() {
+        assert!(path.len() > 5, "robot {i} hardly moved: {path:?}");
+        assert!(path.windows(2).all(|w| w[0].chebyshev(w[1]) == 1));
+        assert!(path.iter().all(|&p| truth.is_free(p)));
+        assert_eq!(last[i], *path.last().unwrap(), "robot {i}");
+    }
+}
