@@ -39,7 +39,7 @@ pub use vector::{VecBuffers, VecEnv};
 pub mod render;
 
 pub use madenet_agent::Decision;
-pub use render::frame;
+pub use render::{frame, world_frame};
 
 use madenet_agent::{
     action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord,

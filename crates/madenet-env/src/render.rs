@@ -1,25 +1,45 @@
 //! A trial's current state as a [`madenet_render::Frame`]: the picture `madenet run --render`
 //! draws and the Python environments' `render()` returns.
 
-use madenet_map::OccGrid;
+use madenet_map::{OccGrid, Pos};
 use madenet_render::{Frame, RobotFrame};
 use madenet_sim::Trial;
+use madenet_world::World;
 
 /// The current state of `trial` as a render frame.
 pub fn frame(trial: &Trial) -> Frame {
     let w = trial.world();
+    let agents = trial.agents();
+    world_frame(
+        w,
+        |i| {
+            let a = &agents[i];
+            (a.goal(), a.path().to_vec(), a.candidates().cells.clone())
+        },
+        w.exchanges(),
+    )
+}
+
+/// The current state of `w` as a render frame, robot i drawn with what `shown(i)` gives (its
+/// goal, planned path and goal candidates) and `links` the pairs exchanging this timestep:
+/// [`frame`] for a world whose agents live elsewhere (the runtime's world node).
+pub fn world_frame(
+    w: &World,
+    shown: impl Fn(usize) -> (Option<Pos>, Vec<Pos>, Vec<Pos>),
+    links: &[(usize, usize)],
+) -> Frame {
     let truth = w.truth().clone();
     let team_map = OccGrid::from_cells(truth.height(), truth.width(), w.team_map().to_vec());
-    let robots = trial
-        .agents()
-        .iter()
-        .enumerate()
-        .map(|(i, a)| RobotFrame {
-            pos: w.positions()[i],
-            goal: a.goal(),
-            path: a.path().to_vec(),
-            candidates: a.candidates().cells.clone(),
-            in_view: w.observation(i).seen.iter().map(|&(p, _)| p).collect(),
+    let robots = (0..w.positions().len())
+        .map(|i| {
+            let (goal, path, candidates) = shown(i);
+            RobotFrame {
+                pos: w.positions()[i],
+                goal,
+                path,
+                candidates,
+                in_view: w.observation(i).seen.iter().map(|&(p, _)| p).collect(),
+            }
         })
         .collect();
     Frame {
@@ -28,6 +48,6 @@ pub fn frame(trial: &Trial) -> Frame {
         team_map,
         robots,
         explored: w.explored_fraction(),
-        links: w.exchanges().to_vec(),
+        links: links.to_vec(),
     }
 }

@@ -64,7 +64,7 @@ pub mod zenoh_bus;
 pub use mailbox::Traffic;
 pub use radio_node::{run_radio, run_radio_with, RadioFaults, MAX_DELAY_STEPS};
 pub use robot::{run_robot, run_robot_with};
-pub use world_node::{run_ground_with, run_world, run_world_with, Ground};
+pub use world_node::{run_ground_with, run_world, run_world_with, Ground, ShowFn};
 
 use madenet_map::Pos;
 use madenet_metrics::{Timing, TrialMetrics};

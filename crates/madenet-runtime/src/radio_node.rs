@@ -86,6 +86,8 @@ pub fn run_radio_with<T: Transport>(
     // Late β waiting for their timestep: (deliver at, addressee, encoded message).
     let mut held: VecDeque<(u64, usize, Vec<u8>)> = VecDeque::new();
     let mut exchanges = Vec::new();
+    // Whether the world asked for each timestep's exchanges (pictures).
+    let mut report = false;
     loop {
         let bytes =
             mb.transport
@@ -126,6 +128,10 @@ pub fn run_radio_with<T: Transport>(
                     per_robot[i].1.push(j);
                     per_robot[j].1.push(i);
                 }
+                if report {
+                    let pairs = Body::Exchanges(now.clone());
+                    mb.send(&Envelope::new(e.step, me, Node::World, pairs))?;
+                }
                 for (i, (mut now, mut late)) in per_robot.into_iter().enumerate() {
                     now.sort_unstable();
                     late.sort_unstable();
@@ -147,6 +153,7 @@ pub fn run_radio_with<T: Transport>(
                 }
             }
             (Node::World, _, Body::Stop) => return Ok(mb.sent),
+            (Node::World, _, Body::Show) => report = true,
             (Node::Robot(i), Node::Robot(j), body) if i < robots && j < robots => {
                 let pair = (i.min(j), i.max(j));
                 let at_step = || links.iter().filter(|l| l.step == e.step);
@@ -164,7 +171,7 @@ pub fn run_radio_with<T: Transport>(
                     node: me,
                     from,
                     step: e.step,
-                    what: "the radio takes contacts and stop from the world and teammates' messages from robots",
+                    what: "the radio takes contacts, show and stop from the world and teammates' messages from robots",
                 })
             }
         }

@@ -5,7 +5,7 @@
 
 use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
-use crate::wire::{BetaMessage, Body, Envelope, Node};
+use crate::wire::{BetaMessage, Body, Envelope, Node, Shown};
 use crate::{RuntimeError, Timeouts};
 use madenet_agent::{Agent, Beta};
 use madenet_map::Occupancy;
@@ -148,6 +148,8 @@ pub fn run_robot_with<T: Transport>(
     let mut to_world = mb.sent;
     let cells = agent.config().height * agent.config().width;
     let mut maps = MapExchanges::default();
+    // Whether the world asked for what this robot shows (pictures).
+    let mut show = false;
     // Observation to move: timesteps acted, total and longest latency.
     let (mut acted, mut latency, mut latency_max) = (0, Duration::ZERO, Duration::ZERO);
     loop {
@@ -160,6 +162,10 @@ pub fn run_robot_with<T: Transport>(
         let observed = std::time::Instant::now();
         let mut obs = match e.body {
             Body::Observation(o) => o,
+            Body::Show => {
+                show = true;
+                continue;
+            }
             Body::Stop => {
                 let between = Traffic {
                     messages: mb.sent.messages - to_world.messages,
@@ -181,7 +187,7 @@ pub fn run_robot_with<T: Transport>(
                     node: me,
                     from: e.from,
                     step,
-                    what: "the world sends observations and stop only",
+                    what: "the world sends observations, show and stop only",
                 })
             }
         };
@@ -290,6 +296,15 @@ pub fn run_robot_with<T: Transport>(
         acted += 1;
         latency += took;
         latency_max = latency_max.max(took);
+        if show {
+            let shown = Body::Shown(Shown {
+                goal: agent.goal(),
+                path: agent.path().to_vec(),
+                candidates: agent.candidates().cells.clone(),
+                exchanged_with: agent.exchanged_with().to_vec(),
+            });
+            mb.send(&Envelope::new(step, me, Node::World, shown))?;
+        }
         to_world.messages += mb.sent.messages - before.messages;
         to_world.bytes += mb.sent.bytes - before.bytes;
         on_step(step, &agent);

@@ -8,12 +8,12 @@
 //! robot sends the world its move; the world ends the run with `Stop`.
 
 use madenet_agent::{Beta, PlanMessage};
-use madenet_map::Occupancy;
+use madenet_map::{Occupancy, Pos};
 use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 3;
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -78,6 +78,24 @@ pub enum Body {
         latency_s: f64,
         latency_max_s: f64,
     },
+    /// World → robot: after each move, also send what you show (`Shown`); world → radio: also
+    /// send me each timestep's `Exchanges`. For pictures.
+    Show,
+    /// Radio → world, when asked by `Show`: the pairs (i < j) exchanging this timestep.
+    Exchanges(Vec<(usize, usize)>),
+    /// Robot → world after its move, when asked by `Show`: what a picture of the timestep
+    /// draws of it besides its cell.
+    Shown(Shown),
+}
+
+/// What a robot shows in a picture of a timestep: its macro action's goal, its planned path,
+/// its goal candidates G_i and the teammates it exchanged β with.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Shown {
+    pub goal: Option<Pos>,
+    pub path: Vec<Pos>,
+    pub candidates: Vec<Pos>,
+    pub exchanged_with: Vec<usize>,
 }
 
 /// A message that could not be read.

@@ -7,7 +7,7 @@
 
 use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
-use crate::wire::{Body, Envelope, Node};
+use crate::wire::{Body, Envelope, Node, Shown};
 use crate::{Latency, LockstepResult, RuntimeError, Timeouts};
 use madenet_map::Pos;
 use madenet_metrics::{MetricsRecorder, Timing};
@@ -94,14 +94,24 @@ pub fn run_world_with<T: Transport>(
     on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
-    run_ground_with(world, transport, timeouts, on_step)
+    run_ground_with(world, transport, timeouts, None, on_step)
 }
 
-/// The world node on any [`Ground`]: [`run_world_with`] for real robots.
+/// What a picture of a timestep draws besides the ground: what each robot shows, and the pairs
+/// exchanging.
+pub type ShowFn<'a, G> = &'a mut dyn FnMut(&G, &[Shown], &[(usize, usize)]);
+
+/// The world node on any [`Ground`] (real robots, say), calling `on_step(ground)` after each
+/// timestep. With `show`, the robots send what they show after each move ([`Shown`]: goal,
+/// path, candidates) and the radio the pairs exchanging each timestep, and `show(ground,
+/// shown, exchanges)` is called once before the first timestep and once after each — the
+/// state `madenet run` draws: the ground after the step, the robots' choices in it, and the
+/// exchanges of the next timestep (a robot that sent nothing in time shows nothing).
 pub fn run_ground_with<G: Ground, T: Transport>(
     mut world: G,
     transport: T,
     timeouts: Timeouts,
+    mut show: Option<ShowFn<'_, G>>,
     mut on_step: impl FnMut(&G),
 ) -> Result<LockstepResult, RuntimeError> {
     let n = world.robots();
@@ -111,6 +121,32 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         .chain((0..n).map(Node::Robot))
         .collect();
     mb.connect(&addressees, timeouts.node)?;
+    let showing = show.is_some();
+    let ask_to_show = |mb: &mut Mailbox<T>, to: Node, step: u64| -> Result<(), RuntimeError> {
+        if showing {
+            mb.send(&Envelope::new(step, me, to, Body::Show))?;
+        }
+        Ok(())
+    };
+    for &to in &addressees {
+        ask_to_show(&mut mb, to, world.t() as u64)?;
+    }
+    let mut shown: Vec<Shown> = vec![Shown::default(); n];
+    // The radio's exchanges of `step` (pictures only).
+    let exchanges = |mb: &mut Mailbox<T>, step: u64| -> Result<Vec<(usize, usize)>, RuntimeError> {
+        let e = mb.try_take(timeouts.peer, |e| {
+            e.step == step && e.from == Node::Radio && matches!(e.body, Body::Exchanges(_))
+        })?;
+        Ok(match e.map(|e| e.body) {
+            Some(Body::Exchanges(pairs)) => pairs,
+            _ => {
+                tracing::warn!(
+                    "{me}: no exchanges from the radio for timestep {step}: drawn without"
+                );
+                Vec::new()
+            }
+        })
+    };
     let started = Instant::now();
     let mut recorder = MetricsRecorder::new(world.explored_fraction());
     let mut positions = vec![world.positions()];
@@ -125,6 +161,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
                 if j < n && !present[j] {
                     tracing::warn!("{me}: robot {j} is back (it said hello) at timestep {step}: waiting for its moves again");
                     present[j] = true;
+                    ask_to_show(&mut mb, Node::Robot(j), step)?;
                 }
             }
         }
@@ -156,6 +193,10 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         for i in 0..n {
             let obs = Body::Observation(world.observation(i));
             mb.send(&Envelope::new(step, me, Node::Robot(i), obs))?;
+        }
+        if let Some(show) = show.as_mut() {
+            let pairs = exchanges(&mut mb, step)?;
+            show(&world, &shown, &pairs);
         }
         // Every present robot's move by one deadline; an absent robot's only if already here.
         let deadline = Instant::now() + timeouts.node;
@@ -189,6 +230,19 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             };
         }
         absent_steps += present.iter().filter(|&&p| !p).count();
+        if showing {
+            shown.clear();
+            for (i, &here) in present.iter().enumerate() {
+                let wait = if here { timeouts.peer } else { Duration::ZERO };
+                let e = mb.try_take(wait, |e| {
+                    e.step == step && e.from == Node::Robot(i) && matches!(e.body, Body::Shown(_))
+                })?;
+                shown.push(match e.map(|e| e.body) {
+                    Some(Body::Shown(s)) => s,
+                    _ => Shown::default(),
+                });
+            }
+        }
         world
             .step(&moves)
             .map_err(|what| RuntimeError::Ground { node: me, what })?;
@@ -197,6 +251,22 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         on_step(&world);
     }
     let step = world.t() as u64;
+    if let Some(show) = show.as_mut() {
+        // The last picture's exchanges: the radio's for a timestep that will not be played.
+        let in_contact: Vec<(usize, usize)> = world
+            .contacts()
+            .into_iter()
+            .filter(|&(i, j)| present[i] && present[j])
+            .collect();
+        mb.send(&Envelope::new(
+            step,
+            me,
+            Node::Radio,
+            Body::Contacts(in_contact),
+        ))?;
+        let pairs = exchanges(&mut mb, step)?;
+        show(&world, &shown, &pairs);
+    }
     for to in (0..n).map(Node::Robot).chain([Node::Radio]) {
         mb.send(&Envelope::new(step, me, to, Body::Stop))?;
     }

@@ -7,7 +7,7 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use madenet_runtime::wire::Node;
+use madenet_runtime::wire::{Node, Shown};
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
 use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, ZenohBus};
 use std::io::{BufRead, BufReader};
@@ -121,6 +121,8 @@ pub struct WorldArgs {
     pace_ms: u64,
     #[command(flatten)]
     real: RealRobotArgs,
+    #[command(flatten)]
+    pictures: crate::run::PictureArgs,
 }
 
 /// Real robots in place of the simulated world (cargo feature `ros2`).
@@ -289,19 +291,60 @@ fn result_json(
 
 pub fn world(a: WorldArgs) -> Result<()> {
     let (spec, _) = a.scenario.spec()?;
+    a.pictures.check(spec.map.width(), spec.map.height())?;
     if let Some(endpoint) = &a.real.ros2_robots {
+        if a.pictures.any() {
+            anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
+        }
         return real_world(&a, &spec, endpoint);
     }
-    let world = madenet_world::World::new(
+    let mut world = madenet_world::World::new(
         spec.map.clone(),
         &spec.starts,
         spec.config.clone(),
         spec.seed,
     )
     .with_context(|| a.scenario.label())?;
+    world.detach_radio();
+    // Pictures as `run` draws them: the world's side, what each robot shows, the radio's links.
+    let mut pictures: Option<crate::run::Pictures> = None;
+    let (mut last, mut failed) = (None, None);
+    let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
+        let f = madenet_env::world_frame(
+            w,
+            |i| {
+                let s = shown.get(i).cloned().unwrap_or_default();
+                (s.goal, s.path, s.candidates)
+            },
+            links,
+        );
+        let r = match pictures.as_mut() {
+            Some(p) if p.every_step() => p.push(&f),
+            Some(_) => Ok(()),
+            None => a.pictures.start(&f).map(|p| pictures = Some(p)),
+        };
+        if failed.is_none() {
+            failed = r.err();
+        }
+        last = Some(f);
+    };
+    let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
+        a.pictures.any().then_some(&mut draw);
     serve_world(&a, &spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_world_with(world, bus, timeouts, |w| on_step(w))
-    })
+        madenet_runtime::run_ground_with(world, bus, timeouts, show, |w| on_step(w))
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    if let (Some(p), Some(last)) = (pictures, last) {
+        for line in p.finish(&last)? {
+            // Launched (`--progress`), launch names the files itself.
+            if !a.node.progress {
+                eprintln!("{line}");
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The world node on real robots' maps and poses (`--ros2-robots`).
@@ -323,7 +366,7 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
     )
     .context("--ros2-robots")?;
     serve_world(a, spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(real, bus, timeouts, |g| on_step(g))
+        madenet_runtime::run_ground_with(real, bus, timeouts, None, |g| on_step(g))
     })
 }
 
@@ -432,6 +475,8 @@ pub struct LaunchArgs {
     ros2: Ros2Args,
     #[command(flatten)]
     real: RealRobotArgs,
+    #[command(flatten)]
+    pictures: crate::run::PictureArgs,
 }
 
 /// The node processes of a launch; dropping it kills any still running.
@@ -451,6 +496,10 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     // rather than five.
     let (spec, registry) = a.scenario.spec()?;
     let n = spec.starts.len();
+    a.pictures.check(spec.map.width(), spec.map.height())?;
+    if a.real.ros2_robots.is_some() && a.pictures.any() {
+        anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
+    }
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
     let port = match a.port {
         0 => free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?,
@@ -491,6 +540,9 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
                     .arg("--out")
                     .arg(&result_path)
                     .args(a.real.to_args());
+                if a.pictures.any() {
+                    cmd.args(a.pictures.to_args());
+                }
                 if a.trajectory {
                     cmd.arg("--trajectory");
                 }
@@ -633,6 +685,9 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
             nodes.len()
         )?;
+        for p in a.pictures.render.iter().chain(&a.pictures.snapshot) {
+            out!("wrote      {}", p.display())?;
+        }
     }
     Ok(())
 }

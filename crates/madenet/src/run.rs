@@ -3,7 +3,7 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use madenet_render::{GifWriter, RenderOptions};
+use madenet_render::{Frame, GifWriter, RenderOptions};
 use madenet_sim::Trial;
 use std::path::PathBuf;
 
@@ -17,18 +17,122 @@ pub struct RunArgs {
     /// Include the per-step trajectory in the JSON output.
     #[arg(long, requires = "json")]
     trajectory: bool,
+    #[command(flatten)]
+    pictures: PictureArgs,
+}
+
+/// Pictures of a trial (`run`, `launch` and `world`).
+#[derive(Args, Debug, Clone)]
+pub struct PictureArgs {
     /// Write an animated GIF of the trial.
     #[arg(long, value_name = "GIF")]
-    render: Option<PathBuf>,
+    pub render: Option<PathBuf>,
     /// Write a PNG of the final state.
     #[arg(long, value_name = "PNG")]
-    snapshot: Option<PathBuf>,
+    pub snapshot: Option<PathBuf>,
     /// Pixels per cell in pictures.
     #[arg(long, default_value_t = 16)]
-    cell_px: u32,
+    pub cell_px: u32,
     /// GIF frame delay in milliseconds.
     #[arg(long, default_value_t = 150)]
-    delay_ms: u32,
+    pub delay_ms: u32,
+}
+
+impl PictureArgs {
+    /// Whether any picture is asked for.
+    pub fn any(&self) -> bool {
+        self.render.is_some() || self.snapshot.is_some()
+    }
+
+    /// The flags as given, for a child process.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(p) = &self.render {
+            v.extend(["--render".into(), p.display().to_string()]);
+        }
+        if let Some(p) = &self.snapshot {
+            v.extend(["--snapshot".into(), p.display().to_string()]);
+        }
+        v.extend([
+            "--cell-px".into(),
+            self.cell_px.to_string(),
+            "--delay-ms".into(),
+            self.delay_ms.to_string(),
+        ]);
+        v
+    }
+
+    /// Checks the flags against a `width × height` map, before anything runs.
+    pub fn check(&self, width: usize, height: usize) -> Result<()> {
+        check_extension(self.render.as_deref(), "--render", "gif")?;
+        check_extension(self.snapshot.as_deref(), "--snapshot", "png")?;
+        if self.any() {
+            madenet_render::check_size(width, height, &self.options())
+                .map_err(anyhow::Error::msg)
+                .context("--cell-px")?;
+        }
+        Ok(())
+    }
+
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            cell_px: self.cell_px,
+            ..Default::default()
+        }
+    }
+
+    /// Starts the pictures: the GIF's first frame is `first`.
+    pub fn start(&self, first: &Frame) -> Result<Pictures<'_>> {
+        let mut gif = match &self.render {
+            Some(p) => Some(GifWriter::new(p, &self.options(), self.delay_ms)?),
+            None => None,
+        };
+        if let Some(g) = gif.as_mut() {
+            g.push(first)?;
+        }
+        Ok(Pictures { args: self, gif })
+    }
+}
+
+/// Pictures being written: one GIF frame per timestep, the PNG of the last.
+pub struct Pictures<'a> {
+    args: &'a PictureArgs,
+    gif: Option<GifWriter>,
+}
+
+impl Pictures<'_> {
+    /// Whether frames are wanted for every timestep (a GIF).
+    pub fn every_step(&self) -> bool {
+        self.gif.is_some()
+    }
+
+    /// Adds a timestep's frame to the GIF.
+    pub fn push(&mut self, frame: &Frame) -> Result<()> {
+        if let Some(g) = self.gif.as_mut() {
+            g.push(frame)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the PNG of `last` and finishes the GIF; the lines to print about them.
+    pub fn finish(self, last: &Frame) -> Result<Vec<String>> {
+        let mut lines = Vec::new();
+        if let Some(g) = self.gif {
+            let frames = g.frames();
+            let bytes = g.finish()?;
+            let p = self.args.render.as_ref().expect("a GIF was asked for");
+            lines.push(format!(
+                "wrote      {} ({frames} frames, {:.1} kB)",
+                p.display(),
+                bytes as f64 / 1e3
+            ));
+        }
+        if let Some(p) = &self.args.snapshot {
+            madenet_render::save_png(last, &self.args.options(), p)?;
+            lines.push(format!("wrote      {}", p.display()));
+        }
+        Ok(lines)
+    }
 }
 
 /// Refuses an output file whose extension names another picture format than the one written
@@ -49,56 +153,31 @@ pub fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
-    check_extension(a.render.as_deref(), "--render", "gif")?;
-    check_extension(a.snapshot.as_deref(), "--snapshot", "png")?;
     let (spec, registry) = a.scenario.spec()?;
-    let opts = RenderOptions {
-        cell_px: a.cell_px,
-        ..Default::default()
-    };
-    if a.render.is_some() || a.snapshot.is_some() {
-        madenet_render::check_size(spec.map.width(), spec.map.height(), &opts)
-            .map_err(anyhow::Error::msg)
-            .context("--cell-px")?;
-    }
+    a.pictures.check(spec.map.width(), spec.map.height())?;
     let mut trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
-
-    let mut gif = match &a.render {
-        Some(p) => Some(GifWriter::new(p, &opts, a.delay_ms)?),
-        None => None,
-    };
-    if let Some(g) = gif.as_mut() {
-        g.push(&madenet_env::frame(&trial))?;
+    let mut pictures = None;
+    if a.pictures.any() {
+        pictures = Some(a.pictures.start(&madenet_env::frame(&trial))?);
     }
     while trial.step() {
-        if let Some(g) = gif.as_mut() {
-            g.push(&madenet_env::frame(&trial))?;
+        if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
+            p.push(&madenet_env::frame(&trial))?;
         }
     }
-    if let Some(p) = &a.snapshot {
-        madenet_render::save_png(&madenet_env::frame(&trial), &opts, p)?;
-    }
-    let mut gif_summary = None;
-    if let Some(g) = gif {
-        let frames = g.frames();
-        gif_summary = Some((frames, g.finish()?));
-    }
+    let wrote = match pictures {
+        Some(p) => p.finish(&madenet_env::frame(&trial))?,
+        None => Vec::new(),
+    };
     let result = trial.finish();
     if a.json {
         out!("{}", serde_json::to_string_pretty(&result)?)?;
     } else {
         print_summary(&result, &a.scenario.start.name())?;
-        if let (Some(p), Some((frames, bytes))) = (&a.render, gif_summary) {
-            out!(
-                "wrote      {} ({frames} frames, {:.1} kB)",
-                p.display(),
-                bytes as f64 / 1e3
-            )?;
-        }
-        if let Some(p) = &a.snapshot {
-            out!("wrote      {}", p.display())?;
+        for line in wrote {
+            out!("{line}")?;
         }
     }
     Ok(())

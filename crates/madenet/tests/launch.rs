@@ -108,3 +108,57 @@ fn a_node_whose_peers_never_come_gives_up_naming_them() {
         "{err}"
     );
 }
+
+#[test]
+fn launch_draws_the_same_pictures_as_run() {
+    // The world node draws its side (truth, team map, positions, what each robot sees) and what
+    // each agent process reports after its move (goal, path, candidates, exchanges): the GIF and
+    // the PNG are byte for byte `run`'s.
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).display().to_string();
+    for policy in ["nf", "made-net"] {
+        let trial = [
+            "--map",
+            "paper:8",
+            "--start",
+            "bottom-left",
+            "--policy",
+            policy,
+            "--csp",
+            "0.5",
+            "--seed",
+            "3",
+            "--cell-px",
+            "6",
+        ];
+        let (gif_l, png_l, gif_r, png_r) =
+            (path("l.gif"), path("l.png"), path("r.gif"), path("r.png"));
+        let (ok, out, err) = madenet(
+            &[
+                &["launch", "--render", &gif_l, "--snapshot", &png_l][..],
+                &trial[..],
+            ]
+            .concat(),
+        );
+        assert!(ok, "{policy}: {err}");
+        assert!(out.contains(&format!("wrote      {gif_l}")), "{out}");
+        let (ok, _, err) = madenet(
+            &[
+                &["run", "--render", &gif_r, "--snapshot", &png_r][..],
+                &trial[..],
+            ]
+            .concat(),
+        );
+        assert!(ok, "{policy}: {err}");
+        let gif = std::fs::read(&gif_l).unwrap();
+        assert!(gif.len() > 1000, "{policy}: a GIF of {} bytes", gif.len());
+        assert!(
+            gif == std::fs::read(&gif_r).unwrap(),
+            "{policy}: the GIFs differ"
+        );
+        assert!(
+            std::fs::read(&png_l).unwrap() == std::fs::read(&png_r).unwrap(),
+            "{policy}: the PNGs differ"
+        );
+    }
+}
