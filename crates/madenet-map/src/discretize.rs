@@ -94,20 +94,48 @@ pub fn discretize(
     params: &DiscretizeParams,
 ) -> OccGrid {
     assert!(factor > 0, "discretize: factor must be at least 1");
+    discretize_area(probs, px_height, px_width, factor as f64, params)
+}
+
+/// [`discretize`] for cells of any size `cell_px ≥ 1` pixels (a robot cell that is not a whole
+/// number of pixels, e.g. 1 m cells on a 0.15 m/pixel map: `cell_px` = 6.67): each cell merges
+/// the pixels whose centres fall in the area it covers, by the same rule. Cell `k` along an axis
+/// covers `[k·cell_px, (k+1)·cell_px)` pixel units from the top-left corner; there are as many
+/// cells as hold at least one pixel centre (`ceil(px / cell_px)` for a whole `cell_px`, so a
+/// whole `cell_px` gives exactly [`discretize`]).
+///
+/// # Panics
+///
+/// Panics if `cell_px` is not a finite number ≥ 1 or `probs.len() != px_height * px_width`
+/// (programming errors: the loaders check both).
+pub fn discretize_area(
+    probs: &[f64],
+    px_height: usize,
+    px_width: usize,
+    cell_px: f64,
+    params: &DiscretizeParams,
+) -> OccGrid {
+    assert!(
+        cell_px.is_finite() && cell_px >= 1.0,
+        "discretize: a cell must be at least one pixel"
+    );
     assert_eq!(
         probs.len(),
         px_height * px_width,
         "discretize: probs.len() must be px_height * px_width"
     );
-    let height = px_height.div_ceil(factor);
-    let width = px_width.div_ceil(factor);
+    // The cell of pixel k along an axis: the one its centre k + 0.5 falls in.
+    let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as usize;
+    let cells = |px: usize| if px == 0 { 0 } else { cell_of(px - 1) + 1 };
+    let (height, width) = (cells(px_height), cells(px_width));
+    let col_cell: Vec<usize> = (0..px_width).map(cell_of).collect();
     // Occupied-pixel and total-pixel counts per output cell.
     let mut occupied = vec![0usize; height * width];
     let mut total = vec![0usize; height * width];
     for (r, row) in probs.chunks(px_width.max(1)).enumerate().take(px_height) {
-        let cell_row = (r / factor) * width;
+        let cell_row = cell_of(r) * width;
         for (c, &p) in row.iter().enumerate() {
-            let i = cell_row + c / factor;
+            let i = cell_row + col_cell[c];
             total[i] += 1;
             if p > params.occupied_prob {
                 occupied[i] += 1;
@@ -133,6 +161,46 @@ mod tests {
     use super::*;
     use crate::Pos;
     use proptest::prelude::*;
+
+    #[test]
+    fn a_cell_of_a_fraction_of_pixels_merges_the_pixels_whose_centres_it_covers() {
+        // 0.15 m pixels, 1 m cells: 6.67 pixels per cell. 20 pixels (3 m) make 3 cells holding
+        // pixels 0–6, 7–12 and 13–19 (7, 6 and 7 pixel centres).
+        let mut probs = vec![0.0; 20 * 20];
+        let mut set = |r: usize, c: usize| probs[r * 20 + c] = 0.9;
+        // Cell (0, 0): 2 of 49 pixels occupied (4 %): free. Cell (1, 1): 11 of 36 (31 %;
+        // pixel column 12 is its last): obstacle. Cell (2, 2): 12 of 49 (24.5 %): free.
+        // Cell (1, 2): 11 of 42 (26 %; pixel column 13 is its first): obstacle.
+        set(0, 0);
+        set(6, 6);
+        (0..10).for_each(|k| set(7 + k % 6, 7 + k / 6));
+        (0..12).for_each(|k| set(13 + k % 7, 13 + k / 7));
+        (0..11).for_each(|k| set(7 + k % 6, 13 + k / 6));
+        set(7, 12);
+        let g = discretize_area(&probs, 20, 20, 1.0 / 0.15, &DiscretizeParams::default());
+        assert_eq!((g.height(), g.width()), (3, 3));
+        let at = |r, c| g.get(Pos::new(r, c));
+        assert_eq!(at(0, 0), Occupancy::Free);
+        assert_eq!(at(1, 1), Occupancy::Obstacle);
+        assert_eq!(at(2, 2), Occupancy::Free);
+        assert_eq!(at(1, 2), Occupancy::Obstacle);
+    }
+
+    proptest! {
+        /// Every pixel lands in exactly one cell, every cell holds at least one pixel, and a
+        /// whole number of pixels per cell gives the block rule's grid size.
+        #[test]
+        fn area_cells_partition_the_pixels(h in 1usize..40, w in 1usize..40, cell_px in 1.0f64..9.0) {
+            let g = discretize_area(&vec![1.0; h * w], h, w, cell_px, &DiscretizeParams::default());
+            // All pixels occupied: every cell that holds a pixel is an obstacle.
+            prop_assert!(g.cells().iter().all(|&c| c == Occupancy::Obstacle));
+            let cells = |px: usize| ((px as f64 - 0.5) / cell_px).floor() as usize + 1;
+            prop_assert_eq!((g.height(), g.width()), (cells(h), cells(w)));
+            let whole = cell_px.round().max(1.0) as usize;
+            let g = discretize_area(&vec![0.0; h * w], h, w, whole as f64, &DiscretizeParams::default());
+            prop_assert_eq!((g.height(), g.width()), (h.div_ceil(whole), w.div_ceil(whole)));
+        }
+    }
 
     /// A 4×4 block with the first `k` pixels (row-major) at probability 0.9, the rest 0.
     fn block(k: usize) -> Vec<f64> {

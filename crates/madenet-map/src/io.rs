@@ -29,10 +29,12 @@
 //! ## Cell size and discretization
 //!
 //! [`LoadOptions::cell_size`] is the size of a robot cell in metres. A map with
-//! `resolution == cell_size` is classified pixel by pixel as above. A finer map
-//! (`resolution < cell_size`) must have `cell_size / resolution` within 1e-6 of an integer
-//! `factor`; blocks of `factor × factor` pixels are then merged with the paper's rule
-//! ([`crate::discretize::discretize`]), where a pixel's probability is the one defined above
+//! `resolution == cell_size` is classified pixel by pixel as above. The pixels of a finer map
+//! (`resolution < cell_size`) are merged into cells with the paper's rule: when
+//! `cell_size / resolution` is within 1e-6 of an integer `factor`, blocks of `factor × factor`
+//! pixels ([`crate::discretize::discretize`]); otherwise (0.15 m/pixel with 1 m cells, say)
+//! the pixels whose centres fall in the area each cell covers
+//! ([`crate::discretize::discretize_area`]). A pixel's probability is the one defined above
 //! except that pixels classified as unknown count as not occupied (probability 0). The result
 //! has `resolution = cell_size` and never contains unknown cells. A map coarser than
 //! `cell_size` is an error naming the field `resolution`. Text grids are already in robot
@@ -47,7 +49,7 @@
 //! and the bare-PGM writer use the same pixel values. [`save_text`] writes the text grid.
 //! Every file is written atomically (to a temporary file in the same folder, then renamed).
 
-use crate::discretize::{discretize, DiscretizeParams};
+use crate::discretize::{discretize_area, DiscretizeParams};
 use crate::{MapError, OccGrid, Occupancy};
 use serde::de::{self, Deserialize, Deserializer, IgnoredAny, MapAccess, SeqAccess, Visitor};
 use std::collections::BTreeMap;
@@ -783,14 +785,15 @@ fn classify_pixel(meta: &MapMeta, v: u8, alpha: u8) -> (f64, Occupancy) {
     }
 }
 
-/// `cell_size / resolution` as an integer factor ≥ 1, or an error naming the field
-/// `resolution` of `path`; `note` is appended to the message.
-fn discretization_factor(
+/// `cell_size / resolution`, the robot cell in pixels (≥ 1; within 1e-6 of a whole number it is
+/// that number), or an error naming the field `resolution` of `path` for a map coarser than the
+/// cell; `note` is appended to the message.
+fn cell_in_pixels(
     resolution: f64,
     cell_size: f64,
     path: &Path,
     note: &str,
-) -> Result<usize, MapError> {
+) -> Result<f64, MapError> {
     let ratio = cell_size / resolution;
     if ratio < 1.0 - 1e-6 {
         return Err(field_err(
@@ -799,15 +802,20 @@ fn discretization_factor(
             format!("map resolution {resolution} m/pixel is coarser than the robot cell size {cell_size} m{note}"),
         ));
     }
-    let factor = ratio.round();
-    if (ratio - factor).abs() > 1e-6 || factor > u32::MAX as f64 {
+    if !ratio.is_finite() || ratio > u32::MAX as f64 {
         return Err(field_err(
             path,
             "resolution",
-            format!("robot cell size {cell_size} m is not an integer multiple of the map resolution {resolution} m/pixel{note}"),
+            format!(
+                "robot cell size {cell_size} m is {ratio} pixels of {resolution} m: too many{note}"
+            ),
         ));
     }
-    Ok(factor as usize)
+    Ok(if (ratio - ratio.round()).abs() <= 1e-6 {
+        ratio.round()
+    } else {
+        ratio
+    })
 }
 
 /// Turns a decoded image into a grid at `opts.cell_size` (see the module docs).
@@ -831,9 +839,9 @@ fn raster_to_grid(
     } else {
         ""
     };
-    let factor = discretization_factor(meta.resolution, opts.cell_size, meta_path, note)?;
+    let cell_px = cell_in_pixels(meta.resolution, opts.cell_size, meta_path, note)?;
     let alpha_at = |i: usize| raster.alpha.as_ref().map_or(255, |a| a[i]);
-    let mut grid = if factor == 1 {
+    let mut grid = if cell_px == 1.0 {
         let cells = (0..n)
             .map(|i| classify_pixel(meta, raster.gray[i], alpha_at(i)).1)
             .collect();
@@ -852,22 +860,21 @@ fn raster_to_grid(
                 }
             })
             .collect();
-        let mut g = discretize(
+        let mut g = discretize_area(
             &probs,
             raster.height,
             raster.width,
-            factor,
+            cell_px,
             &opts.discretize,
         );
         g.resolution = opts.cell_size;
         g
     };
-    // The origin is the lower-left corner. Partial blocks at the bottom extend the grid below
-    // the image by `pad` pixels, so move the origin down (along the map's rotated -y axis).
+    // The origin is the lower-left corner. A partial cell at the bottom extends the grid below
+    // the image by `pad` metres, so move the origin down (along the map's rotated -y axis).
     grid.origin = meta.origin;
-    let pad_rows = grid.height() * factor - raster.height;
-    if pad_rows > 0 {
-        let pad = pad_rows as f64 * meta.resolution;
+    let pad = grid.height() as f64 * grid.resolution - raster.height as f64 * meta.resolution;
+    if pad > 1e-9 {
         let [x, y, yaw] = meta.origin;
         grid.origin = [x + pad * yaw.sin(), y - pad * yaw.cos(), yaw];
     }
@@ -1394,7 +1401,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn resolution_must_fit_the_cell_size() {
+    fn resolution_must_not_be_coarser_than_the_cell_size() {
         let dir = temp_dir("res");
         write(&dir, "m.pgm", &small_pgm());
         let yaml = write(&dir, "m.yaml", YAML_OK.as_bytes());
@@ -1417,12 +1424,13 @@ pub(crate) mod tests {
                 .replace("resolution: 1.0", "resolution: 0.3")
                 .as_bytes(),
         );
-        let e = load(&coarse, &LoadOptions::default()).unwrap_err();
-        assert!(
-            matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
-            "{e}"
-        );
-        assert_names(&e, "integer multiple");
+        // 1 m cells of 3.33 pixels of 0.3 m: the 3 × 2 image (0.9 × 0.6 m) is one cell
+        // holding all six pixel centres, 2 of them occupied (33 % > 25 %); the cell reaches
+        // 0.4 m below the image, so the origin moves down by that.
+        let g = load(&coarse, &LoadOptions::default()).expect("resampled by area");
+        assert_eq!((g.height(), g.width(), g.resolution), (1, 1, 1.0));
+        assert_eq!(g.cells(), [Occupancy::Obstacle]);
+        assert!((g.origin[1] + 0.4).abs() < 1e-9, "{:?}", g.origin);
         // Bare images are 1 m/pixel; a 2 m cell merges 2×2 blocks.
         let g = load(
             &dir.join("m.pgm"),

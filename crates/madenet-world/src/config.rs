@@ -54,8 +54,9 @@ pub struct ScenarioConfig {
     /// Maximum number of timesteps of a trial (paper: 300, Sec. V.A.4).
     pub step_cap: usize,
     /// Robot cell size in metres (paper: 1 m cells). Every map is read at it: a map file of
-    /// resolution r and the built-in maps (1 m cells) are merged into cells of this size by the
-    /// `discretize` rule, so it must be a whole multiple of r (of 1 m for built-in maps).
+    /// resolution r (any r ≤ `cell_size`: the pixels whose centres fall in a cell) and the
+    /// built-in maps (1 m cells; a whole multiple of 1 m) are merged into cells of this size by
+    /// the `discretize` rule.
     pub cell_size: f64,
     /// Rule for maps finer than `cell_size` (paper, Sec. V.B.1: a cell is an obstacle when
     /// more than 25 % of its pixels have occupancy probability above 0.65).
