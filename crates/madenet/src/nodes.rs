@@ -501,15 +501,37 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
         anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
     }
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
-    let port = match a.port {
-        0 => free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?,
-        p => {
-            loopback_endpoints(p, n, Node::Robot(n - 1))
-                .map_err(anyhow::Error::msg)
-                .context("--port")?;
-            p
+    if a.port != 0 {
+        loopback_endpoints(a.port, n, Node::Robot(n - 1))
+            .map_err(anyhow::Error::msg)
+            .context("--port")?;
+        return launch_on(&a, n, a.port);
+    }
+    // Free ports are found by binding and releasing them; another program may take one before
+    // the node binds it. Then the node fails to listen, and the run is tried on new ports.
+    let mut attempt = 1;
+    loop {
+        let port = free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?;
+        match launch_on(&a, n, port) {
+            Err(e) if attempt < PORT_ATTEMPTS && e.downcast_ref::<PortsTaken>().is_some() => {
+                tracing::warn!("{e}: trying again on other ports");
+                attempt += 1;
+            }
+            r => return r,
         }
-    };
+    }
+}
+
+/// Runs of `launch --port 0` tried before giving up on ports taken by other programs.
+const PORT_ATTEMPTS: usize = 3;
+
+/// A node of a launch could not listen on its port: another program took it.
+#[derive(Debug, thiserror::Error)]
+#[error("the run over processes failed: a port of tcp/127.0.0.1:{0}… was taken ({1})")]
+struct PortsTaken(u16, String);
+
+/// One launch on the loopback ports from `port` on.
+fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
     let run = format!("launch-{}-{port}", std::process::id());
     let dir = tempfile::tempdir().context("a folder for the world's result")?;
     let result_path = dir.path().join("result.json");
@@ -656,6 +678,13 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     }
     bars.clear().ok();
     if !failures.is_empty() {
+        let taken = said
+            .iter()
+            .flatten()
+            .find(|l| l.starts_with("error") && l.contains("Address already in use"));
+        if let Some(line) = taken {
+            return Err(PortsTaken(port, line.clone()).into());
+        }
         let mut msg = failures.join("; ");
         for (k, node) in nodes.iter().enumerate() {
             if let Some(last) = said[k].iter().rev().find(|l| l.starts_with("error")) {
