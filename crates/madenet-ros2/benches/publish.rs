@@ -8,24 +8,11 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use hiroz::msg::ZMessage;
 use madenet_map::{OccGrid, Occupancy, Pos};
-use madenet_ros2::{occupancy_grid, MapFrame, RobotTopics, Ros2Options};
+use madenet_ros2::{loopback_router, occupancy_grid, MapFrame, RobotTopics};
 use zenoh::Wait;
 
 fn bench(c: &mut Criterion) {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .expect("a free port")
-        .local_addr()
-        .expect("its address")
-        .port();
-    let mut cfg = zenoh::Config::default();
-    for (k, v) in [
-        ("mode", "\"router\"".to_string()),
-        ("scouting/multicast/enabled", "false".into()),
-        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ] {
-        cfg.insert_json5(k, &v).expect("config");
-    }
-    let router = zenoh::open(cfg).wait().expect("router");
+    let (router, opts) = loopback_router().expect("router");
     let received = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
     let count = received.clone();
     let _sub = router
@@ -35,12 +22,7 @@ fn bench(c: &mut Criterion) {
         })
         .wait()
         .expect("subscriber");
-    let ctx = Ros2Options {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        ..Default::default()
-    }
-    .context()
-    .expect("session");
+    let ctx = opts.context().expect("session");
     let mut g = c.benchmark_group("ros2_publish");
     for side in [20usize, 60, 200] {
         let mut grid = OccGrid::new(side, side, Occupancy::Unknown);

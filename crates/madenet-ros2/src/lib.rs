@@ -140,6 +140,38 @@ impl Ros2Options {
     }
 }
 
+/// A zenoh router on a free loopback port, as rmw_zenoh's `rmw_zenohd` would be, and the
+/// options that reach it (domain 0): a ROS 2 graph on one machine for tests, benches and demos.
+/// The port is found by binding and releasing it; another program could take it in between.
+pub fn loopback_router() -> Result<(zenoh::Session, Ros2Options), Ros2Error> {
+    use zenoh::Wait;
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map_err(|e| Ros2Error::Middleware {
+            what: "a free loopback port".into(),
+            source: Box::new(e),
+        })?
+        .port();
+    let mut c = zenoh::Config::default();
+    for (k, v) in [
+        ("mode", "\"router\"".to_string()),
+        ("scouting/multicast/enabled", "false".into()),
+        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
+    ] {
+        c.insert_json5(k, &v)
+            .map_err(middleware(format!("router config {k}")))?;
+    }
+    let router = zenoh::open(c)
+        .wait()
+        .map_err(middleware(format!("router on tcp/127.0.0.1:{port}")))?;
+    let opts = Ros2Options {
+        connect: vec![format!("tcp/127.0.0.1:{port}")],
+        listen: Vec::new(),
+        domain_id: Some(0),
+    };
+    Ok((router, opts))
+}
+
 /// Where a madenet grid lies in the ROS `map` frame: its size, cell size and origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MapFrame {

@@ -6,39 +6,16 @@
 
 use madenet_map::paper::{paper_map, Corner};
 use madenet_map::Pos;
-use madenet_ros2::{run_stand_in, MapFrame, RealRobots, Ros2Options};
+use madenet_ros2::{loopback_router, run_stand_in, MapFrame, RealRobots};
 use madenet_runtime::transport::ChannelBus;
 use madenet_runtime::{nodes_of, run_ground_with, run_radio, run_robot, Timeouts};
 use madenet_sim::{PolicyRegistry, TrialSpec};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
-use zenoh::Wait;
-
-fn router() -> (zenoh::Session, Ros2Options) {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let mut c = zenoh::Config::default();
-    for (k, v) in [
-        ("mode", "\"router\"".to_string()),
-        ("scouting/multicast/enabled", "false".into()),
-        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ] {
-        c.insert_json5(k, &v).unwrap();
-    }
-    let opts = Ros2Options {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        listen: Vec::new(),
-        domain_id: Some(0),
-    };
-    (zenoh::open(c).wait().unwrap(), opts)
-}
 
 #[test]
 fn nf_agents_explore_a_map_through_ros2_alone() {
-    let (_router, opts) = router();
+    let (_router, opts) = loopback_router().unwrap();
     let truth = paper_map(3).unwrap();
     let spec = TrialSpec {
         map: truth.clone(),

@@ -6,41 +6,10 @@
 
 use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_ros2::{
-    cells_from_grid, occupancy_grid, MapFrame, RobotFeed, RobotTopics, Ros2Options,
+    cells_from_grid, loopback_router, occupancy_grid, MapFrame, RobotFeed, RobotTopics,
 };
-use std::net::TcpListener;
 use std::time::{Duration, Instant};
 use zenoh::Wait;
-
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
-}
-
-/// A zenoh router listening on `port`, as rmw_zenoh's `rmw_zenohd`.
-fn listener(port: u16) -> zenoh::Session {
-    let mut c = zenoh::Config::default();
-    for (k, v) in [
-        ("mode", "\"router\"".to_string()),
-        ("scouting/multicast/enabled", "false".into()),
-        ("scouting/gossip/enabled", "false".into()),
-        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ] {
-        c.insert_json5(k, &v).unwrap();
-    }
-    zenoh::open(c).wait().unwrap()
-}
-
-fn options(port: u16) -> Ros2Options {
-    Ros2Options {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        listen: Vec::new(),
-        domain_id: Some(0),
-    }
-}
 
 /// Little-endian CDR reader; alignment counts from after the 4-byte encapsulation header.
 struct Cdr<'a> {
@@ -177,10 +146,9 @@ fn collect(
 
 #[test]
 fn a_plain_ros2_subscriber_reads_map_pose_and_goal() {
-    let port = free_port();
-    let router = listener(port);
+    let (router, opts) = loopback_router().unwrap();
     let sub = router.declare_subscriber("0/robot1/**").wait().unwrap();
-    let ctx = options(port).context().unwrap();
+    let ctx = opts.context().unwrap();
     let (g, frame) = belief();
     let mut topics = RobotTopics::new(&ctx, 1, frame).unwrap();
     let mut goal = 0;
@@ -256,16 +224,15 @@ fn a_plain_ros2_subscriber_reads_map_pose_and_goal() {
 
 #[test]
 fn a_late_subscriber_still_gets_the_newest_map_transient_local() {
-    let port = free_port();
-    let _router = listener(port);
+    let (_router, opts) = loopback_router().unwrap();
     let (g, frame) = belief();
     // Two peers that reach each other through the router only.
-    let ctx = options(port).context().unwrap();
+    let ctx = opts.context().unwrap();
     let mut topics = RobotTopics::new(&ctx, 0, frame).unwrap();
     topics.publish(g.cells(), Pos::new(2, 1), None).unwrap();
     // Only now does a subscriber (madenet's own feed, as a real robot's consumer) join.
     std::thread::sleep(Duration::from_millis(300));
-    let other = options(port).context().unwrap();
+    let other = opts.context().unwrap();
     let mut feed = RobotFeed::new(&other, 0, frame).unwrap();
     let deadline = Instant::now() + Duration::from_secs(20);
     let mut poses = 1;

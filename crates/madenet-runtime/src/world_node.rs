@@ -132,6 +132,20 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         ask_to_show(&mut mb, to, world.t() as u64)?;
     }
     let mut shown: Vec<Shown> = vec![Shown::default(); n];
+    // The radio is told the pairs in contact among the robots present.
+    let send_contacts = |mb: &mut Mailbox<T>, world: &mut G, present: &[bool], step: u64| {
+        let in_contact: Vec<(usize, usize)> = world
+            .contacts()
+            .into_iter()
+            .filter(|&(i, j)| present[i] && present[j])
+            .collect();
+        mb.send(&Envelope::new(
+            step,
+            me,
+            Node::Radio,
+            Body::Contacts(in_contact),
+        ))
+    };
     // The radio's exchanges of `step` (pictures only).
     let exchanges = |mb: &mut Mailbox<T>, step: u64| -> Result<Vec<(usize, usize)>, RuntimeError> {
         let e = mb.try_take(timeouts.peer, |e| {
@@ -179,17 +193,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
                 }
             }
         }
-        let in_contact: Vec<(usize, usize)> = world
-            .contacts()
-            .into_iter()
-            .filter(|&(i, j)| present[i] && present[j])
-            .collect();
-        mb.send(&Envelope::new(
-            step,
-            me,
-            Node::Radio,
-            Body::Contacts(in_contact),
-        ))?;
+        send_contacts(&mut mb, &mut world, &present, step)?;
         for i in 0..n {
             let obs = Body::Observation(world.observation(i));
             mb.send(&Envelope::new(step, me, Node::Robot(i), obs))?;
@@ -253,17 +257,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
     let step = world.t() as u64;
     if let Some(show) = show.as_mut() {
         // The last picture's exchanges: the radio's for a timestep that will not be played.
-        let in_contact: Vec<(usize, usize)> = world
-            .contacts()
-            .into_iter()
-            .filter(|&(i, j)| present[i] && present[j])
-            .collect();
-        mb.send(&Envelope::new(
-            step,
-            me,
-            Node::Radio,
-            Body::Contacts(in_contact),
-        ))?;
+        send_contacts(&mut mb, &mut world, &present, step)?;
         let pairs = exchanges(&mut mb, step)?;
         show(&world, &shown, &pairs);
     }

@@ -22,23 +22,8 @@ fn pose_xy(cdr: &[u8]) -> (f64, f64) {
 
 /// A zenoh router on a free loopback port (as `rmw_zenohd`), and its endpoint.
 fn router() -> (zenoh::Session, String) {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let mut c = zenoh::Config::default();
-    for (k, v) in [
-        ("mode", "\"router\"".to_string()),
-        ("scouting/multicast/enabled", "false".into()),
-        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ] {
-        c.insert_json5(k, &v).unwrap();
-    }
-    (
-        zenoh::open(c).wait().unwrap(),
-        format!("tcp/127.0.0.1:{port}"),
-    )
+    let (router, opts) = madenet_ros2::loopback_router().unwrap();
+    (router, opts.connect[0].clone())
 }
 
 #[test]
