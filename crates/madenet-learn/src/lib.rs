@@ -64,6 +64,7 @@
 //!   defaults the CEP has 101 202 parameters and a DEP 49 686 (hand arithmetic in the tests).
 
 mod actions;
+pub mod agnostic;
 mod config;
 pub mod env;
 pub mod learner;

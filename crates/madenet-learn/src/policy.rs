@@ -83,19 +83,34 @@ impl Policy for DepPolicy {
             return Decision::Idle;
         }
         let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
-        if let Some(margin) = self.spread_margin {
-            let spread = madenet_agent::Spread::new(self.sensing_range).scores(view);
-            let anchor = spread
-                .iter()
-                .enumerate()
-                .filter_map(|(k, s)| s.map(|s| (k, s)))
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-            if let Some((k, _)) = anchor {
-                if q[greedy] - q[k] < margin {
-                    return Decision::Candidate(k);
-                }
-            }
-        }
-        Decision::Candidate(greedy)
+        Decision::Candidate(conservative(
+            view,
+            &q,
+            greedy,
+            self.spread_margin,
+            self.sensing_range,
+        ))
+    }
+}
+
+/// Conservative acting: the candidate the `spread` rule (d_s = `sensing_range`) takes unless the
+/// network values `greedy` more than it by at least `margin` (`None`: `greedy`).
+pub(crate) fn conservative(
+    view: &mut AgentView<'_>,
+    q: &[f32],
+    greedy: usize,
+    margin: Option<f32>,
+    sensing_range: i32,
+) -> usize {
+    let Some(margin) = margin else { return greedy };
+    let spread = madenet_agent::Spread::new(sensing_range).scores(view);
+    let anchor = spread
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| s.map(|s| (k, s)))
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    match anchor {
+        Some((k, _)) if q[greedy] - q[k] < margin => k,
+        _ => greedy,
     }
 }

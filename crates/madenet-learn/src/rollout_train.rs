@@ -29,8 +29,8 @@
 //! Checkpoints are written after every iteration (dataset, net, optimizer, counters), so a
 //! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
 
+use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
-use crate::policy::DepPolicy;
 use crate::train::{
     io_err, prepare_run, replace_dir, write_atomic, Method, Model, ModelInfo, NetConfigToml,
     TrainError,
@@ -45,7 +45,7 @@ use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::paper::Corner;
 use madenet_map::{OccGrid, Pos};
-use madenet_sim::rollout::candidate_values;
+use madenet_sim::rollout::candidate_values_within;
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
 use madenet_world::ScenarioConfig;
@@ -69,6 +69,17 @@ pub enum Futures {
     Salted,
 }
 
+/// Which DEP network the teacher trains ([`RolloutTrainConfig::network`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Network {
+    /// The paper's DEP ([`QNet`]): one map size, team size and |G|.
+    #[default]
+    Grid,
+    /// The size- and team-agnostic DEP ([`crate::agnostic`]): any map, team and |G|.
+    Agnostic,
+}
+
 /// Every knob of a rollout-teacher run, with its default (`configs/train-rollout.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -88,6 +99,13 @@ pub struct RolloutTrainConfig {
     /// Training map size (the paper: 20 × 20).
     pub map_height: usize,
     pub map_width: usize,
+    /// With the agnostic network: the largest map side of the curriculum (square maps of sides
+    /// `map_height..=map_side_max`, the upper end growing linearly over the iterations from
+    /// `map_height` to this). 0: every map is `map_height × map_width`.
+    pub map_side_max: usize,
+    /// With the agnostic network: the largest team (teams of `scenario.num_robots..=team_max`
+    /// robots, drawn per episode). 0: every team has `scenario.num_robots`.
+    pub team_max: usize,
     /// Obstacle fraction range of the generated maps (ours: 15–60 %; the paper: 40–60 %).
     pub density_min: f64,
     pub density_max: f64,
@@ -100,10 +118,21 @@ pub struct RolloutTrainConfig {
     /// Which futures the teacher scores a candidate in: `noiseless` (default: one continuation
     /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
     pub futures: Futures,
+    /// Steps after which a continuation is cut and its rest estimated from its exploration rate
+    /// ([`madenet_sim::rollout::continuation_within`]); 0: run to the end.
+    pub horizon: usize,
+    /// Probability that a decision with a choice is labelled, at 400 cells (20 × 20); on a map
+    /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
+    /// about what a small one does.
+    pub label_prob: f64,
     /// Continuations per candidate and decision with `futures = "salted"`.
     pub rollouts: usize,
     /// Probability of a random valid candidate in the behaviour.
     pub behaviour_epsilon: f64,
+    /// The DEP network: `grid` (the paper's, one scenario size) or `agnostic` (any map and team).
+    pub network: Network,
+    /// With the agnostic network: cells from a candidate to its crop's edge.
+    pub crop_radius: usize,
     /// The DEP's observation vector (ours: `candidate-features`; the paper: `paper`).
     pub observation: Observation,
     /// Adam steps after each iteration's collection.
@@ -147,14 +176,20 @@ impl Default for RolloutTrainConfig {
             scenario: ScenarioConfig::default(),
             map_height: 20,
             map_width: 20,
+            map_side_max: 0,
+            team_max: 0,
             density_min: 0.15,
             density_max: 0.60,
             corner_start_prob: 0.5,
             csp_extreme_prob: 0.5,
             base_policy: "spread".into(),
             futures: Futures::Noiseless,
+            horizon: 0,
+            label_prob: 1.0,
             rollouts: 4,
             behaviour_epsilon: 0.1,
+            network: Network::Grid,
+            crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
             batch_size: 128,
@@ -192,7 +227,28 @@ impl RolloutTrainConfig {
             .validate()
             .map_err(|e| format!("scenario: {e}"))?;
         let unit = |x: f64| (0.0..=1.0).contains(&x);
-        let checks: [(bool, &str, &str); 14] = [
+        let curriculum = self.map_side_max > 0 || self.team_max > 0;
+        let checks: [(bool, &str, &str); 17] = [
+            (
+                !curriculum || self.network == Network::Agnostic,
+                "map_side_max/team_max",
+                "a curriculum over map sides or teams needs `network = \"agnostic\"`",
+            ),
+            (
+                self.map_side_max == 0
+                    || (self.map_side_max >= self.map_height
+                        && self.map_side_max <= 200
+                        && self.map_height == self.map_width),
+                "map_side_max",
+                "0, or in map_height..=200 with square maps (map_height = map_width)",
+            ),
+            (
+                self.team_max == 0
+                    || (self.team_max >= self.scenario.num_robots
+                        && self.team_max <= madenet_world::MAX_ROBOTS),
+                "team_max",
+                "0, or in scenario.num_robots..=256",
+            ),
             (
                 self.method == METHOD,
                 "method",
@@ -231,9 +287,11 @@ impl RolloutTrainConfig {
             (
                 unit(self.corner_start_prob)
                     && unit(self.csp_extreme_prob)
-                    && unit(self.behaviour_epsilon),
-                "corner_start_prob/csp_extreme_prob/behaviour_epsilon",
-                "must be in [0, 1]",
+                    && unit(self.behaviour_epsilon)
+                    && unit(self.label_prob)
+                    && self.label_prob > 0.0,
+                "corner_start_prob/csp_extreme_prob/behaviour_epsilon/label_prob",
+                "must be in [0, 1] (label_prob above 0)",
             ),
             (
                 self.rollouts >= 1 && self.rollouts <= 64,
@@ -286,7 +344,17 @@ impl RolloutTrainConfig {
                 return Err(format!("field `{field}`: {msg}"));
             }
         }
-        if self.scenario.num_robots > 3 && self.corner_start_prob > 0.0 {
+        if self.network == Network::Agnostic && self.recurrent {
+            return Err(
+                "field `recurrent`: the agnostic network scores single decisions; set false".into(),
+            );
+        }
+        if self.network == Network::Agnostic {
+            crate::agnostic::AgnosticConfig::new()
+                .with_crop_radius(self.crop_radius)
+                .validate()?;
+        }
+        if self.scenario.num_robots > 3 && self.corner_start_prob > 0.0 && self.team_max == 0 {
             return Err(
                 "field `corner_start_prob`: corner starts hold 3 robots; set 0 for larger teams"
                     .into(),
@@ -322,6 +390,21 @@ impl RolloutTrainConfig {
             ));
         }
         Ok(())
+    }
+
+    /// The agnostic network's sizes.
+    pub fn agnostic(&self) -> crate::agnostic::AgnosticConfig {
+        crate::agnostic::AgnosticConfig::new().with_crop_radius(self.crop_radius)
+    }
+
+    /// The largest map side of iteration `iteration`'s curriculum (growing linearly from
+    /// `map_height` to `map_side_max` over the iterations).
+    fn side_max_at(&self, iteration: u64) -> usize {
+        if self.map_side_max == 0 {
+            return self.map_height;
+        }
+        let span = (self.map_side_max - self.map_height) as u64;
+        self.map_height + (span * (iteration + 1)).div_ceil(self.iterations) as usize
     }
 
     /// |G| on the training maps (Eq. 3 unless the scenario sets it).
@@ -383,14 +466,32 @@ pub fn generated_scenario(
         })
 }
 
-/// Episode `index`'s trial spec (policy left empty): its map, starts, CSP and seed.
-fn episode_spec(cfg: &RolloutTrainConfig, name: &str, index: u64) -> Result<TrialSpec, TrainError> {
+/// Episode `index`'s trial spec (policy left empty): its map (square of a side up to `side_max`
+/// with a curriculum), team, starts, CSP and seed.
+fn episode_spec(
+    cfg: &RolloutTrainConfig,
+    name: &str,
+    index: u64,
+    side_max: usize,
+) -> Result<TrialSpec, TrainError> {
     let seed = derive_seed(cfg.seed, name, index);
+    let mut rng = stream(seed, "size", 0);
+    let (height, width) = if cfg.map_side_max > 0 {
+        let side = rng.random_range(cfg.map_height..=side_max.max(cfg.map_height));
+        (side, side)
+    } else {
+        (cfg.map_height, cfg.map_width)
+    };
+    let team = if cfg.team_max > 0 {
+        rng.random_range(cfg.scenario.num_robots..=cfg.team_max)
+    } else {
+        cfg.scenario.num_robots
+    };
     let (map, starts) = generated_scenario(
-        cfg.map_height,
-        cfg.map_width,
+        height,
+        width,
         (cfg.density_min, cfg.density_max),
-        cfg.scenario.num_robots,
+        team,
         cfg.corner_start_prob,
         cfg.scenario.movement,
         seed,
@@ -410,6 +511,7 @@ fn episode_spec(cfg: &RolloutTrainConfig, name: &str, index: u64) -> Result<Tria
         starts,
         config: ScenarioConfig {
             comm_success_prob: csp,
+            num_robots: team,
             ..cfg.scenario.clone()
         },
         policy: String::new(),
@@ -445,9 +547,11 @@ impl Policy for Behaviour {
 /// One labelled decision of one robot.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Labelled {
-    /// The map image, bit-packed.
+    /// Grid network: the map image; agnostic network: the candidates' crops
+    /// ([`AgnosticInput::crops`]). Bit-packed.
     pub map: Vec<u64>,
-    /// The observation vector.
+    /// Grid network: the observation vector; agnostic network: the context followed by the
+    /// candidate inputs ([`AgnosticInput`]).
     pub vec: Vec<f32>,
     /// Candidates that enter the loss (valid, and the decision had a choice).
     pub train_mask: Vec<bool>,
@@ -468,13 +572,18 @@ pub struct Collected {
 fn collect_episode(
     cfg: &RolloutTrainConfig,
     index: u64,
+    side_max: usize,
     behaviour: &PolicyRegistry,
 ) -> Result<Collected, TrainError> {
     let spec = TrialSpec {
         policy: "behaviour".into(),
-        ..episode_spec(cfg, "train", index)?
+        ..episode_spec(cfg, "train", index, side_max)?
     };
     let seed = spec.seed;
+    let cells = spec.map.height() * spec.map.width();
+    let label_prob = (cfg.label_prob * 400.0 / cells as f64).min(1.0);
+    let mut label_rng = stream(seed, "label", 0);
+    let horizon = (cfg.horizon > 0).then_some(cfg.horizon);
     let base = PolicyRegistry::builtin();
     let mut trial = Trial::with_registry(spec, behaviour)
         .map_err(|e| TrainError::Other(e.to_string()))?
@@ -489,18 +598,33 @@ fn collect_episode(
             if !trial.deciding()[i] {
                 continue;
             }
+            // A decision with a choice is labelled with probability `label_prob` (scaled by the
+            // area). The grid network keeps every decision in the robot's sequence (recurrent
+            // windows need them); the agnostic one keeps only labelled decisions.
+            let choice = trial.agent_mut(i).view(true).candidates().cells.len() >= 2;
+            let labelled = choice && label_rng.random::<f64>() < label_prob;
+            if !labelled && cfg.network == Network::Agnostic {
+                continue;
+            }
             let (map, vec, mask) = {
                 let mut view = trial.agent_mut(i).view(true);
-                (
-                    pack_bits(&view.map_image()),
-                    cfg.observation.vector(&mut view, ds),
-                    action_mask(&view),
-                )
+                match cfg.network {
+                    Network::Grid => (
+                        pack_bits(&view.map_image()),
+                        cfg.observation.vector(&mut view, ds),
+                        action_mask(&view),
+                    ),
+                    Network::Agnostic => {
+                        let x = crate::agnostic::inputs(&mut view, ds, cfg.crop_radius);
+                        let mut vec = x.context;
+                        vec.extend(x.features);
+                        (x.crops, vec, x.mask)
+                    }
+                }
             };
-            let valid = mask.iter().filter(|&&m| m).count();
             let mut target = vec![0.0; mask.len()];
             let mut train_mask = vec![false; mask.len()];
-            if valid >= 2 && trial.agents()[i].candidates().cells.len() >= 2 {
+            if labelled {
                 let salts: Vec<Future> = match cfg.futures {
                     Futures::Noiseless => vec![Future::Noiseless],
                     Futures::Salted => (0..cfg.rollouts as u64)
@@ -513,9 +637,17 @@ fn collect_episode(
                         })
                         .collect(),
                 };
-                let values = candidate_values(&trial, i, &[], &cfg.base_policy, &base, &salts)
-                    .map_err(|e| TrainError::Other(e.to_string()))?;
-                rollouts += valid * salts.len();
+                let values = candidate_values_within(
+                    &trial,
+                    i,
+                    &[],
+                    &cfg.base_policy,
+                    &base,
+                    &salts,
+                    horizon,
+                )
+                .map_err(|e| TrainError::Other(e.to_string()))?;
+                rollouts += values.iter().flatten().count() * salts.len();
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
                 for (k, v) in values.iter().enumerate() {
@@ -544,24 +676,15 @@ fn collect_episode(
     })
 }
 
-/// A registry whose policy "behaviour" is the base rule (no student yet) or the student DEP,
-/// each with ε-random candidates from a stream of the episode's seed and robot.
-fn behaviour_registry(cfg: &RolloutTrainConfig, student: Option<Arc<QNet>>) -> PolicyRegistry {
+/// A registry whose policy "behaviour" is the base rule (no student yet) or the student DEP
+/// (greedy), each with ε-random candidates from a stream of the episode's seed and robot.
+fn behaviour_registry(cfg: &RolloutTrainConfig, student: Option<Model>) -> PolicyRegistry {
     let mut r = PolicyRegistry::default();
-    let (base, eps, obs, recurrent) = (
-        PolicyRegistry::builtin(),
-        cfg.behaviour_epsilon,
-        cfg.observation,
-        cfg.recurrent,
-    );
+    let (base, eps) = (PolicyRegistry::builtin(), cfg.behaviour_epsilon);
     let name = cfg.base_policy.clone();
     r.register("behaviour", "data collection", move |ctx| {
         let inner: Box<dyn Policy> = match &student {
-            Some(net) => Box::new(
-                DepPolicy::new("student", Arc::clone(net))
-                    .with_observation(obs, ctx.config.sensing_range)
-                    .with_recurrence(recurrent),
-            ),
+            Some(model) => model.policy("student", ctx.robot, ctx.config.sensing_range),
             None => base
                 .make(&name, ctx)
                 .expect("the base policy is a built-in (validated)"),
@@ -573,6 +696,96 @@ fn behaviour_registry(cfg: &RolloutTrainConfig, student: Option<Arc<QNet>>) -> P
         })
     });
     r
+}
+
+/// The DEP being trained (on the autodiff device).
+#[derive(Clone)]
+#[allow(clippy::large_enum_variant)] // one per run, never moved in a loop
+enum Student {
+    Grid(QNet),
+    Agnostic(AgnosticNet),
+}
+
+impl Student {
+    fn init(cfg: &RolloutTrainConfig, device: &burn::tensor::Device) -> Result<Self, TrainError> {
+        Ok(match cfg.network {
+            Network::Grid => Student::Grid(cfg.net_config().init(device)?),
+            Network::Agnostic => {
+                Student::Agnostic(cfg.agnostic().init(device).map_err(TrainError::Other)?)
+            }
+        })
+    }
+
+    /// The student on the plain CPU device as a model acting with `info`'s margin.
+    fn model(&self, info: ModelInfo) -> Model {
+        match self {
+            Student::Grid(net) => Model {
+                info,
+                deps: vec![Arc::new(net.valid())],
+                agnostic: None,
+            },
+            Student::Agnostic(net) => Model {
+                info,
+                deps: Vec::new(),
+                agnostic: Some(Arc::new(net.valid())),
+            },
+        }
+    }
+
+    /// Saves the weights (of the plain copy when `plain`) to `path`.
+    fn save(&self, path: &Path, plain: bool) -> Result<(), TrainError> {
+        let result = match (self, plain) {
+            (Student::Grid(n), true) => n.valid().into_record().save(path),
+            (Student::Grid(n), false) => n.clone().into_record().save(path),
+            (Student::Agnostic(n), true) => n.valid().into_record().save(path),
+            (Student::Agnostic(n), false) => n.clone().into_record().save(path),
+        };
+        result.map_err(|e| TrainError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+
+    fn load(self, path: &Path) -> Result<Self, TrainError> {
+        let rec = ModuleRecord::load(path).map_err(|e| TrainError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Ok(match self {
+            Student::Grid(n) => Student::Grid(n.load_record(rec)),
+            Student::Agnostic(n) => Student::Agnostic(n.load_record(rec)),
+        })
+    }
+
+    /// One Adam step on `windows` (single decisions for the agnostic network).
+    fn update(
+        self,
+        optim: &mut ModuleOptimizer,
+        cfg: &RolloutTrainConfig,
+        windows: &[&[Labelled]],
+    ) -> (Self, f32) {
+        match self {
+            Student::Grid(net) => {
+                let (net, loss) = update(net, optim, cfg, windows);
+                (Student::Grid(net), loss)
+            }
+            Student::Agnostic(net) => {
+                let (net, loss) = update_agnostic(net, optim, cfg, windows);
+                (Student::Agnostic(net), loss)
+            }
+        }
+    }
+}
+
+/// The masked mean squared error between scores `q` centred over each row's trained slots and
+/// the teacher's advantages `y` (`[rows, slots]`; `m` is 1 on trained slots).
+fn advantage_loss(q: Tensor<2>, y: Tensor<2>, m: Tensor<2>) -> Tensor<1> {
+    let g = q.dims()[1];
+    let count = m.clone().sum().clamp_min(1.0);
+    let n = m.clone().sum_dim(1).clamp_min(1.0);
+    let mean = q.clone().mul(m.clone()).sum_dim(1).div(n).repeat_dim(1, g);
+    let centred = (q - mean).mul(m.clone());
+    (centred - y).powf_scalar(2.0).mul(m).sum().div(count)
 }
 
 /// One Adam step on a batch of robot windows: masked MSE between the DEP's centred Q values and
@@ -608,21 +821,55 @@ fn update(
         }
     }
     let device = net.devices()[0].clone();
-    let count = mask.iter().sum::<f32>().max(1.0);
     let maps = Tensor::<5>::from_data(TensorData::new(maps, [b, t, 4, h, w]), &device);
     let obs = Tensor::<3>::from_data(TensorData::new(obs, [b, t, d]), &device);
-    let y = Tensor::<3>::from_data(TensorData::new(target, [b, t, g]), &device);
-    let m = Tensor::<3>::from_data(TensorData::new(mask, [b, t, g]), &device);
+    let y = Tensor::<2>::from_data(TensorData::new(target, [b * t, g]), &device);
+    let m = Tensor::<2>::from_data(TensorData::new(mask, [b * t, g]), &device);
     let (q, _) = net.forward(maps, obs, None);
-    // Centre Q over the valid candidates of each decision, as the targets are.
-    let n = m.clone().sum_dim(2).clamp_min(1.0);
-    let mean = q.clone().mul(m.clone()).sum_dim(2).div(n).repeat_dim(2, g);
-    let centred = (q - mean).mul(m.clone());
-    let loss = (centred - y)
-        .powf_scalar(2.0)
-        .mul(m)
-        .sum()
-        .div_scalar(count);
+    let loss = advantage_loss(q.reshape([b * t, g]), y, m);
+    let value = loss
+        .clone()
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .expect("loss readable")[0];
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    (optim.step(cfg.learning_rate, net, grads), value)
+}
+
+/// One Adam step of the agnostic DEP on single decisions (the first of each window): the same
+/// loss as [`update`], slots padded to the widest decision of the batch.
+fn update_agnostic(
+    net: AgnosticNet,
+    optim: &mut ModuleOptimizer,
+    cfg: &RolloutTrainConfig,
+    windows: &[&[Labelled]],
+) -> (AgnosticNet, f32) {
+    let inputs: Vec<AgnosticInput> = windows
+        .iter()
+        .filter_map(|w| w.first())
+        .map(|l| AgnosticInput {
+            context: l.vec[..CONTEXT_FEATURES].to_vec(),
+            features: l.vec[CONTEXT_FEATURES..].to_vec(),
+            crops: l.map.clone(),
+            mask: l.train_mask.clone(),
+        })
+        .collect();
+    let refs: Vec<&AgnosticInput> = inputs.iter().collect();
+    let device = net.devices()[0].clone();
+    let batch = Batch::of(&refs, net.crop_side, &device);
+    let (b, g) = (refs.len(), batch.slots);
+    let mut target = vec![0.0f32; b * g];
+    for (i, l) in windows.iter().filter_map(|w| w.first()).enumerate() {
+        target[i * g..i * g + l.target.len()].copy_from_slice(&l.target);
+    }
+    let y = Tensor::<2>::from_data(TensorData::new(target, [b, g]), &device);
+    let q = net.forward(
+        batch.crops,
+        batch.features,
+        batch.context,
+        batch.mask.clone(),
+    );
+    let loss = advantage_loss(q, y, batch.mask);
     let value = loss
         .clone()
         .into_data()
@@ -641,7 +888,7 @@ pub fn validate(
     policy: &str,
 ) -> Result<(f64, usize, usize), TrainError> {
     let specs: Vec<TrialSpec> = (0..cfg.validation_maps as u64)
-        .map(|m| episode_spec(cfg, "validation", m))
+        .map(|m| episode_spec(cfg, "validation", m, cfg.map_side_max))
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .flat_map(|s| {
@@ -724,13 +971,14 @@ fn model_info(
 ) -> ModelInfo {
     ModelInfo {
         method: Method::MadeNetRollout,
-        dep: NetConfigToml {
+        dep: (cfg.network == Network::Grid).then(|| NetConfigToml {
             map_height: cfg.map_height,
             map_width: cfg.map_width,
             team_size: cfg.scenario.num_robots,
             goal_count: cfg.goals(),
             concat_fc: false,
-        },
+        }),
+        agnostic: (cfg.network == Network::Agnostic).then(|| cfg.agnostic()),
         deps: vec!["dep0.bpk".into()],
         episode: state.episodes,
         updates: state.updates,
@@ -741,16 +989,9 @@ fn model_info(
     }
 }
 
-fn save_model(dir: &Path, net: &QNet, info: &ModelInfo) -> Result<(), TrainError> {
+fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
-        let p = tmp.join("dep0.bpk");
-        net.valid()
-            .into_record()
-            .save(&p)
-            .map_err(|e| TrainError::Io {
-                path: p.display().to_string(),
-                message: e.to_string(),
-            })?;
+        net.save(&tmp.join("dep0.bpk"), true)?;
         let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
     })
@@ -792,7 +1033,7 @@ fn train_loop(
     let ckpt = run_dir.join("checkpoint");
     let device = cpu_autodiff();
     device.seed(cfg.seed);
-    let mut net = cfg.net_config().init(&device)?;
+    let mut net = Student::init(cfg, &device)?;
     let mut optim: ModuleOptimizer = AdamConfig::new()
         .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
         .init();
@@ -809,12 +1050,7 @@ fn train_loop(
             path: dp.display().to_string(),
             message: e.to_string(),
         })?;
-        let np = ckpt.join("dep0.bpk");
-        let rec = ModuleRecord::load(&np).map_err(|e| TrainError::Io {
-            path: np.display().to_string(),
-            message: e.to_string(),
-        })?;
-        net = net.load_record(rec);
+        net = net.load(&ckpt.join("dep0.bpk"))?;
         let op = ckpt.join("optim.bpk");
         optim = optim.load(&op).map_err(|e| TrainError::Io {
             path: op.display().to_string(),
@@ -846,13 +1082,14 @@ fn train_loop(
     let wall0 = state.wall_s;
     while state.iteration < cfg.iterations {
         // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then student).
-        let student = (state.iteration > 0).then(|| Arc::new(net.valid()));
+        let student = (state.iteration > 0).then(|| net.model(model_info(cfg, &state, None, None)));
         let behaviour = behaviour_registry(cfg, student);
         let per = cfg.episodes_per_iteration();
         let first = state.iteration * per;
+        let side_max = cfg.side_max_at(state.iteration);
         let collected: Vec<Collected> = (first..first + per)
             .into_par_iter()
-            .map(|e| collect_episode(cfg, e, &behaviour))
+            .map(|e| collect_episode(cfg, e, side_max, &behaviour))
             .collect::<Result<_, _>>()?;
         let decisions: usize = collected
             .iter()
@@ -887,7 +1124,7 @@ fn train_loop(
                     &seq[start..(start + trace_len).min(seq.len())]
                 })
                 .collect();
-            let (next, loss) = update(net, &mut optim, cfg, &windows);
+            let (next, loss) = net.update(&mut optim, cfg, &windows);
             net = next;
             loss_sum += loss as f64;
         }
@@ -896,10 +1133,7 @@ fn train_loop(
         // 5. Validate the greedy DEP and each conservative margin; keep the best.
         let mut tried = Vec::new();
         for margin in std::iter::once(None).chain(cfg.spread_margins.iter().copied().map(Some)) {
-            let model = Model {
-                info: model_info(cfg, &state, None, margin),
-                deps: vec![Arc::new(net.valid())],
-            };
+            let model = net.model(model_info(cfg, &state, None, margin));
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEP being trained");
             let (steps, completed, trials) = validate(cfg, &registry, "candidate")?;
@@ -915,7 +1149,7 @@ fn train_loop(
             state.best_validation = Some(steps);
             save_model(
                 &run_dir.join("best"),
-                &net.valid(),
+                &net,
                 &model_info(cfg, &state, Some(steps), margin),
             )?;
         }
@@ -951,14 +1185,7 @@ fn train_loop(
             let bytes = postcard::to_stdvec(&data)
                 .map_err(|e| TrainError::Other(format!("dataset encoding: {e}")))?;
             std::fs::write(tmp.join("data.bin"), bytes).map_err(io_err(&tmp.join("data.bin")))?;
-            let p = tmp.join("dep0.bpk");
-            net.clone()
-                .into_record()
-                .save(&p)
-                .map_err(|e| TrainError::Io {
-                    path: p.display().to_string(),
-                    message: e.to_string(),
-                })?;
+            net.save(&tmp.join("dep0.bpk"), false)?;
             let p = tmp.join("optim.bpk");
             optim.save(&p).map_err(|e| TrainError::Io {
                 path: p.display().to_string(),
@@ -970,7 +1197,7 @@ fn train_loop(
         })?;
         save_model(
             &run_dir.join("last"),
-            &net.valid(),
+            &net,
             &model_info(cfg, &state, Some(steps), margin),
         )?;
         let r = rows.last().expect("just pushed");
@@ -1004,7 +1231,7 @@ mod tests {
         let behaviour = behaviour_registry(&cfg, None);
         let collect = |r: std::ops::Range<u64>| -> Vec<Vec<Labelled>> {
             r.into_par_iter()
-                .map(|e| collect_episode(&cfg, e, &behaviour).unwrap())
+                .map(|e| collect_episode(&cfg, e, cfg.map_height, &behaviour).unwrap())
                 .flat_map_iter(|c| c.robots)
                 .collect()
         };

@@ -24,6 +24,7 @@
 //! best/                  the weights with the best validation (fewest mean steps): model.toml + *.bpk
 //! ```
 
+use crate::agnostic::{AgnosticConfig, AgnosticNet, AgnosticPolicy};
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::obs::Observation;
@@ -33,6 +34,7 @@ use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::store::ModuleRecord;
+use madenet_agent::Policy;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -606,7 +608,12 @@ impl Nets {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ModelInfo {
     pub method: Method,
-    pub dep: NetConfigToml,
+    /// The paper's (grid) DEP's sizes; absent for an agnostic model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dep: Option<NetConfigToml>,
+    /// The agnostic DEP's sizes ([`crate::agnostic`]); absent for a grid model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub agnostic: Option<AgnosticConfig>,
     /// DEP weight files, one per robot group (one when shared).
     pub deps: Vec<String>,
     /// Episodes per environment and updates behind these weights.
@@ -646,7 +653,10 @@ pub struct NetConfigToml {
 #[derive(Clone)]
 pub struct Model {
     pub info: ModelInfo,
+    /// The grid DEPs (empty for an agnostic model).
     pub deps: Vec<Arc<QNet>>,
+    /// The agnostic DEP, shared by every robot.
+    pub agnostic: Option<Arc<AgnosticNet>>,
 }
 
 impl Model {
@@ -695,12 +705,6 @@ impl Model {
         files: Vec<(String, Vec<u8>)>,
         label: &str,
     ) -> Result<Self, TrainError> {
-        let d = &info.dep;
-        let cfg = NetConfig {
-            obs_dim: info.observation.dim(d.team_size, d.goal_count),
-            ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count)
-                .with_concat_fc(d.concat_fc)
-        };
         if files.len() != info.deps.len() || files.is_empty() {
             return Err(TrainError::Config {
                 path: label.to_string(),
@@ -711,16 +715,57 @@ impl Model {
                 ),
             });
         }
-        let mut deps = Vec::new();
-        for (name, bytes) in files {
-            let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
-                .map_err(|e| TrainError::Io {
+        let record = |name: &String, bytes: Vec<u8>| {
+            ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes)).map_err(|e| {
+                TrainError::Io {
                     path: name.clone(),
                     message: e.to_string(),
-                })?;
-            deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
+                }
+            })
+        };
+        let config_err = |message: String| TrainError::Config {
+            path: label.to_string(),
+            message,
+        };
+        match (&info.dep, &info.agnostic) {
+            (Some(d), None) => {
+                let cfg = NetConfig {
+                    obs_dim: info.observation.dim(d.team_size, d.goal_count),
+                    ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count)
+                        .with_concat_fc(d.concat_fc)
+                };
+                let mut deps = Vec::new();
+                for (name, bytes) in files {
+                    let rec = record(&name, bytes)?;
+                    deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
+                }
+                Ok(Model {
+                    info,
+                    deps,
+                    agnostic: None,
+                })
+            }
+            (None, Some(a)) => {
+                a.validate()
+                    .map_err(|m| config_err(format!("table `agnostic`: {m}")))?;
+                if files.len() != 1 {
+                    return Err(config_err(
+                        "field `deps`: an agnostic model has one weight file".into(),
+                    ));
+                }
+                let (name, bytes) = files.into_iter().next().expect("one file");
+                let rec = record(&name, bytes)?;
+                let net = a.init(&cpu()).map_err(config_err)?.load_record(rec);
+                Ok(Model {
+                    info,
+                    deps: Vec::new(),
+                    agnostic: Some(Arc::new(net)),
+                })
+            }
+            _ => Err(config_err(
+                "exactly one of the tables `dep` (grid network) and `agnostic` is needed".into(),
+            )),
         }
-        Ok(Model { info, deps })
     }
 
     /// Why this model cannot act in a scenario, if it cannot: the networks are built for one
@@ -731,7 +776,10 @@ impl Model {
         width: usize,
         scenario: &ScenarioConfig,
     ) -> Result<(), String> {
-        let d = &self.info.dep;
+        let Some(d) = &self.info.dep else {
+            // The agnostic DEP plays any map size, team and |G|.
+            return Ok(());
+        };
         let goals = scenario.goal_count_for(height * width);
         if (height, width, scenario.num_robots, goals)
             != (d.map_height, d.map_width, d.team_size, d.goal_count)
@@ -747,37 +795,35 @@ impl Model {
     /// Registers this model as policy `name` (robot i uses DEP i, or the shared one); it
     /// refuses scenarios it was not built for ([`Model::check`]).
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
-        let deps = self.deps.clone();
+        let model = self.clone();
+        let checker = self.clone();
         let owned = name.to_string();
-        let info = Model {
-            info: self.info.clone(),
-            deps: Vec::new(),
-        };
-        let (observation, recurrent, margin) = (
-            self.info.observation,
-            self.info.recurrent,
-            self.info.spread_margin,
-        );
         registry.register_checked(
             name,
             about,
-            move |ctx| info.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| {
-                let net = Arc::clone(
-                    &deps[if deps.len() == 1 {
-                        0
-                    } else {
-                        ctx.robot.min(deps.len() - 1)
-                    }],
-                );
-                Box::new(
-                    DepPolicy::new(&owned, net)
-                        .with_observation(observation, ctx.config.sensing_range)
-                        .with_recurrence(recurrent)
-                        .with_spread_margin(margin),
-                )
-            },
+            move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
+            move |ctx| model.policy(&owned, ctx.robot, ctx.config.sensing_range),
         );
+    }
+
+    /// Robot `robot`'s policy under name `name` (d_s = `sensing_range`): its grid DEP (or the
+    /// shared one), or the agnostic DEP.
+    pub fn policy(&self, name: &str, robot: usize, sensing_range: i32) -> Box<dyn Policy> {
+        let margin = self.info.spread_margin;
+        if let (Some(net), Some(a)) = (&self.agnostic, &self.info.agnostic) {
+            return Box::new(
+                AgnosticPolicy::new(name, Arc::clone(net), a.crop_radius, sensing_range)
+                    .with_spread_margin(margin),
+            );
+        }
+        let deps = &self.deps;
+        let net = Arc::clone(&deps[robot.min(deps.len() - 1)]);
+        Box::new(
+            DepPolicy::new(name, net)
+                .with_observation(self.info.observation, sensing_range)
+                .with_recurrence(self.info.recurrent)
+                .with_spread_margin(margin),
+        )
     }
 }
 
@@ -1118,6 +1164,7 @@ fn train_loop(
                     .iter()
                     .map(|(o, _, _)| Arc::new(target_of(o)))
                     .collect(),
+                agnostic: None,
             };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
@@ -1173,13 +1220,14 @@ fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -
     let d = cfg.dep_config();
     ModelInfo {
         method: cfg.method,
-        dep: NetConfigToml {
+        agnostic: None,
+        dep: Some(NetConfigToml {
             map_height: d.map_height,
             map_width: d.map_width,
             team_size: d.team_size,
             goal_count: d.goal_count,
             concat_fc: d.concat_fc,
-        },
+        }),
         deps: (0..cfg.dep_groups().len())
             .map(|k| format!("dep{k}.bpk"))
             .collect(),

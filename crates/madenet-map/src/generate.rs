@@ -48,6 +48,25 @@ pub fn random_starts(
     }
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let anchor = map.pos(free[rng.random_range(0..free.len())]);
+    starts_from(map, anchor, team, movement)
+}
+
+/// `team` start cells around `near`: breadth-first (under `movement`) from the free cell
+/// nearest to `near` (Euclidean; ties to the lower row-major index), or `None` if fewer than
+/// `team` free cells are connected to it.
+pub fn starts_near(map: &OccGrid, near: Pos, team: usize, movement: Movement) -> Option<Vec<Pos>> {
+    let anchor = (0..map.len())
+        .filter(|&i| map.cells()[i] == Occupancy::Free)
+        .map(|i| map.pos(i))
+        .min_by(|a, b| a.euclid(near).total_cmp(&b.euclid(near)))?;
+    starts_from(map, anchor, team, movement)
+}
+
+/// The first `team` cells of a breadth-first search from the free cell `anchor`.
+fn starts_from(map: &OccGrid, anchor: Pos, team: usize, movement: Movement) -> Option<Vec<Pos>> {
+    if team == 0 {
+        return Some(Vec::new());
+    }
     let mut seen = vec![false; map.len()];
     let mut queue = VecDeque::from([anchor]);
     seen[map.index(anchor)] = true;

@@ -30,6 +30,21 @@ pub fn candidate_values(
     registry: &PolicyRegistry,
     futures: &[Future],
 ) -> Result<Vec<Option<f64>>, SimError> {
+    candidate_values_within(trial, i, fixed, base, registry, futures, None)
+}
+
+/// [`candidate_values`] with each continuation cut after `horizon` steps (`None`: run to the
+/// end) and its remainder estimated ([`continuation_within`]): what makes the teacher
+/// affordable on large maps.
+pub fn candidate_values_within(
+    trial: &Trial,
+    i: usize,
+    fixed: &[Option<Decision>],
+    base: &str,
+    registry: &PolicyRegistry,
+    futures: &[Future],
+    horizon: Option<usize>,
+) -> Result<Vec<Option<f64>>, SimError> {
     let agent = &trial.agents()[i];
     let (slots, valid) = (agent.candidates().slots, agent.candidates().cells.len());
     let mut values = vec![None; slots];
@@ -39,7 +54,7 @@ pub fn candidate_values(
         with_k[i] = Some(Decision::Candidate(k));
         let mut sum = 0.0;
         for &future in futures {
-            sum += continuation(trial, &with_k, base, registry, future)?;
+            sum += continuation_within(trial, &with_k, base, registry, future, horizon)?;
         }
         *value = Some(sum / futures.len() as f64);
     }
@@ -55,12 +70,39 @@ pub fn continuation(
     registry: &PolicyRegistry,
     future: Future,
 ) -> Result<f64, SimError> {
+    continuation_within(trial, fixed, base, registry, future, None)
+}
+
+/// [`continuation`] cut after `horizon` steps: if the trial is not over by then, the steps left
+/// are estimated as `horizon` + (explorable cells still unknown) / r, with r the rate at which
+/// the team came to know cells in the trial so far (known cells now / timesteps now, at least
+/// one per step). r is the same for every continuation from this present, so candidates are
+/// ranked by how much of the map they leave unknown at the horizon; a rate measured within each
+/// continuation instead explodes when a continuation happens to learn little.
+pub fn continuation_within(
+    trial: &Trial,
+    fixed: &[Option<Decision>],
+    base: &str,
+    registry: &PolicyRegistry,
+    future: Future,
+    horizon: Option<usize>,
+) -> Result<f64, SimError> {
     let now = trial.world().t() as f64;
+    let rate = (trial.world().known_count() as f64 / now.max(1.0)).max(1.0);
     let mut fork = trial.fork(base, registry, future)?;
     fork.decide_with(fixed);
     fork.finish_step();
-    while fork.step() {}
-    Ok(fork.finish().metrics.tns as f64 - now)
+    let limit = horizon.unwrap_or(usize::MAX).max(1);
+    let mut steps = 1;
+    while steps < limit && fork.step() {
+        steps += 1;
+    }
+    if fork.is_done() {
+        return Ok(fork.finish().metrics.tns as f64 - now);
+    }
+    let w = fork.world();
+    let left = w.explorable_count().saturating_sub(w.known_count()) as f64;
+    Ok(steps as f64 + left / rate)
 }
 
 /// Which oracle.

@@ -371,7 +371,7 @@ fn no_livelock_between_robots_that_cannot_talk() {
 #[test]
 fn rollouts_from_a_fork_are_the_trial_itself() {
     use madenet_agent::Decision;
-    use madenet_sim::rollout::{candidate_values, run_oracle, OracleKind};
+    use madenet_sim::rollout::{candidate_values, candidate_values_within, run_oracle, OracleKind};
     use madenet_sim::{Future, PolicyRegistry};
     let registry = PolicyRegistry::builtin();
     let mut checked = 0;
@@ -403,10 +403,32 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
             "test_{map}: robot 0 decided with a choice three times"
         );
         let values = candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Own]).unwrap();
+        let now = trial.world().t();
+        // Cut continuations: a horizon past the end changes nothing; a short one estimates the
+        // rest at the trial's exploration rate so far — by hand from a fork cut at 5 steps.
+        let within = |h| {
+            candidate_values_within(&trial, 0, &[], "spread", &registry, &[Future::Own], h).unwrap()
+        };
+        assert_eq!(within(Some(100_000)), values);
+        let cut = within(Some(5));
+        {
+            let mut fork = trial.fork("spread", &registry, Future::Own).unwrap();
+            let mut fixed = vec![None; 3];
+            fixed[0] = Some(Decision::Candidate(0));
+            let rate = (trial.world().known_count() as f64 / now.max(1) as f64).max(1.0);
+            fork.decide_with(&fixed);
+            fork.finish_step();
+            for _ in 1..5 {
+                assert!(fork.step());
+            }
+            let w = fork.world();
+            assert!(!w.is_done(), "test_{map}: five steps do not finish the map");
+            let left = (w.explorable_count() - w.known_count()) as f64;
+            assert_eq!(cut[0], Some(5.0 + left / rate), "test_{map}");
+        }
         let salted =
             candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Salted(7)]).unwrap();
         salted_differs |= salted != values;
-        let now = trial.world().t();
         for (k, v) in values.iter().enumerate() {
             let Some(v) = v else { continue };
             // The same present, taken for real: a fresh trial replayed to here by its own policy.

@@ -84,7 +84,7 @@ pub enum StudyError {
     Other(String),
 }
 
-fn field(field: &'static str, message: impl Into<String>) -> StudyError {
+pub(crate) fn field(field: &'static str, message: impl Into<String>) -> StudyError {
     StudyError::Field {
         field,
         message: message.into(),
@@ -118,22 +118,7 @@ impl StudyConfig {
     }
 
     pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(path).map_err(|e| StudyError::File {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        toml::from_str(&text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-            StudyError::File {
-                path: path.display().to_string(),
-                message: match line {
-                    Some(l) => format!("{} (line {l})", e.message().trim()),
-                    None => e.message().trim().to_string(),
-                },
-            }
-        })
+        read_toml(path)
     }
 
     /// The policy registry of the study: built-ins, the baselines with this config's
@@ -367,6 +352,26 @@ impl StudyConfig {
         }
         Ok(out)
     }
+}
+
+/// Reads a study's TOML file; the error names the file, the problem and its line.
+pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
+    let text = std::fs::read_to_string(path).map_err(|e| StudyError::File {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    toml::from_str(&text).map_err(|e| {
+        let line = e
+            .span()
+            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+        StudyError::File {
+            path: path.display().to_string(),
+            message: match line {
+                Some(l) => format!("{} (line {l})", e.message().trim()),
+                None => e.message().trim().to_string(),
+            },
+        }
+    })
 }
 
 #[cfg(test)]

@@ -18,9 +18,11 @@ pub mod calibration;
 pub mod config;
 pub mod report;
 pub mod runner;
+pub mod scale;
 
 pub use config::{StudyConfig, StudyError};
 pub use runner::{TrialKey, TrialOutcome};
+pub use scale::{run_scale, ScaleConfig};
 
 use std::path::{Path, PathBuf};
 
@@ -41,7 +43,29 @@ pub fn run_study(
     };
     std::fs::create_dir_all(out).map_err(io)?;
     let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
-    let cfg_path = out.join("study.toml");
+    prepare_out(out, "study.toml", &cfg_text, fresh)?;
+    let started = std::time::Instant::now();
+    let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
+    let wall = started.elapsed().as_secs_f64();
+    let paper_maps: Vec<String> = maps
+        .iter()
+        .filter(|m| m.paper)
+        .map(|m| m.name.clone())
+        .collect();
+    let report = report::write_all(cfg, &outcomes, &paper_maps, out, wall)?;
+    Ok((report, outcomes))
+}
+
+/// Readies output folder `out` for a study whose config (as text) is saved there as
+/// `cfg_name`: with `fresh`, earlier trials are discarded; otherwise trials recorded by another
+/// configuration are refused (the folder is not touched) and those of this one kept.
+pub(crate) fn prepare_out(
+    out: &Path,
+    cfg_name: &str,
+    cfg_text: &str,
+    fresh: bool,
+) -> Result<(), StudyError> {
+    let cfg_path = out.join(cfg_name);
     if fresh {
         for f in ["trials.csv", "curves.jsonl"] {
             let _ = std::fs::remove_file(out.join(f));
@@ -54,15 +78,5 @@ pub fn run_study(
             });
         }
     }
-    runner::write_atomic(&cfg_path, cfg_text.as_bytes())?;
-    let started = std::time::Instant::now();
-    let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
-    let wall = started.elapsed().as_secs_f64();
-    let paper_maps: Vec<String> = maps
-        .iter()
-        .filter(|m| m.paper)
-        .map(|m| m.name.clone())
-        .collect();
-    let report = report::write_all(cfg, &outcomes, &paper_maps, out, wall)?;
-    Ok((report, outcomes))
+    runner::write_atomic(&cfg_path, cfg_text.as_bytes())
 }

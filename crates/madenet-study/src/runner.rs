@@ -313,10 +313,22 @@ pub fn run(
     out: &Path,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<TrialOutcome>, StudyError> {
-    let planned = plan(cfg, maps, starts);
+    run_planned(&plan(cfg, maps, starts), registry, out, progress)
+}
+
+/// [`run`] for trials planned by the caller (e.g. the scalability study's grid): runs every
+/// one not yet recorded in `out` (keys must be unique), appending each as it finishes, and
+/// returns all outcomes in plan order.
+pub fn run_planned(
+    planned: &[Planned],
+    registry: &PolicyRegistry,
+    out: &Path,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<TrialOutcome>, StudyError> {
+    let first_seed = planned.iter().map(|p| p.key.seed).min().unwrap_or(0);
     // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
-    for p in &planned {
-        if p.key.seed == cfg.seed_base {
+    for p in planned {
+        if p.key.seed == first_seed {
             Trial::with_registry(p.spec.clone(), registry).map_err(|e| {
                 StudyError::Other(format!("map {}, start {}: {e}", p.key.map, p.key.start))
             })?;

@@ -16,6 +16,7 @@ mod nodes;
 mod oracle;
 mod plot_training;
 mod run;
+mod scale_cmd;
 mod scenario_args;
 mod train_cmd;
 
@@ -41,6 +42,8 @@ enum Command {
     Batch(batch::BatchArgs),
     /// Run the paper's comparison study: trials, summary, statistics, figures, report.
     Compare(compare::CompareArgs),
+    /// The scalability study (the paper's Fig. 7): exploration time against team size on maps of several sizes.
+    Scale(scale_cmd::ScaleArgs),
     /// Convert, generate and show maps.
     #[command(subcommand)]
     Map(map_cmd::MapCommand),
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Command::Run(a) => run::run(a),
         Command::Batch(a) => batch::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Scale(a) => scale_cmd::run(a),
         Command::Map(c) => map_cmd::run(c),
         Command::PlotTraining(a) => plot_training::run(a),
         Command::Train(a) => train_cmd::run(a),

@@ -1,0 +1,456 @@
+//! The size- and team-agnostic DEP (`network = "agnostic"`, a departure from the paper, whose
+//! networks are built for one map size, team size and |G|): every goal candidate is scored by
+//! one shared network from what lies *around the candidate*, so the same weights play any map,
+//! any team and any number of candidates.
+//!
+//! ```text
+//!  per candidate k (any |G|)                                         per robot
+//!  crop: 4 × S × S around k (S = 2·crop_radius + 1;                  context: CONTEXT_FEATURES
+//!        explored, obstacles, robots, candidates;                    (explored share, ϱ_i, team
+//!        outside the map = explored obstacle)                         size, teammates heard …)
+//!   K1 conv k3 s1 ─ K2 conv k3 s2 ─ K3 conv k3 s2 ─ flatten ─ KF fc         │
+//!             └──── ‖ features_k (CANDIDATE_INPUTS: path cost, information, │
+//!                     teammates' goals/positions pooled by min and count, …)│
+//!                          E  fc embed ─ leaky ReLU  → e_k                  │
+//!            masked mean of e over the valid candidates ─── ‖ ──────────────┘
+//!                          C  fc context ─ leaky ReLU  → c   (what the alternatives look like)
+//!                    H  fc hidden on [e_k ‖ c] ─ leaky ReLU ─ O fc 1  → score_k
+//! ```
+//!
+//! Teammates enter only through per-candidate features pooled over teammates (distance to the
+//! nearest teammate goal and position, crowding count) and the context's shares, so any |I|
+//! works. Training is the rollout teacher's ([`crate::rollout_train`]): its centralized critic
+//! scores one robot's candidates one at a time by continuing the trial (never the |G|^|I| joint
+//! actions), and the scores regress its advantages.
+
+use crate::obs::{action_mask, pack_bits};
+use crate::{masked_argmax_slice, ConvSpec, Tensor, TensorData};
+use burn::config::Config;
+use burn::module::Module;
+use burn::nn::conv::{Conv2d, Conv2dConfig};
+use burn::nn::{LeakyRelu, LeakyReluConfig, Linear, LinearConfig};
+use burn::tensor::Device;
+use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
+use madenet_map::Pos;
+use std::sync::Arc;
+
+/// Values of the per-robot context vector (see [`inputs`]).
+pub const CONTEXT_FEATURES: usize = 8;
+/// Values per candidate: [`AgentView::CANDIDATE_FEATURES`] and 3 size-free ones (see [`inputs`]).
+pub const CANDIDATE_INPUTS: usize = AgentView::CANDIDATE_FEATURES + 3;
+/// Channels of a crop (the paper's map image channels).
+pub const CROP_CHANNELS: usize = 4;
+
+/// Sizes of the agnostic DEP, with their defaults.
+#[derive(Config, Debug, PartialEq)]
+pub struct AgnosticConfig {
+    /// Cells from the candidate to a crop's edge: crops are (2r + 1)² (6 → 13 × 13: d_s = 4
+    /// plus a margin).
+    #[config(default = 6)]
+    pub crop_radius: usize,
+    /// Channels of the crop convolutions K1, K2, K3.
+    #[config(default = 16)]
+    pub conv_channels: usize,
+    /// Width of KF (the crop's feature).
+    #[config(default = 32)]
+    pub crop_width: usize,
+    /// Width of E (a candidate's embedding).
+    #[config(default = 64)]
+    pub embed_width: usize,
+    /// Width of C (the decision's context).
+    #[config(default = 32)]
+    pub context_width: usize,
+    /// Width of H.
+    #[config(default = 64)]
+    pub hidden_width: usize,
+    /// Negative slope of the leaky ReLUs.
+    #[config(default = 0.01)]
+    pub leaky_slope: f64,
+}
+
+/// The agnostic DEP's layers (see the module docs).
+#[derive(Module, Debug)]
+pub struct AgnosticNet {
+    /// K1: conv kernel 3, stride 1.
+    pub k1: Conv2d,
+    /// K2: conv kernel 3, stride 2.
+    pub k2: Conv2d,
+    /// K3: conv kernel 3, stride 2.
+    pub k3: Conv2d,
+    /// KF: the crop's feature.
+    pub kf: Linear,
+    /// E: a candidate's embedding from [crop feature ‖ candidate inputs].
+    pub embed: Linear,
+    /// C: the decision's context from [mean embedding ‖ robot context].
+    pub context: Linear,
+    /// H: hidden layer on [embedding ‖ context].
+    pub hidden: Linear,
+    /// O: the score.
+    pub out: Linear,
+    /// The leaky ReLU after every layer but O.
+    pub act: LeakyRelu,
+    /// Crop side S expected.
+    pub crop_side: usize,
+}
+
+const K1: ConvSpec = ConvSpec {
+    kernel: 3,
+    stride: 1,
+    channels: 0,
+};
+const K2: ConvSpec = ConvSpec {
+    kernel: 3,
+    stride: 2,
+    channels: 0,
+};
+
+impl AgnosticConfig {
+    /// Crop side S = 2 · `crop_radius` + 1.
+    pub fn crop_side(&self) -> usize {
+        2 * self.crop_radius + 1
+    }
+
+    /// Side of K3's output, or why the sizes don't work.
+    fn conv_out(&self) -> Result<usize, String> {
+        let s = self.crop_side();
+        K1.output_len(s)
+            .and_then(|x| K2.output_len(x))
+            .and_then(|x| K2.output_len(x))
+            .ok_or_else(|| {
+                format!(
+                    "field `crop_radius`: {} is too small for the crop convolutions (need ≥ 4)",
+                    self.crop_radius
+                )
+            })
+    }
+
+    /// Checks the sizes; the message names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        self.conv_out()?;
+        if self.crop_radius > 32 {
+            return Err("field `crop_radius`: must be at most 32".into());
+        }
+        let widths = [
+            self.conv_channels,
+            self.crop_width,
+            self.embed_width,
+            self.context_width,
+            self.hidden_width,
+        ];
+        if widths.iter().any(|&w| w == 0 || w > 4096) {
+            return Err("field `conv_channels`/`*_width`: widths must be in 1..=4096".into());
+        }
+        if !(0.0..1.0).contains(&self.leaky_slope) {
+            return Err("field `leaky_slope`: must be in [0, 1)".into());
+        }
+        Ok(())
+    }
+
+    /// Builds the network on `device`.
+    pub fn init(&self, device: &Device) -> Result<AgnosticNet, String> {
+        let side = self.conv_out()?;
+        self.validate()?;
+        let ch = self.conv_channels;
+        let conv = |cin: usize, spec: ConvSpec| {
+            Conv2dConfig::new([cin, ch], [spec.kernel, spec.kernel])
+                .with_stride([spec.stride, spec.stride])
+                .init(device)
+        };
+        let linear = |i: usize, o: usize| LinearConfig::new(i, o).init(device);
+        Ok(AgnosticNet {
+            k1: conv(CROP_CHANNELS, K1),
+            k2: conv(ch, K2),
+            k3: conv(ch, K2),
+            kf: linear(ch * side * side, self.crop_width),
+            embed: linear(self.crop_width + CANDIDATE_INPUTS, self.embed_width),
+            context: linear(self.embed_width + CONTEXT_FEATURES, self.context_width),
+            hidden: linear(self.embed_width + self.context_width, self.hidden_width),
+            out: linear(self.hidden_width, 1),
+            act: LeakyReluConfig::new()
+                .with_negative_slope(self.leaky_slope)
+                .init(),
+            crop_side: self.crop_side(),
+        })
+    }
+}
+
+impl AgnosticNet {
+    /// Scores of `b` decisions with `g` candidate slots each:
+    /// * `crops` `[b·g, 4, S, S]`, `features` `[b·g, CANDIDATE_INPUTS]` (slot-major per decision);
+    /// * `context` `[b, CONTEXT_FEATURES]`;
+    /// * `mask` `[b, g]`: 1 for a valid candidate (pooled into the context), else 0.
+    ///
+    /// Returns `[b, g]` (scores of masked-out slots are meaningless).
+    pub fn forward(
+        &self,
+        crops: Tensor<4>,
+        features: Tensor<2>,
+        context: Tensor<2>,
+        mask: Tensor<2>,
+    ) -> Tensor<2> {
+        let [b, g] = mask.dims();
+        let n = b * g;
+        let x = self.act.forward(self.k1.forward(crops));
+        let x = self.act.forward(self.k2.forward(x));
+        let x = self.act.forward(self.k3.forward(x));
+        let x: Tensor<2> = x.flatten(1, 3);
+        let x = self.act.forward(self.kf.forward(x));
+        let e = self
+            .act
+            .forward(self.embed.forward(Tensor::cat(vec![x, features], 1)));
+        let width = e.dims()[1];
+        let e3 = e.clone().reshape([b, g, width]);
+        let m3 = mask.reshape([b, g, 1]);
+        let count = m3.clone().sum_dim(1).clamp_min(1.0);
+        let pooled = e3.mul(m3).sum_dim(1).div(count).reshape([b, width]);
+        let c = self
+            .act
+            .forward(self.context.forward(Tensor::cat(vec![pooled, context], 1)));
+        let cw = c.dims()[1];
+        let c = c.reshape([b, 1, cw]).repeat_dim(1, g).reshape([n, cw]);
+        let h = self
+            .act
+            .forward(self.hidden.forward(Tensor::cat(vec![e, c], 1)));
+        self.out.forward(h).reshape([b, g])
+    }
+
+    /// Scores of one decision's inputs (plain CPU device).
+    pub fn scores(&self, input: &AgnosticInput) -> Vec<f32> {
+        let batch = Batch::of(&[input], self.crop_side, &crate::cpu());
+        self.forward(batch.crops, batch.features, batch.context, batch.mask)
+            .into_data()
+            .try_into_vec_as::<f32>()
+            .expect("scores readable as f32")
+    }
+}
+
+/// One robot's inputs at a decision, for any map, team and |G|.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AgnosticInput {
+    /// [`CONTEXT_FEATURES`] values.
+    pub context: Vec<f32>,
+    /// [`CANDIDATE_INPUTS`] values per slot (zeros for an empty slot).
+    pub features: Vec<f32>,
+    /// Crops of every slot (4 × S × S each, zeros for an empty slot), bit-packed.
+    pub crops: Vec<u64>,
+    /// Which slots may be chosen ([`action_mask`]).
+    pub mask: Vec<bool>,
+}
+
+/// The inputs of `view` (d_s = `sensing_range`, crops of `crop_radius`):
+///
+/// * **context**: 0. known cells / all cells; 1. ϱ_i; 2. (|I| − 1) / 8; 3. share of teammates
+///   whose goal was heard within [`Spread::GOAL_MEMORY`] steps; 4. share whose position is known
+///   from the last [`Spread::POSITION_MEMORY`] steps; 5. ln(cells) / 10; 6. valid candidates /
+///   |G|; 7. teammates' mean last heard |E_j| / cells;
+/// * **per candidate**: [`AgentView::write_candidate_features`] (9), then 9. path cost / (4 d_s),
+///   10. the `spread` score / (4 d_s) (both capped at 4 and divided by 4: free of the map size,
+///   unlike features 0 and 7), 11. Chebyshev distance from the robot / (4 d_s), capped at 1;
+/// * **crop** of each candidate: the robot's 4-channel map image (explored, obstacles, robots,
+///   candidates) in a (2r + 1)² window centred on it; cells outside the map are explored
+///   obstacles.
+pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) -> AgnosticInput {
+    let slots = view.candidates().slots;
+    let mut base = vec![0.0; AgentView::candidate_features_len(slots)];
+    view.write_candidate_features(sensing_range, &mut base);
+    let b = view.belief;
+    let (h, w) = (b.height(), b.width());
+    let cells = (h * w).max(1) as f32;
+    let scale = (h + w) as f32;
+    let reach = (4 * sensing_range.max(1)) as f32;
+    let mut features = vec![0.0; CANDIDATE_INPUTS * slots];
+    let valid = view.candidates().cells.len();
+    for k in 0..slots {
+        let f = &mut features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS];
+        let src = &base[k * AgentView::CANDIDATE_FEATURES..(k + 1) * AgentView::CANDIDATE_FEATURES];
+        f[..AgentView::CANDIDATE_FEATURES].copy_from_slice(src);
+        if let Some(c) = view.candidates().get(k) {
+            let capped = |x: f32| (x / reach).min(4.0) / 4.0;
+            f[9] = capped(src[0] * scale);
+            f[10] = capped(src[7] * scale);
+            f[11] = (view.pos.chebyshev(c) as f32 / reach).min(1.0);
+        }
+    }
+    let t = view.t;
+    let recent =
+        |at: Option<usize>, memory: usize| at.is_some_and(|a| t.saturating_sub(a) <= memory);
+    let mates: Vec<_> = view
+        .teammates
+        .iter()
+        .enumerate()
+        .filter(|&(j, _)| j != view.id)
+        .map(|(_, r)| r)
+        .collect();
+    let share = |n: usize| n as f32 / mates.len().max(1) as f32;
+    let heard = mates
+        .iter()
+        .filter(|r| r.goal.is_some() && recent(r.heard_at, Spread::GOAL_MEMORY))
+        .count();
+    let placed = mates
+        .iter()
+        .filter(|r| {
+            r.last_pos().is_some()
+                && (recent(r.seen_at, Spread::POSITION_MEMORY)
+                    || recent(r.heard_at, Spread::POSITION_MEMORY))
+        })
+        .count();
+    let known_mates: Vec<f32> = mates
+        .iter()
+        .filter(|r| r.heard_at.is_some() || r.seen_at.is_some())
+        .map(|r| r.explored as f32 / cells)
+        .collect();
+    let context = vec![
+        b.known_count() as f32 / cells,
+        view.teammate_detected as u8 as f32,
+        mates.len() as f32 / 8.0,
+        share(heard),
+        share(placed),
+        cells.ln() / 10.0,
+        valid as f32 / slots.max(1) as f32,
+        known_mates.iter().sum::<f32>() / known_mates.len().max(1) as f32,
+    ];
+    let img = view.map_image();
+    let side = 2 * crop_radius + 1;
+    let r = crop_radius as i32;
+    let mut crops = vec![0u8; slots * CROP_CHANNELS * side * side];
+    for k in 0..valid {
+        let c = view.candidates().cells[k];
+        let crop =
+            &mut crops[k * CROP_CHANNELS * side * side..(k + 1) * CROP_CHANNELS * side * side];
+        for dr in -r..=r {
+            for dc in -r..=r {
+                let q = Pos::new(c.row + dr, c.col + dc);
+                let at = ((dr + r) as usize) * side + (dc + r) as usize;
+                if b.in_bounds(q) {
+                    let i = b.index(q);
+                    for ch in 0..CROP_CHANNELS {
+                        crop[ch * side * side + at] = img[ch * h * w + i];
+                    }
+                } else {
+                    crop[at] = 1;
+                    crop[side * side + at] = 1;
+                }
+            }
+        }
+    }
+    AgnosticInput {
+        context,
+        features,
+        crops: pack_bits(&crops),
+        mask: action_mask(view),
+    }
+}
+
+/// A batch of decisions as tensors, slots padded to the widest decision.
+pub struct Batch {
+    /// `[b·g, 4, S, S]`.
+    pub crops: Tensor<4>,
+    /// `[b·g, CANDIDATE_INPUTS]`.
+    pub features: Tensor<2>,
+    /// `[b, CONTEXT_FEATURES]`.
+    pub context: Tensor<2>,
+    /// `[b, g]` (1 = valid slot).
+    pub mask: Tensor<2>,
+    /// g, the padded slot count.
+    pub slots: usize,
+}
+
+impl Batch {
+    /// Stacks `inputs` (crops of side `side`) on `device`.
+    pub fn of(inputs: &[&AgnosticInput], side: usize, device: &Device) -> Batch {
+        let b = inputs.len();
+        let g = inputs
+            .iter()
+            .map(|x| x.mask.len())
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        let crop_len = CROP_CHANNELS * side * side;
+        let mut crops = vec![0.0f32; b * g * crop_len];
+        let mut features = vec![0.0f32; b * g * CANDIDATE_INPUTS];
+        let mut context = vec![0.0f32; b * CONTEXT_FEATURES];
+        let mut mask = vec![0.0f32; b * g];
+        for (i, x) in inputs.iter().enumerate() {
+            let slots = x.mask.len();
+            crate::obs::unpack_bits(
+                &x.crops,
+                &mut crops[i * g * crop_len..(i * g + slots) * crop_len],
+            );
+            features[i * g * CANDIDATE_INPUTS..(i * g + slots) * CANDIDATE_INPUTS]
+                .copy_from_slice(&x.features);
+            context[i * CONTEXT_FEATURES..(i + 1) * CONTEXT_FEATURES].copy_from_slice(&x.context);
+            for (k, &m) in x.mask.iter().enumerate() {
+                mask[i * g + k] = m as u8 as f32;
+            }
+        }
+        Batch {
+            crops: Tensor::from_data(
+                TensorData::new(crops, [b * g, CROP_CHANNELS, side, side]),
+                device,
+            ),
+            features: Tensor::from_data(
+                TensorData::new(features, [b * g, CANDIDATE_INPUTS]),
+                device,
+            ),
+            context: Tensor::from_data(TensorData::new(context, [b, CONTEXT_FEATURES]), device),
+            mask: Tensor::from_data(TensorData::new(mask, [b, g]), device),
+            slots: g,
+        }
+    }
+}
+
+/// One robot's agnostic DEP at execution: greedy over its valid candidates, or conservative
+/// (the `spread` rule's candidate unless the DEP values another more by the margin).
+pub struct AgnosticPolicy {
+    name: String,
+    net: Arc<AgnosticNet>,
+    crop_radius: usize,
+    sensing_range: i32,
+    spread_margin: Option<f32>,
+}
+
+impl AgnosticPolicy {
+    /// Policy `name` running `net` (crops of `crop_radius`, d_s = `sensing_range`).
+    pub fn new(name: &str, net: Arc<AgnosticNet>, crop_radius: usize, sensing_range: i32) -> Self {
+        AgnosticPolicy {
+            name: name.into(),
+            net,
+            crop_radius,
+            sensing_range,
+            spread_margin: None,
+        }
+    }
+
+    /// Conservative acting with `margin` (`None`: greedy).
+    pub fn with_spread_margin(mut self, margin: Option<f32>) -> Self {
+        self.spread_margin = margin;
+        self
+    }
+}
+
+impl Policy for AgnosticPolicy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        if view.candidates().cells.is_empty() {
+            return Decision::Idle;
+        }
+        if view.candidates().cells.len() == 1 {
+            return Decision::Candidate(0);
+        }
+        let input = inputs(view, self.sensing_range, self.crop_radius);
+        let q = self.net.scores(&input);
+        let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
+        Decision::Candidate(crate::policy::conservative(
+            view,
+            &q,
+            greedy,
+            self.spread_margin,
+            self.sensing_range,
+        ))
+    }
+}

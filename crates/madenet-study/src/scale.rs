@@ -1,0 +1,631 @@
+//! The scalability study (`madenet scale`): the grid analogue of the paper's Sec. V.B and
+//! Fig. 7 — exploration time against team size on maps of several sizes.
+//!
+//! Map sides × generated maps per side × starts (bottom-left, top-right, middle) × team sizes ×
+//! seeds, for every method, at one CSP. Maps are generated from seeds of their own (never the
+//! learners' training or validation streams) with the start areas kept free; robots start at
+//! the free cells nearest (by moves) to the start's anchor cell. The step cap grows with the
+//! map (`steps_per_cell` × cells), so that small teams on large maps can finish.
+//!
+//! Outputs (the trials resumable as in `madenet compare`, by the same runner):
+//! * `trials.csv`, `curves.jsonl` — one row per trial; map `side<S>-map<k>`, start
+//!   `<start>:<team>`;
+//! * `cells.csv` — mean TNS, TTD, NOLI and completions per (side, team, method);
+//! * `fig7_scalability.{png,svg}` — mean TNS against team size, one panel per map side;
+//! * `scale.md` — the tables; per map side and method a Friedman test across team sizes and
+//!   Wilcoxon signed-rank tests between consecutive team sizes (paired by map, start and seed),
+//!   where exploration time stops falling; the first method against every other: the share of
+//!   (side, team) cells where it has lower mean TNS and TTD, and pooled Wilcoxon tests.
+
+use crate::config::{field, StudyError};
+use crate::runner::{run_planned, write_atomic, Planned, TrialKey, TrialOutcome};
+use madenet_baselines::BaselineParams;
+use madenet_map::generate::{generate_with_movement, starts_near, GeneratorConfig};
+use madenet_map::Pos;
+use madenet_sim::TrialSpec;
+use madenet_stats::{friedman, wilcoxon};
+use madenet_world::rng::derive_seed;
+use madenet_world::ScenarioConfig;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Where a team starts in the scalability study.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScaleStart {
+    /// Around the bottom-left corner cell.
+    BottomLeft,
+    /// Around the top-right corner cell.
+    TopRight,
+    /// Around the centre cell.
+    Middle,
+}
+
+impl ScaleStart {
+    /// Name in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            ScaleStart::BottomLeft => "bottom-left",
+            ScaleStart::TopRight => "top-right",
+            ScaleStart::Middle => "middle",
+        }
+    }
+
+    /// The anchor cell on a `side` × `side` map.
+    pub fn anchor(self, side: usize) -> Pos {
+        let s = side as i32;
+        match self {
+            ScaleStart::BottomLeft => Pos::new(s - 1, 0),
+            ScaleStart::TopRight => Pos::new(0, s - 1),
+            ScaleStart::Middle => Pos::new(s / 2, s / 2),
+        }
+    }
+}
+
+/// The scalability study's design, with its defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScaleConfig {
+    /// Methods by policy name; the first is the one judged against the others.
+    pub methods: Vec<String>,
+    /// Map sides (square maps, cells).
+    pub sides: Vec<usize>,
+    /// Team sizes.
+    pub teams: Vec<usize>,
+    /// Start areas.
+    pub starts: Vec<ScaleStart>,
+    /// Generated maps per side.
+    pub maps_per_side: usize,
+    /// Master seed of the generated maps (`side<S>-map<k>` is drawn from it, side and k).
+    pub map_seed: u64,
+    /// Obstacle fraction range of the generated maps.
+    pub density_min: f64,
+    pub density_max: f64,
+    /// Seeds per (method, map, start, team): `seed_base`, `seed_base + 1`, …
+    pub seeds: u64,
+    pub seed_base: u64,
+    /// Communication success probability of every trial (the paper's Fig. 7: 1).
+    pub csp: f64,
+    /// Step cap per map cell: a trial on a side-S map stops after max(scenario.step_cap,
+    /// ⌈steps_per_cell · S²⌉) steps.
+    pub steps_per_cell: f64,
+    /// Everything else about the world (`num_robots` and `comm_success_prob` are set per trial).
+    pub scenario: ScenarioConfig,
+    /// Parameters of the classical baselines.
+    pub baselines: BaselineParams,
+}
+
+impl Default for ScaleConfig {
+    fn default() -> Self {
+        ScaleConfig {
+            methods: ["made-net-any", "nf", "ub", "pb", "spread"]
+                .map(String::from)
+                .to_vec(),
+            sides: vec![20, 30, 40, 60],
+            teams: vec![2, 3, 4, 5, 6],
+            starts: vec![
+                ScaleStart::BottomLeft,
+                ScaleStart::TopRight,
+                ScaleStart::Middle,
+            ],
+            maps_per_side: 3,
+            map_seed: 7001,
+            density_min: 0.15,
+            density_max: 0.45,
+            seeds: 2,
+            seed_base: 1,
+            csp: 1.0,
+            steps_per_cell: 1.0,
+            scenario: ScenarioConfig::default(),
+            baselines: BaselineParams::default(),
+        }
+    }
+}
+
+/// One trial's place in the grid, beside its planned run.
+#[derive(Clone, Debug)]
+pub struct ScalePlanned {
+    pub side: usize,
+    pub team: usize,
+    pub planned: Planned,
+}
+
+impl ScaleConfig {
+    /// Reads a TOML config; errors name the file, field and line.
+    pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
+        crate::config::read_toml(path)
+    }
+
+    /// Checks every field; the message names it.
+    pub fn validate(&self, registry: &madenet_sim::PolicyRegistry) -> Result<(), StudyError> {
+        if self.methods.is_empty() {
+            return Err(field("methods", "is empty"));
+        }
+        let known = registry.names();
+        for (i, m) in self.methods.iter().enumerate() {
+            if !known.contains(m) {
+                return Err(field(
+                    "methods",
+                    format!("unknown method `{m}`; known: {}", known.join(", ")),
+                ));
+            }
+            if self.methods[..i].contains(m) {
+                return Err(field("methods", format!("`{m}` is listed twice")));
+            }
+        }
+        let unique = |v: &[usize]| v.iter().enumerate().all(|(i, x)| !v[..i].contains(x));
+        if self.sides.is_empty()
+            || !unique(&self.sides)
+            || self.sides.iter().any(|&s| !(12..=500).contains(&s))
+        {
+            return Err(field("sides", "list distinct map sides in 12..=500 cells"));
+        }
+        if self.teams.is_empty()
+            || !unique(&self.teams)
+            || self
+                .teams
+                .iter()
+                .any(|&t| !(1..=madenet_world::MAX_ROBOTS).contains(&t))
+        {
+            return Err(field("teams", "list distinct team sizes in 1..=256"));
+        }
+        if self.starts.is_empty()
+            || self
+                .starts
+                .iter()
+                .enumerate()
+                .any(|(i, s)| self.starts[..i].contains(s))
+        {
+            return Err(field("starts", "list distinct starts"));
+        }
+        if !(1..=1000).contains(&self.maps_per_side) {
+            return Err(field("maps_per_side", "must be in 1..=1000"));
+        }
+        if !(0.0..=0.6).contains(&self.density_min)
+            || !(self.density_min..=0.6).contains(&self.density_max)
+        {
+            return Err(field(
+                "density_min/density_max",
+                "need 0 ≤ density_min ≤ density_max ≤ 0.6",
+            ));
+        }
+        if self.seeds == 0 || self.seeds > 1000 || self.seed_base.checked_add(self.seeds).is_none()
+        {
+            return Err(field(
+                "seeds",
+                "must be in 1..=1000 (and seed_base + seeds fit a u64)",
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.csp) {
+            return Err(field("csp", format!("{} is not a probability", self.csp)));
+        }
+        if !(self.steps_per_cell > 0.0 && self.steps_per_cell <= 100.0) {
+            return Err(field("steps_per_cell", "must be in (0, 100]"));
+        }
+        let cells: Vec<u64> = self
+            .sides
+            .iter()
+            .flat_map(|&s| std::iter::repeat_n((s * s) as u64, self.maps_per_side))
+            .collect();
+        madenet_sim::check_trial_set_size(
+            (self.methods.len() * self.teams.len()) as u64,
+            &cells,
+            self.starts.len() as u64,
+            1,
+            self.seeds,
+        )
+        .map_err(|e| field("sides/teams/seeds", e))?;
+        self.scenario
+            .validate()
+            .map_err(|e| field("scenario", e.to_string()))?;
+        self.baselines
+            .validate()
+            .map_err(|e| field("baselines", e))?;
+        Ok(())
+    }
+
+    /// The step cap on a side-`side` map.
+    pub fn step_cap(&self, side: usize) -> usize {
+        self.scenario
+            .step_cap
+            .max((self.steps_per_cell * (side * side) as f64).ceil() as usize)
+    }
+
+    /// Every trial, in output order (method, side, map, start, team, seed).
+    pub fn plan(&self) -> Result<Vec<ScalePlanned>, StudyError> {
+        let movement = self.scenario.movement;
+        let mut maps = Vec::new();
+        for &side in &self.sides {
+            for k in 0..self.maps_per_side {
+                // The start areas (3 × 3 around each anchor) stay free.
+                let keep_free: Vec<Pos> = self
+                    .starts
+                    .iter()
+                    .flat_map(|s| {
+                        let a = s.anchor(side);
+                        (-1..=1).flat_map(move |dr| {
+                            (-1..=1).map(move |dc| Pos::new(a.row + dr, a.col + dc))
+                        })
+                    })
+                    .filter(|p| {
+                        p.row >= 0
+                            && p.col >= 0
+                            && (p.row as usize) < side
+                            && (p.col as usize) < side
+                    })
+                    .collect();
+                let gen = GeneratorConfig {
+                    height: side,
+                    width: side,
+                    density_min: self.density_min,
+                    density_max: self.density_max,
+                    keep_free,
+                };
+                let seed = derive_seed(self.map_seed, "scale-map", (side * 1000 + k) as u64);
+                let grid = generate_with_movement(&gen, seed, movement)
+                    .map_err(|e| StudyError::Other(format!("map side {side} #{k}: {e}")))?;
+                maps.push((side, format!("side{side}-map{k}"), grid));
+            }
+        }
+        let mut v = Vec::new();
+        for method in &self.methods {
+            for (side, name, grid) in &maps {
+                for start in &self.starts {
+                    for &team in &self.teams {
+                        let cells =
+                            starts_near(grid, start.anchor(*side), team, movement).ok_or_else(
+                                || {
+                                    StudyError::Other(format!(
+                                        "map {name}: fewer than {team} free cells connected to the {} start",
+                                        start.name()
+                                    ))
+                                },
+                            )?;
+                        for s in 0..self.seeds {
+                            let seed = self.seed_base + s;
+                            let config = ScenarioConfig {
+                                num_robots: team,
+                                comm_success_prob: self.csp,
+                                step_cap: self.step_cap(*side),
+                                ..self.scenario.clone()
+                            };
+                            let key = TrialKey {
+                                method: method.clone(),
+                                map: name.clone(),
+                                start: format!("{}:{team}", start.name()),
+                                csp: format!("{}", self.csp),
+                                seed,
+                            };
+                            let spec = TrialSpec {
+                                map: grid.clone(),
+                                map_name: name.clone(),
+                                starts: cells.clone(),
+                                config,
+                                policy: method.clone(),
+                                seed,
+                            };
+                            v.push(ScalePlanned {
+                                side: *side,
+                                team,
+                                planned: Planned {
+                                    key,
+                                    spec,
+                                    oracle: None,
+                                },
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        Ok(v)
+    }
+}
+
+/// One (side, team, method) cell of the grid.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CellRow {
+    pub side: usize,
+    pub team: usize,
+    pub method: String,
+    pub trials: usize,
+    pub completed: usize,
+    pub tns: f64,
+    pub ttd_m: f64,
+    pub noli: f64,
+}
+
+/// What [`run_scale`] produced.
+#[derive(Debug)]
+pub struct ScaleResult {
+    /// `scale.md`.
+    pub report: PathBuf,
+    pub cells: Vec<CellRow>,
+    pub trials: usize,
+}
+
+/// Runs the scalability study into `out` (resuming trials recorded there by the same
+/// configuration; `fresh` discards them) and writes its tables, tests and figure.
+pub fn run_scale(
+    cfg: &ScaleConfig,
+    registry: &madenet_sim::PolicyRegistry,
+    out: &Path,
+    fresh: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ScaleResult, StudyError> {
+    cfg.validate(registry)?;
+    let planned = cfg.plan()?;
+    let io = |e: std::io::Error| StudyError::File {
+        path: out.display().to_string(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(out).map_err(io)?;
+    let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
+    crate::prepare_out(out, "scale.toml", &cfg_text, fresh)?;
+    let started = std::time::Instant::now();
+    let runs: Vec<Planned> = planned.iter().map(|p| p.planned.clone()).collect();
+    let outcomes = run_planned(&runs, registry, out, progress)?;
+    let wall = started.elapsed().as_secs_f64();
+    let cells = cells(cfg, &planned, &outcomes);
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for c in &cells {
+        w.serialize(c)
+            .map_err(|e| StudyError::Other(e.to_string()))?;
+    }
+    write_atomic(
+        &out.join("cells.csv"),
+        &w.into_inner()
+            .map_err(|e| StudyError::Other(e.to_string()))?,
+    )?;
+    figure(cfg, &cells, out)?;
+    let report = out.join("scale.md");
+    let text = report_text(cfg, &planned, &outcomes, &cells, wall);
+    write_atomic(&report, text.as_bytes())?;
+    Ok(ScaleResult {
+        report,
+        cells,
+        trials: outcomes.len(),
+    })
+}
+
+/// Means per (side, team, method), in the config's order.
+pub fn cells(
+    cfg: &ScaleConfig,
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+) -> Vec<CellRow> {
+    let mut rows = Vec::new();
+    for &side in &cfg.sides {
+        for &team in &cfg.teams {
+            for method in &cfg.methods {
+                let sel: Vec<&TrialOutcome> = planned
+                    .iter()
+                    .zip(outcomes)
+                    .filter(|(p, _)| {
+                        p.side == side && p.team == team && &p.planned.key.method == method
+                    })
+                    .map(|(_, o)| o)
+                    .collect();
+                let n = sel.len().max(1) as f64;
+                rows.push(CellRow {
+                    side,
+                    team,
+                    method: method.clone(),
+                    trials: sel.len(),
+                    completed: sel.iter().filter(|o| o.row.completed).count(),
+                    tns: sel.iter().map(|o| o.row.tns as f64).sum::<f64>() / n,
+                    ttd_m: sel.iter().map(|o| o.row.ttd).sum::<f64>() / n,
+                    noli: sel.iter().map(|o| o.row.noli as f64).sum::<f64>() / n,
+                });
+            }
+        }
+    }
+    rows
+}
+
+/// The paired values of `metric` for `method` on side `side` and team `team`, in plan order
+/// (so the same (map, start, seed) sits at the same index for every method and team).
+fn paired(
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+    method: &str,
+    side: Option<usize>,
+    team: Option<usize>,
+    metric: fn(&TrialOutcome) -> f64,
+) -> Vec<f64> {
+    planned
+        .iter()
+        .zip(outcomes)
+        .filter(|(p, _)| {
+            p.planned.key.method == method
+                && side.is_none_or(|s| p.side == s)
+                && team.is_none_or(|t| p.team == t)
+        })
+        .map(|(_, o)| metric(o))
+        .collect()
+}
+
+fn tns(o: &TrialOutcome) -> f64 {
+    o.row.tns as f64
+}
+fn ttd(o: &TrialOutcome) -> f64 {
+    o.row.ttd
+}
+
+fn p_text(p: f64) -> String {
+    if p < 1e-3 {
+        format!("{p:.1e}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+fn report_text(
+    cfg: &ScaleConfig,
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+    cells: &[CellRow],
+    wall: f64,
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Scalability study\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean TNS (steps) / TTD (m), completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
+        outcomes.len(),
+        cfg.methods.len(),
+        cfg.sides,
+        cfg.maps_per_side,
+        cfg.starts.iter().map(|s| s.name()).collect::<Vec<_>>().join(", "),
+        cfg.teams,
+        cfg.seeds,
+        cfg.csp,
+        wall / 60.0
+    );
+    for &side in &cfg.sides {
+        let _ = writeln!(
+            s,
+            "## {side} × {side} (step cap {})\n\n| method | {} |\n|---|{}",
+            cfg.step_cap(side),
+            cfg.teams
+                .iter()
+                .map(|t| format!("{t} robots"))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            "---|".repeat(cfg.teams.len())
+        );
+        for method in &cfg.methods {
+            let row: Vec<String> = cfg
+                .teams
+                .iter()
+                .map(|&t| {
+                    let c = cells
+                        .iter()
+                        .find(|c| c.side == side && c.team == t && &c.method == method)
+                        .expect("every cell computed");
+                    let done = if c.completed < c.trials {
+                        format!(" ({}/{})", c.completed, c.trials)
+                    } else {
+                        String::new()
+                    };
+                    format!("{:.1} / {:.0}{done}", c.tns, c.ttd_m)
+                })
+                .collect();
+            let _ = writeln!(s, "| {method} | {} |", row.join(" | "));
+        }
+        let _ = writeln!(
+            s,
+            "\nAcross team sizes (TNS; Friedman over teams, blocks = map × start × seed; Wilcoxon between consecutive sizes):\n"
+        );
+        for method in &cfg.methods {
+            let groups: Vec<Vec<f64>> = cfg
+                .teams
+                .iter()
+                .map(|&t| paired(planned, outcomes, method, Some(side), Some(t), tns))
+                .collect();
+            let refs: Vec<&[f64]> = groups.iter().map(|g| g.as_slice()).collect();
+            let fr = friedman(&refs)
+                .map(|f| format!("χ² = {:.1}, p = {}", f.statistic, p_text(f.p_value)))
+                .unwrap_or_else(|e| format!("not computed ({e})"));
+            let mut steps = Vec::new();
+            let mut stops = None;
+            for w in 0..cfg.teams.len().saturating_sub(1) {
+                let (a, b) = (&groups[w], &groups[w + 1]);
+                let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+                let (p, falls) = match wilcoxon(a, b) {
+                    Ok(r) => (r.p_value, mean(b) < mean(a) && r.p_value < 0.05),
+                    Err(_) => (1.0, false),
+                };
+                if !falls && stops.is_none() {
+                    stops = Some(cfg.teams[w]);
+                }
+                steps.push(format!(
+                    "{}→{}: {:+.1} (p {})",
+                    cfg.teams[w],
+                    cfg.teams[w + 1],
+                    mean(b) - mean(a),
+                    p_text(p)
+                ));
+            }
+            let stop_text = match stops {
+                Some(t) => format!("stops falling significantly after {t} robots"),
+                None => "falls significantly at every step".into(),
+            };
+            let _ = writeln!(s, "- {method}: {fr}; {}; {stop_text}", steps.join(", "));
+        }
+        let _ = writeln!(s);
+    }
+    if cfg.methods.len() > 1 {
+        let focus = &cfg.methods[0];
+        let _ = writeln!(
+            s,
+            "## {focus} against the others\n\n| method | cells where {focus} has lower mean TNS | … and lower mean TTD | pooled TNS difference | Wilcoxon p (TNS) | pooled TTD difference (m) | Wilcoxon p (TTD) |\n|---|---|---|---|---|---|---|"
+        );
+        for other in &cfg.methods[1..] {
+            let (mut lower_tns, mut lower_both, mut n) = (0, 0, 0);
+            for &side in &cfg.sides {
+                for &team in &cfg.teams {
+                    let get = |m: &String| {
+                        cells
+                            .iter()
+                            .find(|c| c.side == side && c.team == team && &c.method == m)
+                            .expect("every cell computed")
+                    };
+                    let (a, b) = (get(focus), get(other));
+                    n += 1;
+                    lower_tns += (a.tns < b.tns) as usize;
+                    lower_both += (a.tns < b.tns && a.ttd_m < b.ttd_m) as usize;
+                }
+            }
+            let test = |metric: fn(&TrialOutcome) -> f64| {
+                let x = paired(planned, outcomes, focus, None, None, metric);
+                let y = paired(planned, outcomes, other, None, None, metric);
+                let diff = (x.iter().sum::<f64>() - y.iter().sum::<f64>()) / x.len().max(1) as f64;
+                let p = wilcoxon(&x, &y)
+                    .map(|r| p_text(r.p_value))
+                    .unwrap_or("–".into());
+                (diff, p)
+            };
+            let (dt, pt) = test(tns);
+            let (dd, pd) = test(ttd);
+            let _ = writeln!(
+                s,
+                "| {other} | {lower_tns}/{n} | {lower_both}/{n} | {dt:+.2} | {pt} | {dd:+.1} | {pd} |"
+            );
+        }
+    }
+    s
+}
+
+fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result<(), StudyError> {
+    use madenet_plots::{line_panels, LinePanel, LineSeries};
+    let panels: Vec<LinePanel> = cfg
+        .sides
+        .iter()
+        .map(|&side| LinePanel {
+            title: format!("{side} × {side} cells"),
+            x_label: "Robots".into(),
+            y_label: "Mean TNS (steps)".into(),
+            series: cfg
+                .methods
+                .iter()
+                .map(|m| LineSeries {
+                    name: m.clone(),
+                    points: cfg
+                        .teams
+                        .iter()
+                        .filter_map(|&t| {
+                            cells
+                                .iter()
+                                .find(|c| c.side == side && c.team == t && &c.method == m)
+                                .map(|c| (t as f64, c.tns))
+                        })
+                        .collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    line_panels(&out.join("fig7_scalability"), &panels, panels.len().min(2))
+        .map_err(|e| StudyError::Other(e.to_string()))?;
+    Ok(())
+}

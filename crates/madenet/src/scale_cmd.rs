@@ -1,0 +1,99 @@
+//! `madenet scale`: the scalability study (the paper's Sec. V.B, Fig. 7) in one command.
+
+use anyhow::Result;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use madenet_study::{run_scale, ScaleConfig, StudyError};
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct ScaleArgs {
+    /// Scalability config (TOML, see configs/scale.toml); defaults: made-net-any, nf, ub, pb,
+    /// spread × sides 20, 30, 40, 60 × 3 maps × starts bottom-left, top-right, middle × teams
+    /// 2–6 × 2 seeds at CSP 1.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Output folder (created; an interrupted study there resumes).
+    #[arg(long, default_value = "scale")]
+    out: PathBuf,
+    /// Discard earlier results in the output folder.
+    #[arg(long)]
+    fresh: bool,
+    /// Methods, overriding the config (comma-separated policy names; the first is judged
+    /// against the others). `model` is the model given with --model.
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Map sides, overriding the config (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    sides: Option<Vec<usize>>,
+    /// Team sizes, overriding the config (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    teams: Option<Vec<usize>>,
+    /// Seeds per trial, overriding the config.
+    #[arg(long)]
+    seeds: Option<u64>,
+    /// A trained model directory, usable as method `model`.
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = crate::threads_arg)]
+    threads: Option<usize>,
+}
+
+/// Names where a bad field came from: the flag that set it, else the config file.
+fn name_source(e: StudyError, a: &ScaleArgs) -> anyhow::Error {
+    let StudyError::Field { field, .. } = &e else {
+        return e.into();
+    };
+    let flag = match *field {
+        "methods" if a.methods.is_some() => Some("--methods"),
+        "sides" if a.sides.is_some() => Some("--sides"),
+        "teams" if a.teams.is_some() => Some("--teams"),
+        "seeds" if a.seeds.is_some() => Some("--seeds"),
+        _ => None,
+    };
+    match (flag, &a.config) {
+        (Some(flag), _) => anyhow::anyhow!("{flag}: {e}"),
+        (None, Some(path)) => anyhow::anyhow!("{}: {e}", path.display()),
+        (None, None) => e.into(),
+    }
+}
+
+pub fn run(a: ScaleArgs) -> Result<()> {
+    let mut cfg = match &a.config {
+        Some(p) => ScaleConfig::from_toml_file(p)?,
+        None => ScaleConfig::default(),
+    };
+    if let Some(m) = &a.methods {
+        cfg.methods = m.clone();
+    }
+    if let Some(s) = &a.sides {
+        cfg.sides = s.clone();
+    }
+    if let Some(t) = &a.teams {
+        cfg.teams = t.clone();
+    }
+    if let Some(s) = a.seeds {
+        cfg.seeds = s;
+    }
+    let registry = crate::registry(a.model.as_deref())?;
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
+            .expect("valid template"),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()?;
+    let result = pool
+        .install(|| {
+            run_scale(&cfg, &registry, &a.out, a.fresh, &|done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })
+        })
+        .map_err(|e| name_source(e, &a))?;
+    bar.finish_and_clear();
+    out!("{} trials → {}", result.trials, result.report.display())?;
+    Ok(())
+}
