@@ -471,7 +471,7 @@ fn report_text(
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "# Scalability study\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean TNS (steps) / TTD (m), completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
+        "# Scalability study\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean TNS (steps) / TTD (m) / NOLI, completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
         outcomes.len(),
         cfg.methods.len(),
         cfg.sides,
@@ -508,7 +508,7 @@ fn report_text(
                     } else {
                         String::new()
                     };
-                    format!("{:.1} / {:.0}{done}", c.tns, c.ttd_m)
+                    format!("{:.1} / {:.0} / {:.0}{done}", c.tns, c.ttd_m, c.noli)
                 })
                 .collect();
             let _ = writeln!(s, "| {method} | {} |", row.join(" | "));
@@ -524,9 +524,19 @@ fn report_text(
                 .map(|&t| paired(planned, outcomes, method, Some(side), Some(t), tns))
                 .collect();
             let refs: Vec<&[f64]> = groups.iter().map(|g| g.as_slice()).collect();
-            let fr = friedman(&refs)
-                .map(|f| format!("χ² = {:.1}, p = {}", f.statistic, p_text(f.p_value)))
-                .unwrap_or_else(|e| format!("not computed ({e})"));
+            let fr = if refs.len() < 3 {
+                "Friedman needs 3 or more team sizes".to_string()
+            } else {
+                friedman(&refs)
+                    .map(|f| {
+                        format!(
+                            "Friedman χ² = {:.1}, p = {}",
+                            f.statistic,
+                            p_text(f.p_value)
+                        )
+                    })
+                    .unwrap_or_else(|e| format!("Friedman not computed ({e})"))
+            };
             let mut steps = Vec::new();
             let mut stops = None;
             for w in 0..cfg.teams.len().saturating_sub(1) {

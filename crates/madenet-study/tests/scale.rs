@@ -11,7 +11,7 @@ fn tiny() -> ScaleConfig {
     ScaleConfig {
         methods: vec!["spread".into(), "nf".into()],
         sides: vec![14, 18],
-        teams: vec![1, 3],
+        teams: vec![1, 2, 3],
         starts: vec![ScaleStart::BottomLeft, ScaleStart::Middle],
         maps_per_side: 1,
         seeds: 2,
@@ -51,7 +51,7 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     let plan = cfg.plan().unwrap();
     assert_eq!(
         plan.len(),
-        2 * 2 * 2 * 2 * 2,
+        2 * 2 * 2 * 3 * 2,
         "methods × sides × starts × teams × seeds (one map per side)"
     );
     for p in &plan {
@@ -79,8 +79,8 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     }
     let out = scratch("tiny");
     let r = run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
-    assert_eq!(r.trials, 32);
-    assert_eq!(r.cells.len(), 2 * 2 * 2, "sides × teams × methods");
+    assert_eq!(r.trials, 48);
+    assert_eq!(r.cells.len(), 2 * 3 * 2, "sides × teams × methods");
     for c in &r.cells {
         assert_eq!(c.trials, 4, "maps × starts × seeds per cell");
         assert!(c.tns > 0.0 && c.ttd_m > 0.0);
@@ -105,8 +105,9 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     for needle in [
         "## 14 × 14",
         "## 18 × 18",
-        "Friedman",
-        "1→3",
+        "Friedman χ²",
+        "1→2",
+        "2→3",
         "## spread against the others",
         "| nf |",
     ] {
@@ -125,7 +126,7 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
         assert!(out.join(f).exists(), "{f} missing");
     }
     let cells = std::fs::read_to_string(out.join("cells.csv")).unwrap();
-    assert_eq!(cells.lines().count(), 1 + 8);
+    assert_eq!(cells.lines().count(), 1 + 12);
     // Resuming after losing the last trials recomputes exactly them.
     let full = trials_without_time(&out);
     let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();
