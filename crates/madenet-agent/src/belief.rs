@@ -172,6 +172,7 @@ impl Belief {
             if !block_has_news(&self.map.cells()[start..end], &other[start..end]) {
                 continue;
             }
+            #[allow(clippy::needless_range_loop)] // i indexes our map and `other` alike
             for i in start..end {
                 if news(self.map.cells()[i], other[i]) {
                     let p = self.pos(i);
@@ -292,11 +293,11 @@ mod tests {
             let before = b.clone();
             let other: Vec<Occupancy> = other.into_iter().map(|v| match v { 0 => Occupancy::Unknown, 1 => Occupancy::Free, _ => Occupancy::Obstacle }).collect();
             b.merge(&other);
-            for i in 0..before.map().len() {
-                if before.map()[i] != Occupancy::Unknown {
-                    prop_assert_eq!(b.map()[i], before.map()[i]);
+            for ((&now, &was), &heard) in b.map().iter().zip(before.map()).zip(&other) {
+                if was != Occupancy::Unknown {
+                    prop_assert_eq!(now, was);
                 } else {
-                    prop_assert_eq!(b.map()[i], other[i]);
+                    prop_assert_eq!(now, heard);
                 }
             }
             prop_assert!(b.known_count() >= before.known_count());

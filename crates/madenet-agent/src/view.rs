@@ -237,7 +237,8 @@ impl<'a> AgentView<'a> {
             }
             f[1] = unknown as f32 / window;
             f[2] = frontier as f32 / window;
-            let nearest = |sel: &dyn Fn(&(Option<Pos>, Option<Pos>)) -> Option<Pos>| {
+            type Mate = (Option<Pos>, Option<Pos>); // announced goal, last known position
+            let nearest = |sel: &dyn Fn(&Mate) -> Option<Pos>| {
                 mates
                     .iter()
                     .filter_map(sel)

@@ -6,7 +6,7 @@ use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
 
 /// UB's constants.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct UbParams {
     /// β, the weight of path cost against utility, per metre. Unset: one over the map's side
@@ -18,15 +18,6 @@ pub struct UbParams {
     /// (Burgard et al. Sec. III: the probability that the target is also covered by the
     /// teammate's sensor). Unset: the sensing range d_s.
     pub coordination_radius: Option<f64>,
-}
-
-impl Default for UbParams {
-    fn default() -> Self {
-        UbParams {
-            beta: None,
-            coordination_radius: None,
-        }
-    }
 }
 
 /// The UB policy of one robot.

@@ -1,6 +1,6 @@
 //! DME-DRL's network shapes and a critic regression step (fixed batch, MSE falls).
 
-use burn::optim::{AdamConfig, GradientsParams, Optimizer};
+use burn::optim::{AdamConfig, GradientsParams};
 use burn::tensor::{Device, Tensor};
 use madenet_dme::nets::DmeConfig;
 

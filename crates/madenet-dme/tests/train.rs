@@ -121,7 +121,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
                 .unwrap()
                 .forward(maps.clone(), pose.clone())
                 .into_data()
-                .to_vec::<f32>()
+                .try_to_vec::<f32>()
                 .unwrap()
         };
         assert!(logits(&a) == logits(&b), "actor {i} differs after resume");

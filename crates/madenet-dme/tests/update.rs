@@ -99,7 +99,7 @@ fn updates_lower_the_critic_loss_and_actions_respect_masks() {
     );
     let y = gumbel_softmax(logits, mask, g, 1.0)
         .into_data()
-        .to_vec::<f32>()
+        .try_to_vec::<f32>()
         .unwrap();
     let valid: f32 = (0..SECTORS).filter(|k| k % 3 == 0).map(|k| y[k]).sum();
     assert!(
@@ -116,7 +116,7 @@ fn updates_lower_the_critic_loss_and_actions_respect_masks() {
     let out = |a: &madenet_dme::nets::Actor| {
         a.forward(x.clone(), pose.clone())
             .into_data()
-            .to_vec::<f32>()
+            .try_to_vec::<f32>()
             .unwrap()
     };
     assert_eq!(out(&soft_update(other.clone(), &actor, 1.0)), out(&actor));

@@ -594,6 +594,7 @@ fn collect_episode(
     let ds = cfg.scenario.sensing_range;
     while trial.begin_step() {
         let t = trial.world().t() as u64;
+        #[allow(clippy::needless_range_loop)] // i indexes the trial's agents and `robots`
         for i in 0..n {
             if !trial.deciding()[i] {
                 continue;

@@ -63,9 +63,10 @@ pub fn neighbours(
     passable: impl Fn(Pos) -> bool + Copy,
     movement: Movement,
 ) -> impl Iterator<Item = (Pos, u32)> {
-    Move::ALL[1..].iter().filter_map(move |&m| {
-        step_allowed(passable, p, m, movement).then(|| (m.apply(p), move_cost(m)))
-    })
+    Move::ALL[1..]
+        .iter()
+        .filter(move |&&m| step_allowed(passable, p, m, movement))
+        .map(move |&m| (m.apply(p), move_cost(m)))
 }
 
 /// A* from `start` to `goal` over `passable` cells (8-connected under `movement`, octile

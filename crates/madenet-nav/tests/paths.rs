@@ -553,8 +553,10 @@ fn reference_space_time(
     None
 }
 
-fn space_time_case(
-) -> impl Strategy<Value = (Grid, Pos, Pos, Vec<(Pos, Vec<Pos>)>, Movement, usize)> {
+/// A space-time case: grid, start, goal, other robots' (start, path), movement, horizon.
+type SpaceTimeCase = (Grid, Pos, Pos, Vec<(Pos, Vec<Pos>)>, Movement, usize);
+
+fn space_time_case() -> impl Strategy<Value = SpaceTimeCase> {
     (
         grid_strategy(9, 0.3),
         any::<bool>(),

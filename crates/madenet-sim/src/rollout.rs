@@ -191,7 +191,7 @@ pub fn run_oracle(
             if !trial.deciding()[i] {
                 continue;
             }
-            drop(trial.agent_mut(i).view(true));
+            trial.agent_mut(i).view(true); // extracts the candidates
             if trial.agents()[i].candidates().cells.len() < 2 {
                 continue;
             }

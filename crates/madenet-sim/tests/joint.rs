@@ -10,8 +10,11 @@ use std::sync::{Arc, Mutex};
 
 /// Gives each deciding robot a different candidate (robot i takes slot i mod count) and logs
 /// what it was asked.
+/// What a joint decision was asked: each robot's deciding flag, and the timestep.
+type Asked = (Vec<bool>, usize);
+
 struct Spread {
-    log: Arc<Mutex<Vec<(Vec<bool>, usize)>>>,
+    log: Arc<Mutex<Vec<Asked>>>,
 }
 
 impl JointPolicy for Spread {

@@ -160,6 +160,7 @@ fn check_metrics(s: &TrialSpec, r: &TrialResult) {
     for (k, rec) in tr.iter().enumerate() {
         assert_eq!(rec.t, k + 1);
         assert_eq!(rec.explored, m.explored_per_step[k + 1]);
+        #[allow(clippy::needless_range_loop)] // i indexes moves, prev and positions
         for i in 0..prev.len() {
             assert_eq!(
                 rec.moves[i].apply(prev[i]),
@@ -387,7 +388,7 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
         let mut seen = 0;
         while trial.begin_step() {
             if trial.deciding()[0] {
-                drop(trial.agent_mut(0).view(true));
+                trial.agent_mut(0).view(true); // extracts the candidates
                 if trial.agents()[0].candidates().cells.len() >= 2 {
                     seen += 1;
                     if seen == 3 {
@@ -437,7 +438,7 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
                 real.step();
             }
             assert!(real.begin_step());
-            drop(real.agent_mut(0).view(true));
+            real.agent_mut(0).view(true); // extracts the candidates
             let mut fixed = vec![None; 3];
             fixed[0] = Some(Decision::Candidate(k));
             real.decide_with(&fixed);

@@ -226,3 +226,12 @@ fn bad_designs_are_refused_naming_the_field() {
         assert!(e.contains(needle), "{e} should name {needle}");
     }
 }
+
+#[test]
+fn shipped_scale_config_is_the_default() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/scale.toml");
+    assert_eq!(
+        ScaleConfig::from_toml_file(&path).unwrap(),
+        ScaleConfig::default()
+    );
+}

@@ -362,7 +362,7 @@ fn small_study_writes_every_output_consistently() {
     // Progress: from 0 to total, one call per trial.
     assert_eq!(calls.first(), Some(&(0, total)));
     assert_eq!(calls.len(), total + 1, "{calls:?}");
-    assert!(calls.iter().any(|&c| c == (total, total)));
+    assert!(calls.contains(&(total, total)));
     assert!(calls.iter().all(|&(_, t)| t == total));
 
     // trials.csv: header with every column, one row per planned trial, in plan order.
@@ -926,8 +926,7 @@ fn different_config_in_same_folder_is_refused_unless_fresh() {
     };
     let (r, calls) = run(&b, &out, false);
     let msg = r
-        .err()
-        .expect("a different config must be refused")
+        .expect_err("a different config must be refused")
         .to_string();
     assert!(
         msg.contains(&out.display().to_string()),

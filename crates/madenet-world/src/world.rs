@@ -361,10 +361,10 @@ impl World {
                 targets[i] = self.positions[i];
             }
         }
-        for i in 0..n {
-            self.distance[i] += self.executed[i].length() * self.cfg.cell_size;
-            self.positions[i] = targets[i];
+        for (d, m) in self.distance.iter_mut().zip(&self.executed) {
+            *d += m.length() * self.cfg.cell_size;
         }
+        self.positions[..n].copy_from_slice(&targets[..n]);
         self.targets = targets;
     }
 

@@ -78,7 +78,8 @@ proptest! {
     #[test]
     fn visible_set_is_symmetric_under_mirrors_and_transpose((grid, at, radius) in grid_strategy()) {
         let n = grid.n as i32;
-        let maps: [(&str, fn(Pos, i32) -> Pos); 5] = [
+        type Symmetry = (&'static str, fn(Pos, i32) -> Pos);
+        let maps: [Symmetry; 5] = [
             ("left-right", |p, n| Pos::new(p.row, n - 1 - p.col)),
             ("top-bottom", |p, n| Pos::new(n - 1 - p.row, p.col)),
             ("transpose", |p, _| Pos::new(p.col, p.row)),

@@ -387,8 +387,8 @@ fn explorable_reference(truth: &OccGrid, starts: &[Pos], movement: Movement, ds:
     }
     let view = ViewPattern::new(ds, movement);
     let mut out = reach.clone();
-    for i in 0..truth.len() {
-        if reach[i] {
+    for (i, _) in reach.iter().enumerate().filter(|(_, &r)| r) {
+        {
             for q in visible_from(truth, &view, truth.pos(i)) {
                 out[truth.index(q)] = true;
             }
@@ -914,8 +914,7 @@ fn every_invalid_field_is_named() {
         }
         // The world refuses it too, with the same field name.
         let err = World::new(open(10, 10), &[p(0, 0), p(0, 1), p(0, 2)], cfg.clone(), 1)
-            .err()
-            .expect("World::new accepts an invalid config");
+            .expect_err("World::new accepts an invalid config");
         assert!(err.to_string().contains(field), "{err}");
     }
     // Edge values are valid.

@@ -9,8 +9,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 pub struct ScaleArgs {
     /// Scalability config (TOML, see configs/scale.toml); defaults: made-net-any, nf, ub, pb,
-    /// spread × sides 20, 30, 40, 60 × 3 maps × starts bottom-left, top-right, middle × teams
-    /// 2–6 × 2 seeds at CSP 1.
+    /// spread × sides 20, 30, 40, 60 × 4 maps × starts bottom-left, top-right, middle × teams
+    /// 2–6 × 3 seeds at CSP 1.
     #[arg(long)]
     config: Option<PathBuf>,
     /// Output folder (created; an interrupted study there resumes).
