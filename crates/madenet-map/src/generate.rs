@@ -1211,6 +1211,18 @@ mod tests {
                 to_text(&g).lines().map(String::from).collect(),
             ));
         }
+        // Every map is 20 × 20, connected, with the corner start cells free.
+        for (title, lines) in &columns {
+            assert_eq!(lines.len(), 20, "{title}");
+            assert!(lines.iter().all(|l| l.chars().count() == 20), "{title}");
+        }
+        for seed in 1..=3 {
+            let g = generate(&cfg, seed).expect("generate");
+            assert!(is_connected(&g), "seed {seed}");
+            for p in &cfg.keep_free {
+                assert_eq!(g.get(*p), Occupancy::Free, "seed {seed}: start cell {p:?}");
+            }
+        }
         let header: Vec<String> = columns.iter().map(|(t, _)| format!("{t:<22}")).collect();
         println!("{}", header.join(" "));
         for r in 0..20 {

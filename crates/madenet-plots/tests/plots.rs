@@ -249,6 +249,30 @@ fn unusual_but_valid_data_is_drawn() {
         series: vec![curve("raw", &noisy), curve("EWMA", &ewma(&noisy, 0.9))],
     };
     line_panels(&d.join("fig2"), &[panel], 1).unwrap();
+
+    // Everything was drawn: every panel title and every legend name is in its SVG, and the
+    // PNGs are real images.
+    let svg = |stem: &str| std::fs::read_to_string(d.join(format!("{stem}.svg"))).unwrap();
+    for (stem, texts) in [
+        ("neg", vec!["negative".to_string(), "zero".into()]),
+        ("many", (0..10).map(|i| format!(">\ns{i}\n<")).collect()),
+        (
+            "degenerate",
+            vec![
+                "single point".into(),
+                "constant".into(),
+                "another long series name".into(),
+            ],
+        ),
+        ("fig2", vec!["Team reward".into(), ">\nEWMA\n<".into()]),
+    ] {
+        let text = svg(stem);
+        for t in texts {
+            assert!(text.contains(&t), "{stem}.svg lacks {t:?}");
+        }
+        let png = image::open(d.join(format!("{stem}.png"))).unwrap();
+        assert!(png.width() >= 400 && png.height() >= 300, "{stem}.png");
+    }
 }
 
 #[test]
