@@ -149,10 +149,11 @@ impl DmeTrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: DmeTrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config {
-            path: path.display().to_string(),
-            message: toml_error(&text, &e),
-        })?;
+        let cfg: DmeTrainConfig =
+            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
+                path: path.display().to_string(),
+                message,
+            })?;
         cfg.validate().map_err(|m| TrainError::Config {
             path: path.display().to_string(),
             message: m,
@@ -294,17 +295,6 @@ impl DmeTrainConfig {
 }
 
 /// A TOML error on one line: the line number and text it points at, and the message.
-fn toml_error(text: &str, e: &toml::de::Error) -> String {
-    match e.span() {
-        Some(span) => {
-            let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-            let src = text.lines().nth(line - 1).unwrap_or("").trim();
-            format!("line {line} (`{src}`): {}", e.message())
-        }
-        None => e.message().to_string(),
-    }
-}
-
 /// One played episode, as the replay keeps it: per timestep and robot the frame (bit-packed),
 /// pose vector, valid sectors, action in force, whether it decided, and its reward.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -530,10 +520,11 @@ impl Model {
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let info: ModelInfo = toml::from_str(&text).map_err(|e| TrainError::Config {
-            path: path.display().to_string(),
-            message: e.message().to_string(),
-        })?;
+        let info: ModelInfo =
+            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
+                path: path.display().to_string(),
+                message,
+            })?;
         let mut files = Vec::new();
         for f in &info.actors {
             let p = dir.join(f);
@@ -548,10 +539,11 @@ impl Model {
         weights: &[&[u8]],
         label: &str,
     ) -> Result<Self, TrainError> {
-        let info: ModelInfo = toml::from_str(model_toml).map_err(|e| TrainError::Config {
-            path: label.to_string(),
-            message: e.message().to_string(),
-        })?;
+        let info: ModelInfo =
+            madenet_files::parse_toml(model_toml).map_err(|message| TrainError::Config {
+                path: label.to_string(),
+                message,
+            })?;
         Self::from_parts(info, weights.iter().map(|w| w.to_vec()).collect(), label)
     }
 

@@ -20,6 +20,12 @@
 //! ```
 //!
 //! Errors are `std::io::Error`s; callers name the path (and the flag or field) in their own error.
+//!
+//! It is also the one reader of TOML configs ([`read_toml`], [`parse_toml`]): errors name the
+//! file, the field and the line.
+
+mod toml_config;
+pub use toml_config::{parse_toml, read_toml, ConfigFileError};
 
 use std::fs::{File, OpenOptions};
 use std::io::{self, Write};

@@ -210,9 +210,9 @@ impl RolloutTrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: Self = toml::from_str(&text).map_err(|e| TrainError::Config {
+        let cfg: Self = madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
             path: path.display().to_string(),
-            message: e.message().to_string(),
+            message,
         })?;
         cfg.validate().map_err(|m| TrainError::Config {
             path: path.display().to_string(),

@@ -211,10 +211,11 @@ impl TrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
         let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: TrainConfig = toml::from_str(&text).map_err(|e| TrainError::Config {
-            path: path.display().to_string(),
-            message: e.message().to_string(),
-        })?;
+        let cfg: TrainConfig =
+            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
+                path: path.display().to_string(),
+                message,
+            })?;
         cfg.validate().map_err(|m| TrainError::Config {
             path: path.display().to_string(),
             message: m,
@@ -694,9 +695,9 @@ impl Model {
     }
 
     fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
-        toml::from_str(text).map_err(|e| TrainError::Config {
+        madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
             path: label.to_string(),
-            message: e.message().to_string(),
+            message,
         })
     }
 

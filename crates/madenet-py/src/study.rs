@@ -35,13 +35,8 @@ fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyCon
         toml::Table::try_from(extra).map_err(|e| value_error(format!("keyword arguments: {e}")))?;
     table.extend(extra);
     let text = toml::to_string(&table).map_err(value_error)?;
-    toml::from_str(&text).map_err(|e| {
-        value_error(format!(
-            "{}: {}",
-            config.unwrap_or("study"),
-            e.message().trim()
-        ))
-    })
+    madenet_files::parse_toml(&text)
+        .map_err(|message| value_error(format!("{}: {message}", config.unwrap_or("study"))))
 }
 
 fn outcome_dict<'py>(py: Python<'py>, o: &TrialOutcome) -> PyResult<Bound<'py, PyDict>> {
@@ -92,8 +87,8 @@ impl CoreStudy {
     #[staticmethod]
     fn from_toml(text: &str) -> PyResult<Self> {
         Self::build(
-            toml::from_str(text)
-                .map_err(|e| value_error(format!("study: {}", e.message().trim())))?,
+            madenet_files::parse_toml(text)
+                .map_err(|message| value_error(format!("study: {message}")))?,
         )
     }
 

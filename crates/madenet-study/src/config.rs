@@ -354,23 +354,11 @@ impl StudyConfig {
     }
 }
 
-/// Reads a study's TOML file; the error names the file, the problem and its line.
+/// Reads a study's TOML file ([`madenet_files::read_toml`]: the file, field and line).
 pub(crate) fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
-    let text = std::fs::read_to_string(path).map_err(|e| StudyError::File {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    })?;
-    toml::from_str(&text).map_err(|e| {
-        let line = e
-            .span()
-            .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-        StudyError::File {
-            path: path.display().to_string(),
-            message: match line {
-                Some(l) => format!("{} (line {l})", e.message().trim()),
-                None => e.message().trim().to_string(),
-            },
-        }
+    madenet_files::read_toml(path).map_err(|e| StudyError::File {
+        path: e.path,
+        message: e.message,
     })
 }
 

@@ -148,10 +148,11 @@ impl ScenarioConfig {
 
     /// Parses TOML text and validates it.
     pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        let cfg: ScenarioConfig = toml::from_str(text).map_err(|e| ConfigError::File {
-            path: "<toml>".into(),
-            message: describe_toml_error(text, &e),
-        })?;
+        let cfg: ScenarioConfig =
+            madenet_files::parse_toml(text).map_err(|message| ConfigError::File {
+                path: "<toml>".into(),
+                message,
+            })?;
         cfg.validate()?;
         Ok(cfg)
     }
@@ -247,31 +248,6 @@ pub fn goal_count_eq3(cells: usize, sensing_range: i32, robots: usize) -> Option
     }
     let extra = (4.0 * (side / window).log10() + 1e-9).floor().max(0.0) as usize;
     Some(extra + robots)
-}
-
-/// The TOML error with the field it is about (`table.key`, read off the line the error
-/// points at) and the line number.
-fn describe_toml_error(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim().to_string();
-    let Some(span) = e.span() else { return message };
-    let start = span.start.min(text.len());
-    let line_no = text[..start].matches('\n').count() + 1;
-    let line = text.lines().nth(line_no - 1).unwrap_or("");
-    let key = line
-        .split_once('=')
-        .map(|(k, _)| k.trim().trim_matches('"').to_string())
-        .filter(|k| !k.is_empty());
-    let table = text
-        .lines()
-        .take(line_no - 1)
-        .filter_map(|l| l.trim().strip_prefix('[').and_then(|l| l.strip_suffix(']')))
-        .last()
-        .map(|t| t.trim().to_string());
-    match (table, key) {
-        (Some(t), Some(k)) => format!("field `{t}.{k}`: {message} (line {line_no})"),
-        (None, Some(k)) => format!("field `{k}`: {message} (line {line_no})"),
-        _ => format!("{message} (line {line_no})"),
-    }
 }
 
 #[cfg(test)]
