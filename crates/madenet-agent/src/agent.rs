@@ -124,7 +124,7 @@ pub struct Agent {
     pos: Pos,
     belief: Belief,
     teammates: Vec<TeammateRecord>,
-    detected_any: bool,
+    teammate_detected: bool,
     newly_detected: bool,
     exchanged: Vec<usize>,
     goal: Option<Pos>,
@@ -224,7 +224,7 @@ impl Agent {
             pos: self.pos,
             belief: self.belief.clone(),
             teammates: self.teammates.clone(),
-            detected_any: self.detected_any,
+            teammate_detected: self.teammate_detected,
             newly_detected: self.newly_detected,
             exchanged: self.exchanged.clone(),
             goal: self.goal,
@@ -266,7 +266,7 @@ impl Agent {
             pos: start,
             belief,
             teammates,
-            detected_any: false,
+            teammate_detected: false,
             newly_detected: false,
             exchanged,
             goal: None,
@@ -361,7 +361,7 @@ impl Agent {
             rec.seen_at = Some(obs.t);
         }
         self.newly_detected = newly;
-        self.detected_any = !obs.teammates.is_empty();
+        self.teammate_detected = !obs.teammates.is_empty();
         self.check_livelock();
         self.exchanged.clear();
         self.exchanged.extend_from_slice(&obs.exchanged_with);
@@ -516,7 +516,7 @@ impl Agent {
             id: self.cfg.id,
             t: self.t,
             pos: self.pos,
-            teammate_detected: self.detected_any,
+            teammate_detected: self.teammate_detected,
             belief: &self.belief,
             teammates: &self.teammates,
             goal: self.goal,
@@ -576,7 +576,7 @@ impl Agent {
             id: self.cfg.id,
             t: self.t,
             pos: self.pos,
-            teammate_detected: self.detected_any,
+            teammate_detected: self.teammate_detected,
             belief: &self.belief,
             teammates: &self.teammates,
             goal: self.goal,

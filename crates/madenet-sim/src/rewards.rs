@@ -11,9 +11,11 @@ pub struct RewardConfig {
     pub new_cell: f64,
     /// Reward per cell a robot observes that it had already explored (Eq. 7, c ∩ E: −1).
     pub reobserved_cell: f64,
-    /// Consecutive local-interaction steps ρ from which the penalty −(e^ρ / 5)^0.5 applies
-    /// (Eq. 7: ρ ∈ [2, 7]).
+    /// Consecutive local-interaction steps ρ from which the penalty
+    /// −(e^ρ / `interaction_scale`)^0.5 applies (Eq. 7: ρ ∈ [2, 7]).
     pub interaction_from: u32,
+    /// The divisor of e^ρ in the interaction penalty (Eq. 7: 5).
+    pub interaction_scale: f64,
     /// Above this ρ the penalty is `interaction_cap` (Eq. 7: 7).
     pub interaction_until: u32,
     /// The penalty for ρ above `interaction_until` (Eq. 7: −15).
@@ -30,6 +32,7 @@ impl Default for RewardConfig {
             new_cell: 1.0,
             reobserved_cell: -1.0,
             interaction_from: 2,
+            interaction_scale: 5.0,
             interaction_until: 7,
             interaction_cap: -15.0,
             step: -1.0,
@@ -39,23 +42,25 @@ impl Default for RewardConfig {
 }
 
 impl RewardConfig {
-    /// The interaction term of Eq. (7) for ρ consecutive interaction steps.
-    pub fn interaction_penalty(&self, rho: u32) -> f64 {
+    /// The interaction term of Eq. (7) for ρ = `interaction_steps` consecutive steps in local
+    /// interaction.
+    pub fn interaction_penalty(&self, interaction_steps: u32) -> f64 {
+        let rho = interaction_steps; // ρ of Eq. (7)
         if rho < self.interaction_from {
             0.0
         } else if rho <= self.interaction_until {
-            -((rho as f64).exp() / 5.0).sqrt()
+            -((rho as f64).exp() / self.interaction_scale).sqrt()
         } else {
             self.interaction_cap
         }
     }
 
     /// Eq. (7) for one robot: `new` cells it observed that it had not explored, `reobserved`
-    /// that it had, and `rho` consecutive steps in local interaction.
-    pub fn robot(&self, new: usize, reobserved: usize, rho: u32) -> f64 {
+    /// that it had, and ρ = `interaction_steps` consecutive steps in local interaction.
+    pub fn robot(&self, new: usize, reobserved: usize, interaction_steps: u32) -> f64 {
         self.new_cell * new as f64
             + self.reobserved_cell * reobserved as f64
-            + self.interaction_penalty(rho)
+            + self.interaction_penalty(interaction_steps)
     }
 
     /// Eq. (8) for the team: distinct cells observed that the team had not known (`new`) and

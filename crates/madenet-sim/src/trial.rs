@@ -88,7 +88,7 @@ pub struct Trial {
     joint: Option<Box<dyn JointPolicy>>,
     reward_config: RewardConfig,
     /// Consecutive timesteps each robot has been in local interaction (ρ of Eq. 7).
-    interaction_run: Vec<u32>,
+    interaction_steps: Vec<u32>,
     rewards: StepRewards,
     /// Messages of the current step, kept to reuse their allocations: each robot's β
     /// (`composed` = written this step) and the plan being announced.
@@ -178,7 +178,7 @@ impl Trial {
             moves: vec![Move::Stay; n],
             joint: None,
             reward_config: RewardConfig::default(),
-            interaction_run: vec![0; n],
+            interaction_steps: vec![0; n],
             rewards: StepRewards {
                 robots: vec![0.0; n],
                 team: 0.0,
@@ -232,7 +232,7 @@ impl Trial {
         self.decided.fill(false);
         self.moves.fill(Move::Stay);
         self.joint = None;
-        self.interaction_run.fill(0);
+        self.interaction_steps.fill(0);
         self.rewards = StepRewards {
             robots: vec![0.0; n],
             team: 0.0,
@@ -287,7 +287,7 @@ impl Trial {
             moves: self.moves.clone(),
             joint: None,
             reward_config: self.reward_config.clone(),
-            interaction_run: self.interaction_run.clone(),
+            interaction_steps: self.interaction_steps.clone(),
             rewards: self.rewards.clone(),
             outbox: self.outbox.clone(),
             composed: self.composed.clone(),
@@ -552,14 +552,14 @@ impl Trial {
                 })
                 .count();
             let interacting = self.world.contacts().iter().any(|&(a, b)| a == i || b == i);
-            self.interaction_run[i] = if interacting {
-                self.interaction_run[i] + 1
+            self.interaction_steps[i] = if interacting {
+                self.interaction_steps[i] + 1
             } else {
                 0
             };
             self.rewards.robots[i] =
                 self.reward_config
-                    .robot(new, seen.len() - new, self.interaction_run[i]);
+                    .robot(new, seen.len() - new, self.interaction_steps[i]);
         }
         let new = self.world.team_newly_observed();
         let seen = self.world.team_observed();
