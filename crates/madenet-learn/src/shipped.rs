@@ -6,7 +6,7 @@ use crate::train::{Model, TrainError};
 use madenet_sim::PolicyRegistry;
 
 /// (policy name, description, model.toml, DEP weights).
-const SHIPPED: [(&str, &str, &str, &[u8]); 3] = [
+const SHIPPED: [(&str, &str, &str, &[u8]); 4] = [
     (
         "made-net",
         "MADE-Net (shipped model): DEP trained from a centralized rollout teacher, decentralized execution",
@@ -24,6 +24,12 @@ const SHIPPED: [(&str, &str, &str, &[u8]); 3] = [
         "MADE-Net-DT (shipped model): DEP trained on decentralized experience alone",
         include_str!("../../../models/made-net-dt/model.toml"),
         include_bytes!("../../../models/made-net-dt/dep0.bpk"),
+    ),
+    (
+        "made-net-any",
+        "MADE-Net for any map size and team (shipped model): the size- and team-agnostic DEP, rollout teacher on a curriculum of sides 20-60 and teams 2-6",
+        include_str!("../../../models/made-net-any/model.toml"),
+        include_bytes!("../../../models/made-net-any/dep0.bpk"),
     ),
 ];
 

@@ -1,5 +1,5 @@
 //! The shipped models load, play a paper map to completion, and refuse scenarios they were not
-//! built for with a message naming the mismatch.
+//! built for with a message naming the mismatch — but for the agnostic model, which plays them.
 
 use madenet_map::paper::Corner;
 use madenet_sim::{PolicyRegistry, SimError, Trial, TrialSpec};
@@ -37,11 +37,25 @@ fn shipped_models_play_and_refuse_other_sizes() {
             },
             ..spec
         };
+        let agnostic = madenet_learn::shipped::model(name)
+            .unwrap()
+            .agnostic
+            .is_some();
+        let four = if agnostic {
+            // Four free cells next to each other (the corner block above holds an obstacle).
+            let starts =
+                madenet_map::generate::random_starts(&four.map, 4, Default::default(), 1).unwrap();
+            TrialSpec { starts, ..four }
+        } else {
+            four
+        };
         match Trial::with_registry(four, &registry) {
-            Err(e @ SimError::PolicyUnavailable { .. }) => {
+            Err(e @ SimError::PolicyUnavailable { .. }) if !agnostic => {
                 assert!(e.to_string().contains("3 robots"), "{e}")
             }
-            Err(e) => panic!("unexpected error {e}"),
+            Err(e) => panic!("{name}: unexpected error {e}"),
+            // The agnostic model plays any team: four robots explore the map too.
+            Ok(t) if agnostic => assert!(t.run().metrics.completed, "{name} with 4 robots"),
             Ok(_) => panic!("{name} accepted 4 robots"),
         }
     }
