@@ -1,0 +1,80 @@
+//! `madenet scale` end to end: a tiny grid prints its report's path and writes every output, the
+//! shipped agnostic model plays every side and team of it, and bad input gives exit code 2 and
+//! one `error:` line naming the flag or file and field.
+
+use std::process::{Command, Output};
+
+fn madenet(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(args)
+        .output()
+        .expect("run madenet")
+}
+
+fn assert_clean_error(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "one line expected: {err:?}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{n:?} missing from {:?}", lines[0]);
+    }
+}
+
+#[test]
+fn tiny_grid_with_the_agnostic_model_and_bad_input() {
+    let dir = std::env::temp_dir().join(format!("madenet-scale-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("s");
+    let o = out.to_str().unwrap();
+    let r = madenet(&[
+        "scale",
+        "--out",
+        o,
+        "--sides",
+        "14,24",
+        "--teams",
+        "2,4",
+        "--seeds",
+        "1",
+        "--methods",
+        "made-net-any,nf",
+        "--threads",
+        "2",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    // 2 methods × 2 sides × 4 maps × 3 starts × 2 teams × 1 seed.
+    assert!(
+        stdout.starts_with("96 trials → ") && stdout.contains("scale.md"),
+        "{stdout}"
+    );
+    let report = std::fs::read_to_string(out.join("scale.md")).unwrap();
+    assert!(
+        report.contains("## 24 × 24") && report.contains("| made-net-any |"),
+        "{report}"
+    );
+    let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    assert_eq!(trials.lines().count(), 97);
+    assert!(trials
+        .lines()
+        .any(|l| l.starts_with("made-net-any,side24-map3,middle:4,")));
+    assert!(out.join("fig7_scalability.png").exists() && out.join("cells.csv").exists());
+
+    assert_clean_error(
+        &madenet(&["scale", "--out", o, "--teams", "0"]),
+        &["--teams"],
+    );
+    assert_clean_error(
+        &madenet(&["scale", "--out", o, "--methods", "teleport"]),
+        &["--methods", "teleport"],
+    );
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "sides = [20]\nseeds = \"three\"\n").unwrap();
+    assert_clean_error(
+        &madenet(&["scale", "--config", bad.to_str().unwrap(), "--out", o]),
+        &["bad.toml", "seeds", "line 2"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
