@@ -5,7 +5,9 @@
 //!
 //! 1. **Scenarios**: generated maps at obstacle fractions across `density_min..density_max`
 //!    (15–60 % by default: the paper's training maps are 40–60 %, its evaluation maps 18–36 %),
-//!    the team in a shared corner or around a random cell, CSP drawn per episode.
+//!    the team in a shared corner or around a random cell, CSP drawn per episode. With
+//!    `network = "agnostic"` a curriculum: square maps whose largest side grows over the
+//!    iterations up to `map_side_max`, teams up to `team_max`.
 //! 2. **Behaviour** (DAgger): iteration 0 follows the base rule (`spread`), later iterations the
 //!    DEP being trained (greedy); both take a random valid candidate with probability
 //!    `behaviour_epsilon`.
@@ -16,10 +18,11 @@
 //!    communication keeps the trial's own draws), or with `futures = "salted"` over `rollouts`
 //!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k).
 //!    The label of k is the mean number of steps left until the map is explored: one step of
-//!    policy improvement over the base rule.
+//!    policy improvement over the base rule. With `horizon`, continuations stop after that many
+//!    steps and the rest is estimated; `label_prob` thins the labelled decisions on large maps.
 //! 4. **Student**: the paper's DEP (MFE, F3, LSTM, F6; `observation` may add per-candidate
-//!    features) regresses the labels' *advantages* (label minus its mean over the valid
-//!    candidates) with Adam — by default on single decisions from zero LSTM state
+//!    features), or the size- and team-agnostic DEP ([`crate::agnostic`]), regresses the
+//!    labels' *advantages* (label minus its mean over the valid candidates) with Adam — by default on single decisions from zero LSTM state
 //!    (`recurrent = false`), else on windows of each robot's decision sequence.
 //! 5. **Validation** after every iteration on generated trials of their own seeds (210 by
 //!    default), the DEP acting greedily and with each `spread_margins` margin (the `spread` rule's
@@ -118,8 +121,8 @@ pub struct RolloutTrainConfig {
     /// Which futures the teacher scores a candidate in: `noiseless` (default: one continuation
     /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
     pub futures: Futures,
-    /// Steps after which a continuation is cut and its rest estimated from its exploration rate
-    /// ([`madenet_sim::rollout::continuation_within`]); 0: run to the end.
+    /// Steps after which a continuation is cut and its rest estimated at the trial's exploration
+    /// rate so far ([`madenet_sim::rollout::continuation_within`]); 0: run to the end.
     pub horizon: usize,
     /// Probability that a decision with a choice is labelled, at 400 cells (20 × 20); on a map
     /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
