@@ -445,12 +445,14 @@ impl Policy for AgnosticPolicy {
         let input = inputs(view, self.sensing_range, self.crop_radius);
         let q = self.net.scores(&input);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
+        // `spread`'s choice is candidate input 8, already computed for the features.
+        let anchor =
+            (0..input.mask.len()).find(|&k| input.features[k * CANDIDATE_INPUTS + 8] == 1.0);
         Decision::Candidate(crate::policy::conservative(
-            view,
             &q,
             greedy,
             self.spread_margin,
-            self.sensing_range,
+            anchor,
         ))
     }
 }

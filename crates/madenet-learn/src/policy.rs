@@ -83,34 +83,34 @@ impl Policy for DepPolicy {
             return Decision::Idle;
         }
         let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
-        Decision::Candidate(conservative(
-            view,
-            &q,
-            greedy,
-            self.spread_margin,
-            self.sensing_range,
-        ))
+        let anchor = self
+            .spread_margin
+            .and_then(|_| spread_choice(view, self.sensing_range));
+        Decision::Candidate(conservative(&q, greedy, self.spread_margin, anchor))
     }
 }
 
-/// Conservative acting: the candidate the `spread` rule (d_s = `sensing_range`) takes unless the
-/// network values `greedy` more than it by at least `margin` (`None`: `greedy`).
-pub(crate) fn conservative(
-    view: &mut AgentView<'_>,
-    q: &[f32],
-    greedy: usize,
-    margin: Option<f32>,
-    sensing_range: i32,
-) -> usize {
-    let Some(margin) = margin else { return greedy };
-    let spread = madenet_agent::Spread::new(sensing_range).scores(view);
-    let anchor = spread
+/// The candidate the `spread` rule (d_s = `sensing_range`) takes, if any.
+pub(crate) fn spread_choice(view: &mut AgentView<'_>, sensing_range: i32) -> Option<usize> {
+    madenet_agent::Spread::new(sensing_range)
+        .scores(view)
         .iter()
         .enumerate()
         .filter_map(|(k, s)| s.map(|s| (k, s)))
-        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-    match anchor {
-        Some((k, _)) if q[greedy] - q[k] < margin => k,
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+        .map(|(k, _)| k)
+}
+
+/// Conservative acting: `anchor` (the `spread` rule's candidate) unless the network values
+/// `greedy` more than it by at least `margin` (`None`: `greedy`).
+pub(crate) fn conservative(
+    q: &[f32],
+    greedy: usize,
+    margin: Option<f32>,
+    anchor: Option<usize>,
+) -> usize {
+    match (margin, anchor) {
+        (Some(margin), Some(k)) if q[greedy] - q[k] < margin => k,
         _ => greedy,
     }
 }

@@ -51,16 +51,32 @@ fn parse_oracle(s: &str) -> Result<Option<OracleKind>, String> {
 
 /// Names where a bad study field came from: the flag that set it, else the config file.
 fn name_source(e: StudyError, a: &CompareArgs) -> anyhow::Error {
+    name_study_source(
+        e,
+        a.config.as_deref(),
+        &[
+            ("methods", "--methods", a.methods.is_some()),
+            ("oracles", "--oracles", a.oracles.is_some()),
+            ("seeds", "--seeds", a.seeds.is_some()),
+        ],
+    )
+}
+
+/// Names where a bad study field came from: the flag that set it (`(field, flag, given)`), else
+/// the config file, else nothing more (a default). Shared by `compare` and `scale`.
+pub fn name_study_source(
+    e: StudyError,
+    config: Option<&std::path::Path>,
+    flags: &[(&str, &str, bool)],
+) -> anyhow::Error {
     let StudyError::Field { field, .. } = &e else {
         return e.into();
     };
-    let flag = match *field {
-        "methods" if a.methods.is_some() => Some("--methods"),
-        "oracles" if a.oracles.is_some() => Some("--oracles"),
-        "seeds" if a.seeds.is_some() => Some("--seeds"),
-        _ => None,
-    };
-    match (flag, &a.config) {
+    let flag = flags
+        .iter()
+        .find(|(f, _, given)| f == field && *given)
+        .map(|(_, flag, _)| *flag);
+    match (flag, config) {
         (Some(flag), _) => anyhow::anyhow!("{flag}: {e}"),
         (None, Some(path)) => anyhow::anyhow!("{}: {e}", path.display()),
         (None, None) => e.into(),

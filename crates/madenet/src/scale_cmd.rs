@@ -42,21 +42,16 @@ pub struct ScaleArgs {
 
 /// Names where a bad field came from: the flag that set it, else the config file.
 fn name_source(e: StudyError, a: &ScaleArgs) -> anyhow::Error {
-    let StudyError::Field { field, .. } = &e else {
-        return e.into();
-    };
-    let flag = match *field {
-        "methods" if a.methods.is_some() => Some("--methods"),
-        "sides" if a.sides.is_some() => Some("--sides"),
-        "teams" if a.teams.is_some() => Some("--teams"),
-        "seeds" if a.seeds.is_some() => Some("--seeds"),
-        _ => None,
-    };
-    match (flag, &a.config) {
-        (Some(flag), _) => anyhow::anyhow!("{flag}: {e}"),
-        (None, Some(path)) => anyhow::anyhow!("{}: {e}", path.display()),
-        (None, None) => e.into(),
-    }
+    crate::compare::name_study_source(
+        e,
+        a.config.as_deref(),
+        &[
+            ("methods", "--methods", a.methods.is_some()),
+            ("sides", "--sides", a.sides.is_some()),
+            ("teams", "--teams", a.teams.is_some()),
+            ("seeds", "--seeds", a.seeds.is_some()),
+        ],
+    )
 }
 
 pub fn run(a: ScaleArgs) -> Result<()> {
