@@ -2,7 +2,6 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::{MapSource, StartSpec, Trial, TrialResult, TrialSpec};
@@ -66,14 +65,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
         a.config.as_deref(),
         &a.policy,
     )?;
-    let bar = ProgressBar::new(specs.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
-            .expect("valid template"),
-    );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()?;
+    let (bar, pool) = crate::trials_bar_and_pool(specs.len() as u64, a.threads)?;
     let started = std::time::Instant::now();
     let results: Vec<Result<(String, TrialResult)>> = pool.install(|| {
         specs

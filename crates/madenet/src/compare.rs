@@ -2,7 +2,6 @@
 
 use anyhow::Result;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use madenet_sim::rollout::OracleKind;
 use madenet_study::{run_study, StudyConfig, StudyError};
 use std::path::PathBuf;
@@ -97,14 +96,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
     if let Some(s) = a.seeds {
         cfg.seeds = s;
     }
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
-            .expect("valid template"),
-    );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()?;
+    let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     let (report, outcomes) = pool
         .install(|| {
             run_study(&cfg, &a.out, a.fresh, &|done, total| {

@@ -186,6 +186,26 @@ pub fn threads_arg(s: &str) -> Result<usize, String> {
     Ok(n)
 }
 
+/// The progress bar of a trial set (`len` trials, 0 if not known yet) and the thread pool its
+/// trials run on (`threads`: `--threads`, all cores when unset or 0): batch, oracle, compare and
+/// scale.
+pub fn trials_bar_and_pool(
+    len: u64,
+    threads: Option<usize>,
+) -> anyhow::Result<(indicatif::ProgressBar, rayon::ThreadPool)> {
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}",
+        )
+        .expect("valid template"),
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()?;
+    Ok((bar, pool))
+}
+
 /// Reads the scenario config file if given, else the paper's defaults.
 pub fn load_config(
     path: Option<&std::path::Path>,

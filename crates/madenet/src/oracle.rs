@@ -4,7 +4,6 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use indicatif::{ProgressBar, ProgressStyle};
 use madenet_sim::rollout::{check_base, run_oracle, OracleKind};
 use madenet_sim::{Trial, TrialResult};
 use rayon::prelude::*;
@@ -92,14 +91,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Placebo => OracleKind::Placebo,
         Kind::Noiseless => OracleKind::Noiseless,
     };
-    let bar = ProgressBar::new(specs.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
-            .expect("valid template"),
-    );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()?;
+    let (bar, pool) = crate::trials_bar_and_pool(specs.len() as u64, a.threads)?;
     let started = std::time::Instant::now();
     let results: Vec<Result<(String, TrialResult, TrialResult)>> = pool.install(|| {
         specs

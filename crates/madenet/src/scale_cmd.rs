@@ -2,7 +2,6 @@
 
 use anyhow::Result;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
 use madenet_study::{run_scale, ScaleConfig, StudyError};
 use std::path::PathBuf;
 
@@ -72,14 +71,7 @@ pub fn run(a: ScaleArgs) -> Result<()> {
         cfg.seeds = s;
     }
     let registry = crate::registry(a.model.as_deref())?;
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} trials  {elapsed_precise}  eta {eta}")
-            .expect("valid template"),
-    );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
-        .build()?;
+    let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     let result = pool
         .install(|| {
             run_scale(&cfg, &registry, &a.out, a.fresh, &|done, total| {
