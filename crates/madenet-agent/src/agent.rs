@@ -15,20 +15,30 @@ use std::time::{Duration, Instant};
 /// The per-robot parameters an agent needs, derived from the [`ScenarioConfig`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct AgentConfig {
+    /// Robot index i (0-based); also its planning priority: lower indices plan first.
     pub id: usize,
+    /// Team size |I|.
     pub num_robots: usize,
+    /// Map height in cells (rows).
     pub height: usize,
+    /// Map width in cells (columns).
     pub width: usize,
     /// |G| (Eq. 3 unless configured).
     pub goal_count: usize,
+    /// Plan among communicating robots with prioritized space-time A* (Sec. III.C.5); when
+    /// false, teammates' [`PlanMessage`]s are ignored.
     pub prioritized_planning: bool,
+    /// Space-time A* horizon in timesteps; reservations beyond it are ignored.
     pub plan_horizon: usize,
+    /// The rule for diagonal steps past obstacle corners, for navigation and the frontier.
     pub movement: madenet_map::Movement,
     /// How 𝒢 is chosen ([`madenet_world::CandidateRule`]).
     pub candidate_rule: madenet_world::CandidateRule,
 }
 
 impl AgentConfig {
+    /// The config of robot `id` on a `height` × `width` map (cells) under `cfg`; |G| is
+    /// [`ScenarioConfig::goal_count_for`] the map's cells (Eq. 3 unless configured).
     pub fn from_scenario(cfg: &ScenarioConfig, id: usize, height: usize, width: usize) -> Self {
         AgentConfig {
             id,
@@ -47,10 +57,15 @@ impl AgentConfig {
 /// Why the current macro action ended (Sec. III.C.2: β^m), for logs and learning.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Termination {
+    /// The robot had no goal (start of an episode, or its last decision idled).
     NoGoal,
+    /// The robot stands on its goal.
     Reached,
+    /// A teammate was newly detected within d_s (not detected the timestep before).
     TeammateDetected,
+    /// The goal is no longer a frontier cell of the robot's belief m_i.
     NotFrontier,
+    /// A* through the robot's known free cells finds no path to the goal.
     Unreachable,
     /// The robot had a goal elsewhere and stayed put (blocked or waiting) for
     /// [`BLOCKED_STEPS`] timesteps in a row: it re-decides rather than deadlock.
@@ -76,10 +91,13 @@ pub const YIELD_STEPS: usize = 4;
 /// Per-agent timing and counters.
 #[derive(Clone, Debug, Default)]
 pub struct AgentStats {
+    /// Decisions applied ([`Agent::apply_decision`]: the own policy's or a joint policy's).
     pub decisions: usize,
+    /// Wall-clock time spent in [`Agent::decide`] (view, goal extraction and the policy).
     pub decision_time: Duration,
     /// Space-time searches run, and how many found no plan.
     pub space_time_plans: usize,
+    /// Space-time searches that found no plan (the robot kept its A* path).
     pub space_time_failures: usize,
 }
 
@@ -91,6 +109,7 @@ pub struct ViewScratch {
 }
 
 impl ViewScratch {
+    /// Scratch for a `height` × `width` map (cells).
     pub fn new(height: usize, width: usize) -> Self {
         ViewScratch {
             dijkstra: Dijkstra::new(height, width),
@@ -153,6 +172,8 @@ pub struct Agent {
 }
 
 impl Agent {
+    /// Robot `cfg.id` at `start` at the beginning of an episode: it knows no cell, has no goal
+    /// and decides with `policy`.
     pub fn new(cfg: AgentConfig, start: Pos, policy: Box<dyn Policy>) -> Self {
         let (h, w) = (cfg.height, cfg.width);
         let buffers = Buffers {
@@ -291,24 +312,33 @@ impl Agent {
         }
     }
 
+    /// Robot index i.
     pub fn id(&self) -> usize {
         self.cfg.id
     }
+    /// The per-robot parameters this agent was built with.
     pub fn config(&self) -> &AgentConfig {
         &self.cfg
     }
+    /// x_i: the robot's position as of its last observation.
     pub fn pos(&self) -> Pos {
         self.pos
     }
+    /// m_i: the robot's local map with its frontier.
     pub fn belief(&self) -> &Belief {
         &self.belief
     }
+    /// What the robot remembers of each teammate, indexed by robot (its own index holds an
+    /// empty record).
     pub fn teammates(&self) -> &[TeammateRecord] {
         &self.teammates
     }
+    /// g_i: the current goal (None: the robot has none and stays).
     pub fn goal(&self) -> Option<Pos> {
         self.goal
     }
+    /// 𝒢_i as last extracted for a view of this robot (empty when that view was taken without
+    /// candidates).
     pub fn candidates(&self) -> &GoalCandidates {
         &self.candidates
     }
@@ -316,6 +346,7 @@ impl Agent {
     pub fn path(&self) -> &[Pos] {
         &self.path
     }
+    /// The registry name of this robot's policy (e.g. `"nf"`).
     pub fn policy_name(&self) -> &str {
         self.policy.name()
     }
@@ -323,6 +354,7 @@ impl Agent {
     pub fn policy_mode(&self) -> DecisionMode {
         self.policy.mode()
     }
+    /// Timing and counters since the agent was built, restarted or forked.
     pub fn stats(&self) -> &AgentStats {
         &self.stats
     }

@@ -21,6 +21,8 @@ pub struct Belief {
 }
 
 impl Belief {
+    /// A `height` × `width` map (cells) with every cell unknown, whose frontier follows
+    /// `movement`.
     pub fn new(height: usize, width: usize, movement: Movement) -> Self {
         let mut b = Belief {
             map: OccGrid::new(height, width, Occupancy::Unknown),
@@ -50,9 +52,11 @@ impl Belief {
         }
     }
 
+    /// Map width in cells.
     pub fn width(&self) -> usize {
         self.map.width()
     }
+    /// Map height in cells.
     pub fn height(&self) -> usize {
         self.map.height()
     }
@@ -72,18 +76,22 @@ impl Belief {
     pub fn movement(&self) -> Movement {
         self.movement
     }
+    /// Number of frontier cells.
     pub fn frontier_count(&self) -> usize {
         self.frontier_count
     }
 
+    /// Whether `p` lies inside the map.
     #[inline]
     pub fn in_bounds(&self, p: Pos) -> bool {
         self.map.in_bounds(p)
     }
+    /// Row-major index of the in-bounds cell `p`.
     #[inline]
     pub fn index(&self, p: Pos) -> usize {
         self.map.index(p)
     }
+    /// The cell at row-major index `i`.
     #[inline]
     pub fn pos(&self, i: usize) -> Pos {
         self.map.pos(i)
@@ -93,10 +101,12 @@ impl Belief {
     pub fn get(&self, p: Pos) -> Occupancy {
         self.map.get(p)
     }
+    /// Whether `p` is known free (unknown and out-of-bounds cells are not).
     #[inline]
     pub fn is_free(&self, p: Pos) -> bool {
         self.get(p) == Occupancy::Free
     }
+    /// Whether `p` is a frontier cell (false out of bounds).
     #[inline]
     pub fn is_frontier(&self, p: Pos) -> bool {
         self.in_bounds(p) && self.frontier[self.index(p)]

@@ -22,9 +22,11 @@ impl GoalCandidates {
     pub fn valid_mask(&self) -> Vec<bool> {
         (0..self.slots).map(|k| k < self.cells.len()).collect()
     }
+    /// Whether macro action k has a candidate (k < `cells.len()`).
     pub fn is_valid(&self, k: usize) -> bool {
         k < self.cells.len()
     }
+    /// The goal of macro action k (None: the slot is invalid).
     pub fn get(&self, k: usize) -> Option<Pos> {
         self.cells.get(k).copied()
     }

@@ -12,6 +12,8 @@
 //! Policies implement [`Policy`] (one per robot) or [`JointPolicy`] (centralized). The
 //! nearest-frontier baseline [`NearestFrontier`] ships here.
 
+#![deny(missing_docs)]
+
 pub mod agent;
 pub mod belief;
 pub mod goals;

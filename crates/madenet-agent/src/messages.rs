@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 /// current position, current goal and local map, plus |E_j| for the networks.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Beta {
+    /// The sender's robot index j.
     pub from: usize,
     /// Timestep at which it was sent.
     pub t: usize,
@@ -27,9 +28,13 @@ pub struct Beta {
 /// with for prioritized space-time planning: `path[k]` is the cell it will hold at t + k + 1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlanMessage {
+    /// The sender's robot index.
     pub from: usize,
+    /// Timestep at which the plan was made.
     pub t: usize,
+    /// The sender's position at `t`, where the path starts.
     pub start: Pos,
+    /// The planned cells, first = next cell: `path[k]` is held at t + k + 1.
     pub path: Vec<Pos>,
 }
 
@@ -39,14 +44,18 @@ pub struct PlanMessage {
 pub struct TeammateRecord {
     /// Timestep of the last β heard, if any.
     pub heard_at: Option<usize>,
+    /// g_j^{t-1} from the last β (None: never heard, or j had no previous goal).
     pub prev_goal: Option<Pos>,
+    /// g_j^t from the last β (None: never heard, or j had no goal).
     pub goal: Option<Pos>,
     /// Position from the last β.
     pub beta_pos: Option<Pos>,
+    /// |E_j| from the last β (0 until one is heard).
     pub explored: usize,
     /// Last directly detected position and its timestep (teammate detection works during
     /// dropouts too).
     pub seen_pos: Option<Pos>,
+    /// Timestep of `seen_pos` (None: never detected).
     pub seen_at: Option<usize>,
     /// Detected in the current timestep.
     pub detected: bool,

@@ -29,11 +29,14 @@ pub enum Decision {
 pub trait Policy: Send {
     /// Registry name (e.g. `"nf"`).
     fn name(&self) -> &str;
+    /// When this policy is asked for a decision.
     fn mode(&self) -> DecisionMode;
     /// Whether the view must carry goal candidates (their extraction costs a full Dijkstra).
     fn needs_candidates(&self) -> bool {
         true
     }
+    /// The robot's decision from its own view z_i: at each macro termination, or every
+    /// timestep under [`DecisionMode::EveryStep`].
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision;
 }
 
@@ -41,7 +44,10 @@ pub trait Policy: Send {
 /// centralized training). `needs[i]` tells which robots' macro actions terminated; the
 /// decisions of the others are ignored.
 pub trait JointPolicy: Send {
+    /// Registry name.
     fn name(&self) -> &str;
+    /// One decision per robot from every robot's view and the team's merged map 𝓜
+    /// (`team_map`, row-major); only those of robots with `needs[i]` are applied.
     fn decide(
         &mut self,
         views: &mut [AgentView<'_>],
@@ -101,6 +107,7 @@ pub struct RandomCandidate {
 }
 
 impl RandomCandidate {
+    /// The policy of robot `robot`, its random stream derived from the trial `seed`.
     pub fn new(seed: u64, robot: usize) -> Self {
         RandomCandidate {
             rng: madenet_world::rng::stream(seed, "policy/random", robot as u64),
@@ -143,6 +150,7 @@ impl Spread {
     /// Positions older than this many steps are ignored.
     pub const POSITION_MEMORY: usize = 10;
 
+    /// The rule for sensing range d_s = `sensing_range` cells.
     pub fn new(sensing_range: i32) -> Self {
         Spread { sensing_range }
     }

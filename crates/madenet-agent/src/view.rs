@@ -23,8 +23,9 @@ pub struct AgentView<'a> {
     /// β_i: the last information heard from (or seen of) each teammate; own index included
     /// as an empty record.
     pub teammates: &'a [TeammateRecord],
-    /// The robot's current and previous goal.
+    /// g_i^t: the robot's current goal (None: it has none).
     pub goal: Option<Pos>,
+    /// g_i^{t-1}: the goal the robot had before the current one (None: none).
     pub prev_goal: Option<Pos>,
     pub(crate) candidates: &'a GoalCandidates,
     pub(crate) dijkstra: &'a mut Dijkstra,

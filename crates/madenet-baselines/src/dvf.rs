@@ -106,6 +106,8 @@ const DIRS: [(isize, isize); 8] = [
 ];
 
 impl DistributedValueFunctions {
+    /// The PB policy of a robot on a `height` × `width` map (cells), moving by `cfg`'s
+    /// movement rule.
     pub fn new(p: PbParams, cfg: &ScenarioConfig, height: usize, width: usize) -> Self {
         let pw = width + 2;
         let n = (height + 2) * pw;

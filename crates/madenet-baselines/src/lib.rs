@@ -16,6 +16,8 @@
 //! after their source). [`register`] adds `ub` and `pb` to a
 //! [`madenet_sim::PolicyRegistry`].
 
+#![deny(missing_docs)]
+
 mod dvf;
 mod utility;
 
@@ -29,7 +31,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BaselineParams {
+    /// The constants of UB, [`UtilityBased`].
     pub ub: UbParams,
+    /// The constants of PB, [`DistributedValueFunctions`].
     pub pb: PbParams,
 }
 

@@ -46,6 +46,8 @@ pub struct UtilityBased {
 }
 
 impl UtilityBased {
+    /// The UB policy of a robot on a `height` × `width` map (cells), its sensing range d_s
+    /// and cell size taken from `cfg`; the unset `params` get their defaults from them.
     pub fn new(params: UbParams, cfg: &ScenarioConfig, height: usize, width: usize) -> Self {
         let side_m = (height.max(width) as f64) * cfg.cell_size;
         UtilityBased {

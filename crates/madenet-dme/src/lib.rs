@@ -18,6 +18,8 @@
 //! `docs/design/dme-drl-brief.md` records what the original code does and where this
 //! implementation departs from it.
 
+#![deny(missing_docs)]
+
 pub mod maddpg;
 pub mod nets;
 pub mod obs;

@@ -32,8 +32,9 @@ use rand::RngExt;
 pub struct UpdateParams {
     /// Soft target update rate τ (the original: 0.01).
     pub tau: f32,
-    /// Adam step sizes (the original: 1e-3 for both).
+    /// The actors' Adam step size (the original: 1e-3).
     pub actor_lr: f64,
+    /// The critics' Adam step size (the original: 1e-3).
     pub critic_lr: f64,
     /// Gumbel-softmax temperature (the original: 1).
     pub temperature: f32,
@@ -44,6 +45,7 @@ pub struct UpdateParams {
 /// A minibatch of one robot's transitions on the host, row-major.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Batch {
+    /// B, the number of transitions (rows of every field below).
     pub size: usize,
     /// Every robot's stacked frames at the decision `[B][team · 4 · history][H][W]`, robot-major.
     pub maps: Vec<f32>,
@@ -57,12 +59,17 @@ pub struct Batch {
     pub rewards: Vec<f32>,
     /// γ^τ to the next decision, 0 if the episode ended first `[B]`.
     pub discounts: Vec<f32>,
-    /// The same at the robot's next decision (ignored where the discount is 0).
+    /// `maps` at the robot's next decision (this and the other `next_` fields are ignored
+    /// where the discount is 0).
     pub next_maps: Vec<f32>,
+    /// `poses` at the robot's next decision.
     pub next_poses: Vec<f32>,
+    /// `masks` at the robot's next decision: the sectors the target actors may sample.
     pub next_masks: Vec<f32>,
-    /// Actions in force at the next decision `[B][team · 8]`, and who decides then `[B][team]`.
+    /// Actions in force at the next decision `[B][team · 8]`, kept by robots not deciding then.
     pub next_actions: Vec<f32>,
+    /// Who decides at the next decision `[B][team]`: 1 samples its target actor μ'_j, 0 keeps
+    /// its action in force.
     pub next_deciding: Vec<f32>,
 }
 
@@ -78,12 +85,19 @@ pub struct UpdateStats {
 /// The learner's networks: per robot an actor and a critic (online on the autodiff device,
 /// targets on the plain one) and their optimizers.
 pub struct Maddpg {
+    /// Sizes of every actor and critic.
     pub cfg: DmeConfig,
+    /// Online actors μ_i, one per robot (autodiff device).
     pub actors: Vec<Actor>,
+    /// Online centralized critics Q_i, one per robot (autodiff device).
     pub critics: Vec<Critic>,
+    /// Target actors μ'_i (plain device), soft-updated toward `actors` at rate τ.
     pub target_actors: Vec<Actor>,
+    /// Target critics Q'_i (plain device), soft-updated toward `critics` at rate τ.
     pub target_critics: Vec<Critic>,
+    /// Adam state of each actor, in robot order.
     pub actor_optims: Vec<ModuleOptimizer>,
+    /// Adam state of each critic, in robot order.
     pub critic_optims: Vec<ModuleOptimizer>,
 }
 

@@ -23,9 +23,10 @@ use burn::tensor::{Device, Tensor};
 /// Sizes of the DME-DRL networks.
 #[derive(Config, Debug, PartialEq)]
 pub struct DmeConfig {
-    /// Map height and width in cells.
+    /// Map height H in cells.
     #[config(default = 20)]
     pub map_height: usize,
+    /// Map width W in cells.
     #[config(default = 20)]
     pub map_width: usize,
     /// Robots |I|.
@@ -62,7 +63,8 @@ impl DmeConfig {
     pub fn pose_len(&self) -> usize {
         2 * self.team_size
     }
-    /// Flattened length after the two convolutions for `channels` input channels.
+    /// Flattened length after the two convolutions (32 channels × their output sides; the
+    /// same for any number of input channels).
     fn flat(&self) -> usize {
         let (h, w) = (
             out_side(out_side(self.map_height, 4, 2), 3, 2),
@@ -110,10 +112,15 @@ impl DmeConfig {
 /// A decentralized actor: sector logits from the robot's own map history and pose vector.
 #[derive(Module, Debug)]
 pub struct Actor {
+    /// C1: convolution k4 s2, 4·history → 16 channels.
     pub c1: Conv2d,
+    /// C2: convolution k3 s2, 16 → 32 channels.
     pub c2: Conv2d,
+    /// Hidden layer: flattened map features ‖ pose vector (2·team) → `hidden` units.
     pub f1: Linear,
+    /// Output layer: `hidden` units → 8 sector logits.
     pub f2: Linear,
+    /// ReLU after C1, C2 and the hidden layer.
     pub act: Relu,
 }
 
@@ -134,10 +141,16 @@ impl Actor {
 /// A centralized critic: Q_i from every robot's map history, action and pose vector.
 #[derive(Module, Debug)]
 pub struct Critic {
+    /// C1: convolution k4 s2, team·4·critic_history → 16 channels.
     pub c1: Conv2d,
+    /// C2: convolution k3 s2, 16 → 32 channels.
     pub c2: Conv2d,
+    /// Hidden layer: flattened map features ‖ every robot's action (team·8) ‖ every robot's
+    /// pose vector (team·2·team) → `hidden` units.
     pub f1: Linear,
+    /// Output layer: `hidden` units → Q_i.
     pub f2: Linear,
+    /// ReLU after C1, C2 and the hidden layer.
     pub act: Relu,
 }
 

@@ -66,6 +66,7 @@ pub struct History {
 }
 
 impl History {
+    /// An empty history of `len` frames (at least 1); the first [`push`](Self::push) fills it.
     pub fn new(len: usize) -> Self {
         History {
             len: len.max(1),

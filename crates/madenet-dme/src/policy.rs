@@ -33,6 +33,7 @@ pub const BLOCKED_STEPS: usize = madenet_agent::BLOCKED_STEPS;
 pub struct StepRecord {
     /// This timestep's frame `[4][H][W]` (0/1).
     pub frame: Vec<u8>,
+    /// This timestep's pose vector `[2 · team]` ([`pose_vector`]).
     pub pose: Vec<f32>,
     /// Sectors with a reachable frontier cell.
     pub mask: [bool; SECTORS],

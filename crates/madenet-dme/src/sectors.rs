@@ -26,6 +26,7 @@ pub fn sector_of(from: Pos, to: Pos) -> Option<usize> {
 /// cheapest path (ties: lower row-major index), or `None` (the action is masked).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SectorGoals {
+    /// `goals[k]`: sector k's goal cell, `None` if it holds no reachable frontier cell.
     pub goals: [Option<Pos>; SECTORS],
 }
 

@@ -60,10 +60,13 @@ pub struct DmeTrainConfig {
     pub max_minutes: f64,
     /// The simulated world; its `comm_success_prob` is unused (drawn per episode from U(0, 1)).
     pub scenario: ScenarioConfig,
-    /// Training map size and obstacle density range (as MADE-Net's: 20 × 20, 40–60 %).
+    /// Training map height in cells (as MADE-Net's: 20).
     pub map_height: usize,
+    /// Training map width in cells (as MADE-Net's: 20).
     pub map_width: usize,
+    /// Lowest obstacle density of the training maps, a fraction (as MADE-Net's: 0.4).
     pub density_min: f64,
+    /// Highest obstacle density of the training maps, a fraction (as MADE-Net's: 0.6).
     pub density_max: f64,
     /// Frames of map history in an actor's input (the original: 6 frames of 100 × 100).
     pub history: usize,
@@ -79,8 +82,9 @@ pub struct DmeTrainConfig {
     pub gamma: f32,
     /// Soft target update rate (the original: 0.01).
     pub tau: f32,
-    /// Adam step sizes (the original: 1e-3).
+    /// The actors' Adam step size (the original: 1e-3).
     pub actor_lr: f64,
+    /// The critics' Adam step size (the original: 1e-3).
     pub critic_lr: f64,
     /// Gumbel-softmax temperature (the original: 1).
     pub temperature: f32,
@@ -96,8 +100,9 @@ pub struct DmeTrainConfig {
     pub update_every: u64,
     /// Validate every this many episodes; 0 = never.
     pub validate_every: u64,
-    /// Generated validation maps (fixed by `seed`, never the paper's) and their CSPs.
+    /// Generated validation maps (fixed by `seed`, never the paper's).
     pub validation_maps: usize,
+    /// CSPs each validation map is run at.
     pub validation_csp: Vec<f64>,
     /// Checkpoint every this many episodes.
     pub checkpoint_every: u64,
@@ -294,7 +299,6 @@ impl DmeTrainConfig {
     }
 }
 
-/// A TOML error on one line: the line number and text it points at, and the message.
 /// One played episode, as the replay keeps it: per timestep and robot the frame (bit-packed),
 /// pose vector, valid sectors, action in force, whether it decided, and its reward.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -313,6 +317,7 @@ pub struct Episode {
     /// Per robot, the timesteps at which it chose a sector: its transitions start there.
     decisions: Vec<Vec<u32>>,
     steps: usize,
+    /// The team explored the whole map before the step cap.
     pub complete: bool,
 }
 
@@ -331,6 +336,7 @@ impl Episode {
     pub fn len(&self) -> usize {
         self.steps
     }
+    /// True if no timestep was played.
     pub fn is_empty(&self) -> bool {
         self.steps == 0
     }
@@ -473,12 +479,17 @@ impl Replay {
 /// What [`train`] reports after each episode (for a progress bar).
 #[derive(Clone, Debug)]
 pub struct Progress {
+    /// Episodes played so far, this one included.
     pub episode: u64,
+    /// Episodes the run is to play (`episodes` of the config).
     pub episodes: u64,
+    /// MADDPG updates so far.
     pub updates: u64,
-    /// The episode's summed reward and steps.
+    /// The episode's reward, summed over robots and timesteps.
     pub reward: f64,
+    /// Timesteps the episode lasted.
     pub steps: usize,
+    /// Mean steps of the latest validation (`None` before the first).
     pub validation_steps: Option<f64>,
 }
 
@@ -496,22 +507,35 @@ struct State {
 /// The trained actors as shipped: `model.toml` and one weight file per robot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ModelInfo {
+    /// Always `dme-drl` (loading rejects any other method).
     pub method: String,
+    /// Map height in cells the actors were trained for.
     pub map_height: usize,
+    /// Map width in cells the actors were trained for.
     pub map_width: usize,
+    /// Robots |I|: one actor each.
     pub team_size: usize,
+    /// Map frames stacked in an actor's input ([`DmeConfig::history`]).
     pub history: usize,
+    /// Hidden units of the actors' fully connected layer.
     pub hidden: usize,
+    /// Weight files of the actors in robot order, relative to the model's directory
+    /// (`actor0.bpk`, …).
     pub actors: Vec<String>,
+    /// Episodes played when the model was saved.
     pub episode: u64,
+    /// MADDPG updates when the model was saved.
     pub updates: u64,
+    /// Mean validation steps that made this the best model (`best/`); `None` for `last/`.
     pub validation_steps: Option<f64>,
 }
 
 /// A loaded DME-DRL model: one actor per robot on the plain CPU device.
 #[derive(Clone)]
 pub struct Model {
+    /// Sizes and provenance, as in `model.toml`.
     pub info: ModelInfo,
+    /// One actor per robot, in robot order (robot i runs actor i).
     pub actors: Vec<SharedActor>,
 }
 

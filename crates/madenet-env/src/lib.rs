@@ -32,6 +32,8 @@
 //!   when rayon has one thread) into flat buffers, auto-resetting;
 //! * [`frame`]: the picture of the current state, as `madenet run --render` draws it.
 
+#![deny(missing_docs)]
+
 pub mod vector;
 
 pub use vector::{VecBuffers, VecEnv};
@@ -78,8 +80,13 @@ pub enum ActionMode {
 /// Why an environment cannot be built or stepped.
 #[derive(Debug, thiserror::Error)]
 pub enum EnvError {
+    /// The simulator refused to set up the trial or a policy (an invalid scenario config or
+    /// start cells; an unknown or unavailable policy).
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// The caller misused the environment (wrong buffer lengths or counts; an action, robot or
+    /// goal out of range; a call before `reset` or after the episode's end; a mode mismatch);
+    /// the message says which.
     #[error("{0}")]
     Usage(String),
 }
@@ -281,15 +288,19 @@ impl ExplorationEnv {
             .timed(false))
     }
 
+    /// Team size |I|.
     pub fn num_robots(&self) -> usize {
         self.starts.len()
     }
+    /// Map height H in cells.
     pub fn height(&self) -> usize {
         self.map.height()
     }
+    /// Map width W in cells.
     pub fn width(&self) -> usize {
         self.map.width()
     }
+    /// What an action means in this environment.
     pub fn mode(&self) -> ActionMode {
         self.mode
     }

@@ -21,6 +21,8 @@ pub struct VecBuffers<'a> {
     pub needs_action: &'a mut [bool],
     /// `[n]`: the episode ended in this step (the environment has been reset since).
     pub terminated: &'a mut [bool],
+    /// `[n]`: the episode hit the step cap in this step, unexplored (the environment has been
+    /// reset since).
     pub truncated: &'a mut [bool],
 }
 
@@ -141,12 +143,15 @@ impl VecEnv {
         Ok(v)
     }
 
+    /// Number of environments N.
     pub fn len(&self) -> usize {
         self.slots.len()
     }
+    /// Always false: [`VecEnv::new`] refuses 0 environments.
     pub fn is_empty(&self) -> bool {
         self.slots.is_empty()
     }
+    /// Environment 0, e.g. to read the batch's shapes (robots, map size, action count).
     pub fn first(&self) -> &ExplorationEnv {
         &self.slots[0].env
     }

@@ -24,6 +24,8 @@
 //! It is also the one reader of TOML configs ([`read_toml`], [`parse_toml`]): errors name the
 //! file, the field and the line.
 
+#![deny(missing_docs)]
+
 mod toml_config;
 pub use toml_config::{parse_toml, read_toml, ConfigFileError};
 

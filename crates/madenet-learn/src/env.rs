@@ -92,6 +92,11 @@ pub struct Actor {
 }
 
 impl Actor {
+    /// The actor of one `kind` episode: ε = `epsilon`, |G| = `goals` candidates per robot, a
+    /// team of `team` robots, zero LSTM states; `cen_explore` makes the decentralized env
+    /// explore by the CEP's joint choice (if there is a CEP) rather than a random valid
+    /// candidate.
+    /// The ε draws and random candidates come from `rng`.
     pub fn new(
         kind: EnvKind,
         nets: ActorNets,
@@ -215,7 +220,9 @@ impl JointPolicy for Actor {
 /// One recorded training episode.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Episode {
+    /// The environment that played it.
     pub kind: EnvKind,
+    /// The episode's CSP (1 in the centralized env, drawn from U(0, 1) in the decentralized).
     pub comm_success_prob: f64,
     /// Primitive steps (decided flags, actions in force, Eq. 7/8 rewards).
     pub steps: Vec<PrimitiveStep>,
@@ -223,9 +230,10 @@ pub struct Episode {
     pub decisions: Vec<JointStep>,
     /// The CEP's macro transitions: `cep[k]` starts at `decisions[k]`.
     pub cep: Vec<MacroTransition>,
-    /// Each robot's DEP transitions and, for its `k`-th, the index into `decisions` where it
-    /// was chosen.
+    /// Each robot's DEP transitions, from its own decisions.
     pub dep: Vec<Vec<MacroTransition>>,
+    /// `dep_at[i][k]`: the index into `decisions` where robot i's `k`-th DEP transition was
+    /// chosen.
     pub dep_at: Vec<Vec<usize>>,
     /// The team explored everything (else the step cap ended it).
     pub complete: bool,
@@ -242,6 +250,7 @@ impl Episode {
     pub fn len(&self) -> usize {
         self.steps.len()
     }
+    /// True if no primitive step was taken.
     pub fn is_empty(&self) -> bool {
         self.steps.is_empty()
     }
@@ -250,8 +259,10 @@ impl Episode {
 /// Why an episode could not be recorded.
 #[derive(Debug, thiserror::Error)]
 pub enum EpisodeError {
+    /// The simulator could not build the trial from the spec.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// The recorded steps could not be squeezed into macro transitions.
     #[error(transparent)]
     Replay(#[from] ReplayError),
 }

@@ -39,9 +39,13 @@ pub struct UpdateParams {
     pub learning_rate: f64,
     /// Rewards are multiplied by this before entering the targets.
     pub reward_scale: f32,
+    /// Map height H in cells (rows of the map images).
     pub map_height: usize,
+    /// Map width W in cells (columns of the map images).
     pub map_width: usize,
+    /// Team size |I|.
     pub team: usize,
+    /// Goal candidates per robot |G| (macro actions per robot).
     pub goals: usize,
 }
 
@@ -145,8 +149,11 @@ fn td_step(
 /// A slice of an episode: joint decisions `start..end`.
 #[derive(Clone, Copy, Debug)]
 pub struct Window<'a> {
+    /// The episode the decisions belong to.
     pub episode: &'a Episode,
+    /// First joint decision (index into `episode.decisions`).
     pub start: usize,
+    /// One past the last joint decision.
     pub end: usize,
 }
 
@@ -244,9 +251,13 @@ pub fn cep_update(
 /// that spans many joint decisions (teammates deciding often) is trained like any other.
 #[derive(Clone, Copy, Debug)]
 pub struct RobotWindow<'a> {
+    /// The episode the decisions belong to.
     pub episode: &'a Episode,
+    /// The robot whose DEP transitions these are.
     pub robot: usize,
+    /// First transition (index into `episode.dep[robot]`).
     pub start: usize,
+    /// One past the last transition.
     pub end: usize,
 }
 

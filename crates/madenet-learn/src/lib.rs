@@ -63,6 +63,8 @@
 //!   LSTM keeps *separate* input and hidden biases per gate: 4·(in·h + h + h·h + h). At the
 //!   defaults the CEP has 101 202 parameters and a DEP 49 686 (hand arithmetic in the tests).
 
+#![deny(missing_docs)]
+
 mod actions;
 pub mod agnostic;
 mod config;

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 pub struct RobotObs {
     /// The map image, bit-packed ([`pack_bits`]).
     pub map: Vec<u64>,
+    /// The non-map macro observation `z_i \ {m_i}` ([`crate::obs_dim_for`] values).
     pub vec: Vec<f32>,
     /// Which macro actions may be chosen ([`action_mask`]).
     pub mask: Vec<bool>,
@@ -23,7 +24,9 @@ pub struct RobotObs {
 pub struct JointObs {
     /// The merged map image, bit-packed ([`pack_bits`]).
     pub map: Vec<u64>,
+    /// Every robot's non-map vector, concatenated in robot order.
     pub vec: Vec<f32>,
+    /// Each robot's candidate mask ([`action_mask`]), in robot order.
     pub masks: Vec<Vec<bool>>,
 }
 

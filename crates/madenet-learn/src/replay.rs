@@ -27,7 +27,9 @@ pub struct PrimitiveStep {
 /// (`None` when the episode ended first: a terminal transition).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MacroTransition {
+    /// The primitive step whose observation the action was chosen on.
     pub from: usize,
+    /// The primitive step of the next decision (its observation bootstraps); `None`: terminal.
     pub to: Option<usize>,
     /// The action: a robot's candidate index (DEP) or the joint actions in force (CEP).
     pub actions: Vec<usize>,
@@ -41,17 +43,34 @@ pub struct MacroTransition {
 /// Why an episode cannot be squeezed.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ReplayError {
+    /// A step's per-robot list does not have one entry per robot (the team size being the
+    /// length of the first step's `decided`).
     #[error("step {step}: {what} has {got} entries for {robots} robots")]
     Ragged {
+        /// Index of the offending step.
         step: usize,
+        /// The list: `decided`, `actions` or `robot_rewards`.
         what: &'static str,
+        /// Its length.
         got: usize,
+        /// The team size.
         robots: usize,
     },
+    /// A robot did not decide at the episode's first step, so its first macro action has no
+    /// observation.
     #[error("the first step must be a decision of every robot (robot {robot} did not decide)")]
-    NoInitialDecision { robot: usize },
+    NoInitialDecision {
+        /// The robot that did not decide.
+        robot: usize,
+    },
+    /// A robot index beyond the team was asked for.
     #[error("robot {robot} is out of range for a team of {robots}")]
-    NoSuchRobot { robot: usize, robots: usize },
+    NoSuchRobot {
+        /// The robot asked for.
+        robot: usize,
+        /// The team size.
+        robots: usize,
+    },
 }
 
 fn check(steps: &[PrimitiveStep]) -> Result<usize, ReplayError> {

@@ -99,8 +99,9 @@ pub struct RolloutTrainConfig {
     pub iterations: u64,
     /// The simulated world; its `comm_success_prob` is unused (CSP is drawn per episode).
     pub scenario: ScenarioConfig,
-    /// Training map size (the paper: 20 × 20).
+    /// Training map height in cells (the paper: 20); the curriculum's smallest side.
     pub map_height: usize,
+    /// Training map width in cells (the paper: 20).
     pub map_width: usize,
     /// With the agnostic network: the largest map side of the curriculum (square maps of sides
     /// `map_height..=map_side_max`, the upper end growing linearly over the iterations from
@@ -109,8 +110,9 @@ pub struct RolloutTrainConfig {
     /// With the agnostic network: the largest team (teams of `scenario.num_robots..=team_max`
     /// robots, drawn per episode). 0: every team has `scenario.num_robots`.
     pub team_max: usize,
-    /// Obstacle fraction range of the generated maps (ours: 15–60 %; the paper: 40–60 %).
+    /// Lowest obstacle fraction of the generated maps (ours: 0.15; the paper: 0.4).
     pub density_min: f64,
+    /// Highest obstacle fraction of the generated maps (ours and the paper: 0.6).
     pub density_max: f64,
     /// Probability that the team starts in a shared corner (else around a random free cell).
     pub corner_start_prob: f64,
@@ -163,6 +165,7 @@ pub struct RolloutTrainConfig {
     /// Generated validation maps (seeds of their own, never the paper's), each run at every
     /// validation CSP.
     pub validation_maps: usize,
+    /// CSPs each validation map is run at.
     pub validation_csp: Vec<f64>,
     /// Threads (episodes are collected in parallel; burn's kernels use the same pool).
     pub threads: usize,
@@ -565,8 +568,12 @@ pub struct Labelled {
 /// What one collected episode adds: each robot's decision sequence, and how it went.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Collected {
+    /// Each robot's decisions in time order (grid network: every decision, labelled or not;
+    /// agnostic network: the labelled ones only).
     pub robots: Vec<Vec<Labelled>>,
+    /// Timesteps the episode lasted under the behaviour policy.
     pub steps: usize,
+    /// Continuations the teacher ran to label it (candidates valued × futures).
     pub rollouts: usize,
 }
 
@@ -957,11 +964,17 @@ struct IterationRow {
 /// What [`train`] reports after each iteration.
 #[derive(Clone, Debug)]
 pub struct Progress {
+    /// DAgger iterations done.
     pub iteration: u64,
+    /// DAgger iterations the run is to do (`iterations` of the config).
     pub iterations: u64,
+    /// Episodes collected so far.
     pub episodes: u64,
+    /// Robot decisions collected in this iteration.
     pub decisions: usize,
+    /// Mean regression loss over this iteration's updates.
     pub loss: f64,
+    /// Validation mean steps of this iteration's best variant (greedy DEP or a spread margin).
     pub validation_steps: f64,
     /// The base rule's validation mean, for comparison.
     pub base_steps: f64,

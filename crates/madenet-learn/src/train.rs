@@ -62,6 +62,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The method's name in configs, `model.toml` and `madenet train --method`.
     pub fn name(self) -> &'static str {
         match self {
             Method::MadeNet => "made-net",
@@ -87,11 +88,13 @@ pub struct TrainConfig {
     /// used by nothing: the centralized env has full communication and the decentralized env
     /// draws CSP ~ U(0, 1) per episode (Sec. III.C.4).
     pub scenario: ScenarioConfig,
-    /// Training map size (the paper: 20 × 20).
+    /// Training map height in cells (the paper: 20).
     pub map_height: usize,
+    /// Training map width in cells (the paper: 20).
     pub map_width: usize,
-    /// Obstacle density range of the training maps (the paper: 40–60 %).
+    /// Lowest obstacle density of the training maps, a fraction (the paper: 0.4).
     pub density_min: f64,
+    /// Highest obstacle density of the training maps, a fraction (the paper: 0.6).
     pub density_max: f64,
     /// γ (the paper: 1), applied once per macro step.
     pub gamma: f32,
@@ -119,7 +122,9 @@ pub struct TrainConfig {
     /// ε-greedy, linear decay from `epsilon_start` to `epsilon_end` over
     /// `epsilon_decay_episodes` episodes.
     pub epsilon_start: f32,
+    /// ε after the decay, held from then on.
     pub epsilon_end: f32,
+    /// Episodes per environment over which ε decays ([`TrainConfig::epsilon`]).
     pub epsilon_decay_episodes: u64,
     /// In the decentralized env, explore by following the CEP's joint choice (MacDec's
     /// `cen_explore`) instead of a random candidate.
@@ -185,16 +190,33 @@ impl Default for TrainConfig {
 /// Why training cannot start or go on. Messages name the file and field.
 #[derive(Debug, thiserror::Error)]
 pub enum TrainError {
+    /// A config, `model.toml`, checkpoint or weight file that cannot be parsed, holds a bad
+    /// value, or does not fit the run or model.
     #[error("{path}: {message}")]
-    Config { path: String, message: String },
+    Config {
+        /// The file, or a label for a model compiled into the binary or a config given in code.
+        path: String,
+        /// What is wrong, naming the field where there is one.
+        message: String,
+    },
+    /// The network sizes cannot be built.
     #[error("{0}")]
     Net(#[from] ConfigError),
+    /// A file or directory could not be read, written or decoded.
     #[error("{path}: {message}")]
-    Io { path: String, message: String },
+    Io {
+        /// The file or directory (or the label of a compiled-in model's weights).
+        path: String,
+        /// The underlying error.
+        message: String,
+    },
+    /// A training episode could not be run or recorded.
     #[error(transparent)]
     Episode(#[from] EpisodeError),
+    /// A training log could not be read or written.
     #[error(transparent)]
     Log(#[from] madenet_trainlog::TrainLogError),
+    /// Anything else (thread pool, encoding, generated maps, unknown shipped model, …).
     #[error("{0}")]
     Other(String),
 }
@@ -409,11 +431,15 @@ pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<P
 pub struct Progress {
     /// Episodes per environment done.
     pub episode: u64,
+    /// Episodes per environment the run is to play (`episodes` of the config).
     pub episodes: u64,
+    /// ε of the last iteration's episodes.
     pub epsilon: f32,
+    /// Updates so far (each one step of the CEP and of every DEP; no CEP for MADE-Net-DT).
     pub updates: u64,
-    /// Mean team reward and steps of the last iteration's episodes.
+    /// Mean team return (Σ r, Eq. 8) of the last iteration's episodes, one per environment.
     pub team_reward: f64,
+    /// Mean primitive steps of the last iteration's episodes.
     pub steps: f64,
     /// Last validation's mean steps, if any.
     pub validation_steps: Option<f64>,
@@ -608,6 +634,7 @@ impl Nets {
 /// The trained DEPs as shipped: `model.toml` (method, net config, |I|, |G|) and the weights.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ModelInfo {
+    /// The learner that trained the DEPs.
     pub method: Method,
     /// The paper's (grid) DEP's sizes; absent for an agnostic model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -617,8 +644,9 @@ pub struct ModelInfo {
     pub agnostic: Option<AgnosticConfig>,
     /// DEP weight files, one per robot group (one when shared).
     pub deps: Vec<String>,
-    /// Episodes per environment and updates behind these weights.
+    /// Episodes per environment behind these weights.
     pub episode: u64,
+    /// Updates behind these weights.
     pub updates: u64,
     /// Their validation mean steps.
     pub validation_steps: Option<f64>,
@@ -643,16 +671,22 @@ fn yes() -> bool {
 /// The DEP's [`NetConfig`] fields that vary, for `model.toml`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct NetConfigToml {
+    /// Map height H in cells ([`NetConfig::map_height`]).
     pub map_height: usize,
+    /// Map width W in cells ([`NetConfig::map_width`]).
     pub map_width: usize,
+    /// Team size |I| ([`NetConfig::team_size`]).
     pub team_size: usize,
+    /// Goal candidates per robot |G| ([`NetConfig::goal_count`]).
     pub goal_count: usize,
+    /// CONCAT as a learned layer ([`NetConfig::concat_fc`]).
     pub concat_fc: bool,
 }
 
 /// A loaded model: the DEP nets on the plain CPU device.
 #[derive(Clone)]
 pub struct Model {
+    /// What `model.toml` says: method, sizes, provenance, how to act.
     pub info: ModelInfo,
     /// The grid DEPs (empty for an agnostic model).
     pub deps: Vec<Arc<QNet>>,
@@ -952,6 +986,10 @@ pub fn prepare_run<C: Default + Serialize>(
     Ok((cfg, resuming))
 }
 
+/// Trains MADE-Net or MADE-Net-DT into `run_dir` (created; if it holds a checkpoint, the run
+/// resumes from it with the saved config — `cfg`, if given, may differ from it only in
+/// `episodes` and `max_minutes`; `None`: the saved config, or the defaults for a new run),
+/// calling `progress` after each iteration.
 pub fn train(
     run_dir: &Path,
     cfg: Option<TrainConfig>,

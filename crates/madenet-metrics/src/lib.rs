@@ -15,6 +15,8 @@
 //! * **CT** — wall-clock time of the trial and per decision (kept apart from everything else,
 //!   since it is the only non-deterministic number).
 
+#![deny(missing_docs)]
+
 use serde::{Deserialize, Serialize};
 
 /// Coverage levels (percent) reported as "timesteps to N %", like the authors' `to_N`.
@@ -93,6 +95,8 @@ impl MetricsRecorder {
         self.noli_authors += pairs_closer;
     }
 
+    /// Ends the trial (`completed`: every explorable cell was explored before the step cap)
+    /// and computes its [`TrialMetrics`]: TNS is the number of recorded timesteps.
     pub fn finish(self, completed: bool) -> TrialMetrics {
         let tns = self.explored.len() - 1;
         let steps_to = COVERAGE_LEVELS

@@ -39,6 +39,7 @@ const STEPS: [(isize, isize, u32); 8] = [
 ];
 
 impl Dijkstra {
+    /// Buffers for a `height × width` grid (cells); every run must stay on this grid.
     pub fn new(height: usize, width: usize) -> Self {
         let n = width * height;
         Dijkstra {

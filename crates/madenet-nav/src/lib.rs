@@ -16,6 +16,8 @@
 //! (≈ √2·STRAIGHT), so path lengths in metres are `cost / STRAIGHT` times the cell size.
 //! The movement rule is the world's ([`madenet_world::step_allowed`] under a [`Movement`]).
 
+#![deny(missing_docs)]
+
 mod dijkstra;
 mod spacetime;
 

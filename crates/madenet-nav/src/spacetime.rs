@@ -24,6 +24,8 @@ pub struct Reservations {
 }
 
 impl Reservations {
+    /// An empty table for a `height × width` grid (cells) reserving timesteps `0..=horizon`;
+    /// the table itself is allocated on the first reservation.
     pub fn new(height: usize, width: usize, horizon: usize) -> Self {
         // The table is allocated on the first reservation.
         Reservations {
@@ -36,6 +38,7 @@ impl Reservations {
         }
     }
 
+    /// The last timestep (from now) that reservations cover.
     pub fn horizon(&self) -> usize {
         self.horizon
     }
@@ -50,6 +53,7 @@ impl Reservations {
         self.count = 0;
     }
 
+    /// True if nothing has been reserved since the last [`clear`](Self::clear).
     pub fn is_empty(&self) -> bool {
         self.count == 0
     }
@@ -72,6 +76,7 @@ impl Reservations {
         }
     }
 
+    /// Reserves cell `p` at timestep `t`; off-grid cells and t beyond the horizon are ignored.
     pub fn reserve(&mut self, p: Pos, t: usize) {
         self.allocate();
         if let Some(s) = self.slot(p, t) {
@@ -90,6 +95,7 @@ impl Reservations {
         }
     }
 
+    /// True if cell `p` is reserved at timestep `t` (never off the grid or beyond the horizon).
     #[inline]
     pub fn is_reserved(&self, p: Pos, t: usize) -> bool {
         self.count > 0
@@ -193,6 +199,8 @@ pub struct SpaceTimePlanner {
 }
 
 impl SpaceTimePlanner {
+    /// A planner for a `height × width` grid (cells) and a planning horizon in timesteps,
+    /// matching the [`Reservations`] it will plan against; buffers are allocated on first use.
     pub fn new(height: usize, width: usize, horizon: usize) -> Self {
         // Buffers are allocated on the first search: most robots rarely need one.
         SpaceTimePlanner {

@@ -29,6 +29,8 @@
 //! streamed to a device or pipe), and every error names
 //! the target file.
 
+#![deny(missing_docs)]
+
 mod canvas;
 pub mod font;
 
@@ -42,12 +44,14 @@ use std::path::{Path, PathBuf};
 /// Everything one picture shows; plain data filled in by the simulator.
 #[derive(Clone, Debug)]
 pub struct Frame {
+    /// Timestep t shown in the status bar (`step 42`).
     pub step: usize,
     /// Ground truth (no Unknown cells).
     pub truth: OccGrid,
     /// The team's merged knowledge, same size as truth (Unknown/Free/Obstacle). The panels
     /// are sized by this grid; `truth` is read cell by cell at the same positions.
     pub team_map: OccGrid,
+    /// The robots; robot i (its index here) is drawn in [`robot_color`]`(i)`.
     pub robots: Vec<RobotFrame>,
     /// Explored fraction 0..=1, shown in the status bar.
     pub explored: f64,
@@ -73,7 +77,9 @@ impl Default for Frame {
 /// One robot as drawn in a [`Frame`]. Positions outside the grid are simply not drawn.
 #[derive(Clone, Debug, Default)]
 pub struct RobotFrame {
+    /// The robot's cell x_i, drawn as a filled disc.
     pub pos: Pos,
+    /// The robot's current exploration goal g_i, drawn as an X; `None` draws no goal.
     pub goal: Option<Pos>,
     /// Planned path from the robot to its goal (cells, first = next cell).
     pub path: Vec<Pos>,
@@ -104,18 +110,22 @@ impl Default for RenderOptions {
 /// Which panel of the picture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Panel {
+    /// The ground-truth panel (left; absent without [`RenderOptions::show_truth`]).
     Truth,
+    /// The team-map panel: the merged knowledge (right, or alone).
     Team,
 }
 
 /// Where things go in the picture; a pure function of the grid size and the options.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {
-    /// Picture size in pixels.
+    /// Picture width in pixels.
     pub width: u32,
+    /// Picture height in pixels.
     pub height: u32,
-    /// Grid size in cells.
+    /// Grid width in cells (columns).
     pub grid_width: usize,
+    /// Grid height in cells (rows).
     pub grid_height: usize,
     /// Effective pixels per cell (≥ 1).
     pub cell_px: u32,
@@ -125,7 +135,7 @@ pub struct Layout {
     pub team_origin: (u32, u32),
     /// Font scale of the status bar and titles (1 to 3).
     pub text_scale: u32,
-    /// Height of the status bar on top.
+    /// Height of the status bar on top, in pixels.
     pub status_height: u32,
 }
 
@@ -513,11 +523,18 @@ fn cell_origin(layout: &Layout, p: &Pos, ox: i32, oy: i32) -> Option<(i32, i32)>
 pub enum RenderError {
     /// Creating, writing or renaming the file failed.
     #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: io::Error },
+    Io {
+        /// The picture file being written.
+        path: PathBuf,
+        /// The underlying I/O error.
+        source: io::Error,
+    },
     /// The image encoder refused the picture (e.g. a GIF wider than 65535 pixels).
     #[error("{}: cannot encode picture: {source}", path.display())]
     Encode {
+        /// The picture file being written.
         path: PathBuf,
+        /// The encoder's error.
         source: image::ImageError,
     },
     /// A GIF frame whose picture size differs from the first frame's.
@@ -527,22 +544,39 @@ pub enum RenderError {
         path.display()
     )]
     FrameSize {
+        /// The GIF being written.
         path: PathBuf,
+        /// 0-based index of the offending frame.
         index: usize,
+        /// The animation's width in pixels (the first frame's).
         width: u32,
+        /// The animation's height in pixels (the first frame's).
         height: u32,
+        /// The offending frame's width in pixels.
         got_width: u32,
+        /// The offending frame's height in pixels.
         got_height: u32,
     },
     /// A GIF with no frames was requested.
     #[error("{}: no frames to write", path.display())]
-    NoFrames { path: PathBuf },
+    NoFrames {
+        /// The GIF that was to be written.
+        path: PathBuf,
+    },
     /// The picture would be too large, or `cell_px` is out of range ([`check_size`]).
     #[error("{}: {reason}", path.display())]
-    TooLarge { path: PathBuf, reason: String },
+    TooLarge {
+        /// The picture file that was to be written.
+        path: PathBuf,
+        /// [`check_size`]'s message, naming `cell_px` and the bound.
+        reason: String,
+    },
     /// The path has no file name to write to.
     #[error("{}: not a file path", path.display())]
-    BadPath { path: PathBuf },
+    BadPath {
+        /// The path given.
+        path: PathBuf,
+    },
 }
 
 fn check_frame_size(frame: &Frame, opts: &RenderOptions, path: &Path) -> Result<(), RenderError> {

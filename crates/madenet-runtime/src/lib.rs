@@ -53,6 +53,8 @@
 //! assert_eq!(apart.metrics, together.metrics);
 //! ```
 
+#![deny(missing_docs)]
+
 mod mailbox;
 mod radio_node;
 mod robot;
@@ -79,30 +81,66 @@ pub use zenoh_bus::{Endpoints, ZenohBus};
 /// Why a node stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum RuntimeError {
+    /// A node waited in vain for something it cannot go on without (see [`Timeouts`]).
     #[error("{node}: nothing arrived for {timeout:?} while waiting for {waiting_for}")]
     Timeout {
+        /// The node that gave up.
         node: Node,
+        /// What it waited for, in words.
         waiting_for: String,
+        /// How long it waited.
         timeout: Duration,
     },
+    /// A node received bytes it could not read.
     #[error("{node}: {source}")]
-    Wire { node: Node, source: WireError },
+    Wire {
+        /// The receiving node.
+        node: Node,
+        /// What was wrong with the message.
+        source: WireError,
+    },
+    /// A node received a message it does not take, or one naming robots or cells that do not
+    /// exist.
     #[error("{node}: unexpected message from {from} at step {step}: {what}")]
     Unexpected {
+        /// The receiving node.
         node: Node,
+        /// The sender.
         from: Node,
+        /// The message's timestep.
         step: u64,
+        /// What was wrong with it.
         what: &'static str,
     },
+    /// The transport could not deliver a message: the addressee's endpoint is gone.
     #[error("{node}: {to} is gone")]
-    Gone { node: Node, to: Node },
+    Gone {
+        /// The sending node.
+        node: Node,
+        /// Where the message went (the radio, for a robot's message to a teammate).
+        to: Node,
+    },
+    /// The transport could not connect a node to its peers in time
+    /// ([`Transport::connect`]).
     #[error("{node}: {what}")]
-    Transport { node: Node, what: String },
+    Transport {
+        /// The node connecting.
+        node: Node,
+        /// The transport's explanation (who is missing).
+        what: String,
+    },
     /// The ground truth failed (real robots: a feed went silent or sent a bad map).
     #[error("{node}: {what}")]
-    Ground { node: Node, what: String },
+    Ground {
+        /// The world node.
+        node: Node,
+        /// The [`Ground`]'s explanation.
+        what: String,
+    },
+    /// The world and agents could not be built from the trial spec.
     #[error(transparent)]
     Setup(#[from] madenet_sim::SimError),
+    /// A node's thread panicked ([`run_threads`]).
     #[error("a node thread panicked")]
     Panicked,
 }
@@ -110,6 +148,8 @@ pub enum RuntimeError {
 /// What the world node saw of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LockstepResult {
+    /// The trial's metrics, recorded by the world node (for the simulated world, as the
+    /// in-process trial records them).
     pub metrics: TrialMetrics,
     /// Robot positions before the first move and after every timestep.
     pub positions: Vec<Vec<Pos>>,
@@ -133,8 +173,11 @@ pub struct LockstepResult {
 /// Wall time from a robot's observation to its move, over every robot and timestep it acted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Latency {
+    /// Robot-timesteps in which a robot sent a move.
     pub acted: usize,
+    /// Mean latency in seconds (0 if no robot acted).
     pub mean_s: f64,
+    /// Longest latency in seconds.
     pub max_s: f64,
 }
 

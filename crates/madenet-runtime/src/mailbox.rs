@@ -10,7 +10,9 @@ use std::time::{Duration, Instant};
 /// Messages and bytes a node sent.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Traffic {
+    /// Messages sent (by the radio: forwarded ones included).
     pub messages: usize,
+    /// Their encoded size in bytes.
     pub bytes: usize,
 }
 

@@ -19,8 +19,12 @@ pub const PROTOCOL_VERSION: u16 = 4;
 /// communication model) or a robot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Node {
+    /// The world node: ground truth, motion, sensing and the metrics.
     World,
+    /// The radio node: the communication model (CSP, dropouts), carrier of every
+    /// robot-to-robot message.
     Radio,
+    /// Robot i's node.
     Robot(usize),
 }
 
@@ -37,12 +41,15 @@ impl std::fmt::Display for Node {
 /// One message.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Envelope {
+    /// The sender's [`PROTOCOL_VERSION`]; a node refuses any other.
     pub version: u16,
     /// The timestep the message belongs to (the world's t when the observation was made).
     pub step: u64,
+    /// The sender.
     pub from: Node,
     /// The addressee; a robot's message to a teammate travels through the radio.
     pub to: Node,
+    /// What the message says.
     pub body: Body,
 }
 
@@ -57,7 +64,12 @@ pub enum Body {
     /// Radio → each robot, every timestep: the teammates it exchanges with now (ascending), so
     /// it knows whose β and plans to wait for, and those whose β will arrive late (a delaying
     /// radio; send them β, do not wait).
-    Links { now: Vec<usize>, late: Vec<usize> },
+    Links {
+        /// Teammates it exchanges with this timestep, ascending.
+        now: Vec<usize>,
+        /// Teammates whose β of this timestep will arrive late, ascending.
+        late: Vec<usize>,
+    },
     /// Robot → robot, along a successful exchange: β (paper Sec. III.C.1), its map sent as the
     /// changes since the last map sent to the same teammate.
     Beta(BetaMessage),
@@ -72,10 +84,15 @@ pub enum Body {
     /// Robot → world, answering `Stop`: its decisions and their total wall time, and its
     /// latency from observation to move (timesteps acted, total and longest, seconds).
     Done {
+        /// Decisions its agent applied ([`madenet_agent::AgentStats::decisions`]).
         decisions: usize,
+        /// Wall time of its own policy's decisions, seconds.
         decision_s: f64,
+        /// Timesteps it sent a move.
         acted: usize,
+        /// Total latency from observation to move, seconds.
         latency_s: f64,
+        /// Longest latency from observation to move, seconds.
         latency_max_s: f64,
     },
     /// World → robot: after each move, also send what you show (`Shown`); world → radio: also
@@ -92,24 +109,35 @@ pub enum Body {
 /// its goal candidates G_i and the teammates it exchanged β with.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Shown {
+    /// g_i, the goal of its macro action (None: it has none).
     pub goal: Option<Pos>,
+    /// Its planned path, first = next cell.
     pub path: Vec<Pos>,
+    /// Its goal candidates 𝒢_i.
     pub candidates: Vec<Pos>,
+    /// The teammates it exchanged β with this timestep.
     pub exchanged_with: Vec<usize>,
 }
 
 /// A message that could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum WireError {
+    /// The bytes do not decode as an envelope.
     #[error("malformed message: {0}")]
     Malformed(#[from] postcard::Error),
+    /// The message is of another protocol version.
     #[error("message of protocol version {got}, this node speaks {PROTOCOL_VERSION}")]
-    Version { got: u16 },
+    Version {
+        /// The version it carries.
+        got: u16,
+    },
+    /// A β whose whole map, or a changed cell's index, does not fit this map's size.
     #[error("a β whose map does not fit this map's size")]
     MapSize,
 }
 
 impl Envelope {
+    /// A message of this node's [`PROTOCOL_VERSION`].
     pub fn new(step: u64, from: Node, to: Node, body: Body) -> Self {
         Envelope {
             version: PROTOCOL_VERSION,
@@ -120,6 +148,8 @@ impl Envelope {
         }
     }
 
+    /// The envelope serialized with postcard, as a [`Transport`](crate::transport::Transport)
+    /// carries it.
     pub fn encode(&self) -> Vec<u8> {
         postcard::to_stdvec(self).expect("every envelope serializes")
     }
@@ -139,12 +169,19 @@ impl Envelope {
 /// β on the wire: the paper's β with its local map m_j as a [`MapUpdate`] for this addressee.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BetaMessage {
+    /// The sender's robot index j.
     pub from: usize,
+    /// Timestep at which it was sent.
     pub t: usize,
+    /// g_j^{t-1}
     pub prev_goal: Option<madenet_map::Pos>,
+    /// x_j^t
     pub pos: madenet_map::Pos,
+    /// g_j^t
     pub goal: Option<madenet_map::Pos>,
+    /// |E_j|: cells robot j knows.
     pub explored: usize,
+    /// m_j^t, whole or as the changes since the map last sent to this addressee.
     pub map: MapUpdate,
     /// The last changes this sender received from the addressee did not fit (a message was
     /// lost, or the sender restarted): send the whole map next time.
@@ -161,7 +198,9 @@ pub enum MapUpdate {
     /// receiver, and a receiver that merged the base already knows every other cell, so
     /// merging the changes leaves it exactly where merging the whole map would.
     Changes {
+        /// Timestep of the map the changes build on.
         base: usize,
+        /// (row-major index, new value) of every cell that changed.
         cells: Vec<(u32, Occupancy)>,
     },
 }

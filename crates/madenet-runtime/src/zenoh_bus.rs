@@ -32,7 +32,9 @@ use zenoh::Wait;
 /// `tcp/127.0.0.1:7447`).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Endpoints {
+    /// Locators this node listens on.
     pub listen: Vec<String>,
+    /// Locators of the nodes this node dials (Zenoh redials them when a link closes).
     pub connect: Vec<String>,
 }
 

@@ -16,6 +16,8 @@
 //!
 //! The same seed gives byte-identical trajectories and metrics.
 
+#![deny(missing_docs)]
+
 mod registry;
 pub mod rewards;
 pub mod rollout;
@@ -32,12 +34,27 @@ pub use trial::{
 /// Errors setting up a trial; messages name the field at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
+    /// No policy of that name is in the [`PolicyRegistry`].
     #[error("unknown policy `{name}` (field `policy`); known policies: {known}")]
-    UnknownPolicy { name: String, known: String },
+    UnknownPolicy {
+        /// The name asked for (field `policy`).
+        name: String,
+        /// The registered names, comma-separated.
+        known: String,
+    },
+    /// The policy exists but its check refuses this scenario
+    /// ([`PolicyRegistry::register_checked`]).
     #[error("policy `{name}` cannot run this scenario: {reason}")]
-    PolicyUnavailable { name: String, reason: String },
+    PolicyUnavailable {
+        /// The policy's registered name.
+        name: String,
+        /// Why not, as the policy's check says (e.g. the model's map or team size).
+        reason: String,
+    },
+    /// The world cannot start: a bad config or bad start cells.
     #[error(transparent)]
     Scenario(#[from] madenet_world::ScenarioError),
+    /// A bad config on its own (the world's own validation arrives as [`SimError::Scenario`]).
     #[error(transparent)]
     Config(#[from] madenet_world::ConfigError),
 }

@@ -8,10 +8,15 @@ use std::sync::Arc;
 /// What a policy factory gets to build one robot's policy.
 #[derive(Clone, Debug)]
 pub struct PolicyContext<'a> {
+    /// The trial's seed; a random policy derives its stream from it and `robot`.
     pub seed: u64,
+    /// Index i of the robot the policy is for.
     pub robot: usize,
+    /// The trial's scenario (d_s, |I|, CSP, …).
     pub config: &'a ScenarioConfig,
+    /// Map height in cells (rows); the policy never sees the ground truth itself.
     pub height: usize,
+    /// Map width in cells (columns).
     pub width: usize,
 }
 
@@ -48,6 +53,8 @@ impl PolicyRegistry {
         r
     }
 
+    /// Adds (or replaces, dropping any check) the policy `name`, described by `about`, whose
+    /// instances `f` builds, one per robot.
     pub fn register(
         &mut self,
         name: &str,
@@ -105,6 +112,7 @@ impl PolicyRegistry {
         }
     }
 
+    /// The registered names, sorted.
     pub fn names(&self) -> Vec<String> {
         self.factories.keys().cloned().collect()
     }

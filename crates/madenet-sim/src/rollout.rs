@@ -128,6 +128,7 @@ pub enum OracleKind {
 }
 
 impl OracleKind {
+    /// Every oracle: replay, averaged, noiseless, placebo.
     pub const ALL: [OracleKind; 4] = [
         OracleKind::Replay,
         OracleKind::Averaged,

@@ -17,9 +17,13 @@ use std::str::FromStr;
 /// training range; the corner start cells kept free) or a file path.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MapSource {
+    /// `paper:N`: the paper's evaluation map N (Fig. 3), N in 1..=[`PAPER_MAP_COUNT`].
     Paper(usize),
+    /// `generate:SEED`: the generator at its default densities, with this seed.
     Generated(u64),
+    /// `generate-wide:SEED`: the generator at [`WIDE_DENSITY`], with this seed.
     GeneratedWide(u64),
+    /// A map file (ROS `map_server` YAML, PGM, PNG or a plain-text grid).
     File(PathBuf),
 }
 
@@ -101,8 +105,11 @@ impl MapSource {
 /// map always gives the same cells).
 #[derive(Clone, Debug, PartialEq)]
 pub enum StartSpec {
+    /// The three cells at one of the map's corners (paper Fig. 3), [`Corner::start_cells`].
     Corner(Corner),
+    /// Explicit cells, one per robot, written `r,c;r,c;…`.
     Cells(Vec<Pos>),
+    /// `random`: cells drawn from the map itself, the same for the same map.
     Random,
 }
 
@@ -164,6 +171,7 @@ impl StartSpec {
         }
     }
 
+    /// The start as written on a command line (`top-left`, `0,0;1,2`, `random`).
     pub fn name(&self) -> String {
         match self {
             StartSpec::Corner(c) => c.name().to_string(),

@@ -13,27 +13,39 @@ use std::time::Instant;
 /// Everything that defines a trial.
 #[derive(Clone, Debug)]
 pub struct TrialSpec {
+    /// The ground-truth map.
     pub map: OccGrid,
     /// A label for outputs (e.g. `test_3`).
     pub map_name: String,
+    /// Start cells, robot i at `starts[i]`; cells beyond `config.num_robots` are ignored.
     pub starts: Vec<Pos>,
+    /// The scenario's parameters (d_s, CSP, noise, step cap, …).
     pub config: ScenarioConfig,
+    /// Every robot's policy, by its name in the [`PolicyRegistry`] (e.g. `nf`, `spread`).
     pub policy: String,
+    /// Seed of the world's random streams and of the robots' policies.
     pub seed: u64,
 }
 
 /// One timestep of a trajectory (state after the step).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepRecord {
+    /// Timestep reached by this step (1 for the first).
     pub t: usize,
+    /// Every robot's cell x_i after the step.
     pub positions: Vec<Pos>,
+    /// The moves executed (slips and conflicts applied, so not necessarily those intended).
     pub moves: Vec<Move>,
+    /// Every robot's goal g_i in force (None: it had none and stayed).
     pub goals: Vec<Option<Pos>>,
     /// Robots that took a decision in this step (their macro action had terminated).
     pub decided: Vec<bool>,
     /// Each robot's macro action in force (goal candidate index), if it chose one.
     pub actions: Vec<Option<usize>>,
+    /// Pairs (i < j) whose exchange succeeded at this step's contact stage (the trial
+    /// delivers their β at the start of the next step).
     pub exchanges: Vec<(usize, usize)>,
+    /// The team's explored fraction after the step, 0..=1.
     pub explored: f64,
     /// Rewards of the step (Eq. 7 per robot, Eq. 8 for the team).
     pub rewards: StepRewards,
@@ -42,14 +54,21 @@ pub struct StepRecord {
 /// The outcome of a trial.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrialResult {
+    /// The map's label ([`TrialSpec::map_name`]).
     pub map: String,
+    /// The policy's registry name, or the joint policy's name ([`Trial::with_joint_policy`]).
     pub policy: String,
+    /// The trial's seed.
     pub seed: u64,
+    /// CSP, the communication success probability of the scenario.
     pub comm_success_prob: f64,
+    /// The start cells of the robots that ran (one per robot).
     pub starts: Vec<Pos>,
+    /// The paper's metrics (TNS, TTD, NOLI, OFV, exploration curve).
     pub metrics: TrialMetrics,
     /// Empty unless recording was requested.
     pub trajectory: Vec<StepRecord>,
+    /// Wall-clock times (CT): the steps and the robots' decisions.
     pub timing: Timing,
 }
 
@@ -156,6 +175,7 @@ impl Trial {
         Self::with_registry(spec, &PolicyRegistry::builtin())
     }
 
+    /// Builds the world and the agents with the policies of `registry`.
     pub fn with_registry(spec: TrialSpec, registry: &PolicyRegistry) -> Result<Self, SimError> {
         let (map_name, policy, seed) = (spec.map_name.clone(), spec.policy.clone(), spec.seed);
         let mut starts = spec.starts.clone();
@@ -375,9 +395,11 @@ impl Trial {
         self
     }
 
+    /// The world (ground truth, true poses, team map).
     pub fn world(&self) -> &World {
         &self.world
     }
+    /// The agents, robot i at index i.
     pub fn agents(&self) -> &[Agent] {
         &self.agents
     }
@@ -385,6 +407,7 @@ impl Trial {
     pub fn agent_mut(&mut self, i: usize) -> &mut Agent {
         &mut self.agents[i]
     }
+    /// The team has explored everything explorable, or the step cap is reached.
     pub fn is_done(&self) -> bool {
         self.world.is_done()
     }

@@ -100,11 +100,20 @@ impl Default for ScenarioConfig {
 /// A bad configuration value or file; the message names the file (if any) and the field.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
+    /// A config file (or TOML text) that cannot be read, parsed or validated.
     #[error("{path}: {message}")]
-    File { path: String, message: String },
+    File {
+        /// The file; `<toml>` for text given to [`ScenarioConfig::from_toml_str`].
+        path: String,
+        /// What is wrong (a bad field's message is prefixed with ``field `name`: ``).
+        message: String,
+    },
+    /// A field whose value is out of its range (from [`ScenarioConfig::validate`]).
     #[error("config field `{field}`: {message}")]
     Field {
+        /// The field's name as in TOML, e.g. `sensing_range` or `discretize.occupied_prob`.
         field: &'static str,
+        /// What the field must be and what it was, e.g. `must be at least 1`.
         message: String,
     },
 }

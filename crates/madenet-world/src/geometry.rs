@@ -7,14 +7,23 @@ use serde::{Deserialize, Serialize};
 /// A primitive action: one of the 8 neighbour moves or staying (paper Sec. III.B).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum Move {
+    /// Stay in the current cell (Δ = (0, 0)).
     Stay,
+    /// North: one row up (Δ = (−1, 0)).
     N,
+    /// North-east, diagonal (Δ = (−1, +1)).
     NE,
+    /// East: one column right (Δ = (0, +1)).
     E,
+    /// South-east, diagonal (Δ = (+1, +1)).
     SE,
+    /// South: one row down (Δ = (+1, 0)).
     S,
+    /// South-west, diagonal (Δ = (+1, −1)).
     SW,
+    /// West: one column left (Δ = (0, −1)).
     W,
+    /// North-west, diagonal (Δ = (−1, −1)).
     NW,
 }
 
@@ -53,6 +62,7 @@ impl Move {
         Move::ALL.into_iter().find(|m| m.delta() == d)
     }
 
+    /// True for the four diagonal moves (NE, SE, SW, NW).
     pub const fn is_diagonal(self) -> bool {
         let (r, c) = self.delta();
         r != 0 && c != 0
@@ -67,11 +77,13 @@ impl Move {
         }
     }
 
+    /// The cell this move leads to from `p` (not checked against any map).
     pub fn apply(self, p: Pos) -> Pos {
         let (dr, dc) = self.delta();
         Pos::new(p.row + dr, p.col + dc)
     }
 
+    /// The move's position in [`Move::ALL`] (`Stay` = 0, `N` = 1, …, `NW` = 8).
     pub fn index(self) -> usize {
         self as usize
     }
@@ -198,6 +210,9 @@ pub struct ViewPattern {
 }
 
 impl ViewPattern {
+    /// Traces the rays of the (2·`radius`+1)² window, `radius` being d_s in cells, nearest
+    /// ring first; under [`Movement::NoCornerCutting`] a ray squeezing between two obstacles
+    /// touching at a corner is blocked there.
     pub fn new(radius: i32, movement: Movement) -> Self {
         let squeeze_blocks = movement == Movement::NoCornerCutting;
         let mut targets = Vec::new();
@@ -235,6 +250,7 @@ impl ViewPattern {
         }
     }
 
+    /// The window radius d_s in cells this pattern was built for.
     pub fn radius(&self) -> i32 {
         self.radius
     }

@@ -18,6 +18,8 @@
 //! messages they exchange are delivered by the trial runner along [`World::exchanges`].
 //! All parameters live in [`ScenarioConfig`], whose defaults are the paper's values.
 
+#![deny(missing_docs)]
+
 pub mod config;
 pub mod geometry;
 pub mod radio;

@@ -12,21 +12,33 @@ use std::sync::Arc;
 /// Why a scenario cannot start.
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
+    /// The [`ScenarioConfig`] fails [`ScenarioConfig::validate`].
     #[error(transparent)]
     Config(#[from] ConfigError),
+    /// A robot's start cell cannot be used.
     #[error("start cell {pos} of robot {robot} is {what}")]
     BadStart {
+        /// Index of the robot whose start it is.
         robot: usize,
+        /// The offending start cell.
         pos: Pos,
+        /// Why: `outside the map`, `not free` or `shared with another robot`.
         what: &'static str,
     },
+    /// Fewer start cells than robots (extra start cells are ignored, not an error).
     #[error("{robots} robots but {starts} start cells (config field `num_robots`)")]
-    StartCount { robots: usize, starts: usize },
+    StartCount {
+        /// Team size |I| (`num_robots`).
+        robots: usize,
+        /// Number of start cells given.
+        starts: usize,
+    },
 }
 
 /// What one robot perceives in one timestep (its primitive observation o_i).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Observation {
+    /// Index i of the observing robot.
     pub robot: usize,
     /// Timestep of the observation.
     pub t: usize,
@@ -533,9 +545,11 @@ impl World {
         self.radio = None;
     }
 
+    /// The scenario's parameters (with noise switched off after [`World::set_noiseless`]).
     pub fn config(&self) -> &ScenarioConfig {
         &self.cfg
     }
+    /// The ground-truth grid, which no robot may read directly.
     pub fn truth(&self) -> &OccGrid {
         &self.truth
     }
@@ -543,6 +557,7 @@ impl World {
     pub fn t(&self) -> usize {
         self.t
     }
+    /// Every robot's true cell, indexed by robot.
     pub fn positions(&self) -> &[Pos] {
         &self.positions
     }
@@ -578,6 +593,8 @@ impl World {
     pub fn explorable_count(&self) -> usize {
         self.explorable_count
     }
+    /// Per cell (row-major, as [`OccGrid::index`]): whether it is explorable, i.e. visible
+    /// from a free cell reachable from the starts; [`World::explorable_count`] counts them.
     pub fn explorable(&self) -> &[bool] {
         &self.explorable
     }
