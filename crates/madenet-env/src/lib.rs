@@ -30,7 +30,8 @@
 //!   one agent (merged observation, joint action |G|^|I|), for centralized learners;
 //! * [`VecEnv`]: N environments stepped together (on rayon, or in turn on the calling thread
 //!   when rayon has one thread) into flat buffers, auto-resetting;
-//! * [`frame`]: the picture of the current state, as `madenet run --render` draws it.
+//! * [`ExplorationEnv::frame`]: the picture of the current state, as `madenet run --render`
+//!   draws it ([`madenet_render::trial_frame`]).
 
 #![deny(missing_docs)]
 
@@ -38,10 +39,7 @@ pub mod vector;
 
 pub use vector::{VecBuffers, VecEnv};
 
-pub mod render;
-
 pub use madenet_agent::Decision;
-pub use render::{frame, world_frame};
 
 use madenet_agent::{
     action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord,
@@ -608,7 +606,7 @@ impl ExplorationEnv {
     /// The picture `madenet run --render` draws of the current state (truth and team map,
     /// robots, paths, goals, candidates, links).
     pub fn frame(&self) -> Result<Frame, EnvError> {
-        Ok(frame(self.trial()?))
+        Ok(madenet_render::trial_frame(self.trial()?))
     }
 
     /// Applies `actions` (one per robot; only those of robots in

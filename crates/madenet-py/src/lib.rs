@@ -1,9 +1,11 @@
 //! `madenet._core`: the compiled core of madenet's Python package. A thin pyo3 layer over
 //! [`madenet_env`] (environments, one or N at a time), the shipped policies
-//! ([`madenet_study::StudyConfig::registry`]) and the study runner; the Python package
+//! ([`madenet_catalogue::shipped`]) and the study runner; the Python package
 //! (`python/madenet`) builds the PettingZoo and Gymnasium environments, `run_trial`, `compare`
 //! and `madenet.ray` on it. Every error becomes a `ValueError` naming the field; long calls
 //! release the GIL.
+
+#![deny(missing_docs)]
 
 mod study;
 mod vector;
@@ -84,11 +86,7 @@ pub(crate) fn action_mode(mode: &str) -> PyResult<ActionMode> {
 pub(crate) fn registry() -> PyResult<&'static PolicyRegistry> {
     static REGISTRY: OnceLock<Result<PolicyRegistry, String>> = OnceLock::new();
     REGISTRY
-        .get_or_init(|| {
-            madenet_study::StudyConfig::default()
-                .registry()
-                .map_err(|e| e.to_string())
-        })
+        .get_or_init(|| madenet_catalogue::shipped().map_err(|e| e.to_string()))
         .as_ref()
         .map_err(value_error)
 }
@@ -200,48 +198,59 @@ impl CoreEnv {
         })
     }
 
+    /// Team size |I|.
     #[getter]
     fn num_robots(&self) -> usize {
         self.env.num_robots()
     }
+    /// Map height H, cells.
     #[getter]
     fn height(&self) -> usize {
         self.env.height()
     }
+    /// Map width W, cells.
     #[getter]
     fn width(&self) -> usize {
         self.env.width()
     }
+    /// Actions per robot: |G| goal candidates (macro mode) or 9 moves (primitive mode).
     #[getter]
     fn action_count(&self) -> usize {
         self.env.action_count()
     }
+    /// Goal candidates per decision |G| for this map.
     #[getter]
     fn goal_count(&self) -> usize {
         self.env.goal_count()
     }
+    /// Length of one robot's observation vector.
     #[getter]
     fn vector_len(&self) -> usize {
         self.env.vector_len()
     }
+    /// Length of the joint observation vector (every robot's vector, in robot order).
     #[getter]
     fn joint_vector_len(&self) -> usize {
         self.env.joint_vector_len()
     }
+    /// Number of joint macro actions |G|^|I|; a `ValueError` if it overflows.
     #[getter]
     fn joint_action_count(&self) -> PyResult<usize> {
         self.env
             .joint_action_count()
             .ok_or_else(|| value_error("num_robots: |G|^|I| joint actions overflow"))
     }
+    /// Name of the map in outputs (e.g. `test_1` for `paper:1`).
     #[getter]
     fn map_name(&self) -> String {
         self.map_name.clone()
     }
+    /// The current timestep of the episode.
     #[getter]
     fn t(&self) -> usize {
         self.env.t()
     }
+    /// The episode has ended (map explored or step cap reached).
     #[getter]
     fn done(&self) -> bool {
         self.env.is_done()

@@ -35,6 +35,7 @@ pub struct CoreVecEnv {
     /// `[n]` bool
     #[pyo3(get)]
     terminated: Py<PyArray<bool, Ix1>>,
+    /// `[n]` bool
     #[pyo3(get)]
     truncated: Py<PyArray<bool, Ix1>>,
 }
@@ -136,14 +137,17 @@ impl CoreVecEnv {
         })
     }
 
+    /// Number of environments N.
     #[getter]
     fn num_envs(&self) -> usize {
         self.inner.len()
     }
+    /// Team size |I| of every environment.
     #[getter]
     fn num_robots(&self) -> usize {
         self.inner.first().num_robots()
     }
+    /// Actions per robot: |G| goal candidates (macro mode) or 9 moves (primitive mode).
     #[getter]
     fn action_count(&self) -> usize {
         self.inner.first().action_count()

@@ -33,6 +33,9 @@
 
 mod canvas;
 pub mod font;
+mod of_trial;
+
+pub use of_trial::{trial_frame, world_frame};
 
 use canvas::{mix, Canvas, Rgb};
 use image::{Rgba, RgbaImage};

@@ -9,12 +9,9 @@ use madenet_world::{Move, ScenarioConfig};
 use std::sync::LazyLock;
 use std::time::Duration;
 
-/// Every shipped method (built-ins, baselines, learned models), as the study registers them.
-static REGISTRY: LazyLock<PolicyRegistry> = LazyLock::new(|| {
-    madenet_study::StudyConfig::default()
-        .registry()
-        .expect("the shipped models load")
-});
+/// Every shipped method (built-ins, baselines, learned models): the policy catalogue.
+static REGISTRY: LazyLock<PolicyRegistry> =
+    LazyLock::new(|| madenet_catalogue::shipped().expect("the shipped models load"));
 
 fn spec(map: usize, corner: Corner, policy: &str, csp: f64, seed: u64) -> TrialSpec {
     let grid = paper_map(map).unwrap();

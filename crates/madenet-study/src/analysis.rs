@@ -6,14 +6,21 @@ use std::collections::BTreeMap;
 /// The four metrics of the paper's Fig. 4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Metric {
+    /// TNS, total number of steps: timesteps to completion, or the step cap (lower is better).
     Tns,
+    /// TTD, total travel distance of the team, metres (lower is better).
     Ttd,
+    /// NOLI, number of local interactions: robot pairs within d_s in line of sight, summed
+    /// over timesteps (lower is better).
     Noli,
+    /// OFV, objective function value of Eq. (1), Σ_p p / D(p) (higher is better).
     Ofv,
 }
 
 impl Metric {
+    /// Every metric, in the order of Fig. 4's panels and of [`SummaryRow::metrics`].
     pub const ALL: [Metric; 4] = [Metric::Tns, Metric::Ttd, Metric::Noli, Metric::Ofv];
+    /// Short name in tables and figures: `TNS`, `TTD`, `NOLI` or `OFV`.
     pub fn name(self) -> &'static str {
         match self {
             Metric::Tns => "TNS",
@@ -22,6 +29,7 @@ impl Metric {
             Metric::Ofv => "OFV",
         }
     }
+    /// Spelled-out name (with the unit for TTD): the y-axis label of its Fig. 4 panel.
     pub fn label(self) -> &'static str {
         match self {
             Metric::Tns => "total number of steps",
@@ -30,6 +38,7 @@ impl Metric {
             Metric::Ofv => "objective function value, Eq. (1)",
         }
     }
+    /// The metric's value in trial `o` (counts converted to `f64`).
     pub fn of(self, o: &TrialOutcome) -> f64 {
         match self {
             Metric::Tns => o.row.tns as f64,
@@ -79,17 +88,24 @@ pub fn select<'a>(outcomes: &'a [TrialOutcome], method: &str, csp: &str) -> Vec<
 /// One cell of the summary table.
 #[derive(Clone, Debug)]
 pub struct SummaryRow {
+    /// Method name, as in `trials.csv`.
     pub method: String,
+    /// CSP label, as in `trials.csv` (e.g. `0.5`).
     pub csp: String,
+    /// Number of trials of this method at this CSP.
     pub trials: usize,
+    /// How many of them completed (every explorable cell explored before the step cap).
     pub completed: usize,
     /// (mean, sd) per metric of [`Metric::ALL`].
     pub metrics: Vec<(f64, f64)>,
-    /// Mean simulation time per trial, seconds, and per decision, seconds.
+    /// Mean simulation wall time per trial (CT), seconds.
     pub trial_s: f64,
+    /// Mean over trials of each trial's mean wall time per decision (CT), seconds.
     pub per_decision_s: f64,
 }
 
+/// One [`SummaryRow`] per method (in the order of `methods`) and CSP present (ascending);
+/// a method with no trial at a CSP has no row there.
 pub fn summary(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<SummaryRow> {
     let mut rows = Vec::new();
     for m in methods {
@@ -122,10 +138,18 @@ pub fn summary(outcomes: &[TrialOutcome], methods: &[String]) -> Vec<SummaryRow>
 /// Statistics of one metric at one CSP.
 #[derive(Clone, Debug)]
 pub struct MetricStats {
+    /// The metric compared across methods.
     pub metric: Metric,
+    /// CSP label, as in `trials.csv`.
     pub csp: String,
+    /// Number of (map, start, seed) blocks in which every method has a trial: the only ones
+    /// tested.
     pub blocks: usize,
+    /// Friedman test across the methods; `Err`: why it could not be computed (e.g. fewer than
+    /// 3 methods).
     pub friedman: Result<madenet_stats::Friedman, String>,
+    /// Bonferroni-corrected two-sided Wilcoxon signed-rank tests, one per pair of methods;
+    /// `Err`: why they could not be computed (e.g. too few blocks).
     pub pairs: Result<Vec<madenet_stats::PairwiseTest>, String>,
 }
 

@@ -30,18 +30,31 @@ pub const METHODS: [(&str, &str); 3] = [("nf", "greedy"), ("ub", "utility"), ("p
 /// A convention in which the authors' simulator differs from ours (see the README).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convention {
+    /// Their robots act one after another within a timestep; ours act simultaneously.
     Sequential,
+    /// Their robots decide before scanning from the cell they stand on (one step of lag).
     ScanLag,
+    /// Their distances and paths count every move as 1, diagonals included; ours are metres.
     KingMetric,
+    /// Their failed draw blocks the whole team's exchanges for 7 steps; ours blocks one pair.
     Blackout,
+    /// Their runs stop at 100 timesteps.
     Cap100,
+    /// Their run ends when their team map has no frontier left; ours when every explorable
+    /// cell is known.
     Completion,
+    /// Ours plan paths with A* around teammates; theirs take one greedy step at a time.
     Navigation,
+    /// Their UB scores cells and repels robots differently from ours (ours: Burgard et al.'s
+    /// information gain − β·path cost).
     UbDesign,
+    /// Their PB scales rewards and adds repulsion around neighbours; ours solves on the plain
+    /// rewards.
     PbDesign,
 }
 
 impl Convention {
+    /// Short name, listed after each difference above 15 % in the report.
     pub fn name(self) -> &'static str {
         match self {
             Convention::Sequential => "sequential moves",
@@ -55,6 +68,7 @@ impl Convention {
             Convention::PbDesign => "PB design",
         }
     }
+    /// How their simulator and ours differ, in one sentence of the report.
     pub fn explain(self) -> &'static str {
         match self {
             Convention::Sequential => "their robots act one after another inside a timestep, each after the earlier ones have moved, scanned and shared maps; ours act simultaneously, and a robot cannot enter a cell another holds at the start of the step",
@@ -101,11 +115,18 @@ pub fn conventions(method: &str, metric: &str, csp: f64) -> Vec<Convention> {
 /// One comparison line.
 #[derive(Clone, Debug)]
 pub struct Comparison {
+    /// Our method: `nf`, `ub` or `pb` ([`METHODS`]).
     pub method: String,
+    /// CSP, 1 − their failure probability.
     pub csp: f64,
+    /// `steps` (our TNS capped at 100 against their `to_100`), `distance` (TTD, metres,
+    /// against `total_dist`) or `local interactions` (`noli_authors` against `local_int`).
     pub metric: &'static str,
+    /// Our mean over the study's trials on the paper's maps.
     pub ours: f64,
+    /// The mean of the authors' published runs.
     pub theirs: f64,
+    /// Number of our trials averaged in `ours` (not the authors' run count).
     pub runs: usize,
 }
 

@@ -24,6 +24,7 @@ pub struct StudyConfig {
     pub csp: Vec<f64>,
     /// Seeds per (method, map, start, CSP): `seed_base`, `seed_base + 1`, …
     pub seeds: u64,
+    /// The first seed of each (method, map, start, CSP).
     pub seed_base: u64,
     /// The scenario of every trial (its `comm_success_prob` is replaced by each CSP).
     pub scenario: ScenarioConfig,
@@ -73,13 +74,25 @@ impl Default for StudyConfig {
 /// A study that cannot start; the message names the file and field.
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
+    /// A file or folder cannot be read or written, or holds something unusable (a malformed
+    /// config, no maps, another configuration's results).
     #[error("{path}: {message}")]
-    File { path: String, message: String },
-    #[error("study field `{field}`: {message}")]
-    Field {
-        field: &'static str,
+    File {
+        /// The file or folder, as displayed.
+        path: String,
+        /// What went wrong with it.
         message: String,
     },
+    /// A field of the configuration has a value the study cannot run.
+    #[error("study field `{field}`: {message}")]
+    Field {
+        /// The field's name in the TOML file (`a/b` when it is about several fields).
+        field: &'static str,
+        /// Why the value is refused.
+        message: String,
+    },
+    /// Any other failure: building the policies, loading a map, a trial that cannot start,
+    /// drawing a figure, serializing.
     #[error("{0}")]
     Other(String),
 }
@@ -94,7 +107,9 @@ pub(crate) fn field(field: &'static str, message: impl Into<String>) -> StudyErr
 /// A map of the study, loaded.
 #[derive(Clone, Debug)]
 pub struct StudyMap {
+    /// Name in outputs ([`MapSource::name`]: `test_N` for paper map N, a file's stem, …).
     pub name: String,
+    /// The map, loaded at the scenario's cell size.
     pub grid: madenet_map::OccGrid,
     /// One of the paper's 10 evaluation maps (the embedded copy), which the calibration
     /// compares with the authors' results.
@@ -117,18 +132,16 @@ impl StudyConfig {
         v
     }
 
+    /// Reads a TOML config (fields left out take their defaults); errors name the file,
+    /// field and line.
     pub fn from_toml_file(path: &Path) -> Result<Self, StudyError> {
         read_toml(path)
     }
 
-    /// The policy registry of the study: built-ins, the baselines with this config's
-    /// parameters and the shipped learned models (`made-net`, `made-net-dt`, `dme-drl`).
+    /// The policy catalogue ([`madenet_catalogue::catalogue`]) with this config's baseline
+    /// parameters.
     pub fn registry(&self) -> Result<PolicyRegistry, StudyError> {
-        let mut r = PolicyRegistry::builtin();
-        madenet_baselines::register(&mut r, &self.baselines);
-        madenet_learn::shipped::register(&mut r).map_err(|e| StudyError::Other(e.to_string()))?;
-        madenet_dme::shipped::register(&mut r).map_err(|e| StudyError::Other(e.to_string()))?;
-        Ok(r)
+        madenet_catalogue::catalogue(&self.baselines).map_err(|e| StudyError::Other(e.to_string()))
     }
 
     /// Checks everything that can be checked before a trial runs, and loads the maps.

@@ -13,6 +13,8 @@
 //!
 //! Methods are policy names: the study has no special case per method.
 
+#![deny(missing_docs)]
+
 pub mod analysis;
 pub mod calibration;
 pub mod config;
@@ -28,7 +30,7 @@ use std::path::{Path, PathBuf};
 
 /// Runs the study into `out` (created if needed). With `fresh`, earlier results there are
 /// discarded; otherwise trials already recorded for the same configuration are kept and only
-/// the rest run. Returns the path of `report.md`.
+/// the rest run. Returns the path of `report.md` and every trial's outcome, in plan order.
 pub fn run_study(
     cfg: &StudyConfig,
     out: &Path,

@@ -14,34 +14,54 @@ use std::sync::Mutex;
 /// Identifies a trial: (method, map, start, CSP, seed).
 #[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct TrialKey {
+    /// Method: a policy name, or `oracle-<kind>` for an oracle's trials.
     pub method: String,
+    /// Map name ([`StudyMap::name`]; `side<S>-map<k>` in the scalability study).
     pub map: String,
+    /// Start name: a corner, cells `r,c;r,c;…` or `random` (`<start>:<team>` in the
+    /// scalability study).
     pub start: String,
     /// CSP as written in outputs (shortest round-trip decimal).
     pub csp: String,
+    /// Seed of the trial's world and policies.
     pub seed: u64,
 }
 
 /// One row of `trials.csv`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrialRow {
+    /// Which trial.
     pub key: TrialKey,
+    /// The team explored every explorable cell before the step cap.
     pub completed: bool,
+    /// TNS, total number of steps: timesteps to completion, or the step cap.
     pub tns: usize,
+    /// TTD, total travel distance of the team, metres (column `ttd_m`).
     pub ttd: f64,
+    /// NOLI, number of local interactions: robot pairs within d_s in line of sight, summed
+    /// over timesteps.
     pub noli: usize,
+    /// NOLI counted the way the authors' code does, for the calibration.
     pub noli_authors: usize,
+    /// OFV, objective function value of Eq. (1): Σ_p p / D(p) over coverage levels p.
     pub ofv: f64,
+    /// Final explored fraction of the explorable cells (0–1).
     pub explored: f64,
+    /// Timesteps until coverage first reached each level of [`COVERAGE_LEVELS`] (columns
+    /// `to_20` … `to_100`); `None` (an empty cell): never reached.
     pub steps_to: Vec<Option<usize>>,
+    /// Wall-clock simulation time of the trial (CT), seconds; not deterministic.
     pub trial_s: f64,
+    /// Decisions taken by all robots during the trial.
     pub decisions: usize,
+    /// Mean wall-clock time of one decision (CT), seconds; not deterministic.
     pub per_decision_s: f64,
 }
 
 /// One line of `curves.jsonl`: the exploration curve of a trial.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Curve {
+    /// Which trial.
     pub key: TrialKey,
     /// Explored fraction after each timestep (index 0: before the first move).
     pub explored: Vec<f64>,
@@ -52,7 +72,9 @@ pub struct Curve {
 /// A finished trial.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TrialOutcome {
+    /// Its row of `trials.csv`.
     pub row: TrialRow,
+    /// Its line of `curves.jsonl`.
     pub curve: Curve,
 }
 
@@ -207,7 +229,9 @@ fn csp_label(c: f64) -> String {
 /// the spec's policy does).
 #[derive(Clone, Debug)]
 pub struct Planned {
+    /// The trial's identity in the outputs.
     pub key: TrialKey,
+    /// What is simulated: map, start cells, scenario (at this trial's CSP), policy, seed.
     pub spec: TrialSpec,
     /// The oracle and its number of futures.
     pub oracle: Option<(OracleKind, usize)>,
@@ -357,31 +381,26 @@ pub fn run_planned(
     let total = planned.len();
     let counter = std::sync::atomic::AtomicUsize::new(done.len());
     progress(done.len(), total);
-    let fresh: Vec<Result<TrialOutcome, StudyError>> = todo
-        .par_iter()
-        .map(|p| {
-            let outcome = run_one(p, registry)?;
-            {
-                let mut f = files.lock().expect("no panics while holding the lock");
-                let io = |e: std::io::Error| StudyError::File {
-                    path: out.display().to_string(),
-                    message: e.to_string(),
-                };
-                let mut line = serde_json::to_string(&outcome.curve).expect("curve serializes");
-                line.push('\n');
-                f.1.write_all(line.as_bytes()).map_err(io)?;
-                f.1.flush().map_err(io)?;
-                f.0.write_all(outcome.row.to_line().as_bytes())
-                    .map_err(io)?;
-                f.0.flush().map_err(io)?;
-            }
-            let n = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(n, total);
-            Ok(outcome)
-        })
-        .collect();
-    for r in fresh {
-        let o = r?;
+    let fresh = run_all(&todo, registry, &|outcome| {
+        {
+            let mut f = files.lock().expect("no panics while holding the lock");
+            let io = |e: std::io::Error| StudyError::File {
+                path: out.display().to_string(),
+                message: e.to_string(),
+            };
+            let mut line = serde_json::to_string(&outcome.curve).expect("curve serializes");
+            line.push('\n');
+            f.1.write_all(line.as_bytes()).map_err(io)?;
+            f.1.flush().map_err(io)?;
+            f.0.write_all(outcome.row.to_line().as_bytes())
+                .map_err(io)?;
+            f.0.flush().map_err(io)?;
+        }
+        let n = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress(n, total);
+        Ok(())
+    })?;
+    for o in fresh {
         done.insert(o.row.key.clone(), o);
     }
     let all: Vec<TrialOutcome> = planned
@@ -394,13 +413,42 @@ pub fn run_planned(
     Ok(all)
 }
 
-fn write_records(out: &Path, outcomes: &[&TrialOutcome]) -> Result<(), StudyError> {
+/// Runs `planned` in parallel on the current rayon pool, whatever records they have, calling
+/// `finished` with each outcome as it finishes (from the worker thread that ran it); returns
+/// the outcomes in plan order, or the first error in plan order.
+pub fn run_all(
+    planned: &[&Planned],
+    registry: &PolicyRegistry,
+    finished: &(dyn Fn(&TrialOutcome) -> Result<(), StudyError> + Sync),
+) -> Result<Vec<TrialOutcome>, StudyError> {
+    planned
+        .par_iter()
+        .map(|p| {
+            let outcome = run_one(p, registry)?;
+            finished(&outcome)?;
+            Ok(outcome)
+        })
+        .collect::<Vec<Result<TrialOutcome, StudyError>>>()
+        .into_iter()
+        .collect()
+}
+
+/// The bytes of `trials.csv` holding `outcomes`' rows in the given order: the one trial-table
+/// schema ([`header`]) of the study, the scalability study and `madenet batch`.
+pub fn trials_csv(outcomes: &[&TrialOutcome]) -> Vec<u8> {
     let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
     w.write_record(header()).expect("writing to memory");
     let mut csv_bytes = w.into_inner().expect("writing to memory");
-    let mut curves = Vec::new();
     for o in outcomes {
         csv_bytes.extend_from_slice(o.row.to_line().as_bytes());
+    }
+    csv_bytes
+}
+
+fn write_records(out: &Path, outcomes: &[&TrialOutcome]) -> Result<(), StudyError> {
+    let csv_bytes = trials_csv(outcomes);
+    let mut curves = Vec::new();
+    for o in outcomes {
         curves.extend_from_slice(
             serde_json::to_string(&o.curve)
                 .expect("curve serializes")

@@ -79,11 +79,13 @@ pub struct ScaleConfig {
     pub maps_per_side: usize,
     /// Master seed of the generated maps (`side<S>-map<k>` is drawn from it, side and k).
     pub map_seed: u64,
-    /// Obstacle fraction range of the generated maps.
+    /// Lower bound of the generated maps' target obstacle fraction.
     pub density_min: f64,
+    /// Upper bound of the generated maps' target obstacle fraction.
     pub density_max: f64,
     /// Seeds per (method, map, start, team): `seed_base`, `seed_base + 1`, …
     pub seeds: u64,
+    /// The first seed of each (method, map, start, team).
     pub seed_base: u64,
     /// Communication success probability of every trial (the paper's Fig. 7: 1).
     pub csp: f64,
@@ -126,8 +128,11 @@ impl Default for ScaleConfig {
 /// One trial's place in the grid, beside its planned run.
 #[derive(Clone, Debug)]
 pub struct ScalePlanned {
+    /// Map side, cells.
     pub side: usize,
+    /// Team size, robots.
     pub team: usize,
+    /// The trial, as the runner runs it.
     pub planned: Planned,
 }
 
@@ -326,13 +331,21 @@ impl ScaleConfig {
 /// One (side, team, method) cell of the grid.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CellRow {
+    /// Map side, cells.
     pub side: usize,
+    /// Team size, robots.
     pub team: usize,
+    /// Method (policy name).
     pub method: String,
+    /// Number of trials in the cell.
     pub trials: usize,
+    /// How many of them completed before the step cap.
     pub completed: usize,
+    /// Mean TNS (total number of steps), timesteps.
     pub tns: f64,
+    /// Mean TTD (total travel distance), metres.
     pub ttd_m: f64,
+    /// Mean NOLI (number of local interactions).
     pub noli: f64,
 }
 
@@ -341,7 +354,9 @@ pub struct CellRow {
 pub struct ScaleResult {
     /// `scale.md`.
     pub report: PathBuf,
+    /// The means per (side, team, method), as written to `cells.csv`.
     pub cells: Vec<CellRow>,
+    /// Number of trials of the study, recorded earlier or run now.
     pub trials: usize,
 }
 

@@ -1,12 +1,13 @@
-//! `madenet batch`: many trials in parallel, one CSV row each.
+//! `madenet batch`: many trials in parallel, one CSV row each — a trial set planned and run by
+//! the study runner ([`madenet_study::runner`]), written in its `trials.csv` schema.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Args;
-use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
-use madenet_metrics::COVERAGE_LEVELS;
-use madenet_sim::{MapSource, StartSpec, Trial, TrialResult, TrialSpec};
-use rayon::prelude::*;
-use std::path::PathBuf;
+use madenet_map::paper::Corner;
+use madenet_sim::PolicyRegistry;
+use madenet_study::runner::{self, Planned, TrialOutcome};
+use madenet_study::StudyConfig;
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
@@ -33,7 +34,7 @@ pub struct BatchArgs {
     /// Scenario config (TOML).
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Output CSV (written atomically).
+    /// Output CSV (written atomically), in the schema of `madenet compare`'s `trials.csv`.
     #[arg(long, default_value = "batch.csv")]
     out: PathBuf,
     /// Worker threads (default: all cores).
@@ -49,215 +50,133 @@ pub fn run(a: BatchArgs) -> Result<()> {
         );
     }
     let registry = crate::registry(a.model.as_deref())?;
-    if !registry.names().contains(&a.policy) {
-        bail!(
-            "unknown policy `{}` (field `--policy`); known policies: {}",
-            a.policy,
-            registry.names().join(", ")
-        );
-    }
-    let specs = plan(
+    known_policy(&registry, &a.policy, "--policy")?;
+    let mut cfg = trial_set(
         &a.maps,
         &a.starts,
         &a.csp,
         a.seeds,
         a.seed_base,
         a.config.as_deref(),
-        &a.policy,
     )?;
-    let (bar, pool) = crate::trials_bar_and_pool(specs.len() as u64, a.threads)?;
+    cfg.methods = vec![a.policy.clone()];
+    let flag = format!("--policy {}", a.policy);
+    let planned = plan(&cfg, &registry, a.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let results: Vec<Result<(String, TrialResult)>> = pool.install(|| {
-        specs
-            .into_par_iter()
-            .map(|(start, spec)| {
-                let label = format!("map {}, start {start}", spec.map_name);
-                let r = Trial::with_registry(spec, &registry)
-                    .with_context(|| label)?
-                    .run();
-                bar.inc(1);
-                Ok((start, r))
-            })
-            .collect()
-    });
-    bar.finish_and_clear();
+    let outcomes = run_planned(&planned, &registry, a.threads)?;
     let elapsed = started.elapsed();
-    let results: Vec<(String, TrialResult)> = results.into_iter().collect::<Result<_>>()?;
-    write_csv(&a.out, &results)?;
+    let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
+    madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))?;
     out!(
         "{} trials in {:.2} s → {}",
-        results.len(),
+        outcomes.len(),
         elapsed.as_secs_f64(),
         a.out.display()
     )?;
     for &csp in &a.csp {
-        let sel: Vec<&TrialResult> = results
+        let sel: Vec<&runner::TrialRow> = outcomes
             .iter()
-            .map(|(_, r)| r)
-            .filter(|r| r.comm_success_prob == csp)
+            .map(|o| &o.row)
+            .filter(|r| r.key.csp == format!("{csp}"))
             .collect();
         let n = sel.len().max(1) as f64;
-        let mean = |f: &dyn Fn(&TrialResult) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
+        let mean = |f: &dyn Fn(&runner::TrialRow) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
         out!(
             "csp {csp:.2}: completed {}/{}  TNS {:.1}  TTD {:.1} m  NOLI {:.1}  OFV {:.2}",
-            sel.iter().filter(|r| r.metrics.completed).count(),
+            sel.iter().filter(|r| r.completed).count(),
             sel.len(),
-            mean(&|r| r.metrics.tns as f64),
-            mean(&|r| r.metrics.ttd),
-            mean(&|r| r.metrics.noli as f64),
-            mean(&|r| r.metrics.ofv),
+            mean(&|r| r.tns as f64),
+            mean(&|r| r.ttd),
+            mean(&|r| r.noli as f64),
+            mean(&|r| r.ofv),
         )?;
     }
     Ok(())
 }
 
-/// The trials of a trial set: every map × start × CSP × seed, with its start's name.
-pub fn plan(
-    maps_arg: &[String],
-    starts_arg: &[String],
-    csps: &[f64],
-    seeds: u64,
-    seed_base: u64,
-    config: Option<&std::path::Path>,
-    policy: &str,
-) -> Result<Vec<(String, TrialSpec)>> {
-    if seeds == 0 {
-        bail!("--seeds 0: need at least one seed");
-    }
-    let base = crate::load_config(config)?;
-    let mut maps = Vec::new();
-    for m in maps_arg {
-        if m == "paper" {
-            maps.extend((1..=PAPER_MAP_COUNT).map(MapSource::Paper));
-        } else {
-            maps.push(
-                m.parse::<MapSource>()
-                    .map_err(anyhow::Error::msg)
-                    .context("--maps")?,
-            );
-        }
-    }
-    let mut starts = Vec::new();
-    for s in starts_arg {
-        if s == "all" {
-            starts.extend(Corner::ALL.into_iter().map(StartSpec::Corner));
-        } else {
-            let start = s
-                .parse::<StartSpec>()
-                .map_err(anyhow::Error::msg)
-                .context("--starts")?;
-            start
-                .check_team(base.num_robots)
-                .map_err(anyhow::Error::msg)
-                .context("--starts")?;
-            starts.push(start);
-        }
-    }
-    let loaded = maps
-        .iter()
-        .map(|source| source.load(&base))
-        .collect::<Result<Vec<_>, _>>()?;
-    madenet_sim::check_trial_set_size(
-        1,
-        &loaded
-            .iter()
-            .map(|m| m.cells().len() as u64)
-            .collect::<Vec<_>>(),
-        starts.len() as u64,
-        csps.len() as u64,
-        seeds,
-    )
-    .map_err(anyhow::Error::msg)
-    .context("--seeds")?;
-    if seed_base.checked_add(seeds.saturating_sub(1)).is_none() {
+/// `policy` (given with `flag`) must be in the registry.
+pub fn known_policy(registry: &PolicyRegistry, policy: &str, flag: &str) -> Result<()> {
+    if !registry.names().iter().any(|n| n == policy) {
         bail!(
-            "--seed-base {seed_base}: with {seeds} seeds it runs past the largest seed, {}",
-            u64::MAX
+            "unknown policy `{policy}` (field `{flag}`); known policies: {}",
+            registry.names().join(", ")
         );
     }
-    let mut specs = Vec::new();
-    for (source, map) in maps.iter().zip(&loaded) {
-        for start in &starts {
-            for &csp in csps {
-                let mut cfg = base.clone();
-                cfg.comm_success_prob = csp;
-                cfg.validate().context("--csp")?;
-                let cells = start.cells(map, cfg.num_robots, cfg.movement);
-                if cells.is_empty() {
-                    bail!("--starts random: map {} has no {} connected free cells around the cell drawn from it", source.name(), cfg.num_robots);
-                }
-                for k in 0..seeds {
-                    specs.push((
-                        start.name(),
-                        TrialSpec {
-                            map: map.clone(),
-                            map_name: source.name(),
-                            starts: cells.clone(),
-                            config: cfg.clone(),
-                            policy: policy.to_string(),
-                            seed: seed_base + k,
-                        },
-                    ));
-                }
-            }
-        }
-    }
-    Ok(specs)
+    Ok(())
 }
 
-pub fn write_csv(path: &std::path::Path, results: &[(String, TrialResult)]) -> Result<()> {
-    let file =
-        madenet_files::AtomicFile::create(path).with_context(|| format!("{}", path.display()))?;
-    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
-    let mut header: Vec<String> = [
-        "map",
-        "start",
-        "policy",
-        "csp",
-        "seed",
-        "completed",
-        "tns",
-        "ttd",
-        "noli",
-        "ofv",
-        "explored",
-    ]
-    .map(String::from)
-    .to_vec();
-    header.extend(COVERAGE_LEVELS.iter().map(|n| format!("to_{n}")));
-    header.extend(["trial_s", "decisions", "per_decision_s"].map(String::from));
-    w.write_record(&header)?;
-    for (start, r) in results {
-        let m = &r.metrics;
-        let mut row = vec![
-            r.map.clone(),
-            start.clone(),
-            r.policy.clone(),
-            r.comm_success_prob.to_string(),
-            r.seed.to_string(),
-            m.completed.to_string(),
-            m.tns.to_string(),
-            format!("{:.6}", m.ttd),
-            m.noli.to_string(),
-            format!("{:.6}", m.ofv),
-            format!("{:.6}", m.explored),
-        ];
-        row.extend(
-            m.steps_to
-                .iter()
-                .map(|s| s.map(|v| v.to_string()).unwrap_or_default()),
-        );
-        row.extend([
-            format!("{:.6}", r.timing.trial_s),
-            r.timing.decisions.to_string(),
-            format!("{:.9}", r.timing.per_decision_s),
-        ]);
-        w.write_record(&row)?;
+/// The trial set the flags of `batch` and `oracle` describe, as a study config with no methods
+/// and no oracles yet: `--starts all` is the four corners, `--config` the scenario.
+pub fn trial_set(
+    maps: &[String],
+    starts: &[String],
+    csp: &[f64],
+    seeds: u64,
+    seed_base: u64,
+    config: Option<&Path>,
+) -> Result<StudyConfig> {
+    let mut corners = Vec::new();
+    for s in starts {
+        if s == "all" {
+            corners.extend(Corner::ALL.iter().map(|c| c.name().to_string()));
+        } else {
+            corners.push(s.clone());
+        }
     }
-    w.into_inner()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
-        .into_inner()
-        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.error()))?
-        .commit()
-        .with_context(|| format!("{}", path.display()))
+    Ok(StudyConfig {
+        methods: Vec::new(),
+        maps: maps.to_vec(),
+        starts: corners,
+        csp: csp.to_vec(),
+        seeds,
+        seed_base,
+        scenario: crate::load_config(config)?,
+        oracles: Vec::new(),
+        ..StudyConfig::default()
+    })
+}
+
+/// Checks `cfg` (a bad field named by its flag; `policy_flag` for the policy) and plans its
+/// trials with the study runner, in its order: methods, then oracles; maps, starts, CSPs, seeds.
+pub fn plan(
+    cfg: &StudyConfig,
+    registry: &PolicyRegistry,
+    config: Option<&Path>,
+    policy_flag: &str,
+) -> Result<Vec<Planned>> {
+    let (maps, starts) = cfg.validate(registry).map_err(|e| {
+        crate::compare::name_study_source(
+            e,
+            config,
+            &[
+                ("methods", policy_flag, true),
+                ("oracle_base", policy_flag, true),
+                ("oracle_futures", "--futures", true),
+                ("maps", "--maps", true),
+                ("starts", "--starts", true),
+                ("csp", "--csp", true),
+                ("seeds", "--seeds", true),
+                ("seed_base", "--seed-base", true),
+            ],
+        )
+    })?;
+    Ok(runner::plan(cfg, &maps, &starts))
+}
+
+/// Runs `planned` with a progress bar on `threads` workers; outcomes in plan order.
+pub fn run_planned(
+    planned: &[Planned],
+    registry: &PolicyRegistry,
+    threads: Option<usize>,
+) -> Result<Vec<TrialOutcome>> {
+    let (bar, pool) = crate::trials_bar_and_pool(planned.len() as u64, threads)?;
+    let all: Vec<&Planned> = planned.iter().collect();
+    let outcomes = pool.install(|| {
+        runner::run_all(&all, registry, &|_| {
+            bar.inc(1);
+            Ok(())
+        })
+    });
+    bar.finish_and_clear();
+    Ok(outcomes?)
 }

@@ -62,13 +62,13 @@ fn name_source(e: StudyError, a: &CompareArgs) -> anyhow::Error {
 }
 
 /// Names where a bad study field came from: the flag that set it (`(field, flag, given)`), else
-/// the config file, else nothing more (a default). Shared by `compare` and `scale`.
+/// the config file, else nothing more (a default). Shared by `batch`, `compare` and `scale`.
 pub fn name_study_source(
     e: StudyError,
     config: Option<&std::path::Path>,
     flags: &[(&str, &str, bool)],
 ) -> anyhow::Error {
-    let StudyError::Field { field, .. } = &e else {
+    let StudyError::Field { field, message } = &e else {
         return e.into();
     };
     let flag = flags
@@ -76,7 +76,7 @@ pub fn name_study_source(
         .find(|(f, _, given)| f == field && *given)
         .map(|(_, flag, _)| *flag);
     match (flag, config) {
-        (Some(flag), _) => anyhow::anyhow!("{flag}: {e}"),
+        (Some(flag), _) => anyhow::anyhow!("{flag}: {message}"),
         (None, Some(path)) => anyhow::anyhow!("{}: {e}", path.display()),
         (None, None) => e.into(),
     }

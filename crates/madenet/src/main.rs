@@ -113,37 +113,14 @@ fn main() -> ExitCode {
     }
 }
 
-/// Every policy the CLI knows: built-ins, baselines, the shipped learned models, and the model
+/// Every policy the CLI knows: the catalogue ([`madenet_catalogue::shipped`]) and the model
 /// in `model_dir` as `model`.
 pub fn registry(
     model_dir: Option<&std::path::Path>,
 ) -> anyhow::Result<madenet_sim::PolicyRegistry> {
-    let mut r = madenet_study::StudyConfig::default().registry()?;
+    let mut r = madenet_catalogue::shipped()?;
     if let Some(dir) = model_dir {
-        // A DME-DRL model says so in its model.toml; anything else is a MADE-Net model.
-        let toml_path = dir.join("model.toml");
-        let is_dme = std::fs::read_to_string(&toml_path)
-            .ok()
-            .and_then(|t| t.parse::<toml::Table>().ok())
-            .and_then(|t| {
-                t.get("method")
-                    .and_then(|m| m.as_str())
-                    .map(|m| m == madenet_dme::train::METHOD)
-            })
-            .unwrap_or(false);
-        if is_dme {
-            madenet_dme::train::Model::load(dir)?.register(
-                &mut r,
-                "model",
-                "the model given with --model",
-            );
-        } else {
-            madenet_learn::Model::load(dir)?.register(
-                &mut r,
-                "model",
-                "the model given with --model",
-            );
-        }
+        madenet_catalogue::register_model(&mut r, "model", "the model given with --model", dir)?;
     }
     Ok(r)
 }

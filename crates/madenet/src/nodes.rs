@@ -310,7 +310,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
     let mut pictures: Option<crate::run::Pictures> = None;
     let (mut last, mut failed) = (None, None);
     let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
-        let f = madenet_env::world_frame(
+        let f = madenet_render::world_frame(
             w,
             |i| {
                 let s = shown.get(i).cloned().unwrap_or_default();

@@ -2,11 +2,10 @@
 //! the ceiling a candidate rule or a learned policy is judged against
 //! ([`madenet_sim::rollout`]).
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use madenet_sim::rollout::{check_base, run_oracle, OracleKind};
-use madenet_sim::{Trial, TrialResult};
-use rayon::prelude::*;
+use madenet_sim::rollout::OracleKind;
+use madenet_study::runner::{self, TrialOutcome};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -53,7 +52,8 @@ pub struct OracleArgs {
     /// Scenario config (TOML).
     #[arg(long)]
     config: Option<PathBuf>,
-    /// Also write the oracle's trials as CSV (the schema of `madenet batch`).
+    /// Also write the base rule's and the oracle's trials as CSV (the schema of `madenet batch`
+    /// and the study's `trials.csv`; the oracle's rows are method `oracle-KIND`).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Worker threads (default: all cores).
@@ -66,63 +66,34 @@ pub fn run(a: OracleArgs) -> Result<()> {
         bail!("--futures {}: must be in 1..=64", a.futures);
     }
     let registry = crate::registry(None)?;
-    if !registry.names().contains(&a.base) {
-        bail!(
-            "unknown policy `{}` (field `--base`); known policies: {}",
-            a.base,
-            registry.names().join(", ")
-        );
-    }
-    let specs = crate::batch::plan(
-        &a.maps,
-        &a.starts,
-        &a.csp,
-        a.seeds,
-        a.seed_base,
-        a.config.as_deref(),
-        &a.base,
-    )?;
-    if let Some((_, s)) = specs.first() {
-        check_base(s, &registry).map_err(|e| anyhow::anyhow!("--base {}: {e}", a.base))?;
-    }
+    crate::batch::known_policy(&registry, &a.base, "--base")?;
     let kind = match a.kind {
         Kind::Replay => OracleKind::Replay,
         Kind::Averaged => OracleKind::Averaged,
         Kind::Placebo => OracleKind::Placebo,
         Kind::Noiseless => OracleKind::Noiseless,
     };
-    let (bar, pool) = crate::trials_bar_and_pool(specs.len() as u64, a.threads)?;
+    let mut cfg = crate::batch::trial_set(
+        &a.maps,
+        &a.starts,
+        &a.csp,
+        a.seeds,
+        a.seed_base,
+        a.config.as_deref(),
+    )?;
+    cfg.methods = vec![a.base.clone()];
+    cfg.oracles = vec![kind];
+    cfg.oracle_base = a.base.clone();
+    cfg.oracle_futures = a.futures;
+    let flag = format!("--base {}", a.base);
+    // The base rule's trials, then the oracle's on the same (map, start, CSP, seed), in order.
+    let planned = crate::batch::plan(&cfg, &registry, a.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let results: Vec<Result<(String, TrialResult, TrialResult)>> = pool.install(|| {
-        specs
-            .into_par_iter()
-            .map(|(start, spec)| {
-                let label = format!("map {}, start {start}", spec.map_name);
-                let base = Trial::with_registry(spec.clone(), &registry)
-                    .with_context(|| label.clone())?
-                    .timed(false)
-                    .run();
-                let mut oracle =
-                    run_oracle(spec, &registry, kind, a.futures).with_context(|| label)?;
-                oracle.policy = format!(
-                    "oracle-{}({})",
-                    format!("{:?}", a.kind).to_lowercase(),
-                    a.base
-                );
-                bar.inc(1);
-                Ok((start, base, oracle))
-            })
-            .collect()
-    });
-    bar.finish_and_clear();
-    let results: Vec<(String, TrialResult, TrialResult)> =
-        results.into_iter().collect::<Result<_>>()?;
+    let outcomes = crate::batch::run_planned(&planned, &registry, a.threads)?;
+    let (base, oracle) = outcomes.split_at(outcomes.len() / 2);
     if let Some(path) = &a.out {
-        let rows: Vec<(String, TrialResult)> = results
-            .iter()
-            .map(|(s, _, o)| (s.clone(), o.clone()))
-            .collect();
-        crate::batch::write_csv(path, &rows)?;
+        let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
+        madenet_files::write_atomic(path, &runner::trials_csv(&rows))?;
     }
     let futures = match a.kind {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
@@ -130,28 +101,26 @@ pub fn run(a: OracleArgs) -> Result<()> {
     };
     out!(
         "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}",
-        results.len(),
+        base.len(),
         started.elapsed().as_secs_f64(),
         a.kind,
         a.base
     )?;
     for &csp in &a.csp {
-        let sel: Vec<&(String, TrialResult, TrialResult)> = results
+        let sel: Vec<(&TrialOutcome, &TrialOutcome)> = base
             .iter()
-            .filter(|r| r.1.comm_success_prob == csp)
+            .zip(oracle)
+            .filter(|(b, _)| b.row.key.csp == format!("{csp}"))
             .collect();
         let n = sel.len().max(1) as f64;
-        let base: f64 = sel.iter().map(|r| r.1.metrics.tns as f64).sum::<f64>() / n;
-        let oracle: f64 = sel.iter().map(|r| r.2.metrics.tns as f64).sum::<f64>() / n;
-        let wins = sel
-            .iter()
-            .filter(|r| r.2.metrics.tns < r.1.metrics.tns)
-            .count();
-        let losses = sel
-            .iter()
-            .filter(|r| r.2.metrics.tns > r.1.metrics.tns)
-            .count();
-        out!("csp {csp:.2}: base TNS {base:.1}  oracle TNS {oracle:.1}  ({:+.1} %)  oracle better on {wins}, worse on {losses} of {}", 100.0 * (oracle / base - 1.0), sel.len())?;
+        let mean = |f: &dyn Fn(&(&TrialOutcome, &TrialOutcome)) -> usize| {
+            sel.iter().map(|r| f(r) as f64).sum::<f64>() / n
+        };
+        let base_tns = mean(&|r| r.0.row.tns);
+        let oracle_tns = mean(&|r| r.1.row.tns);
+        let wins = sel.iter().filter(|r| r.1.row.tns < r.0.row.tns).count();
+        let losses = sel.iter().filter(|r| r.1.row.tns > r.0.row.tns).count();
+        out!("csp {csp:.2}: base TNS {base_tns:.1}  oracle TNS {oracle_tns:.1}  ({:+.1} %)  oracle better on {wins}, worse on {losses} of {}", 100.0 * (oracle_tns / base_tns - 1.0), sel.len())?;
     }
     Ok(())
 }

@@ -160,15 +160,15 @@ pub fn run(a: RunArgs) -> Result<()> {
         .record_trajectory(a.trajectory);
     let mut pictures = None;
     if a.pictures.any() {
-        pictures = Some(a.pictures.start(&madenet_env::frame(&trial))?);
+        pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
     }
     while trial.step() {
         if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
-            p.push(&madenet_env::frame(&trial))?;
+            p.push(&madenet_render::trial_frame(&trial))?;
         }
     }
     let wrote = match pictures {
-        Some(p) => p.finish(&madenet_env::frame(&trial))?,
+        Some(p) => p.finish(&madenet_render::trial_frame(&trial))?,
         None => Vec::new(),
     };
     let result = trial.finish();

@@ -358,7 +358,7 @@ fn outputs_through_symlinks_and_devices() {
     for (link, target, magic) in [
         ("trial.gif", "t.gif", &b"GIF89a"[..]),
         ("final.png", "f.png", &b"\x89PNG"[..]),
-        ("latest.csv", "b.csv", &b"map,"[..]),
+        ("latest.csv", "b.csv", &b"method,map,"[..]),
     ] {
         let meta = std::fs::symlink_metadata(dir.join(link)).unwrap();
         assert!(meta.file_type().is_symlink(), "{link} is still a symlink");
@@ -406,9 +406,9 @@ fn outputs_through_symlinks_and_devices() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.lines().any(|l| l.starts_with("map,")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("method,map,")), "{text}");
     assert!(
-        text.lines().filter(|l| l.starts_with("test_1,")).count() == 4,
+        text.lines().filter(|l| l.starts_with("nf,test_1,")).count() == 4,
         "{text}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -1,13 +1,13 @@
-//! A trial's current state as a [`madenet_render::Frame`]: the picture `madenet run --render`
-//! draws and the Python environments' `render()` returns.
+//! A trial's current state as a [`Frame`]: the picture `madenet run --render` draws, the
+//! Python environments' `render()` returns and the runtime's world node shows.
 
+use crate::{Frame, RobotFrame};
 use madenet_map::{OccGrid, Pos};
-use madenet_render::{Frame, RobotFrame};
 use madenet_sim::Trial;
 use madenet_world::World;
 
 /// The current state of `trial` as a render frame.
-pub fn frame(trial: &Trial) -> Frame {
+pub fn trial_frame(trial: &Trial) -> Frame {
     let w = trial.world();
     let agents = trial.agents();
     world_frame(
@@ -22,7 +22,7 @@ pub fn frame(trial: &Trial) -> Frame {
 
 /// The current state of `w` as a render frame, robot i drawn with what `shown(i)` gives (its
 /// goal, planned path and goal candidates) and `links` the pairs exchanging this timestep:
-/// [`frame`] for a world whose agents live elsewhere (the runtime's world node).
+/// [`trial_frame`] for a world whose agents live elsewhere (the runtime's world node).
 pub fn world_frame(
     w: &World,
     shown: impl Fn(usize) -> (Option<Pos>, Vec<Pos>, Vec<Pos>),
