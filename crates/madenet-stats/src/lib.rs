@@ -66,7 +66,7 @@
 //! assert_eq!(post_hoc[0].p_corrected, 3.0 * 2.0 / 64.0);
 //! ```
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 mod friedman;
 mod rank;

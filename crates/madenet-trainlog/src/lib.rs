@@ -105,7 +105,7 @@
 //!
 //! Every error is one line naming the file concerned.
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 use std::path::PathBuf;
 
