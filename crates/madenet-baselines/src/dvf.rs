@@ -423,4 +423,113 @@ mod tests {
         assert_eq!(pb.value.len(), 7 * 9);
         assert_eq!(pb.offset(0), -9);
     }
+
+    /// A 1 × 3 corridor of states a – b – c (a padded grid's middle row) with rewards
+    /// R = (0, 0, 4), γ = 0.5 and moves only along the corridor.
+    fn corridor(iterations: usize, tolerance: f32) -> DistributedValueFunctions {
+        let p = PbParams {
+            horizon: 0,
+            iterations,
+            tolerance,
+            discount: 0.5,
+            ..PbParams::default()
+        };
+        let mut pb = DistributedValueFunctions::new(p, &ScenarioConfig::default(), 1, 3);
+        let n = pb.reward.len();
+        let [a, b, c] = [0, 1, 2].map(|col| pb.padded(Pos::new(0, col)));
+        pb.reward[c] = 4.0;
+        pb.penalty = vec![f32::NEG_INFINITY; 8 * n];
+        let (east, west) = (2, 6); // DIRS[2] = (0, 1), DIRS[6] = (0, -1)
+        for k in [a, b] {
+            pb.penalty[east * n + k] = 0.0;
+        }
+        for k in [b, c] {
+            pb.penalty[west * n + k] = 0.0;
+        }
+        pb
+    }
+
+    fn corridor_values(pb: &DistributedValueFunctions, v: &[f32]) -> [f32; 3] {
+        [0, 1, 2].map(|col| v[pb.padded(Pos::new(0, col))])
+    }
+
+    /// Jacobi sweeps by hand from V = R = (0, 0, 4): V(s) = R(s) + γ · max over neighbours.
+    /// Sweep 1: (0, 0.5·4, 4 + 0.5·0) = (0, 2, 4); sweep 2: (0.5·2, 0.5·4, 4 + 0.5·2) =
+    /// (1, 2, 5); the fixed point solves c = 4 + b/2, b = c/2, a = b/2: (4/3, 8/3, 16/3).
+    #[test]
+    fn value_iteration_matches_hand_computed_sweeps() {
+        for (iterations, want) in [(1, [0.0, 2.0, 4.0]), (2, [1.0, 2.0, 5.0])] {
+            let mut pb = corridor(iterations, 0.0);
+            let v = pb.value_iteration(false);
+            assert_eq!(corridor_values(&pb, &v), want, "{iterations} sweeps");
+        }
+        let mut pb = corridor(200, 1e-6);
+        let v = pb.value_iteration(false);
+        let got = corridor_values(&pb, &v);
+        for (g, w) in got.iter().zip([4.0 / 3.0, 8.0 / 3.0, 16.0 / 3.0]) {
+            assert!((g - w).abs() < 1e-4, "{got:?}");
+        }
+    }
+
+    /// The DVF is subtracted from the successor's value: with DVF(c) = 10, b's best successor
+    /// is a (V(a) − 0 > V(c) − 10), so nothing of c's reward flows left of c. The fixed point
+    /// is then a = b = 0 and c = 4 + γ · V(b) = 4.
+    #[test]
+    fn value_iteration_subtracts_the_distributed_value_function() {
+        let mut pb = corridor(200, 1e-6);
+        let c = pb.padded(Pos::new(0, 2));
+        pb.dvf[c] = 10.0;
+        let v = pb.value_iteration(true);
+        assert_eq!(corridor_values(&pb, &v), [0.0, 0.0, 4.0]);
+        // Without the DVF the same corridor carries the reward left.
+        let v = pb.value_iteration(false);
+        assert!(corridor_values(&pb, &v)[0] > 1.0);
+    }
+
+    /// A state without allowed moves keeps V = R, whatever the sweeps.
+    #[test]
+    fn a_state_without_moves_keeps_its_reward() {
+        let mut pb = corridor(5, 0.0);
+        let n = pb.reward.len();
+        let c = pb.padded(Pos::new(0, 2));
+        for d in 0..8 {
+            pb.penalty[d * n + c] = f32::NEG_INFINITY;
+        }
+        let v = pb.value_iteration(false);
+        assert_eq!(v[c], 4.0);
+        // b still sees c: 0 + 0.5 · 4.
+        assert_eq!(v[pb.padded(Pos::new(0, 1))], 2.0);
+    }
+
+    /// `prepare` on a 3 × 3 belief, robot at the centre: rewards are the unknown in-bounds
+    /// 8-neighbours of known free cells (0 at the robot's own cell), and under the
+    /// no-corner-cutting rule a diagonal move needs both side cells free.
+    #[test]
+    fn prepare_sets_rewards_and_allowed_moves() {
+        let mut belief = Belief::new(3, 3, Movement::NoCornerCutting);
+        for (r, c) in [(1, 1), (1, 2), (2, 2)] {
+            belief.observe(Pos::new(r, c), Occupancy::Free);
+        }
+        belief.observe(Pos::new(2, 1), Occupancy::Obstacle);
+        let cfg = ScenarioConfig {
+            movement: Movement::NoCornerCutting,
+            ..ScenarioConfig::default()
+        };
+        let mut pb = DistributedValueFunctions::new(PbParams::default(), &cfg, 3, 3);
+        pb.prepare(&belief, Pos::new(1, 1));
+        let k = |r, c| pb.padded(Pos::new(r, c));
+        // (1, 2): neighbours (0, 1), (0, 2) unknown; (1, 1), (2, 1), (2, 2) known → 2.
+        // (2, 2): neighbours (1, 1), (1, 2), (2, 1) all known → 0.
+        assert_eq!(pb.reward[k(1, 1)], 0.0);
+        assert_eq!(pb.reward[k(1, 2)], 2.0);
+        assert_eq!(pb.reward[k(2, 2)], 0.0);
+        assert!(pb.active[k(1, 1)] && pb.active[k(2, 2)] && !pb.active[k(2, 1)]);
+        let n = pb.reward.len();
+        let allowed = |from: usize, d: usize| pb.penalty[d * n + from] == 0.0;
+        assert!(allowed(k(1, 1), 2)); // east to (1, 2)
+        assert!(!allowed(k(1, 1), 3)); // south-east to (2, 2): (2, 1) is occupied
+        assert!(allowed(k(1, 2), 4)); // south to (2, 2)
+        assert!(!allowed(k(1, 1), 4)); // south into the obstacle
+        assert!(!allowed(k(1, 1), 0)); // north into unknown space
+    }
 }

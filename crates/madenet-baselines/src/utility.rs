@@ -152,3 +152,55 @@ impl Policy for UtilityBased {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The summed-area table counts the unknown cells of the d_s window around a cell,
+    /// clipped to the map; hand-counted on a 4 × 5 map with d_s = 1.
+    #[test]
+    fn unknown_window_counts_by_hand() {
+        use Occupancy::{Free as F, Obstacle as O, Unknown as U};
+        #[rustfmt::skip]
+        let map = [
+            U, U, F, F, O,
+            U, F, F, U, U,
+            F, F, O, U, F,
+            O, U, U, U, U,
+        ];
+        let cfg = ScenarioConfig {
+            sensing_range: 1,
+            ..ScenarioConfig::default()
+        };
+        let mut ub = UtilityBased::new(UbParams::default(), &cfg, 4, 5);
+        ub.build_sat(&map, 4, 5);
+        // (0, 0): window rows 0–1, cols 0–1: U U / U F → 3.
+        assert_eq!(ub.unknown_around(0, 0, 4, 5), 3);
+        // (1, 2): rows 0–2, cols 1–3: U F F / F F U / F O U → 3.
+        assert_eq!(ub.unknown_around(1, 2, 4, 5), 3);
+        // (3, 4): rows 2–3, cols 3–4: U F / U U → 3.
+        assert_eq!(ub.unknown_around(3, 4, 4, 5), 3);
+        // (2, 3): rows 1–3, cols 2–4: F U U / O U F / U U U → 6.
+        assert_eq!(ub.unknown_around(2, 3, 4, 5), 6);
+    }
+
+    /// Unset β is one over the map's side in metres; unset radius is d_s.
+    #[test]
+    fn unset_parameters_follow_the_map_and_sensor() {
+        let cfg = ScenarioConfig::default();
+        let ub = UtilityBased::new(UbParams::default(), &cfg, 20, 30);
+        assert_eq!(ub.beta, 1.0 / (30.0 * cfg.cell_size));
+        assert_eq!(ub.radius, cfg.sensing_range as f64);
+        let ub = UtilityBased::new(
+            UbParams {
+                beta: Some(0.25),
+                coordination_radius: Some(2.5),
+            },
+            &cfg,
+            20,
+            30,
+        );
+        assert_eq!((ub.beta, ub.radius), (0.25, 2.5));
+    }
+}

@@ -76,9 +76,8 @@ pub const MAP_CHANNELS: usize = 4;
 /// The robot's own explored count `|E_i|` is *not* in this layout (it follows the brief of the
 /// learner issue); a caller that wants it adds 1 to [`NetConfig::obs_dim`].
 pub fn obs_dim_for(team: usize, goals: usize) -> usize {
-    let own = 2 + 1;
-    let per_teammate = 2 + 2 + 2 + 1 + 1;
-    own + per_teammate * team.saturating_sub(1) + 2 * goals + goals
+    // One formula: the agent's, which writes the vector.
+    madenet_agent::AgentView::macro_observation_len(team, goals)
 }
 
 /// Length of the CEP's joint non-map observation: every robot's [`obs_dim_for`] vector,

@@ -401,3 +401,45 @@ fn one_adam_step_lowers_mse_on_a_fixed_batch() {
         assert!(after < before, "loss did not fall: {before} → {after}");
     }
 }
+
+/// The observation length the networks are built for (`obs_dim_for`, `Observation::dim`) is the
+/// length the agent writes from a live view, for several team and candidate counts (a grid
+/// model's DEP is built with `Observation::dim`, `Model::load`).
+#[test]
+fn observation_lengths_match_what_the_agent_writes() {
+    use madenet_learn::obs::{robot_obs, Observation};
+    use madenet_sim::{MapSource, StartSpec, Trial, TrialSpec};
+    for (team, goals) in [(2, 2), (3, 4), (4, 6), (6, 3)] {
+        let config = madenet_world::ScenarioConfig {
+            num_robots: team,
+            goal_count: Some(goals),
+            ..Default::default()
+        };
+        let map = MapSource::Generated(7).load(&config).unwrap();
+        let spec = TrialSpec {
+            starts: StartSpec::Random.cells(&map, team, config.movement),
+            map,
+            map_name: "generated_7".into(),
+            config: config.clone(),
+            policy: "spread".into(),
+            seed: 3,
+        };
+        let mut trial = Trial::new(spec).unwrap();
+        for _ in 0..5 {
+            trial.step();
+        }
+        for i in 0..team {
+            let mut view = trial.agent_mut(i).view(true);
+            assert_eq!(view.candidates().slots, goals);
+            assert_eq!(robot_obs(&view).vec.len(), obs_dim_for(team, goals));
+            for o in [Observation::Paper, Observation::CandidateFeatures] {
+                let v = o.vector(&mut view, config.sensing_range);
+                assert_eq!(
+                    v.len(),
+                    o.dim(team, goals),
+                    "{o:?}, {team} robots, {goals} goals"
+                );
+            }
+        }
+    }
+}

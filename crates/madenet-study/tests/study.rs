@@ -6,6 +6,7 @@
 //! Studies here are small (2 paper maps × 2 corners × 2 CSPs × 2 seeds per method) so the tests
 //! stay fast in the dev profile.
 
+use madenet_metrics::COVERAGE_LEVELS;
 use madenet_study::{run_study, StudyConfig, TrialOutcome};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -406,10 +407,43 @@ fn small_study_writes_every_output_consistently() {
             "{r:?}"
         );
         let tns = trials.num(r, "tns");
-        assert!(tns >= 1.0 && tns <= cfg.scenario.step_cap as f64, "{r:?}");
+        let cap = cfg.scenario.step_cap as f64;
+        assert!(tns >= 1.0 && tns <= cap, "{r:?}");
         let e = trials.num(r, "explored");
         assert!((0.0..=1.0 + 1e-9).contains(&e), "{r:?}");
-        assert!(trials.num(r, "ttd_m") > 0.0 && trials.num(r, "ofv") >= 0.0);
+        // Completed ⇔ everything explored; then the trial ends the step 100 % is first
+        // reached, else it runs to the cap and never reaches 100 %.
+        let completed = trials.get(r, "completed") == "true";
+        assert_eq!(completed, e >= 1.0 - 1e-12, "{r:?}");
+        if completed {
+            assert_eq!(trials.num(r, "to_100"), tns, "{r:?}");
+        } else {
+            assert_eq!((tns, trials.get(r, "to_100")), (cap, ""), "{r:?}");
+        }
+        // Coverage levels: reached in order, and each exactly when the final coverage is at
+        // least that level (coverage never falls).
+        let mut last = 0.0;
+        for level in COVERAGE_LEVELS {
+            let v = trials.get(r, &format!("to_{level}"));
+            assert_eq!(
+                v.is_empty(),
+                e < level as f64 / 100.0 - 1e-12,
+                "to_{level}: {r:?}"
+            );
+            if !v.is_empty() {
+                let k: f64 = v.parse().unwrap();
+                assert!(k >= last && k <= tns, "to_{level}: {r:?}");
+                last = k;
+            }
+        }
+        // TTD: positive, and at most every robot moving one diagonal cell every step.
+        let ttd = trials.num(r, "ttd_m");
+        let most = tns
+            * cfg.scenario.num_robots as f64
+            * std::f64::consts::SQRT_2
+            * cfg.scenario.cell_size;
+        assert!(ttd > 0.0 && ttd <= most + 1e-9, "{r:?}");
+        assert!(trials.num(r, "ofv") >= 0.0);
         assert!(
             trials.num(r, "noli_authors") <= trials.num(r, "noli"),
             "{r:?}"
