@@ -25,15 +25,12 @@ use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
-use madenet_learn::train::{
-    io_err, prepare_run, replace_dir, training_scenario, validate_policy, write_atomic,
-};
+use madenet_learn::harness::{self, replace_dir, Clock, Logs, Seen};
+use madenet_learn::train::{io_err, training_scenario, validate_policy, write_atomic};
 use madenet_learn::{TrainConfig, TrainError};
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
-use madenet_trainlog::{
-    truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, ValidationRow,
-};
+use madenet_trainlog::{EpisodeRow, MaddpgUpdateRow, ValidationRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -41,7 +38,6 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::{Arc, Mutex, RwLock};
-use std::time::Instant;
 
 /// The registry name of the method.
 pub const METHOD: &str = "dme-drl";
@@ -731,12 +727,8 @@ fn checkpoint(dir: &Path, nets: &Maddpg, state: &State, replay: &Replay) -> Resu
                 op.save(&p).map_err(save_err(&p))?;
             }
         }
-        let bytes = postcard::to_stdvec(replay)
-            .map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
-        write_atomic(&tmp.join("replay.bin"), &bytes)?;
-        let text =
-            serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
-        write_atomic(&tmp.join("state.json"), text.as_bytes())
+        harness::write_postcard(&tmp.join("replay.bin"), replay)?;
+        harness::write_json(&tmp.join("state.json"), state)
     })
 }
 
@@ -769,18 +761,8 @@ fn restore(dir: &Path, mut nets: Maddpg) -> Result<(Maddpg, State, Replay), Trai
             *op = loaded;
         }
     }
-    let sp = dir.join("state.json");
-    let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-    let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config {
-        path: sp.display().to_string(),
-        message: e.to_string(),
-    })?;
-    let rp = dir.join("replay.bin");
-    let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
-    let replay: Replay = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
-        path: rp.display().to_string(),
-        message: e.to_string(),
-    })?;
+    let state: State = harness::read_json(&dir.join("state.json"))?;
+    let replay: Replay = harness::read_postcard(&dir.join("replay.bin"))?;
     Ok((nets, state, replay))
 }
 
@@ -808,7 +790,7 @@ pub fn train(
     cfg: Option<DmeTrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    let (cfg, resuming) = prepare_run(
+    harness::run(
         run_dir,
         cfg,
         DmeTrainConfig::from_toml_file,
@@ -820,12 +802,9 @@ pub fn train(
                 ..given.clone()
             } == *saved
         },
-    )?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(cfg.threads)
-        .build()
-        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
-    pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
+        |cfg| cfg.threads,
+        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
+    )
 }
 
 fn train_loop(
@@ -844,36 +823,15 @@ fn train_loop(
     } else {
         (nets, State::default(), Replay::default())
     };
-    let log_path = |name: &str| run_dir.join(name);
-    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| {
-        r.episode < state.episode
-    })?;
-    truncate_rows::<MaddpgUpdateRow>(&log_path(MaddpgUpdateRow::FILE_NAME), |r| {
-        r.update < state.updates
-    })?;
-    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| {
-        r.episode <= state.episode
-    })?;
-    // TensorBoard's curves likewise.
-    madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
-        Some("episode") => step < state.episode as i64,
-        Some("loss") => step < state.updates as i64,
-        Some("validation") => step <= state.episode as i64,
-        _ => true,
-    })
-    .map_err(io_err(run_dir))?;
-    let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
-    let mut up_log = LogWriter::<MaddpgUpdateRow>::open(log_path(MaddpgUpdateRow::FILE_NAME))?;
-    let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
-    let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
-    let unix = || {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64())
-    };
-    let started = Instant::now();
-    let mut last_checkpoint = started;
-    let wall0 = state.wall_s;
+    let mut logs = Logs::<MaddpgUpdateRow>::open(
+        run_dir,
+        Seen {
+            episodes: state.episode,
+            updates: state.updates,
+            first_loss_step: 0, // `loss/*` steps count updates from 0
+        },
+    )?;
+    let mut clock = Clock::start(state.wall_s);
     let params = cfg.update_params();
     let team = cfg.scenario.num_robots;
     let learn = cfg.learn_view();
@@ -957,26 +915,19 @@ fn train_loop(
                 for (i, a) in acting.iter().enumerate() {
                     *a.write().expect("actor lock") = nets.acting_actor(i);
                 }
-                up_log.append(&MaddpgUpdateRow {
+                logs.updates.append(&MaddpgUpdateRow {
                     update: state.updates,
                     critic_loss: stats.critic_loss.into(),
                     actor_loss: stats.actor_loss.into(),
                 })?;
-                tb.add_scalar(
-                    "loss/critic",
-                    stats.critic_loss,
-                    state.updates as i64,
-                    unix(),
-                )
-                .map_err(io_err(run_dir))?;
-                tb.add_scalar("loss/actor", stats.actor_loss, state.updates as i64, unix())
-                    .map_err(io_err(run_dir))?;
+                logs.scalar("loss/critic", stats.critic_loss, state.updates)?;
+                logs.scalar("loss/actor", stats.actor_loss, state.updates)?;
                 state.updates += 1;
             }
         }
         episode.complete = trial.is_done() && trial.world().is_complete();
         let (steps, reward) = (episode.len(), episode.team_return());
-        ep_log.append(&EpisodeRow {
+        logs.episodes.append(&EpisodeRow {
             episode: e,
             env: madenet_trainlog::Env::Dec,
             csp,
@@ -985,17 +936,15 @@ fn train_loop(
             complete: episode.complete,
             epsilon: 0.0,
             updates: state.updates,
-            wall_s: wall0 + started.elapsed().as_secs_f64(),
+            wall_s: clock.wall(),
         })?;
-        tb.add_scalar("episode/reward", reward as f32, e as i64, unix())
-            .map_err(io_err(run_dir))?;
-        tb.add_scalar("episode/steps", steps as f32, e as i64, unix())
-            .map_err(io_err(run_dir))?;
+        logs.scalar("episode/reward", reward as f32, e)?;
+        logs.scalar("episode/steps", steps as f32, e)?;
         replay.push(episode, cfg.replay_steps);
         state.episode += 1;
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
             let (steps, ret, done, n) = validate(cfg, &nets)?;
-            val_log.append(&ValidationRow {
+            logs.validation.append(&ValidationRow {
                 episode: state.episode,
                 updates: state.updates,
                 mean_steps: steps,
@@ -1003,16 +952,9 @@ fn train_loop(
                 completed: done as u32,
                 trials: n as u32,
             })?;
-            tb.add_scalar(
-                "validation/mean_steps",
-                steps as f32,
-                state.episode as i64,
-                unix(),
-            )
-            .map_err(io_err(run_dir))?;
+            logs.scalar("validation/mean_steps", steps as f32, state.episode)?;
             last_validation = Some(steps);
-            if state.best_validation.is_none_or(|b| steps < b) {
-                state.best_validation = Some(steps);
+            if harness::new_best(&mut state.best_validation, steps) {
                 save_model(
                     &run_dir.join("best"),
                     &nets,
@@ -1020,17 +962,17 @@ fn train_loop(
                 )?;
             }
         }
-        let stopping = state.episode == cfg.episodes
-            || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
-        let ckpt_due = cfg.checkpoint_minutes > 0.0
-            && last_checkpoint.elapsed().as_secs_f64() >= cfg.checkpoint_minutes * 60.0;
-        if state.episode % cfg.checkpoint_every == 0 || stopping || ckpt_due {
-            state.wall_s = wall0 + started.elapsed().as_secs_f64();
+        let stopping = state.episode == cfg.episodes || clock.out_of_time(cfg.max_minutes);
+        if state.episode % cfg.checkpoint_every == 0
+            || stopping
+            || clock.checkpoint_due(cfg.checkpoint_minutes)
+        {
+            state.wall_s = clock.wall();
             checkpoint(&ckpt_dir, &nets, &state, &replay)?;
-            last_checkpoint = Instant::now();
+            clock.checkpointed();
             save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
         }
-        tb.flush().map_err(io_err(run_dir))?;
+        logs.flush()?;
         progress(&Progress {
             episode: state.episode,
             episodes: cfg.episodes,

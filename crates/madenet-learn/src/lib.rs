@@ -69,6 +69,7 @@ mod actions;
 pub mod agnostic;
 mod config;
 pub mod env;
+pub mod harness;
 pub mod learner;
 mod net;
 pub mod obs;

@@ -33,11 +33,9 @@
 //! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
+use crate::harness::{self, replace_dir, Clock};
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
-use crate::train::{
-    io_err, prepare_run, replace_dir, write_atomic, Method, Model, ModelInfo, NetConfigToml,
-    TrainError,
-};
+use crate::train::{io_err, write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
 use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
@@ -57,7 +55,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
-use std::time::Instant;
 
 /// The `method` of this learner's config and `model.toml`.
 pub const METHOD: &str = "made-net-rollout";
@@ -1022,7 +1019,7 @@ pub fn train(
     cfg: Option<RolloutTrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    let (cfg, resuming) = prepare_run(
+    harness::run(
         run_dir,
         cfg,
         RolloutTrainConfig::from_toml_file,
@@ -1033,12 +1030,9 @@ pub fn train(
                 ..given.clone()
             } == *saved
         },
-    )?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(cfg.threads)
-        .build()
-        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
-    pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
+        |cfg| cfg.threads,
+        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
+    )
 }
 
 fn train_loop(
@@ -1055,18 +1049,8 @@ fn train_loop(
         .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
         .init();
     let (mut state, mut data): (State, Vec<Vec<Labelled>>) = if resuming {
-        let sp = ckpt.join("state.json");
-        let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-        let state = serde_json::from_str(&text).map_err(|e| TrainError::Config {
-            path: sp.display().to_string(),
-            message: e.to_string(),
-        })?;
-        let dp = ckpt.join("data.bin");
-        let bytes = std::fs::read(&dp).map_err(io_err(&dp))?;
-        let data = postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
-            path: dp.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let state = harness::read_json(&ckpt.join("state.json"))?;
+        let data = harness::read_postcard(&ckpt.join("data.bin"))?;
         net = net.load(&ckpt.join("dep0.bpk"))?;
         let op = ckpt.join("optim.bpk");
         optim = optim.load(&op).map_err(|e| TrainError::Io {
@@ -1095,8 +1079,7 @@ fn train_loop(
     // The base rule on the validation set: the line to beat.
     let base_registry = PolicyRegistry::builtin();
     let (base_steps, _, _) = validate(cfg, &base_registry, &cfg.base_policy)?;
-    let started = Instant::now();
-    let wall0 = state.wall_s;
+    let clock = Clock::start(state.wall_s);
     while state.iteration < cfg.iterations {
         // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then student).
         let student = (state.iteration > 0).then(|| net.model(model_info(cfg, &state, None, None)));
@@ -1162,15 +1145,14 @@ fn train_loop(
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .expect("the greedy DEP is tried");
         let greedy_steps = tried[0].1;
-        if state.best_validation.is_none_or(|b| steps < b) {
-            state.best_validation = Some(steps);
+        if harness::new_best(&mut state.best_validation, steps) {
             save_model(
                 &run_dir.join("best"),
                 &net,
                 &model_info(cfg, &state, Some(steps), margin),
             )?;
         }
-        state.wall_s = wall0 + started.elapsed().as_secs_f64();
+        state.wall_s = clock.wall();
         rows.push(IterationRow {
             iteration: state.iteration - 1,
             episodes: state.episodes,
@@ -1199,18 +1181,14 @@ fn train_loop(
         )?;
         // Checkpoint: counters, dataset, net, optimizer.
         replace_dir(&ckpt, |tmp| {
-            let bytes = postcard::to_stdvec(&data)
-                .map_err(|e| TrainError::Other(format!("dataset encoding: {e}")))?;
-            std::fs::write(tmp.join("data.bin"), bytes).map_err(io_err(&tmp.join("data.bin")))?;
+            harness::write_postcard(&tmp.join("data.bin"), &data)?;
             net.save(&tmp.join("dep0.bpk"), false)?;
             let p = tmp.join("optim.bpk");
             optim.save(&p).map_err(|e| TrainError::Io {
                 path: p.display().to_string(),
                 message: e.to_string(),
             })?;
-            let text = serde_json::to_string_pretty(&state)
-                .map_err(|e| TrainError::Other(e.to_string()))?;
-            std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
+            harness::write_json(&tmp.join("state.json"), &state)
         })?;
         save_model(
             &run_dir.join("last"),
@@ -1227,7 +1205,7 @@ fn train_loop(
             validation_steps: steps,
             base_steps,
         });
-        if cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0 {
+        if clock.out_of_time(cfg.max_minutes) {
             break;
         }
     }

@@ -26,6 +26,7 @@
 
 use crate::agnostic::{AgnosticConfig, AgnosticNet, AgnosticPolicy};
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
+use crate::harness::{self, replace_dir, Clock, Logs, Seen};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::obs::Observation;
 use crate::policy::DepPolicy;
@@ -38,7 +39,7 @@ use madenet_agent::Policy;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::{OccGrid, Pos};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
-use madenet_trainlog::{truncate_rows, EpisodeRow, LogRow, LogWriter, UpdateRow, ValidationRow};
+use madenet_trainlog::{EpisodeRow, UpdateRow, ValidationRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -46,7 +47,6 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
-use std::time::Instant;
 
 /// Which learner.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -867,32 +867,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
     madenet_files::write_atomic(path, bytes).map_err(io_err(path))
 }
 
-/// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
-/// half-written `dir`: the old one is moved to `dir.old` first and removed last.
-pub fn replace_dir(
-    dir: &Path,
-    fill: impl FnOnce(&Path) -> Result<(), TrainError>,
-) -> Result<(), TrainError> {
-    let tmp = dir.with_extension("tmp");
-    let old = dir.with_extension("old");
-    if tmp.exists() {
-        std::fs::remove_dir_all(&tmp).map_err(io_err(&tmp))?;
-    }
-    std::fs::create_dir_all(&tmp).map_err(io_err(&tmp))?;
-    fill(&tmp)?;
-    if dir.exists() {
-        if old.exists() {
-            std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
-        }
-        std::fs::rename(dir, &old).map_err(io_err(dir))?;
-    }
-    std::fs::rename(&tmp, dir).map_err(io_err(dir))?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
-    }
-    Ok(())
-}
-
 /// Validation: the greedy DEPs, decentralized, on the fixed generated validation maps at each
 /// validation CSP. Returns (mean steps, mean team return, completed, trials).
 pub fn validate_policy(
@@ -932,60 +906,6 @@ pub fn validate_policy(
     Ok((steps / n.max(1) as f64, ret / n.max(1) as f64, done, n))
 }
 
-/// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
-/// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`, to
-/// extend a run). `progress` is called after every iteration.
-/// Opens a training run directory (created if needed) and settles its config: a new run writes
-/// `cfg` (or the defaults) to `config.toml`; a directory holding a checkpoint resumes with the
-/// saved config, which `cfg`, if given, may change only where `same_run(given, saved)` allows
-/// (the run's length). Also recovers `checkpoint/` from a crash between the two renames of
-/// [`replace_dir`]. Returns the config and whether the run resumes. Shared by every learner.
-pub fn prepare_run<C: Default + Serialize>(
-    run_dir: &Path,
-    cfg: Option<C>,
-    load: impl Fn(&Path) -> Result<C, TrainError>,
-    validate: impl Fn(&C) -> Result<(), String>,
-    same_run: impl Fn(&C, &C) -> bool,
-) -> Result<(C, bool), TrainError> {
-    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
-    let cfg_path = run_dir.join("config.toml");
-    let ckpt_dir = run_dir.join("checkpoint");
-    // A crash between the two renames of `replace_dir` leaves only `checkpoint.old`.
-    if !ckpt_dir.exists() && ckpt_dir.with_extension("old").exists() {
-        std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
-    }
-    let resuming = ckpt_dir.join("state.json").exists();
-    let save = |cfg: &C| -> Result<(), TrainError> {
-        let text = toml::to_string(cfg).map_err(|e| TrainError::Other(e.to_string()))?;
-        write_atomic(&cfg_path, text.as_bytes())
-    };
-    let checked = |cfg: C| -> Result<C, TrainError> {
-        validate(&cfg).map_err(|m| TrainError::Config {
-            path: "train config".into(),
-            message: m,
-        })?;
-        save(&cfg)?;
-        Ok(cfg)
-    };
-    let cfg = if cfg_path.exists() {
-        let saved = load(&cfg_path)?;
-        match cfg {
-            // Only the run's length may change on resume: the rest defines the run.
-            Some(given) if !same_run(&given, &saved) => {
-                return Err(TrainError::Config {
-                    path: cfg_path.display().to_string(),
-                    message: "this run was started with a different config (only its length may change on resume: `episodes` and `max_minutes`, or `max_minutes` alone for made-net-rollout); use a new directory".into(),
-                });
-            }
-            Some(given) => checked(given)?,
-            None => saved,
-        }
-    } else {
-        checked(cfg.unwrap_or_default())?
-    };
-    Ok((cfg, resuming))
-}
-
 /// Trains MADE-Net or MADE-Net-DT into `run_dir` (created; if it holds a checkpoint, the run
 /// resumes from it with the saved config — `cfg`, if given, may differ from it only in
 /// `episodes` and `max_minutes`; `None`: the saved config, or the defaults for a new run),
@@ -995,7 +915,7 @@ pub fn train(
     cfg: Option<TrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    let (cfg, resuming) = prepare_run(
+    harness::run(
         run_dir,
         cfg,
         TrainConfig::from_toml_file,
@@ -1007,12 +927,9 @@ pub fn train(
                 ..given.clone()
             } == *saved
         },
-    )?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(cfg.threads)
-        .build()
-        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
-    pool.install(|| train_loop(run_dir, &cfg, resuming, progress))
+        |cfg| cfg.threads,
+        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
+    )
 }
 
 fn train_loop(
@@ -1024,20 +941,9 @@ fn train_loop(
     let ckpt_dir = run_dir.join("checkpoint");
     let mut nets = Nets::init(cfg)?;
     let (mut state, mut cen, mut dec) = if resuming {
-        let sp = ckpt_dir.join("state.json");
-        let text = std::fs::read_to_string(&sp).map_err(io_err(&sp))?;
-        let state: State = serde_json::from_str(&text).map_err(|e| TrainError::Config {
-            path: sp.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let state: State = harness::read_json(&ckpt_dir.join("state.json"))?;
         nets = nets.load(&ckpt_dir)?;
-        let rp = ckpt_dir.join("replay.bin");
-        let bytes = std::fs::read(&rp).map_err(io_err(&rp))?;
-        let (cen, dec): (Replay, Replay) =
-            postcard::from_bytes(&bytes).map_err(|e| TrainError::Config {
-                path: rp.display().to_string(),
-                message: e.to_string(),
-            })?;
+        let (cen, dec): (Replay, Replay) = harness::read_postcard(&ckpt_dir.join("replay.bin"))?;
         (state, cen, dec)
     } else {
         (State::default(), Replay::default(), Replay::default())
@@ -1048,34 +954,15 @@ fn train_loop(
     };
     // Logs keep what the checkpoint has seen; a resumed run appends from there.
     let seen = state.episode * per_iter;
-    let log_path = |name: &str| run_dir.join(name);
-    truncate_rows::<EpisodeRow>(&log_path(EpisodeRow::FILE_NAME), |r| r.episode < seen)?;
-    truncate_rows::<UpdateRow>(&log_path(UpdateRow::FILE_NAME), |r| {
-        r.update < state.updates
-    })?;
-    truncate_rows::<ValidationRow>(&log_path(ValidationRow::FILE_NAME), |r| r.episode <= seen)?;
-    // TensorBoard's curves likewise (`loss/*` steps count updates from 1).
-    madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
-        Some("episode") => step < seen as i64,
-        Some("loss") => step <= state.updates as i64,
-        Some("validation") => step <= seen as i64,
-        _ => true,
-    })
-    .map_err(io_err(run_dir))?;
-    let mut ep_log = LogWriter::<EpisodeRow>::open(log_path(EpisodeRow::FILE_NAME))?;
-    let mut up_log = LogWriter::<UpdateRow>::open(log_path(UpdateRow::FILE_NAME))?;
-    let mut val_log = LogWriter::<ValidationRow>::open(log_path(ValidationRow::FILE_NAME))?;
-    let mut tb = madenet_trainlog::TfEventWriter::create(run_dir).map_err(io_err(run_dir))?;
-    let started = Instant::now();
-    let mut last_checkpoint = started;
-    let wall0 = state.wall_s;
-    let wall = |started: &Instant| wall0 + started.elapsed().as_secs_f64();
-    // TensorBoard's wall-clock axis wants Unix seconds.
-    let unix = || {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64())
-    };
+    let mut logs = Logs::<UpdateRow>::open(
+        run_dir,
+        Seen {
+            episodes: seen,
+            updates: state.updates,
+            first_loss_step: 1, // `loss/*` steps count updates from 1
+        },
+    )?;
+    let mut clock = Clock::start(state.wall_s);
     let params = cfg.update_params();
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
@@ -1117,7 +1004,7 @@ fn train_loop(
             );
             let ep = run_episode(spec, actor)?;
             let id = e * per_iter + k as u64;
-            ep_log.append(&EpisodeRow {
+            logs.episodes.append(&EpisodeRow {
                 episode: id,
                 env: kind.into(),
                 csp,
@@ -1126,22 +1013,11 @@ fn train_loop(
                 complete: ep.complete,
                 epsilon: f64::from(epsilon),
                 updates: state.updates,
-                wall_s: wall(&started),
+                wall_s: clock.wall(),
             })?;
-            tb.add_scalar(
-                &format!("episode/{}_team_reward", kind.short()),
-                ep.team_return as f32,
-                id as i64,
-                unix(),
-            )
-            .map_err(io_err(run_dir))?;
-            tb.add_scalar(
-                &format!("episode/{}_steps", kind.short()),
-                ep.len() as f32,
-                id as i64,
-                unix(),
-            )
-            .map_err(io_err(run_dir))?;
+            let tag = |what: &str| format!("episode/{}_{what}", kind.short());
+            logs.scalar(&tag("team_reward"), ep.team_return as f32, id)?;
+            logs.scalar(&tag("steps"), ep.len() as f32, id)?;
             reward_sum += ep.team_return;
             steps_sum += ep.len() as f64;
             match kind {
@@ -1182,17 +1058,15 @@ fn train_loop(
                 if state.updates % cfg.target_update_every == 0 {
                     nets.sync_targets();
                 }
-                up_log.append(&UpdateRow {
+                logs.updates.append(&UpdateRow {
                     update: state.updates - 1,
                     cep_loss: cep_loss.into(),
                     dep_loss: dep_loss.into(),
                 })?;
                 if cep_loss.is_finite() {
-                    tb.add_scalar("loss/cep", cep_loss, state.updates as i64, unix())
-                        .map_err(io_err(run_dir))?;
+                    logs.scalar("loss/cep", cep_loss, state.updates)?;
                 }
-                tb.add_scalar("loss/dep", dep_loss, state.updates as i64, unix())
-                    .map_err(io_err(run_dir))?;
+                logs.scalar("loss/dep", dep_loss, state.updates)?;
             }
         }
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
@@ -1209,7 +1083,7 @@ fn train_loop(
             model.register(&mut registry, "candidate", "the DEPs being trained");
             let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
             let id = state.episode * per_iter;
-            val_log.append(&ValidationRow {
+            logs.validation.append(&ValidationRow {
                 episode: id,
                 updates: state.updates,
                 mean_steps: steps,
@@ -1217,28 +1091,25 @@ fn train_loop(
                 completed: done as u32,
                 trials: n as u32,
             })?;
-            tb.add_scalar("validation/mean_steps", steps as f32, id as i64, unix())
-                .map_err(io_err(run_dir))?;
-            tb.add_scalar("validation/mean_team_reward", ret as f32, id as i64, unix())
-                .map_err(io_err(run_dir))?;
+            logs.scalar("validation/mean_steps", steps as f32, id)?;
+            logs.scalar("validation/mean_team_reward", ret as f32, id)?;
             last_validation = Some(steps);
-            if state.best_validation.is_none_or(|b| steps < b) {
-                state.best_validation = Some(steps);
+            if harness::new_best(&mut state.best_validation, steps) {
                 let info = model_info(cfg, &state, Some(steps));
                 save_model(&run_dir.join("best"), &nets, &info)?;
             }
         }
-        let stopping = state.episode == cfg.episodes
-            || (cfg.max_minutes > 0.0 && started.elapsed().as_secs_f64() > cfg.max_minutes * 60.0);
-        let ckpt_due = cfg.checkpoint_minutes > 0.0
-            && last_checkpoint.elapsed().as_secs_f64() >= cfg.checkpoint_minutes * 60.0;
-        if state.episode % cfg.checkpoint_every == 0 || stopping || ckpt_due {
-            state.wall_s = wall(&started);
+        let stopping = state.episode == cfg.episodes || clock.out_of_time(cfg.max_minutes);
+        if state.episode % cfg.checkpoint_every == 0
+            || stopping
+            || clock.checkpoint_due(cfg.checkpoint_minutes)
+        {
+            state.wall_s = clock.wall();
             checkpoint(&ckpt_dir, &nets, &state, &cen, &dec)?;
-            last_checkpoint = Instant::now();
+            clock.checkpointed();
             save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
         }
-        tb.flush().map_err(io_err(run_dir))?;
+        logs.flush()?;
         progress(&Progress {
             episode: state.episode,
             episodes: cfg.episodes,
@@ -1316,12 +1187,8 @@ fn checkpoint(
 ) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
         nets.save(tmp)?;
-        let bytes = postcard::to_stdvec(&(cen, dec))
-            .map_err(|e| TrainError::Other(format!("replay encoding: {e}")))?;
-        std::fs::write(tmp.join("replay.bin"), bytes).map_err(io_err(&tmp.join("replay.bin")))?;
-        let text =
-            serde_json::to_string_pretty(state).map_err(|e| TrainError::Other(e.to_string()))?;
-        std::fs::write(tmp.join("state.json"), text).map_err(io_err(&tmp.join("state.json")))
+        harness::write_postcard(&tmp.join("replay.bin"), &(cen, dec))?;
+        harness::write_json(&tmp.join("state.json"), state)
     })
 }
 

@@ -1,0 +1,320 @@
+//! The one training harness of madenet's learners (MADE-Net, MADE-Net-DT, the rollout teacher,
+//! DME-DRL): what every training run does around its own algorithm.
+//!
+//! - [`run`]: settle the run directory ([`prepare_run`]: `config.toml`, resume or not) and run
+//!   the learner's loop on a pool of the config's threads;
+//! - [`Logs`]: `episodes.csv`, the updates log, `validation.csv` and TensorBoard events,
+//!   truncated on resume to what the checkpoint has seen, then appended together;
+//! - [`Clock`]: wall time carried across resumes, the `max_minutes` budget and the
+//!   `checkpoint_minutes` cadence;
+//! - checkpoints and models: [`replace_dir`] (a directory replaced whole, never half-written),
+//!   [`read_json`] / [`read_postcard`] and [`write_json`] / [`write_postcard`] for the state and
+//!   replay files inside it, [`new_best`] for `best/`.
+//!
+//! A learner keeps only what is its own: its networks, data, update and validation.
+
+use crate::train::{io_err, write_atomic, TrainError};
+use madenet_trainlog::{
+    truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, TfEventWriter, UpdateRow,
+    ValidationRow,
+};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Opens a training run directory (created if needed) and settles its config: a new run writes
+/// `cfg` (or the defaults) to `config.toml`; a directory holding a checkpoint resumes with the
+/// saved config, which `cfg`, if given, may change only where `same_run(given, saved)` allows
+/// (the run's length). Also recovers `checkpoint/` from a crash between the two renames of
+/// [`replace_dir`]. Returns the config and whether the run resumes.
+pub fn prepare_run<C: Default + Serialize>(
+    run_dir: &Path,
+    cfg: Option<C>,
+    load: impl Fn(&Path) -> Result<C, TrainError>,
+    validate: impl Fn(&C) -> Result<(), String>,
+    same_run: impl Fn(&C, &C) -> bool,
+) -> Result<(C, bool), TrainError> {
+    std::fs::create_dir_all(run_dir).map_err(io_err(run_dir))?;
+    let cfg_path = run_dir.join("config.toml");
+    let ckpt_dir = run_dir.join("checkpoint");
+    // A crash between the two renames of `replace_dir` leaves only `checkpoint.old`.
+    if !ckpt_dir.exists() && ckpt_dir.with_extension("old").exists() {
+        std::fs::rename(ckpt_dir.with_extension("old"), &ckpt_dir).map_err(io_err(&ckpt_dir))?;
+    }
+    let resuming = ckpt_dir.join("state.json").exists();
+    let save = |cfg: &C| -> Result<(), TrainError> {
+        let text = toml::to_string(cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&cfg_path, text.as_bytes())
+    };
+    let checked = |cfg: C| -> Result<C, TrainError> {
+        validate(&cfg).map_err(|m| TrainError::Config {
+            path: "train config".into(),
+            message: m,
+        })?;
+        save(&cfg)?;
+        Ok(cfg)
+    };
+    let cfg = if cfg_path.exists() {
+        let saved = load(&cfg_path)?;
+        match cfg {
+            // Only the run's length may change on resume: the rest defines the run.
+            Some(given) if !same_run(&given, &saved) => {
+                return Err(TrainError::Config {
+                    path: cfg_path.display().to_string(),
+                    message: "this run was started with a different config (only its length may change on resume: `episodes` and `max_minutes`, or `max_minutes` alone for made-net-rollout); use a new directory".into(),
+                });
+            }
+            Some(given) => checked(given)?,
+            None => saved,
+        }
+    } else {
+        checked(cfg.unwrap_or_default())?
+    };
+    Ok((cfg, resuming))
+}
+
+/// Trains into `run_dir`: [`prepare_run`] with `load`, `validate` and `same_run`, then
+/// `train_loop(&cfg, resuming)` on a thread pool of `threads(&cfg)` workers (so a run's results
+/// depend on its config, not on the machine's core count).
+pub fn run<C: Default + Serialize + Sync>(
+    run_dir: &Path,
+    cfg: Option<C>,
+    load: impl Fn(&Path) -> Result<C, TrainError>,
+    validate: impl Fn(&C) -> Result<(), String>,
+    same_run: impl Fn(&C, &C) -> bool,
+    threads: impl Fn(&C) -> usize,
+    train_loop: impl FnOnce(&C, bool) -> Result<(), TrainError> + Send,
+) -> Result<(), TrainError> {
+    let (cfg, resuming) = prepare_run(run_dir, cfg, load, validate, same_run)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads(&cfg))
+        .build()
+        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
+    pool.install(|| train_loop(&cfg, resuming))
+}
+
+/// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
+/// half-written `dir`: the old one is moved to `dir.old` first and removed last.
+pub fn replace_dir(
+    dir: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), TrainError>,
+) -> Result<(), TrainError> {
+    let tmp = dir.with_extension("tmp");
+    let old = dir.with_extension("old");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).map_err(io_err(&tmp))?;
+    }
+    std::fs::create_dir_all(&tmp).map_err(io_err(&tmp))?;
+    fill(&tmp)?;
+    if dir.exists() {
+        if old.exists() {
+            std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
+        }
+        std::fs::rename(dir, &old).map_err(io_err(dir))?;
+    }
+    std::fs::rename(&tmp, dir).map_err(io_err(dir))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
+    }
+    Ok(())
+}
+
+fn decode_err(path: &Path) -> impl FnOnce(String) -> TrainError + '_ {
+    move |message| TrainError::Config {
+        path: path.display().to_string(),
+        message,
+    }
+}
+
+/// Reads a JSON checkpoint file (e.g. `state.json`); errors name the file.
+pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, TrainError> {
+    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    serde_json::from_str(&text).map_err(|e| decode_err(path)(e.to_string()))
+}
+
+/// Reads a postcard checkpoint file (e.g. `replay.bin`); errors name the file.
+pub fn read_postcard<T: DeserializeOwned>(path: &Path) -> Result<T, TrainError> {
+    let bytes = std::fs::read(path).map_err(io_err(path))?;
+    postcard::from_bytes(&bytes).map_err(|e| decode_err(path)(e.to_string()))
+}
+
+/// Writes `value` as pretty JSON into a directory being filled by [`replace_dir`] (whose
+/// rename makes the whole checkpoint appear at once, so a plain write suffices).
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| TrainError::Other(e.to_string()))?;
+    std::fs::write(path, text).map_err(io_err(path))
+}
+
+/// Writes `value` with postcard into a directory being filled by [`replace_dir`].
+pub fn write_postcard<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
+    let bytes = postcard::to_stdvec(value)
+        .map_err(|e| TrainError::Other(format!("{}: encoding: {e}", path.display())))?;
+    std::fs::write(path, bytes).map_err(io_err(path))
+}
+
+/// Whether validation mean `steps` beats the run's best so far (fewer steps), recording it as
+/// the new best if so: the caller then saves `best/`.
+pub fn new_best(best: &mut Option<f64>, steps: f64) -> bool {
+    let better = best.is_none_or(|b| steps < b);
+    if better {
+        *best = Some(steps);
+    }
+    better
+}
+
+/// A run's clock: wall time carried across resumes, its `max_minutes` budget and its
+/// `checkpoint_minutes` cadence (both measured in this process only).
+#[derive(Clone, Debug)]
+pub struct Clock {
+    started: Instant,
+    wall0: f64,
+    last_checkpoint: Instant,
+}
+
+impl Clock {
+    /// Starts now; the run had already trained for `wall0` seconds before this process.
+    pub fn start(wall0: f64) -> Self {
+        let now = Instant::now();
+        Clock {
+            started: now,
+            wall0,
+            last_checkpoint: now,
+        }
+    }
+
+    /// Seconds of training over the whole run, resumes included.
+    pub fn wall(&self) -> f64 {
+        self.wall0 + self.started.elapsed().as_secs_f64()
+    }
+
+    /// Whether this process has used up `max_minutes` (0: no limit).
+    pub fn out_of_time(&self, max_minutes: f64) -> bool {
+        max_minutes > 0.0 && self.started.elapsed().as_secs_f64() > max_minutes * 60.0
+    }
+
+    /// Whether `minutes` have passed since the last checkpoint (0: never by time).
+    pub fn checkpoint_due(&self, minutes: f64) -> bool {
+        minutes > 0.0 && self.last_checkpoint.elapsed().as_secs_f64() >= minutes * 60.0
+    }
+
+    /// Records that a checkpoint was just written.
+    pub fn checkpointed(&mut self) {
+        self.last_checkpoint = Instant::now();
+    }
+}
+
+/// Seconds since the Unix epoch: TensorBoard's wall-clock axis.
+fn unix_now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// A row of a learner's updates log, numbered by update.
+pub trait UpdateLog: LogRow {
+    /// The update's number (0 for the first).
+    fn update(&self) -> u64;
+}
+
+impl UpdateLog for UpdateRow {
+    fn update(&self) -> u64 {
+        self.update
+    }
+}
+
+impl UpdateLog for MaddpgUpdateRow {
+    fn update(&self) -> u64 {
+        self.update
+    }
+}
+
+/// What a checkpoint has seen, to which [`Logs::open`] cuts the logs of a resumed run.
+#[derive(Clone, Copy, Debug)]
+pub struct Seen {
+    /// Episode rows numbered below this were seen (validation rows up to and including it).
+    pub episodes: u64,
+    /// Updates done.
+    pub updates: u64,
+    /// The TensorBoard step of the first update's `loss/*` scalars (the learners number them
+    /// from 1 or from 0).
+    pub first_loss_step: u64,
+}
+
+/// The logs of an episode-based run, written together: `episodes.csv`, the updates log
+/// (`U`), `validation.csv` and TensorBoard events (`episode/*`, `loss/*`, `validation/*`).
+pub struct Logs<U: UpdateLog> {
+    dir: PathBuf,
+    /// `episodes.csv`.
+    pub episodes: LogWriter<EpisodeRow>,
+    /// The updates log (`updates.csv`).
+    pub updates: LogWriter<U>,
+    /// `validation.csv`.
+    pub validation: LogWriter<ValidationRow>,
+    tb: TfEventWriter,
+}
+
+impl<U: UpdateLog> Logs<U> {
+    /// Opens the logs of `run_dir` for appending, first dropping what the checkpoint has not
+    /// `seen` (rows and TensorBoard scalars of a run killed after its last checkpoint), so a
+    /// resumed run's logs equal an uninterrupted run's.
+    pub fn open(run_dir: &Path, seen: Seen) -> Result<Self, TrainError> {
+        let path = |name: &str| run_dir.join(name);
+        truncate_rows::<EpisodeRow>(&path(EpisodeRow::FILE_NAME), |r| r.episode < seen.episodes)?;
+        truncate_rows::<U>(&path(U::FILE_NAME), |r| r.update() < seen.updates)?;
+        truncate_rows::<ValidationRow>(&path(ValidationRow::FILE_NAME), |r| {
+            r.episode <= seen.episodes
+        })?;
+        let loss_end = seen.updates + seen.first_loss_step;
+        madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
+            Some("episode") => step < seen.episodes as i64,
+            Some("loss") => step < loss_end as i64,
+            Some("validation") => step <= seen.episodes as i64,
+            _ => true,
+        })
+        .map_err(io_err(run_dir))?;
+        Ok(Logs {
+            dir: run_dir.to_path_buf(),
+            episodes: LogWriter::open(path(EpisodeRow::FILE_NAME))?,
+            updates: LogWriter::open(path(U::FILE_NAME))?,
+            validation: LogWriter::open(path(ValidationRow::FILE_NAME))?,
+            tb: TfEventWriter::create(run_dir).map_err(io_err(run_dir))?,
+        })
+    }
+
+    /// Adds a TensorBoard scalar `tag` = `value` at `step`.
+    pub fn scalar(&mut self, tag: &str, value: f32, step: u64) -> Result<(), TrainError> {
+        self.tb
+            .add_scalar(tag, value, step as i64, unix_now())
+            .map_err(io_err(&self.dir))
+    }
+
+    /// Flushes the TensorBoard events (the CSV logs are written row by row).
+    pub fn flush(&mut self) -> Result<(), TrainError> {
+        self.tb.flush().map_err(io_err(&self.dir))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn new_best_keeps_the_fewest_steps() {
+        let mut best = None;
+        assert!(new_best(&mut best, 50.0));
+        assert!(!new_best(&mut best, 50.0), "a tie is not better");
+        assert!(!new_best(&mut best, 60.0));
+        assert!(new_best(&mut best, 40.0));
+        assert_eq!(best, Some(40.0));
+    }
+
+    #[test]
+    fn clock_budget_and_cadence_off_at_zero() {
+        let c = Clock::start(12.5);
+        assert!(c.wall() >= 12.5);
+        assert!(!c.out_of_time(0.0) && !c.checkpoint_due(0.0));
+        assert!(!c.out_of_time(1.0), "one minute has not passed");
+        assert!(c.checkpoint_due(1e-12));
+    }
+}
