@@ -20,7 +20,7 @@
 //! [`Movement`] and [`OccGrid::can_step`] define how robots move between cells; the
 //! connectivity helpers in [`generate`] follow the same rule.
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 pub mod discretize;
 pub mod generate;

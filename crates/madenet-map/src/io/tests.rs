@@ -1,0 +1,533 @@
+//! Tests of map IO across formats, mostly through the public entry points.
+
+use super::pgm::decode_pgm;
+use super::raster::classify_pixel;
+use super::yaml::{parse_map_yaml, MapMeta};
+use super::*;
+use crate::Pos;
+use proptest::prelude::*;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A fresh, empty folder under the system temp dir, unique to this process and call.
+fn temp_dir(name: &str) -> PathBuf {
+    static N: AtomicU64 = AtomicU64::new(0);
+    let dir = std::env::temp_dir().join(format!(
+        "madenet-map-test-{}-{name}-{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).expect("create temp dir");
+    dir
+}
+
+fn grid_strategy(max: usize) -> impl Strategy<Value = OccGrid> {
+    (1..=max, 1..=max).prop_flat_map(|(h, w)| {
+        proptest::collection::vec(
+            prop_oneof![
+                Just(Occupancy::Free),
+                Just(Occupancy::Obstacle),
+                Just(Occupancy::Unknown)
+            ],
+            h * w,
+        )
+        .prop_map(move |cells| OccGrid::from_cells(h, w, cells))
+    })
+}
+
+const YAML_OK: &str = "image: m.pgm\nresolution: 1.0\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    fs::write(&p, bytes).expect("write test file");
+    p
+}
+
+fn assert_names(err: &MapError, needle: &str) {
+    let msg = err.to_string();
+    assert!(
+        msg.contains(needle),
+        "error {msg:?} should mention {needle:?}"
+    );
+}
+
+fn small_pgm() -> Vec<u8> {
+    b"P5\n3 2\n255\n\x00\xfe\xcd\xfe\xfe\x00".to_vec()
+}
+
+#[test]
+fn save_thresholds_round_trip_the_three_pixel_values() {
+    let meta = MapMeta::bare();
+    assert_eq!(classify_pixel(&meta, PIXEL_FREE, 255).1, Occupancy::Free);
+    assert_eq!(
+        classify_pixel(&meta, PIXEL_OBSTACLE, 255).1,
+        Occupancy::Obstacle
+    );
+    assert_eq!(
+        classify_pixel(&meta, PIXEL_UNKNOWN, 255).1,
+        Occupancy::Unknown
+    );
+    // 205 → 50/255 = 0.19608 ≥ 0.196 (not free) but 0.25 would make it free.
+    let p_unknown = f64::from(255 - PIXEL_UNKNOWN) / 255.0;
+    assert!(p_unknown > SAVE_FREE_THRESH && p_unknown < 0.25);
+}
+
+#[test]
+fn reads_yaml_with_pgm() {
+    let dir = temp_dir("yaml-ok");
+    write(&dir, "m.pgm", &small_pgm());
+    let yaml = write(
+        &dir,
+        "m.yaml",
+        YAML_OK
+            .replace("[0.0, 0.0, 0.0]", "[1.5, -2, 0.0]")
+            .as_bytes(),
+    );
+    let g = load(&yaml, &LoadOptions::default()).expect("load");
+    assert_eq!((g.height(), g.width()), (2, 3));
+    assert_eq!(to_text(&g), "#.?\n..#\n");
+    assert_eq!(g.origin, [1.5, -2.0, 0.0]);
+    assert_eq!(g.resolution, 1.0);
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn negate_and_modes() {
+    let dir = temp_dir("modes");
+    write(&dir, "m.pgm", &small_pgm());
+    let negated = write(
+        &dir,
+        "n.yaml",
+        YAML_OK.replace("negate: 0", "negate: 1").as_bytes(),
+    );
+    let g = load(&negated, &LoadOptions::default()).expect("negated");
+    // 0 → p 0 free; 254 → p 0.996 obstacle; 205 → p 0.80 obstacle.
+    assert_eq!(to_text(&g), ".##\n##.\n");
+    let scale = write(&dir, "s.yaml", format!("{YAML_OK}mode: scale\n").as_bytes());
+    assert_eq!(
+        to_text(&load(&scale, &LoadOptions::default()).expect("scale")),
+        "#.?\n..#\n"
+    );
+    // Raw: values 0..=100 are percentages; 205 and 254 are unknown.
+    write(&dir, "r.pgm", b"P5\n4 1\n255\n\x00\x32\x64\xfe");
+    let raw = write(
+        &dir,
+        "r.yaml",
+        format!("{}mode: raw\n", YAML_OK.replace("m.pgm", "r.pgm")).as_bytes(),
+    );
+    assert_eq!(
+        to_text(&load(&raw, &LoadOptions::default()).expect("raw")),
+        ".?#?\n"
+    );
+    let bad = write(&dir, "b.yaml", format!("{YAML_OK}mode: fancy\n").as_bytes());
+    let e = load(&bad, &LoadOptions::default()).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "mode"),
+        "{e}"
+    );
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn ascii_pgm_and_maxval_scaling() {
+    let dir = temp_dir("p2");
+    // maxval 1: 0 → 0 (obstacle), 1 → 255 (free).
+    let p = write(&dir, "a.pgm", b"P2\n# comment\n2 2\n1\n0 1\n1 0\n");
+    assert_eq!(
+        to_text(&load(&p, &LoadOptions::default()).expect("p2")),
+        "#.\n.#\n"
+    );
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn bad_inputs_give_the_right_error() {
+    let dir = temp_dir("bad");
+    let opts = LoadOptions::default();
+    write(&dir, "m.pgm", &small_pgm());
+
+    let missing = dir.join("nope.yaml");
+    let e = load(&missing, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Io { .. }), "{e}");
+    assert_names(&e, "nope.yaml");
+
+    let no_res = write(
+        &dir,
+        "nores.yaml",
+        YAML_OK.replace("resolution: 1.0\n", "").as_bytes(),
+    );
+    let e = load(&no_res, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
+        "{e}"
+    );
+    assert_names(&e, "nores.yaml");
+
+    let wrong_type = write(
+        &dir,
+        "type.yaml",
+        YAML_OK
+            .replace("resolution: 1.0", "resolution: fine")
+            .as_bytes(),
+    );
+    let e = load(&wrong_type, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
+        "{e}"
+    );
+
+    let neg_res = write(
+        &dir,
+        "negres.yaml",
+        YAML_OK
+            .replace("resolution: 1.0", "resolution: -1")
+            .as_bytes(),
+    );
+    let e = load(&neg_res, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
+        "{e}"
+    );
+
+    let bad_thresh = write(
+        &dir,
+        "thresh.yaml",
+        YAML_OK
+            .replace("occupied_thresh: 0.65", "occupied_thresh: 1.5")
+            .as_bytes(),
+    );
+    let e = load(&bad_thresh, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "occupied_thresh"),
+        "{e}"
+    );
+    assert_names(&e, "thresh.yaml");
+
+    let crossed = write(
+        &dir,
+        "crossed.yaml",
+        YAML_OK
+            .replace("free_thresh: 0.196", "free_thresh: 0.7")
+            .as_bytes(),
+    );
+    let e = load(&crossed, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "free_thresh"),
+        "{e}"
+    );
+
+    let bad_origin = write(
+        &dir,
+        "origin.yaml",
+        YAML_OK.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0]").as_bytes(),
+    );
+    let e = load(&bad_origin, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "origin"),
+        "{e}"
+    );
+
+    let bad_negate = write(
+        &dir,
+        "negate.yaml",
+        YAML_OK.replace("negate: 0", "negate: 2").as_bytes(),
+    );
+    let e = load(&bad_negate, &opts).unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "negate"),
+        "{e}"
+    );
+
+    let garbage = write(&dir, "garbage.yaml", b"image: [unclosed\n  - : :");
+    let e = load(&garbage, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Format { .. }), "{e}");
+    assert_names(&e, "garbage.yaml");
+
+    let missing_image = write(
+        &dir,
+        "noimg.yaml",
+        YAML_OK.replace("m.pgm", "absent.pgm").as_bytes(),
+    );
+    let e = load(&missing_image, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Io { .. }), "{e}");
+    assert_names(&e, "absent.pgm");
+
+    // Truncated and garbled PGMs, directly and through a YAML.
+    let full = small_pgm();
+    for (i, bytes) in [
+        &full[..full.len() - 2],
+        &full[..8],
+        &full[..3],
+        b"P5\n3 x\n255\n",
+        b"P6\n1 1\n255\n\x00",
+        b"",
+        b"P5\n1 1\n65535\n\x00\x00",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let name = format!("t{i}.pgm");
+        let p = write(&dir, &name, bytes);
+        let e = load(&p, &opts).unwrap_err();
+        assert!(matches!(e, MapError::Format { .. }), "{e}");
+        assert_names(&e, &name);
+        let y = write(
+            &dir,
+            &format!("t{i}.yaml"),
+            YAML_OK.replace("m.pgm", &name).as_bytes(),
+        );
+        let e = load(&y, &opts).unwrap_err();
+        assert_names(&e, &name);
+    }
+
+    let png = write(&dir, "broken.png", b"\x89PNG\r\n\x1a\nnot really");
+    let e = load(&png, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Format { .. }), "{e}");
+    assert_names(&e, "broken.png");
+
+    let ragged = write(&dir, "ragged.txt", b"...\n..\n...\n");
+    let e = load(&ragged, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Format { .. }), "{e}");
+    assert_names(&e, "ragged.txt");
+    assert_names(&e, "line 2");
+
+    let bad_char = write(&dir, "char.txt", b"...\n.x.\n");
+    let e = load(&bad_char, &opts).unwrap_err();
+    assert!(matches!(e, MapError::Format { .. }), "{e}");
+    assert_names(&e, "char.txt");
+    assert_names(&e, "line 2, column 2");
+
+    let empty = write(&dir, "empty.txt", b"\n\n");
+    assert!(matches!(
+        load(&empty, &opts).unwrap_err(),
+        MapError::Format { .. }
+    ));
+
+    let unsupported = write(&dir, "map.bmp", b"BM");
+    let e = load(&unsupported, &opts).unwrap_err();
+    assert_names(&e, "map.bmp");
+    assert_names(&e, ".yaml");
+
+    let e = load(
+        &dir.join("m.pgm"),
+        &LoadOptions {
+            cell_size: 0.0,
+            ..opts
+        },
+    )
+    .unwrap_err();
+    assert!(matches!(e, MapError::Invalid(_)), "{e}");
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn resolution_must_not_be_coarser_than_the_cell_size() {
+    let dir = temp_dir("res");
+    write(&dir, "m.pgm", &small_pgm());
+    let yaml = write(&dir, "m.yaml", YAML_OK.as_bytes());
+    let e = load(
+        &yaml,
+        &LoadOptions {
+            cell_size: 0.5,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
+        "{e}"
+    );
+    let coarse = write(
+        &dir,
+        "c.yaml",
+        YAML_OK
+            .replace("resolution: 1.0", "resolution: 0.3")
+            .as_bytes(),
+    );
+    // 1 m cells of 3.33 pixels of 0.3 m: the 3 × 2 image (0.9 × 0.6 m) is one cell
+    // holding all six pixel centres, 2 of them occupied (33 % > 25 %); the cell reaches
+    // 0.4 m below the image, so the origin moves down by that.
+    let g = load(&coarse, &LoadOptions::default()).expect("resampled by area");
+    assert_eq!((g.height(), g.width(), g.resolution), (1, 1, 1.0));
+    assert_eq!(g.cells(), [Occupancy::Obstacle]);
+    assert!((g.origin[1] + 0.4).abs() < 1e-9, "{:?}", g.origin);
+    // Bare images are 1 m/pixel; a 2 m cell merges 2×2 blocks.
+    let g = load(
+        &dir.join("m.pgm"),
+        &LoadOptions {
+            cell_size: 2.0,
+            ..LoadOptions::default()
+        },
+    )
+    .expect("bare");
+    assert_eq!((g.height(), g.width(), g.resolution), (1, 2, 2.0));
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn discretizes_a_fine_yaml_map() {
+    // 8×8 pixels at 0.25 m → 2×2 cells of 1 m (4×4 pixels each).
+    // Cell (0,0): exactly 4 occupied pixels of 16 → free.
+    // Cell (0,1): 5 occupied pixels → obstacle.
+    // Cell (1,0): 16 unknown pixels (205) → unknown counts as not occupied → free.
+    // Cell (1,1): 4 occupied + 12 unknown → free; (a 5th occupied pixel would flip it).
+    let mut px = [PIXEL_FREE; 64];
+    let mut set = |r: usize, c: usize, v: u8| px[r * 8 + c] = v;
+    for c in 0..4 {
+        set(0, c, PIXEL_OBSTACLE);
+    }
+    for (r, c) in [(0, 4), (1, 5), (2, 6), (3, 7), (3, 4)] {
+        set(r, c, PIXEL_OBSTACLE);
+    }
+    for r in 4..8 {
+        for c in 0..8 {
+            set(r, c, PIXEL_UNKNOWN);
+        }
+    }
+    for c in 4..8 {
+        set(7, c, PIXEL_OBSTACLE);
+    }
+    let dir = temp_dir("fine");
+    let mut pgm = b"P5\n8 8\n255\n".to_vec();
+    pgm.extend_from_slice(&px);
+    write(&dir, "fine.pgm", &pgm);
+    let yaml = write(
+        &dir,
+        "fine.yaml",
+        YAML_OK
+            .replace("m.pgm", "fine.pgm")
+            .replace("resolution: 1.0", "resolution: 0.25")
+            .as_bytes(),
+    );
+    let g = load(&yaml, &LoadOptions::default()).expect("fine map");
+    assert_eq!((g.height(), g.width()), (2, 2));
+    assert_eq!(g.resolution, 1.0);
+    assert_eq!(g.get(Pos::new(0, 0)), Occupancy::Free);
+    assert_eq!(g.get(Pos::new(0, 1)), Occupancy::Obstacle);
+    assert_eq!(g.get(Pos::new(1, 0)), Occupancy::Free);
+    assert_eq!(g.get(Pos::new(1, 1)), Occupancy::Free);
+    // cell_size 0.25 keeps the pixels (and the unknown band).
+    let g = load(
+        &yaml,
+        &LoadOptions {
+            cell_size: 0.25,
+            ..LoadOptions::default()
+        },
+    )
+    .expect("pixels");
+    assert_eq!(
+        (g.height(), g.width(), g.count(Occupancy::Unknown)),
+        (8, 8, 32 - 4)
+    );
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn partial_bottom_block_moves_the_origin_down() {
+    let dir = temp_dir("origin");
+    write(&dir, "m.pgm", &small_pgm()); // 3 wide, 2 high
+    let yaml = write(
+        &dir,
+        "m.yaml",
+        YAML_OK
+            .replace("resolution: 1.0", "resolution: 0.5")
+            .as_bytes(),
+    );
+    let g = load(&yaml, &LoadOptions::default()).expect("load");
+    // 2 pixel rows fit one 2-pixel cell exactly; 3 columns → 2 cells, no vertical padding.
+    assert_eq!((g.height(), g.width(), g.origin), (1, 2, [0.0, 0.0, 0.0]));
+    let g = load(
+        &yaml,
+        &LoadOptions {
+            cell_size: 1.5,
+            ..LoadOptions::default()
+        },
+    )
+    .expect("load");
+    // 2 rows → 1 cell of 3 pixel rows: one padding row of 0.5 m below the image.
+    assert_eq!((g.height(), g.width()), (1, 1));
+    assert!((g.origin[1] + 0.5).abs() < 1e-12 && g.origin[0].abs() < 1e-12);
+    let _ = fs::remove_dir_all(dir);
+}
+
+#[test]
+fn text_parsing_details() {
+    let p = Path::new("inline.txt");
+    let g = parse_text("#.?  \r\n...\r\n\n\n", p).expect("parse");
+    assert_eq!((g.height(), g.width()), (2, 3));
+    assert_eq!(g.get(Pos::new(0, 2)), Occupancy::Unknown);
+    assert_eq!(to_text(&g), "#.?\n...\n");
+    let e = parse_text("..\n\n..\n", p).unwrap_err();
+    assert_names(&e, "line 2");
+}
+
+#[test]
+fn png_round_trip_and_save_dispatch() {
+    let dir = temp_dir("png");
+    let g = parse_text("#.?\n..#\n", Path::new("x")).expect("parse");
+    for name in ["a.png", "a.pgm", "a.txt", "a.map", "a.yml"] {
+        let p = dir.join(name);
+        save(&g, &p).expect("save");
+        assert_eq!(
+            load(&p, &LoadOptions::default()).expect("load"),
+            g,
+            "{name}"
+        );
+    }
+    assert!(save(&g, &dir.join("a.jpg")).is_err());
+    // No temporary files are left behind.
+    let leftovers: Vec<_> = fs::read_dir(&dir)
+        .expect("read dir")
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty());
+    // An RGBA PNG: luma for color, transparent pixels unknown.
+    let rgba = image::RgbaImage::from_raw(
+        3,
+        1,
+        vec![0, 0, 0, 255, 255, 255, 255, 255, 255, 255, 255, 0],
+    )
+    .expect("rgba");
+    let p = dir.join("rgba.png");
+    rgba.save(&p).expect("save rgba");
+    assert_eq!(
+        to_text(&load(&p, &LoadOptions::default()).expect("rgba")),
+        "#.?\n"
+    );
+    let _ = fs::remove_dir_all(dir);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn yaml_pgm_round_trip(grid in grid_strategy(12), x in -100.0f64..100.0, y in -100.0f64..100.0, yaw in -3.2f64..3.2) {
+        let dir = temp_dir("rt");
+        let mut grid = grid;
+        grid.origin = [x, y, yaw];
+        let path = dir.join("map.yaml");
+        save_yaml(&grid, &path).expect("save");
+        let back = load(&path, &LoadOptions::default()).expect("load");
+        let _ = fs::remove_dir_all(&dir);
+        prop_assert_eq!(back, grid);
+    }
+
+    #[test]
+    fn text_round_trip(grid in grid_strategy(30)) {
+        let text = to_text(&grid);
+        let back = parse_text(&text, Path::new("t.txt")).expect("parse");
+        prop_assert_eq!(back, grid);
+    }
+
+    #[test]
+    fn garbage_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..64)) {
+        let _ = decode_pgm(&bytes, Path::new("g.pgm"));
+        let mut p5 = b"P5\n4 4\n255\n".to_vec();
+        p5.extend_from_slice(&bytes);
+        let _ = decode_pgm(&p5, Path::new("g.pgm"));
+        let _ = parse_text(&String::from_utf8_lossy(&bytes), Path::new("g.txt"));
+        let _ = parse_map_yaml(&String::from_utf8_lossy(&bytes), Path::new("g.yaml"));
+    }
+}
