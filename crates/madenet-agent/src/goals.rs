@@ -7,8 +7,9 @@ use madenet_nav::Dijkstra;
 use madenet_world::CandidateRule;
 use serde::{Deserialize, Serialize};
 
-/// The goal candidates 𝒢_i of one robot: `cells[k]` is the goal of macro action k; `valid`
-/// is the mask of the paper's network outputs (slots past `cells.len()` are invalid).
+/// The goal candidates 𝒢_i of one robot: `cells[k]` is the goal of macro action k;
+/// [`GoalCandidates::valid_mask`] is the mask of the paper's network outputs (slots past
+/// `cells.len()` are invalid).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct GoalCandidates {
     /// |G|: the number of macro actions (Eq. 3).

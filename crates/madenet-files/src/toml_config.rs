@@ -9,7 +9,7 @@ use std::path::Path;
 /// line where the TOML parser knows them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ConfigFileError {
-    /// The file (or the label given to [`parse_toml`]'s caller).
+    /// The file, as given to [`read_toml`].
     pub path: String,
     /// What is wrong, e.g. ``field `scenario.sensing_range`: invalid type … (line 4)``.
     pub message: String,

@@ -261,20 +261,23 @@ pub fn run_threads<T: Transport>(
             .zip(buses)
             .map(|(agent, bus)| s.spawn(move || run_robot(agent, bus, timeouts)))
             .collect();
-        let mut result = run_world(world, world_bus, timeouts);
-        for r in robots {
-            let (all, between) = r.join().map_err(|_| RuntimeError::Panicked)??;
-            if let Ok(res) = result.as_mut() {
-                res.robots_sent.messages += all.messages;
-                res.robots_sent.bytes += all.bytes;
-                res.between_robots.messages += between.messages;
-                res.between_robots.bytes += between.bytes;
-            }
+        let world_result = run_world(world, world_bus, timeouts);
+        let robot_results: Vec<_> = robots
+            .into_iter()
+            .map(|r| r.join().map_err(|_| RuntimeError::Panicked)?)
+            .collect();
+        let radio_result = radio.join().map_err(|_| RuntimeError::Panicked)?;
+        // The world's own error first: the others' are usually its consequences (a robot
+        // timing out because the world stopped).
+        let mut res = world_result?;
+        for r in robot_results {
+            let (all, between) = r?;
+            res.robots_sent.messages += all.messages;
+            res.robots_sent.bytes += all.bytes;
+            res.between_robots.messages += between.messages;
+            res.between_robots.bytes += between.bytes;
         }
-        let radio_sent = radio.join().map_err(|_| RuntimeError::Panicked)??;
-        if let Ok(res) = result.as_mut() {
-            res.radio_sent = radio_sent;
-        }
-        result
+        res.radio_sent = radio_result?;
+        Ok(res)
     })
 }

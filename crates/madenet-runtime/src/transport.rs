@@ -11,7 +11,9 @@ use std::time::Duration;
 pub trait Transport: Send {
     /// Sends one encoded message to `to`; false if `to` is gone.
     fn send(&self, to: Node, bytes: Vec<u8>) -> bool;
-    /// The next message for this node, or `None` after `timeout` (or once every sender is gone).
+    /// The next message for this node, or `None` after `timeout` (or, for a transport that can
+    /// tell, once every sender is gone; an in-memory [`ChannelBus`] endpoint keeps a sender to
+    /// its own inbox, so it only times out).
     fn recv(&self, timeout: Duration) -> Option<Vec<u8>>;
     /// Waits until `peers` can be sent to (a network transport: their inboxes are subscribed
     /// and reachable); an error names who is missing after `timeout`.

@@ -183,7 +183,11 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             // Nobody to wait for: give a restarted robot the time to say hello, then give up.
             let hello = mb.try_take(timeouts.node, |e| matches!(e.body, Body::Hello))?;
             match hello.map(|e| e.from) {
-                Some(Node::Robot(j)) if j < n => present[j] = true,
+                Some(Node::Robot(j)) if j < n => {
+                    tracing::warn!("{me}: robot {j} is back (it said hello) at timestep {step}: waiting for its moves again");
+                    present[j] = true;
+                    ask_to_show(&mut mb, Node::Robot(j), step)?;
+                }
                 _ => {
                     return Err(RuntimeError::Timeout {
                         node: me,

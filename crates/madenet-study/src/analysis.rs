@@ -69,7 +69,11 @@ pub fn csps(outcomes: &[TrialOutcome]) -> Vec<(f64, String)> {
     let mut v: Vec<(f64, String)> = Vec::new();
     for o in outcomes {
         let c: f64 = o.row.key.csp.parse().unwrap_or(f64::NAN);
-        if !v.iter().any(|(x, _)| *x == c) {
+        // Compared by label too, so an unparsable label (NaN ≠ NaN) is listed once.
+        if !v
+            .iter()
+            .any(|(x, label)| *x == c || *label == o.row.key.csp)
+        {
             v.push((c, o.row.key.csp.clone()));
         }
     }
@@ -85,7 +89,7 @@ pub fn select<'a>(outcomes: &'a [TrialOutcome], method: &str, csp: &str) -> Vec<
         .collect()
 }
 
-/// One cell of the summary table.
+/// One row of the summary table: one method at one CSP.
 #[derive(Clone, Debug)]
 pub struct SummaryRow {
     /// Method name, as in `trials.csv`.

@@ -79,7 +79,7 @@ impl Convention {
             Convention::Completion => "their run ends when their team map has no frontier left; ours when every explorable cell (visible from some reachable cell) is known",
             Convention::Navigation => "our robots plan paths with A* and prioritized space-time A* around teammates they talk to, and treat teammates they see as obstacles; theirs take one greedy step at a time and only avoid occupied cells",
             Convention::UbDesign => "their UB scores cells by a normalized cell reward plus a beta-shaped distance term and repels robots by breadth-first distance from teammates in sight; ours is Burgard et al.'s information gain − β·path cost with targets discounted near the goals teammates announced, as the study specifies",
-            Convention::PbDesign => "their PB multiplies the initial values by a reward multiplier, solves each teammate's value function with repulsive rewards around its neighbours, ; ours solves every teammate's value function on the plain rewards (on these maps one function serves all teammates) and sweeps as they do (at least 21, then until values move by less than 1, at most 50)",
+            Convention::PbDesign => "their PB multiplies the initial values by a reward multiplier, solves each teammate's value function with repulsive rewards around its neighbours; ours solves every teammate's value function on the plain rewards (on these maps one function serves all teammates) and sweeps as they do (at least 21, then until values move by less than 1, at most 50)",
         }
     }
 }
@@ -126,8 +126,10 @@ pub struct Comparison {
     pub ours: f64,
     /// The mean of the authors' published runs.
     pub theirs: f64,
-    /// Number of our trials averaged in `ours` (not the authors' run count).
+    /// Number of our trials averaged in `ours`.
     pub runs: usize,
+    /// Number of the authors' published runs averaged in `theirs`.
+    pub their_runs: usize,
 }
 
 impl Comparison {
@@ -201,7 +203,6 @@ pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparis
             }
             let n = sel.len() as f64;
             let mean = |f: &dyn Fn(&TrialOutcome) -> f64| sel.iter().map(|o| f(o)).sum::<f64>() / n;
-            let _ = runs;
             out.push(Comparison {
                 method: ours.into(),
                 csp,
@@ -209,6 +210,7 @@ pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparis
                 ours: mean(&|o| (o.row.tns as f64).min(100.0)),
                 theirs: t_steps,
                 runs: sel.len(),
+                their_runs: runs,
             });
             out.push(Comparison {
                 method: ours.into(),
@@ -217,6 +219,7 @@ pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparis
                 ours: mean(&|o| o.row.ttd),
                 theirs: t_dist,
                 runs: sel.len(),
+                their_runs: runs,
             });
             out.push(Comparison {
                 method: ours.into(),
@@ -225,6 +228,7 @@ pub fn compare(outcomes: &[TrialOutcome], paper_maps: &[String]) -> Vec<Comparis
                 ours: mean(&|o| o.row.noli_authors as f64),
                 theirs: t_int,
                 runs: sel.len(),
+                their_runs: runs,
             });
         }
     }

@@ -79,6 +79,13 @@ pub(crate) fn prepare_out(
                 message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
             });
         }
+    } else if out.join("trials.csv").exists() {
+        // Another kind of study (or `madenet batch`'s table) in this folder: its rows would be
+        // dropped as not planned here.
+        return Err(StudyError::File {
+            path: out.display().to_string(),
+            message: format!("holds a trials.csv without {cfg_name}: results of another study: choose another output folder or start afresh (--fresh)"),
+        });
     }
     runner::write_atomic(&cfg_path, cfg_text.as_bytes())
 }

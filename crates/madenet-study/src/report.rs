@@ -282,19 +282,21 @@ fn calibration_md(cmp: &[Comparison]) -> String {
     if cmp.is_empty() {
         return "No method of this study has published results of the authors to compare with (NF, UB, PB on the paper's maps).\n".into();
     }
-    let mut s = String::from("Our means against the authors' published per-run results for the same maps and starts (`reference/`; failure probability 0/20/50/100 % = CSP 1.0/0.8/0.5/0.0). Their steps are steps to 100 % of the map known, capped at 100 as their runs were; ours are TNS capped at 100. Their local interactions count robot pairs at Chebyshev distance < 4 with line of sight per timestep (their `data_cleaning.py` halves a list of ordered pairs); ours are counted the same way here (`noli_authors`). Differences above 15 % are marked and attributed below.\n\n| method | CSP | metric | ours | theirs | difference |\n|---|---|---|---|---|---|\n");
+    let mut s = String::from("Our means against the authors' published per-run results for the same maps and starts (`reference/`; failure probability 0/20/50/100 % = CSP 1.0/0.8/0.5/0.0). Their steps are steps to 100 % of the map known, capped at 100 as their runs were; ours are TNS capped at 100. Their local interactions count robot pairs at Chebyshev distance < 4 with line of sight per timestep (their `data_cleaning.py` halves a list of ordered pairs); ours are counted the same way here (`noli_authors`). Differences above 15 % are marked and attributed below.\n\n| method | CSP | metric | ours | theirs | difference | trials (ours / theirs) |\n|---|---|---|---|---|---|---|\n");
     for c in cmp {
         let rel = c.relative();
         let flag = if rel.abs() > 0.15 { " **>15 %**" } else { "" };
         let _ = writeln!(
             s,
-            "| {} | {:.0} % | {} | {:.1} | {:.1} | {:+.0} %{flag} |",
+            "| {} | {:.0} % | {} | {:.1} | {:.1} | {:+.0} %{flag} | {} / {} |",
             c.method,
             100.0 * c.csp,
             c.metric,
             c.ours,
             c.theirs,
-            100.0 * rel
+            100.0 * rel,
+            c.runs,
+            c.their_runs
         );
     }
     let flagged: Vec<&Comparison> = cmp.iter().filter(|c| c.relative().abs() > 0.15).collect();
@@ -319,7 +321,6 @@ fn calibration_md(cmp: &[Comparison]) -> String {
             .iter()
             .flat_map(|c| conventions(&c.method, c.metric, c.csp))
             .collect();
-        all.dedup();
         let mut seen = Vec::new();
         s.push('\n');
         for v in all {

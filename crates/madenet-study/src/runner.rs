@@ -341,14 +341,21 @@ pub fn run(
 }
 
 /// [`run`] for trials planned by the caller (e.g. the scalability study's grid): runs every
-/// one not yet recorded in `out` (keys must be unique), appending each as it finishes, and
-/// returns all outcomes in plan order.
+/// one not yet recorded in `out` (keys must be unique: a repeated key is an error), appending
+/// each as it finishes, and returns all outcomes in plan order.
 pub fn run_planned(
     planned: &[Planned],
     registry: &PolicyRegistry,
     out: &Path,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<TrialOutcome>, StudyError> {
+    let mut keys = std::collections::HashSet::new();
+    if let Some(p) = planned.iter().find(|p| !keys.insert(&p.key)) {
+        return Err(StudyError::Other(format!(
+            "the trial {:?} is planned twice (each trial of a set needs its own key)",
+            p.key
+        )));
+    }
     let first_seed = planned.iter().map(|p| p.key.seed).min().unwrap_or(0);
     // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
     for p in planned {

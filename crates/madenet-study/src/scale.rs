@@ -173,7 +173,13 @@ impl ScaleConfig {
                 .iter()
                 .any(|&t| !(1..=madenet_world::MAX_ROBOTS).contains(&t))
         {
-            return Err(field("teams", "list distinct team sizes in 1..=256"));
+            return Err(field(
+                "teams",
+                format!(
+                    "list distinct team sizes in 1..={}",
+                    madenet_world::MAX_ROBOTS
+                ),
+            ));
         }
         if self.starts.is_empty()
             || self
@@ -195,11 +201,13 @@ impl ScaleConfig {
                 "need 0 ≤ density_min ≤ density_max ≤ 0.6",
             ));
         }
-        if self.seeds == 0 || self.seeds > 1000 || self.seed_base.checked_add(self.seeds).is_none()
+        if self.seeds == 0
+            || self.seeds > 1000
+            || self.seed_base.checked_add(self.seeds - 1).is_none()
         {
             return Err(field(
                 "seeds",
-                "must be in 1..=1000 (and seed_base + seeds fit a u64)",
+                "must be in 1..=1000 (and the last seed, seed_base + seeds − 1, fit a u64)",
             ));
         }
         if !(0.0..=1.0).contains(&self.csp) {

@@ -684,6 +684,9 @@ fn small_study_writes_every_output_consistently() {
         assert!(methods.contains(&m.as_str()), "{cal:?}");
         assert!(c == "100 %" || c == "0 %", "{cal:?}");
     }
+    // Each row says how many trials each side averaged: ours 2 maps × 2 starts × 2 seeds, the
+    // authors' 10 maps × 4 corners.
+    assert_eq!(text.matches("| 8 / 40 |").count(), cal.len(), "{text}");
     // The configuration is recorded beside the results.
     assert_eq!(toml_cfg(&out.join("study.toml")), cfg);
 }
@@ -1315,4 +1318,26 @@ fn bad_oracle_fields_are_refused() {
         },
         &["oracle_futures", "0"],
     );
+}
+
+/// A folder holding another study's table (here `madenet batch`'s, no `study.toml`) is refused
+/// and left as it was, unless the study starts afresh.
+#[test]
+fn a_folder_with_a_foreign_trials_csv_is_refused() {
+    let dir = Scratch::new("foreign");
+    let out = dir.path();
+    std::fs::create_dir_all(out).unwrap();
+    let foreign = "method,map\nnf,elsewhere\n";
+    std::fs::write(out.join("trials.csv"), foreign).unwrap();
+    let cfg = small(&["nf"], &[1.0], 1);
+    let e = run(&cfg, out, false).0.unwrap_err().to_string();
+    assert!(
+        e.contains("study.toml") && e.contains(&out.display().to_string()),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("trials.csv")).unwrap(),
+        foreign
+    );
+    run_ok(&cfg, out, true);
 }

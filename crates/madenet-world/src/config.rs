@@ -61,8 +61,9 @@ pub struct ScenarioConfig {
     /// Rule for maps finer than `cell_size` (paper, Sec. V.B.1: a cell is an obstacle when
     /// more than 25 % of its pixels have occupancy probability above 0.65).
     pub discretize: DiscretizeParams,
-    /// Number of goal candidates |G|; unset means Eq. (3):
-    /// floor(4·log10(√|X| / (2·d_s+1))) + |I|.
+    /// Number of goal candidates |G|; unset means Eq. (3),
+    /// floor(4·log10(√|X| / (2·d_s+1))) + |I|, or |I| on maps too small for it
+    /// ([`ScenarioConfig::goal_count_for`]).
     pub goal_count: Option<usize>,
     /// How the goal candidates 𝒢 are chosen among the frontier clusters (Sec. III.C.1):
     /// `paper` (default) — the nearest cluster, then farthest-point selection; or
