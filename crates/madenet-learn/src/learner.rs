@@ -137,6 +137,17 @@ fn td_step(
     let real = Tensor::<1>::from_data(TensorData::new(seq.real.clone(), [n]), &device);
     let count = seq.real.iter().sum::<f32>().max(1.0);
     let loss = (q - y).powf_scalar(2.0).mul(real).sum().div_scalar(count);
+    adam_step(net, optim, lr, loss)
+}
+
+/// Backpropagates `loss` through `net` and takes one optimizer step with learning rate `lr`:
+/// the updated net and the loss's value. Every learner's update ends here.
+pub(crate) fn adam_step<M: Module>(
+    net: M,
+    optim: &mut ModuleOptimizer,
+    lr: f64,
+    loss: Tensor<1>,
+) -> (M, f32) {
     let value = loss
         .clone()
         .into_data()

@@ -34,12 +34,13 @@
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
 use crate::harness::{self, replace_dir, Clock};
+use crate::learner::adam_step;
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
 use crate::train::{io_err, write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
 use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
-use burn::optim::{AdamConfig, GradientsParams, ModuleOptimizer};
+use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::store::ModuleRecord;
 use burn::tensor::{Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
@@ -835,13 +836,7 @@ fn update(
     let m = Tensor::<2>::from_data(TensorData::new(mask, [b * t, g]), &device);
     let (q, _) = net.forward(maps, obs, None);
     let loss = advantage_loss(q.reshape([b * t, g]), y, m);
-    let value = loss
-        .clone()
-        .into_data()
-        .try_into_vec_as::<f32>()
-        .expect("loss readable")[0];
-    let grads = GradientsParams::from_grads(loss.backward(), &net);
-    (optim.step(cfg.learning_rate, net, grads), value)
+    adam_step(net, optim, cfg.learning_rate, loss)
 }
 
 /// One Adam step of the agnostic DEP on single decisions (the first of each window): the same
@@ -878,13 +873,7 @@ fn update_agnostic(
         batch.mask.clone(),
     );
     let loss = advantage_loss(q, y, batch.mask);
-    let value = loss
-        .clone()
-        .into_data()
-        .try_into_vec_as::<f32>()
-        .expect("loss readable")[0];
-    let grads = GradientsParams::from_grads(loss.backward(), &net);
-    (optim.step(cfg.learning_rate, net, grads), value)
+    adam_step(net, optim, cfg.learning_rate, loss)
 }
 
 /// Mean TNS (and completions) of registry policy `policy` on the validation set: maps and

@@ -317,7 +317,7 @@ fn calibration_md(cmp: &[Comparison]) -> String {
                 names.join(", ")
             );
         }
-        let mut all: Vec<crate::calibration::Convention> = flagged
+        let all: Vec<crate::calibration::Convention> = flagged
             .iter()
             .flat_map(|c| conventions(&c.method, c.metric, c.csp))
             .collect();
