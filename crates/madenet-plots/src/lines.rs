@@ -194,8 +194,20 @@ fn draw_line_panel<DB: DrawingBackend>(
         .y_label_area_size(y_label_area(y0, y1))
         .build_cartesian_2d(x0..x1, y0..y1)
         .map_err(s)?;
+    // Whole-number x data (team sizes, iterations) gets whole-number ticks only: no more
+    // labels than units, so plotters never steps by a fraction.
+    let whole_x = p
+        .series
+        .iter()
+        .all(|s| s.points.iter().all(|&(x, _)| x.fract() == 0.0));
+    let x_labels = if whole_x {
+        ((x1 - x0).floor() as usize + 1).clamp(2, 10)
+    } else {
+        10
+    };
     chart
         .configure_mesh()
+        .x_labels(x_labels)
         .x_desc(p.x_label.as_str())
         .y_desc(p.y_label.as_str())
         .x_label_formatter(&tick_label)

@@ -533,3 +533,37 @@ fn too_many_panels_is_an_error_not_a_huge_image() {
     let r = line_panels(&d.join("big"), &panels, 1);
     assert!(matches!(r, Err(PlotError::InvalidInput { .. })), "{r:?}");
 }
+
+/// Whole-number x data (e.g. team sizes 2–6) is labelled at whole numbers only; fractional x
+/// data keeps fractional ticks where plotters puts them.
+#[test]
+fn whole_number_x_gets_whole_number_ticks() {
+    let d = dir("whole-x");
+    let panel = |xs: &[f64]| LinePanel {
+        title: "teams".into(),
+        x_label: "Robots".into(),
+        y_label: "TNS".into(),
+        series: vec![LineSeries {
+            name: "nf".into(),
+            points: xs.iter().map(|&x| (x, 100.0 / x)).collect(),
+        }],
+    };
+    // The x tick labels of the SVG: text elements holding a number.
+    let ticks = |stem: &str, xs: &[f64]| -> Vec<String> {
+        line_panels(&d.join(stem), &[panel(xs)], 1).unwrap();
+        let svg = std::fs::read_to_string(d.join(format!("{stem}.svg"))).unwrap();
+        svg.split('>')
+            .filter_map(|t| t.split('<').next())
+            .map(str::trim)
+            .filter(|t| !t.is_empty() && t.parse::<f64>().is_ok())
+            .map(String::from)
+            .collect()
+    };
+    let whole = ticks("whole", &[2.0, 3.0, 4.0, 5.0, 6.0]);
+    for x in ["2", "3", "4", "5", "6"] {
+        assert!(whole.iter().any(|t| t == x), "{x} missing: {whole:?}");
+    }
+    assert!(!whole.iter().any(|t| t == "2.5" || t == "3.5"), "{whole:?}");
+    let halves = ticks("halves", &[2.0, 2.5, 3.0, 3.5, 4.0]);
+    assert!(halves.iter().any(|t| t == "2.5"), "{halves:?}");
+}
