@@ -89,6 +89,13 @@ use crate::lines::{faint_series, jagged_series, Lines, Look};
 use crate::output::{with_ext, write_figure, write_one, Target};
 use crate::validate::{legend_names, validate_bars, validate_lines};
 
+/// The bundled font's TrueType bytes (the subset of DejaVu Sans 2.37 described in
+/// `assets/README.md`) that the figures' text is drawn with, for other crates drawing text in
+/// the same face (`madenet-render`'s frame pictures).
+pub fn font_bytes() -> &'static [u8] {
+    style::FONT_BYTES
+}
+
 /// Largest magnitude of a value that can be plotted; larger values (and
 /// bar tops `mean ± error` beyond it) are rejected as input errors.
 pub const MAX_ABS_VALUE: f64 = 1e15;

@@ -12,7 +12,7 @@ use crate::PlotError;
 
 /// The bundled font (a subset of DejaVu Sans 2.37; licence in
 /// `assets/DejaVuSans-LICENSE.txt`).
-const FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+pub(crate) const FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 /// The family name the bundled font is registered under and drawn with.
 const FONT_FAMILY: &str = "sans-serif";
 

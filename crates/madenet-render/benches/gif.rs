@@ -5,7 +5,11 @@
 //! * `gif/whole_frames/N` — the same pictures through `image`'s GIF encoder, every frame whole:
 //!   how the writer worked before (the anchor).
 //!
-//! Both include encoding and writing a temporary file; the pictures are rendered beforehand.
+//! * `gif/render/100` — [`render`] of one frame (the last of the 100 × 100 exploration): the
+//!   drawing alone, no encoding.
+//!
+//! The GIF benches include encoding and writing a temporary file; the pictures are rendered
+//! beforehand.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use image::codecs::gif::{GifEncoder, Repeat};
@@ -15,7 +19,7 @@ use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_render::{render, Frame, GifWriter, RenderOptions, RobotFrame};
 
 /// Three robots walking diagonally, the team map growing around them.
-fn pictures(n: usize, steps: usize, opts: &RenderOptions) -> Vec<RgbaImage> {
+fn frames(n: usize, steps: usize) -> Vec<Frame> {
     let truth = generate(&GeneratorConfig::for_size(n, n), 7).expect("generate");
     let mut team = OccGrid::new(n, n, Occupancy::Unknown);
     let last = n as i32 - 1;
@@ -55,9 +59,13 @@ fn pictures(n: usize, steps: usize, opts: &RenderOptions) -> Vec<RgbaImage> {
             explored: 0.0,
             links: vec![(0, 1)],
         };
-        out.push(render(&frame, opts));
+        out.push(frame);
     }
     out
+}
+
+fn pictures(n: usize, steps: usize, opts: &RenderOptions) -> Vec<RgbaImage> {
+    frames(n, steps).iter().map(|f| render(f, opts)).collect()
 }
 
 fn bench(c: &mut Criterion) {
@@ -65,6 +73,8 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir();
     let mut g = c.benchmark_group("gif");
     g.sample_size(10);
+    let last = frames(100, 60).pop().expect("frames");
+    g.bench_function("render/100", |b| b.iter(|| render(&last, &opts)));
     for n in [40, 100] {
         let images = pictures(n, 60, &opts);
         let path = dir.join(format!("madenet-bench-{}-{n}.gif", std::process::id()));

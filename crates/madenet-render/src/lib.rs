@@ -20,10 +20,11 @@
 //! squares in a lighter shade, its field of view as a faint tint, and comm links as thin
 //! dashed lines between robots, over light grid lines between cells.
 //!
-//! Text uses a tiny bitmap font embedded in the source and all drawing primitives are
-//! hand-written, so the only dependencies are `image` for PNG encoding and `gif` (the GIF
-//! library `image` itself uses) for animations that store only what changed between frames
-//! ([`GifWriter`]). The image size is a
+//! Shapes are drawn with `imageproc` and text with `ab_glyph` in the font the figures use
+//! (`madenet-plots`' bundled DejaVu Sans), its antialiasing reduced to eight levels so a
+//! picture keeps to the 256 colours a GIF frame holds exactly. `image` encodes PNGs and `gif`
+//! (the GIF library `image` itself uses) writes animations that store only what changed
+//! between frames ([`GifWriter`]). The image size is a
 //! deterministic function of the grid size and the options ([`Layout`]). Files are written
 //! through `madenet-files` (atomic replace of a regular file, through a symlink to its target,
 //! streamed to a device or pipe), and every error names
@@ -31,14 +32,17 @@
 
 #![deny(missing_docs)]
 
-mod canvas;
-pub mod font;
+mod draw;
 mod of_trial;
 
 pub use of_trial::{trial_frame, world_frame};
 
-use canvas::{mix, Canvas, Rgb};
+use draw::{line, mix, rect, rgba, translucent, Rgb};
 use image::{Rgba, RgbaImage};
+use imageproc::drawing::{
+    draw_filled_circle_mut, draw_filled_rect_mut, draw_hollow_rect_mut, Blend,
+};
+use imageproc::rect::Rect;
 use madenet_files::AtomicFile;
 use madenet_map::{OccGrid, Occupancy, Pos};
 use std::io::{self, BufWriter, Write};
@@ -197,7 +201,7 @@ impl Layout {
         // Text grows with the cells (16 px cells: scale 2, at most 3) but shrinks to scale 1
         // when the longest status text would not fit.
         let mut text_scale = (cell_px / 8).clamp(1, 3);
-        while text_scale > 1 && width < 2 * MARGIN + font::text_width(STATUS_TEMPLATE, text_scale) {
+        while text_scale > 1 && width < 2 * MARGIN + draw::text_width(STATUS_TEMPLATE, text_scale) {
             text_scale -= 1;
         }
         let status_height = 15 * text_scale;
@@ -335,45 +339,50 @@ pub fn robot_color(i: usize) -> Rgba<u8> {
 /// Draws `frame` as an opaque RGBA picture of size [`Layout::for_frame`].
 pub fn render(frame: &Frame, opts: &RenderOptions) -> RgbaImage {
     let layout = Layout::for_frame(frame, opts);
-    let [r, g, b] = BACKGROUND;
-    let mut img = RgbaImage::from_pixel(layout.width, layout.height, Rgba([r, g, b, 255]));
-    draw_status(&mut img, &layout, frame);
+    // Drawn on directly through `.0`, alpha-blended through the `Blend` wrapper.
+    let mut img = Blend(RgbaImage::from_pixel(
+        layout.width,
+        layout.height,
+        rgba(BACKGROUND),
+    ));
+    draw_status(&mut img.0, &layout, frame);
     let s = layout.text_scale;
     let (pw, _) = layout.panel_size();
     for (panel, title) in [(Panel::Truth, "truth"), (Panel::Team, "team map")] {
         let Some((ox, _)) = layout.origin(panel) else {
             continue;
         };
-        let tw = font::text_width(title, s);
+        let tw = draw::text_width(title, s);
         let tx = ox as i32 + (pw as i32 - tw as i32) / 2;
-        let ty = (layout.status_height + 5 * s) as i32;
-        Canvas::new(&mut img).text(tx.max(0), ty, title, s, TITLE_FG);
+        let ty = (layout.status_height + 3 * s) as i32;
+        draw::text(&mut img.0, (tx.max(0), ty), title, s, TITLE_FG);
         draw_panel(&mut img, &layout, frame, panel);
     }
-    img
+    img.0
 }
 
 fn draw_status(img: &mut RgbaImage, layout: &Layout, frame: &Frame) {
     let s = layout.text_scale;
-    let mut c = Canvas::new(img);
-    c.fill_rect(
-        0,
-        0,
-        layout.width as i32,
-        layout.status_height as i32,
-        STATUS_BG,
-    );
+    let bar = Rect::at(0, 0).of_size(layout.width, layout.status_height);
+    draw_filled_rect_mut(img, bar, rgba(STATUS_BG));
     let text = format!(
         "step {}  explored {:.1}%",
         frame.step,
         frame.explored * 100.0
     );
     let cap_top = ((layout.status_height - 7 * s) / 2) as i32;
-    c.text(MARGIN as i32, cap_top, &text, s, STATUS_FG);
+    // The line's top sits two scale units above the capitals' top.
+    draw::text(
+        img,
+        (MARGIN as i32, cap_top - 2 * s as i32),
+        &text,
+        s,
+        STATUS_FG,
+    );
 
     // Progress bar at the right end, where there is room beside the longest status text.
     let bar_w = 100 * s;
-    let text_room = font::text_width(STATUS_TEMPLATE, s) + 8 * s;
+    let text_room = draw::text_width(STATUS_TEMPLATE, s) + 8 * s;
     if layout.width >= 2 * MARGIN + text_room + bar_w {
         let x = (layout.width - MARGIN - bar_w) as i32;
         let h = (7 * s) as i32;
@@ -383,8 +392,11 @@ fn draw_status(img: &mut RgbaImage, layout: &Layout, frame: &Frame) {
             0.0
         };
         let inner = ((bar_w - 2) as f64 * fill).round() as i32;
-        c.rect_outline(x, cap_top, bar_w as i32, h, BAR_BORDER);
-        c.fill_rect(x + 1, cap_top + 1, inner, h - 2, BAR_FILL);
+        let outline = Rect::at(x, cap_top).of_size(bar_w, h as u32);
+        draw_hollow_rect_mut(img, outline, rgba(BAR_BORDER));
+        if let Some(r) = rect(x + 1, cap_top + 1, inner, h - 2) {
+            draw_filled_rect_mut(img, r, rgba(BAR_FILL));
+        }
     }
 }
 
@@ -405,117 +417,121 @@ fn cell_color(frame: &Frame, panel: Panel, p: Pos) -> Rgb {
     }
 }
 
-fn draw_panel(img: &mut RgbaImage, layout: &Layout, frame: &Frame, panel: Panel) {
+/// Draws `panel`. Everything is drawn around cell centres inside the grid and what belongs to
+/// a cell outside it is left out, so nothing reaches beyond the panel.
+fn draw_panel(c: &mut Blend<RgbaImage>, layout: &Layout, frame: &Frame, panel: Panel) {
     let Some((ox, oy)) = layout.origin(panel) else {
         return;
     };
     let (pw, ph) = layout.panel_size();
     let (ox, oy) = (ox as i32, oy as i32);
     let cp = layout.cell_px as i32;
-    let mut c = Canvas::clipped(img, ox, oy, pw as i32, ph as i32);
+    let center = |p: Pos| {
+        let (x, y) = layout.cell_center(panel, p)?;
+        Some((x as i32, y as i32))
+    };
 
     // Cells (each drawn one pixel larger so the shared grid-line pixels get a colour).
     for row in 0..layout.grid_height as i32 {
         for col in 0..layout.grid_width as i32 {
-            let color = cell_color(frame, panel, Pos::new(row, col));
-            c.fill_rect(ox + col * cp, oy + row * cp, cp + 1, cp + 1, color);
+            let color = rgba(cell_color(frame, panel, Pos::new(row, col)));
+            let r = Rect::at(ox + col * cp, oy + row * cp).of_size(cp as u32 + 1, cp as u32 + 1);
+            draw_filled_rect_mut(&mut c.0, r, color);
         }
     }
     // Field of view: a faint tint of each robot's colour on its sensed cells' interiors.
     for (i, r) in frame.robots.iter().enumerate() {
+        let tint = translucent(robot_rgb(i), VIEW_ALPHA);
         for p in &r.in_view {
-            if let Some((x, y)) = cell_origin(layout, p, ox, oy) {
-                c.blend_rect(x + 1, y + 1, cp - 1, cp - 1, robot_rgb(i), VIEW_ALPHA);
+            let corner = center(*p).map(|(x, y)| (x - cp / 2, y - cp / 2));
+            if let Some(r) = corner.and_then(|(x, y)| rect(x + 1, y + 1, cp - 1, cp - 1)) {
+                draw_filled_rect_mut(c, r, tint);
             }
         }
     }
     // Grid lines, darkening whatever is below a little; skipped when cells are tiny.
     if cp >= 4 {
+        let ink = translucent(GRID_INK, GRID_ALPHA);
         for col in 1..layout.grid_width as i32 {
-            c.blend_rect(ox + col * cp, oy, 1, ph as i32, GRID_INK, GRID_ALPHA);
+            draw_filled_rect_mut(c, Rect::at(ox + col * cp, oy).of_size(1, ph), ink);
         }
         for row in 1..layout.grid_height as i32 {
-            c.blend_rect(ox, oy + row * cp, pw as i32, 1, GRID_INK, GRID_ALPHA);
+            draw_filled_rect_mut(c, Rect::at(ox, oy + row * cp).of_size(pw, 1), ink);
         }
     }
-    c.rect_outline(ox, oy, pw as i32, ph as i32, PANEL_BORDER);
-
-    let center = |p: Pos| (ox + p.col * cp + cp / 2, oy + p.row * cp + cp / 2);
+    let c = &mut c.0;
+    draw_hollow_rect_mut(c, Rect::at(ox, oy).of_size(pw, ph), rgba(PANEL_BORDER));
     let thick = (layout.cell_px / 8).max(1);
     let link_thick = (layout.cell_px / 16).max(1);
 
     // Comm links under everything robot-specific.
     for &(a, b) in &frame.links {
-        if let (Some(ra), Some(rb)) = (frame.robots.get(a), frame.robots.get(b)) {
-            c.line(
-                center(ra.pos),
-                center(rb.pos),
-                link_thick,
-                LINK,
-                Some((4 * link_thick, 3 * link_thick)),
-            );
+        let (Some(ra), Some(rb)) = (frame.robots.get(a), frame.robots.get(b)) else {
+            continue;
+        };
+        if let (Some(pa), Some(pb)) = (center(ra.pos), center(rb.pos)) {
+            let dash = Some((4 * link_thick, 3 * link_thick));
+            line(c, (pa, pb), link_thick, LINK, dash);
         }
     }
     // Paths.
     for (i, r) in frame.robots.iter().enumerate() {
-        let color = robot_rgb(i);
         let mut prev = center(r.pos);
         for &p in &r.path {
-            let next = center(p);
-            c.line(prev, next, thick, color, None);
-            prev = next;
+            if let (Some(a), Some(b)) = (prev, center(p)) {
+                line(c, (a, b), thick, robot_rgb(i), None);
+            }
+            prev = center(p);
         }
     }
     // Candidates: hollow squares, half a cell wide, in a lighter shade.
     let half = cp / 4;
     for (i, r) in frame.robots.iter().enumerate() {
-        let color = mix(robot_rgb(i), FREE, 0.35);
-        for &p in &r.candidates {
-            let (x, y) = center(p);
-            c.rect_outline(x - half, y - half, 2 * half + 1, 2 * half + 1, color);
+        let color = rgba(mix(robot_rgb(i), FREE, 0.35));
+        for (x, y) in r.candidates.iter().filter_map(|&p| center(p)) {
+            let side = 2 * half as u32 + 1;
+            draw_hollow_rect_mut(c, Rect::at(x - half, y - half).of_size(side, side), color);
             if cp >= 12 {
-                c.rect_outline(
-                    x - half + 1,
-                    y - half + 1,
-                    2 * half - 1,
-                    2 * half - 1,
-                    color,
-                );
+                let inner = Rect::at(x - half + 1, y - half + 1).of_size(side - 2, side - 2);
+                draw_hollow_rect_mut(c, inner, color);
             }
         }
     }
     // Goals: an X across most of the cell.
     let arm = ((cp as f32) * 0.32).round() as i32;
     for (i, r) in frame.robots.iter().enumerate() {
-        if let Some(g) = r.goal {
-            let (x, y) = center(g);
+        if let Some((x, y)) = r.goal.and_then(center) {
             let color = robot_rgb(i);
-            c.line((x - arm, y - arm), (x + arm, y + arm), thick, color, None);
-            c.line((x - arm, y + arm), (x + arm, y - arm), thick, color, None);
+            line(
+                c,
+                ((x - arm, y - arm), (x + arm, y + arm)),
+                thick,
+                color,
+                None,
+            );
+            line(
+                c,
+                ((x - arm, y + arm), (x + arm, y - arm)),
+                thick,
+                color,
+                None,
+            );
         }
     }
     // Robots: discs with a thin darker rim, on top of everything.
-    let radius = (cp as f32 * 0.42).max(1.0);
+    let radius = ((cp as f32 * 0.42).round() as i32).max(1);
     for (i, r) in frame.robots.iter().enumerate() {
-        let (x, y) = center(r.pos);
+        let Some((x, y)) = center(r.pos) else {
+            continue;
+        };
         let color = robot_rgb(i);
-        if radius >= 3.0 {
-            c.fill_circle(x, y, radius, mix(color, [0, 0, 0], 0.45));
-            c.fill_circle(x, y, radius - 1.0, color);
+        if radius >= 3 {
+            draw_filled_circle_mut(c, (x, y), radius, rgba(mix(color, [0, 0, 0], 0.45)));
+            draw_filled_circle_mut(c, (x, y), radius - 1, rgba(color));
         } else {
-            c.fill_circle(x, y, radius, color);
+            draw_filled_circle_mut(c, (x, y), radius, rgba(color));
         }
     }
-}
-
-/// Top-left pixel of cell `p` (its grid line), `None` outside the grid.
-fn cell_origin(layout: &Layout, p: &Pos, ox: i32, oy: i32) -> Option<(i32, i32)> {
-    let inside = p.row >= 0
-        && p.col >= 0
-        && (p.row as usize) < layout.grid_height
-        && (p.col as usize) < layout.grid_width;
-    let cp = layout.cell_px as i32;
-    inside.then(|| (ox + p.col * cp, oy + p.row * cp))
 }
 
 // ---------------------------------------------------------------------------------------
