@@ -149,17 +149,7 @@ impl Default for DmeTrainConfig {
 impl DmeTrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: DmeTrainConfig =
-            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
-                path: path.display().to_string(),
-                message,
-            })?;
-        cfg.validate().map_err(|m| TrainError::Config {
-            path: path.display().to_string(),
-            message: m,
-        })?;
-        Ok(cfg)
+        harness::read_config(path, Self::validate)
     }
 
     /// One message naming the first bad field.

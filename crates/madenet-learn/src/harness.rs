@@ -74,6 +74,23 @@ pub fn prepare_run<C: Default + Serialize>(
     Ok((cfg, resuming))
 }
 
+/// Reads a learner's TOML config and checks it with `validate`: unknown keys, bad values and
+/// failed checks are [`TrainError::Config`] naming the file and the field. Every learner's
+/// `from_toml_file`.
+pub fn read_config<C: DeserializeOwned>(
+    path: &Path,
+    validate: impl Fn(&C) -> Result<(), String>,
+) -> Result<C, TrainError> {
+    let config_err = |message| TrainError::Config {
+        path: path.display().to_string(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    let cfg: C = madenet_files::parse_toml(&text).map_err(config_err)?;
+    validate(&cfg).map_err(config_err)?;
+    Ok(cfg)
+}
+
 /// Trains into `run_dir`: [`prepare_run`] with `load`, `validate` and `same_run`, then
 /// `train_loop(&cfg, resuming)` on a thread pool of `threads(&cfg)` workers (so a run's results
 /// depend on its config, not on the machine's core count).

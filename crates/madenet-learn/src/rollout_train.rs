@@ -213,16 +213,7 @@ impl Default for RolloutTrainConfig {
 impl RolloutTrainConfig {
     /// Reads a TOML config; errors name the file and the field.
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: Self = madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
-            path: path.display().to_string(),
-            message,
-        })?;
-        cfg.validate().map_err(|m| TrainError::Config {
-            path: path.display().to_string(),
-            message: m,
-        })?;
-        Ok(cfg)
+        harness::read_config(path, Self::validate)
     }
 
     /// Checks every field; the message names the field.

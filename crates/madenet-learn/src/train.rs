@@ -232,17 +232,7 @@ pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
 impl TrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        let text = std::fs::read_to_string(path).map_err(io_err(path))?;
-        let cfg: TrainConfig =
-            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
-                path: path.display().to_string(),
-                message,
-            })?;
-        cfg.validate().map_err(|m| TrainError::Config {
-            path: path.display().to_string(),
-            message: m,
-        })?;
-        Ok(cfg)
+        harness::read_config(path, Self::validate)
     }
 
     /// Checks every field; the message names the field.
@@ -1153,25 +1143,21 @@ fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -
 /// Writes the DEPs (and the CEP, for reference) and `model.toml` into `dir`, atomically.
 fn save_model(dir: &Path, nets: &Nets, info: &ModelInfo) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
-        for (k, (o, _, _)) in nets.deps.iter().enumerate() {
-            let p = tmp.join(format!("dep{k}.bpk"));
-            target_of(o)
+        let save = |name: String, online| {
+            let p = tmp.join(name);
+            target_of(online)
                 .into_record()
                 .save(&p)
                 .map_err(|e| TrainError::Io {
                     path: p.display().to_string(),
                     message: e.to_string(),
-                })?;
+                })
+        };
+        for (k, (o, _, _)) in nets.deps.iter().enumerate() {
+            save(format!("dep{k}.bpk"), o)?;
         }
         if let Some((o, _, _)) = &nets.cep {
-            let p = tmp.join("cep.bpk");
-            target_of(o)
-                .into_record()
-                .save(&p)
-                .map_err(|e| TrainError::Io {
-                    path: p.display().to_string(),
-                    message: e.to_string(),
-                })?;
+            save("cep.bpk".into(), o)?;
         }
         let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
         std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
