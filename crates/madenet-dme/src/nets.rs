@@ -141,7 +141,7 @@ impl Actor {
 /// A centralized critic: Q_i from every robot's map history, action and pose vector.
 #[derive(Module, Debug)]
 pub struct Critic {
-    /// C1: convolution k4 s2, team·4·critic_history → 16 channels.
+    /// C1: convolution k4 s2, team·4·min(critic_history, history) → 16 channels.
     pub c1: Conv2d,
     /// C2: convolution k3 s2, 16 → 32 channels.
     pub c2: Conv2d,

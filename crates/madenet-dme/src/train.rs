@@ -26,7 +26,7 @@ use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use madenet_learn::harness::{self, replace_dir, Clock, Logs, Seen};
-use madenet_learn::train::{io_err, training_scenario, validate_policy, write_atomic};
+use madenet_learn::train::{io_err, training_scenario, validate_policy};
 use madenet_learn::{TrainConfig, TrainError};
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -684,8 +684,7 @@ fn save_model(dir: &Path, nets: &Maddpg, info: &ModelInfo) -> Result<(), TrainEr
                 .save(&p)
                 .map_err(save_err(&p))?;
         }
-        let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
-        write_atomic(&tmp.join("model.toml"), text.as_bytes())
+        harness::write_toml(&tmp.join("model.toml"), info)
     })
 }
 

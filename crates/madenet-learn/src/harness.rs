@@ -156,18 +156,25 @@ pub fn read_postcard<T: DeserializeOwned>(path: &Path) -> Result<T, TrainError> 
     postcard::from_bytes(&bytes).map_err(|e| decode_err(path)(e.to_string()))
 }
 
-/// Writes `value` as pretty JSON into a directory being filled by [`replace_dir`] (whose
-/// rename makes the whole checkpoint appear at once, so a plain write suffices).
+/// Writes `value` as pretty JSON (e.g. `state.json` into a directory being filled by
+/// [`replace_dir`]), synced to disk ([`write_atomic`]), so a checkpoint survives a power loss.
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
     let text = serde_json::to_string_pretty(value).map_err(|e| TrainError::Other(e.to_string()))?;
-    std::fs::write(path, text).map_err(io_err(path))
+    write_atomic(path, text.as_bytes())
 }
 
-/// Writes `value` with postcard into a directory being filled by [`replace_dir`].
+/// Writes `value` with postcard (e.g. `replay.bin`), synced to disk like [`write_json`].
 pub fn write_postcard<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
     let bytes = postcard::to_stdvec(value)
         .map_err(|e| TrainError::Other(format!("{}: encoding: {e}", path.display())))?;
-    std::fs::write(path, bytes).map_err(io_err(path))
+    write_atomic(path, &bytes)
+}
+
+/// Writes a model's `model.toml` (into a model directory being filled by [`replace_dir`]),
+/// synced like [`write_json`].
+pub fn write_toml<T: Serialize>(path: &Path, value: &T) -> Result<(), TrainError> {
+    let text = toml::to_string(value).map_err(|e| TrainError::Other(e.to_string()))?;
+    write_atomic(path, text.as_bytes())
 }
 
 /// Whether validation mean `steps` beats the run's best so far (fewer steps), recording it as
@@ -332,6 +339,7 @@ mod tests {
         assert!(c.wall() >= 12.5);
         assert!(!c.out_of_time(0.0) && !c.checkpoint_due(0.0));
         assert!(!c.out_of_time(1.0), "one minute has not passed");
-        assert!(c.checkpoint_due(1e-12));
+        std::thread::sleep(std::time::Duration::from_millis(5));
+        assert!(c.checkpoint_due(1e-6), "5 ms is more than 60 µs");
     }
 }

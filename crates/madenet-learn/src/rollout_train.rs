@@ -36,7 +36,7 @@ use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
 use crate::harness::{self, replace_dir, Clock};
 use crate::learner::adam_step;
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
-use crate::train::{io_err, write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
+use crate::train::{write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
 use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
@@ -986,8 +986,7 @@ fn model_info(
 fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
         net.save(&tmp.join("dep0.bpk"), true)?;
-        let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
-        std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
+        harness::write_toml(&tmp.join("model.toml"), info)
     })
 }
 

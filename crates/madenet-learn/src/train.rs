@@ -1159,8 +1159,7 @@ fn save_model(dir: &Path, nets: &Nets, info: &ModelInfo) -> Result<(), TrainErro
         if let Some((o, _, _)) = &nets.cep {
             save("cep.bpk".into(), o)?;
         }
-        let text = toml::to_string(info).map_err(|e| TrainError::Other(e.to_string()))?;
-        std::fs::write(tmp.join("model.toml"), text).map_err(io_err(&tmp.join("model.toml")))
+        harness::write_toml(&tmp.join("model.toml"), info)
     })
 }
 

@@ -410,6 +410,14 @@ fn observation_lengths_match_what_the_agent_writes() {
     use madenet_learn::obs::{robot_obs, Observation};
     use madenet_sim::{MapSource, StartSpec, Trial, TrialSpec};
     for (team, goals) in [(2, 2), (3, 4), (4, 6), (6, 3)] {
+        // The layout by hand (Sec. IV): own position (2) and teammate-detected flag ϱ_i (1),
+        // per teammate previous goal, position, current goal (2 each), |E_j| and a known flag
+        // (8), per candidate its cell (2) and validity (1).
+        assert_eq!(obs_dim_for(team, goals), 3 + 8 * (team - 1) + 3 * goals);
+        assert_eq!(
+            Observation::CandidateFeatures.dim(team, goals),
+            obs_dim_for(team, goals) + 9 * goals
+        );
         let config = madenet_world::ScenarioConfig {
             num_robots: team,
             goal_count: Some(goals),
@@ -439,6 +447,15 @@ fn observation_lengths_match_what_the_agent_writes() {
                     o.dim(team, goals),
                     "{o:?}, {team} robots, {goals} goals"
                 );
+                // The validity mask closes the paper's part, where the layout says.
+                let paper = obs_dim_for(team, goals);
+                let mask: Vec<f32> = view
+                    .candidates()
+                    .valid_mask()
+                    .iter()
+                    .map(|&m| m as u8 as f32)
+                    .collect();
+                assert_eq!(&v[paper - goals..paper], &mask[..], "{o:?}");
             }
         }
     }

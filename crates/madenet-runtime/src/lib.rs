@@ -262,16 +262,14 @@ pub fn run_threads<T: Transport>(
             .map(|(agent, bus)| s.spawn(move || run_robot(agent, bus, timeouts)))
             .collect();
         let world_result = run_world(world, world_bus, timeouts);
-        let robot_results: Vec<_> = robots
-            .into_iter()
-            .map(|r| r.join().map_err(|_| RuntimeError::Panicked)?)
-            .collect();
-        let radio_result = radio.join().map_err(|_| RuntimeError::Panicked)?;
-        // The world's own error first: the others' are usually its consequences (a robot
-        // timing out because the world stopped).
+        let robot_results: Vec<_> = robots.into_iter().map(|r| r.join()).collect();
+        let radio_result = radio.join();
+        // The world's own error first: the others' (a panic aside) are usually its
+        // consequences, e.g. a robot timing out because the world stopped.
         let mut res = world_result?;
+        let radio_result = radio_result.map_err(|_| RuntimeError::Panicked)?;
         for r in robot_results {
-            let (all, between) = r?;
+            let (all, between) = r.map_err(|_| RuntimeError::Panicked)??;
             res.robots_sent.messages += all.messages;
             res.robots_sent.bytes += all.bytes;
             res.between_robots.messages += between.messages;

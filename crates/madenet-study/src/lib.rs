@@ -72,7 +72,11 @@ pub(crate) fn prepare_out(
         for f in ["trials.csv", "curves.jsonl"] {
             let _ = std::fs::remove_file(out.join(f));
         }
-    } else if let Ok(old) = std::fs::read_to_string(&cfg_path) {
+    } else if cfg_path.exists() {
+        let old = std::fs::read_to_string(&cfg_path).map_err(|e| StudyError::File {
+            path: cfg_path.display().to_string(),
+            message: e.to_string(),
+        })?;
         if old != cfg_text && (out.join("trials.csv").exists()) {
             return Err(StudyError::File {
                 path: out.display().to_string(),

@@ -221,8 +221,19 @@ fn load_done(out: &Path) -> HashMap<TrialKey, TrialOutcome> {
         .collect()
 }
 
-fn csp_label(c: f64) -> String {
+/// A CSP as written in [`TrialKey::csp`] and outputs: Rust's shortest round-trip decimal.
+pub fn csp_label(c: f64) -> String {
     format!("{c}")
+}
+
+impl std::fmt::Display for TrialKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}, map {}, start {}, CSP {}, seed {}",
+            self.method, self.map, self.start, self.csp, self.seed
+        )
+    }
 }
 
 /// A trial the study runs: its key, its spec, and the oracle that makes its decisions (`None`:
@@ -294,7 +305,7 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<P
 /// thread, process or machine runs it).
 pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, StudyError> {
     let (key, spec) = (&p.key, &p.spec);
-    let failed = |e: madenet_sim::SimError| StudyError::Other(format!("{key:?}: {e}"));
+    let failed = |e: madenet_sim::SimError| StudyError::Other(format!("{key}: {e}"));
     let result = match p.oracle {
         None => Trial::with_registry(spec.clone(), registry)
             .map_err(failed)?
@@ -340,6 +351,28 @@ pub fn run(
     run_planned(&plan(cfg, maps, starts), registry, out, progress)
 }
 
+/// Checks a planned trial set before anything runs: every key unique, and every trial able to
+/// start (e.g. no start cell in an obstacle, enough start cells for the team; checked on the
+/// first seed, as the seed changes neither).
+pub fn check_planned(planned: &[Planned], registry: &PolicyRegistry) -> Result<(), StudyError> {
+    let mut keys = std::collections::HashSet::new();
+    if let Some(p) = planned.iter().find(|p| !keys.insert(&p.key)) {
+        return Err(StudyError::Other(format!(
+            "the trial ({}) is planned twice (each trial of a set needs its own key)",
+            p.key
+        )));
+    }
+    let first_seed = planned.iter().map(|p| p.key.seed).min().unwrap_or(0);
+    for p in planned {
+        if p.key.seed == first_seed {
+            Trial::with_registry(p.spec.clone(), registry).map_err(|e| {
+                StudyError::Other(format!("map {}, start {}: {e}", p.key.map, p.key.start))
+            })?;
+        }
+    }
+    Ok(())
+}
+
 /// [`run`] for trials planned by the caller (e.g. the scalability study's grid): runs every
 /// one not yet recorded in `out` (keys must be unique: a repeated key is an error), appending
 /// each as it finishes, and returns all outcomes in plan order.
@@ -349,22 +382,7 @@ pub fn run_planned(
     out: &Path,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<TrialOutcome>, StudyError> {
-    let mut keys = std::collections::HashSet::new();
-    if let Some(p) = planned.iter().find(|p| !keys.insert(&p.key)) {
-        return Err(StudyError::Other(format!(
-            "the trial {:?} is planned twice (each trial of a set needs its own key)",
-            p.key
-        )));
-    }
-    let first_seed = planned.iter().map(|p| p.key.seed).min().unwrap_or(0);
-    // Every trial must be able to start before any runs (e.g. a start cell in an obstacle).
-    for p in planned {
-        if p.key.seed == first_seed {
-            Trial::with_registry(p.spec.clone(), registry).map_err(|e| {
-                StudyError::Other(format!("map {}, start {}: {e}", p.key.map, p.key.start))
-            })?;
-        }
-    }
+    check_planned(planned, registry)?;
     let mut done = load_done(out);
     done.retain(|k, _| planned.iter().any(|p| &p.key == k));
     // Rewrite the record files with exactly the complete trials, then append.

@@ -307,7 +307,7 @@ impl ScaleConfig {
                                 method: method.clone(),
                                 map: name.clone(),
                                 start: format!("{}:{team}", start.name()),
-                                csp: format!("{}", self.csp),
+                                csp: crate::runner::csp_label(self.csp),
                                 seed,
                             };
                             let spec = TrialSpec {

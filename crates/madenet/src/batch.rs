@@ -50,7 +50,6 @@ pub fn run(a: BatchArgs) -> Result<()> {
         );
     }
     let registry = crate::registry(a.model.as_deref())?;
-    known_policy(&registry, &a.policy, "--policy")?;
     let mut cfg = trial_set(
         &a.maps,
         &a.starts,
@@ -77,7 +76,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
         let sel: Vec<&runner::TrialRow> = outcomes
             .iter()
             .map(|o| &o.row)
-            .filter(|r| r.key.csp == format!("{csp}"))
+            .filter(|r| r.key.csp == runner::csp_label(csp))
             .collect();
         let n = sel.len().max(1) as f64;
         let mean = |f: &dyn Fn(&runner::TrialRow) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
@@ -90,17 +89,6 @@ pub fn run(a: BatchArgs) -> Result<()> {
             mean(&|r| r.noli as f64),
             mean(&|r| r.ofv),
         )?;
-    }
-    Ok(())
-}
-
-/// `policy` (given with `flag`) must be in the registry.
-pub fn known_policy(registry: &PolicyRegistry, policy: &str, flag: &str) -> Result<()> {
-    if !registry.names().iter().any(|n| n == policy) {
-        bail!(
-            "unknown policy `{policy}` (field `{flag}`); known policies: {}",
-            registry.names().join(", ")
-        );
     }
     Ok(())
 }
@@ -160,7 +148,9 @@ pub fn plan(
             ],
         )
     })?;
-    Ok(runner::plan(cfg, &maps, &starts))
+    let planned = runner::plan(cfg, &maps, &starts);
+    runner::check_planned(&planned, registry)?;
+    Ok(planned)
 }
 
 /// Runs `planned` with a progress bar on `threads` workers; outcomes in plan order.

@@ -66,7 +66,6 @@ pub fn run(a: OracleArgs) -> Result<()> {
         bail!("--futures {}: must be in 1..=64", a.futures);
     }
     let registry = crate::registry(None)?;
-    crate::batch::known_policy(&registry, &a.base, "--base")?;
     let kind = match a.kind {
         Kind::Replay => OracleKind::Replay,
         Kind::Averaged => OracleKind::Averaged,
@@ -110,7 +109,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         let sel: Vec<(&TrialOutcome, &TrialOutcome)> = base
             .iter()
             .zip(oracle)
-            .filter(|(b, _)| b.row.key.csp == format!("{csp}"))
+            .filter(|(b, _)| b.row.key.csp == runner::csp_label(csp))
             .collect();
         let n = sel.len().max(1) as f64;
         let mean = |f: &dyn Fn(&(&TrialOutcome, &TrialOutcome)) -> usize| {
