@@ -1,10 +1,11 @@
 //! Pictures of madenet simulator frames.
 //!
 //! This crate draws simulator frames as pictures — PNG snapshots and animated GIFs — from
-//! plain data ([`Frame`]). It knows nothing of the simulator: whoever runs an episode fills in
-//! a [`Frame`] per step (ground truth, the team's merged map, robots with their paths, goals
-//! and goal candidates, comm links, explored fraction) and hands it to [`render`],
-//! [`save_png`], [`save_gif`] or the streaming [`GifWriter`].
+//! plain data ([`Frame`]). The drawing knows nothing of the simulator: whoever runs an episode
+//! fills in a [`Frame`] per step (ground truth, the team's merged map, robots with their paths,
+//! goals and goal candidates, comm links, explored fraction) — [`trial_frame`] does it for a
+//! simulator trial, [`world_frame`] for a world whose agents run elsewhere — and hands it to
+//! [`render`], [`save_png`], [`save_gif`] or the streaming [`GifWriter`].
 //!
 //! The picture has a status bar on top ("step 42  explored 87.5%" plus a progress bar) and
 //! two panels side by side (the left one can be switched off with
