@@ -6,8 +6,8 @@
 //! anchor: publishing should cost less than a timestep's own messages.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use hiroz::msg::ZMessage;
 use madenet_map::{OccGrid, Occupancy, Pos};
+use madenet_ros2::msgs::RosMessage;
 use madenet_ros2::{loopback_router, occupancy_grid, MapFrame, RobotTopics};
 use zenoh::Wait;
 
@@ -46,11 +46,11 @@ fn bench(c: &mut Criterion) {
         let msg = occupancy_grid(&frame, grid.cells(), Default::default());
         eprintln!(
             "{side} × {side}: map message {} B as CDR; {} samples received so far",
-            msg.serialize().len(),
+            msg.to_cdr().len(),
             received.load(std::sync::atomic::Ordering::Relaxed)
         );
         g.bench_with_input(BenchmarkId::new("cdr_only", side), &side, |b, _| {
-            b.iter(|| occupancy_grid(&frame, grid.cells(), Default::default()).serialize())
+            b.iter(|| occupancy_grid(&frame, grid.cells(), Default::default()).to_cdr())
         });
     }
     g.finish();

@@ -15,7 +15,7 @@
 //!
 //! The wire format is rmw_zenoh's (ROS 2 Jazzy): key expressions
 //! `<domain>/<topic>/<type>/<RIHS01 type hash>`, CDR payloads, liveliness tokens for the ROS
-//! graph — written by the `hiroz` crate, which shares madenet's zenoh. A ROS 2 installation
+//! graph — written by [`rmw`] on madenet's own zenoh, the messages by [`msgs`]. A ROS 2 installation
 //! with `RMW_IMPLEMENTATION=rmw_zenoh_cpp` sees the topics through its router (`ros2 run
 //! rmw_zenoh_cpp rmw_zenohd`, `tcp/127.0.0.1:7447`, [`Ros2Options::default`]).
 //!
@@ -42,23 +42,17 @@
 //! ```
 #![deny(missing_docs)]
 
-use hiroz::msg::ZMessage;
-use hiroz::prelude::{Builder, ZContext, ZContextBuilder, ZNode, ZPub, ZSub};
-use hiroz::qos::{QosDurability, QosHistory, QosProfile, QosReliability};
-use hiroz_msgs::builtin_interfaces::Time;
-use hiroz_msgs::geometry_msgs::{Point, Pose, PoseStamped, Quaternion};
-use hiroz_msgs::nav_msgs::{MapMetaData, OccupancyGrid};
-use hiroz_msgs::std_msgs::Header;
 use madenet_map::{OccGrid, Occupancy, Pos};
-use std::num::NonZeroUsize;
+use msgs::{Header, MapMetaData, OccupancyGrid, Point, Pose, PoseStamped, Quaternion, Time};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-pub use hiroz;
-pub use hiroz_msgs;
 pub use real::RealRobots;
+pub use rmw::{Durability, Node, Publisher, QosProfile, Reliability, Ros2Context, Subscription};
 pub use stand_in::run_stand_in;
 
+pub mod msgs;
 mod real;
+pub mod rmw;
 mod stand_in;
 
 /// The frame every madenet topic is stamped with (REP 105's `map`).
@@ -72,7 +66,7 @@ pub enum Ros2Error {
     Middleware {
         /// What was being done.
         what: String,
-        /// hiroz's / zenoh's error.
+        /// zenoh's error.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
     /// A received message that cannot be read as a map or pose.
@@ -116,27 +110,84 @@ impl Default for Ros2Options {
 }
 
 impl Ros2Options {
-    /// Opens the zenoh session (peer mode, no multicast scouting) in the rmw_zenoh key format.
-    pub fn context(&self) -> Result<ZContext, Ros2Error> {
+    /// The domain: [`Ros2Options::domain_id`], else `ROS_DOMAIN_ID`, else 0.
+    pub fn domain(&self) -> Result<usize, Ros2Error> {
+        if let Some(d) = self.domain_id {
+            return Ok(d);
+        }
+        match std::env::var("ROS_DOMAIN_ID") {
+            Ok(v) if !v.trim().is_empty() => v.trim().parse().map_err(|_| Ros2Error::Middleware {
+                what: "ROS_DOMAIN_ID".into(),
+                source: format!("{v:?} is not a non-negative integer").into(),
+            }),
+            _ => Ok(0),
+        }
+    }
+
+    /// Opens the zenoh session with rmw_zenoh_cpp's session defaults (its
+    /// `DEFAULT_RMW_ZENOH_SESSION_CONFIG`: timestamps on, 60 s transport timeouts, no multicast
+    /// scouting) and these endpoints.
+    pub fn context(&self) -> Result<Ros2Context, Ros2Error> {
+        let domain = self.domain()?;
+        let what = || {
+            format!(
+                "session (connect {:?}, listen {:?})",
+                self.connect, self.listen
+            )
+        };
+        let json = |v: &[String]| format!("{v:?}");
         // A client of the router (or of the peer it connects to): it listens on no port of its
         // own, so it cannot take one a madenet node is about to bind, and the router carries
         // its data to every ROS 2 node.
-        let mut b = ZContextBuilder::default()
-            .with_mode(if self.listen.is_empty() {
-                "client"
-            } else {
-                "peer"
-            })
-            .disable_multicast_scouting()
-            .with_connect_endpoints(self.connect.iter().cloned())
-            .with_listen_endpoints(self.listen.iter().cloned());
-        if let Some(d) = self.domain_id {
-            b = b.with_domain_id(d);
+        let mode = if self.listen.is_empty() {
+            "client"
+        } else {
+            "peer"
+        };
+        let mut c = zenoh::Config::default();
+        for (k, v) in [
+            ("mode", format!("{mode:?}")),
+            ("connect/endpoints", json(&self.connect)),
+            ("listen/endpoints", json(&self.listen)),
+            (
+                "connect/timeout_ms",
+                r#"{"router": -1, "peer": -1, "client": 0}"#.into(),
+            ),
+            (
+                "connect/exit_on_failure",
+                r#"{"router": false, "peer": false, "client": true}"#.into(),
+            ),
+            ("scouting/multicast/enabled", "false".into()),
+            (
+                "scouting/gossip/target",
+                r#"{"router": ["router", "peer"], "peer": ["router"]}"#.into(),
+            ),
+            (
+                "scouting/gossip/autoconnect_strategy",
+                r#"{"peer": {"to_router": "always", "to_peer": "greater-zid"}}"#.into(),
+            ),
+            (
+                "timestamping/enabled",
+                r#"{"router": true, "peer": true, "client": true}"#.into(),
+            ),
+            ("queries_default_timeout", "60000".into()),
+            ("transport/unicast/open_timeout", "60000".into()),
+            ("transport/unicast/accept_timeout", "60000".into()),
+            ("transport/unicast/accept_pending", "10000".into()),
+            ("transport/unicast/max_sessions", "10000".into()),
+            ("transport/link/tx/lease", "60000".into()),
+            ("transport/link/tx/keep_alive", "2".into()),
+            (
+                "transport/link/tx/queue/congestion_control/block/wait_before_close",
+                "60000000".into(),
+            ),
+        ] {
+            c.insert_json5(k, &v)
+                .map_err(middleware(format!("{} ({k})", what())))?;
         }
-        b.build().map_err(middleware(format!(
-            "session (connect {:?}, listen {:?})",
-            self.connect, self.listen
-        )))
+        use zenoh::Wait;
+        let session = zenoh::open(c).wait().map_err(middleware(what()))?;
+        Ok(Ros2Context::new(session, domain))
     }
 }
 
@@ -377,24 +428,20 @@ pub fn topics(i: usize) -> [String; 3] {
 /// and nav2 that start late still get the newest map.
 pub fn map_qos() -> QosProfile {
     QosProfile {
-        reliability: QosReliability::Reliable,
-        durability: QosDurability::TransientLocal,
-        history: QosHistory::KeepLast(NonZeroUsize::MIN),
-        ..Default::default()
+        reliability: Reliability::Reliable,
+        durability: Durability::TransientLocal,
+        depth: 1,
     }
 }
-
-pub(crate) type Pub<T> = ZPub<T, <T as ZMessage>::Serdes>;
-type Sub<T> = ZSub<T, zenoh::sample::Sample, <T as ZMessage>::Serdes>;
 
 /// One robot's publishers: its belief as `/robot<i>/map`, its cell as `/robot<i>/pose`, its
 /// macro action's goal as `/robot<i>/goal_pose`.
 pub struct RobotTopics {
-    _node: ZNode,
+    _node: Node,
     frame: MapFrame,
-    map: Pub<OccupancyGrid>,
-    pose: Pub<PoseStamped>,
-    goal: Pub<PoseStamped>,
+    map: Publisher<OccupancyGrid>,
+    pose: Publisher<PoseStamped>,
+    goal: Publisher<PoseStamped>,
     last_map: Option<Vec<Occupancy>>,
     last_goal: Option<Pos>,
     published: usize,
@@ -403,25 +450,12 @@ pub struct RobotTopics {
 impl RobotTopics {
     /// A node `madenet_robot<i>` on `ctx` with robot `i`'s three publishers; cells are placed
     /// by `frame`.
-    pub fn new(ctx: &ZContext, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
-        let node = ctx
-            .create_node(format!("madenet_robot{i}"))
-            .build()
-            .map_err(middleware(format!("node madenet_robot{i}")))?;
+    pub fn new(ctx: &Ros2Context, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
+        let node = ctx.create_node(&format!("madenet_robot{i}"))?;
         let [map_t, pose_t, goal_t] = topics(i);
-        let map = node
-            .create_pub::<OccupancyGrid>(&map_t)
-            .with_qos(map_qos())
-            .build()
-            .map_err(middleware(format!("publisher {map_t}")))?;
-        let pose = node
-            .create_pub::<PoseStamped>(&pose_t)
-            .build()
-            .map_err(middleware(format!("publisher {pose_t}")))?;
-        let goal = node
-            .create_pub::<PoseStamped>(&goal_t)
-            .build()
-            .map_err(middleware(format!("publisher {goal_t}")))?;
+        let map = node.create_pub::<OccupancyGrid>(&map_t, map_qos())?;
+        let pose = node.create_pub::<PoseStamped>(&pose_t, QosProfile::default())?;
+        let goal = node.create_pub::<PoseStamped>(&goal_t, QosProfile::default())?;
         Ok(RobotTopics {
             _node: node,
             frame,
@@ -445,20 +479,16 @@ impl RobotTopics {
         let t = stamp(SystemTime::now());
         if self.last_map.as_deref() != Some(belief) {
             let msg = occupancy_grid(&self.frame, belief, t);
-            self.map.publish(&msg).map_err(middleware("publish map"))?;
+            self.map.publish(&msg)?;
             self.last_map = Some(belief.to_vec());
             self.published += 1;
         }
         let msg = pose_stamped(&self.frame, pos, t);
-        self.pose
-            .publish(&msg)
-            .map_err(middleware("publish pose"))?;
+        self.pose.publish(&msg)?;
         self.published += 1;
         if let Some(g) = goal.filter(|&g| Some(g) != self.last_goal) {
             let msg = pose_stamped(&self.frame, g, t);
-            self.goal
-                .publish(&msg)
-                .map_err(middleware("publish goal"))?;
+            self.goal.publish(&msg)?;
             self.last_goal = Some(g);
             self.published += 1;
         }
@@ -474,32 +504,22 @@ impl RobotTopics {
 /// A real robot's `/robot<i>/map` and `/robot<i>/pose`, read into madenet cells of `frame`:
 /// what a robot stack provides in place of madenet's simulated world.
 pub struct RobotFeed {
-    _node: ZNode,
+    _node: Node,
     frame: MapFrame,
     topics: [String; 3],
-    map: Sub<OccupancyGrid>,
-    pose: Sub<PoseStamped>,
+    map: Subscription<OccupancyGrid>,
+    pose: Subscription<PoseStamped>,
     cells: Option<Vec<Occupancy>>,
     at: Option<Pos>,
 }
 
 impl RobotFeed {
     /// A node `madenet_feed<i>` on `ctx` subscribed to robot `i`'s map and pose.
-    pub fn new(ctx: &ZContext, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
-        let node = ctx
-            .create_node(format!("madenet_feed{i}"))
-            .build()
-            .map_err(middleware(format!("node madenet_feed{i}")))?;
+    pub fn new(ctx: &Ros2Context, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
+        let node = ctx.create_node(&format!("madenet_feed{i}"))?;
         let topics = topics(i);
-        let map = node
-            .create_sub::<OccupancyGrid>(&topics[0])
-            .with_qos(map_qos())
-            .build()
-            .map_err(middleware(format!("subscriber {}", topics[0])))?;
-        let pose = node
-            .create_sub::<PoseStamped>(&topics[1])
-            .build()
-            .map_err(middleware(format!("subscriber {}", topics[1])))?;
+        let map = node.create_sub::<OccupancyGrid>(&topics[0], map_qos())?;
+        let pose = node.create_sub::<PoseStamped>(&topics[1], QosProfile::default())?;
         Ok(RobotFeed {
             _node: node,
             frame,
@@ -517,10 +537,10 @@ impl RobotFeed {
     pub fn latest(&mut self, wait: Duration) -> Result<Option<(&[Occupancy], Pos)>, Ros2Error> {
         let deadline = std::time::Instant::now() + wait;
         loop {
-            while let Ok(m) = self.map.recv_timeout(Duration::ZERO) {
+            while let Some(m) = self.map.recv_timeout(Duration::ZERO)? {
                 self.cells = Some(cells_from_grid(&m, &self.frame, &self.topics[0])?);
             }
-            while let Ok(p) = self.pose.recv_timeout(Duration::ZERO) {
+            while let Some(p) = self.pose.recv_timeout(Duration::ZERO)? {
                 let (x, y) = (p.pose.position.x, p.pose.position.y);
                 self.at = Some(
                     self.frame

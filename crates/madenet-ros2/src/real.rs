@@ -2,9 +2,10 @@
 //! stack publishes — `/robot<i>/map` and `/robot<i>/pose` — and whose moves go out as
 //! `/robot<i>/goal_pose` (the next cell's centre, for nav2 or any controller to reach).
 
-use crate::{pose_stamped, stamp, MapFrame, Pub, RobotFeed, Ros2Error};
-use hiroz::prelude::{Builder, ZContext, ZNode};
-use hiroz_msgs::geometry_msgs::PoseStamped;
+use crate::msgs::PoseStamped;
+use crate::{
+    pose_stamped, stamp, MapFrame, Node, Publisher, QosProfile, RobotFeed, Ros2Context, Ros2Error,
+};
 use madenet_map::{Occupancy, Pos};
 use madenet_metrics::MetricsRecorder;
 use madenet_runtime::Ground;
@@ -20,9 +21,9 @@ use std::time::{Duration, Instant, SystemTime};
 /// where its pose says, as a failed move in the simulator). Exploration is complete when the
 /// union of the robots' maps has no frontier (a free cell next to an unknown one).
 pub struct RealRobots {
-    _node: ZNode,
+    _node: Node,
     feeds: Vec<RobotFeed>,
-    goals: Vec<Pub<PoseStamped>>,
+    goals: Vec<Publisher<PoseStamped>>,
     frame: MapFrame,
     config: ScenarioConfig,
     step_timeout: Duration,
@@ -38,27 +39,20 @@ impl RealRobots {
     /// Subscribes to `robots` robots' maps and poses and waits up to `first_wait` for each
     /// one's first map and pose. `config` gives d_s, the movement rule and the step cap.
     pub fn new(
-        ctx: &ZContext,
+        ctx: &Ros2Context,
         robots: usize,
         frame: MapFrame,
         config: ScenarioConfig,
         step_timeout: Duration,
         first_wait: Duration,
     ) -> Result<Self, Ros2Error> {
-        let node = ctx
-            .create_node("madenet_world")
-            .build()
-            .map_err(crate::middleware("node madenet_world"))?;
+        let node = ctx.create_node("madenet_world")?;
         let mut feeds = Vec::with_capacity(robots);
         let mut goals = Vec::with_capacity(robots);
         for i in 0..robots {
             feeds.push(RobotFeed::new(ctx, i, frame)?);
             let topic = &crate::topics(i)[2];
-            goals.push(
-                node.create_pub::<PoseStamped>(topic)
-                    .build()
-                    .map_err(crate::middleware(format!("publisher {topic}")))?,
-            );
+            goals.push(node.create_pub::<PoseStamped>(topic, QosProfile::default())?);
         }
         let cells = frame.height * frame.width;
         let mut real = RealRobots {

@@ -3,9 +3,8 @@
 //! `/robot<i>/pose`, and goes to the cell a `/robot<i>/goal_pose` names when that cell is a
 //! free neighbour (any controller that reaches the goal cell would do the same).
 
-use crate::{MapFrame, RobotTopics, Ros2Error, Ros2Options};
-use hiroz::prelude::Builder;
-use hiroz_msgs::geometry_msgs::PoseStamped;
+use crate::msgs::PoseStamped;
+use crate::{MapFrame, QosProfile, RobotTopics, Ros2Error, Ros2Options};
 use madenet_map::{OccGrid, Occupancy, Pos};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
@@ -23,15 +22,9 @@ pub fn run_stand_in(
     let ctx = opts.context()?;
     let frame = MapFrame::of(truth);
     let mut topics = RobotTopics::new(&ctx, i, frame)?;
-    let node = ctx
-        .create_node(format!("stand_in{i}"))
-        .build()
-        .map_err(crate::middleware(format!("node stand_in{i}")))?;
+    let node = ctx.create_node(&format!("stand_in{i}"))?;
     let topic = crate::topics(i)[2].clone();
-    let goals = node
-        .create_sub::<PoseStamped>(&topic)
-        .build()
-        .map_err(crate::middleware(format!("subscriber {topic}")))?;
+    let goals = node.create_sub::<PoseStamped>(&topic, QosProfile::default())?;
     let mut seen = OccGrid::new(truth.height(), truth.width(), Occupancy::Unknown);
     let sense = |at: Pos, seen: &mut OccGrid| {
         let ds = sensing_range;
@@ -47,7 +40,7 @@ pub fn run_stand_in(
     sense(at, &mut seen);
     while !stop.load(Ordering::Relaxed) {
         topics.publish(seen.cells(), at, None)?;
-        if let Ok(g) = goals.recv_timeout(Duration::from_millis(3)) {
+        if let Some(g) = goals.recv_timeout(Duration::from_millis(3))? {
             let to = frame.cell_at(g.pose.position.x, g.pose.position.y);
             if let Some(to) = to.filter(|&to| to.chebyshev(at) == 1 && truth.is_free(to)) {
                 at = to;

@@ -2,7 +2,7 @@
 //! only the ROS 2 message definitions (`nav_msgs/msg/OccupancyGrid`,
 //! `geometry_msgs/msg/PoseStamped`) and rmw_zenoh's conventions: key expressions
 //! `<domain>/<topic>/<dds type>/<RIHS01 hash>`, little-endian CDR, liveliness tokens under
-//! `@ros2_lv`. It decodes the bytes by hand, so it checks the wire, not hiroz against itself.
+//! `@ros2_lv`. It decodes the bytes by hand, so it checks the wire, not madenet-ros2 against itself.
 
 use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_ros2::{

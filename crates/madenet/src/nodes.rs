@@ -196,7 +196,7 @@ impl Ros2Args {
 
 /// Robot `i`'s ROS 2 publishers, when `--ros2` asked for them.
 #[cfg(feature = "ros2")]
-struct Ros2Out(Option<(hiroz::prelude::ZContext, madenet_ros2::RobotTopics)>);
+struct Ros2Out(Option<(madenet_ros2::Ros2Context, madenet_ros2::RobotTopics)>);
 
 #[cfg(feature = "ros2")]
 impl Ros2Out {

@@ -1,0 +1,296 @@
+//! The ROS 2 messages madenet speaks, as plain structs with their ROS type names and Jazzy
+//! type hashes, and their CDR encoding (the `cdr-encoding` crate, little endian, after the
+//! 4-byte encapsulation header `00 01 00 00`).
+//!
+//! Field order and types follow the `.msg` definitions of ROS 2 Jazzy (`builtin_interfaces`,
+//! `std_msgs`, `geometry_msgs`, `nav_msgs`); CDR has no field names, so order is the format.
+//!
+//! ```
+//! use madenet_ros2::msgs::{PoseStamped, RosMessage};
+//!
+//! let mut p = PoseStamped::default();
+//! p.header.frame_id = "map".into();
+//! p.pose.position.x = 1.5;
+//! let bytes = p.to_cdr();
+//! assert_eq!(&bytes[..4], &[0, 1, 0, 0]); // CDR, little endian
+//! assert_eq!(bytes.len(), 4 + 8 + 4 + 4 + 7 * 8); // stamp, "map\0", pose
+//! assert_eq!(PoseStamped::from_cdr(&bytes).unwrap(), p);
+//! assert_eq!(PoseStamped::dds_type_name(), "geometry_msgs::msg::dds_::PoseStamped_");
+//! ```
+
+use serde::{Deserialize, Serialize};
+
+/// The encapsulation header of little-endian plain CDR (what rmw_zenoh and rosbag2 write).
+pub const CDR_LE: [u8; 4] = [0, 1, 0, 0];
+
+/// A ROS 2 message type: its names and type hash, and its CDR encoding.
+pub trait RosMessage: Serialize + for<'de> Deserialize<'de> {
+    /// The ROS type name, e.g. `nav_msgs/msg/OccupancyGrid`.
+    const TYPE_NAME: &'static str;
+    /// The Jazzy type description hash (REP 2011, `RIHS01_` and 64 hex digits).
+    const TYPE_HASH: &'static str;
+
+    /// The DDS type name rmw_zenoh puts in key expressions, e.g.
+    /// `nav_msgs::msg::dds_::OccupancyGrid_`.
+    fn dds_type_name() -> String {
+        let (head, name) = Self::TYPE_NAME
+            .rsplit_once('/')
+            .expect("ROS type names are package/msg/Name");
+        format!("{}::dds_::{name}_", head.replace('/', "::"))
+    }
+
+    /// The message as CDR bytes: the little-endian encapsulation header, then the fields.
+    fn to_cdr(&self) -> Vec<u8> {
+        let mut out = CDR_LE.to_vec();
+        cdr_encoding::to_writer::<_, byteorder::LittleEndian, _>(&mut out, self)
+            .expect("every madenet message is CDR-serializable (no maps, no unsized sequences)");
+        out
+    }
+
+    /// Reads a message from CDR bytes (little or big endian, per the header). Trailing bytes
+    /// are refused.
+    fn from_cdr(bytes: &[u8]) -> Result<Self, String> {
+        let (header, body) = bytes
+            .split_first_chunk::<4>()
+            .ok_or_else(|| format!("{} bytes: shorter than the CDR header", bytes.len()))?;
+        let (msg, used) = match header[..2] {
+            [0, 1] => cdr_encoding::from_bytes::<Self, byteorder::LittleEndian>(body),
+            [0, 0] => cdr_encoding::from_bytes::<Self, byteorder::BigEndian>(body),
+            _ => return Err(format!("encapsulation {header:02x?} is not plain CDR")),
+        }
+        .map_err(|e| e.to_string())?;
+        // Up to 3 bytes of padding may follow the last field.
+        if body.len() - used > 3 {
+            return Err(format!("{} bytes after the message", body.len() - used));
+        }
+        Ok(msg)
+    }
+}
+
+/// `builtin_interfaces/msg/Time`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Time {
+    /// Seconds since the epoch.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+/// `std_msgs/msg/Header`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// When.
+    pub stamp: Time,
+    /// In which frame (madenet: `map`).
+    pub frame_id: String,
+}
+
+/// `geometry_msgs/msg/Point`, metres.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Point {
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// z (m).
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Quaternion`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Quaternion {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+    /// w.
+    pub w: f64,
+}
+
+impl Default for Quaternion {
+    /// The identity rotation (as in the `.msg` file: `w` defaults to 1).
+    fn default() -> Self {
+        Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }
+    }
+}
+
+/// `geometry_msgs/msg/Pose`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// Position.
+    pub position: Point,
+    /// Orientation.
+    pub orientation: Quaternion,
+}
+
+/// `geometry_msgs/msg/PoseStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PoseStamped {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The pose.
+    pub pose: Pose,
+}
+
+/// `nav_msgs/msg/MapMetaData`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MapMetaData {
+    /// When the map was loaded.
+    pub map_load_time: Time,
+    /// Metres per cell.
+    pub resolution: f32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// The pose of cell (0, 0)'s corner.
+    pub origin: Pose,
+}
+
+/// `nav_msgs/msg/OccupancyGrid`: row-major, row 0 at the origin; 0 free, 100 occupied, −1
+/// unknown.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OccupancyGrid {
+    /// Stamp and frame.
+    pub header: Header,
+    /// Size, resolution, origin.
+    pub info: MapMetaData,
+    /// The cells.
+    #[serde(with = "int8_sequence")]
+    pub data: Vec<i8>,
+}
+
+/// An `int8[]` written as one byte block (the same bytes as a sequence of `int8`, without a
+/// serializer call per element).
+mod int8_sequence {
+    use serde::{Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(data: &[i8], s: S) -> Result<S::Ok, S::Error> {
+        // i8 and u8 have the same size and layout; CDR writes both as single bytes.
+        let bytes: Vec<u8> = data.iter().map(|&v| v as u8).collect();
+        s.serialize_bytes(&bytes)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<i8>, D::Error> {
+        let bytes: serde_bytes_buf::ByteBuf = serde::Deserialize::deserialize(d)?;
+        Ok(bytes.0.into_iter().map(|b| b as i8).collect())
+    }
+
+    /// Receives a byte block (hand-written: `serde_bytes` would be a dependency for 10 lines).
+    mod serde_bytes_buf {
+        pub struct ByteBuf(pub Vec<u8>);
+        impl<'de> serde::Deserialize<'de> for ByteBuf {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                struct V;
+                impl serde::de::Visitor<'_> for V {
+                    type Value = ByteBuf;
+                    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                        f.write_str("an int8 sequence")
+                    }
+                    fn visit_bytes<E>(self, v: &[u8]) -> Result<ByteBuf, E> {
+                        Ok(ByteBuf(v.to_vec()))
+                    }
+                    fn visit_byte_buf<E>(self, v: Vec<u8>) -> Result<ByteBuf, E> {
+                        Ok(ByteBuf(v))
+                    }
+                }
+                d.deserialize_byte_buf(V)
+            }
+        }
+    }
+}
+
+impl RosMessage for PoseStamped {
+    const TYPE_NAME: &'static str = "geometry_msgs/msg/PoseStamped";
+    const TYPE_HASH: &'static str =
+        "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8";
+}
+
+impl RosMessage for OccupancyGrid {
+    const TYPE_NAME: &'static str = "nav_msgs/msg/OccupancyGrid";
+    const TYPE_HASH: &'static str =
+        "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7";
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn type_hashes_are_jazzys() {
+        // From the ROS 2 Jazzy message definitions, computed independently by the Python
+        // `rosbags` package (typestore ROS2_JAZZY, hash_rihs01).
+        assert_eq!(
+            OccupancyGrid::TYPE_HASH,
+            "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7"
+        );
+        assert_eq!(
+            PoseStamped::TYPE_HASH,
+            "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8"
+        );
+        assert_eq!(
+            OccupancyGrid::dds_type_name(),
+            "nav_msgs::msg::dds_::OccupancyGrid_"
+        );
+    }
+
+    #[test]
+    fn cdr_bytes_by_hand() {
+        // Header {stamp {1, 2}, "map"}, Pose {(0.5, 0, 0), (0, 0, 0, 1)}: alignment counts
+        // from after the encapsulation header, so the f64s start at offset 16 of the body.
+        let msg = PoseStamped {
+            header: Header {
+                stamp: Time { sec: 1, nanosec: 2 },
+                frame_id: "map".into(),
+            },
+            pose: Pose {
+                position: Point {
+                    x: 0.5,
+                    y: 0.0,
+                    z: 0.0,
+                },
+                orientation: Quaternion::default(),
+            },
+        };
+        let b = msg.to_cdr();
+        let mut want = vec![
+            0, 1, 0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 4, 0, 0, 0, b'm', b'a', b'p', 0,
+        ];
+        for v in [0.5f64, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0] {
+            want.extend(v.to_le_bytes());
+        }
+        assert_eq!(b, want);
+        assert_eq!(PoseStamped::from_cdr(&b).unwrap(), msg);
+        // A grid's int8[]: length, then one byte per cell; −1 is 0xff.
+        let grid = OccupancyGrid {
+            data: vec![-1, 0, 100],
+            ..Default::default()
+        };
+        let b = grid.to_cdr();
+        assert_eq!(b[b.len() - 7..], [3, 0, 0, 0, 0xff, 0, 100]);
+        assert_eq!(OccupancyGrid::from_cdr(&b).unwrap(), grid);
+    }
+
+    #[test]
+    fn bad_cdr_is_an_error_not_a_panic() {
+        let b = PoseStamped::default().to_cdr();
+        assert!(PoseStamped::from_cdr(&b[..b.len() - 1]).is_err());
+        assert!(PoseStamped::from_cdr(&[0, 1]).is_err());
+        assert!(PoseStamped::from_cdr(&[9, 9, 0, 0]).is_err());
+        let mut long = b.clone();
+        long.extend([0; 8]);
+        assert!(PoseStamped::from_cdr(&long).is_err());
+        // A sequence length far beyond the bytes sent allocates nothing.
+        let mut g = OccupancyGrid::default().to_cdr();
+        let n = g.len();
+        g[n - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(OccupancyGrid::from_cdr(&g).is_err());
+    }
+}
