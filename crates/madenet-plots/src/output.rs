@@ -3,6 +3,7 @@
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
+use image::ImageEncoder;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -62,23 +63,21 @@ pub(crate) fn write_one<P: Panels>(
     let size = (fig.width(), fig.height());
     match target {
         Target::Bitmap => {
-            // plotters writes the file itself on `present`: it draws into a temporary path
-            // that `madenet_files` then puts at `path`.
-            let mut drawing = None;
-            let written = madenet_files::write_via_path(path, |tmp: &Path| {
-                let root = BitMapBackend::new(tmp, size).into_drawing_area();
-                if let Err(message) =
-                    render(&root, fig, draw_panel, target).and_then(|()| root.present().map_err(s))
-                {
-                    drawing = Some(message);
-                    return Err(std::io::Error::other("drawing failed"));
-                }
-                Ok(())
-            });
-            if let Some(message) = drawing {
-                return Err(draw_err(path)(message));
+            // Drawn into an RGB buffer and encoded with the workspace's `image` (plotters' own
+            // file writer would bring a second, older `image` into the build: issue 25).
+            let (w, h) = (size.0 as usize, size.1 as usize);
+            let mut rgb = vec![0u8; w * h * 3];
+            {
+                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+                render(&root, fig, draw_panel, target)
+                    .and_then(|()| root.present().map_err(s))
+                    .map_err(draw_err(path))?;
             }
-            written.map_err(io_err(path))
+            let mut png = Vec::new();
+            image::codecs::png::PngEncoder::new(&mut png)
+                .write_image(&rgb, size.0, size.1, image::ExtendedColorType::Rgb8)
+                .map_err(|e| draw_err(path)(e.to_string()))?;
+            madenet_files::write_atomic(path, &png).map_err(io_err(path))
         }
         Target::Vector => {
             let mut text = String::new();
