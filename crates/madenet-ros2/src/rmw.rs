@@ -210,10 +210,17 @@ pub struct Node {
 }
 
 impl Node {
-    /// The liveliness key of a new entity of `kind` (`MP`, `MS`) on `topic`.
-    fn entity_key<T: RosMessage>(&self, kind: &str, topic: &str, qos: &QosProfile) -> String {
+    /// Announces a new entity of `kind` (`MP` publisher, `MS` subscription) on `topic` with
+    /// its liveliness token; returns the token's key expression and the token.
+    fn announce<T: RosMessage>(
+        &self,
+        kind: &str,
+        topic: &str,
+        qos: &QosProfile,
+        what: &str,
+    ) -> Result<(String, LivelinessToken), Ros2Error> {
         let id = self.counter.fetch_add(1, Ordering::Relaxed);
-        format!(
+        let key = format!(
             "{}/{id}/{kind}/{EMPTY}/{EMPTY}/{}/{}/{}/{}/{}",
             self.prefix,
             mangle(&self.name),
@@ -221,7 +228,14 @@ impl Node {
             mangle(&T::dds_type_name()),
             T::TYPE_HASH,
             qos.encode()
-        )
+        );
+        let token = self
+            .session
+            .liveliness()
+            .declare_token(&key)
+            .wait()
+            .map_err(middleware(what))?;
+        Ok((key, token))
     }
 
     /// A publisher of `T` on `topic` with `qos`.
@@ -250,13 +264,7 @@ impl Node {
             }
         }
         let inner = b.wait().map_err(middleware(what()))?;
-        let key = self.entity_key::<T>("MP", topic, &qos);
-        let token = self
-            .session
-            .liveliness()
-            .declare_token(&key)
-            .wait()
-            .map_err(middleware(what()))?;
+        let (key, token) = self.announce::<T>("MP", topic, &qos, &what())?;
         Ok(Publisher {
             inner,
             gid: gid(&key),
@@ -293,13 +301,7 @@ impl Node {
             }
         }
         let inner = b.wait().map_err(middleware(what()))?;
-        let key = self.entity_key::<T>("MS", topic, &qos);
-        let token = self
-            .session
-            .liveliness()
-            .declare_token(key)
-            .wait()
-            .map_err(middleware(what()))?;
+        let (_, token) = self.announce::<T>("MS", topic, &qos, &what())?;
         Ok(Subscription {
             inner,
             topic: topic.to_string(),

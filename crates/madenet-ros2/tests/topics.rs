@@ -117,15 +117,18 @@ fn belief() -> (OccGrid, MapFrame) {
     (g, f)
 }
 
+/// A received sample: key expression, payload, attachment.
+type Received = (String, Vec<u8>, Vec<u8>);
+
 /// Waits for one sample of each of `want` key-expression prefixes (after the domain) while
 /// `publish` runs again every 50 ms (a subscriber that joins late misses volatile samples).
 fn collect(
     sub: &zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
     want: &[&str],
     mut publish: impl FnMut(),
-) -> Vec<(String, Vec<u8>)> {
+) -> Vec<Received> {
     let deadline = Instant::now() + Duration::from_secs(20);
-    let mut got: Vec<Option<(String, Vec<u8>)>> = vec![None; want.len()];
+    let mut got: Vec<Option<Received>> = vec![None; want.len()];
     while got.iter().any(Option::is_none) {
         assert!(
             Instant::now() < deadline,
@@ -136,7 +139,12 @@ fn collect(
             let key = s.key_expr().as_str().to_string();
             for (k, w) in want.iter().enumerate() {
                 if key.starts_with(&format!("0/{w}/")) {
-                    got[k] = Some((key.clone(), s.payload().to_bytes().to_vec()));
+                    let attachment = s.attachment().map(|a| a.to_bytes().to_vec());
+                    got[k] = Some((
+                        key.clone(),
+                        s.payload().to_bytes().to_vec(),
+                        attachment.unwrap_or_default(),
+                    ));
                 }
             }
         }
@@ -166,7 +174,7 @@ fn a_plain_ros2_subscriber_reads_map_pose_and_goal() {
         },
     );
     // Key expressions: domain / topic / DDS type name / Jazzy type hash (RIHS01).
-    let (map_key, map_bytes) = &got[0];
+    let (map_key, map_bytes, map_attachment) = &got[0];
     let parts: Vec<&str> = map_key.split('/').collect();
     assert_eq!(
         parts[..4],
@@ -188,7 +196,7 @@ fn a_plain_ros2_subscriber_reads_map_pose_and_goal() {
     assert!(m.data[8] == -1 || m.data[8] == 0);
     assert_eq!(m.data[9..11], [-1, -1]);
     // The pose: the centre of cell (2, 0) — 0.25 m into the grid from its lower-left corner.
-    let (pose_key, pose_bytes) = &got[1];
+    let (pose_key, pose_bytes, _) = &got[1];
     assert!(
         pose_key.contains("/geometry_msgs::msg::dds_::PoseStamped_/RIHS01_"),
         "{pose_key}"
@@ -215,8 +223,35 @@ fn a_plain_ros2_subscriber_reads_map_pose_and_goal() {
         .iter()
         .find(|t| t.contains("/MP/") && t.contains("%robot1%map/"))
         .unwrap_or_else(|| panic!("no publisher token for /robot1/map in {tokens:?}"));
-    assert!(map_token.contains("madenet_robot1"), "{map_token}");
-    assert!(map_token.contains(&format!("nav_msgs::msg::dds_::OccupancyGrid_/{}", parts[4])));
+    // rmw_zenoh's layout: admin space, domain, zid, node id, entity id, kind, enclave and
+    // namespace (empty: %), node, topic with / as %, type, hash, QoS (reliable, transient
+    // local, keep last 1).
+    let fields: Vec<&str> = map_token.split('/').collect();
+    assert_eq!(fields.len(), 13, "{map_token}");
+    assert_eq!(fields[..2], ["@ros2_lv", "0"]);
+    assert!(fields[3].parse::<u32>().is_ok() && fields[4].parse::<u32>().is_ok());
+    assert_eq!(
+        fields[5..],
+        [
+            "MP",
+            "%",
+            "%",
+            "madenet_robot1",
+            "%robot1%map",
+            "nav_msgs::msg::dds_::OccupancyGrid_",
+            parts[4],
+            ":1:,1:,:,:,,"
+        ]
+    );
+    // The attachment (rmw_zenoh_cpp ≥ 0.2.4): sequence number (i64, from 1), source time
+    // (i64 ns), GID length 16 and the GID, XXH3-128 of the publisher's liveliness token.
+    assert_eq!(map_attachment.len(), 33, "{map_attachment:?}");
+    let sn = i64::from_le_bytes(map_attachment[..8].try_into().unwrap());
+    assert!(sn >= 1, "sequence numbers start at 1: {sn}");
+    let ns = i64::from_le_bytes(map_attachment[8..16].try_into().unwrap());
+    assert!(ns > 1_700_000_000_000_000_000, "source time in ns: {ns}");
+    assert_eq!(map_attachment[16], 16);
+    assert_eq!(map_attachment[17..], madenet_ros2::rmw::gid(map_token));
     assert!(tokens
         .iter()
         .any(|t| t.contains("/NN/") && t.contains("madenet_robot1")));
