@@ -132,11 +132,17 @@ impl Belief {
     }
 
     /// Records an observation of `p`. Knowledge is never lost: a known cell keeps its value
-    /// (the world is static and sensing exact). Returns true if the cell was new.
+    /// (the world is static and sensing exact), but for one upgrade: a free cell observed as an
+    /// obstacle becomes one (a continuous world's robot finds a cell it read as free
+    /// impassable; on the grid, where sensing is exact, this never happens). Returns true if
+    /// the cell was new.
     #[inline]
     pub fn observe(&mut self, p: Pos, occ: Occupancy) -> bool {
         let i = self.index(p);
         if self.map.cells()[i] != Occupancy::Unknown || occ == Occupancy::Unknown {
+            if self.map.cells()[i] == Occupancy::Free && occ == Occupancy::Obstacle {
+                self.upgrade_to_obstacle(p);
+            }
             return false;
         }
         self.map.cells_mut()[i] = occ;
@@ -165,7 +171,8 @@ impl Belief {
     }
 
     /// Merges a teammate's local map (Sec. III.C.1, *Mapping*): every cell unknown here and
-    /// known there is copied. Returns the number of new cells.
+    /// known there is copied, and a cell free here that the teammate found to be an obstacle
+    /// becomes one ([`Belief::observe`]'s upgrade). Returns the number of new cells.
     pub fn merge(&mut self, other: &[Occupancy]) -> usize {
         assert_eq!(
             other.len(),
@@ -175,7 +182,10 @@ impl Belief {
         // Blocks of 32 cells are scanned branch-free (vectorized) and only blocks with a cell
         // unknown here and known there are merged cell by cell, in the same cell order as a
         // plain loop: once maps agree, the common case, a merge is this scan.
-        let news = |a: Occupancy, b: Occupancy| a == Occupancy::Unknown && b != Occupancy::Unknown;
+        let news = |a: Occupancy, b: Occupancy| {
+            (a == Occupancy::Unknown && b != Occupancy::Unknown)
+                || (a == Occupancy::Free && b == Occupancy::Obstacle)
+        };
         let mut added = 0;
         for start in (0..other.len()).step_by(MERGE_BLOCK) {
             let end = (start + MERGE_BLOCK).min(other.len());
@@ -186,12 +196,32 @@ impl Belief {
             for i in start..end {
                 if news(self.map.cells()[i], other[i]) {
                     let p = self.pos(i);
-                    self.observe(p, other[i]);
-                    added += 1;
+                    if self.observe(p, other[i]) {
+                        added += 1;
+                    }
                 }
             }
         }
         added
+    }
+
+    /// A known free cell turns out to be an obstacle: it is no frontier any more, and under
+    /// [`Movement::NoCornerCutting`] its neighbours' frontier flags may change.
+    fn upgrade_to_obstacle(&mut self, p: Pos) {
+        let i = self.index(p);
+        self.map.cells_mut()[i] = Occupancy::Obstacle;
+        if self.frontier[i] {
+            self.frontier[i] = false;
+            self.frontier_count -= 1;
+        }
+        if self.movement == Movement::NoCornerCutting {
+            for (dr, dc) in NEIGHBOURS {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if self.in_bounds(q) {
+                    self.refresh_frontier(q);
+                }
+            }
+        }
     }
 
     /// An unknown 8-neighbour that can be seen from `p`: under
@@ -236,14 +266,15 @@ fn block_has_news(mine: &[Occupancy], theirs: &[Occupancy]) -> bool {
         (Ok(a), Ok(b)) => {
             let mut acc = 0u8;
             for i in 0..MERGE_BLOCK {
-                acc |= (a[i] as u8 == 0) as u8 & (b[i] as u8 != 0) as u8;
+                acc |= ((a[i] as u8 == 0) as u8 & (b[i] as u8 != 0) as u8)
+                    | ((a[i] as u8 == 1) as u8 & (b[i] as u8 == 2) as u8);
             }
             acc != 0
         }
-        _ => mine
-            .iter()
-            .zip(theirs)
-            .any(|(&a, &b)| a == Occupancy::Unknown && b != Occupancy::Unknown),
+        _ => mine.iter().zip(theirs).any(|(&a, &b)| {
+            (a == Occupancy::Unknown && b != Occupancy::Unknown)
+                || (a == Occupancy::Free && b == Occupancy::Obstacle)
+        }),
     }
 }
 
@@ -283,8 +314,10 @@ mod tests {
     }
 
     proptest! {
-        /// The incremental frontier equals a from-scratch recomputation, and merging never
-        /// loses knowledge (monotone: known cells stay known with the same value).
+        /// The incremental frontier equals a from-scratch recomputation (observations that
+        /// turn free cells into obstacles included), and merging never loses knowledge
+        /// (monotone: known cells stay known with the same value, but for free cells a
+        /// teammate knows as obstacles).
         #[test]
         fn incremental_frontier_and_monotone_merge(
             obs in proptest::collection::vec((0i32..8, 0i32..9, 1u8..3), 0..80),
@@ -304,7 +337,10 @@ mod tests {
             let other: Vec<Occupancy> = other.into_iter().map(|v| match v { 0 => Occupancy::Unknown, 1 => Occupancy::Free, _ => Occupancy::Obstacle }).collect();
             b.merge(&other);
             for ((&now, &was), &heard) in b.map().iter().zip(before.map()).zip(&other) {
-                if was != Occupancy::Unknown {
+                if was == Occupancy::Free && heard == Occupancy::Obstacle {
+                    // The one upgrade: a teammate found the cell impassable.
+                    prop_assert_eq!(now, Occupancy::Obstacle);
+                } else if was != Occupancy::Unknown {
                     prop_assert_eq!(now, was);
                 } else {
                     prop_assert_eq!(now, heard);

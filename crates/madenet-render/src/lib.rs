@@ -33,6 +33,7 @@
 
 #![deny(missing_docs)]
 
+pub mod continuous;
 mod draw;
 mod of_trial;
 
@@ -270,17 +271,17 @@ impl Layout {
 // ---------------------------------------------------------------------------------------
 // Colours
 
-const BACKGROUND: Rgb = [246, 246, 244];
+pub(crate) const BACKGROUND: Rgb = [246, 246, 244];
 const STATUS_BG: Rgb = [36, 40, 48];
 const STATUS_FG: Rgb = [238, 238, 238];
 const BAR_BORDER: Rgb = [150, 156, 166];
 const BAR_FILL: Rgb = [110, 190, 120];
-const TITLE_FG: Rgb = [50, 50, 50];
+pub(crate) const TITLE_FG: Rgb = [50, 50, 50];
 const PANEL_BORDER: Rgb = [90, 90, 90];
 const GRID_INK: Rgb = [0, 0, 0];
 const GRID_ALPHA: f32 = 0.12;
-const FREE: Rgb = [255, 255, 255];
-const UNKNOWN: Rgb = [128, 128, 128];
+pub(crate) const FREE: Rgb = [255, 255, 255];
+pub(crate) const UNKNOWN: Rgb = [128, 128, 128];
 const TEAM_OBSTACLE: Rgb = [0, 0, 0];
 const TRUTH_OBSTACLE: Rgb = [40, 40, 40];
 const TRUTH_FREE_UNSEEN: Rgb = [192, 201, 216];
@@ -302,7 +303,7 @@ const ROBOT_PALETTE: [Rgb; 9] = [
     [23, 190, 207],  // cyan
 ];
 
-fn robot_rgb(i: usize) -> Rgb {
+pub(crate) fn robot_rgb(i: usize) -> Rgb {
     if let Some(&c) = ROBOT_PALETTE.get(i) {
         return c;
     }
@@ -624,7 +625,11 @@ fn io_err(path: &Path, source: io::Error) -> RenderError {
 /// Renders `frame` and writes it as a PNG to `path` (atomically).
 pub fn save_png(frame: &Frame, opts: &RenderOptions, path: &Path) -> Result<(), RenderError> {
     check_frame_size(frame, opts, path)?;
-    let img = render(frame, opts);
+    save_image_png(&render(frame, opts), path)
+}
+
+/// Writes a rendered picture as a PNG to `path` (atomically).
+pub fn save_image_png(img: &RgbaImage, path: &Path) -> Result<(), RenderError> {
     let mut w = BufWriter::new(create(path)?);
     img.write_with_encoder(image::codecs::png::PngEncoder::new(&mut w))
         .map_err(|source| RenderError::Encode {

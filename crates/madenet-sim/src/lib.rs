@@ -18,6 +18,7 @@
 
 #![deny(missing_docs)]
 
+pub mod continuous;
 mod registry;
 pub mod rewards;
 pub mod rollout;
@@ -34,6 +35,9 @@ pub use trial::{
 /// Errors setting up a trial; messages name the field at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
+    /// A continuous world that cannot start (bad start, bad field).
+    #[error("{0}")]
+    Continuous(String),
     /// No policy of that name is in the [`PolicyRegistry`].
     #[error("unknown policy `{name}` (field `policy`); known policies: {known}")]
     UnknownPolicy {

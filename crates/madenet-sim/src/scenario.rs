@@ -53,6 +53,31 @@ impl FromStr for MapSource {
 }
 
 impl MapSource {
+    /// The true geometry of this map for the continuous world: a map file at its native
+    /// resolution (one pixel per obstacle square: thin walls stay thin), a paper map's 1 m
+    /// cells, or for `generate:SEED` / `generate-wide:SEED` the continuous world's generator of
+    /// cluttered `side` × `side` metre worlds (bookshelves, bins, cylinders) with this seed.
+    pub fn scene(&self, side: f64) -> Result<madenet_continuous::Scene, MapError> {
+        use madenet_continuous::{scene::generate_cluttered, Scene};
+        Ok(match self {
+            MapSource::Paper(n) => Scene::from_grid(&paper_map(*n)?, &format!("paper:{n}")),
+            MapSource::Generated(seed) | MapSource::GeneratedWide(seed) => {
+                generate_cluttered(side, 0.1, *seed)
+            }
+            MapSource::File(p) => {
+                let resolution = madenet_map::io::native_resolution(p)?;
+                let grid = load(
+                    p,
+                    &LoadOptions {
+                        cell_size: resolution,
+                        discretize: Default::default(),
+                    },
+                )?;
+                Scene::from_grid(&grid, &p.display().to_string())
+            }
+        })
+    }
+
     /// Loads or generates the map (discretized to the config's cell size).
     pub fn load(&self, cfg: &ScenarioConfig) -> Result<OccGrid, MapError> {
         let builtin = match self {

@@ -3,7 +3,9 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
+use madenet_continuous::ContinuousConfig;
 use madenet_render::{Frame, GifWriter, RenderOptions};
+use madenet_sim::continuous::ContinuousTrial;
 use madenet_sim::Trial;
 use std::path::PathBuf;
 
@@ -19,6 +21,21 @@ pub struct RunArgs {
     trajectory: bool,
     #[command(flatten)]
     pictures: PictureArgs,
+    /// The world: `grid` (the paper's 1 m cells in lockstep timesteps) or `continuous`
+    /// (differential-drive robots, a lidar, each robot's own occupancy grid, a local planner,
+    /// time in seconds; the map file at its native resolution).
+    #[arg(long, default_value = "grid", value_parser = ["grid", "continuous"])]
+    world: String,
+    /// Side in metres of a generated continuous world (`--world continuous --generate SEED`).
+    #[arg(long, default_value_t = 20.0)]
+    side: f64,
+    /// The continuous world's parameters (TOML: robot, lidar, mapping, planner, …; defaults
+    /// documented in `madenet_continuous::ContinuousConfig`).
+    #[arg(long, value_name = "TOML")]
+    continuous_config: Option<PathBuf>,
+    /// Simulated seconds per GIF frame of a continuous run.
+    #[arg(long, default_value_t = 1.0)]
+    frame_s: f64,
 }
 
 /// Pictures of a trial (`run`, `launch` and `world`).
@@ -117,15 +134,8 @@ impl Pictures<'_> {
     /// Writes the PNG of `last` and finishes the GIF; the lines to print about them.
     pub fn finish(self, last: &Frame) -> Result<Vec<String>> {
         let mut lines = Vec::new();
-        if let Some(g) = self.gif {
-            let frames = g.frames();
-            let bytes = g.finish()?;
-            let p = self.args.render.as_ref().expect("a GIF was asked for");
-            lines.push(format!(
-                "wrote      {} ({frames} frames, {:.1} kB)",
-                p.display(),
-                bytes as f64 / 1e3
-            ));
+        if let (Some(g), Some(p)) = (self.gif, &self.args.render) {
+            lines.push(finish_gif(g, p)?);
         }
         if let Some(p) = &self.args.snapshot {
             madenet_render::save_png(last, &self.args.options(), p)?;
@@ -133,6 +143,17 @@ impl Pictures<'_> {
         }
         Ok(lines)
     }
+}
+
+/// Finishes the GIF written to `path`; the line to print about it.
+fn finish_gif(g: GifWriter, path: &std::path::Path) -> Result<String> {
+    let frames = g.frames();
+    let bytes = g.finish()?;
+    Ok(format!(
+        "wrote      {} ({frames} frames, {:.1} kB)",
+        path.display(),
+        bytes as f64 / 1e3
+    ))
 }
 
 /// Refuses an output file whose extension names another picture format than the one written
@@ -153,6 +174,9 @@ pub fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
+    if a.world == "continuous" {
+        return run_continuous(a);
+    }
     let (spec, registry) = a.scenario.spec()?;
     a.pictures.check(spec.map.width(), spec.map.height())?;
     let mut trial = Trial::with_registry(spec, &registry)
@@ -205,5 +229,97 @@ pub fn print_summary(result: &madenet_sim::TrialResult, start: &str) -> Result<(
         1e6 * result.timing.per_decision_s,
         result.timing.decisions
     )?;
+    Ok(())
+}
+
+/// `run --world continuous`: one trial in the continuous world.
+fn run_continuous(a: RunArgs) -> Result<()> {
+    if a.trajectory {
+        anyhow::bail!("--trajectory: not recorded in the continuous world yet");
+    }
+    if !(a.frame_s.is_finite() && a.frame_s >= 0.05) {
+        anyhow::bail!(
+            "--frame-s: at least 0.05 simulated seconds per frame, got {}",
+            a.frame_s
+        );
+    }
+    let continuous: ContinuousConfig = match &a.continuous_config {
+        Some(p) => madenet_files::read_toml(p)?,
+        None => ContinuousConfig::default(),
+    };
+    check_extension(a.pictures.render.as_deref(), "--render", "gif")?;
+    check_extension(a.pictures.snapshot.as_deref(), "--snapshot", "png")?;
+    let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
+    let scale = madenet_render::continuous::px_per_m(
+        spec.scene.width_m().max(spec.scene.height_m()),
+        (a.pictures.cell_px * 25).clamp(100, 600),
+    );
+    let mut trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
+    let mut gif = match &a.pictures.render {
+        Some(p) => {
+            let mut g =
+                madenet_render::GifWriter::new(p, &Default::default(), a.pictures.delay_ms)?;
+            g.push_image(madenet_render::continuous::continuous_picture(
+                &trial, scale,
+            ))?;
+            Some(g)
+        }
+        None => None,
+    };
+    let mut next_frame = a.frame_s;
+    while trial.step() {
+        if let Some(g) = gif.as_mut() {
+            if trial.world().time() + 1e-9 >= next_frame {
+                next_frame += a.frame_s;
+                g.push_image(madenet_render::continuous::continuous_picture(
+                    &trial, scale,
+                ))?;
+            }
+        }
+    }
+    let mut wrote = Vec::new();
+    if let (Some(g), Some(p)) = (gif, &a.pictures.render) {
+        wrote.push(finish_gif(g, p)?);
+    }
+    if let Some(p) = &a.pictures.snapshot {
+        madenet_render::continuous::save_continuous_png(&trial, scale, p)?;
+        wrote.push(format!("wrote      {}", p.display()));
+    }
+    let r = trial.finish();
+    if a.json {
+        out!("{}", serde_json::to_string_pretty(&r)?)?;
+        return Ok(());
+    }
+    out!(
+        "map {}  start {}  policy {}  csp {}  seed {}  (continuous world)",
+        r.map,
+        a.scenario.start.name(),
+        r.policy,
+        r.comm_success_prob,
+        r.seed
+    )?;
+    out!("completed  {}", r.complete)?;
+    out!("ET         {:.1} s", r.exploration_time_s)?;
+    out!("TTD        {:.1} m", r.team_distance_m)?;
+    out!(
+        "collisions {} with obstacles, {} between robots",
+        r.obstacle_collisions,
+        r.robot_collisions
+    )?;
+    out!("local interactions {}", r.local_interactions)?;
+    out!(
+        "impassable cells {}  written off {}  held up {}",
+        r.impassable_cells,
+        r.written_off_cells,
+        r.held_up
+    )?;
+    out!(
+        "wall clock {:.2} s ({:.0}x real time)",
+        r.wall_s,
+        r.real_time_factor()
+    )?;
+    for line in wrote {
+        out!("{line}")?;
+    }
     Ok(())
 }

@@ -4,6 +4,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
+use madenet_sim::continuous::ContinuousSpec;
 use madenet_sim::{MapSource, PolicyRegistry, StartSpec, TrialSpec};
 use std::path::PathBuf;
 
@@ -74,6 +75,53 @@ impl ScenarioArgs {
     /// The trial these flags name, checked (each problem named by its flag), with the policies
     /// it may use.
     pub fn spec(&self) -> Result<(TrialSpec, PolicyRegistry)> {
+        let cfg = self.checked_config()?;
+        let source = self.source();
+        let map = source.load(&cfg)?;
+        let starts = self.starts_on(&map, &cfg)?;
+        let registry = crate::registry(self.model.as_deref())?;
+        let spec = TrialSpec {
+            starts,
+            map_name: source.name(),
+            map,
+            config: cfg,
+            policy: self.policy.clone(),
+            seed: self.seed,
+        };
+        Ok((spec, registry))
+    }
+
+    /// The continuous trial these flags name (`run --world continuous`): the map's true
+    /// geometry ([`MapSource::scene`]; generated worlds are `side` metres square), the starts
+    /// read on its cells, `continuous` for the world's own parameters.
+    pub fn continuous_spec(
+        &self,
+        side: f64,
+        continuous: madenet_continuous::ContinuousConfig,
+    ) -> Result<(ContinuousSpec, PolicyRegistry)> {
+        let cfg = self.checked_config()?;
+        continuous.validate().context("--continuous-config")?;
+        if !(side.is_finite() && (4.0..=1000.0).contains(&side)) {
+            anyhow::bail!("--side: a generated world is 4 to 1000 m square, got {side}");
+        }
+        let source = self.source();
+        let scene = source.scene(side)?;
+        let coarse = scene.coarse_truth(cfg.cell_size, &cfg.discretize);
+        let starts = self.starts_on(&coarse, &cfg)?;
+        let registry = crate::registry(self.model.as_deref())?;
+        let spec = ContinuousSpec {
+            scene: std::sync::Arc::new(scene),
+            starts,
+            config: cfg,
+            continuous,
+            policy: self.policy.clone(),
+            seed: self.seed,
+        };
+        Ok((spec, registry))
+    }
+
+    /// The scenario config (`--config`, `--csp`), checked with `--model` and `--start`.
+    fn checked_config(&self) -> Result<madenet_world::ScenarioConfig> {
         let mut cfg = crate::load_config(self.config.as_deref())?;
         if let Some(csp) = self.csp {
             cfg.comm_success_prob = csp;
@@ -89,26 +137,24 @@ impl ScenarioArgs {
             .check_team(cfg.num_robots)
             .map_err(anyhow::Error::msg)
             .context("--start")?;
-        let source = self.source();
-        let map = source.load(&cfg)?;
-        let starts = self.start.cells(&map, cfg.num_robots, cfg.movement);
+        Ok(cfg)
+    }
+
+    /// The start cells of `--start` on `map`.
+    fn starts_on(
+        &self,
+        map: &madenet_map::OccGrid,
+        cfg: &madenet_world::ScenarioConfig,
+    ) -> Result<Vec<madenet_map::Pos>> {
+        let starts = self.start.cells(map, cfg.num_robots, cfg.movement);
         if starts.is_empty() {
             anyhow::bail!(
                 "--start random: map {} has no {} connected free cells around the cell drawn from it",
-                source.name(),
+                self.source().name(),
                 cfg.num_robots
             );
         }
-        let registry = crate::registry(self.model.as_deref())?;
-        let spec = TrialSpec {
-            starts,
-            map_name: source.name(),
-            map,
-            config: cfg,
-            policy: self.policy.clone(),
-            seed: self.seed,
-        };
-        Ok((spec, registry))
+        Ok(starts)
     }
 
     /// A label for messages: map and start.

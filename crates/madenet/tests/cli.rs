@@ -278,3 +278,82 @@ fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
         &["random"],
     );
 }
+
+#[test]
+fn a_continuous_run_explores_draws_and_refuses_bad_input() {
+    let dir = scratch("continuous");
+    let png = dir.join("run.png");
+    let out = madenet(&[
+        "run",
+        "--world",
+        "continuous",
+        "--generate",
+        "3",
+        "--side",
+        "10",
+        "--start",
+        "bottom-left",
+        "--json",
+        "--snapshot",
+        png.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_str(&text).expect("JSON result");
+    assert_eq!(r["complete"], true, "{text}");
+    assert_eq!(r["obstacle_collisions"], 0, "{text}");
+    assert_eq!(r["robot_collisions"], 0, "{text}");
+    assert!(r["exploration_time_s"].as_f64().unwrap() > 5.0, "{text}");
+    let img = image::open(&png).expect("a PNG");
+    // Five panels (world, team map, three robot maps) side by side.
+    assert!(
+        img.width() > 4 * img.height(),
+        "{}x{}",
+        img.width(),
+        img.height()
+    );
+
+    let bad = |args: &[&str], needles: &[&str]| {
+        let mut all = vec!["run", "--world", "continuous"];
+        all.extend_from_slice(args);
+        assert_clean_error(&madenet(&all), needles);
+    };
+    bad(&["--generate", "1", "--side", "2"], &["--side"]);
+    let cfg = dir.join("c.toml");
+    std::fs::write(&cfg, "[robot]\nmax_speed = -1.0\n").unwrap();
+    bad(
+        &[
+            "--generate",
+            "1",
+            "--continuous-config",
+            cfg.to_str().unwrap(),
+        ],
+        &["--continuous-config", "robot.max_speed"],
+    );
+    std::fs::write(&cfg, "[lidar]\nbeam = 3\n").unwrap();
+    bad(
+        &[
+            "--generate",
+            "1",
+            "--continuous-config",
+            cfg.to_str().unwrap(),
+        ],
+        &["c.toml", "beam"],
+    );
+    // paper:1's top-left corner cells at 1 m: a robot of radius 0.6 m does not fit.
+    std::fs::write(&cfg, "[robot]\nradius = 0.6\n").unwrap();
+    bad(
+        &[
+            "--map",
+            "paper:1",
+            "--continuous-config",
+            cfg.to_str().unwrap(),
+        ],
+        &["robot.radius"],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -159,6 +159,24 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<OccGrid, MapError> {
     })
 }
 
+/// The pixel size in metres a map file is drawn at: a map_server YAML's `resolution`; 1 m for
+/// bare images and text grids (as [`load`] reads them). Loading with this as
+/// [`LoadOptions::cell_size`] gives the map at its native resolution, one cell per pixel: the
+/// fine geometry a continuous world is built from.
+pub fn native_resolution(path: &Path) -> Result<f64, MapError> {
+    if map_format(path)? != MapFormat::Yaml {
+        return Ok(1.0);
+    }
+    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        io_err(
+            path,
+            std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+        )
+    })?;
+    Ok(yaml::parse_map_yaml(text, path)?.resolution)
+}
+
 /// Reads a map from `bytes`, the contents of the file `path` (which [`load`] reads and passes
 /// here): the format is chosen from `path`'s extension and errors name it as [`load`]'s do. A
 /// YAML map's image path (resolved against `path`'s folder) is given to `read_image`, which

@@ -1,0 +1,346 @@
+//! One robot's map: an occupancy-probability grid in log-odds, built from its own scans, and
+//! the agent's cells read from it by the paper's rule (Sec. V.B.1: a cell is an obstacle when
+//! more than 25 % of its pixels have occupancy probability above 65 %).
+//!
+//! The agent's belief is write-once but for one upgrade (free → obstacle), so each cell is
+//! reported when it first becomes known, and again if it turns into an obstacle: a cell is an
+//! obstacle as soon as its occupied pixels exceed the rule's fraction of all its pixels, or of
+//! its observed pixels once a quarter of them are observed (a sensor never sees inside an
+//! obstacle); it is known free once `known_fraction` of its pixels have been observed without
+//! that.
+
+use crate::config::MappingConfig;
+use madenet_map::discretize::DiscretizeParams;
+use madenet_map::{Occupancy, Pos};
+
+/// A robot's fine map and the coarse cells derived from it.
+#[derive(Clone, Debug)]
+pub struct RobotMap {
+    cfg: MappingConfig,
+    /// Log-odds above this are occupied (logit of `occupied_prob`).
+    occupied_log_odds: f32,
+    obstacle_fraction: f64,
+    height: usize,
+    width: usize,
+    log_odds: Vec<f32>,
+    observed: Vec<bool>,
+    coarse_height: usize,
+    coarse_width: usize,
+    /// Coarse cell of each fine row / column.
+    row_cell: Vec<u32>,
+    col_cell: Vec<u32>,
+    pixels: Vec<u32>,
+    observed_in: Vec<u32>,
+    occupied_in: Vec<u32>,
+    coarse: Vec<Occupancy>,
+    /// Coarse cells that changed since [`RobotMap::take_changes`] last ran.
+    changes: Vec<(Pos, Occupancy)>,
+}
+
+impl RobotMap {
+    /// An empty map of `height` × `width` pixels of `cfg.resolution` metres, read in cells of
+    /// `cell_size` metres by `rule`.
+    pub fn new(
+        height: usize,
+        width: usize,
+        cell_size: f64,
+        cfg: MappingConfig,
+        rule: &DiscretizeParams,
+    ) -> Self {
+        let cell_px = (cell_size / cfg.resolution).max(1.0);
+        let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as u32;
+        let row_cell: Vec<u32> = (0..height).map(cell_of).collect();
+        let col_cell: Vec<u32> = (0..width).map(cell_of).collect();
+        let coarse_height = row_cell.last().map_or(0, |&c| c as usize + 1);
+        let coarse_width = col_cell.last().map_or(0, |&c| c as usize + 1);
+        let mut pixels = vec![0u32; coarse_height * coarse_width];
+        for &r in &row_cell {
+            for &c in &col_cell {
+                pixels[r as usize * coarse_width + c as usize] += 1;
+            }
+        }
+        let p = rule.occupied_prob.clamp(1e-6, 1.0 - 1e-6);
+        RobotMap {
+            cfg,
+            occupied_log_odds: (p / (1.0 - p)).ln() as f32,
+            obstacle_fraction: rule.obstacle_fraction,
+            height,
+            width,
+            log_odds: vec![0.0; height * width],
+            observed: vec![false; height * width],
+            coarse_height,
+            coarse_width,
+            row_cell,
+            col_cell,
+            pixels,
+            observed_in: vec![0; coarse_height * coarse_width],
+            occupied_in: vec![0; coarse_height * coarse_width],
+            coarse: vec![Occupancy::Unknown; coarse_height * coarse_width],
+            changes: Vec::new(),
+        }
+    }
+
+    /// Pixel rows.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+    /// Pixel columns.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+    /// Pixel size in metres.
+    pub fn resolution(&self) -> f64 {
+        self.cfg.resolution
+    }
+    /// The agent's cells: rows and columns.
+    pub fn coarse_size(&self) -> (usize, usize) {
+        (self.coarse_height, self.coarse_width)
+    }
+    /// The agent's cells as this map reads them.
+    pub fn coarse(&self) -> &[Occupancy] {
+        &self.coarse
+    }
+    /// Whether pixel (`r`, `c`) is occupied (probability above the rule's threshold).
+    #[inline]
+    pub fn occupied(&self, r: usize, c: usize) -> bool {
+        self.log_odds[r * self.width + c] > self.occupied_log_odds
+    }
+    /// Whether pixel (`r`, `c`) has been observed.
+    #[inline]
+    pub fn observed(&self, r: usize, c: usize) -> bool {
+        self.observed[r * self.width + c]
+    }
+    /// Occupancy probability of every pixel (0.5 where unobserved), row-major: the map as
+    /// RTAB-Map or gmapping would publish it.
+    pub fn probabilities(&self) -> Vec<f64> {
+        self.log_odds
+            .iter()
+            .map(|&l| 1.0 / (1.0 + (-l as f64).exp()))
+            .collect()
+    }
+
+    /// The coarse cells that changed since the last call, in the order they changed.
+    pub fn take_changes(&mut self, out: &mut Vec<(Pos, Occupancy)>) {
+        out.append(&mut self.changes);
+    }
+
+    /// Marks coarse cell `p` an obstacle (the local planner proved it impassable).
+    pub fn block(&mut self, p: Pos) {
+        let i = p.row as usize * self.coarse_width + p.col as usize;
+        if self.coarse[i] != Occupancy::Obstacle {
+            self.coarse[i] = Occupancy::Obstacle;
+            self.changes.push((p, Occupancy::Obstacle));
+        }
+    }
+
+    /// Integrates one beam from (`x0`, `y0`) to (`x1`, `y1`) (metres): every pixel it crosses
+    /// is observed free; the last is observed occupied when `hit`.
+    pub fn integrate_beam(&mut self, x0: f64, y0: f64, x1: f64, y1: f64, hit: bool) {
+        // Amanatides–Woo traversal, by hand: the per-beam inner loop of mapping, no allocation.
+        let res = self.cfg.resolution;
+        let (gx0, gy0, gx1, gy1) = (x0 / res, y0 / res, x1 / res, y1 / res);
+        let (mut c, mut r) = (gx0.floor() as i64, gy0.floor() as i64);
+        let (c_end, r_end) = (gx1.floor() as i64, gy1.floor() as i64);
+        let (dx, dy) = (gx1 - gx0, gy1 - gy0);
+        let step_c: i64 = if dx > 0.0 { 1 } else { -1 };
+        let step_r: i64 = if dy > 0.0 { 1 } else { -1 };
+        let t_delta_c = if dx != 0.0 {
+            (1.0 / dx).abs()
+        } else {
+            f64::INFINITY
+        };
+        let t_delta_r = if dy != 0.0 {
+            (1.0 / dy).abs()
+        } else {
+            f64::INFINITY
+        };
+        let mut t_max_c = if dx > 0.0 {
+            (c as f64 + 1.0 - gx0) * t_delta_c
+        } else if dx < 0.0 {
+            (gx0 - c as f64) * t_delta_c
+        } else {
+            f64::INFINITY
+        };
+        let mut t_max_r = if dy > 0.0 {
+            (r as f64 + 1.0 - gy0) * t_delta_r
+        } else if dy < 0.0 {
+            (gy0 - r as f64) * t_delta_r
+        } else {
+            f64::INFINITY
+        };
+        let miss = self.cfg.miss_log_odds as f32;
+        let limit = (c - c_end).abs() + (r - r_end).abs() + 2;
+        for _ in 0..limit {
+            let last = c == c_end && r == r_end;
+            if last {
+                if hit {
+                    self.update(r, c, self.cfg.hit_log_odds as f32);
+                } else {
+                    self.update(r, c, miss);
+                }
+                return;
+            }
+            self.update(r, c, miss);
+            if t_max_c < t_max_r {
+                t_max_c += t_delta_c;
+                c += step_c;
+            } else {
+                t_max_r += t_delta_r;
+                r += step_r;
+            }
+        }
+    }
+
+    #[inline]
+    fn update(&mut self, r: i64, c: i64, delta: f32) {
+        if r < 0 || c < 0 || r as usize >= self.height || c as usize >= self.width {
+            return;
+        }
+        let (r, c) = (r as usize, c as usize);
+        let i = r * self.width + c;
+        let before = self.log_odds[i];
+        let after =
+            (before + delta).clamp(self.cfg.min_log_odds as f32, self.cfg.max_log_odds as f32);
+        self.log_odds[i] = after;
+        let was_observed = self.observed[i];
+        let (was_occ, is_occ) = (
+            before > self.occupied_log_odds,
+            after > self.occupied_log_odds,
+        );
+        if was_observed && was_occ == is_occ {
+            return;
+        }
+        self.observed[i] = true;
+        let cell = self.row_cell[r] as usize * self.coarse_width + self.col_cell[c] as usize;
+        if !was_observed {
+            self.observed_in[cell] += 1;
+        }
+        if is_occ && !was_occ {
+            self.occupied_in[cell] += 1;
+        } else if was_occ && !is_occ {
+            self.occupied_in[cell] -= 1;
+        }
+        self.refresh(cell);
+    }
+
+    /// Re-reads coarse cell `cell` after one of its pixels changed.
+    fn refresh(&mut self, cell: usize) {
+        let now = self.coarse[cell];
+        if now == Occupancy::Obstacle {
+            return;
+        }
+        let n = self.pixels[cell] as f64;
+        let (seen, occupied) = (self.observed_in[cell] as f64, self.occupied_in[cell] as f64);
+        // The rule over all pixels, or over the observed ones once a quarter is observed: a
+        // sensor sees an obstacle's surface, never its inside, so a cell mostly covered by an
+        // obstacle would otherwise stay unknown (and a frontier) for ever.
+        let next = if occupied > self.obstacle_fraction * n
+            || (seen >= 0.25 * n && occupied > self.obstacle_fraction * seen)
+        {
+            Occupancy::Obstacle
+        } else if now == Occupancy::Unknown && seen >= self.cfg.known_fraction * n {
+            Occupancy::Free
+        } else {
+            now
+        };
+        if next != now {
+            self.coarse[cell] = next;
+            let p = Pos::new(
+                (cell / self.coarse_width) as i32,
+                (cell % self.coarse_width) as i32,
+            );
+            self.changes.push((p, next));
+        }
+    }
+
+    /// Whether a disc of `radius` metres at (`x`, `y`) overlaps an occupied pixel.
+    pub fn disc_hits_occupied(&self, x: f64, y: f64, radius: f64) -> bool {
+        let res = self.cfg.resolution;
+        let r0 = ((y - radius) / res).floor().max(0.0) as usize;
+        let c0 = ((x - radius) / res).floor().max(0.0) as usize;
+        let r1 = (((y + radius) / res).floor() as usize).min(self.height.saturating_sub(1));
+        let c1 = (((x + radius) / res).floor() as usize).min(self.width.saturating_sub(1));
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                if !self.occupied(r, c) {
+                    continue;
+                }
+                // Nearest point of the pixel to the centre.
+                let nx = x.clamp(c as f64 * res, (c + 1) as f64 * res);
+                let ny = y.clamp(r as f64 * res, (r + 1) as f64 * res);
+                if (nx - x).powi(2) + (ny - y).powi(2) < radius * radius {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map() -> RobotMap {
+        // 4 m × 4 m at 0.1 m, 1 m cells.
+        RobotMap::new(
+            40,
+            40,
+            1.0,
+            MappingConfig::default(),
+            &DiscretizeParams::default(),
+        )
+    }
+
+    #[test]
+    fn a_beam_frees_its_path_and_marks_its_end() {
+        let mut m = map();
+        for _ in 0..3 {
+            m.integrate_beam(0.05, 0.05, 3.55, 0.05, true);
+        }
+        assert!((0..35).all(|c| m.observed(0, c) && !m.occupied(0, c)));
+        assert!(m.occupied(0, 35));
+        assert!(!m.observed(0, 36));
+        assert!(!m.observed(1, 10));
+    }
+
+    #[test]
+    fn cells_become_free_then_obstacle_by_the_rule() {
+        let mut m = map();
+        // Sweep cell (0, 0) free: 100 pixels, all observed.
+        for r in 0..10 {
+            m.integrate_beam(
+                0.0,
+                r as f64 * 0.1 + 0.05,
+                0.99,
+                r as f64 * 0.1 + 0.05,
+                false,
+            );
+        }
+        let mut out = Vec::new();
+        m.take_changes(&mut out);
+        assert!(out.contains(&(Pos::new(0, 0), Occupancy::Free)), "{out:?}");
+        // 26 occupied pixels (> 25 %) in cell (0, 0): an obstacle.
+        for k in 0..26 {
+            let (r, c) = (k / 10, k % 10);
+            let (x, y) = (c as f64 * 0.1 + 0.05, r as f64 * 0.1 + 0.05);
+            for _ in 0..2 {
+                m.integrate_beam(x, y, x, y, true);
+            }
+        }
+        out.clear();
+        m.take_changes(&mut out);
+        assert_eq!(out, vec![(Pos::new(0, 0), Occupancy::Obstacle)]);
+        assert_eq!(m.coarse()[0], Occupancy::Obstacle);
+    }
+
+    #[test]
+    fn disc_test_sees_occupied_pixels_only_within_the_radius() {
+        let mut m = map();
+        for _ in 0..2 {
+            m.integrate_beam(2.05, 2.05, 2.05, 2.05, true);
+        }
+        assert!(m.disc_hits_occupied(2.3, 2.05, 0.3));
+        assert!(!m.disc_hits_occupied(2.5, 2.05, 0.3));
+    }
+}

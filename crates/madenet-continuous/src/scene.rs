@@ -1,0 +1,380 @@
+//! The true geometry of a continuous world: obstacle shapes in metres, and the same geometry as
+//! a fine raster (for the ground-truth coarse map, completion and pictures).
+//!
+//! Coordinates: `x` to the right and `y` downward, in metres from the top-left corner of the
+//! map, as the rows and columns of [`OccGrid`]s run (pixel `(row, col)` covers
+//! `[col·res, (col+1)·res) × [row·res, (row+1)·res)`). Headings are `atan2(dy, dx)` in that frame.
+
+use madenet_map::discretize::{discretize_area, DiscretizeParams};
+use madenet_map::{OccGrid, Occupancy, Pos};
+use rand::RngExt;
+use serde::{Deserialize, Serialize};
+
+/// One obstacle.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Shape {
+    /// A rectangle centred at (`x`, `y`), half extents `hx` × `hy`, turned by `angle` radians.
+    Rect {
+        /// Centre x (m).
+        x: f64,
+        /// Centre y (m).
+        y: f64,
+        /// Half width along its own x axis (m).
+        hx: f64,
+        /// Half height along its own y axis (m).
+        hy: f64,
+        /// Rotation (rad).
+        angle: f64,
+    },
+    /// A disc centred at (`x`, `y`) of radius `r`.
+    Circle {
+        /// Centre x (m).
+        x: f64,
+        /// Centre y (m).
+        y: f64,
+        /// Radius (m).
+        r: f64,
+    },
+}
+
+impl Shape {
+    /// Whether the point (`px`, `py`) lies inside.
+    pub fn contains(&self, px: f64, py: f64) -> bool {
+        match *self {
+            Shape::Rect {
+                x,
+                y,
+                hx,
+                hy,
+                angle,
+            } => {
+                let (s, c) = angle.sin_cos();
+                let (dx, dy) = (px - x, py - y);
+                let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
+                lx.abs() <= hx && ly.abs() <= hy
+            }
+            Shape::Circle { x, y, r } => (px - x).powi(2) + (py - y).powi(2) <= r * r,
+        }
+    }
+
+    /// Axis-aligned bounds `(x0, y0, x1, y1)`.
+    pub fn bounds(&self) -> (f64, f64, f64, f64) {
+        match *self {
+            Shape::Rect {
+                x,
+                y,
+                hx,
+                hy,
+                angle,
+            } => {
+                let (s, c) = angle.sin_cos();
+                let ex = (c * hx).abs() + (s * hy).abs();
+                let ey = (s * hx).abs() + (c * hy).abs();
+                (x - ex, y - ey, x + ex, y + ey)
+            }
+            Shape::Circle { x, y, r } => (x - r, y - r, x + r, y + r),
+        }
+    }
+}
+
+/// A world's true geometry.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Obstacles (the map's border included).
+    pub shapes: Vec<Shape>,
+    /// The same geometry, one pixel per `fine.resolution` metres: obstacle or free.
+    pub fine: OccGrid,
+    /// Where it came from, for messages (`generated:30:7`, a file path).
+    pub name: String,
+}
+
+impl Scene {
+    /// Width in metres.
+    pub fn width_m(&self) -> f64 {
+        self.fine.width() as f64 * self.fine.resolution
+    }
+    /// Height in metres.
+    pub fn height_m(&self) -> f64 {
+        self.fine.height() as f64 * self.fine.resolution
+    }
+
+    /// A scene from a fine grid (a map file loaded at its native resolution): every obstacle or
+    /// unknown pixel is solid (unknown space of a map file lies outside what was mapped), merged
+    /// into as few axis-aligned rectangles as runs allow (row runs extended downward while the
+    /// pixels below are solid too); the map's edge is a wall just outside it.
+    pub fn from_grid(grid: &OccGrid, name: &str) -> Scene {
+        let (h, w, res) = (grid.height(), grid.width(), grid.resolution);
+        let solid = |r: usize, c: usize| grid.cells()[r * w + c] != Occupancy::Free;
+        let mut fine = OccGrid::from_cells(
+            h,
+            w,
+            grid.cells()
+                .iter()
+                .map(|&c| {
+                    if c == Occupancy::Free {
+                        Occupancy::Free
+                    } else {
+                        Occupancy::Obstacle
+                    }
+                })
+                .collect(),
+        );
+        fine.resolution = res;
+        fine.origin = grid.origin;
+        // Row runs, merged downward into rectangles.
+        let mut used = vec![false; h * w];
+        let mut shapes = Vec::new();
+        for r in 0..h {
+            let mut c = 0;
+            while c < w {
+                if !solid(r, c) || used[r * w + c] {
+                    c += 1;
+                    continue;
+                }
+                let c0 = c;
+                while c < w && solid(r, c) && !used[r * w + c] {
+                    c += 1;
+                }
+                let c1 = c;
+                let mut r1 = r + 1;
+                while r1 < h && (c0..c1).all(|k| solid(r1, k) && !used[r1 * w + k]) {
+                    r1 += 1;
+                }
+                for rr in r..r1 {
+                    used[rr * w..][c0..c1].fill(true);
+                }
+                shapes.push(Shape::Rect {
+                    x: (c0 + c1) as f64 * res / 2.0,
+                    y: (r + r1) as f64 * res / 2.0,
+                    hx: (c1 - c0) as f64 * res / 2.0,
+                    hy: (r1 - r) as f64 * res / 2.0,
+                    angle: 0.0,
+                });
+            }
+        }
+        // The map's edge is a wall: half a metre thick, just outside the map.
+        let (wm, hm) = (w as f64 * res, h as f64 * res);
+        for (x, y, hx, hy) in [
+            (wm / 2.0, -0.25, wm / 2.0 + 0.5, 0.25),
+            (wm / 2.0, hm + 0.25, wm / 2.0 + 0.5, 0.25),
+            (-0.25, hm / 2.0, 0.25, hm / 2.0 + 0.5),
+            (wm + 0.25, hm / 2.0, 0.25, hm / 2.0 + 0.5),
+        ] {
+            shapes.push(Shape::Rect {
+                x,
+                y,
+                hx,
+                hy,
+                angle: 0.0,
+            });
+        }
+        Scene {
+            shapes,
+            fine,
+            name: name.into(),
+        }
+    }
+
+    /// A scene from shapes inside a `width_m` × `height_m` box, rasterized at `resolution`
+    /// (a pixel is an obstacle when its centre lies in a shape); the box's border becomes four
+    /// thin walls.
+    pub fn from_shapes(
+        mut shapes: Vec<Shape>,
+        width_m: f64,
+        height_m: f64,
+        resolution: f64,
+        name: &str,
+    ) -> Scene {
+        let t = resolution;
+        let (w2, h2) = (width_m / 2.0, height_m / 2.0);
+        for (x, y, hx, hy) in [
+            (w2, t / 2.0, w2, t / 2.0),
+            (w2, height_m - t / 2.0, w2, t / 2.0),
+            (t / 2.0, h2, t / 2.0, h2),
+            (width_m - t / 2.0, h2, t / 2.0, h2),
+        ] {
+            shapes.push(Shape::Rect {
+                x,
+                y,
+                hx,
+                hy,
+                angle: 0.0,
+            });
+        }
+        let w = (width_m / resolution).round().max(1.0) as usize;
+        let h = (height_m / resolution).round().max(1.0) as usize;
+        let mut cells = vec![Occupancy::Free; w * h];
+        for s in &shapes {
+            let (x0, y0, x1, y1) = s.bounds();
+            let c0 = ((x0 / resolution).floor().max(0.0)) as usize;
+            let r0 = ((y0 / resolution).floor().max(0.0)) as usize;
+            let c1 = ((x1 / resolution).ceil() as usize).min(w);
+            let r1 = ((y1 / resolution).ceil() as usize).min(h);
+            for r in r0..r1 {
+                for c in c0..c1 {
+                    let (px, py) = ((c as f64 + 0.5) * resolution, (r as f64 + 0.5) * resolution);
+                    if s.contains(px, py) {
+                        cells[r * w + c] = Occupancy::Obstacle;
+                    }
+                }
+            }
+        }
+        let mut fine = OccGrid::from_cells(h, w, cells);
+        fine.resolution = resolution;
+        Scene {
+            shapes,
+            fine,
+            name: name.into(),
+        }
+    }
+
+    /// The true map in the agent's cells of `cell_size` metres, by the paper's rule: what the
+    /// team would know at the end, and what "explored" is measured against.
+    pub fn coarse_truth(&self, cell_size: f64, params: &DiscretizeParams) -> OccGrid {
+        let probs: Vec<f64> = self
+            .fine
+            .cells()
+            .iter()
+            .map(|&c| if c == Occupancy::Free { 0.0 } else { 1.0 })
+            .collect();
+        let cell_px = (cell_size / self.fine.resolution).max(1.0);
+        let mut g = discretize_area(
+            &probs,
+            self.fine.height(),
+            self.fine.width(),
+            cell_px,
+            params,
+        );
+        g.resolution = cell_size;
+        g
+    }
+
+    /// The centre of cell `p` of `cell_size` metres, in metres.
+    pub fn cell_centre(p: Pos, cell_size: f64) -> (f64, f64) {
+        (
+            (p.col as f64 + 0.5) * cell_size,
+            (p.row as f64 + 0.5) * cell_size,
+        )
+    }
+}
+
+/// The paper's kind of cluttered world (Sec. V.B, Fig. 6: bookshelves, bins, cylinders),
+/// seeded: `side` metres square, pixels of `resolution` metres. Bookshelf-like boxes stand in
+/// rows with gaps (narrow passages and dead ends between them), bins and cylinders are
+/// scattered; the area near the three start positions the paper uses (bottom-left, top-right,
+/// middle) is kept clear.
+pub fn generate_cluttered(side: f64, resolution: f64, seed: u64) -> Scene {
+    let mut rng = madenet_world::rng::stream(seed, "continuous-generator", 0);
+    let mut shapes = Vec::new();
+    let clear = [
+        (2.0, side - 2.0),
+        (side - 2.0, 2.0),
+        (side / 2.0, side / 2.0),
+    ];
+    let keep_clear = |s: &Shape| {
+        let (x0, y0, x1, y1) = s.bounds();
+        clear.iter().all(|&(cx, cy)| {
+            let dx = (cx - cx.clamp(x0, x1)).abs();
+            let dy = (cy - cy.clamp(y0, y1)).abs();
+            dx * dx + dy * dy > 2.5 * 2.5
+        })
+    };
+    // About one obstacle per 9 m²: bookshelves 40 %, bins 30 %, cylinders 30 %.
+    let count = (side * side / 9.0).round() as usize;
+    let mut tries = 0;
+    while shapes.len() < count && tries < count * 20 {
+        tries += 1;
+        let x = rng.random_range(1.0..side - 1.0);
+        let y = rng.random_range(1.0..side - 1.0);
+        let kind: f64 = rng.random();
+        let s = if kind < 0.4 {
+            // A bookshelf: 0.4 m deep, 1.2–3 m long, along one of the axes (as furniture
+            // stands), sometimes turned.
+            let long = rng.random_range(0.6..1.5);
+            let turned = rng.random::<f64>() < 0.2;
+            let angle = if turned {
+                rng.random_range(0.0..std::f64::consts::PI)
+            } else if rng.random::<bool>() {
+                0.0
+            } else {
+                std::f64::consts::FRAC_PI_2
+            };
+            Shape::Rect {
+                x,
+                y,
+                hx: long,
+                hy: 0.2,
+                angle,
+            }
+        } else if kind < 0.7 {
+            // A bin: 0.5–0.9 m square.
+            let half = rng.random_range(0.25..0.45);
+            Shape::Rect {
+                x,
+                y,
+                hx: half,
+                hy: half,
+                angle: 0.0,
+            }
+        } else {
+            Shape::Circle {
+                x,
+                y,
+                r: rng.random_range(0.1..0.4),
+            }
+        };
+        if keep_clear(&s) {
+            shapes.push(s);
+        }
+    }
+    Scene::from_shapes(
+        shapes,
+        side,
+        side,
+        resolution,
+        &format!("generated:{side}:{seed}"),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_grid_becomes_rectangles_covering_exactly_its_solid_pixels() {
+        let text = "#####\n#..##\n#...#\n##..#\n#####\n";
+        let mut g = madenet_map::io::parse_text(text, std::path::Path::new("t.txt")).unwrap();
+        g.resolution = 0.5;
+        let s = Scene::from_grid(&g, "t");
+        for r in 0..5 {
+            for c in 0..5 {
+                let (px, py) = ((c as f64 + 0.5) * 0.5, (r as f64 + 0.5) * 0.5);
+                let inside = s.shapes.iter().filter(|sh| sh.contains(px, py)).count();
+                let solid = g.get(Pos::new(r, c)) != Occupancy::Free;
+                assert_eq!(inside, usize::from(solid), "pixel ({r}, {c})");
+            }
+        }
+    }
+
+    #[test]
+    fn generated_worlds_are_seeded_and_keep_the_starts_clear() {
+        let a = generate_cluttered(20.0, 0.1, 3);
+        let b = generate_cluttered(20.0, 0.1, 3);
+        assert_eq!(a.shapes, b.shapes);
+        assert_ne!(a.shapes, generate_cluttered(20.0, 0.1, 4).shapes);
+        assert_eq!((a.fine.height(), a.fine.width()), (200, 200));
+        for (x, y) in [(2.0, 18.0), (18.0, 2.0), (10.0, 10.0)] {
+            assert!(a.shapes[..a.shapes.len() - 4]
+                .iter()
+                .all(|s| !s.contains(x, y)));
+        }
+        let coarse = a.coarse_truth(1.0, &DiscretizeParams::default());
+        assert_eq!((coarse.height(), coarse.width()), (20, 20));
+        let obstacles = coarse
+            .cells()
+            .iter()
+            .filter(|&&c| c == Occupancy::Obstacle)
+            .count();
+        assert!((20..200).contains(&obstacles), "{obstacles} obstacle cells");
+    }
+}

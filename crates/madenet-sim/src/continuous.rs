@@ -1,0 +1,548 @@
+//! A trial in the continuous world (`madenet_continuous`): the same agents and policies as the
+//! grid [`crate::Trial`], in continuous time, each robot on its own clock.
+//!
+//! Every control period, in order:
+//! 1. **Radio** (at `radio_rate_hz`): pairs within d_s with line of sight try to exchange
+//!    (CSP, dropouts: [`madenet_world::Radio`]); β goes both ways along each success.
+//! 2. **Agents**: a robot asks its agent for a move when it enters a new cell, when its agent
+//!    said "stay" `stay_period` seconds ago, when its local planner found the target cell
+//!    impassable, or when teammates have held it up for `wait_time` seconds. A scan after a
+//!    robot reached its goal, the neighbours of that cell its map still cannot read are written
+//!    off as obstacles to it (seen from the frontier they border, they never will be). The agent observes
+//!    (its map's newly read cells, the teammates in view, whom it exchanged with), decides if
+//!    its macro action ended, plans, and names the next cell.
+//! 3. **Local planning**: each robot's planner drives toward its target cell.
+//! 4. **World**: motion, contacts, scans ([`ContinuousWorld::step`]).
+
+use crate::registry::PolicyRegistry;
+use crate::trial::{build_agent, TrialSpec};
+use crate::SimError;
+use madenet_agent::{Agent, Beta};
+use madenet_continuous::{
+    Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Neighbour, Scene,
+};
+use madenet_map::{Occupancy, Pos};
+use madenet_world::{Observation, Radio, ScenarioConfig};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Everything that defines a continuous trial.
+#[derive(Clone, Debug)]
+pub struct ContinuousSpec {
+    /// The true geometry.
+    pub scene: Arc<Scene>,
+    /// Start cells (of `config.cell_size` metres): robot i starts at the centre of `starts[i]`.
+    pub starts: Vec<Pos>,
+    /// The scenario (team size, d_s, CSP, dropout, the discretization rule, |G|).
+    pub config: ScenarioConfig,
+    /// The continuous world's parameters.
+    pub continuous: ContinuousConfig,
+    /// Every robot's policy, by registry name.
+    pub policy: String,
+    /// Seed of the sensors, the radio and the policies.
+    pub seed: u64,
+}
+
+/// The outcome of a continuous trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContinuousResult {
+    /// The scene's name.
+    pub map: String,
+    /// The policy's registry name.
+    pub policy: String,
+    /// The trial's seed.
+    pub seed: u64,
+    /// CSP.
+    pub comm_success_prob: f64,
+    /// Whether the team explored every explorable cell before the time cap.
+    pub complete: bool,
+    /// ET: simulated seconds to complete exploration (the time cap when incomplete).
+    pub exploration_time_s: f64,
+    /// TTD: metres driven by the whole team.
+    pub team_distance_m: f64,
+    /// Robot–obstacle collisions.
+    pub obstacle_collisions: u64,
+    /// Robot–robot collisions.
+    pub robot_collisions: u64,
+    /// Local interactions: pairs in contact summed over radio rounds.
+    pub local_interactions: u64,
+    /// Cells a local planner found impassable (read free on the coarse map, blocked in truth).
+    pub impassable_cells: u64,
+    /// Cells written off: unknown neighbours of a reached goal its robot could not see from it.
+    pub written_off_cells: u64,
+    /// Times a robot was held up by teammates for `wait_time` seconds and asked its agent again.
+    pub held_up: u64,
+    /// Decisions taken by the agents.
+    pub decisions: usize,
+    /// Explored fraction at every whole simulated second (index = second).
+    pub explored: Vec<f64>,
+    /// Wall-clock seconds the trial took.
+    pub wall_s: f64,
+}
+
+impl ContinuousResult {
+    /// Simulated seconds per wall-clock second.
+    pub fn real_time_factor(&self) -> f64 {
+        if self.wall_s > 0.0 {
+            self.exploration_time_s / self.wall_s
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
+/// Why robot i must ask its agent now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ask {
+    No,
+    Yes,
+}
+
+/// A trial in the continuous world.
+pub struct ContinuousTrial {
+    world: ContinuousWorld,
+    agents: Vec<Agent>,
+    planners: Vec<LocalPlanner>,
+    radio: Radio,
+    targets: Vec<Option<Pos>>,
+    cells: Vec<Pos>,
+    ask_at: Vec<f64>,
+    asks: Vec<Ask>,
+    agent_t: Vec<usize>,
+    held_since: Vec<Option<f64>>,
+    replan: Vec<bool>,
+    commands: Vec<Command>,
+    /// The goal cell a robot reached, and when: its unknown neighbours are written off a scan
+    /// later if it could not see them.
+    reached: Vec<Option<(Pos, f64)>>,
+    written_off: u64,
+    exchanged: Vec<Vec<usize>>,
+    radio_every: u64,
+    ticks: u64,
+    seen: Vec<(Pos, Occupancy)>,
+    outbox: Vec<Beta>,
+    spec_map: String,
+    policy: String,
+    seed: u64,
+    local_interactions: u64,
+    impassable: u64,
+    held_up: u64,
+    explored: Vec<f64>,
+    started: Instant,
+}
+
+impl ContinuousTrial {
+    /// Builds the world and the agents (policies from `registry`).
+    pub fn new(spec: ContinuousSpec, registry: &PolicyRegistry) -> Result<Self, SimError> {
+        let world = ContinuousWorld::new(
+            spec.scene.clone(),
+            &spec.starts,
+            spec.config.clone(),
+            spec.continuous,
+            spec.seed,
+        )
+        .map_err(|e| SimError::Continuous(e.to_string()))?;
+        let n = world.robots();
+        // The agents see only the map's size (their cells).
+        let grid_spec = TrialSpec {
+            map: world.coarse_truth().clone(),
+            map_name: spec.scene.name.clone(),
+            starts: spec.starts.clone(),
+            config: spec.config.clone(),
+            policy: spec.policy.clone(),
+            seed: spec.seed,
+        };
+        let agents = (0..n)
+            .map(|i| build_agent(&grid_spec, registry, i))
+            .collect::<Result<Vec<_>, _>>()?;
+        let radio_every = (1.0 / (spec.continuous.radio_rate_hz * spec.continuous.control_period))
+            .round()
+            .max(1.0) as u64;
+        let cells = (0..n).map(|i| world.cell_of(i)).collect();
+        let outbox = agents.iter().map(|a| a.beta()).collect();
+        Ok(ContinuousTrial {
+            radio: Radio::new(&spec.config, n, spec.seed),
+            planners: vec![LocalPlanner::default(); n],
+            targets: vec![None; n],
+            cells,
+            ask_at: vec![0.0; n],
+            asks: vec![Ask::Yes; n],
+            agent_t: vec![0; n],
+            held_since: vec![None; n],
+            replan: vec![false; n],
+            commands: vec![Command::Drive(0.0, 0.0); n],
+            reached: vec![None; n],
+            written_off: 0,
+            exchanged: vec![Vec::new(); n],
+            radio_every,
+            ticks: 0,
+            seen: Vec::new(),
+            outbox,
+            spec_map: spec.scene.name.clone(),
+            policy: spec.policy,
+            seed: spec.seed,
+            local_interactions: 0,
+            impassable: 0,
+            held_up: 0,
+            explored: vec![world.explored_fraction()],
+            started: Instant::now(),
+            agents,
+            world,
+        })
+    }
+
+    /// The world.
+    pub fn world(&self) -> &ContinuousWorld {
+        &self.world
+    }
+    /// The agents, robot i at index i.
+    pub fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+    /// Robot `i`'s local planner (its local path, for pictures).
+    pub fn planner(&self, i: usize) -> &LocalPlanner {
+        &self.planners[i]
+    }
+    /// Robot `i`'s target cell.
+    pub fn target(&self, i: usize) -> Option<Pos> {
+        self.targets[i]
+    }
+    /// Robot `i`'s last local-planner command.
+    pub fn command(&self, i: usize) -> Command {
+        self.commands[i]
+    }
+    /// Complete, or at the time cap.
+    pub fn is_done(&self) -> bool {
+        self.world.is_complete() || self.world.time() >= self.world.config().time_cap
+    }
+
+    /// One control period (the stages of the module docs). Returns false once done.
+    pub fn step(&mut self) -> bool {
+        if self.is_done() {
+            return false;
+        }
+        let n = self.agents.len();
+        let now = self.world.time();
+        // 1. radio
+        if self.ticks.is_multiple_of(self.radio_every) {
+            let contacts = self.world.contacts();
+            self.local_interactions += contacts.len() as u64;
+            let mut exchanges = Vec::new();
+            self.radio.exchange(&contacts, &mut exchanges);
+            for &(i, j) in &exchanges {
+                for k in [i, j] {
+                    self.agents[k].beta_into(&mut self.outbox[k]);
+                }
+                let (bi, bj) = (self.outbox[i].clone(), self.outbox[j].clone());
+                self.agents[j].receive_beta(&bi);
+                self.agents[i].receive_beta(&bj);
+                self.exchanged[i].push(j);
+                self.exchanged[j].push(i);
+            }
+        }
+        // 2a. cells a robot could not see from the goal it reached: written off (module docs)
+        let scan_period = 1.0 / self.world.config().lidar.rate_hz;
+        for i in 0..n {
+            if let Some((cell, at)) = self.reached[i] {
+                if now >= at + scan_period + 1e-9 {
+                    self.reached[i] = None;
+                    self.write_off_around(i, cell);
+                }
+            }
+        }
+        // 2b. agents
+        for i in 0..n {
+            let cell = self.world.cell_of(i);
+            let entered = cell != self.cells[i];
+            let due = self.targets[i].is_none() && now >= self.ask_at[i];
+            if entered || due || self.asks[i] == Ask::Yes {
+                self.cells[i] = cell;
+                self.ask(i);
+            }
+        }
+        // 3. local planning
+        let cfg = *self.world.config();
+        let cell_size = self.world.scenario().cell_size;
+        let mut commands = vec![(0.0, 0.0); n];
+        #[allow(clippy::needless_range_loop)] // i indexes the world, the planners and commands
+        for i in 0..n {
+            let Some(target) = self.targets[i] else {
+                continue;
+            };
+            let neighbours: Vec<Neighbour> = (0..n)
+                .filter(|&j| j != i && self.world.in_view(i, j))
+                .map(|j| Neighbour {
+                    pose: self.world.pose(j),
+                    velocity: self.world.velocity(j),
+                    priority: j < i,
+                })
+                .collect();
+            let replan = std::mem::take(&mut self.replan[i]);
+            let c = self.planners[i].command(
+                &cfg,
+                cell_size,
+                self.world.map(i),
+                self.world.pose(i),
+                self.world.velocity(i),
+                target,
+                &neighbours,
+                replan,
+            );
+            self.commands[i] = c;
+            match c {
+                Command::Drive(v, w) => {
+                    self.held_since[i] = None;
+                    commands[i] = (v, w);
+                }
+                Command::Held(v, w) => {
+                    commands[i] = (v, w);
+                    let since = *self.held_since[i].get_or_insert(now);
+                    if now - since >= cfg.planner.wait_time {
+                        self.held_since[i] = None;
+                        self.held_up += 1;
+                        self.asks[i] = Ask::Yes;
+                    }
+                }
+                Command::Impassable => {
+                    self.impassable += 1;
+                    self.world.block(i, target);
+                    self.planners[i].reset();
+                    self.targets[i] = None;
+                    self.asks[i] = Ask::Yes;
+                }
+            }
+        }
+        // Local paths are re-planned at every scan (the map has changed).
+        // 4. world
+        self.world.step(&commands);
+        self.ticks += 1;
+        for r in &mut self.replan {
+            *r = self.ticks.is_multiple_of(4);
+        }
+        let second = self.world.time().floor() as usize;
+        if second >= self.explored.len() {
+            self.explored.push(self.world.explored_fraction());
+        }
+        true
+    }
+
+    /// Robot `i` asks its agent: observe, decide if the macro action ended, plan, move.
+    fn ask(&mut self, i: usize) {
+        self.asks[i] = Ask::No;
+        self.seen.clear();
+        self.world.take_observed(i, &mut self.seen);
+        let n = self.agents.len();
+        let teammates = (0..n)
+            .filter(|&j| j != i && self.world.in_view(i, j))
+            .map(|j| (j, self.world.cell_of(j)))
+            .collect();
+        let mut exchanged = std::mem::take(&mut self.exchanged[i]);
+        exchanged.sort_unstable();
+        exchanged.dedup();
+        let obs = Observation {
+            robot: i,
+            t: self.agent_t[i],
+            pos: self.cells[i],
+            seen: std::mem::take(&mut self.seen),
+            teammates,
+            exchanged_with: exchanged,
+        };
+        self.agent_t[i] += 1;
+        let a = &mut self.agents[i];
+        a.observe(&obs);
+        self.seen = obs.seen;
+        if a.goal() == Some(self.cells[i]) {
+            self.reached[i] = Some((self.cells[i], self.world.time()));
+        }
+        if a.needs_decision() {
+            a.decide();
+        }
+        a.plan();
+        let (dr, dc) = a.next_move().delta();
+        let here = self.cells[i];
+        let next = Pos::new(here.row + dr, here.col + dc);
+        if next == here {
+            self.targets[i] = None;
+            self.ask_at[i] = self.world.time() + self.world.config().planner.stay_period;
+        } else {
+            if self.targets[i] != Some(next) {
+                self.planners[i].reset();
+            }
+            self.targets[i] = Some(next);
+        }
+        self.held_since[i] = None;
+    }
+
+    /// The 8-neighbours of `cell` that robot `i`'s map still cannot read after it stood in
+    /// `cell` for a scan become obstacles to it: it cannot see them from there (something
+    /// thinner than the rule's fraction stands between), and a frontier it cannot resolve by
+    /// going there would draw it back for ever.
+    fn write_off_around(&mut self, i: usize, cell: Pos) {
+        let (h, w) = self.world.map(i).coarse_size();
+        for dr in -1..=1 {
+            for dc in -1..=1 {
+                let q = Pos::new(cell.row + dr, cell.col + dc);
+                if (dr, dc) == (0, 0)
+                    || q.row < 0
+                    || q.col < 0
+                    || q.row as usize >= h
+                    || q.col as usize >= w
+                {
+                    continue;
+                }
+                if self.world.map(i).coarse()[q.row as usize * w + q.col as usize]
+                    == Occupancy::Unknown
+                {
+                    self.world.block(i, q);
+                    self.written_off += 1;
+                    self.asks[i] = Ask::Yes;
+                }
+            }
+        }
+    }
+
+    /// Runs to completion or the time cap.
+    pub fn run(mut self) -> ContinuousResult {
+        while self.step() {}
+        self.finish()
+    }
+
+    /// The result so far.
+    pub fn finish(self) -> ContinuousResult {
+        let Collisions { obstacle, robot } = self.world.collisions();
+        ContinuousResult {
+            map: self.spec_map,
+            policy: self.policy,
+            seed: self.seed,
+            comm_success_prob: self.world.scenario().comm_success_prob,
+            complete: self.world.is_complete(),
+            exploration_time_s: self.world.time(),
+            team_distance_m: (0..self.agents.len()).map(|i| self.world.distance(i)).sum(),
+            obstacle_collisions: obstacle,
+            robot_collisions: robot,
+            local_interactions: self.local_interactions,
+            impassable_cells: self.impassable,
+            written_off_cells: self.written_off,
+            held_up: self.held_up,
+            decisions: self.agents.iter().map(|a| a.stats().decisions).sum(),
+            explored: self.explored,
+            wall_s: self.started.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use madenet_continuous::scene::generate_cluttered;
+
+    fn spec(policy: &str, seed: u64) -> ContinuousSpec {
+        ContinuousSpec {
+            scene: Arc::new(generate_cluttered(12.0, 0.1, 2)),
+            starts: vec![Pos::new(10, 1), Pos::new(10, 2), Pos::new(9, 1)],
+            config: ScenarioConfig::default(),
+            continuous: ContinuousConfig::default(),
+            policy: policy.into(),
+            seed,
+        }
+    }
+
+    /// Prints a trial second by second (`cargo test -p madenet-sim trace -- --ignored
+    /// --nocapture`): to see why a team is stuck.
+    #[test]
+    #[ignore = "a debugging aid: prints, asserts nothing"]
+    fn trace() {
+        let registry = PolicyRegistry::builtin();
+        let mut t = ContinuousTrial::new(spec("nf", 3), &registry).unwrap();
+        let mut k = 0;
+        while t.step() && k < 4000 {
+            k += 1;
+            if k % 20 == 0 {
+                let w = t.world();
+                let line: Vec<String> = (0..w.robots())
+                    .map(|i| {
+                        let p = w.pose(i);
+                        format!(
+                            "r{i} ({:.2},{:.2},{:.2}) v{:.2} cell {} tgt {:?} goal {:?} {:?}",
+                            p.x,
+                            p.y,
+                            p.theta,
+                            w.velocity(i).0,
+                            w.cell_of(i),
+                            t.target(i),
+                            t.agents()[i].goal(),
+                            t.command(i)
+                        )
+                    })
+                    .collect();
+                println!(
+                    "{:.0}s {:.3} | {}",
+                    w.time(),
+                    w.explored_fraction(),
+                    line.join(" | ")
+                );
+                if k == 600 {
+                    let p = w.pose(0);
+                    let m = w.map(0);
+                    let (pr, pc) = ((p.y / 0.1) as i64, (p.x / 0.1) as i64);
+                    println!("path {:?}", t.planner(0).path());
+                    for r in pr - 8..=pr + 8 {
+                        let row: String = (pc - 8..=pc + 8)
+                            .map(|c| {
+                                if (r, c) == (pr, pc) {
+                                    'R'
+                                } else if r < 0 || c < 0 {
+                                    ' '
+                                } else if m.occupied(r as usize, c as usize) {
+                                    '#'
+                                } else if m.observed(r as usize, c as usize) {
+                                    '.'
+                                } else {
+                                    '?'
+                                }
+                            })
+                            .collect();
+                        println!("{row}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_team_explores_a_small_world_without_collisions_and_repeats_itself() {
+        let registry = PolicyRegistry::builtin();
+        let run = |seed| {
+            let mut r = ContinuousTrial::new(spec("nf", seed), &registry)
+                .unwrap()
+                .run();
+            r.wall_s = 0.0;
+            r
+        };
+        let a = run(3);
+        let summary = format!(
+            "ET {} s, explored {:.3}, {} m, collisions {}/{}, held up {}, impassable {}, decisions {}",
+            a.exploration_time_s,
+            a.explored.last().unwrap(),
+            a.team_distance_m,
+            a.obstacle_collisions,
+            a.robot_collisions,
+            a.held_up,
+            a.impassable_cells,
+            a.decisions
+        );
+        assert!(a.complete, "{summary}");
+        assert_eq!(
+            (a.obstacle_collisions, a.robot_collisions),
+            (0, 0),
+            "{summary}"
+        );
+        assert!(
+            a.exploration_time_s > 10.0 && a.team_distance_m > 5.0,
+            "{summary}"
+        );
+        assert!(a.explored.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(a, run(3));
+    }
+}
