@@ -123,6 +123,10 @@ pub struct PlannerConfig {
     pub wait_time: f64,
     /// Seconds a robot whose agent said "stay" waits before asking again (1.0).
     pub stay_period: f64,
+    /// The stuck rule: a robot that has not entered its target cell this many seconds after
+    /// it was named finds that cell impassable (it becomes an obstacle to it, the agent plans
+    /// anew) and the event is counted (30.0).
+    pub stuck_time: f64,
 }
 
 impl Default for PlannerConfig {
@@ -133,6 +137,7 @@ impl Default for PlannerConfig {
             prediction_horizon: 1.5,
             wait_time: 3.0,
             stay_period: 1.0,
+            stuck_time: 30.0,
         }
     }
 }
@@ -245,6 +250,7 @@ impl ContinuousConfig {
         positive("planner.prediction_horizon", p.prediction_horizon, 30.0)?;
         positive("planner.wait_time", p.wait_time, 3600.0)?;
         positive("planner.stay_period", p.stay_period, 3600.0)?;
+        positive("planner.stuck_time", p.stuck_time, 1.0e6)?;
         positive("control_period", self.control_period, 1.0)?;
         positive("radio_rate_hz", self.radio_rate_hz, 1000.0)?;
         positive("time_cap", self.time_cap, 1.0e7)?;

@@ -177,14 +177,17 @@ fn safe(
     let r = cfg.robot;
     let dt = 0.1;
     let steps = (cfg.planner.prediction_horizon / dt).ceil() as usize;
-    // The margin is kept where the robot has it; a robot already inside it (it brushed past
-    // something, or something was seen late) may still move, only not onto the obstacle.
-    let clearance = if map.disc_hits_occupied(pose.x, pose.y, r.radius + cfg.planner.safety_margin)
-    {
-        r.radius + 0.01
-    } else {
-        r.radius + cfg.planner.safety_margin
-    };
+    // The margin is kept where the robot has it; a robot already closer (it brushed past
+    // something, or something was seen late) keeps the largest clearance it still has, down
+    // to half its radius, or it could never leave.
+    let clearance = [
+        r.radius + cfg.planner.safety_margin,
+        r.radius + 0.01,
+        r.radius * 0.5,
+    ]
+    .into_iter()
+    .find(|&c| !map.disc_hits_occupied(pose.x, pose.y, c))
+    .unwrap_or(0.0);
     let (mut x, mut y, mut th) = (pose.x, pose.y, pose.theta);
     let (mut v, mut w) = velocity;
     let mut others: Vec<(f64, f64, f64)> = neighbours

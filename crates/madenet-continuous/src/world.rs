@@ -100,6 +100,18 @@ impl ContinuousWorld {
                 starts.len()
             )));
         }
+        let (px_h, px_w) = map_pixels(&scene, &cfg);
+        let bytes = n as f64 * px_h as f64 * px_w as f64 * MAP_BYTES_PER_PIXEL;
+        if bytes > MAX_MAP_BYTES {
+            return Err(ContinuousError::Scenario(format!(
+                "the maps of {n} robots at {} m per pixel on a {:.0} × {:.0} m world would take {:.1} GB, more than the {:.0} GB allowed: raise `mapping.resolution`, lower `num_robots`, or use a smaller world",
+                cfg.mapping.resolution,
+                scene.width_m(),
+                scene.height_m(),
+                bytes / 1e9,
+                MAX_MAP_BYTES / 1e9
+            )));
+        }
         let cell = scenario.cell_size;
         let coarse_truth = scene.coarse_truth(cell, &scenario.discretize);
         let sensing_m = scenario.sensing_range as f64 * cell;
@@ -191,10 +203,7 @@ impl ContinuousWorld {
             }
         }
         let explorable_count = explorable.iter().filter(|&&e| e).count();
-        let fine = &scene.fine;
-        let px_h = (scene.height_m() / cfg.mapping.resolution).round() as usize;
-        let px_w = (scene.width_m() / cfg.mapping.resolution).round() as usize;
-        let _ = fine;
+        let (px_h, px_w) = map_pixels(&scene, &cfg);
         let maps = (0..n)
             .map(|_| RobotMap::new(px_h, px_w, cell, cfg.mapping, &scenario.discretize))
             .collect();
@@ -508,6 +517,19 @@ impl ContinuousWorld {
     }
 }
 
+/// Bytes a robot's map takes per pixel (log-odds and the observed flag).
+const MAP_BYTES_PER_PIXEL: f64 = 5.0;
+/// The most memory the robots' maps of one trial may take (4 GB).
+const MAX_MAP_BYTES: f64 = 4.0e9;
+
+/// A robot map's rows and columns on `scene`.
+fn map_pixels(scene: &Scene, cfg: &ContinuousConfig) -> (usize, usize) {
+    (
+        (scene.height_m() / cfg.mapping.resolution).round() as usize,
+        (scene.width_m() / cfg.mapping.resolution).round() as usize,
+    )
+}
+
 /// Unicycle motion over `dt` at constant (v, ω): exact arcs, straight lines when ω ≈ 0.
 pub fn integrate(x: f64, y: f64, theta: f64, v: f64, w: f64, dt: f64) -> (f64, f64, f64) {
     if w.abs() < 1e-9 {
@@ -618,6 +640,27 @@ mod tests {
         };
         assert_eq!(run(5), run(5));
         assert_ne!(run(5).3, run(6).3);
+    }
+
+    #[test]
+    fn maps_too_large_for_memory_are_refused_before_any_is_built() {
+        let scene = Arc::new(Scene::from_shapes(Vec::new(), 400.0, 400.0, 1.0, "big"));
+        let mut cfg = ContinuousConfig::default();
+        cfg.mapping.resolution = 0.01;
+        let err = ContinuousWorld::new(
+            scene,
+            &[Pos::new(1, 1), Pos::new(1, 3), Pos::new(3, 1)],
+            ScenarioConfig::default(),
+            cfg,
+            1,
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(
+            err.contains("mapping.resolution") && err.contains("GB"),
+            "{err}"
+        );
     }
 
     #[test]

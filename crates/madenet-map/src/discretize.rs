@@ -156,6 +156,71 @@ pub fn discretize_area(
     OccGrid::from_cells(height, width, cells)
 }
 
+/// What a discretization kept of a fine map's obstacles ([`erasure`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Erasure {
+    /// Obstacle pixels of the fine map.
+    pub obstacle_pixels: usize,
+    /// Of those, the ones whose cell came out free.
+    pub erased_pixels: usize,
+    /// Obstacle cells of the coarse map.
+    pub obstacle_cells: usize,
+}
+
+impl Erasure {
+    /// The fraction of obstacle pixels in free cells (0 when there are none).
+    pub fn erased_fraction(&self) -> f64 {
+        if self.obstacle_pixels == 0 {
+            0.0
+        } else {
+            self.erased_pixels as f64 / self.obstacle_pixels as f64
+        }
+    }
+
+    /// A warning when the discretization erased most of the obstacles (more than half their
+    /// pixels lie in free cells) or all of them, naming the setting that keeps walls; `None`
+    /// when it kept them.
+    pub fn warning(&self, name: &str, params: &DiscretizeParams) -> Option<String> {
+        let most = self.erased_fraction() > 0.5;
+        let all = self.obstacle_cells == 0 && self.obstacle_pixels > 0;
+        (most || all).then(|| {
+            format!(
+                "{name}: the discretization into cells left {:.0} % of the map's obstacle pixels in free cells ({} obstacle cells): walls thinner than {:.0} % of a cell vanish, and a robot on the cells plans through them; a lower `discretize.obstacle_fraction` (now {}) keeps them",
+                100.0 * self.erased_fraction(),
+                self.obstacle_cells,
+                100.0 * params.obstacle_fraction,
+                params.obstacle_fraction
+            )
+        })
+    }
+}
+
+/// Compares a fine map (`fine`, e.g. a map file at its native resolution) with its
+/// discretization `coarse` (the same area in cells of `coarse.resolution` metres, cells
+/// holding the pixels whose centres they cover, as [`discretize_area`] merges them): how many
+/// of the fine map's obstacle pixels ended up in free cells.
+pub fn erasure(fine: &OccGrid, coarse: &OccGrid) -> Erasure {
+    let cell_px = (coarse.resolution / fine.resolution).max(1.0);
+    let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as i32;
+    let mut e = Erasure {
+        obstacle_pixels: 0,
+        erased_pixels: 0,
+        obstacle_cells: coarse.count(Occupancy::Obstacle),
+    };
+    for r in 0..fine.height() {
+        for c in 0..fine.width() {
+            if fine.get(crate::Pos::new(r as i32, c as i32)) != Occupancy::Obstacle {
+                continue;
+            }
+            e.obstacle_pixels += 1;
+            if coarse.get(crate::Pos::new(cell_of(r), cell_of(c))) == Occupancy::Free {
+                e.erased_pixels += 1;
+            }
+        }
+    }
+    e
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -205,6 +270,40 @@ mod tests {
     /// A 4×4 block with the first `k` pixels (row-major) at probability 0.9, the rest 0.
     fn block(k: usize) -> Vec<f64> {
         (0..16).map(|i| if i < k { 0.9 } else { 0.0 }).collect()
+    }
+
+    #[test]
+    fn thin_walls_erased_by_the_rule_are_measured_and_warned_about() {
+        // 20 × 20 pixels of 0.1 m, a one-pixel wall down column 5: 10 % of each 1 m cell.
+        let mut probs = vec![0.0; 400];
+        for r in 0..20 {
+            probs[r * 20 + 5] = 1.0;
+        }
+        let p = DiscretizeParams::default();
+        let mut fine = discretize(&probs, 20, 20, 1, &p);
+        fine.resolution = 0.1;
+        let mut coarse = discretize(&probs, 20, 20, 10, &p);
+        coarse.resolution = 1.0;
+        let e = erasure(&fine, &coarse);
+        assert_eq!(
+            (e.obstacle_pixels, e.erased_pixels, e.obstacle_cells),
+            (20, 20, 0)
+        );
+        let w = e.warning("wall.yaml", &p).expect("a warning");
+        assert!(
+            w.contains("wall.yaml") && w.contains("discretize.obstacle_fraction"),
+            "{w}"
+        );
+        // At obstacle_fraction 0.05 the wall stays.
+        let keep = DiscretizeParams {
+            obstacle_fraction: 0.05,
+            ..p
+        };
+        let mut coarse = discretize(&probs, 20, 20, 10, &keep);
+        coarse.resolution = 1.0;
+        let e = erasure(&fine, &coarse);
+        assert_eq!((e.erased_pixels, e.obstacle_cells), (0, 2));
+        assert_eq!(e.warning("wall.yaml", &keep), None);
     }
 
     #[test]

@@ -11,7 +11,8 @@
 //!    off as obstacles to it (seen from the frontier they border, they never will be). The agent observes
 //!    (its map's newly read cells, the teammates in view, whom it exchanged with), decides if
 //!    its macro action ended, plans, and names the next cell.
-//! 3. **Local planning**: each robot's planner drives toward its target cell.
+//! 3. **Local planning**: each robot's planner drives toward its target cell. The stuck rule:
+//!    a target not entered `stuck_time` seconds after it was named is impassable to the robot.
 //! 4. **World**: motion, contacts, scans ([`ContinuousWorld::step`]).
 
 use crate::registry::PolicyRegistry;
@@ -69,6 +70,8 @@ pub struct ContinuousResult {
     pub local_interactions: u64,
     /// Cells a local planner found impassable (read free on the coarse map, blocked in truth).
     pub impassable_cells: u64,
+    /// Stuck events: a target cell not entered `planner.stuck_time` seconds after it was named.
+    pub stuck: u64,
     /// Cells written off: unknown neighbours of a reached goal its robot could not see from it.
     pub written_off_cells: u64,
     /// Times a robot was held up by teammates for `wait_time` seconds and asked its agent again.
@@ -117,6 +120,9 @@ pub struct ContinuousTrial {
     /// later if it could not see them.
     reached: Vec<Option<(Pos, f64)>>,
     written_off: u64,
+    /// When each robot's current target was named (the stuck rule).
+    target_since: Vec<f64>,
+    stuck: u64,
     exchanged: Vec<Vec<usize>>,
     radio_every: u64,
     ticks: u64,
@@ -174,6 +180,8 @@ impl ContinuousTrial {
             commands: vec![Command::Drive(0.0, 0.0); n],
             reached: vec![None; n],
             written_off: 0,
+            target_since: vec![0.0; n],
+            stuck: 0,
             exchanged: vec![Vec::new(); n],
             radio_every,
             ticks: 0,
@@ -270,6 +278,15 @@ impl ContinuousTrial {
             let Some(target) = self.targets[i] else {
                 continue;
             };
+            if now - self.target_since[i] >= cfg.planner.stuck_time {
+                // The stuck rule (`planner.stuck_time`).
+                self.stuck += 1;
+                self.world.block(i, target);
+                self.planners[i].reset();
+                self.targets[i] = None;
+                self.asks[i] = Ask::Yes;
+                continue;
+            }
             let neighbours: Vec<Neighbour> = (0..n)
                 .filter(|&j| j != i && self.world.in_view(i, j))
                 .map(|j| Neighbour {
@@ -368,6 +385,7 @@ impl ContinuousTrial {
         } else {
             if self.targets[i] != Some(next) {
                 self.planners[i].reset();
+                self.target_since[i] = self.world.time();
             }
             self.targets[i] = Some(next);
         }
@@ -424,6 +442,7 @@ impl ContinuousTrial {
             local_interactions: self.local_interactions,
             impassable_cells: self.impassable,
             written_off_cells: self.written_off,
+            stuck: self.stuck,
             held_up: self.held_up,
             decisions: self.agents.iter().map(|a| a.stats().decisions).sum(),
             explored: self.explored,

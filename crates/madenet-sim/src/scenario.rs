@@ -78,6 +78,27 @@ impl MapSource {
         })
     }
 
+    /// For a map file finer than the config's cells: a warning when the discretization erased
+    /// most of its obstacles ([`madenet_map::discretize::Erasure::warning`]). Reads the file
+    /// again at its native resolution; `None` for built-in maps and maps the rule kept.
+    pub fn erasure_warning(&self, cfg: &ScenarioConfig) -> Result<Option<String>, MapError> {
+        let MapSource::File(p) = self else {
+            return Ok(None);
+        };
+        let resolution = madenet_map::io::native_resolution(p)?;
+        if resolution >= cfg.cell_size {
+            return Ok(None);
+        }
+        let native = LoadOptions {
+            cell_size: resolution,
+            discretize: cfg.discretize,
+        };
+        let fine = load(p, &native)?;
+        let coarse = self.load(cfg)?;
+        let e = madenet_map::discretize::erasure(&fine, &coarse);
+        Ok(e.warning(&p.display().to_string(), &cfg.discretize))
+    }
+
     /// Loads or generates the map (discretized to the config's cell size).
     pub fn load(&self, cfg: &ScenarioConfig) -> Result<OccGrid, MapError> {
         let builtin = match self {

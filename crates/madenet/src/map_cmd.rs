@@ -90,6 +90,9 @@ pub fn run(c: MapCommand) -> Result<()> {
         MapCommand::Show { input, config } => {
             let cfg = crate::load_config(config.as_deref())?;
             let grid = input.load(&cfg)?;
+            if let Some(w) = input.erasure_warning(&cfg)? {
+                eprintln!("warning: {w}");
+            }
             crate::write_out(format_args!("{}", to_text(&grid)))?;
             out!(
                 "{}: {}×{} cells of {} m, {} free, {} obstacle, {} unknown, density {:.3}, free space connected: {}",

@@ -178,6 +178,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         return run_continuous(a);
     }
     let (spec, registry) = a.scenario.spec()?;
+    a.scenario.warn_erasure(&spec.config)?;
     a.pictures.check(spec.map.width(), spec.map.height())?;
     let mut trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
@@ -250,6 +251,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     check_extension(a.pictures.render.as_deref(), "--render", "gif")?;
     check_extension(a.pictures.snapshot.as_deref(), "--snapshot", "png")?;
     let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
+    a.scenario.warn_erasure(&spec.config)?;
     let scale = madenet_render::continuous::px_per_m(
         spec.scene.width_m().max(spec.scene.height_m()),
         (a.pictures.cell_px * 25).clamp(100, 600),
@@ -298,7 +300,11 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         r.comm_success_prob,
         r.seed
     )?;
-    out!("completed  {}", r.complete)?;
+    if r.complete {
+        out!("completed  true")?;
+    } else {
+        out!("completed  false: time cap reached (`time_cap`)")?;
+    }
     out!("ET         {:.1} s", r.exploration_time_s)?;
     out!("TTD        {:.1} m", r.team_distance_m)?;
     out!(
@@ -308,10 +314,11 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     )?;
     out!("local interactions {}", r.local_interactions)?;
     out!(
-        "impassable cells {}  written off {}  held up {}",
+        "impassable cells {}  written off {}  held up {}  stuck {}",
         r.impassable_cells,
         r.written_off_cells,
-        r.held_up
+        r.held_up,
+        r.stuck
     )?;
     out!(
         "wall clock {:.2} s ({:.0}x real time)",

@@ -157,6 +157,15 @@ impl ScenarioArgs {
         Ok(starts)
     }
 
+    /// Prints a warning when the map file's discretization into `cfg`'s cells erased most of
+    /// its obstacles ([`MapSource::erasure_warning`]).
+    pub fn warn_erasure(&self, cfg: &madenet_world::ScenarioConfig) -> Result<()> {
+        if let Some(w) = self.source().erasure_warning(cfg)? {
+            eprintln!("warning: {w}");
+        }
+        Ok(())
+    }
+
     /// A label for messages: map and start.
     pub fn label(&self) -> String {
         format!("map {}, start {}", self.source().name(), self.start.name())
