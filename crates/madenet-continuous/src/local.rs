@@ -247,9 +247,9 @@ fn sweep_clear(
 
 /// Whether `p` lies within `keep` of a teammate that `from` does not already lie that close to.
 fn near_teammate(others: &[(f64, f64)], p: (f64, f64), from: (f64, f64), keep: f64) -> bool {
-    others.iter().any(|&(ox, oy)| {
-        (ox - p.0).hypot(oy - p.1) < keep && (ox - from.0).hypot(oy - from.1) >= keep
-    })
+    let near =
+        |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2) < keep * keep;
+    others.iter().any(|&o| near(o, p) && !near(o, from))
 }
 
 /// A* over map pixels in the window of cells around `from` and `target` (two cells of margin):
@@ -284,11 +284,18 @@ fn local_astar(
         return None;
     }
     let centre = |r: i64, c: i64| ((c as f64 + 0.5) * res, (r as f64 + 0.5) * res);
+    // The map's inflation answers the footprint test when it is this clearance.
+    let inflated = (map.inflation() - clearance).abs() < 1e-12;
     let free: Vec<bool> = (0..h * w)
         .map(|k| {
             let (r, c) = (r0 + (k / w) as i64, c0 + (k % w) as i64);
             let (x, y) = centre(r, c);
-            !map.disc_hits_occupied(x, y, clearance) && !near_teammate(others, (x, y), from, keep)
+            let clear = if inflated {
+                !map.blocked(r as usize, c as usize)
+            } else {
+                !map.disc_hits_occupied(x, y, clearance)
+            };
+            clear && !near_teammate(others, (x, y), from, keep)
         })
         .collect();
     let idx = |r: i64, c: i64| ((r - r0) as usize) * w + (c - c0) as usize;

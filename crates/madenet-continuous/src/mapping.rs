@@ -4,10 +4,9 @@
 //!
 //! The agent's belief is write-once but for one upgrade (free → obstacle), so each cell is
 //! reported when it first becomes known, and again if it turns into an obstacle: a cell is an
-//! obstacle as soon as its occupied pixels exceed the rule's fraction of all its pixels, or of
-//! its observed pixels once a quarter of them are observed (a sensor never sees inside an
-//! obstacle); it is known free once `known_fraction` of its pixels have been observed without
-//! that.
+//! obstacle as soon as its occupied pixels exceed the rule's fraction of its observed pixels,
+//! or of half its pixels while fewer are observed (a sensor never sees inside an obstacle); it
+//! is known free once `known_fraction` of its pixels have been observed without that.
 
 use crate::config::MappingConfig;
 use madenet_map::discretize::DiscretizeParams;
@@ -33,6 +32,12 @@ pub struct RobotMap {
     observed_in: Vec<u32>,
     occupied_in: Vec<u32>,
     coarse: Vec<Occupancy>,
+    /// The radius occupied pixels are inflated by ([`RobotMap::with_inflation`]; 0: none).
+    inflation: f64,
+    /// Pixel offsets within `inflation` of a pixel's centre (nearest point of the pixel).
+    kernel: Vec<(i32, i32)>,
+    /// Per pixel, the occupied pixels within `inflation` of its centre.
+    inflated: Vec<u32>,
     /// Coarse cells that changed since [`RobotMap::take_changes`] last ran.
     changes: Vec<(Pos, Occupancy)>,
 }
@@ -76,7 +81,63 @@ impl RobotMap {
             observed_in: vec![0; coarse_height * coarse_width],
             occupied_in: vec![0; coarse_height * coarse_width],
             coarse: vec![Occupancy::Unknown; coarse_height * coarse_width],
+            inflation: 0.0,
+            kernel: Vec::new(),
+            inflated: Vec::new(),
             changes: Vec::new(),
+        }
+    }
+
+    /// This map with its occupied pixels inflated by `radius` metres (the local planner's
+    /// footprint plus margin), kept up to date as pixels turn occupied or free, so that
+    /// [`RobotMap::blocked`] answers [`RobotMap::disc_hits_occupied`] at a pixel's centre in
+    /// constant time (the costmap inflation of nav2, exact for the disc).
+    pub fn with_inflation(mut self, radius: f64) -> Self {
+        let res = self.cfg.resolution;
+        let reach = (radius / res).ceil() as i32 + 1;
+        // The nearest point of a pixel `d` pixels away lies (|d| − ½) pixels from a centre.
+        let gap = |d: i32| (d.abs() as f64 - 0.5).max(0.0) * res;
+        self.kernel = (-reach..=reach)
+            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+            .filter(|&(dr, dc)| gap(dr).powi(2) + gap(dc).powi(2) < radius * radius)
+            .collect();
+        self.inflation = radius;
+        self.inflated = vec![0; self.height * self.width];
+        for r in 0..self.height {
+            for c in 0..self.width {
+                if self.occupied(r, c) {
+                    self.stamp(r, c, true);
+                }
+            }
+        }
+        self
+    }
+
+    /// The radius of [`RobotMap::with_inflation`] (0 when not inflated).
+    pub fn inflation(&self) -> f64 {
+        self.inflation
+    }
+
+    /// Whether a disc of [`RobotMap::inflation`] at pixel (`r`, `c`)'s centre touches an
+    /// occupied pixel. Only on an inflated map.
+    #[inline]
+    pub fn blocked(&self, r: usize, c: usize) -> bool {
+        self.inflated[r * self.width + c] > 0
+    }
+
+    /// Counts occupied pixel (`r`, `c`) in (`add`) or out of the inflation around it.
+    fn stamp(&mut self, r: usize, c: usize, add: bool) {
+        for &(dr, dc) in &self.kernel {
+            let (nr, nc) = (r as i64 + dr as i64, c as i64 + dc as i64);
+            if nr < 0 || nc < 0 || nr as usize >= self.height || nc as usize >= self.width {
+                continue;
+            }
+            let k = &mut self.inflated[nr as usize * self.width + nc as usize];
+            if add {
+                *k += 1;
+            } else {
+                *k -= 1;
+            }
         }
     }
 
@@ -133,76 +194,45 @@ impl RobotMap {
         }
     }
 
-    /// Integrates one beam from (`x0`, `y0`) to (`x1`, `y1`) (metres): every pixel it crosses
-    /// is observed free; the last is observed occupied when `hit`.
+    /// Integrates one beam from (`x0`, `y0`) to (`x1`, `y1`) (metres), as a scan of its own:
+    /// every pixel it crosses is observed free; the last is observed occupied when `hit`.
     pub fn integrate_beam(&mut self, x0: f64, y0: f64, x1: f64, y1: f64, hit: bool) {
-        // Amanatides–Woo traversal, by hand: the per-beam inner loop of mapping, no allocation.
+        self.integrate_scan(x0, y0, &[(x1, y1, hit)]);
+    }
+
+    /// Integrates one scan from (`x0`, `y0`): beams ending at (`x`, `y`) (metres), returned
+    /// from an obstacle there when the flag is set. Each beam is a measurement of its own, in
+    /// order: every pixel it crosses is observed free, its last pixel occupied when it
+    /// returned. (OctoMap's one update per pixel and scan, occupied winning, was measured
+    /// 25 % faster, but with the default range noise it thickened every wall by the free
+    /// pixel before it, and cells along walls turned into obstacles.)
+    pub fn integrate_scan(&mut self, x0: f64, y0: f64, ends: &[(f64, f64, bool)]) {
         let res = self.cfg.resolution;
-        let (gx0, gy0, gx1, gy1) = (x0 / res, y0 / res, x1 / res, y1 / res);
-        let (mut c, mut r) = (gx0.floor() as i64, gy0.floor() as i64);
-        let (c_end, r_end) = (gx1.floor() as i64, gy1.floor() as i64);
-        let (dx, dy) = (gx1 - gx0, gy1 - gy0);
-        let step_c: i64 = if dx > 0.0 { 1 } else { -1 };
-        let step_r: i64 = if dy > 0.0 { 1 } else { -1 };
-        let t_delta_c = if dx != 0.0 {
-            (1.0 / dx).abs()
-        } else {
-            f64::INFINITY
-        };
-        let t_delta_r = if dy != 0.0 {
-            (1.0 / dy).abs()
-        } else {
-            f64::INFINITY
-        };
-        let mut t_max_c = if dx > 0.0 {
-            (c as f64 + 1.0 - gx0) * t_delta_c
-        } else if dx < 0.0 {
-            (gx0 - c as f64) * t_delta_c
-        } else {
-            f64::INFINITY
-        };
-        let mut t_max_r = if dy > 0.0 {
-            (r as f64 + 1.0 - gy0) * t_delta_r
-        } else if dy < 0.0 {
-            (gy0 - r as f64) * t_delta_r
-        } else {
-            f64::INFINITY
-        };
-        let miss = self.cfg.miss_log_odds as f32;
-        let limit = (c - c_end).abs() + (r - r_end).abs() + 2;
-        for _ in 0..limit {
-            let last = c == c_end && r == r_end;
-            if last {
-                if hit {
-                    self.update(r, c, self.cfg.hit_log_odds as f32);
-                } else {
-                    self.update(r, c, miss);
+        let (h, w) = (self.height as i64, self.width as i64);
+        let (miss, hit) = (self.cfg.miss_log_odds as f32, self.cfg.hit_log_odds as f32);
+        for &(x1, y1, returned) in ends {
+            let end = ((y1 / res).floor() as i64, (x1 / res).floor() as i64);
+            traverse(x0 / res, y0 / res, x1 / res, y1 / res, |r, c| {
+                if r >= 0 && c >= 0 && r < h && c < w {
+                    let delta = if returned && (r, c) == end { hit } else { miss };
+                    self.update(r as usize, c as usize, delta);
                 }
-                return;
-            }
-            self.update(r, c, miss);
-            if t_max_c < t_max_r {
-                t_max_c += t_delta_c;
-                c += step_c;
-            } else {
-                t_max_r += t_delta_r;
-                r += step_r;
-            }
+            });
         }
     }
 
     #[inline]
-    fn update(&mut self, r: i64, c: i64, delta: f32) {
-        if r < 0 || c < 0 || r as usize >= self.height || c as usize >= self.width {
-            return;
-        }
-        let (r, c) = (r as usize, c as usize);
+    fn update(&mut self, r: usize, c: usize, delta: f32) {
         let i = r * self.width + c;
         let before = self.log_odds[i];
         let after =
             (before + delta).clamp(self.cfg.min_log_odds as f32, self.cfg.max_log_odds as f32);
-        self.log_odds[i] = after;
         let was_observed = self.observed[i];
+        // Saturated (most free pixels near a robot): nothing changes.
+        if after == before && was_observed {
+            return;
+        }
+        self.log_odds[i] = after;
         let (was_occ, is_occ) = (
             before > self.occupied_log_odds,
             after > self.occupied_log_odds,
@@ -217,8 +247,10 @@ impl RobotMap {
         }
         if is_occ && !was_occ {
             self.occupied_in[cell] += 1;
+            self.stamp(r, c, true);
         } else if was_occ && !is_occ {
             self.occupied_in[cell] -= 1;
+            self.stamp(r, c, false);
         }
         self.refresh(cell);
     }
@@ -231,12 +263,12 @@ impl RobotMap {
         }
         let n = self.pixels[cell] as f64;
         let (seen, occupied) = (self.observed_in[cell] as f64, self.occupied_in[cell] as f64);
-        // The rule over all pixels, or over the observed ones once a quarter is observed: a
-        // sensor sees an obstacle's surface, never its inside, so a cell mostly covered by an
-        // obstacle would otherwise stay unknown (and a frontier) for ever.
-        let next = if occupied > self.obstacle_fraction * n
-            || (seen >= 0.25 * n && occupied > self.obstacle_fraction * seen)
-        {
+        // The rule over the observed pixels, but never fewer than half the cell's: a sensor
+        // sees an obstacle's surface, never its inside, so a cell mostly covered by an obstacle
+        // would stay unknown (and a frontier) for ever under the rule over all pixels; and a
+        // glimpse of a cell (a few pixels by a wall, some of them occupied by range noise) is
+        // not enough to call it an obstacle.
+        let next = if occupied > self.obstacle_fraction * seen.max(0.5 * n) {
             Occupancy::Obstacle
         } else if now == Occupancy::Unknown && seen >= self.cfg.known_fraction * n {
             Occupancy::Free
@@ -260,6 +292,20 @@ impl RobotMap {
         let c0 = ((x - radius) / res).floor().max(0.0) as usize;
         let r1 = (((y + radius) / res).floor() as usize).min(self.height.saturating_sub(1));
         let c1 = (((x + radius) / res).floor() as usize).min(self.width.saturating_sub(1));
+        if r0 > r1 || c0 > c1 {
+            return false;
+        }
+        // Most discs lie in cells without a single occupied pixel: the cells' counts answer
+        // without a look at the pixels (the local planner asks thousands of times a second).
+        let (cr0, cr1) = (self.row_cell[r0] as usize, self.row_cell[r1] as usize);
+        let (cc0, cc1) = (self.col_cell[c0] as usize, self.col_cell[c1] as usize);
+        if (cr0..=cr1).all(|cr| {
+            self.occupied_in[cr * self.coarse_width + cc0..=cr * self.coarse_width + cc1]
+                .iter()
+                .all(|&k| k == 0)
+        }) {
+            return false;
+        }
         for r in r0..=r1 {
             for c in c0..=c1 {
                 if !self.occupied(r, c) {
@@ -274,6 +320,55 @@ impl RobotMap {
             }
         }
         false
+    }
+}
+
+/// The pixels a segment from (`gx0`, `gy0`) to (`gx1`, `gy1`) (in pixels) crosses, in order,
+/// both ends included: Amanatides–Woo, by hand (the inner loop of mapping, no allocation).
+fn traverse(gx0: f64, gy0: f64, gx1: f64, gy1: f64, mut visit: impl FnMut(i64, i64)) {
+    let (mut c, mut r) = (gx0.floor() as i64, gy0.floor() as i64);
+    let (c_end, r_end) = (gx1.floor() as i64, gy1.floor() as i64);
+    let (dx, dy) = (gx1 - gx0, gy1 - gy0);
+    let step_c: i64 = if dx > 0.0 { 1 } else { -1 };
+    let step_r: i64 = if dy > 0.0 { 1 } else { -1 };
+    let t_delta_c = if dx != 0.0 {
+        (1.0 / dx).abs()
+    } else {
+        f64::INFINITY
+    };
+    let t_delta_r = if dy != 0.0 {
+        (1.0 / dy).abs()
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_c = if dx > 0.0 {
+        (c as f64 + 1.0 - gx0) * t_delta_c
+    } else if dx < 0.0 {
+        (gx0 - c as f64) * t_delta_c
+    } else {
+        f64::INFINITY
+    };
+    let mut t_max_r = if dy > 0.0 {
+        (r as f64 + 1.0 - gy0) * t_delta_r
+    } else if dy < 0.0 {
+        (gy0 - r as f64) * t_delta_r
+    } else {
+        f64::INFINITY
+    };
+    // Rounding can step past the end pixel: the walk is bounded by its Manhattan length.
+    let limit = (c - c_end).abs() + (r - r_end).abs() + 2;
+    for _ in 0..limit {
+        visit(r, c);
+        if c == c_end && r == r_end {
+            return;
+        }
+        if t_max_c < t_max_r {
+            t_max_c += t_delta_c;
+            c += step_c;
+        } else {
+            t_max_r += t_delta_r;
+            r += step_r;
+        }
     }
 }
 
@@ -305,6 +400,31 @@ mod tests {
     }
 
     #[test]
+    fn each_beam_of_a_scan_is_a_measurement_of_its_own() {
+        let cfg = MappingConfig::default();
+        let prob = |l: f64| 1.0 / (1.0 + (-l).exp());
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-6;
+        // Three beams along row 0: one returns at pixel 35, one passes it to 39.
+        let ends = [(3.55, 0.05, true), (3.95, 0.05, false), (2.05, 0.05, false)];
+        let mut one = map();
+        one.integrate_scan(0.05, 0.05, &ends);
+        let mut apart = map();
+        for end in ends {
+            apart.integrate_beam(0.05, 0.05, end.0, end.1, end.2);
+        }
+        assert_eq!(one.probabilities(), apart.probabilities());
+        let p = one.probabilities();
+        let three_misses = (3.0 * cfg.miss_log_odds).max(cfg.min_log_odds);
+        assert!(close(p[10], prob(three_misses)), "{}", p[10]);
+        assert!(
+            close(p[35], prob(cfg.hit_log_odds + cfg.miss_log_odds)),
+            "{}",
+            p[35]
+        );
+        assert!(close(p[38], prob(cfg.miss_log_odds)), "{}", p[38]);
+    }
+
+    #[test]
     fn cells_become_free_then_obstacle_by_the_rule() {
         let mut m = map();
         // Sweep cell (0, 0) free: 100 pixels, all observed.
@@ -332,6 +452,83 @@ mod tests {
         m.take_changes(&mut out);
         assert_eq!(out, vec![(Pos::new(0, 0), Occupancy::Obstacle)]);
         assert_eq!(m.coarse()[0], Occupancy::Obstacle);
+    }
+
+    #[test]
+    fn disc_test_agrees_with_a_look_at_every_pixel() {
+        let mut m = map();
+        // A few occupied pixels scattered over the cells.
+        for (x, y) in [
+            (0.35, 0.45),
+            (1.95, 2.05),
+            (2.05, 2.05),
+            (3.55, 0.15),
+            (0.95, 3.95),
+        ] {
+            for _ in 0..2 {
+                m.integrate_beam(x, y, x, y, true);
+            }
+        }
+        let brute = |x: f64, y: f64, radius: f64| {
+            (0..40).any(|r| {
+                (0..40).any(|c| {
+                    let nx = x.clamp(c as f64 * 0.1, (c + 1) as f64 * 0.1);
+                    let ny = y.clamp(r as f64 * 0.1, (r + 1) as f64 * 0.1);
+                    m.occupied(r, c) && (nx - x).powi(2) + (ny - y).powi(2) < radius * radius
+                })
+            })
+        };
+        let mut hits = 0;
+        for i in 0..80 {
+            for j in 0..80 {
+                let (x, y) = (i as f64 * 0.05 + 0.01, j as f64 * 0.05 + 0.02);
+                for radius in [0.1, 0.3, 0.7] {
+                    let want = brute(x, y, radius);
+                    assert_eq!(
+                        m.disc_hits_occupied(x, y, radius),
+                        want,
+                        "({x}, {y}) r {radius}"
+                    );
+                    hits += usize::from(want);
+                }
+            }
+        }
+        assert!(hits > 100, "{hits}");
+    }
+
+    #[test]
+    fn the_inflated_map_answers_the_disc_test_at_every_pixel_centre() {
+        let radius = 0.227;
+        let mut m = map().with_inflation(radius);
+        let check = |m: &RobotMap| {
+            let mut blocked = 0;
+            for r in 0..40 {
+                for c in 0..40 {
+                    let (x, y) = ((c as f64 + 0.5) * 0.1, (r as f64 + 0.5) * 0.1);
+                    assert_eq!(
+                        m.blocked(r, c),
+                        m.disc_hits_occupied(x, y, radius),
+                        "({r}, {c})"
+                    );
+                    blocked += usize::from(m.blocked(r, c));
+                }
+            }
+            blocked
+        };
+        // Pixels turn occupied (one by the border), then one turns free again.
+        for (x, y) in [(0.35, 0.45), (1.95, 2.05), (2.05, 2.05), (3.95, 0.15)] {
+            for _ in 0..2 {
+                m.integrate_beam(x, y, x, y, true);
+            }
+        }
+        let before = check(&m);
+        assert!(before > 30, "{before}");
+        for _ in 0..6 {
+            m.integrate_beam(2.05, 2.05, 2.25, 2.05, false);
+        }
+        assert!(!m.occupied(20, 20));
+        let after = check(&m);
+        assert!(after < before, "{after} vs {before}");
     }
 
     #[test]

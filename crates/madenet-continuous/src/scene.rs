@@ -77,6 +77,25 @@ impl Shape {
     }
 }
 
+/// The edge of a `width_m` × `height_m` map as four walls half a metre thick just outside it:
+/// nothing leaves the map, and no pixel inside it is taken.
+fn edge_walls(width_m: f64, height_m: f64) -> [Shape; 4] {
+    let (w2, h2) = (width_m / 2.0, height_m / 2.0);
+    [
+        (w2, -0.25, w2 + 0.5, 0.25),
+        (w2, height_m + 0.25, w2 + 0.5, 0.25),
+        (-0.25, h2, 0.25, h2 + 0.5),
+        (width_m + 0.25, h2, 0.25, h2 + 0.5),
+    ]
+    .map(|(x, y, hx, hy)| Shape::Rect {
+        x,
+        y,
+        hx,
+        hy,
+        angle: 0.0,
+    })
+}
+
 /// A world's true geometry.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -152,22 +171,7 @@ impl Scene {
                 });
             }
         }
-        // The map's edge is a wall: half a metre thick, just outside the map.
-        let (wm, hm) = (w as f64 * res, h as f64 * res);
-        for (x, y, hx, hy) in [
-            (wm / 2.0, -0.25, wm / 2.0 + 0.5, 0.25),
-            (wm / 2.0, hm + 0.25, wm / 2.0 + 0.5, 0.25),
-            (-0.25, hm / 2.0, 0.25, hm / 2.0 + 0.5),
-            (wm + 0.25, hm / 2.0, 0.25, hm / 2.0 + 0.5),
-        ] {
-            shapes.push(Shape::Rect {
-                x,
-                y,
-                hx,
-                hy,
-                angle: 0.0,
-            });
-        }
+        shapes.extend(edge_walls(w as f64 * res, h as f64 * res));
         Scene {
             shapes,
             fine,
@@ -176,8 +180,8 @@ impl Scene {
     }
 
     /// A scene from shapes inside a `width_m` × `height_m` box, rasterized at `resolution`
-    /// (a pixel is an obstacle when its centre lies in a shape); the box's border becomes four
-    /// thin walls.
+    /// (a pixel is an obstacle when its centre lies in a shape); the box's edge is a wall just
+    /// outside it.
     pub fn from_shapes(
         mut shapes: Vec<Shape>,
         width_m: f64,
@@ -185,22 +189,7 @@ impl Scene {
         resolution: f64,
         name: &str,
     ) -> Scene {
-        let t = resolution;
-        let (w2, h2) = (width_m / 2.0, height_m / 2.0);
-        for (x, y, hx, hy) in [
-            (w2, t / 2.0, w2, t / 2.0),
-            (w2, height_m - t / 2.0, w2, t / 2.0),
-            (t / 2.0, h2, t / 2.0, h2),
-            (width_m - t / 2.0, h2, t / 2.0, h2),
-        ] {
-            shapes.push(Shape::Rect {
-                x,
-                y,
-                hx,
-                hy,
-                angle: 0.0,
-            });
-        }
+        shapes.extend(edge_walls(width_m, height_m));
         let w = (width_m / resolution).round().max(1.0) as usize;
         let h = (height_m / resolution).round().max(1.0) as usize;
         let mut cells = vec![Occupancy::Free; w * h];
@@ -247,6 +236,74 @@ impl Scene {
         );
         g.resolution = cell_size;
         g
+    }
+
+    /// Which pixels of [`Scene::fine`] the centre of a disc of `radius` metres can reach from
+    /// the points `from` (metres) without the disc touching an obstacle pixel: where a robot
+    /// of that footprint can drive (8-connected; a start is a seed even where the raster's
+    /// rounding blocks it).
+    pub fn drivable(&self, from: &[(f64, f64)], radius: f64) -> Vec<bool> {
+        let (h, w, res) = (self.fine.height(), self.fine.width(), self.fine.resolution);
+        let cells = self.fine.cells();
+        // The nearest point of a pixel `d` pixels away lies (|d| − ½) pixels from a centre.
+        let reach = (radius / res).ceil() as i64 + 1;
+        let gap = |d: i64| (d.abs() as f64 - 0.5).max(0.0) * res;
+        let kernel: Vec<(i64, i64)> = (-reach..=reach)
+            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+            .filter(|&(dr, dc)| gap(dr).powi(2) + gap(dc).powi(2) < radius * radius)
+            .collect();
+        // The edge walls lie outside the raster: within `radius` of the edge is blocked too.
+        let edge = |k: usize, n: usize| {
+            let d = (k as f64 + 0.5).min(n as f64 - k as f64 - 0.5) * res;
+            d < radius
+        };
+        let mut blocked: Vec<bool> = (0..h * w)
+            .map(|k| edge(k / w, h) || edge(k % w, w))
+            .collect();
+        for (k, _) in cells
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| c != Occupancy::Free)
+        {
+            let (r, c) = ((k / w) as i64, (k % w) as i64);
+            for &(dr, dc) in &kernel {
+                let (nr, nc) = (r + dr, c + dc);
+                if nr >= 0 && nc >= 0 && (nr as usize) < h && (nc as usize) < w {
+                    blocked[nr as usize * w + nc as usize] = true;
+                }
+            }
+        }
+        let mut seen = vec![false; h * w];
+        let mut queue = std::collections::VecDeque::new();
+        for &(x, y) in from {
+            let (r, c) = ((y / res).floor() as i64, (x / res).floor() as i64);
+            if r >= 0 && c >= 0 && (r as usize) < h && (c as usize) < w {
+                let k = r as usize * w + c as usize;
+                if !seen[k] {
+                    seen[k] = true;
+                    queue.push_back(k);
+                }
+            }
+        }
+        while let Some(k) = queue.pop_front() {
+            let (r, c) = ((k / w) as i64, (k % w) as i64);
+            // The grid world's moves but staying: the 8 neighbours.
+            for (dr, dc) in madenet_world::geometry::Move::ALL.map(|m| m.delta()) {
+                if (dr, dc) == (0, 0) {
+                    continue;
+                }
+                let (nr, nc) = (r + dr as i64, c + dc as i64);
+                if nr < 0 || nc < 0 || nr as usize >= h || nc as usize >= w {
+                    continue;
+                }
+                let j = nr as usize * w + nc as usize;
+                if !seen[j] && !blocked[j] {
+                    seen[j] = true;
+                    queue.push_back(j);
+                }
+            }
+        }
+        seen
     }
 
     /// The centre of cell `p` of `cell_size` metres, in metres.
@@ -339,6 +396,44 @@ pub fn generate_cluttered(side: f64, resolution: f64, seed: u64) -> Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_edge_takes_no_pixel_and_a_gap_narrower_than_the_footprint_stops_the_drive() {
+        let wall = |y: f64, hy: f64| Shape::Rect {
+            x: 3.0,
+            y,
+            hx: 0.1,
+            hy,
+            angle: 0.0,
+        };
+        // A wall across a 6 m × 4 m box at x = 3 m, open between y = 1.8 and y = 1.8 + gap.
+        let scene = |gap: f64| {
+            let low = 1.8;
+            Scene::from_shapes(
+                vec![
+                    wall(low / 2.0, low / 2.0),
+                    wall((low + gap + 4.0) / 2.0, (4.0 - low - gap) / 2.0),
+                ],
+                6.0,
+                4.0,
+                0.1,
+                "gap",
+            )
+        };
+        let empty = Scene::from_shapes(Vec::new(), 6.0, 4.0, 0.1, "empty");
+        assert!(empty.fine.cells().iter().all(|&c| c == Occupancy::Free));
+        assert_eq!(empty.shapes.len(), 4, "the edge walls, outside");
+        // From the left half: the right half only through a gap wider than the disc.
+        let right = |d: &[bool], s: &Scene| (0..d.len()).any(|k| d[k] && k % s.fine.width() > 35);
+        let narrow = scene(0.4);
+        assert!(!right(&narrow.drivable(&[(1.0, 2.0)], 0.227), &narrow));
+        let wide = scene(0.7);
+        let d = wide.drivable(&[(1.0, 2.0)], 0.227);
+        assert!(right(&d, &wide));
+        // Nothing within the footprint of a wall or the edge is drivable.
+        let w = wide.fine.width();
+        assert!((0..d.len()).all(|k| !d[k] || (k % w >= 2 && k / w >= 2)));
+    }
 
     #[test]
     fn a_grid_becomes_rectangles_covering_exactly_its_solid_pixels() {

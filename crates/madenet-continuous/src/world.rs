@@ -10,6 +10,7 @@ use madenet_map::{generate::reachable_from_with, OccGrid, Occupancy, Pos};
 use madenet_world::rng::{stream, Rng};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
+use rand_distr::StandardNormal;
 use rapier2d::prelude::*;
 use std::sync::Arc;
 
@@ -73,6 +74,12 @@ pub struct ContinuousWorld {
     collisions: Collisions,
     distance: Vec<f64>,
     scans: Vec<Vec<Beam>>,
+    /// Scratch of [`ContinuousWorld::scan`]: colliders in range, bearing, angular half-width.
+    near: Vec<(ColliderHandle, f64, f64)>,
+    /// Scratch of [`ContinuousWorld::scan`]: where its beams end, and whether they returned.
+    ends: Vec<(f64, f64, bool)>,
+    /// (cos φ_k, sin φ_k) of each beam's angle φ_k from the heading.
+    beam_dirs: Vec<(f64, f64)>,
     sensing_m: f64,
 }
 
@@ -189,7 +196,28 @@ impl ContinuousWorld {
         }
         physics.integration_parameters.dt = cfg.control_period as f32;
         physics.step();
-        // Explorable: the true free cells reachable from a start.
+        // Explorable: the true free cells reachable from a start on the cells, into which the
+        // local planner can drive on the true geometry (its footprint plus margin reaches a
+        // pixel of the cell): a free cell walled in by obstacles no robot can pass or see
+        // around is not asked for.
+        let drivable = scene.drivable(
+            &starts[..n]
+                .iter()
+                .map(|&p| Scene::cell_centre(p, cell))
+                .collect::<Vec<_>>(),
+            cfg.robot.radius + cfg.planner.safety_margin,
+        );
+        let mut enterable = vec![false; coarse_truth.len()];
+        {
+            let (fw, cell_px) = (scene.fine.width(), cell / scene.fine.resolution);
+            let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as usize;
+            for (k, _) in drivable.iter().enumerate().filter(|(_, &d)| d) {
+                let (r, c) = (cell_of(k / fw), cell_of(k % fw));
+                if r < coarse_truth.height() && c < coarse_truth.width() {
+                    enterable[r * coarse_truth.width() + c] = true;
+                }
+            }
+        }
         let mut explorable = vec![false; coarse_truth.len()];
         for &p in &starts[..n] {
             if coarse_truth.get(p) == Occupancy::Free {
@@ -202,10 +230,16 @@ impl ContinuousWorld {
                 }
             }
         }
+        for (e, &d) in explorable.iter_mut().zip(&enterable) {
+            *e &= d;
+        }
         let explorable_count = explorable.iter().filter(|&&e| e).count();
         let (px_h, px_w) = map_pixels(&scene, &cfg);
         let maps = (0..n)
-            .map(|_| RobotMap::new(px_h, px_w, cell, cfg.mapping, &scenario.discretize))
+            .map(|_| {
+                RobotMap::new(px_h, px_w, cell, cfg.mapping, &scenario.discretize)
+                    .with_inflation(cfg.robot.radius + cfg.planner.safety_margin)
+            })
             .collect();
         let scan_every = (1.0 / (cfg.lidar.rate_hz * cfg.control_period))
             .round()
@@ -230,6 +264,15 @@ impl ContinuousWorld {
             collisions: Collisions::default(),
             distance: vec![0.0; n],
             scans: vec![Vec::new(); n],
+            near: Vec::new(),
+            ends: Vec::new(),
+            beam_dirs: (0..cfg.lidar.beams)
+                .map(|k| {
+                    let fov = cfg.lidar.fov_deg.to_radians();
+                    let phi = -fov / 2.0 + (k as f64 + 0.5) * fov / cfg.lidar.beams as f64;
+                    (phi.cos(), phi.sin())
+                })
+                .collect(),
             sensing_m,
             poses,
             physics,
@@ -320,6 +363,14 @@ impl ContinuousWorld {
             .count();
         known as f64 / self.explorable_count as f64
     }
+    /// The explorable cells no robot knows yet.
+    pub fn unexplored(&self) -> Vec<Pos> {
+        let w = self.coarse_truth.width();
+        (0..self.explorable.len())
+            .filter(|&k| self.explorable[k] && !self.team_known[k])
+            .map(|k| Pos::new((k / w) as i32, (k % w) as i32))
+            .collect()
+    }
     /// Every explorable cell is known to some robot.
     pub fn is_complete(&self) -> bool {
         self.explorable
@@ -331,9 +382,12 @@ impl ContinuousWorld {
     pub fn take_observed(&mut self, i: usize, out: &mut Vec<(Pos, Occupancy)>) {
         out.append(&mut self.pending[i]);
     }
-    /// Robot `i`'s local planner found cell `p` impassable: an obstacle in its map from now on.
+    /// Robot `i`'s local planner found cell `p` impassable, or robot `i` stood next to it and
+    /// could not read it: an obstacle in its map from now on, and resolved for the team.
     pub fn block(&mut self, i: usize, p: Pos) {
         self.maps[i].block(p);
+        // Resolved, as far as the team can: it counts as explored (the trial reports how many
+        // cells were resolved this way).
         self.collect(i);
     }
 
@@ -453,20 +507,25 @@ impl ContinuousWorld {
         let res = self.cfg.mapping.resolution;
         let filter = QueryFilter::default().exclude_rigid_body(self.bodies[i]);
         let origin = Vector::new(p.x as f32, p.y as f32);
+        let mut near = std::mem::take(&mut self.near);
+        near_colliders(&self.physics, (p.x, p.y), range, filter, &mut near);
         let mut beams = std::mem::take(&mut self.scans[i]);
         beams.clear();
-        for k in 0..lidar.beams {
-            let a = p.theta - fov / 2.0 + (k as f64 + 0.5) * fov / lidar.beams as f64;
+        let mut ends = std::mem::take(&mut self.ends);
+        ends.clear();
+        // Beam k points at θ + φ_k: a rotation of the sensor's fixed directions.
+        let (cos_t, sin_t) = (p.theta.cos(), p.theta.sin());
+        for (k, &(cos_k, sin_k)) in self.beam_dirs.iter().enumerate() {
             let rng = &mut self.rng_sensor[i];
             let missed = rng.random::<f64>() < lidar.miss_prob;
-            let noise = gaussian(rng) * lidar.range_noise;
+            let noise = rng.sample::<f64, _>(StandardNormal) * lidar.range_noise;
             if missed {
                 continue;
             }
-            let (dx, dy) = (a.cos(), a.sin());
+            let a = p.theta - fov / 2.0 + (k as f64 + 0.5) * fov / lidar.beams as f64;
+            let (dx, dy) = (cos_t * cos_k - sin_t * sin_k, sin_t * cos_k + cos_t * sin_k);
             let ray = Ray::new(origin, Vector::new(dx as f32, dy as f32));
-            let hit = self.physics.cast_ray(&ray, range as f32, true, filter);
-            match hit {
+            match cast_beam(&self.physics, &near, &ray, a, range as f32) {
                 Some((h, toi)) => {
                     let on_robot = self
                         .physics
@@ -476,29 +535,26 @@ impl ContinuousWorld {
                     let d = (toi as f64 + noise).clamp(0.0, range);
                     if on_robot {
                         let d = (d - res).max(0.0);
-                        self.maps[i].integrate_beam(p.x, p.y, p.x + dx * d, p.y + dy * d, false);
+                        ends.push((p.x + dx * d, p.y + dy * d, false));
                         beams.push((a, d, false));
                     } else {
                         // A quarter pixel past the surface: the end lands in the obstacle's
                         // pixel from whichever side the beam comes.
                         let e = d + res * 0.25;
-                        self.maps[i].integrate_beam(p.x, p.y, p.x + dx * e, p.y + dy * e, true);
+                        ends.push((p.x + dx * e, p.y + dy * e, true));
                         beams.push((a, d, true));
                     }
                 }
                 None => {
-                    self.maps[i].integrate_beam(
-                        p.x,
-                        p.y,
-                        p.x + dx * range,
-                        p.y + dy * range,
-                        false,
-                    );
+                    ends.push((p.x + dx * range, p.y + dy * range, false));
                     beams.push((a, range, false));
                 }
             }
         }
+        self.maps[i].integrate_scan(p.x, p.y, &ends);
+        self.ends = ends;
         self.scans[i] = beams;
+        self.near = near;
         self.collect(i);
     }
 
@@ -517,8 +573,75 @@ impl ContinuousWorld {
     }
 }
 
-/// Bytes a robot's map takes per pixel (log-odds and the observed flag).
-const MAP_BYTES_PER_PIXEL: f64 = 5.0;
+/// The colliders that a scan from `at` with `range` can hit (`filter` passing), each with the
+/// bearing and angular half-width of its bounding circle, into `out`: one broad-phase query per
+/// scan instead of one per beam, so that a beam is cast only against the few shapes around its
+/// bearing.
+fn near_colliders(
+    physics: &PhysicsWorld,
+    at: (f64, f64),
+    range: f64,
+    filter: QueryFilter,
+    out: &mut Vec<(ColliderHandle, f64, f64)>,
+) {
+    out.clear();
+    let reach = Aabb::new(
+        Vector::new((at.0 - range) as f32, (at.1 - range) as f32),
+        Vector::new((at.0 + range) as f32, (at.1 + range) as f32),
+    );
+    for (h, co) in physics.intersect_aabb_conservative(reach, filter) {
+        let b = co.compute_aabb();
+        let (c, half) = (b.center(), b.half_extents());
+        let (cx, cy) = (c.x as f64 - at.0, c.y as f64 - at.1);
+        // A millimetre of slack against rounding in the f32 boxes.
+        let (d, rc) = (cx.hypot(cy), (half.x as f64).hypot(half.y as f64) + 1e-3);
+        if d - rc > range {
+            continue;
+        }
+        let spread = if d <= rc {
+            std::f64::consts::PI
+        } else {
+            (rc / d).asin()
+        };
+        out.push((h, cy.atan2(cx), spread));
+    }
+}
+
+/// The first of `near` (from [`near_colliders`]) that `ray` at bearing `angle` hits within
+/// `range`, and the distance: what `physics.cast_ray` answers, without the per-beam tree walk.
+fn cast_beam(
+    physics: &PhysicsWorld,
+    near: &[(ColliderHandle, f64, f64)],
+    ray: &Ray,
+    angle: f64,
+    range: f32,
+) -> Option<(ColliderHandle, f32)> {
+    let mut hit: Option<(ColliderHandle, f32)> = None;
+    let angle = normalize_angle(angle);
+    for &(h, bearing, spread) in near {
+        // Both in (−π, π]: one turn at most between them.
+        let mut off = (angle - bearing).abs();
+        if off > std::f64::consts::PI {
+            off = std::f64::consts::TAU - off;
+        }
+        if off > spread {
+            continue;
+        }
+        let Some(co) = physics.colliders.get(h) else {
+            continue;
+        };
+        let max = hit.map_or(range, |(_, t)| t);
+        if let Some(t) = co.shape().cast_ray(co.position(), ray, max, true) {
+            if hit.is_none_or(|(_, best)| t < best) {
+                hit = Some((h, t));
+            }
+        }
+    }
+    hit
+}
+
+/// Bytes a robot's map takes per pixel (log-odds, the observed flag, the inflation count).
+const MAP_BYTES_PER_PIXEL: f64 = 9.0;
 /// The most memory the robots' maps of one trial may take (4 GB).
 const MAX_MAP_BYTES: f64 = 4.0e9;
 
@@ -556,13 +679,6 @@ pub fn normalize_angle(a: f64) -> f64 {
     a
 }
 
-/// A standard normal draw (Box–Muller, by hand: one line, no distribution crate).
-fn gaussian(rng: &mut Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(1e-300);
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -579,6 +695,41 @@ mod tests {
             seed,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn a_beam_cast_against_the_colliders_near_a_scan_hits_what_the_broad_phase_hits() {
+        let w = world(1);
+        let range = w.sensing_m();
+        let mut near = Vec::new();
+        let (mut hits, mut rays) = (0, 0);
+        // Positions over the whole 20 m world (some inside obstacles, some by the border),
+        // and robot 0 excluded as in its own scan.
+        for py in 0..40 {
+            for px in 0..40 {
+                let at = (px as f64 * 0.5 + 0.13, py as f64 * 0.5 + 0.29);
+                let filter = QueryFilter::default().exclude_rigid_body(w.bodies[0]);
+                near_colliders(&w.physics, at, range, filter, &mut near);
+                for k in 0..90 {
+                    let a = normalize_angle(k as f64 * 4.0f64.to_radians() - 2.0);
+                    let ray = Ray::new(
+                        Vector::new(at.0 as f32, at.1 as f32),
+                        Vector::new(a.cos() as f32, a.sin() as f32),
+                    );
+                    let fast = cast_beam(&w.physics, &near, &ray, a, range as f32);
+                    let slow = w.physics.cast_ray(&ray, range as f32, true, filter);
+                    assert_eq!(
+                        fast.map(|(_, t)| t),
+                        slow.map(|(_, t)| t),
+                        "beam at {a} rad from {at:?}"
+                    );
+                    rays += 1;
+                    hits += usize::from(slow.is_some());
+                }
+            }
+        }
+        // Both outcomes were exercised.
+        assert!(hits > rays / 10 && hits < rays, "{hits} of {rays}");
     }
 
     #[test]

@@ -80,11 +80,27 @@ pub struct ContinuousResult {
     pub decisions: usize,
     /// Explored fraction at every whole simulated second (index = second).
     pub explored: Vec<f64>,
+    /// Metres the team has driven at every whole simulated second, aligned with `explored`.
+    pub distance: Vec<f64>,
     /// Wall-clock seconds the trial took.
     pub wall_s: f64,
 }
 
 impl ContinuousResult {
+    /// The grid world's metrics of this trial, with the simulated second as the timestep:
+    /// TNS is ET rounded up to whole seconds, `steps_to` in whole seconds, OFV over the
+    /// per-second curves, NOLI (both counts) the local interactions of the radio rounds.
+    pub fn metrics(&self) -> madenet_metrics::TrialMetrics {
+        let mut rec = madenet_metrics::MetricsRecorder::new(self.explored[0]);
+        for (&e, &d) in self.explored.iter().zip(&self.distance).skip(1) {
+            rec.record(e, d, 0, 0);
+        }
+        let mut m = rec.finish(self.complete);
+        m.noli = self.local_interactions as usize;
+        m.noli_authors = self.local_interactions as usize;
+        m
+    }
+
     /// Simulated seconds per wall-clock second.
     pub fn real_time_factor(&self) -> f64 {
         if self.wall_s > 0.0 {
@@ -135,6 +151,7 @@ pub struct ContinuousTrial {
     impassable: u64,
     held_up: u64,
     explored: Vec<f64>,
+    distance: Vec<f64>,
     started: Instant,
 }
 
@@ -194,6 +211,7 @@ impl ContinuousTrial {
             impassable: 0,
             held_up: 0,
             explored: vec![world.explored_fraction()],
+            distance: vec![0.0],
             started: Instant::now(),
             agents,
             world,
@@ -340,6 +358,7 @@ impl ContinuousTrial {
         let second = self.world.time().floor() as usize;
         if second >= self.explored.len() {
             self.explored.push(self.world.explored_fraction());
+            self.distance.push(self.team_distance());
         }
         true
     }
@@ -395,8 +414,14 @@ impl ContinuousTrial {
     /// The 8-neighbours of `cell` that robot `i`'s map still cannot read after it stood in
     /// `cell` for a scan become obstacles to it: it cannot see them from there (something
     /// thinner than the rule's fraction stands between), and a frontier it cannot resolve by
-    /// going there would draw it back for ever.
+    /// going there would draw it back for ever. Not while a teammate stands within two cells
+    /// (it may be what hides them). Written-off cells count as explored (resolved as far as
+    /// the team can) and are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
+        // A teammate close by may be what hides them: not written off (asked again later).
+        if (0..self.agents.len()).any(|j| j != i && self.world.cell_of(j).chebyshev(cell) <= 2) {
+            return;
+        }
         let (h, w) = self.world.map(i).coarse_size();
         for dr in -1..=1 {
             for dc in -1..=1 {
@@ -426,9 +451,20 @@ impl ContinuousTrial {
         self.finish()
     }
 
+    /// Metres the team has driven so far.
+    fn team_distance(&self) -> f64 {
+        (0..self.agents.len()).map(|i| self.world.distance(i)).sum()
+    }
+
     /// The result so far.
-    pub fn finish(self) -> ContinuousResult {
+    pub fn finish(mut self) -> ContinuousResult {
+        // The curves end with the state at the end, as the sample of the second it falls in.
+        if self.world.time() > (self.explored.len() - 1) as f64 + 1e-9 {
+            self.explored.push(self.world.explored_fraction());
+            self.distance.push(self.team_distance());
+        }
         let Collisions { obstacle, robot } = self.world.collisions();
+        let team_distance_m = self.team_distance();
         ContinuousResult {
             map: self.spec_map,
             policy: self.policy,
@@ -436,7 +472,7 @@ impl ContinuousTrial {
             comm_success_prob: self.world.scenario().comm_success_prob,
             complete: self.world.is_complete(),
             exploration_time_s: self.world.time(),
-            team_distance_m: (0..self.agents.len()).map(|i| self.world.distance(i)).sum(),
+            team_distance_m,
             obstacle_collisions: obstacle,
             robot_collisions: robot,
             local_interactions: self.local_interactions,
@@ -446,6 +482,7 @@ impl ContinuousTrial {
             held_up: self.held_up,
             decisions: self.agents.iter().map(|a| a.stats().decisions).sum(),
             explored: self.explored,
+            distance: self.distance,
             wall_s: self.started.elapsed().as_secs_f64(),
         }
     }
