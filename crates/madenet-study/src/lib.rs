@@ -24,7 +24,7 @@ pub mod scale;
 
 pub use config::{StudyConfig, StudyError};
 pub use runner::{TrialKey, TrialOutcome};
-pub use scale::{run_scale, ScaleConfig};
+pub use scale::{run_scale, ScaleConfig, ScaleWorld};
 
 use std::path::{Path, PathBuf};
 

@@ -2,6 +2,7 @@
 
 use crate::config::{oracle_method, StudyConfig, StudyError, StudyMap};
 use madenet_metrics::COVERAGE_LEVELS;
+use madenet_sim::continuous::{ContinuousSpec, ContinuousTrial};
 use madenet_sim::rollout::{run_oracle, OracleKind};
 use madenet_sim::{PolicyRegistry, StartSpec, Trial, TrialSpec};
 use rayon::prelude::*;
@@ -56,7 +57,38 @@ pub struct TrialRow {
     pub decisions: usize,
     /// Mean wall-clock time of one decision (CT), seconds; not deterministic.
     pub per_decision_s: f64,
+    /// What only a continuous-world trial has (its own columns; absent in grid tables).
+    pub continuous: Option<ContinuousColumns>,
 }
+
+/// The columns of a continuous-world trial ([`madenet_sim::continuous`]), where the timestep
+/// of the other columns is the simulated second (TNS: ET rounded up; `to_*`: seconds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContinuousColumns {
+    /// ET: simulated seconds to full exploration (the time cap when incomplete).
+    pub et_s: f64,
+    /// Robot–obstacle collisions.
+    pub obstacle_collisions: u64,
+    /// Robot–robot collisions.
+    pub robot_collisions: u64,
+    /// Cells a local planner found impassable (free on the coarse map, blocked in truth).
+    pub impassable_cells: u64,
+    /// Stuck events: a target cell not entered within `planner.stuck_time`.
+    pub stuck: u64,
+    /// Cells written off: unknown neighbours of a reached goal its robot could not read from
+    /// there (they count as explored).
+    pub written_off_cells: u64,
+}
+
+/// The extra columns of a continuous study's `trials.csv`, after the grid's.
+const CONTINUOUS_HEADER: [&str; 6] = [
+    "et_s",
+    "obstacle_collisions",
+    "robot_collisions",
+    "impassable_cells",
+    "stuck",
+    "written_off_cells",
+];
 
 /// One line of `curves.jsonl`: the exploration curve of a trial.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,6 +135,13 @@ pub fn header() -> Vec<String> {
     h
 }
 
+/// The columns of a continuous study's `trials.csv`: [`header`], then ET and the collisions.
+pub fn continuous_header() -> Vec<String> {
+    let mut h = header();
+    h.extend(CONTINUOUS_HEADER.iter().map(|s| s.to_string()));
+    h
+}
+
 impl TrialRow {
     /// The row as a CSV line. Numbers are written in Rust's shortest form that reads back as
     /// the same `f64`, so a resumed study computes its statistics from exactly the values a
@@ -131,6 +170,16 @@ impl TrialRow {
                 .iter()
                 .map(|s| s.map(|v| v.to_string()).unwrap_or_default()),
         );
+        if let Some(c) = &self.continuous {
+            f.extend([
+                c.et_s.to_string(),
+                c.obstacle_collisions.to_string(),
+                c.robot_collisions.to_string(),
+                c.impassable_cells.to_string(),
+                c.stuck.to_string(),
+                c.written_off_cells.to_string(),
+            ]);
+        }
         let mut w = csv::WriterBuilder::new()
             .has_headers(false)
             .from_writer(Vec::new());
@@ -139,7 +188,8 @@ impl TrialRow {
     }
 
     fn from_record(r: &csv::StringRecord) -> Option<TrialRow> {
-        if r.len() != FIXED_HEADER.len() + COVERAGE_LEVELS.len() {
+        let grid = FIXED_HEADER.len() + COVERAGE_LEVELS.len();
+        if r.len() != grid && r.len() != grid + CONTINUOUS_HEADER.len() {
             return None;
         }
         let g = |i: usize| r.get(i);
@@ -171,6 +221,18 @@ impl TrialRow {
                     }
                 })
                 .collect::<Option<Vec<_>>>()?,
+            continuous: if r.len() == grid {
+                None
+            } else {
+                Some(ContinuousColumns {
+                    et_s: g(grid)?.parse().ok()?,
+                    obstacle_collisions: g(grid + 1)?.parse().ok()?,
+                    robot_collisions: g(grid + 2)?.parse().ok()?,
+                    impassable_cells: g(grid + 3)?.parse().ok()?,
+                    stuck: g(grid + 4)?.parse().ok()?,
+                    written_off_cells: g(grid + 5)?.parse().ok()?,
+                })
+            },
         })
     }
 }
@@ -246,6 +308,37 @@ pub struct Planned {
     pub spec: TrialSpec,
     /// The oracle and its number of futures.
     pub oracle: Option<(OracleKind, usize)>,
+    /// `Some`: the trial runs in the continuous world on this geometry, `spec.map` being its
+    /// coarse truth and `spec.starts` the cells whose centres the robots start at.
+    pub continuous: Option<PlannedContinuous>,
+}
+
+/// The continuous world of a [`Planned`] trial.
+#[derive(Clone, Debug)]
+pub struct PlannedContinuous {
+    /// The true geometry.
+    pub scene: std::sync::Arc<madenet_continuous::Scene>,
+    /// The world's parameters.
+    pub config: madenet_continuous::ContinuousConfig,
+}
+
+impl Planned {
+    /// The continuous trial this plans, if it is one.
+    fn continuous_trial(
+        &self,
+        registry: &PolicyRegistry,
+    ) -> Option<Result<ContinuousTrial, madenet_sim::SimError>> {
+        let c = self.continuous.as_ref()?;
+        let spec = ContinuousSpec {
+            scene: c.scene.clone(),
+            starts: self.spec.starts.clone(),
+            config: self.spec.config.clone(),
+            continuous: c.config,
+            policy: self.spec.policy.clone(),
+            seed: self.spec.seed,
+        };
+        Some(ContinuousTrial::new(spec, registry))
+    }
 }
 
 /// Everything the study runs, in output order: each policy of
@@ -292,7 +385,12 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<P
                             policy: policy.clone(),
                             seed,
                         };
-                        v.push(Planned { key, spec, oracle });
+                        v.push(Planned {
+                            key,
+                            spec,
+                            oracle,
+                            continuous: None,
+                        });
                     }
                 }
             }
@@ -306,6 +404,48 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<P
 pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, StudyError> {
     let (key, spec) = (&p.key, &p.spec);
     let failed = |e: madenet_sim::SimError| StudyError::Other(format!("{key}: {e}"));
+    if let Some(trial) = p.continuous_trial(registry) {
+        if p.oracle.is_some() {
+            return Err(StudyError::Other(format!(
+                "{key}: the oracles run in the grid world only"
+            )));
+        }
+        let r = trial.map_err(failed)?.run();
+        let m = r.metrics();
+        return Ok(TrialOutcome {
+            row: TrialRow {
+                key: key.clone(),
+                completed: m.completed,
+                tns: m.tns,
+                ttd: m.ttd,
+                noli: m.noli,
+                noli_authors: m.noli_authors,
+                ofv: m.ofv,
+                explored: m.explored,
+                steps_to: m.steps_to.clone(),
+                trial_s: r.wall_s,
+                decisions: r.decisions,
+                per_decision_s: if r.decisions > 0 {
+                    r.wall_s / r.decisions as f64
+                } else {
+                    0.0
+                },
+                continuous: Some(ContinuousColumns {
+                    et_s: r.exploration_time_s,
+                    obstacle_collisions: r.obstacle_collisions,
+                    robot_collisions: r.robot_collisions,
+                    impassable_cells: r.impassable_cells,
+                    stuck: r.stuck,
+                    written_off_cells: r.written_off_cells,
+                }),
+            },
+            curve: Curve {
+                key: key.clone(),
+                explored: m.explored_per_step,
+                distance: m.distance_per_step,
+            },
+        });
+    }
     let result = match p.oracle {
         None => Trial::with_registry(spec.clone(), registry)
             .map_err(failed)?
@@ -329,6 +469,7 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
             trial_s: result.timing.trial_s,
             decisions: result.timing.decisions,
             per_decision_s: result.timing.per_decision_s,
+            continuous: None,
         },
         curve: Curve {
             key: key.clone(),
@@ -365,9 +506,13 @@ pub fn check_planned(planned: &[Planned], registry: &PolicyRegistry) -> Result<(
     let first_seed = planned.iter().map(|p| p.key.seed).min().unwrap_or(0);
     for p in planned {
         if p.key.seed == first_seed {
-            Trial::with_registry(p.spec.clone(), registry).map_err(|e| {
+            let fails = |e: madenet_sim::SimError| {
                 StudyError::Other(format!("map {}, start {}: {e}", p.key.map, p.key.start))
-            })?;
+            };
+            match p.continuous_trial(registry) {
+                Some(t) => drop(t.map_err(fails)?),
+                None => drop(Trial::with_registry(p.spec.clone(), registry).map_err(fails)?),
+            }
         }
     }
     Ok(())
@@ -388,7 +533,8 @@ pub fn run_planned(
     // Rewrite the record files with exactly the complete trials, then append.
     let mut kept: Vec<&TrialOutcome> = done.values().collect();
     kept.sort_by(|a, b| a.row.key.cmp(&b.row.key));
-    write_records(out, &kept)?;
+    let continuous = planned.iter().any(|p| p.continuous.is_some());
+    write_records(out, &kept, continuous)?;
     let open = |name: &str| {
         std::fs::OpenOptions::new()
             .append(true)
@@ -434,7 +580,7 @@ pub fn run_planned(
         .collect();
     // Final files in plan order: the same bytes whatever the thread count or interruptions
     // (but for the wall-clock columns).
-    write_records(out, &all.iter().collect::<Vec<_>>())?;
+    write_records(out, &all.iter().collect::<Vec<_>>(), continuous)?;
     Ok(all)
 }
 
@@ -461,8 +607,21 @@ pub fn run_all(
 /// The bytes of `trials.csv` holding `outcomes`' rows in the given order: the one trial-table
 /// schema ([`header`]) of the study, the scalability study and `madenet batch`.
 pub fn trials_csv(outcomes: &[&TrialOutcome]) -> Vec<u8> {
+    let continuous = outcomes.iter().any(|o| o.row.continuous.is_some());
+    trials_table(outcomes, continuous)
+}
+
+/// [`trials_csv`] with the header of a continuous study's table ([`continuous_header`]) or of
+/// a grid study's.
+fn trials_table(outcomes: &[&TrialOutcome], continuous: bool) -> Vec<u8> {
     let mut w = csv::WriterBuilder::new().from_writer(Vec::new());
-    w.write_record(header()).expect("writing to memory");
+    // A continuous study's table has its own columns after the grid's.
+    if continuous {
+        w.write_record(continuous_header())
+    } else {
+        w.write_record(header())
+    }
+    .expect("writing to memory");
     let mut csv_bytes = w.into_inner().expect("writing to memory");
     for o in outcomes {
         csv_bytes.extend_from_slice(o.row.to_line().as_bytes());
@@ -470,8 +629,12 @@ pub fn trials_csv(outcomes: &[&TrialOutcome]) -> Vec<u8> {
     csv_bytes
 }
 
-fn write_records(out: &Path, outcomes: &[&TrialOutcome]) -> Result<(), StudyError> {
-    let csv_bytes = trials_csv(outcomes);
+fn write_records(
+    out: &Path,
+    outcomes: &[&TrialOutcome],
+    continuous: bool,
+) -> Result<(), StudyError> {
+    let csv_bytes = trials_table(outcomes, continuous);
     let mut curves = Vec::new();
     for o in outcomes {
         curves.extend_from_slice(

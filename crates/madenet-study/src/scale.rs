@@ -18,8 +18,11 @@
 //!   (side, team) cells where it has lower mean TNS and TTD, and pooled Wilcoxon tests.
 
 use crate::config::{field, StudyError};
-use crate::runner::{run_planned, write_atomic, Planned, TrialKey, TrialOutcome};
+use crate::runner::{
+    run_planned, write_atomic, Planned, PlannedContinuous, TrialKey, TrialOutcome,
+};
 use madenet_baselines::BaselineParams;
+use madenet_continuous::scene::generate_cluttered;
 use madenet_map::generate::{generate_with_movement, starts_near, GeneratorConfig};
 use madenet_map::Pos;
 use madenet_sim::TrialSpec;
@@ -29,6 +32,7 @@ use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Where a team starts in the scalability study.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -63,6 +67,18 @@ impl ScaleStart {
     }
 }
 
+/// The world the scalability study's trials run in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScaleWorld {
+    /// The grid world: timesteps, TNS in steps.
+    #[default]
+    Grid,
+    /// The continuous world (the paper's own protocol: differential-drive robots, lidar
+    /// maps, a local planner): generated cluttered scenes, ET in simulated seconds.
+    Continuous,
+}
+
 /// The scalability study's design, with its defaults.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -90,8 +106,16 @@ pub struct ScaleConfig {
     /// Communication success probability of every trial (the paper's Fig. 7: 1).
     pub csp: f64,
     /// Step cap per map cell: a trial on a side-S map stops after max(scenario.step_cap,
-    /// ⌈steps_per_cell · S²⌉) steps.
+    /// ⌈steps_per_cell · S²⌉) steps (in the continuous world: simulated seconds, at least
+    /// `continuous.time_cap`).
     pub steps_per_cell: f64,
+    /// The world the trials run in. `continuous`: each map is a cluttered scene of the
+    /// continuous world's generator (bookshelves, bins, cylinders; S × S cells of
+    /// `scenario.cell_size` metres, drawn from `map_seed`; `density_min`/`density_max` do not
+    /// apply), read as cells by the scenario's discretization rule.
+    pub world: ScaleWorld,
+    /// The continuous world's parameters (`world = "continuous"` only).
+    pub continuous: madenet_continuous::ContinuousConfig,
     /// Everything else about the world (`num_robots` and `comm_success_prob` are set per trial).
     pub scenario: ScenarioConfig,
     /// Parameters of the classical baselines.
@@ -119,8 +143,27 @@ impl Default for ScaleConfig {
             seed_base: 1,
             csp: 1.0,
             steps_per_cell: 1.0,
+            world: ScaleWorld::Grid,
+            continuous: madenet_continuous::ContinuousConfig::default(),
             scenario: ScenarioConfig::default(),
             baselines: BaselineParams::default(),
+        }
+    }
+}
+
+impl ScaleConfig {
+    /// The continuous world's study as `madenet scale --world continuous` runs it: the paper's
+    /// Fig. 7 grid (sides 20, 30, 40, 60 m; teams 2–6; starts BL, TR, M) on one generated
+    /// scene per side, 3 seeds, methods made-net-any, nf, ub, spread (PB's cost grows with the
+    /// team and its grid results trail UB's).
+    pub fn continuous_default() -> Self {
+        ScaleConfig {
+            world: ScaleWorld::Continuous,
+            methods: ["made-net-any", "nf", "ub", "spread"]
+                .map(String::from)
+                .to_vec(),
+            maps_per_side: 1,
+            ..ScaleConfig::default()
         }
     }
 }
@@ -235,22 +278,46 @@ impl ScaleConfig {
         self.baselines
             .validate()
             .map_err(|e| field("baselines", e))?;
+        self.continuous
+            .validate()
+            .map_err(|e| field("continuous", e.to_string()))?;
         Ok(())
     }
 
-    /// The step cap on a side-`side` map.
+    /// The step cap on a side-`side` map (in the continuous world: the time cap, seconds).
     pub fn step_cap(&self, side: usize) -> usize {
-        self.scenario
-            .step_cap
-            .max((self.steps_per_cell * (side * side) as f64).ceil() as usize)
+        let floor = match self.world {
+            ScaleWorld::Grid => self.scenario.step_cap,
+            ScaleWorld::Continuous => self.continuous.time_cap.ceil() as usize,
+        };
+        floor.max((self.steps_per_cell * (side * side) as f64).ceil() as usize)
     }
 
     /// Every trial, in output order (method, side, map, start, team, seed).
     pub fn plan(&self) -> Result<Vec<ScalePlanned>, StudyError> {
         let movement = self.scenario.movement;
         let mut maps = Vec::new();
+        let cell = self.scenario.cell_size;
         for &side in &self.sides {
             for k in 0..self.maps_per_side {
+                if self.world == ScaleWorld::Continuous {
+                    let seed = derive_seed(self.map_seed, "scale-scene", (side * 1000 + k) as u64);
+                    let scene = generate_cluttered(
+                        side as f64 * cell,
+                        self.continuous.mapping.resolution,
+                        seed,
+                    );
+                    let grid = scene.coarse_truth(cell, &self.scenario.discretize);
+                    let planned = PlannedContinuous {
+                        scene: Arc::new(scene),
+                        config: madenet_continuous::ContinuousConfig {
+                            time_cap: self.step_cap(side) as f64,
+                            ..self.continuous
+                        },
+                    };
+                    maps.push((side, format!("side{side}-map{k}"), grid, Some(planned)));
+                    continue;
+                }
                 // The start areas (3 × 3 around each anchor) stay free.
                 let keep_free: Vec<Pos> = self
                     .starts
@@ -278,12 +345,12 @@ impl ScaleConfig {
                 let seed = derive_seed(self.map_seed, "scale-map", (side * 1000 + k) as u64);
                 let grid = generate_with_movement(&gen, seed, movement)
                     .map_err(|e| StudyError::Other(format!("map side {side} #{k}: {e}")))?;
-                maps.push((side, format!("side{side}-map{k}"), grid));
+                maps.push((side, format!("side{side}-map{k}"), grid, None));
             }
         }
         let mut v = Vec::new();
         for method in &self.methods {
-            for (side, name, grid) in &maps {
+            for (side, name, grid, continuous) in &maps {
                 for start in &self.starts {
                     for &team in &self.teams {
                         let cells =
@@ -325,6 +392,7 @@ impl ScaleConfig {
                                     key,
                                     spec,
                                     oracle: None,
+                                    continuous: continuous.clone(),
                                 },
                             });
                         }
@@ -349,12 +417,30 @@ pub struct CellRow {
     pub trials: usize,
     /// How many of them completed before the step cap.
     pub completed: usize,
-    /// Mean TNS (total number of steps), timesteps.
+    /// Mean TNS (total number of steps), timesteps; in the continuous world mean ET,
+    /// simulated seconds.
     pub tns: f64,
     /// Mean TTD (total travel distance), metres.
     pub ttd_m: f64,
     /// Mean NOLI (number of local interactions).
     pub noli: f64,
+    /// Collisions (robot–obstacle and robot–robot) over the cell's trials; 0 in the grid.
+    #[serde(skip)]
+    pub collisions: u64,
+}
+
+/// A row of a continuous study's `cells.csv`.
+#[derive(Serialize)]
+struct ContinuousCellRow<'a> {
+    side: usize,
+    team: usize,
+    method: &'a str,
+    trials: usize,
+    completed: usize,
+    et_s: f64,
+    ttd_m: f64,
+    noli: f64,
+    collisions: u64,
 }
 
 /// What [`run_scale`] produced.
@@ -393,8 +479,21 @@ pub fn run_scale(
     let cells = cells(cfg, &planned, &outcomes);
     let mut w = csv::Writer::from_writer(Vec::new());
     for c in &cells {
-        w.serialize(c)
-            .map_err(|e| StudyError::Other(e.to_string()))?;
+        match cfg.world {
+            ScaleWorld::Grid => w.serialize(c),
+            ScaleWorld::Continuous => w.serialize(ContinuousCellRow {
+                side: c.side,
+                team: c.team,
+                method: &c.method,
+                trials: c.trials,
+                completed: c.completed,
+                et_s: c.tns,
+                ttd_m: c.ttd_m,
+                noli: c.noli,
+                collisions: c.collisions,
+            }),
+        }
+        .map_err(|e| StudyError::Other(e.to_string()))?;
     }
     write_atomic(
         &out.join("cells.csv"),
@@ -437,9 +536,14 @@ pub fn cells(
                     method: method.clone(),
                     trials: sel.len(),
                     completed: sel.iter().filter(|o| o.row.completed).count(),
-                    tns: sel.iter().map(|o| o.row.tns as f64).sum::<f64>() / n,
+                    tns: sel.iter().map(|o| tns(o)).sum::<f64>() / n,
                     ttd_m: sel.iter().map(|o| o.row.ttd).sum::<f64>() / n,
                     noli: sel.iter().map(|o| o.row.noli as f64).sum::<f64>() / n,
+                    collisions: sel
+                        .iter()
+                        .filter_map(|o| o.row.continuous)
+                        .map(|c| c.obstacle_collisions + c.robot_collisions)
+                        .sum(),
                 });
             }
         }
@@ -469,8 +573,9 @@ fn paired(
         .collect()
 }
 
+/// The study's time metric: TNS in steps, or ET in seconds in the continuous world.
 fn tns(o: &TrialOutcome) -> f64 {
-    o.row.tns as f64
+    o.row.continuous.map_or(o.row.tns as f64, |c| c.et_s)
 }
 fn ttd(o: &TrialOutcome) -> f64 {
     o.row.ttd
@@ -492,9 +597,13 @@ fn report_text(
     wall: f64,
 ) -> String {
     let mut s = String::new();
+    let (what, unit, cap, world) = match cfg.world {
+        ScaleWorld::Grid => ("TNS", "steps", "step cap", "grid world"),
+        ScaleWorld::Continuous => ("ET", "s", "time cap, s", "continuous world"),
+    };
     let _ = writeln!(
         s,
-        "# Scalability study\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean TNS (steps) / TTD (m) / NOLI, completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
+        "# Scalability study ({world})\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean {what} ({unit}) / TTD (m) / NOLI, completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
         outcomes.len(),
         cfg.methods.len(),
         cfg.sides,
@@ -505,10 +614,30 @@ fn report_text(
         cfg.csp,
         wall / 60.0
     );
+    if cfg.world == ScaleWorld::Continuous {
+        let sum = |f: fn(&crate::runner::ContinuousColumns) -> u64| {
+            outcomes
+                .iter()
+                .filter_map(|o| o.row.continuous.as_ref())
+                .map(f)
+                .sum::<u64>()
+        };
+        let _ = writeln!(
+            s,
+            "Over all trials: {} robot–obstacle and {} robot–robot collisions, {} cells found impassable by a local planner, {} cells written off (a robot next to them could not read them; they count as explored), {} stuck events, {} of {} trials stopped by the time cap.\n",
+            sum(|c| c.obstacle_collisions),
+            sum(|c| c.robot_collisions),
+            sum(|c| c.impassable_cells),
+            sum(|c| c.written_off_cells),
+            sum(|c| c.stuck),
+            outcomes.iter().filter(|o| !o.row.completed).count(),
+            outcomes.len()
+        );
+    }
     for &side in &cfg.sides {
         let _ = writeln!(
             s,
-            "## {side} × {side} (step cap {})\n\n| method | {} |\n|---|{}",
+            "## {side} × {side} ({cap} {})\n\n| method | {} |\n|---|{}",
             cfg.step_cap(side),
             cfg.teams
                 .iter()
@@ -538,7 +667,7 @@ fn report_text(
         }
         let _ = writeln!(
             s,
-            "\nAcross team sizes (TNS; Friedman over teams, blocks = map × start × seed; Wilcoxon between consecutive sizes):\n"
+            "\nAcross team sizes ({what}; Friedman over teams, blocks = map × start × seed; Wilcoxon between consecutive sizes):\n"
         );
         for method in &cfg.methods {
             let groups: Vec<Vec<f64>> = cfg
@@ -592,7 +721,7 @@ fn report_text(
         let focus = &cfg.methods[0];
         let _ = writeln!(
             s,
-            "## {focus} against the others\n\n| method | cells where {focus} has lower mean TNS | … and lower mean TTD | pooled TNS difference | Wilcoxon p (TNS) | pooled TTD difference (m) | Wilcoxon p (TTD) |\n|---|---|---|---|---|---|---|"
+            "## {focus} against the others\n\n| method | cells where {focus} has lower mean {what} | … and lower mean TTD | pooled {what} difference ({unit}) | Wilcoxon p ({what}) | pooled TTD difference (m) | Wilcoxon p (TTD) |\n|---|---|---|---|---|---|---|"
         );
         for other in &cfg.methods[1..] {
             let (mut lower_tns, mut lower_both, mut n) = (0, 0, 0);
@@ -636,9 +765,17 @@ fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result<(), StudyE
         .sides
         .iter()
         .map(|&side| LinePanel {
-            title: format!("{side} × {side} cells"),
+            title: match cfg.world {
+                ScaleWorld::Grid => format!("{side} × {side} cells"),
+                ScaleWorld::Continuous => {
+                    format!("{0} × {0} m", side as f64 * cfg.scenario.cell_size)
+                }
+            },
             x_label: "Robots".into(),
-            y_label: "Mean TNS (steps)".into(),
+            y_label: match cfg.world {
+                ScaleWorld::Grid => "Mean TNS (steps)".into(),
+                ScaleWorld::Continuous => "Mean ET (s)".into(),
+            },
             series: cfg
                 .methods
                 .iter()

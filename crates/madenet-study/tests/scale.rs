@@ -145,6 +145,75 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
 }
 
 #[test]
+fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_same_trials() {
+    let cfg = ScaleConfig {
+        methods: vec!["spread".into(), "nf".into()],
+        sides: vec![12],
+        teams: vec![1, 2, 3],
+        starts: vec![ScaleStart::BottomLeft],
+        seeds: 2,
+        ..ScaleConfig::continuous_default()
+    };
+    let plan = cfg.plan().unwrap();
+    assert_eq!(plan.len(), 2 * 3 * 2, "methods × teams × seeds");
+    assert!(plan.iter().all(|p| p.planned.continuous.is_some()));
+    let out = scratch("continuous");
+    let r = run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
+    assert_eq!(r.trials, 12);
+    let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    let header = text.lines().next().unwrap();
+    assert!(
+        header.ends_with(
+            "et_s,obstacle_collisions,robot_collisions,impassable_cells,stuck,written_off_cells"
+        ),
+        "{header}"
+    );
+    let mut rdr = csv::Reader::from_reader(text.as_bytes());
+    let cols = rdr.headers().unwrap().clone();
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    for rec in rdr.records() {
+        let rec = rec.unwrap();
+        let et: f64 = rec[col("et_s")].parse().unwrap();
+        let tns: f64 = rec[col("tns")].parse().unwrap();
+        // TNS counts whole simulated seconds: ET rounded up.
+        assert_eq!(tns, et.ceil(), "{rec:?}");
+        assert_eq!(&rec[col("completed")], "true", "{rec:?}");
+        assert!(et > 10.0 && et < 600.0, "{rec:?}");
+    }
+    // Seconds, as means per cell; more robots explore the 12 m scene faster than one.
+    let et = |team| {
+        r.cells
+            .iter()
+            .filter(|c| c.team == team)
+            .map(|c| c.tns)
+            .sum::<f64>()
+    };
+    assert!(et(1) > et(3), "1 robot {} s vs 3 robots {} s", et(1), et(3));
+    let report = std::fs::read_to_string(&r.report).unwrap();
+    for needle in [
+        "(continuous world)",
+        "Mean ET (s)",
+        "robot–obstacle",
+        "## 12 × 12 (time cap, s 1800)",
+        "Friedman χ²",
+    ] {
+        assert!(
+            report.contains(needle),
+            "report lacks {needle:?}:\n{report}"
+        );
+    }
+    let cells = std::fs::read_to_string(out.join("cells.csv")).unwrap();
+    assert!(cells.starts_with("side,team,method,trials,completed,et_s,ttd_m,noli,collisions"));
+    // Resumed after losing trials: the same rows.
+    let full = trials_without_time(&out);
+    let kept: Vec<&str> = text.lines().take(5).collect();
+    std::fs::write(out.join("trials.csv"), kept.join("\n") + "\n").unwrap();
+    run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
+    assert_eq!(trials_without_time(&out), full);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn bad_designs_are_refused_naming_the_field() {
     let reg = registry();
     let cases: Vec<(ScaleConfig, &str)> = vec![

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use madenet_study::{run_scale, ScaleConfig, StudyError};
+use madenet_study::{run_scale, ScaleConfig, ScaleWorld, StudyError};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -12,6 +12,12 @@ pub struct ScaleArgs {
     /// 2–6 × 3 seeds at CSP 1.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// The world the trials run in: `grid`, or `continuous` (the paper's own protocol:
+    /// differential-drive robots, lidar maps, a local planner, ET in seconds; without
+    /// --config its defaults are `ScaleConfig::continuous_default`: made-net-any, nf, ub,
+    /// spread on one generated cluttered scene per side). Overrides the config's `world`.
+    #[arg(long, value_parser = ["grid", "continuous"])]
+    world: Option<String>,
     /// Output folder (created; an interrupted study there resumes).
     #[arg(long, default_value = "scale")]
     out: PathBuf,
@@ -54,10 +60,16 @@ fn name_source(e: StudyError, a: &ScaleArgs) -> anyhow::Error {
 }
 
 pub fn run(a: ScaleArgs) -> Result<()> {
-    let mut cfg = match &a.config {
-        Some(p) => ScaleConfig::from_toml_file(p)?,
-        None => ScaleConfig::default(),
+    let mut cfg = match (&a.config, a.world.as_deref()) {
+        (Some(p), _) => ScaleConfig::from_toml_file(p)?,
+        (None, Some("continuous")) => ScaleConfig::continuous_default(),
+        (None, _) => ScaleConfig::default(),
     };
+    match a.world.as_deref() {
+        Some("continuous") => cfg.world = ScaleWorld::Continuous,
+        Some(_) => cfg.world = ScaleWorld::Grid,
+        None => {}
+    }
     if let Some(m) = &a.methods {
         cfg.methods = m.clone();
     }
