@@ -70,6 +70,7 @@ pub struct ContinuousWorld {
     explorable_count: usize,
     team_known: Vec<bool>,
     team_known_count: usize,
+    unread: usize,
     touching: Vec<bool>,
     collisions: Collisions,
     distance: Vec<f64>,
@@ -250,6 +251,7 @@ impl ContinuousWorld {
                 .collect(),
             team_known: vec![false; coarse_truth.len()],
             team_known_count: 0,
+            unread: 0,
             coarse_truth,
             explorable,
             explorable_count,
@@ -385,10 +387,25 @@ impl ContinuousWorld {
     /// Robot `i`'s local planner found cell `p` impassable, or robot `i` stood next to it and
     /// could not read it: an obstacle in its map from now on, and resolved for the team.
     pub fn block(&mut self, i: usize, p: Pos) {
+        let k = p.row as usize * self.coarse_truth.width() + p.col as usize;
+        if self.explorable.get(k) == Some(&true) && !self.team_known[k] {
+            self.unread += 1;
+        }
         self.maps[i].block(p);
-        // Resolved, as far as the team can: it counts as explored (the trial reports how many
-        // cells were resolved this way).
+        // Resolved, as far as the team can: it counts as explored (and as unread).
         self.collect(i);
+    }
+
+    /// The cells the team is asked to explore: free in truth, reachable on the cells, and
+    /// enterable by a robot's footprint.
+    pub fn explorable_count(&self) -> usize {
+        self.explorable_count
+    }
+
+    /// Explorable cells that count as explored though no robot's map has read them: blocked
+    /// ([`ContinuousWorld::block`]) before anyone saw them.
+    pub fn unread(&self) -> usize {
+        self.unread
     }
 
     /// Pairs (i < j) within d_s of each other with a clear line of sight on the true world.

@@ -74,6 +74,11 @@ pub struct ContinuousResult {
     pub stuck: u64,
     /// Cells written off: unknown neighbours of a reached goal its robot could not see from it.
     pub written_off_cells: u64,
+    /// Explorable cells counted as explored though no robot's map read them (written off or
+    /// found impassable before anyone saw them).
+    pub unread_cells: u64,
+    /// Explorable cells (free in truth, reachable, enterable by a robot's footprint).
+    pub explorable_cells: u64,
     /// Times a robot was held up by teammates for `wait_time` seconds and asked its agent again.
     pub held_up: u64,
     /// Decisions taken by the agents.
@@ -478,6 +483,8 @@ impl ContinuousTrial {
             local_interactions: self.local_interactions,
             impassable_cells: self.impassable,
             written_off_cells: self.written_off,
+            unread_cells: self.world.unread() as u64,
+            explorable_cells: self.world.explorable_count() as u64,
             stuck: self.stuck,
             held_up: self.held_up,
             decisions: self.agents.iter().map(|a| a.stats().decisions).sum(),

@@ -78,16 +78,22 @@ pub struct ContinuousColumns {
     /// Cells written off: unknown neighbours of a reached goal its robot could not read from
     /// there (they count as explored).
     pub written_off_cells: u64,
+    /// Explorable cells counted as explored though no robot's map read them.
+    pub unread_cells: u64,
+    /// Explorable cells of the trial.
+    pub explorable_cells: u64,
 }
 
 /// The extra columns of a continuous study's `trials.csv`, after the grid's.
-const CONTINUOUS_HEADER: [&str; 6] = [
+const CONTINUOUS_HEADER: [&str; 8] = [
     "et_s",
     "obstacle_collisions",
     "robot_collisions",
     "impassable_cells",
     "stuck",
     "written_off_cells",
+    "unread_cells",
+    "explorable_cells",
 ];
 
 /// One line of `curves.jsonl`: the exploration curve of a trial.
@@ -178,6 +184,8 @@ impl TrialRow {
                 c.impassable_cells.to_string(),
                 c.stuck.to_string(),
                 c.written_off_cells.to_string(),
+                c.unread_cells.to_string(),
+                c.explorable_cells.to_string(),
             ]);
         }
         let mut w = csv::WriterBuilder::new()
@@ -231,6 +239,8 @@ impl TrialRow {
                     impassable_cells: g(grid + 3)?.parse().ok()?,
                     stuck: g(grid + 4)?.parse().ok()?,
                     written_off_cells: g(grid + 5)?.parse().ok()?,
+                    unread_cells: g(grid + 6)?.parse().ok()?,
+                    explorable_cells: g(grid + 7)?.parse().ok()?,
                 })
             },
         })
@@ -437,6 +447,8 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
                     impassable_cells: r.impassable_cells,
                     stuck: r.stuck,
                     written_off_cells: r.written_off_cells,
+                    unread_cells: r.unread_cells,
+                    explorable_cells: r.explorable_cells,
                 }),
             },
             curve: Curve {

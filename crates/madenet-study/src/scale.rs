@@ -624,11 +624,13 @@ fn report_text(
         };
         let _ = writeln!(
             s,
-            "Over all trials: {} robot–obstacle and {} robot–robot collisions, {} cells found impassable by a local planner, {} cells written off (a robot next to them could not read them; they count as explored), {} stuck events, {} of {} trials stopped by the time cap.\n",
+            "Over all trials: {} robot–obstacle and {} robot–robot collisions, {} cells found impassable by a local planner, {} cells written off (a robot next to them could not read them; they count as explored), of which {} explorable ({:.1} % of all trials' explorable cells: explored unread), {} stuck events, {} of {} trials stopped by the time cap.\n",
             sum(|c| c.obstacle_collisions),
             sum(|c| c.robot_collisions),
             sum(|c| c.impassable_cells),
             sum(|c| c.written_off_cells),
+            sum(|c| c.unread_cells),
+            100.0 * sum(|c| c.unread_cells) as f64 / sum(|c| c.explorable_cells).max(1) as f64,
             sum(|c| c.stuck),
             outcomes.iter().filter(|o| !o.row.completed).count(),
             outcomes.len()

@@ -164,7 +164,7 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     let header = text.lines().next().unwrap();
     assert!(
         header.ends_with(
-            "et_s,obstacle_collisions,robot_collisions,impassable_cells,stuck,written_off_cells"
+            "et_s,obstacle_collisions,robot_collisions,impassable_cells,stuck,written_off_cells,unread_cells,explorable_cells"
         ),
         "{header}"
     );
