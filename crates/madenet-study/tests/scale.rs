@@ -304,3 +304,13 @@ fn shipped_scale_config_is_the_default() {
         ScaleConfig::default()
     );
 }
+
+#[test]
+fn shipped_continuous_scale_config_is_the_continuous_default() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../configs/scale-continuous.toml");
+    assert_eq!(
+        ScaleConfig::from_toml_file(&path).unwrap(),
+        ScaleConfig::continuous_default()
+    );
+}

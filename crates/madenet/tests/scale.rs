@@ -78,3 +78,44 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
+    let dir = std::env::temp_dir().join(format!("madenet-scale-cont-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("s");
+    let o = out.to_str().unwrap();
+    let r = madenet(&[
+        "scale",
+        "--world",
+        "continuous",
+        "--out",
+        o,
+        "--sides",
+        "12",
+        "--teams",
+        "2",
+        "--seeds",
+        "1",
+        "--methods",
+        "spread",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // 1 method × 1 scene × 3 starts × 1 team × 1 seed.
+    assert!(String::from_utf8_lossy(&r.stdout).starts_with("3 trials → "));
+    let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    assert!(
+        trials.lines().next().unwrap().contains(",et_s,"),
+        "{trials}"
+    );
+    let report = std::fs::read_to_string(out.join("scale.md")).unwrap();
+    assert!(report.contains("(continuous world)"), "{report}");
+    let bad = madenet(&["scale", "--world", "gazebo", "--out", o]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--world") && !err.contains("panicked"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
