@@ -328,33 +328,19 @@ impl RobotMap {
 fn traverse(gx0: f64, gy0: f64, gx1: f64, gy1: f64, mut visit: impl FnMut(i64, i64)) {
     let (mut c, mut r) = (gx0.floor() as i64, gy0.floor() as i64);
     let (c_end, r_end) = (gx1.floor() as i64, gy1.floor() as i64);
-    let (dx, dy) = (gx1 - gx0, gy1 - gy0);
-    let step_c: i64 = if dx > 0.0 { 1 } else { -1 };
-    let step_r: i64 = if dy > 0.0 { 1 } else { -1 };
-    let t_delta_c = if dx != 0.0 {
-        (1.0 / dx).abs()
-    } else {
-        f64::INFINITY
+    // Per axis: the step, the parameter between pixel borders, the parameter of the first one.
+    let axis = |g0: f64, d: f64, k: i64| -> (i64, f64, f64) {
+        let t_delta = (1.0 / d).abs();
+        if d > 0.0 {
+            (1, t_delta, (k as f64 + 1.0 - g0) * t_delta)
+        } else if d < 0.0 {
+            (-1, t_delta, (g0 - k as f64) * t_delta)
+        } else {
+            (-1, f64::INFINITY, f64::INFINITY)
+        }
     };
-    let t_delta_r = if dy != 0.0 {
-        (1.0 / dy).abs()
-    } else {
-        f64::INFINITY
-    };
-    let mut t_max_c = if dx > 0.0 {
-        (c as f64 + 1.0 - gx0) * t_delta_c
-    } else if dx < 0.0 {
-        (gx0 - c as f64) * t_delta_c
-    } else {
-        f64::INFINITY
-    };
-    let mut t_max_r = if dy > 0.0 {
-        (r as f64 + 1.0 - gy0) * t_delta_r
-    } else if dy < 0.0 {
-        (gy0 - r as f64) * t_delta_r
-    } else {
-        f64::INFINITY
-    };
+    let (step_c, t_delta_c, mut t_max_c) = axis(gx0, gx1 - gx0, c);
+    let (step_r, t_delta_r, mut t_max_r) = axis(gy0, gy1 - gy0, r);
     // Rounding can step past the end pixel: the walk is bounded by its Manhattan length.
     let limit = (c - c_end).abs() + (r - r_end).abs() + 2;
     for _ in 0..limit {

@@ -421,42 +421,23 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
             )));
         }
         let r = trial.map_err(failed)?.run();
-        let m = r.metrics();
-        return Ok(TrialOutcome {
-            row: TrialRow {
-                key: key.clone(),
-                completed: m.completed,
-                tns: m.tns,
-                ttd: m.ttd,
-                noli: m.noli,
-                noli_authors: m.noli_authors,
-                ofv: m.ofv,
-                explored: m.explored,
-                steps_to: m.steps_to.clone(),
-                trial_s: r.wall_s,
-                decisions: r.decisions,
-                per_decision_s: if r.decisions > 0 {
-                    r.wall_s / r.decisions as f64
-                } else {
-                    0.0
-                },
-                continuous: Some(ContinuousColumns {
-                    et_s: r.exploration_time_s,
-                    obstacle_collisions: r.obstacle_collisions,
-                    robot_collisions: r.robot_collisions,
-                    impassable_cells: r.impassable_cells,
-                    stuck: r.stuck,
-                    written_off_cells: r.written_off_cells,
-                    unread_cells: r.unread_cells,
-                    explorable_cells: r.explorable_cells,
-                }),
-            },
-            curve: Curve {
-                key: key.clone(),
-                explored: m.explored_per_step,
-                distance: m.distance_per_step,
-            },
-        });
+        let per_decision_s = if r.decisions > 0 {
+            r.wall_s / r.decisions as f64
+        } else {
+            0.0
+        };
+        let columns = ContinuousColumns {
+            et_s: r.exploration_time_s,
+            obstacle_collisions: r.obstacle_collisions,
+            robot_collisions: r.robot_collisions,
+            impassable_cells: r.impassable_cells,
+            stuck: r.stuck,
+            written_off_cells: r.written_off_cells,
+            unread_cells: r.unread_cells,
+            explorable_cells: r.explorable_cells,
+        };
+        let timing = (r.wall_s, r.decisions, per_decision_s);
+        return Ok(outcome(key, r.metrics(), timing, Some(columns)));
     }
     let result = match p.oracle {
         None => Trial::with_registry(spec.clone(), registry)
@@ -466,8 +447,20 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
             run_oracle(spec.clone(), registry, kind, futures).map_err(failed)?
         }
     };
-    let m = &result.metrics;
-    Ok(TrialOutcome {
+    let t = &result.timing;
+    let timing = (t.trial_s, t.decisions, t.per_decision_s);
+    Ok(outcome(key, result.metrics, timing, None))
+}
+
+/// A trial's row and curve from its metrics, its timing (trial seconds, decisions, seconds per
+/// decision) and, for a continuous trial, its own columns.
+fn outcome(
+    key: &TrialKey,
+    m: madenet_metrics::TrialMetrics,
+    (trial_s, decisions, per_decision_s): (f64, usize, f64),
+    continuous: Option<ContinuousColumns>,
+) -> TrialOutcome {
+    TrialOutcome {
         row: TrialRow {
             key: key.clone(),
             completed: m.completed,
@@ -477,18 +470,18 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
             noli_authors: m.noli_authors,
             ofv: m.ofv,
             explored: m.explored,
-            steps_to: m.steps_to.clone(),
-            trial_s: result.timing.trial_s,
-            decisions: result.timing.decisions,
-            per_decision_s: result.timing.per_decision_s,
-            continuous: None,
+            steps_to: m.steps_to,
+            trial_s,
+            decisions,
+            per_decision_s,
+            continuous,
         },
         curve: Curve {
             key: key.clone(),
-            explored: m.explored_per_step.clone(),
-            distance: m.distance_per_step.clone(),
+            explored: m.explored_per_step,
+            distance: m.distance_per_step,
         },
-    })
+    }
 }
 
 /// Runs every planned trial not yet recorded in `out`, appending each as it finishes, and
