@@ -35,7 +35,7 @@ pub struct RobotMap {
     /// The radius occupied pixels are inflated by ([`RobotMap::with_inflation`]; 0: none).
     inflation: f64,
     /// Pixel offsets within `inflation` of a pixel's centre (nearest point of the pixel).
-    kernel: Vec<(i32, i32)>,
+    kernel: Vec<(i64, i64)>,
     /// Per pixel, the occupied pixels within `inflation` of its centre.
     inflated: Vec<u32>,
     /// Coarse cells that changed since [`RobotMap::take_changes`] last ran.
@@ -94,13 +94,7 @@ impl RobotMap {
     /// constant time (the costmap inflation of nav2, exact for the disc).
     pub fn with_inflation(mut self, radius: f64) -> Self {
         let res = self.cfg.resolution;
-        let reach = (radius / res).ceil() as i32 + 1;
-        // The nearest point of a pixel `d` pixels away lies (|d| − ½) pixels from a centre.
-        let gap = |d: i32| (d.abs() as f64 - 0.5).max(0.0) * res;
-        self.kernel = (-reach..=reach)
-            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
-            .filter(|&(dr, dc)| gap(dr).powi(2) + gap(dc).powi(2) < radius * radius)
-            .collect();
+        self.kernel = disc_kernel(radius, res);
         self.inflation = radius;
         self.inflated = vec![0; self.height * self.width];
         for r in 0..self.height {
@@ -128,7 +122,7 @@ impl RobotMap {
     /// Counts occupied pixel (`r`, `c`) in (`add`) or out of the inflation around it.
     fn stamp(&mut self, r: usize, c: usize, add: bool) {
         for &(dr, dc) in &self.kernel {
-            let (nr, nc) = (r as i64 + dr as i64, c as i64 + dc as i64);
+            let (nr, nc) = (r as i64 + dr, c as i64 + dc);
             if nr < 0 || nc < 0 || nr as usize >= self.height || nc as usize >= self.width {
                 continue;
             }
@@ -321,6 +315,19 @@ impl RobotMap {
         }
         false
     }
+}
+
+/// Pixel offsets (rows, columns) whose pixel comes within `radius` metres of a pixel centre
+/// (pixels of `res` metres): the footprint inflation of [`RobotMap::with_inflation`] and
+/// [`crate::Scene::drivable`].
+pub(crate) fn disc_kernel(radius: f64, res: f64) -> Vec<(i64, i64)> {
+    let reach = (radius / res).ceil() as i64 + 1;
+    // The nearest point of a pixel `d` pixels away lies (|d| − ½) pixels from a centre.
+    let gap = |d: i64| (d.abs() as f64 - 0.5).max(0.0) * res;
+    (-reach..=reach)
+        .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
+        .filter(|&(dr, dc)| gap(dr).powi(2) + gap(dc).powi(2) < radius * radius)
+        .collect()
 }
 
 /// The pixels a segment from (`gx0`, `gy0`) to (`gx1`, `gy1`) (in pixels) crosses, in order,

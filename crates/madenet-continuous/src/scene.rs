@@ -245,13 +245,7 @@ impl Scene {
     pub fn drivable(&self, from: &[(f64, f64)], radius: f64) -> Vec<bool> {
         let (h, w, res) = (self.fine.height(), self.fine.width(), self.fine.resolution);
         let cells = self.fine.cells();
-        // The nearest point of a pixel `d` pixels away lies (|d| − ½) pixels from a centre.
-        let reach = (radius / res).ceil() as i64 + 1;
-        let gap = |d: i64| (d.abs() as f64 - 0.5).max(0.0) * res;
-        let kernel: Vec<(i64, i64)> = (-reach..=reach)
-            .flat_map(|dr| (-reach..=reach).map(move |dc| (dr, dc)))
-            .filter(|&(dr, dc)| gap(dr).powi(2) + gap(dc).powi(2) < radius * radius)
-            .collect();
+        let kernel = crate::mapping::disc_kernel(radius, res);
         // The edge walls lie outside the raster: within `radius` of the edge is blocked too.
         let edge = |k: usize, n: usize| {
             let d = (k as f64 + 0.5).min(n as f64 - k as f64 - 0.5) * res;

@@ -365,14 +365,6 @@ impl ContinuousWorld {
             .count();
         known as f64 / self.explorable_count as f64
     }
-    /// The explorable cells no robot knows yet.
-    pub fn unexplored(&self) -> Vec<Pos> {
-        let w = self.coarse_truth.width();
-        (0..self.explorable.len())
-            .filter(|&k| self.explorable[k] && !self.team_known[k])
-            .map(|k| Pos::new((k / w) as i32, (k % w) as i32))
-            .collect()
-    }
     /// Every explorable cell is known to some robot.
     pub fn is_complete(&self) -> bool {
         self.explorable
