@@ -43,37 +43,6 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     f.commit()
 }
 
-/// Lets `fill` write a file by path (for libraries that only write to a path, such as plotters'
-/// backends), then puts it at `path` as [`write_atomic`] does. `fill` gets a temporary path
-/// with the same extension as `path`.
-pub fn write_via_path<E: From<io::Error>>(
-    path: &Path,
-    fill: impl FnOnce(&Path) -> Result<(), E>,
-) -> Result<(), E> {
-    let target = Target::resolve(path)?;
-    let ext = path
-        .extension()
-        .map(|e| format!(".{}", e.to_string_lossy()))
-        .unwrap_or_default();
-    match &target {
-        Target::Replace(final_path) => {
-            let tmp = temp_builder(&ext).tempfile_in(parent_dir(final_path))?;
-            fill(tmp.path())?;
-            tmp.as_file().sync_all()?;
-            tmp.persist(final_path).map_err(|e| e.error)?;
-        }
-        Target::Stream(device) => {
-            let tmp = temp_builder(&ext).tempfile()?;
-            fill(tmp.path())?;
-            let bytes = std::fs::read(tmp.path())?;
-            let mut out = OpenOptions::new().write(true).open(device)?;
-            out.write_all(&bytes)?;
-            out.flush()?;
-        }
-    }
-    Ok(())
-}
-
 /// A file being written: [`Write`] into it, then [`AtomicFile::commit`]. Dropped without a
 /// commit, a replacement leaves the target as it was (the temporary file is removed); a
 /// stream keeps what was written.

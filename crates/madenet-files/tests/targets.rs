@@ -1,7 +1,7 @@
 //! What each kind of target gets: regular files replaced atomically, symlinks followed,
 //! devices and pipes streamed into, folders refused.
 
-use madenet_files::{write_atomic, write_via_path, AtomicFile};
+use madenet_files::{write_atomic, AtomicFile};
 use std::io::Write;
 use std::path::Path;
 
@@ -73,7 +73,7 @@ fn a_symlink_stays_a_link_and_its_target_is_replaced() {
     // A dangling link creates its target.
     let dangling = dir.path().join("next.csv");
     std::os::unix::fs::symlink("results/run2.csv", &dangling).unwrap();
-    write_via_path::<std::io::Error>(&dangling, |tmp| std::fs::write(tmp, b"via path")).unwrap();
+    write_atomic(&dangling, b"via path").unwrap();
     assert!(std::fs::symlink_metadata(&dangling)
         .unwrap()
         .file_type()
@@ -106,7 +106,7 @@ fn a_device_or_pipe_is_written_into_not_replaced() {
         let fifo = fifo.clone();
         std::thread::spawn(move || std::fs::read(&fifo).unwrap())
     };
-    write_via_path::<std::io::Error>(&fifo, |tmp| std::fs::write(tmp, b"streamed")).unwrap();
+    write_atomic(&fifo, b"streamed").unwrap();
     assert_eq!(reader.join().unwrap(), b"streamed");
     assert!(std::fs::symlink_metadata(&fifo)
         .unwrap()

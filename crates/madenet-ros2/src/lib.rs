@@ -43,6 +43,7 @@
 #![deny(missing_docs)]
 
 use madenet_map::{OccGrid, Occupancy, Pos};
+use madenet_runtime::zenoh_bus::zenoh_config;
 use msgs::{Header, MapMetaData, OccupancyGrid, Point, Pose, PoseStamped, Quaternion, Time};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
@@ -144,8 +145,7 @@ impl Ros2Options {
         } else {
             "peer"
         };
-        let mut c = zenoh::Config::default();
-        for (k, v) in [
+        let c = zenoh_config([
             ("mode", format!("{mode:?}")),
             ("connect/endpoints", json(&self.connect)),
             ("listen/endpoints", json(&self.listen)),
@@ -181,10 +181,8 @@ impl Ros2Options {
                 "transport/link/tx/queue/congestion_control/block/wait_before_close",
                 "60000000".into(),
             ),
-        ] {
-            c.insert_json5(k, &v)
-                .map_err(middleware(format!("{} ({k})", what())))?;
-        }
+        ])
+        .map_err(|(pair, e)| middleware(format!("{} ({pair})", what()))(e))?;
         use zenoh::Wait;
         let session = zenoh::open(c).wait().map_err(middleware(what()))?;
         Ok(Ros2Context::new(session, domain))
@@ -203,15 +201,12 @@ pub fn loopback_router() -> Result<(zenoh::Session, Ros2Options), Ros2Error> {
             source: Box::new(e),
         })?
         .port();
-    let mut c = zenoh::Config::default();
-    for (k, v) in [
+    let c = zenoh_config([
         ("mode", "\"router\"".to_string()),
         ("scouting/multicast/enabled", "false".into()),
         ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ] {
-        c.insert_json5(k, &v)
-            .map_err(middleware(format!("router config {k}")))?;
-    }
+    ])
+    .map_err(|(pair, e)| middleware(format!("router config {pair}"))(e))?;
     let router = zenoh::open(c)
         .wait()
         .map_err(middleware(format!("router on tcp/127.0.0.1:{port}")))?;

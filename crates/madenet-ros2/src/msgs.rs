@@ -173,9 +173,8 @@ mod int8_sequence {
     use serde::{Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(data: &[i8], s: S) -> Result<S::Ok, S::Error> {
-        // i8 and u8 have the same size and layout; CDR writes both as single bytes.
-        let bytes: Vec<u8> = data.iter().map(|&v| v as u8).collect();
-        s.serialize_bytes(&bytes)
+        // i8 and u8 have the same size and layout; CDR writes both as single bytes (no copy).
+        s.serialize_bytes(bytemuck::cast_slice(data))
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<i8>, D::Error> {

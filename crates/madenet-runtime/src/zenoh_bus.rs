@@ -102,6 +102,20 @@ pub fn inbox_key(run: &str, node: Node) -> String {
     }
 }
 
+/// A zenoh config from `(key, JSON5 value)` pairs over the defaults: the one place madenet fills
+/// one (its nodes and the ROS 2 side). A refused pair comes back as `key = value` and zenoh's error.
+pub fn zenoh_config<'a>(
+    settings: impl IntoIterator<Item = (&'a str, String)>,
+) -> Result<zenoh::Config, (String, zenoh::Error)> {
+    let mut config = zenoh::Config::default();
+    for (key, value) in settings {
+        config
+            .insert_json5(key, &value)
+            .map_err(|e| (format!("{key} = {value}"), e))?;
+    }
+    Ok(config)
+}
+
 /// Checks a run name: one key-expression chunk (letters, digits, `-`, `_`, `.`).
 pub fn check_run_name(run: &str) -> Result<(), String> {
     if run.is_empty()
@@ -129,7 +143,6 @@ impl ZenohBus {
     /// Opens node `me`'s session of run `run` with `endpoints` and subscribes to its inbox.
     pub fn open(run: &str, me: Node, endpoints: &Endpoints) -> Result<ZenohBus, String> {
         check_run_name(run)?;
-        let mut config = zenoh::Config::default();
         let json_list = |v: &[String]| serde_json_list(v.iter().map(String::as_str));
         let settings = [
             ("mode", "\"peer\"".to_string()),
@@ -143,11 +156,8 @@ impl ZenohBus {
                 "{ period_init_ms: 50, period_max_ms: 200, period_increase_factor: 1.5 }".into(),
             ),
         ];
-        for (key, value) in settings {
-            config
-                .insert_json5(key, &value)
-                .map_err(|e| format!("zenoh config {key} = {value}: {e}"))?;
-        }
+        let config =
+            zenoh_config(settings).map_err(|(pair, e)| format!("zenoh config {pair}: {e}"))?;
         let session = zenoh::open(config)
             .wait()
             .map_err(|e| format!("{me}: opening the zenoh session ({endpoints:?}): {e}"))?;
