@@ -26,6 +26,9 @@ use std::collections::BinaryHeap;
 /// Path points considered per pursuit step (in thirds of the candidates looked at).
 const PATH_STRIDE: usize = 4;
 
+/// Metres within which a path point counts as passed.
+const PASSED: f64 = 0.15;
+
 /// A teammate in view, as the planner predicts it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Neighbour {
@@ -60,6 +63,14 @@ impl LocalPlanner {
     /// The local path being followed (metres), for pictures.
     pub fn path(&self) -> &[(f64, f64)] {
         &self.path
+    }
+
+    /// Whether a robot at `pose` has reached the end of its local path (within the distance
+    /// at which path points count as passed).
+    pub fn arrived(&self, pose: Pose) -> bool {
+        self.path
+            .last()
+            .is_some_and(|&(px, py)| (px - pose.x).hypot(py - pose.y) < PASSED)
     }
 
     /// Forgets the local path (the target changed or the map did).
@@ -117,7 +128,7 @@ impl LocalPlanner {
         let passed = self
             .path
             .iter()
-            .take_while(|&&(px, py)| (px - pose.x).hypot(py - pose.y) < 0.15)
+            .take_while(|&&(px, py)| (px - pose.x).hypot(py - pose.y) < PASSED)
             .count()
             .min(self.path.len() - 1);
         self.path.drain(..passed);
@@ -148,9 +159,23 @@ impl LocalPlanner {
         }
         // The rollout drives toward the pursuit point, then brakes: the path bends there.
         let reach = (tx - pose.x).hypot(ty - pose.y);
-        for scale in [1.0, 0.5, 0.25, 0.0] {
+        // Never closer to what the robot has mapped than it stands; only if that leaves no
+        // forward motion at all, slowly, a little closer (`CLEARANCE_TOLERANCE`).
+        let strict = rollout_clearance(cfg, map, pose, 0.0);
+        for scale in [1.0, 0.5, 0.25] {
             let vs = v * scale;
-            if vs == 0.0 || safe(cfg, map, pose, velocity, (vs, w), reach, neighbours) {
+            if vs > 0.0
+                && safe(
+                    cfg,
+                    map,
+                    pose,
+                    velocity,
+                    (vs, w),
+                    reach,
+                    neighbours,
+                    (strict, strict),
+                )
+            {
                 return if scale == 1.0 {
                     Command::Drive(vs, w)
                 } else {
@@ -158,13 +183,31 @@ impl LocalPlanner {
                 };
             }
         }
+        let tolerant = rollout_clearance(cfg, map, pose, CLEARANCE_TOLERANCE);
+        let vs = v * 0.25;
+        if vs > 0.0
+            && safe(
+                cfg,
+                map,
+                pose,
+                velocity,
+                (vs, w),
+                reach,
+                neighbours,
+                (tolerant, strict),
+            )
+        {
+            return Command::Held(vs, w);
+        }
         Command::Held(0.0, w)
     }
 }
 
 /// Rolls out (v, ω) from `pose` at `velocity` under the acceleration limits for `reach` metres,
-/// then braking: no contact with the robot's map within the horizon, nor with a neighbour
-/// moving at constant velocity.
+/// then braking: the disc of `clearance` ([`rollout_clearance`]) touches nothing on the robot's
+/// map within the horizon, and no neighbour moving at constant velocity comes too close (one
+/// with right of way: within twice `mate_clearance`).
+#[allow(clippy::too_many_arguments)] // the rollout's inputs, each used once
 fn safe(
     cfg: &ContinuousConfig,
     map: &RobotMap,
@@ -173,21 +216,11 @@ fn safe(
     command: (f64, f64),
     reach: f64,
     neighbours: &[Neighbour],
+    (clearance, mate_clearance): (f64, f64),
 ) -> bool {
     let r = cfg.robot;
     let dt = 0.1;
     let steps = (cfg.planner.prediction_horizon / dt).ceil() as usize;
-    // The margin is kept where the robot has it; a robot already closer (it brushed past
-    // something, or something was seen late) keeps the largest clearance it still has, down
-    // to half its radius, or it could never leave.
-    let clearance = [
-        r.radius + cfg.planner.safety_margin,
-        r.radius + 0.01,
-        r.radius * 0.5,
-    ]
-    .into_iter()
-    .find(|&c| !map.disc_hits_occupied(pose.x, pose.y, c))
-    .unwrap_or(0.0);
     let (mut x, mut y, mut th) = (pose.x, pose.y, pose.theta);
     let (mut v, mut w) = velocity;
     let mut others: Vec<(f64, f64, f64)> = neighbours
@@ -210,7 +243,7 @@ fn safe(
             // Right of way: keep out of its predicted path by a margin; otherwise only the
             // first second matters (it will keep off us too).
             let keep = if n.priority {
-                2.0 * clearance
+                2.0 * mate_clearance
             } else {
                 2.0 * r.radius + 0.02
             };
@@ -224,6 +257,45 @@ fn safe(
         }
     }
     true
+}
+
+/// Clearance steps, metres: the rollout's clearance is found to this resolution.
+const CLEARANCE_STEP: f64 = 0.01;
+/// How much closer than it stands a rollout may take a robot to what it has mapped: the
+/// local path is planned on pixel centres, and a robot at the edge of its margin would
+/// otherwise find every straight line to the path a few centimetres too close, and never move.
+const CLEARANCE_TOLERANCE: f64 = 0.02;
+/// The least clearance beyond its radius a tolerant rollout may plan for, metres: three
+/// standard deviations of the default range noise (a mapped surface can lie that far off).
+const CLEARANCE_FLOOR: f64 = 0.03;
+
+/// The clearance a rollout from `pose` must keep from the robot's map: the clearance the robot
+/// has now (the margin, radius + `safety_margin`, at most; to [`CLEARANCE_STEP`]) less
+/// `tolerance`, but not under [`CLEARANCE_FLOOR`] beyond its radius; a robot already closer
+/// than that (something seen late) may not come any closer: it can turn, slide along or
+/// leave, which always exists for a round robot.
+fn rollout_clearance(cfg: &ContinuousConfig, map: &RobotMap, pose: Pose, tolerance: f64) -> f64 {
+    let r = cfg.robot.radius;
+    let full = r + cfg.planner.safety_margin;
+    let floor = (r + CLEARANCE_FLOOR).min(full);
+    let keep = |c: f64| {
+        if c >= floor {
+            (c - tolerance).max(floor)
+        } else {
+            c
+        }
+    };
+    if !map.disc_hits_occupied(pose.x, pose.y, full) {
+        return keep(full);
+    }
+    let mut c = full - CLEARANCE_STEP;
+    while c > 0.0 {
+        if !map.disc_hits_occupied(pose.x, pose.y, c) {
+            return keep(c);
+        }
+        c -= CLEARANCE_STEP;
+    }
+    0.0
 }
 
 /// Whether a disc of `clearance` sweeps from `a` to `b` without touching an occupied pixel,

@@ -102,6 +102,12 @@ impl RobotMap {
                 if self.occupied(r, c) {
                     self.stamp(r, c, true);
                 }
+                // The map's edge is a wall (nothing lies beyond it), counted once for good.
+                let (x, y) = ((c as f64 + 0.5) * res, (r as f64 + 0.5) * res);
+                let (w, h) = (self.width as f64 * res, self.height as f64 * res);
+                if x.min(y).min(w - x).min(h - y) < radius {
+                    self.inflated[r * self.width + c] += 1;
+                }
             }
         }
         self
@@ -113,7 +119,7 @@ impl RobotMap {
     }
 
     /// Whether a disc of [`RobotMap::inflation`] at pixel (`r`, `c`)'s centre touches an
-    /// occupied pixel. Only on an inflated map.
+    /// occupied pixel or the map's edge. Only on an inflated map.
     #[inline]
     pub fn blocked(&self, r: usize, c: usize) -> bool {
         self.inflated[r * self.width + c] > 0
@@ -279,9 +285,14 @@ impl RobotMap {
         }
     }
 
-    /// Whether a disc of `radius` metres at (`x`, `y`) overlaps an occupied pixel.
+    /// Whether a disc of `radius` metres at (`x`, `y`) overlaps an occupied pixel or the map's
+    /// edge (a wall: nothing lies beyond it).
     pub fn disc_hits_occupied(&self, x: f64, y: f64, radius: f64) -> bool {
         let res = self.cfg.resolution;
+        let (w, h) = (self.width as f64 * res, self.height as f64 * res);
+        if x.min(y).min(w - x).min(h - y) < radius {
+            return true;
+        }
         let r0 = ((y - radius) / res).floor().max(0.0) as usize;
         let c0 = ((x - radius) / res).floor().max(0.0) as usize;
         let r1 = (((y + radius) / res).floor() as usize).min(self.height.saturating_sub(1));
@@ -462,14 +473,16 @@ mod tests {
                 m.integrate_beam(x, y, x, y, true);
             }
         }
+        // The map's edge (4 m square) counts as a wall.
         let brute = |x: f64, y: f64, radius: f64| {
-            (0..40).any(|r| {
-                (0..40).any(|c| {
-                    let nx = x.clamp(c as f64 * 0.1, (c + 1) as f64 * 0.1);
-                    let ny = y.clamp(r as f64 * 0.1, (r + 1) as f64 * 0.1);
-                    m.occupied(r, c) && (nx - x).powi(2) + (ny - y).powi(2) < radius * radius
+            x.min(y).min(4.0 - x).min(4.0 - y) < radius
+                || (0..40).any(|r| {
+                    (0..40).any(|c| {
+                        let nx = x.clamp(c as f64 * 0.1, (c + 1) as f64 * 0.1);
+                        let ny = y.clamp(r as f64 * 0.1, (r + 1) as f64 * 0.1);
+                        m.occupied(r, c) && (nx - x).powi(2) + (ny - y).powi(2) < radius * radius
+                    })
                 })
-            })
         };
         let mut hits = 0;
         for i in 0..80 {
