@@ -6,13 +6,13 @@
 //!    (CSP, dropouts: [`madenet_world::Radio`]); β goes both ways along each success.
 //! 2. **Agents**: a robot asks its agent for a move when it enters its target cell (a tenth
 //!    of a cell past its edge, [`ENTER_DEPTH`], or at the local path's end; cells a detour
-//!    passes through do not count), when its agent
-//!    said "stay" `stay_period` seconds ago, when its local planner found the target cell
-//!    impassable, or when teammates have held it up for `wait_time` seconds. A scan after a
-//!    robot reached its goal, the neighbours of that cell its map still cannot read are written
-//!    off as obstacles to it (seen from the frontier they border, they never will be). The agent observes
-//!    (its map's newly read cells, the teammates in view, whom it exchanged with), decides if
-//!    its macro action ended, plans, and names the next cell.
+//!    passes through do not count), when its agent said "stay" `stay_period` seconds ago,
+//!    when its local planner found the target cell impassable, or when teammates have held it
+//!    up for `wait_time` seconds. A scan after a robot reached its goal, the neighbours of that
+//!    cell its map still cannot read are written off as obstacles to it (seen from the frontier
+//!    they border, they never will be). The agent observes (its map's newly read cells, the
+//!    teammates in view, whom it exchanged with), decides if its macro action ended, plans, and
+//!    names the next cell.
 //! 3. **Local planning**: each robot's planner drives toward its target cell. The stuck rule:
 //!    a target not entered `stuck_time` seconds after it was named is impassable to the robot.
 //! 4. **World**: motion, contacts, scans ([`ContinuousWorld::step`]).
@@ -482,11 +482,9 @@ impl ContinuousTrial {
                         continue;
                     }
                 }
-                {
-                    self.world.block(i, q);
-                    self.written_off += 1;
-                    self.asks[i] = Ask::Yes;
-                }
+                self.world.block(i, q);
+                self.written_off += 1;
+                self.asks[i] = Ask::Yes;
             }
         }
     }
