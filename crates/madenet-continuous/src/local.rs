@@ -162,9 +162,8 @@ impl LocalPlanner {
         // Never closer to what the robot has mapped than it stands; only if that leaves no
         // forward motion at all, slowly, a little closer (`CLEARANCE_TOLERANCE`).
         let strict = rollout_clearance(cfg, map, pose, 0.0);
-        for scale in [1.0, 0.5, 0.25] {
-            let vs = v * scale;
-            if vs > 0.0
+        let moves = |vs: f64, clearance: f64| {
+            vs > 0.0
                 && safe(
                     cfg,
                     map,
@@ -173,9 +172,12 @@ impl LocalPlanner {
                     (vs, w),
                     reach,
                     neighbours,
-                    (strict, strict),
+                    (clearance, strict),
                 )
-            {
+        };
+        for scale in [1.0, 0.5, 0.25] {
+            let vs = v * scale;
+            if moves(vs, strict) {
                 return if scale == 1.0 {
                     Command::Drive(vs, w)
                 } else {
@@ -183,20 +185,8 @@ impl LocalPlanner {
                 };
             }
         }
-        let tolerant = rollout_clearance(cfg, map, pose, CLEARANCE_TOLERANCE);
         let vs = v * 0.25;
-        if vs > 0.0
-            && safe(
-                cfg,
-                map,
-                pose,
-                velocity,
-                (vs, w),
-                reach,
-                neighbours,
-                (tolerant, strict),
-            )
-        {
+        if moves(vs, rollout_clearance(cfg, map, pose, CLEARANCE_TOLERANCE)) {
             return Command::Held(vs, w);
         }
         Command::Held(0.0, w)
