@@ -366,6 +366,32 @@ impl Agent {
     pub fn termination(&self) -> Option<Termination> {
         self.termination
     }
+    /// The cells this robot can reach from where it stands over cells its belief holds free
+    /// (a row-major mask; its own cell included whatever the belief says of it, as the path
+    /// searches start there).
+    pub fn reachable(&self) -> Vec<bool> {
+        let b = &self.belief;
+        let (mut seen, mut stack) = (vec![false; b.map().len()], vec![self.pos]);
+        seen[b.index(self.pos)] = true;
+        while let Some(p) = stack.pop() {
+            for (q, _) in madenet_nav::neighbours(p, |q| b.is_free(q), b.movement()) {
+                if !std::mem::replace(&mut seen[b.index(q)], true) {
+                    stack.push(q);
+                }
+            }
+        }
+        seen
+    }
+
+    /// Whether a frontier cell other than its own (as goal extraction counts them) is
+    /// reachable: false once, as far as this robot knows, exploration is over.
+    pub fn frontier_reachable(&self) -> bool {
+        let here = self.belief.index(self.pos);
+        self.reachable()
+            .iter()
+            .enumerate()
+            .any(|(i, &r)| r && i != here && self.belief.is_frontier_index(i))
+    }
 
     /// Stage 1: take in this timestep's primitive observation o_i.
     pub fn observe(&mut self, obs: &Observation) {

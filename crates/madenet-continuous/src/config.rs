@@ -161,6 +161,11 @@ pub struct ContinuousConfig {
     pub radio_rate_hz: f64,
     /// Simulated seconds after which a trial ends unfinished (1800).
     pub time_cap: f64,
+    /// Seconds no robot's agent may have a reachable frontier before the trial ends
+    /// unfinished: the team believes the map explored where the world does not (cells sealed
+    /// off behind written-off ones), and stops as a real team would (10; ≥ `1 / radio_rate_hz`
+    /// lets a last exchange bring news).
+    pub no_frontier_time: f64,
 }
 
 impl Default for ContinuousConfig {
@@ -173,6 +178,7 @@ impl Default for ContinuousConfig {
             control_period: 0.05,
             radio_rate_hz: 1.0,
             time_cap: 1800.0,
+            no_frontier_time: 10.0,
         }
     }
 }
@@ -254,6 +260,7 @@ impl ContinuousConfig {
         positive("control_period", self.control_period, 1.0)?;
         positive("radio_rate_hz", self.radio_rate_hz, 1000.0)?;
         positive("time_cap", self.time_cap, 1.0e7)?;
+        positive("no_frontier_time", self.no_frontier_time, 1.0e7)?;
         if l.rate_hz * self.control_period > 1.0 + 1e-9 {
             return Err(ConfigError {
                 field: "lidar.rate_hz".into(),

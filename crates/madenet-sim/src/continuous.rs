@@ -12,7 +12,8 @@
 //!    cell its map still cannot read are written off as obstacles to it (seen from the frontier
 //!    they border, they never will be). The agent observes (its map's newly read cells, the
 //!    teammates in view, whom it exchanged with), decides if its macro action ended, plans, and
-//!    names the next cell.
+//!    names the next cell. When no robot's agent has a reachable frontier left though the
+//!    world is incomplete, the trial ends `no_frontier_time` later and says so.
 //! 3. **Local planning**: each robot's planner drives toward its target cell. The stuck rule:
 //!    a target not entered `stuck_time` seconds after it was named is impassable to the robot.
 //! 4. **World**: motion, contacts, scans ([`ContinuousWorld::step`]).
@@ -61,7 +62,11 @@ pub struct ContinuousResult {
     pub comm_success_prob: f64,
     /// Whether the team explored every explorable cell before the time cap.
     pub complete: bool,
-    /// ET: simulated seconds to complete exploration (the time cap when incomplete).
+    /// When no robot's agent had a reachable frontier left though the world was incomplete
+    /// (the team then stopped exploring: the trial ended `no_frontier_time` later).
+    pub no_frontier_at: Option<f64>,
+    /// ET: simulated seconds until exploration ended — complete, the team out of frontiers
+    /// (`no_frontier_at`), or the time cap.
     pub exploration_time_s: f64,
     /// TTD: metres driven by the whole team.
     pub team_distance_m: f64,
@@ -144,11 +149,15 @@ pub struct ContinuousTrial {
     /// later if it could not see them.
     reached: Vec<Option<(Pos, f64)>>,
     written_off: u64,
+    /// The cells each robot has stood in (row-major masks of the coarse grid).
+    visited: Vec<Vec<bool>>,
     /// When a cell was first spared from robot i's write-off because a teammate may hide it.
     spared: BTreeMap<(usize, Pos), f64>,
     /// When each robot's current target was named (the stuck rule).
     target_since: Vec<f64>,
     stuck: u64,
+    /// Since when no robot's agent has had a reachable frontier.
+    no_frontier_since: Option<f64>,
     exchanged: Vec<Vec<usize>>,
     radio_every: u64,
     ticks: u64,
@@ -192,7 +201,16 @@ impl ContinuousTrial {
         let radio_every = (1.0 / (spec.continuous.radio_rate_hz * spec.continuous.control_period))
             .round()
             .max(1.0) as u64;
-        let cells = (0..n).map(|i| world.cell_of(i)).collect();
+        let cells: Vec<Pos> = (0..n).map(|i| world.cell_of(i)).collect();
+        let (h, w) = world.map(0).coarse_size();
+        let visited = cells
+            .iter()
+            .map(|c| {
+                let mut v = vec![false; h * w];
+                v[c.row as usize * w + c.col as usize] = true;
+                v
+            })
+            .collect();
         let outbox = agents.iter().map(|a| a.beta()).collect();
         Ok(ContinuousTrial {
             radio: Radio::new(&spec.config, n, spec.seed),
@@ -207,9 +225,11 @@ impl ContinuousTrial {
             commands: vec![Command::Drive(0.0, 0.0); n],
             reached: vec![None; n],
             written_off: 0,
+            visited,
             spared: BTreeMap::new(),
             target_since: vec![0.0; n],
             stuck: 0,
+            no_frontier_since: None,
             exchanged: vec![Vec::new(); n],
             radio_every,
             ticks: 0,
@@ -249,9 +269,14 @@ impl ContinuousTrial {
     pub fn command(&self, i: usize) -> Command {
         self.commands[i]
     }
-    /// Complete, or at the time cap.
+    /// Complete, at the time cap, or `no_frontier_time` after the team ran out of frontiers.
     pub fn is_done(&self) -> bool {
-        self.world.is_complete() || self.world.time() >= self.world.config().time_cap
+        let (now, cfg) = (self.world.time(), self.world.config());
+        self.world.is_complete()
+            || now >= cfg.time_cap
+            || self
+                .no_frontier_since
+                .is_some_and(|t| now - t >= cfg.no_frontier_time - 1e-9)
     }
 
     /// One control period (the stages of the module docs). Returns false once done.
@@ -303,6 +328,14 @@ impl ContinuousTrial {
                 self.cells[i] = cell;
                 self.ask(i);
             }
+        }
+        // 2c. the team's belief: no robot has a reachable frontier left (ends the trial later)
+        if self.targets.iter().all(Option::is_none)
+            && self.agents.iter().all(|a| !a.frontier_reachable())
+        {
+            self.no_frontier_since.get_or_insert(now);
+        } else {
+            self.no_frontier_since = None;
         }
         // 3. local planning
         let cfg = *self.world.config();
@@ -368,6 +401,11 @@ impl ContinuousTrial {
         // 4. world
         self.world.step(&commands);
         self.ticks += 1;
+        let w = self.world.map(0).coarse_size().1;
+        for (i, v) in self.visited.iter_mut().enumerate() {
+            let c = self.world.cell_of(i);
+            v[c.row as usize * w + c.col as usize] = true;
+        }
         for r in &mut self.replan {
             *r = self.ticks.is_multiple_of(4);
         }
@@ -430,12 +468,15 @@ impl ContinuousTrial {
     /// The 8-neighbours of `cell` that robot `i`'s map still cannot read after it stood in
     /// `cell` for a scan become obstacles to it: it cannot see them from there (something
     /// thinner than the rule's fraction stands between), and a frontier it cannot resolve by
-    /// going there would draw it back for ever. Not a cell a teammate may hide: one whose
-    /// footprint lies within half a cell diagonal of the line from the robot to the cell's
-    /// centre (lidar beams stop at teammates); it is tried again the next time a goal is
+    /// going there would draw it back for ever. Spared are a corner (diagonal) neighbour with
+    /// a side neighbour the robot knows free, can reach and has not stood in — from there it
+    /// may see round the corner that hid it, and written off it could seal a corridor's far
+    /// end off from every frontier — and a cell a teammate may hide: one whose footprint lies
+    /// within half a cell diagonal of the line from the robot to the cell's centre (lidar
+    /// beams stop at teammates). A spared cell is tried again the next time a goal is
     /// reached, and written off all the same once `planner.stuck_time` has passed since it was
-    /// first spared. Written-off cells count as explored (resolved as far as the team can) and are
-    /// reported (`written_off_cells`).
+    /// first spared. Written-off cells count as explored (resolved as far as the team can) and
+    /// are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
         let now = self.world.time();
         let cell_size = self.world.scenario().cell_size;
@@ -458,6 +499,16 @@ impl ContinuousTrial {
                 .any(|&m| segment_distance(m, (here.x, here.y), c) < reach)
         };
         let (h, w) = self.world.map(i).coarse_size();
+        let reachable = self.agents[i].reachable();
+        let belief = self.agents[i].belief();
+        let visited = &self.visited[i];
+        let unvisited_side = |q: Pos| {
+            [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|&(dr, dc)| {
+                let s = Pos::new(q.row + dr, q.col + dc);
+                belief.is_free(s) && reachable[belief.index(s)] && !visited[belief.index(s)]
+            })
+        };
+        let mut write_off = Vec::new();
         for dr in -1..=1 {
             for dc in -1..=1 {
                 let q = Pos::new(cell.row + dr, cell.col + dc);
@@ -474,18 +525,23 @@ impl ContinuousTrial {
                 {
                     continue;
                 }
-                if hidden(q) {
-                    // Spared while a teammate may hide it, but not for longer than the stuck
-                    // rule's time: two robots hiding each other's cells would wait for ever.
+                // A corner cell seen past a side cell not yet stood in, or a cell a teammate
+                // may hide: spared, but not for longer than the stuck rule's time (two robots
+                // hiding each other's cells, or one going back and forth, would wait for ever).
+                let corner = dr != 0 && dc != 0 && unvisited_side(q);
+                if corner || hidden(q) {
                     let since = *self.spared.entry((i, q)).or_insert(now);
                     if now - since < self.world.config().planner.stuck_time {
                         continue;
                     }
                 }
-                self.world.block(i, q);
-                self.written_off += 1;
-                self.asks[i] = Ask::Yes;
+                write_off.push(q);
             }
+        }
+        for q in write_off {
+            self.world.block(i, q);
+            self.written_off += 1;
+            self.asks[i] = Ask::Yes;
         }
     }
 
@@ -507,6 +563,8 @@ impl ContinuousTrial {
             self.explored.push(self.world.explored_fraction());
             self.distance.push(self.team_distance());
         }
+        let complete = self.world.is_complete();
+        let no_frontier_at = self.no_frontier_since.filter(|_| !complete);
         let Collisions { obstacle, robot } = self.world.collisions();
         let team_distance_m = self.team_distance();
         ContinuousResult {
@@ -514,7 +572,8 @@ impl ContinuousTrial {
             policy: self.policy,
             seed: self.seed,
             comm_success_prob: self.world.scenario().comm_success_prob,
-            complete: self.world.is_complete(),
+            complete,
+            no_frontier_at,
             exploration_time_s: self.world.time(),
             team_distance_m,
             obstacle_collisions: obstacle,
@@ -689,9 +748,10 @@ mod tests {
             a.impassable_cells,
             a.decisions
         );
-        // Not always complete: cells written off can seal an explorable cell off from every
-        // agent's frontier (here one cell of 127 in some runs); the team then stops short.
-        assert!(*a.explored.last().unwrap() > 0.99, "{summary}");
+        // This trial used to stop one cell short (of 127): a corridor's two ends were
+        // written off from their corners, sealing its middle off from every frontier.
+        assert!(a.complete && a.no_frontier_at.is_none(), "{summary}");
+        assert!(a.exploration_time_s < 600.0, "{summary}");
         assert_eq!(
             (a.obstacle_collisions, a.robot_collisions),
             (0, 0),
@@ -703,5 +763,47 @@ mod tests {
         );
         assert!(a.explored.windows(2).all(|w| w[0] <= w[1]));
         assert_eq!(a, run(3));
+    }
+
+    /// A team whose agents have no reachable frontier left while the world is incomplete
+    /// (here: the ring around a free cell written off in every robot's map by hand) stops:
+    /// the trial ends `no_frontier_time` later, incomplete, and says when.
+    #[test]
+    fn a_team_without_frontiers_ends_the_trial_and_says_so() {
+        let registry = PolicyRegistry::builtin();
+        // d_s = 1 cell: a robot outside the ring cannot read half the sealed cell.
+        let mut s = spec("nf", 3);
+        s.config.sensing_range = 1;
+        let mut t = ContinuousTrial::new(s, &registry).unwrap();
+        let (h, w) = t.world.map(0).coarse_size();
+        let truth = t.world.coarse_truth().clone();
+        let sealed = (0..h * w)
+            .map(|k| Pos::new((k / w) as i32, (k % w) as i32))
+            .find(|p| {
+                p.row > 0
+                    && p.col > 0
+                    && p.row < 7
+                    && truth.get(*p) == Occupancy::Free
+                    && t.cells.iter().all(|c| c.chebyshev(*p) > 2)
+            })
+            .unwrap();
+        for i in 0..t.agents.len() {
+            for dr in -1..=1 {
+                for dc in -1..=1 {
+                    let q = Pos::new(sealed.row + dr, sealed.col + dc);
+                    if (dr, dc) != (0, 0) {
+                        t.world.block(i, q);
+                    }
+                }
+            }
+        }
+        let r = t.run();
+        let at = r.no_frontier_at.expect("the team runs out of frontiers");
+        let et = r.exploration_time_s;
+        assert!(!r.complete);
+        assert!((et - at - ContinuousConfig::default().no_frontier_time).abs() < 0.06);
+        assert!(et < 600.0, "ran {et} s");
+        assert!(*r.explored.last().unwrap() < 1.0);
+        assert_eq!(r.metrics().tns, et.ceil() as usize);
     }
 }

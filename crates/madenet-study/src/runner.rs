@@ -65,7 +65,8 @@ pub struct TrialRow {
 /// of the other columns is the simulated second (TNS: ET rounded up; `to_*`: seconds).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContinuousColumns {
-    /// ET: simulated seconds to full exploration (the time cap when incomplete).
+    /// ET: simulated seconds until exploration ended (complete, the team out of frontiers,
+    /// or the time cap).
     pub et_s: f64,
     /// Robot–obstacle collisions.
     pub obstacle_collisions: u64,

@@ -404,6 +404,28 @@ impl ScaleConfig {
     }
 }
 
+impl ScaleConfig {
+    /// The grid twin of a continuous study's plan: the same trials (the scenes read as cells
+    /// by the scenario's rule, the same start cells, teams, methods and seeds) in the grid
+    /// world, with the grid study's step cap — so each policy's advantage can be compared
+    /// between the two worlds trial by trial (same index, same trial).
+    pub fn grid_twin(&self, planned: &[ScalePlanned]) -> Vec<ScalePlanned> {
+        let grid = ScaleConfig {
+            world: ScaleWorld::Grid,
+            ..self.clone()
+        };
+        planned
+            .iter()
+            .map(|p| {
+                let mut t = p.clone();
+                t.planned.continuous = None;
+                t.planned.spec.config.step_cap = grid.step_cap(p.side);
+                t
+            })
+            .collect()
+    }
+}
+
 /// One (side, team, method) cell of the grid.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CellRow {
@@ -473,8 +495,25 @@ pub fn run_scale(
     let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
     crate::prepare_out(out, "scale.toml", &cfg_text, fresh)?;
     let started = std::time::Instant::now();
+    // A continuous study runs its grid twin first (`grid/`; fast), in one progress count.
+    let twin = match cfg.world {
+        ScaleWorld::Grid => None,
+        ScaleWorld::Continuous => {
+            let dir = out.join("grid");
+            std::fs::create_dir_all(&dir).map_err(io)?;
+            crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
+            let twin = cfg.grid_twin(&planned);
+            let runs: Vec<Planned> = twin.iter().map(|p| p.planned.clone()).collect();
+            let n = planned.len();
+            let outcomes = run_planned(&runs, registry, &dir, &|d, t| progress(d, t + n))?;
+            Some((twin, outcomes))
+        }
+    };
+    let offset = twin.as_ref().map_or(0, |(t, _)| t.len());
     let runs: Vec<Planned> = planned.iter().map(|p| p.planned.clone()).collect();
-    let outcomes = run_planned(&runs, registry, out, progress)?;
+    let outcomes = run_planned(&runs, registry, out, &|d, t| {
+        progress(d + offset, t + offset)
+    })?;
     let wall = started.elapsed().as_secs_f64();
     let cells = cells(cfg, &planned, &outcomes);
     let mut w = csv::Writer::from_writer(Vec::new());
@@ -502,7 +541,14 @@ pub fn run_scale(
     )?;
     figure(cfg, &cells, out)?;
     let report = out.join("scale.md");
-    let text = report_text(cfg, &planned, &outcomes, &cells, wall);
+    let mut text = report_text(cfg, &planned, &outcomes, &cells, wall);
+    if let Some((twin_planned, twin_outcomes)) = &twin {
+        text.push_str(&twin_text(
+            cfg,
+            (&planned, &outcomes),
+            (twin_planned, twin_outcomes),
+        ));
+    }
     write_atomic(&report, text.as_bytes())?;
     Ok(ScaleResult {
         report,
@@ -624,7 +670,7 @@ fn report_text(
         };
         let _ = writeln!(
             s,
-            "Over all trials: {} robot–obstacle and {} robot–robot collisions, {} cells found impassable by a local planner, {} cells written off (a robot next to them could not read them; they count as explored), of which {} explorable ({:.1} % of all trials' explorable cells: explored unread), {} stuck events, {} of {} trials stopped by the time cap.\n",
+            "Over all trials: {} robot–obstacle and {} robot–robot collisions, {} cells found impassable by a local planner, {} cells written off (a robot next to them could not read them; they count as explored), of which {} explorable ({:.1} % of all trials' explorable cells: explored unread), {} stuck events, {} of {} trials incomplete ({} stopped by the time cap, the others when no robot had a reachable frontier left).\n",
             sum(|c| c.obstacle_collisions),
             sum(|c| c.robot_collisions),
             sum(|c| c.impassable_cells),
@@ -633,7 +679,12 @@ fn report_text(
             100.0 * sum(|c| c.unread_cells) as f64 / sum(|c| c.explorable_cells).max(1) as f64,
             sum(|c| c.stuck),
             outcomes.iter().filter(|o| !o.row.completed).count(),
-            outcomes.len()
+            outcomes.len(),
+            planned
+                .iter()
+                .zip(outcomes)
+                .filter(|(p, o)| tns(o) >= cfg.step_cap(p.side) as f64)
+                .count()
         );
     }
     for &side in &cfg.sides {
@@ -755,6 +806,111 @@ fn report_text(
             let _ = writeln!(
                 s,
                 "| {other} | {lower_tns}/{n} | {lower_both}/{n} | {dt:+.2} | {pt} | {dd:+.1} | {pd} |"
+            );
+        }
+    }
+    s
+}
+
+/// Each method's time relative to the block's mean over methods (block = map × start × team ×
+/// seed), averaged: below 1 is faster than the methods' average on the same trials.
+fn relative_time(
+    cfg: &ScaleConfig,
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+) -> Vec<f64> {
+    let by_method: Vec<Vec<f64>> = cfg
+        .methods
+        .iter()
+        .map(|m| paired(planned, outcomes, m, None, None, tns))
+        .collect();
+    let blocks = by_method.first().map_or(0, Vec::len);
+    let block_mean =
+        |b: usize| by_method.iter().map(|v| v[b]).sum::<f64>() / by_method.len() as f64;
+    by_method
+        .iter()
+        .map(|v| (0..blocks).map(|b| v[b] / block_mean(b)).sum::<f64>() / blocks.max(1) as f64)
+        .collect()
+}
+
+/// The continuous study beside its grid twin: the methods' ranking and each gap of the first
+/// method to the others in both worlds, per side and pooled, with paired Wilcoxon tests.
+fn twin_text(
+    cfg: &ScaleConfig,
+    continuous: (&[ScalePlanned], &[TrialOutcome]),
+    grid: (&[ScalePlanned], &[TrialOutcome]),
+) -> String {
+    let mut s = String::new();
+    let rank = |(p, o): (&[ScalePlanned], &[TrialOutcome])| {
+        let rel = relative_time(cfg, p, o);
+        let mut order: Vec<usize> = (0..cfg.methods.len()).collect();
+        order.sort_by(|&a, &b| rel[a].total_cmp(&rel[b]));
+        order
+            .iter()
+            .map(|&k| format!("{} {:.3}", cfg.methods[k], rel[k]))
+            .collect::<Vec<_>>()
+            .join(" < ")
+    };
+    let _ = writeln!(
+        s,
+        "## Grid and continuous worlds on the same maps
+
+The grid twin (`grid/`) runs every trial of this study in the grid world: the scenes read as cells by the scenario's rule, the same start cells, teams, methods and seeds, TNS in steps. Ranking by mean time relative to the methods' mean on the same trial (below 1: faster):
+
+- grid: {}
+- continuous: {}
+",
+        rank(grid),
+        rank(continuous)
+    );
+    let Some(focus) = cfg.methods.first() else {
+        return s;
+    };
+    let _ = writeln!(
+        s,
+        "{focus} against each other method: mean time difference in % of the other's mean (negative: {focus} faster), paired Wilcoxon p over the same trials.
+
+| side | method | grid Δ TNS | p | continuous Δ ET | p | same verdict |
+|---|---|---|---|---|---|---|"
+    );
+    let sides: Vec<Option<usize>> = cfg
+        .sides
+        .iter()
+        .map(|&x| Some(x))
+        .chain(std::iter::once(None))
+        .collect();
+    for side in sides {
+        for other in &cfg.methods[1..] {
+            let gap = |(p, o): (&[ScalePlanned], &[TrialOutcome])| {
+                let x = paired(p, o, focus, side, None, tns);
+                let y = paired(p, o, other, side, None, tns);
+                let (mx, my) = (
+                    x.iter().sum::<f64>() / x.len().max(1) as f64,
+                    y.iter().sum::<f64>() / y.len().max(1) as f64,
+                );
+                let pct = 100.0 * (mx - my) / my.max(f64::MIN_POSITIVE);
+                let p = wilcoxon(&x, &y).map(|r| r.p_value).ok();
+                (pct, p)
+            };
+            let (gd, gp) = gap(grid);
+            let (cd, cp) = gap(continuous);
+            // A verdict: faster, slower or no difference at p < 0.05.
+            let verdict = |d: f64, p: Option<f64>| match p {
+                Some(p) if p < 0.05 => d.signum() as i32,
+                _ => 0,
+            };
+            let same = if verdict(gd, gp) == verdict(cd, cp) {
+                "yes"
+            } else {
+                "no"
+            };
+            let p_or = |p: Option<f64>| p.map_or("–".to_string(), p_text);
+            let side_text = side.map_or("all".to_string(), |x| format!("{x}"));
+            let _ = writeln!(
+                s,
+                "| {side_text} | {other} | {gd:+.1} % | {} | {cd:+.1} % | {} | {same} |",
+                p_or(gp),
+                p_or(cp)
             );
         }
     }

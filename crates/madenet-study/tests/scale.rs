@@ -204,12 +204,35 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     }
     let cells = std::fs::read_to_string(out.join("cells.csv")).unwrap();
     assert!(cells.starts_with("side,team,method,trials,completed,et_s,ttd_m,noli,collisions"));
+    // The grid twin: the same trials (keys) in the grid world, beside them in the report.
+    let key = |line: &str| line.split(',').take(5).collect::<Vec<_>>().join(",");
+    let grid_text = std::fs::read_to_string(out.join("grid/trials.csv")).unwrap();
+    assert!(!grid_text.lines().next().unwrap().contains("et_s"));
+    let mut a: Vec<String> = text.lines().skip(1).map(key).collect();
+    let mut b: Vec<String> = grid_text.lines().skip(1).map(key).collect();
+    a.sort();
+    b.sort();
+    assert_eq!((a.len(), &a), (12, &b));
+    for needle in [
+        "## Grid and continuous worlds on the same maps",
+        "- grid: ",
+        "- continuous: ",
+        "| 12 | nf | ",
+        "| all | nf | ",
+    ] {
+        assert!(
+            report.contains(needle),
+            "report lacks {needle:?}:\n{report}"
+        );
+    }
+    let grid_full = trials_without_time(&out.join("grid"));
     // Resumed after losing trials: the same rows.
     let full = trials_without_time(&out);
     let kept: Vec<&str> = text.lines().take(5).collect();
     std::fs::write(out.join("trials.csv"), kept.join("\n") + "\n").unwrap();
     run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
     assert_eq!(trials_without_time(&out), full);
+    assert_eq!(trials_without_time(&out.join("grid")), grid_full);
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -300,10 +300,14 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         r.comm_success_prob,
         r.seed
     )?;
-    if r.complete {
-        out!("completed  true")?;
-    } else {
-        out!("completed  false: time cap reached (`time_cap`)")?;
+    match (r.complete, r.no_frontier_at) {
+        (true, _) => out!("completed  true")?,
+        (false, Some(t)) => out!(
+            "completed  false: no robot had a reachable frontier from {t:.1} s on, the team \
+             stopped at {:.1} % explored (`no_frontier_time`)",
+            100.0 * r.explored.last().copied().unwrap_or(0.0)
+        )?,
+        (false, None) => out!("completed  false: time cap reached (`time_cap`)")?,
     }
     out!("ET         {:.1} s", r.exploration_time_s)?;
     out!("TTD        {:.1} m", r.team_distance_m)?;
