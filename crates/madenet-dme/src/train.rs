@@ -492,6 +492,7 @@ struct State {
 
 /// The trained actors as shipped: `model.toml` and one weight file per robot.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelInfo {
     /// Always `dme-drl` (loading rejects any other method).
     pub method: String,

@@ -156,6 +156,39 @@ impl Target {
     }
 }
 
+/// An output folder held by one run: [`lock_folder`]. The lock is the kernel's (`flock`) on
+/// `.madenet.lock` in the folder, so it ends with the process however that ends.
+#[derive(Debug)]
+pub struct FolderLock {
+    _file: File,
+}
+
+/// Takes `dir` (which must exist) for this run: fails with [`io::ErrorKind::WouldBlock`] while
+/// another run holds it. Holding it, removes the temporary files an interrupted write left
+/// there (`.madenet-*`: nobody else can be writing them).
+pub fn lock_folder(dir: &Path) -> io::Result<FolderLock> {
+    let file = OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(dir.join(".madenet.lock"))?;
+    file.try_lock().map_err(|e| match e {
+        std::fs::TryLockError::WouldBlock => io::Error::new(
+            io::ErrorKind::WouldBlock,
+            "another madenet run is using this folder",
+        ),
+        std::fs::TryLockError::Error(e) => e,
+    })?;
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let name = entry.file_name();
+        if name.to_string_lossy().starts_with(".madenet-") && entry.file_type()?.is_file() {
+            std::fs::remove_file(entry.path())?;
+        }
+    }
+    Ok(FolderLock { _file: file })
+}
+
 fn parent_dir(p: &Path) -> PathBuf {
     match p.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),

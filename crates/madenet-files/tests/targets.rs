@@ -125,3 +125,24 @@ fn a_folder_is_refused_and_left_alone() {
     assert!(sub.is_dir());
     assert_eq!(names(dir.path()), ["out"]);
 }
+
+#[test]
+fn a_folder_is_one_runs_and_its_stale_temporary_files_go() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join(".madenet-AbC123"), b"torn").unwrap();
+    std::fs::write(dir.path().join("trials.csv"), b"kept").unwrap();
+    let lock = madenet_files::lock_folder(dir.path()).unwrap();
+    assert!(!dir.path().join(".madenet-AbC123").exists());
+    assert_eq!(
+        std::fs::read(dir.path().join("trials.csv")).unwrap(),
+        b"kept"
+    );
+    let second = madenet_files::lock_folder(dir.path()).unwrap_err();
+    assert_eq!(second.kind(), std::io::ErrorKind::WouldBlock);
+    assert!(
+        second.to_string().contains("another madenet run"),
+        "{second}"
+    );
+    drop(lock);
+    madenet_files::lock_folder(dir.path()).unwrap();
+}

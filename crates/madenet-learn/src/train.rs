@@ -623,6 +623,7 @@ impl Nets {
 
 /// The trained DEPs as shipped: `model.toml` (method, net config, |I|, |G|) and the weights.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ModelInfo {
     /// The learner that trained the DEPs.
     pub method: Method,
@@ -660,6 +661,7 @@ fn yes() -> bool {
 
 /// The DEP's [`NetConfig`] fields that vary, for `model.toml`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct NetConfigToml {
     /// Map height H in cells ([`NetConfig::map_height`]).
     pub map_height: usize,
@@ -719,10 +721,30 @@ impl Model {
     }
 
     fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
-        madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
-            path: label.to_string(),
-            message,
-        })
+        let info: ModelInfo =
+            madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
+                path: label.to_string(),
+                message,
+            })?;
+        if let Some(d) = &info.dep {
+            // Sizes are checked here, by name, before any network is built from them.
+            let max_robots = madenet_world::MAX_ROBOTS;
+            let checks = [
+                ("dep.map_height", d.map_height, crate::MIN_MAP_SIDE, 1000),
+                ("dep.map_width", d.map_width, crate::MIN_MAP_SIDE, 1000),
+                ("dep.team_size", d.team_size, 1, max_robots),
+                ("dep.goal_count", d.goal_count, 1, 4 * max_robots),
+            ];
+            for (field, v, lo, hi) in checks {
+                if !(lo..=hi).contains(&v) {
+                    return Err(TrainError::Config {
+                        path: label.to_string(),
+                        message: format!("field `{field}`: must lie in {lo}..={hi}, got {v}"),
+                    });
+                }
+            }
+        }
+        Ok(info)
     }
 
     fn from_parts(

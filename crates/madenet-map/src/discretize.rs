@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 /// Parameters of the discretization rule. The defaults are the paper's values.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct DiscretizeParams {
     /// A pixel counts as occupied when its occupancy probability is strictly above this
     /// (default 0.65).

@@ -45,7 +45,7 @@ pub fn run_study(
     };
     std::fs::create_dir_all(out).map_err(io)?;
     let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
-    prepare_out(out, "study.toml", &cfg_text, fresh)?;
+    let _lock = prepare_out(out, "study.toml", &cfg_text, fresh)?;
     let started = std::time::Instant::now();
     let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
@@ -60,19 +60,17 @@ pub fn run_study(
 
 /// Readies output folder `out` for a study whose config (as text) is saved there as
 /// `cfg_name`: with `fresh`, earlier trials are discarded; otherwise trials recorded by another
-/// configuration are refused (the folder is not touched) and those of this one kept.
+/// configuration are refused (the folder is not touched) and those of this one kept. The folder
+/// is this run's while the returned lock lives (a second run on it is refused), and the temporary
+/// files of an interrupted write are removed.
 pub(crate) fn prepare_out(
     out: &Path,
     cfg_name: &str,
     cfg_text: &str,
     fresh: bool,
-) -> Result<(), StudyError> {
+) -> Result<madenet_files::FolderLock, StudyError> {
     let cfg_path = out.join(cfg_name);
-    if fresh {
-        for f in ["trials.csv", "curves.jsonl"] {
-            let _ = std::fs::remove_file(out.join(f));
-        }
-    } else if cfg_path.exists() {
+    if !fresh && cfg_path.exists() {
         let old = std::fs::read_to_string(&cfg_path).map_err(|e| StudyError::File {
             path: cfg_path.display().to_string(),
             message: e.to_string(),
@@ -83,7 +81,7 @@ pub(crate) fn prepare_out(
                 message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
             });
         }
-    } else if out.join("trials.csv").exists() {
+    } else if !fresh && out.join("trials.csv").exists() {
         // Another kind of study (or `madenet batch`'s table) in this folder: its rows would be
         // dropped as not planned here.
         return Err(StudyError::File {
@@ -91,5 +89,16 @@ pub(crate) fn prepare_out(
             message: format!("holds a trials.csv without {cfg_name}: results of another study: choose another output folder or start afresh (--fresh)"),
         });
     }
-    runner::write_atomic(&cfg_path, cfg_text.as_bytes())
+    // Refusals above leave the folder untouched; from here on it is this run's.
+    let lock = madenet_files::lock_folder(out).map_err(|e| StudyError::File {
+        path: out.display().to_string(),
+        message: e.to_string(),
+    })?;
+    if fresh {
+        for f in ["trials.csv", "curves.jsonl"] {
+            let _ = std::fs::remove_file(out.join(f));
+        }
+    }
+    runner::write_atomic(&cfg_path, cfg_text.as_bytes())?;
+    Ok(lock)
 }

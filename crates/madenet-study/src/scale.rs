@@ -493,7 +493,7 @@ pub fn run_scale(
     };
     std::fs::create_dir_all(out).map_err(io)?;
     let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
-    crate::prepare_out(out, "scale.toml", &cfg_text, fresh)?;
+    let _lock = crate::prepare_out(out, "scale.toml", &cfg_text, fresh)?;
     let started = std::time::Instant::now();
     // A continuous study runs its grid twin first (`grid/`; fast), in one progress count.
     let twin = match cfg.world {
@@ -501,7 +501,7 @@ pub fn run_scale(
         ScaleWorld::Continuous => {
             let dir = out.join("grid");
             std::fs::create_dir_all(&dir).map_err(io)?;
-            crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
+            let _twin_lock = crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
             let twin = cfg.grid_twin(&planned);
             let runs: Vec<Planned> = twin.iter().map(|p| p.planned.clone()).collect();
             let n = planned.len();

@@ -103,14 +103,20 @@ pub struct Visibility {
 }
 
 impl World {
-    /// Builds the world and performs the initial sensing and contact stage (t = 0).
+    /// Builds the world and performs the initial sensing and contact stage (t = 0). Unknown
+    /// cells of `truth` (a map's unmapped area) are obstacles: nobody can enter or explore them.
     pub fn new(
-        truth: OccGrid,
+        mut truth: OccGrid,
         starts: &[Pos],
         cfg: ScenarioConfig,
         seed: u64,
     ) -> Result<Self, ScenarioError> {
         cfg.validate()?;
+        for c in truth.cells_mut() {
+            if *c == Occupancy::Unknown {
+                *c = Occupancy::Obstacle;
+            }
+        }
         let n = cfg.num_robots;
         if starts.len() < n {
             return Err(ScenarioError::StartCount {

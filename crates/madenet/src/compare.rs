@@ -91,6 +91,9 @@ pub fn run(a: CompareArgs) -> Result<()> {
         cfg.methods = m.clone();
     }
     if let Some(o) = &a.oracles {
+        if o.len() > 1 && o.contains(&None) {
+            anyhow::bail!("--oracles: `none` stands alone (got {} names)", o.len());
+        }
         cfg.oracles = o.iter().flatten().copied().collect();
     }
     if let Some(s) = a.seeds {

@@ -571,10 +571,9 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
             }
             Node::Radio => {
                 cmd.arg("radio").args(&common).args([
-                    "--loss".to_string(),
-                    a.faults.loss.to_string(),
-                    "--delay".into(),
-                    a.faults.delay.to_string(),
+                    // As `--csp` (ScenarioArgs::to_args): −0.0 must not reach a child as "-0".
+                    format!("--loss={}", a.faults.loss + 0.0),
+                    format!("--delay={}", a.faults.delay),
                 ]);
             }
             Node::Robot(i) => {

@@ -58,7 +58,9 @@ impl ScenarioArgs {
             v.extend(["--model".into(), m.display().to_string()]);
         }
         if let Some(csp) = self.csp {
-            v.extend(["--csp".into(), csp.to_string()]);
+            // `--csp=V`, not `--csp V`: a child reads "-0" (from −0.0) as a flag; `+ 0.0`
+            // writes −0.0 as 0.
+            v.push(format!("--csp={}", csp + 0.0));
         }
         if let Some(c) = &self.config {
             v.extend(["--config".into(), c.display().to_string()]);

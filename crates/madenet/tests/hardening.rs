@@ -413,3 +413,154 @@ fn outputs_through_symlinks_and_devices() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 27's second pass, the cases that held up badly: each a row that failed before.
+#[test]
+fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
+    let dir = scratch("second");
+    let s = |p: &Path| p.display().to_string();
+    // Unknown fields under [discretize] and in a model's model.toml are refused by name.
+    std::fs::write(
+        dir.join("scenario.toml"),
+        "[discretize]\nobstacle_fractoin = 0.9\n",
+    )
+    .unwrap();
+    let out = madenet(&[
+        "run".into(),
+        "--config".into(),
+        s(&dir.join("scenario.toml")),
+    ]);
+    check_error(
+        "[discretize] typo",
+        &out,
+        &["scenario.toml", "obstacle_fractoin"],
+    );
+    let model = dir.join("model");
+    std::fs::create_dir_all(&model).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net");
+    for e in std::fs::read_dir(&shipped).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, model.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let toml = std::fs::read_to_string(model.join("model.toml")).unwrap();
+    std::fs::write(
+        model.join("model.toml"),
+        format!("colour = \"red\"\n{toml}"),
+    )
+    .unwrap();
+    let out = madenet(&[
+        "run".into(),
+        "--policy".into(),
+        "model".into(),
+        "--model".into(),
+        s(&model),
+    ]);
+    check_error("model.toml typo", &out, &["model.toml", "colour"]);
+    // `none` is no oracle at all: not beside others.
+    let out = madenet(&[
+        "compare".into(),
+        "--oracles".into(),
+        "none,placebo".into(),
+        "--out".into(),
+        s(&dir.join("cmp")),
+    ]);
+    check_error("--oracles none,placebo", &out, &["--oracles", "none"]);
+    assert!(!dir.join("cmp").exists());
+    // A YAML map whose YAML target is a folder: its image beside it stays untouched.
+    std::fs::create_dir_all(dir.join("keep.yaml")).unwrap();
+    std::fs::write(dir.join("keep.pgm"), b"precious").unwrap();
+    let out = madenet(&[
+        "map".into(),
+        "convert".into(),
+        "paper:2".into(),
+        s(&dir.join("keep.yaml")),
+    ]);
+    check_error("convert onto a folder", &out, &["keep.yaml"]);
+    assert_eq!(std::fs::read(dir.join("keep.pgm")).unwrap(), b"precious");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Unknown cells of a ground truth are obstacles: `explored` never exceeds 100 %.
+#[test]
+fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
+    let dir = scratch("unknown");
+    let mut text = String::new();
+    for r in 0..12 {
+        let row: String = (0..12)
+            .map(|c| match (r, c) {
+                (5, 3..=8) => '?',
+                (9, 2) | (2, 9) => '#',
+                _ => '.',
+            })
+            .collect();
+        text.push_str(&row);
+        text.push('\n');
+    }
+    std::fs::write(dir.join("m.txt"), text).unwrap();
+    let out = madenet(&[
+        "run".into(),
+        "--map".into(),
+        dir.join("m.txt").display().to_string(),
+        "--start".into(),
+        "top-left".into(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let explored: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("explored"))
+        .and_then(|v| v.trim().trim_end_matches('%').trim().parse().ok())
+        .expect("an explored line");
+    assert!(explored <= 100.0 && explored > 99.9, "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A model.toml whose sizes are impossible is refused by field before any network is built.
+#[test]
+fn a_model_with_impossible_sizes_names_the_field() {
+    let dir = scratch("sizes");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net");
+    for (field, bad) in [
+        ("goal_count", "0"),
+        ("team_size", "100000"),
+        ("map_height", "3"),
+    ] {
+        let model = dir.join(field);
+        std::fs::create_dir_all(&model).unwrap();
+        for e in std::fs::read_dir(&shipped).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_file() {
+                std::fs::copy(&p, model.join(p.file_name().unwrap())).unwrap();
+            }
+        }
+        let toml = std::fs::read_to_string(model.join("model.toml")).unwrap();
+        let edited: String = toml
+            .lines()
+            .map(|l| {
+                if l.starts_with(&format!("{field} =")) {
+                    format!("{field} = {bad}\n")
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+        assert_ne!(edited, toml, "{field} is in model.toml");
+        std::fs::write(model.join("model.toml"), edited).unwrap();
+        let out = madenet(&[
+            "run".into(),
+            "--policy".into(),
+            "model".into(),
+            "--model".into(),
+            model.display().to_string(),
+        ]);
+        check_error(field, &out, &["model.toml", &format!("dep.{field}")]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -77,6 +77,9 @@ fn launch_text_output_and_bad_flags() {
         out.contains("TNS") && out.contains("5 processes over Zenoh"),
         "{out}"
     );
+    // −0.0 is a number like any other: handed to the children in a form they parse.
+    let (ok, _, err) = madenet(&["launch", "--map", "paper:5", "--csp=-0.0", "--loss=-0.0"]);
+    assert!(ok, "{err}");
     // A bad trial flag is refused once, by launch itself, before any process starts.
     let (ok, _, err) = madenet(&["launch", "--policy", "nope"]);
     assert!(!ok);

@@ -217,7 +217,7 @@ pub fn load_bytes(
 
 // Errors: each names the file (and the field, for `field_err`).
 
-fn io_err(path: &Path, source: std::io::Error) -> MapError {
+pub(crate) fn io_err(path: &Path, source: std::io::Error) -> MapError {
     MapError::Io {
         path: path.to_path_buf(),
         source,

@@ -8,7 +8,7 @@
 use super::pgm::{decode_pgm, encode_pgm};
 use super::raster::{decode_image, raster_to_grid};
 use super::{
-    check_options, check_savable, extension, field_err, format_err, write_atomic, LoadOptions,
+    check_options, check_savable, extension, field_err, format_err, io_err, LoadOptions,
     SAVE_FREE_THRESH, SAVE_OCCUPIED_THRESH,
 };
 use crate::{MapError, OccGrid};
@@ -16,6 +16,7 @@ use serde::de::IgnoredAny;
 use serde::Deserialize;
 use serde_saphyr::Spanned;
 use std::collections::BTreeMap;
+use std::io::Write as _;
 use std::path::Path;
 
 /// How pixel values are interpreted (ROS `map_server` `mode`).
@@ -320,14 +321,24 @@ pub fn save_yaml(grid: &OccGrid, yaml_path: &Path) -> Result<(), MapError> {
         .ok_or_else(|| format_err(yaml_path, "YAML path needs a UTF-8 file name"))?;
     let image_name = format!("{stem}.pgm");
     let image_path = yaml_path.with_file_name(&image_name);
-    write_atomic(&image_path, &encode_pgm(grid))?;
     let [x, y, yaw] = grid.origin;
     let yaml = format!(
         "image: {}\nmode: trinary\nresolution: {:?}\norigin: [{x:?}, {y:?}, {yaw:?}]\nnegate: 0\noccupied_thresh: {SAVE_OCCUPIED_THRESH:?}\nfree_thresh: {SAVE_FREE_THRESH:?}\n",
         yaml_string(&image_name),
         grid.resolution,
     );
-    write_atomic(yaml_path, yaml.as_bytes())
+    // Both targets are opened (a folder or an unwritable place refused) before either is
+    // written: a refused YAML never leaves a replaced image behind.
+    let open = |p: &Path| madenet_files::AtomicFile::create(p).map_err(|e| io_err(p, e));
+    let (mut image, mut meta) = (open(&image_path)?, open(yaml_path)?);
+    for (f, p, bytes) in [
+        (&mut image, image_path.as_path(), encode_pgm(grid)),
+        (&mut meta, yaml_path, yaml.into_bytes()),
+    ] {
+        f.write_all(&bytes).map_err(|e| io_err(p, e))?;
+    }
+    image.commit().map_err(|e| io_err(&image_path, e))?;
+    meta.commit().map_err(|e| io_err(yaml_path, e))
 }
 
 #[cfg(test)]
