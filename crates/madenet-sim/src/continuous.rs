@@ -151,7 +151,8 @@ pub struct ContinuousTrial {
     written_off: u64,
     /// The cells each robot has stood in (row-major masks of the coarse grid).
     visited: Vec<Vec<bool>>,
-    /// When a cell was first spared from robot i's write-off because a teammate may hide it.
+    /// When a cell was first spared from robot i's write-off (a teammate may hide it, or it is
+    /// a corner cell with a side cell not yet stood in).
     spared: BTreeMap<(usize, Pos), f64>,
     /// When each robot's current target was named (the stuck rule).
     target_since: Vec<f64>,
