@@ -183,7 +183,8 @@ pub fn lock_folder(dir: &Path) -> io::Result<FolderLock> {
         let entry = entry?;
         let name = entry.file_name();
         if name.to_string_lossy().starts_with(".madenet-") && entry.file_type()?.is_file() {
-            std::fs::remove_file(entry.path())?;
+            // Best effort: a writer outside the lock may have renamed or removed it already.
+            let _ = std::fs::remove_file(entry.path());
         }
     }
     Ok(FolderLock { _file: file })

@@ -565,7 +565,11 @@ impl ContinuousTrial {
             self.distance.push(self.team_distance());
         }
         let complete = self.world.is_complete();
-        let no_frontier_at = self.no_frontier_since.filter(|_| !complete);
+        // Only when that rule ended the trial (not a cap inside its window, not a mid-run look).
+        let (now, wait) = (self.world.time(), self.world.config().no_frontier_time);
+        let no_frontier_at = self
+            .no_frontier_since
+            .filter(|&t| !complete && now - t >= wait - 1e-9);
         let Collisions { obstacle, robot } = self.world.collisions();
         let team_distance_m = self.team_distance();
         ContinuousResult {
