@@ -500,10 +500,13 @@ impl ContinuousTrial {
                 .any(|&m| segment_distance(m, (here.x, here.y), c) < reach)
         };
         let (h, w) = self.world.map(i).coarse_size();
-        let reachable = self.agents[i].reachable();
-        let belief = self.agents[i].belief();
+        // Searched only when a corner cell needs it (most reached goals have none unknown).
+        let reachable = std::cell::OnceCell::new();
+        let agent = &self.agents[i];
+        let belief = agent.belief();
         let visited = &self.visited[i];
         let unvisited_side = |q: Pos| {
+            let reachable = reachable.get_or_init(|| agent.reachable());
             [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|&(dr, dc)| {
                 let s = Pos::new(q.row + dr, q.col + dc);
                 belief.is_free(s) && reachable[belief.index(s)] && !visited[belief.index(s)]

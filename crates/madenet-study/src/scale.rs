@@ -17,6 +17,7 @@
 //!   where exploration time stops falling; the first method against every other: the share of
 //!   (side, team) cells where it has lower mean TNS and TTD, and pooled Wilcoxon tests.
 
+use crate::analysis::mean_sd;
 use crate::config::{field, StudyError};
 use crate::runner::{
     run_planned, write_atomic, Planned, PlannedContinuous, TrialKey, TrialOutcome,
@@ -501,15 +502,16 @@ pub fn run_scale(
         ScaleWorld::Continuous => {
             let dir = out.join("grid");
             std::fs::create_dir_all(&dir).map_err(io)?;
-            let _twin_lock = crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
+            // `grid/` stays this run's until the report is written, as `out` does.
+            let lock = crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
             let twin = cfg.grid_twin(&planned);
             let runs: Vec<Planned> = twin.iter().map(|p| p.planned.clone()).collect();
             let n = planned.len();
             let outcomes = run_planned(&runs, registry, &dir, &|d, t| progress(d, t + n))?;
-            Some((twin, outcomes))
+            Some((twin, outcomes, lock))
         }
     };
-    let offset = twin.as_ref().map_or(0, |(t, _)| t.len());
+    let offset = twin.as_ref().map_or(0, |(t, _, _)| t.len());
     let runs: Vec<Planned> = planned.iter().map(|p| p.planned.clone()).collect();
     let outcomes = run_planned(&runs, registry, out, &|d, t| {
         progress(d + offset, t + offset)
@@ -542,7 +544,7 @@ pub fn run_scale(
     figure(cfg, &cells, out)?;
     let report = out.join("scale.md");
     let mut text = report_text(cfg, &planned, &outcomes, &cells, wall);
-    if let Some((twin_planned, twin_outcomes)) = &twin {
+    if let Some((twin_planned, twin_outcomes, _)) = &twin {
         text.push_str(&twin_text(
             cfg,
             (&planned, &outcomes),
@@ -683,7 +685,7 @@ fn report_text(
             planned
                 .iter()
                 .zip(outcomes)
-                .filter(|(p, o)| tns(o) >= cfg.step_cap(p.side) as f64)
+                .filter(|(p, o)| !o.row.completed && tns(o) >= cfg.step_cap(p.side) as f64)
                 .count()
         );
     }
@@ -884,10 +886,7 @@ The grid twin (`grid/`) runs every trial of this study in the grid world: the sc
             let gap = |(p, o): (&[ScalePlanned], &[TrialOutcome])| {
                 let x = paired(p, o, focus, side, None, tns);
                 let y = paired(p, o, other, side, None, tns);
-                let (mx, my) = (
-                    x.iter().sum::<f64>() / x.len().max(1) as f64,
-                    y.iter().sum::<f64>() / y.len().max(1) as f64,
-                );
+                let (mx, my) = (mean_sd(&x).0, mean_sd(&y).0);
                 let pct = 100.0 * (mx - my) / my.max(f64::MIN_POSITIVE);
                 let p = wilcoxon(&x, &y).map(|r| r.p_value).ok();
                 (pct, p)
