@@ -26,7 +26,9 @@
 
 #![deny(missing_docs)]
 
+mod read;
 mod toml_config;
+pub use read::{read_capped, read_text_capped, InputKind, STREAM_WAIT};
 pub use toml_config::{parse_toml, read_toml, ConfigFileError};
 
 use std::fs::{File, OpenOptions};

@@ -43,7 +43,8 @@ pub fn read_toml<T: DeserializeOwned>(path: &Path) -> Result<T, ConfigFileError>
         path: path.display().to_string(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| fail(e.to_string()))?;
+    let text =
+        crate::read_text_capped(path, crate::InputKind::Config).map_err(|e| fail(e.to_string()))?;
     parse_toml(&text).map_err(fail)
 }
 

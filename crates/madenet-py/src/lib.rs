@@ -31,8 +31,11 @@ pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
 pub(crate) fn scenario(config: Option<&str>, overrides: &str) -> PyResult<ScenarioConfig> {
     let mut table = match config {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
+            let text = madenet_files::read_text_capped(
+                std::path::Path::new(path),
+                madenet_files::InputKind::Config,
+            )
+            .map_err(|e| value_error(format!("{path}: {e}")))?;
             text.parse::<toml::Table>()
                 .map_err(|e| value_error(format!("{path}: {}", e.message())))?
         }

@@ -22,8 +22,11 @@ pub struct CoreStudy {
 fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyConfig> {
     let mut table = match config {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| value_error(format!("{path}: {e}")))?;
+            let text = madenet_files::read_text_capped(
+                std::path::Path::new(path),
+                madenet_files::InputKind::Config,
+            )
+            .map_err(|e| value_error(format!("{path}: {e}")))?;
             text.parse::<toml::Table>()
                 .map_err(|e| value_error(format!("{path}: {}", e.message())))?
         }

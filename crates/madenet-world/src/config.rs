@@ -140,10 +140,11 @@ fn check_prob(name: &'static str, p: f64) -> Result<(), ConfigError> {
 impl ScenarioConfig {
     /// Reads a TOML file; errors name the file and the offending key.
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ConfigError::File {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
+            .map_err(|e| ConfigError::File {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })?;
         Self::from_toml_str(&text).map_err(|e| match e {
             ConfigError::File { message, .. } => ConfigError::File {
                 path: path.display().to_string(),

@@ -40,8 +40,8 @@ pub struct TrainArgs {
 
 /// The `method` key of a training config file, if it has one.
 fn method_of(path: &Path) -> Result<Option<String>> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let value: toml::Table = toml::from_str(&text)
         .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
     Ok(value

@@ -71,7 +71,6 @@ pub use yaml::save_yaml;
 
 use crate::discretize::DiscretizeParams;
 use crate::{MapError, OccGrid, Occupancy};
-use std::fs;
 use std::path::Path;
 use yaml::MapMeta;
 
@@ -153,10 +152,14 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<OccGrid, MapError> {
     check_options(opts)?;
     // An unsupported extension is reported without touching the file.
     map_format(path)?;
-    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
-    load_bytes(&bytes, path, opts, |image| {
-        fs::read(image).map_err(|e| io_err(image, e))
-    })
+    let bytes = read_input(path)?;
+    load_bytes(&bytes, path, opts, read_input)
+}
+
+/// A map file's (or its image's) bytes, read with the cap of a map
+/// ([`madenet_files::InputKind::Map`]): a device or a FIFO never reads without end.
+fn read_input(path: &Path) -> Result<Vec<u8>, MapError> {
+    madenet_files::read_capped(path, madenet_files::InputKind::Map).map_err(|e| io_err(path, e))
 }
 
 /// The pixel size in metres a map file is drawn at: a map_server YAML's `resolution`; 1 m for
@@ -167,7 +170,7 @@ pub fn native_resolution(path: &Path) -> Result<f64, MapError> {
     if map_format(path)? != MapFormat::Yaml {
         return Ok(1.0);
     }
-    let bytes = fs::read(path).map_err(|e| io_err(path, e))?;
+    let bytes = read_input(path)?;
     let text = std::str::from_utf8(&bytes).map_err(|e| {
         io_err(
             path,

@@ -6,6 +6,7 @@ use super::yaml::{parse_map_yaml, MapMeta};
 use super::*;
 use crate::Pos;
 use proptest::prelude::*;
+use std::fs;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
