@@ -92,10 +92,14 @@ enum Negate {
 /// Parses and validates ROS `map_server` YAML text. Unknown keys are ignored (as ROS does).
 pub(super) fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, MapError> {
     let not_a_mapping = |e: serde_saphyr::Error| {
-        format_err(
-            yaml_path,
-            format!("not a valid map_server YAML mapping: {e}"),
-        )
+        let message = one_line(&e);
+        match top_level_key(text, &e) {
+            Some(key) => field_err(yaml_path, &key, message),
+            None => format_err(
+                yaml_path,
+                format!("not a valid map_server YAML mapping: {message}"),
+            ),
+        }
     };
     // First the document as a whole: malformed YAML, a root that is not a mapping, a duplicate
     // key or a non-finite float anywhere is a format error, not one of a field. Where each
@@ -112,6 +116,37 @@ pub(super) fn parse_map_yaml(text: &str, yaml_path: &Path) -> Result<MapMeta, Ma
             None => not_a_mapping(e),
         })?;
     yaml.validate(yaml_path)
+}
+
+/// serde-saphyr's message on one line: no source snippet, no notes, no advice meant for the
+/// programmer (`set DuplicateKeyPolicy in Options`).
+fn one_line(e: &serde_saphyr::Error) -> String {
+    let text = e.without_snippet().to_string();
+    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+    first
+        .trim()
+        .trim_start_matches("error: ")
+        .replace(", set DuplicateKeyPolicy in Options if acceptable", "")
+        .replace(" rejected by the configured policy", " is not allowed")
+        .replace(
+            "budget breached:",
+            "the document expands beyond the reader's budget (anchors and aliases):",
+        )
+}
+
+/// The top-level key on the line serde-saphyr's error `e` points at (`resolution: .nan`), if
+/// that line starts one.
+fn top_level_key(text: &str, e: &serde_saphyr::Error) -> Option<String> {
+    let line = e.location()?.line();
+    let line = text
+        .lines()
+        .nth(usize::try_from(line).ok()?.checked_sub(1)?)?;
+    if line.starts_with([' ', '\t', '-', '#', '[', '{']) {
+        return None;
+    }
+    let (key, _) = line.split_once(':')?;
+    let key = key.trim().trim_matches(['"', '\'']);
+    (!key.is_empty() && key.len() <= 64).then(|| key.to_string())
 }
 
 /// The field of [`MapServerYaml`] (with what it must hold, from [`EXPECTED`]) whose value
