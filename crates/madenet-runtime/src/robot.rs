@@ -21,6 +21,8 @@ struct MapExchanges {
     heard_from: HashMap<usize, usize>,
     /// Teammates whose last changes did not fit: ask them for their whole map.
     want_full: HashSet<usize>,
+    /// Malformed β dropped so far.
+    dropped: usize,
 }
 
 impl MapExchanges {
@@ -31,25 +33,49 @@ impl MapExchanges {
         msg
     }
 
+    /// The β to merge from `msg`, or `None` when it is malformed — from a teammate that does
+    /// not exist, a map of another size, cells outside the map: such a β is dropped and counted
+    /// (a teammate started on another map must not end this robot).
     fn incoming(
         &mut self,
         me: Node,
         msg: &BetaMessage,
-        cells: usize,
-        team: usize,
-    ) -> Result<Beta, RuntimeError> {
+        cfg: &madenet_agent::AgentConfig,
+    ) -> Option<Beta> {
         let j = msg.from;
-        if j >= team || Node::Robot(j) == me {
-            return Err(RuntimeError::Unexpected {
-                node: me,
-                from: Node::Robot(j),
-                step: msg.t as u64,
-                what: "a β from a teammate that does not exist",
-            });
-        }
-        let (beta, fitted) = msg
-            .to_beta(self.heard_from.get(&j).copied(), cells)
-            .map_err(|source| RuntimeError::Wire { node: me, source })?;
+        let inside = |p: madenet_map::Pos| {
+            p.row >= 0
+                && p.col >= 0
+                && (p.row as usize) < cfg.height
+                && (p.col as usize) < cfg.width
+        };
+        let positions_inside =
+            inside(msg.pos) && msg.goal.is_none_or(inside) && msg.prev_goal.is_none_or(inside);
+        let malformed = if j >= cfg.num_robots || j == cfg.id {
+            Some("from a teammate that does not exist".to_string())
+        } else if !positions_inside {
+            Some("with a position or goal outside this map".to_string())
+        } else {
+            None
+        };
+        let converted = match malformed {
+            Some(why) => Err(why),
+            None => msg
+                .to_beta(self.heard_from.get(&j).copied(), cfg.height * cfg.width)
+                .map_err(|e| e.to_string()),
+        };
+        let (beta, fitted) = match converted {
+            Ok(b) => b,
+            Err(why) => {
+                self.dropped += 1;
+                tracing::warn!(
+                    "{me}: dropped a β of robot {j} for timestep {} ({why}); {} dropped so far — are all nodes started with the same map and config?",
+                    msg.t,
+                    self.dropped
+                );
+                return None;
+            }
+        };
         if msg.want_full {
             self.sent_to.remove(&j);
         }
@@ -62,7 +88,7 @@ impl MapExchanges {
             );
             self.want_full.insert(j);
         }
-        Ok(beta)
+        Some(beta)
     }
 }
 
@@ -109,14 +135,17 @@ pub fn run_robot<T: Transport>(
     transport: T,
     timeouts: Timeouts,
 ) -> Result<(Traffic, Traffic), RuntimeError> {
-    run_robot_with(agent, transport, timeouts, |_, _| {})
+    run_robot_with(agent, transport, timeouts, None, |_, _| {})
 }
 
-/// [`run_robot`], calling `on_step(timestep, agent)` after each move it sends (progress).
+/// [`run_robot`], its hello carrying `scenario` (the [`scenario_digest`](crate::wire::scenario_digest)
+/// of what it was started with; a world started with others refuses it), calling
+/// `on_step(timestep, agent)` after each move it sends (progress).
 pub fn run_robot_with<T: Transport>(
     mut agent: Agent,
     transport: T,
     timeouts: Timeouts,
+    scenario: Option<u64>,
     mut on_step: impl FnMut(u64, &Agent),
 ) -> Result<(Traffic, Traffic), RuntimeError> {
     let i = agent.id();
@@ -127,7 +156,7 @@ pub fn run_robot_with<T: Transport>(
     // killed and is now restarted) waits for its moves again.
     let started = std::time::Instant::now();
     loop {
-        mb.send(&Envelope::new(0, me, Node::World, Body::Hello))?;
+        mb.send(&Envelope::new(0, me, Node::World, Body::Hello { scenario }))?;
         if mb
             .try_take(HELLO_EVERY, |e| e.from == Node::World)?
             .is_some_and(|first| {
@@ -146,7 +175,6 @@ pub fn run_robot_with<T: Transport>(
         }
     }
     let mut to_world = mb.sent;
-    let cells = agent.config().height * agent.config().width;
     let mut maps = MapExchanges::default();
     // Whether the world asked for what this robot shows (pictures).
     let mut show = false;
@@ -206,7 +234,7 @@ pub fn run_robot_with<T: Transport>(
         let mut late: Vec<Beta> = Vec::new();
         for e in mb.forget_before(step, |e| matches!(e.body, Body::Beta(_))) {
             if let Body::Beta(m) = &e.body {
-                late.push(maps.incoming(me, m, cells, agent.config().num_robots)?);
+                late.extend(maps.incoming(me, m, agent.config()));
             }
         }
         // 1–2. observe, with this timestep's links from the radio.
@@ -250,7 +278,7 @@ pub fn run_robot_with<T: Transport>(
                 e.step == step && e.from == Node::Robot(j) && matches!(e.body, Body::Beta(_))
             })?;
             match e.map(|e| e.body) {
-                Some(Body::Beta(m)) => late.push(maps.incoming(me, &m, cells, n)?),
+                Some(Body::Beta(m)) => late.extend(maps.incoming(me, &m, agent.config())),
                 _ => tracing::warn!(
                     "{me}: no β from robot {j} for timestep {step} within {:?}",
                     timeouts.peer
@@ -308,5 +336,49 @@ pub fn run_robot_with<T: Transport>(
         to_world.messages += mb.sent.messages - before.messages;
         to_world.bytes += mb.sent.bytes - before.bytes;
         on_step(step, &agent);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use madenet_map::Pos;
+
+    fn message(from: usize, cells: usize, pos: Pos) -> BetaMessage {
+        let beta = Beta {
+            from,
+            t: 4,
+            prev_goal: None,
+            pos,
+            goal: Some(Pos::new(2, 3)),
+            map: vec![Occupancy::Free; cells],
+            explored: cells,
+        };
+        BetaMessage::new(&beta, None, false)
+    }
+
+    /// A β of another map size, of a robot that does not exist or of cells outside the map is
+    /// dropped and counted; the next good one is merged as ever.
+    #[test]
+    fn a_malformed_beta_is_dropped_and_counted_not_fatal() {
+        let cfg = madenet_agent::AgentConfig::from_scenario(&Default::default(), 0, 20, 20);
+        let me = Node::Robot(0);
+        let mut maps = MapExchanges::default();
+        assert!(maps
+            .incoming(me, &message(1, 30 * 30, Pos::new(1, 1)), &cfg)
+            .is_none());
+        assert!(maps
+            .incoming(me, &message(7, 400, Pos::new(1, 1)), &cfg)
+            .is_none());
+        assert!(maps
+            .incoming(me, &message(0, 400, Pos::new(1, 1)), &cfg)
+            .is_none());
+        assert!(maps
+            .incoming(me, &message(1, 400, Pos::new(25, 1)), &cfg)
+            .is_none());
+        assert_eq!(maps.dropped, 4);
+        let beta = maps.incoming(me, &message(1, 400, Pos::new(1, 1)), &cfg);
+        assert_eq!(beta.map(|b| (b.from, b.map.len())), Some((1, 400)));
+        assert_eq!(maps.dropped, 4);
     }
 }

@@ -13,7 +13,7 @@ use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 4;
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -79,8 +79,13 @@ pub enum Body {
     Move(Move),
     /// World → robots and radio: the trial is over (complete or at the step cap).
     Stop,
-    /// Robot → world when it starts: wait for my moves (again, after a restart).
-    Hello,
+    /// Robot → world when it starts: wait for my moves (again, after a restart). `scenario`:
+    /// the digest of the map and scenario the robot was started with ([`scenario_digest`]), so
+    /// that a world started with others refuses it by name; `None`: not checked.
+    Hello {
+        /// [`scenario_digest`] of the robot's map, starts and scenario config.
+        scenario: Option<u64>,
+    },
     /// Robot → world, answering `Stop`: its decisions and their total wall time, and its
     /// latency from observation to move (timesteps acted, total and longest, seconds).
     Done {
@@ -263,4 +268,25 @@ impl BetaMessage {
         };
         Ok((beta, fitted))
     }
+}
+
+/// The digest a node's hello carries of what every node of a run must share: the map's cells,
+/// the starts and the scenario config (as TOML). XXH3-64; equal inputs, equal digests, on any
+/// machine.
+pub fn scenario_digest(
+    map: &madenet_map::OccGrid,
+    starts: &[madenet_map::Pos],
+    config: &madenet_world::ScenarioConfig,
+) -> u64 {
+    let mut bytes = format!("{}x{};", map.height(), map.width()).into_bytes();
+    for r in 0..map.height() {
+        for c in 0..map.width() {
+            bytes.push(map.get(madenet_map::Pos::new(r as i32, c as i32)) as u8);
+        }
+    }
+    for p in starts {
+        bytes.extend_from_slice(format!(";{},{}", p.row, p.col).as_bytes());
+    }
+    bytes.extend_from_slice(toml::to_string(config).unwrap_or_default().as_bytes());
+    xxhash_rust::xxh3::xxh3_64(&bytes)
 }

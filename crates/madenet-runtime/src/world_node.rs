@@ -94,7 +94,22 @@ pub fn run_world_with<T: Transport>(
     on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
-    run_ground_with(world, transport, timeouts, None, on_step)
+    run_ground_with(world, transport, timeouts, None, None, on_step)
+}
+
+/// Refuses a robot whose hello carries another scenario digest than this world's (both known).
+fn check_hello(me: Node, scenario: Option<u64>, e: &Envelope) -> Result<(), RuntimeError> {
+    match (scenario, &e.body) {
+        (Some(mine), Body::Hello { scenario: Some(theirs) }) if mine != *theirs => {
+            Err(RuntimeError::Unexpected {
+                node: me,
+                from: e.from,
+                step: e.step,
+                what: "a hello for another map or scenario (start every node with the same --map, --start and --config)",
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// What a picture of a timestep draws besides the ground: what each robot shows, and the pairs
@@ -111,6 +126,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
     mut world: G,
     transport: T,
     timeouts: Timeouts,
+    scenario: Option<u64>,
     mut show: Option<ShowFn<'_, G>>,
     mut on_step: impl FnMut(&G),
 ) -> Result<LockstepResult, RuntimeError> {
@@ -170,7 +186,8 @@ pub fn run_ground_with<G: Ground, T: Transport>(
     while !world.is_done() {
         let step = world.t() as u64;
         // Hellos: robots that (re)joined are waited for from now on.
-        for e in mb.forget_before(step, |e| matches!(e.body, Body::Hello)) {
+        for e in mb.forget_before(step, |e| matches!(e.body, Body::Hello { .. })) {
+            check_hello(me, scenario, &e)?;
             if let Node::Robot(j) = e.from {
                 if j < n && !present[j] {
                     tracing::warn!("{me}: robot {j} is back (it said hello) at timestep {step}: waiting for its moves again");
@@ -181,7 +198,10 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         }
         if present.iter().all(|&p| !p) {
             // Nobody to wait for: give a restarted robot the time to say hello, then give up.
-            let hello = mb.try_take(timeouts.node, |e| matches!(e.body, Body::Hello))?;
+            let hello = mb.try_take(timeouts.node, |e| matches!(e.body, Body::Hello { .. }))?;
+            if let Some(e) = &hello {
+                check_hello(me, scenario, e)?;
+            }
             match hello.map(|e| e.from) {
                 Some(Node::Robot(j)) if j < n => {
                     tracing::warn!("{me}: robot {j} is back (it said hello) at timestep {step}: waiting for its moves again");

@@ -53,17 +53,6 @@ impl NodeArgs {
             .context("--run/--port")
     }
     fn timeouts(&self) -> Timeouts {
-        // The nodes' warnings (an absent robot, a silent teammate) go to stderr, one line each.
-        let _ = tracing_subscriber::fmt()
-            .with_writer(std::io::stderr)
-            .without_time()
-            .with_target(false)
-            .with_ansi(false)
-            // Ours at warn; Zenoh's own only when they are errors.
-            .with_env_filter(tracing_subscriber::EnvFilter::new(
-                "error,madenet_runtime=warn,madenet=warn",
-            ))
-            .try_init();
         Timeouts::new(Duration::from_secs(self.timeout_s))
     }
 }
@@ -330,8 +319,9 @@ pub fn world(a: WorldArgs) -> Result<()> {
     };
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
         a.pictures.any().then_some(&mut draw);
+    let scenario = Some(scenario_of(&spec));
     serve_world(&a, &spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(world, bus, timeouts, show, |w| on_step(w))
+        madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w| on_step(w))
     })?;
     if let Some(e) = failed {
         return Err(e);
@@ -345,6 +335,11 @@ pub fn world(a: WorldArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The digest every node's hello is checked by: map, starts and scenario config.
+fn scenario_of(spec: &madenet_sim::TrialSpec) -> u64 {
+    madenet_runtime::wire::scenario_digest(&spec.map, &spec.starts, &spec.config)
 }
 
 /// The world node on real robots' maps and poses (`--ros2-robots`).
@@ -365,8 +360,9 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
         wait,
     )
     .context("--ros2-robots")?;
+    let scenario = Some(scenario_of(spec));
     serve_world(a, spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(real, bus, timeouts, None, |g| on_step(g))
+        madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g| on_step(g))
     })
 }
 
@@ -440,7 +436,8 @@ pub fn agent(a: AgentArgs) -> Result<()> {
     let mut ros2 = Ros2Out::open(&a.ros2, a.robot, &spec.map)?;
     let bus = a.node.bus(Node::Robot(a.robot), n)?;
     let progress = a.node.progress;
-    madenet_runtime::run_robot_with(agent, &bus, a.node.timeouts(), |step, agent| {
+    let scenario = Some(scenario_of(&spec));
+    madenet_runtime::run_robot_with(agent, &bus, a.node.timeouts(), scenario, |step, agent| {
         ros2.publish(agent);
         if progress {
             match agent.goal() {

@@ -44,9 +44,14 @@ impl Run {
 
     /// Starts `madenet <command> <trial> <node flags> <extra>`, its stderr collected as `label`.
     fn start(&mut self, label: &str, command: &str, extra: &[&str]) {
+        self.start_on(label, command, &TRIAL, extra)
+    }
+
+    /// [`Run::start`] with another trial.
+    fn start_on(&mut self, label: &str, command: &str, trial: &[&str], extra: &[&str]) {
         let mut child = Command::new(env!("CARGO_BIN_EXE_madenet"))
             .arg(command)
-            .args(TRIAL)
+            .args(trial)
             .args([
                 "--run",
                 &self.run,
@@ -259,4 +264,36 @@ fn exploration_completes_with_extra_loss_and_delay() {
         let result = run.finish();
         assert_eq!(result["metrics"]["completed"], true, "{extra:?}: {result}");
     }
+}
+
+/// A robot started on another map than the world's is refused by name at its hello (the run
+/// would otherwise finish with an agent exploring a map that is not there), and the world ends
+/// with one error line.
+#[test]
+fn a_robot_started_on_another_map_is_refused_by_name() {
+    let mut run = Run::new("other-map");
+    let out = run.out.path().join("result.json");
+    let out = out.to_str().unwrap().to_string();
+    run.start("world", "world", &["--out", &out, "--pace-ms", "40"]);
+    run.start("radio", "radio", &[]);
+    run.start("robot 0", "agent", &["--robot", "0"]);
+    run.start("robot 1", "agent", &["--robot", "1"]);
+    let mut other = TRIAL;
+    other[1] = "paper:4";
+    run.start_on("robot 2", "agent", &other, &["--robot", "2"]);
+    let line = run.wait_for("world", |l| l.starts_with("error:"));
+    assert!(
+        line.contains("robot 2") && line.contains("another map or scenario"),
+        "{line}"
+    );
+    let (_, world) = run.children.iter_mut().find(|(l, _)| l == "world").unwrap();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let status = loop {
+        if let Some(s) = world.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the world did not end");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(!status.success(), "{status:?}");
 }
