@@ -72,6 +72,26 @@ impl DmeConfig {
         );
         32 * h * w
     }
+    /// Refuses sizes whose hidden layer would be too large to build: the flattened map ×
+    /// `hidden` weights of an actor's (and a critic's) first fully connected layer, at most
+    /// [`Self::MAX_FC_WEIGHTS`] (64 MB of f32; the default 20 × 20, 128 units is 0.1 M).
+    pub fn check_size(&self) -> Result<(), String> {
+        let weights = (self.flat() as u64).saturating_mul(self.hidden as u64);
+        if weights > Self::MAX_FC_WEIGHTS {
+            return Err(format!(
+                "field `hidden`: {} units on {} × {} maps make {weights} weights in one layer, more than {}; fewer units or smaller maps",
+                self.hidden,
+                self.map_height,
+                self.map_width,
+                Self::MAX_FC_WEIGHTS
+            ));
+        }
+        Ok(())
+    }
+
+    /// The largest first fully connected layer [`Self::check_size`] lets through.
+    pub const MAX_FC_WEIGHTS: u64 = 1 << 24;
+
     fn convs(&self, channels: usize, device: &Device) -> (Conv2d, Conv2d) {
         (
             Conv2dConfig::new([channels, 16], [4, 4])

@@ -163,6 +163,18 @@ impl DmeTrainConfig {
                 ),
             );
         }
+        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        harness::check_sizes(&[
+            ("episodes", self.episodes, 1, 10_000_000),
+            ("map_height", self.map_height as u64, 1, side),
+            ("map_width", self.map_width as u64, 1, side),
+            ("history", self.history as u64, 1, 64),
+            ("hidden", self.hidden as u64, 1, 4096),
+            ("batch_size", self.batch_size as u64, 1, 4096),
+            ("replay_steps", self.replay_steps as u64, 1, 1_000_000),
+            ("validation_maps", self.validation_maps as u64, 0, 100_000),
+        ])?;
+        self.nets().check_size()?;
         if self.history == 0 {
             return bad("history", "must be at least 1");
         }
@@ -509,6 +521,10 @@ pub struct ModelInfo {
     /// Weight files of the actors in robot order, relative to the model's directory
     /// (`actor0.bpk`, …).
     pub actors: Vec<String>,
+    /// Each actor file's digest ([`madenet_learn::integrity::digest`]), in the order of
+    /// `actors`; written by training, checked at load (absent in older folders: unchecked).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub digests: Vec<String>,
     /// Episodes played when the model was saved.
     pub episode: u64,
     /// MADDPG updates when the model was saved.
@@ -530,7 +546,8 @@ impl Model {
     /// Loads `dir/model.toml` and its actors.
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
+            .map_err(io_err(&path))?;
         let info: ModelInfo =
             madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
                 path: path.display().to_string(),
@@ -539,7 +556,10 @@ impl Model {
         let mut files = Vec::new();
         for f in &info.actors {
             let p = dir.join(f);
-            files.push(std::fs::read(&p).map_err(io_err(&p))?);
+            files.push(
+                madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
+                    .map_err(io_err(&p))?,
+            );
         }
         Self::from_parts(info, files, &path.display().to_string())
     }
@@ -575,6 +595,23 @@ impl Model {
                 ),
             });
         }
+        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        harness::check_sizes(&[
+            ("map_height", info.map_height as u64, 1, side),
+            ("map_width", info.map_width as u64, 1, side),
+            (
+                "team_size",
+                info.team_size as u64,
+                1,
+                madenet_world::MAX_ROBOTS as u64,
+            ),
+            ("history", info.history as u64, 1, 64),
+            ("hidden", info.hidden as u64, 1, 4096),
+        ])
+        .map_err(|message| TrainError::Config {
+            path: label.into(),
+            message,
+        })?;
         if info.history == 0
             || info.hidden == 0
             || info.map_height < madenet_learn::MIN_MAP_SIDE
@@ -594,20 +631,29 @@ impl Model {
             .with_team_size(info.team_size)
             .with_history(info.history)
             .with_hidden(info.hidden);
+        cfg.check_size().map_err(|message| TrainError::Config {
+            path: label.into(),
+            message,
+        })?;
+        let named: Vec<(String, Vec<u8>)> = info.actors.iter().cloned().zip(files).collect();
+        madenet_learn::integrity::check_digests(&info.digests, &named, label)?;
+        let sizes = format!(
+            "`map_height` {}, `map_width` {}, `team_size` {}, `history` {}, `hidden` {}",
+            info.map_height, info.map_width, info.team_size, info.history, info.hidden
+        );
         let mut actors = Vec::new();
-        for (name, bytes) in info.actors.iter().zip(files) {
+        for (name, bytes) in named {
             let rec = ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes))
                 .map_err(|e| TrainError::Io {
                     path: format!("{label}: {name}"),
                     message: e.to_string(),
                 })?;
-            let actor = cfg
-                .actor(&Device::flex())
-                .try_load_record(rec)
-                .map_err(|e| TrainError::Config {
-                    path: format!("{label}: {name}"),
-                    message: format!("weights do not fit the sizes in model.toml: {e}"),
-                })?;
+            let actor = madenet_learn::integrity::checked_weights(
+                cfg.actor(&Device::flex()).try_load_record(rec),
+                &name,
+                label,
+                &sizes,
+            )?;
             actors.push(Arc::new(RwLock::new(actor)));
         }
         Ok(Model { info, actors })
@@ -662,6 +708,7 @@ fn model_info(cfg: &DmeTrainConfig, state: &State, validation_steps: Option<f64>
         actors: (0..cfg.scenario.num_robots)
             .map(|i| format!("actor{i}.bpk"))
             .collect(),
+        digests: Vec::new(), // filled in by `save_model`
         episode: state.episode,
         updates: state.updates,
         validation_steps,
@@ -685,7 +732,11 @@ fn save_model(dir: &Path, nets: &Maddpg, info: &ModelInfo) -> Result<(), TrainEr
                 .save(&p)
                 .map_err(save_err(&p))?;
         }
-        harness::write_toml(&tmp.join("model.toml"), info)
+        let info = ModelInfo {
+            digests: harness::file_digests(tmp, &info.actors)?,
+            ..info.clone()
+        };
+        harness::write_toml(&tmp.join("model.toml"), &info)
     })
 }
 
@@ -723,23 +774,18 @@ fn checkpoint(dir: &Path, nets: &Maddpg, state: &State, replay: &Replay) -> Resu
 }
 
 fn restore(dir: &Path, mut nets: Maddpg) -> Result<(Maddpg, State, Replay), TrainError> {
-    let rec = |stem: &str| -> Result<ModuleRecord, TrainError> {
-        let p = dir.join(format!("{stem}.bpk"));
-        ModuleRecord::load(&p).map_err(save_err(&p))
-    };
+    let p = |stem: String| dir.join(format!("{stem}.bpk"));
     for i in 0..nets.actors.len() {
-        nets.actors[i] = nets.actors[i]
-            .clone()
-            .load_record(rec(&format!("actor{i}"))?);
-        nets.critics[i] = nets.critics[i]
-            .clone()
-            .load_record(rec(&format!("critic{i}"))?);
-        nets.target_actors[i] = nets.target_actors[i]
-            .clone()
-            .load_record(rec(&format!("actor{i}_target"))?);
-        nets.target_critics[i] = nets.target_critics[i]
-            .clone()
-            .load_record(rec(&format!("critic{i}_target"))?);
+        nets.actors[i] = harness::load_weights(nets.actors[i].clone(), &p(format!("actor{i}")))?;
+        nets.critics[i] = harness::load_weights(nets.critics[i].clone(), &p(format!("critic{i}")))?;
+        nets.target_actors[i] = harness::load_weights(
+            nets.target_actors[i].clone(),
+            &p(format!("actor{i}_target")),
+        )?;
+        nets.target_critics[i] = harness::load_weights(
+            nets.target_critics[i].clone(),
+            &p(format!("critic{i}_target")),
+        )?;
         for (stem, op) in [
             (format!("actor{i}_optim"), &mut nets.actor_optims[i]),
             (format!("critic{i}_optim"), &mut nets.critic_optims[i]),

@@ -13,7 +13,7 @@
 //!
 //! A learner keeps only what is its own: its networks, data, update and validation.
 
-use crate::train::{io_err, write_atomic, TrainError};
+use crate::train::{io_err, write_atomic, ModelInfo, TrainError};
 use madenet_trainlog::{
     truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, TfEventWriter, UpdateRow,
     ValidationRow,
@@ -55,8 +55,23 @@ pub fn prepare_run<C: Default + Serialize>(
         save(&cfg)?;
         Ok(cfg)
     };
+    // The config the checkpoint was trained with, kept beside `config.toml`: an edit of
+    // `config.toml` after the start is refused by field, before any weights are loaded.
+    let started_path = run_dir.join(".config-at-start.toml");
     let cfg = if cfg_path.exists() {
         let saved = load(&cfg_path)?;
+        if resuming && started_path.exists() {
+            let started = load(&started_path)?;
+            if !same_run(&saved, &started) {
+                return Err(TrainError::Config {
+                    path: cfg_path.display().to_string(),
+                    message: format!(
+                        "edited after the run started ({}); only the run's length may change on resume: use a new directory, or undo the edit",
+                        changed_fields(&started, &saved).join(", ")
+                    ),
+                });
+            }
+        }
         match cfg {
             // Only the run's length may change on resume: the rest defines the run.
             Some(given) if !same_run(&given, &saved) => {
@@ -71,7 +86,47 @@ pub fn prepare_run<C: Default + Serialize>(
     } else {
         checked(cfg.unwrap_or_default())?
     };
+    if !resuming {
+        let text = toml::to_string(&cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        write_atomic(&started_path, text.as_bytes())?;
+    }
     Ok((cfg, resuming))
+}
+
+/// The fields in which two configs differ, as ``field `a.b` (x at the start, y now)``.
+fn changed_fields<C: Serialize>(started: &C, now: &C) -> Vec<String> {
+    fn walk(prefix: &str, a: &toml::Value, b: &toml::Value, out: &mut Vec<String>) {
+        match (a, b) {
+            (toml::Value::Table(ta), toml::Value::Table(tb)) => {
+                let mut keys: Vec<&String> = ta.keys().chain(tb.keys()).collect();
+                keys.sort();
+                keys.dedup();
+                for k in keys {
+                    let name = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    match (ta.get(k), tb.get(k)) {
+                        (Some(x), Some(y)) => walk(&name, x, y, out),
+                        (x, y) => out.push(format!(
+                            "field `{name}` ({} at the start, {} now)",
+                            x.map_or("absent".into(), |v| v.to_string()),
+                            y.map_or("absent".into(), |v| v.to_string())
+                        )),
+                    }
+                }
+            }
+            _ if a != b => out.push(format!("field `{prefix}` ({a} at the start, {b} now)")),
+            _ => {}
+        }
+    }
+    let (Ok(a), Ok(b)) = (toml::Value::try_from(started), toml::Value::try_from(now)) else {
+        return vec!["a field".into()];
+    };
+    let mut out = Vec::new();
+    walk("", &a, &b, &mut out);
+    out
 }
 
 /// Reads a learner's TOML config and checks it with `validate`: unknown keys, bad values and
@@ -85,10 +140,32 @@ pub fn read_config<C: DeserializeOwned>(
         path: path.display().to_string(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(io_err(path))?;
+    let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
+        .map_err(io_err(path))?;
     let cfg: C = madenet_files::parse_toml(&text).map_err(config_err)?;
     validate(&cfg).map_err(config_err)?;
     Ok(cfg)
+}
+
+/// The largest map side a learner trains or a grid model is built for (the paper's maps are
+/// 20; a 200 × 200 grid DEP has ≈ 5 M parameters, a 1 000 × 1 000 one would have ≈ 130 M).
+pub const MAX_TRAIN_MAP_SIDE: usize = 200;
+
+/// The largest CEP joint action space |G|^|I| a learner builds (the paper's is 4³ = 64).
+pub const MAX_JOINT_ACTIONS: u64 = 1 << 16;
+
+/// Checks size fields against their bounds: `(field, value, min, max)`; the first out of bounds
+/// is ``field `name`: must lie in min..=max, got value``. Every training config bounds every
+/// size it allocates by, so a typo cannot ask for terabytes or run for years.
+pub fn check_sizes(fields: &[(&str, u64, u64, u64)]) -> Result<(), String> {
+    for &(field, value, min, max) in fields {
+        if !(min..=max).contains(&value) {
+            return Err(format!(
+                "field `{field}`: must lie in {min}..={max}, got {value}"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Trains into `run_dir`: [`prepare_run`] with `load`, `validate` and `same_run`, then
@@ -142,6 +219,42 @@ fn decode_err(path: &Path) -> impl FnOnce(String) -> TrainError + '_ {
         path: path.display().to_string(),
         message,
     }
+}
+
+/// Loads checkpointed weights from `path` into `net`: weights that do not fit the net (the
+/// run's `config.toml` changed a size after the checkpoint) are an error naming the file, never
+/// burn's panic.
+pub fn load_weights<M: burn::module::Module>(net: M, path: &Path) -> Result<M, TrainError> {
+    let rec = burn::store::ModuleRecord::load(path).map_err(|e| TrainError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    net.try_load_record(rec).map_err(|e| TrainError::Config {
+        path: path.display().to_string(),
+        message: format!("the weights do not fit the run's config.toml: {e}"),
+    })
+}
+
+/// Writes a model's `model.toml` into the model folder `dir` being filled by [`replace_dir`],
+/// with the digests of the weight files already there ([`crate::integrity::digest`]).
+pub fn write_model_toml(dir: &Path, info: &ModelInfo) -> Result<(), TrainError> {
+    let mut info = info.clone();
+    info.digests = file_digests(dir, &info.deps)?;
+    write_toml(&dir.join("model.toml"), &info)
+}
+
+/// The digests ([`crate::integrity::digest`]) of the weight files `files` in `dir`, for a
+/// `model.toml`'s `digests`.
+pub fn file_digests(dir: &Path, files: &[String]) -> Result<Vec<String>, TrainError> {
+    files
+        .iter()
+        .map(|f| {
+            let p = dir.join(f);
+            std::fs::read(&p)
+                .map(|b| crate::integrity::digest(&b))
+                .map_err(io_err(&p))
+        })
+        .collect()
 }
 
 /// Reads a JSON checkpoint file (e.g. `state.json`); errors name the file.
@@ -275,7 +388,8 @@ pub struct Logs<U: UpdateLog> {
     pub updates: LogWriter<U>,
     /// `validation.csv`.
     pub validation: LogWriter<ValidationRow>,
-    tb: TfEventWriter,
+    /// Created with the first scalar, so a resume that trains nothing adds no event file.
+    tb: Option<TfEventWriter>,
 }
 
 impl<U: UpdateLog> Logs<U> {
@@ -302,20 +416,26 @@ impl<U: UpdateLog> Logs<U> {
             episodes: LogWriter::open(path(EpisodeRow::FILE_NAME))?,
             updates: LogWriter::open(path(U::FILE_NAME))?,
             validation: LogWriter::open(path(ValidationRow::FILE_NAME))?,
-            tb: TfEventWriter::create(run_dir).map_err(io_err(run_dir))?,
+            tb: None,
         })
     }
 
     /// Adds a TensorBoard scalar `tag` = `value` at `step`.
     pub fn scalar(&mut self, tag: &str, value: f32, step: u64) -> Result<(), TrainError> {
-        self.tb
-            .add_scalar(tag, value, step as i64, unix_now())
+        if self.tb.is_none() {
+            self.tb = Some(TfEventWriter::create(&self.dir).map_err(io_err(&self.dir))?);
+        }
+        let tb = self.tb.as_mut().expect("created above");
+        tb.add_scalar(tag, value, step as i64, unix_now())
             .map_err(io_err(&self.dir))
     }
 
     /// Flushes the TensorBoard events (the CSV logs are written row by row).
     pub fn flush(&mut self) -> Result<(), TrainError> {
-        self.tb.flush().map_err(io_err(&self.dir))
+        match &mut self.tb {
+            Some(tb) => tb.flush().map_err(io_err(&self.dir)),
+            None => Ok(()),
+        }
     }
 }
 

@@ -70,6 +70,7 @@ pub mod agnostic;
 mod config;
 pub mod env;
 pub mod harness;
+pub mod integrity;
 pub mod learner;
 mod net;
 pub mod obs;

@@ -41,7 +41,6 @@ use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
-use burn::store::ModuleRecord;
 use burn::tensor::{Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
@@ -339,6 +338,16 @@ impl RolloutTrainConfig {
                 return Err(format!("field `{field}`: {msg}"));
             }
         }
+        harness::check_sizes(&[
+            ("episodes", self.episodes, 1, 10_000_000),
+            (
+                "updates_per_iteration",
+                self.updates_per_iteration,
+                0,
+                1_000_000,
+            ),
+            ("horizon", self.horizon as u64, 0, 100_000),
+        ])?;
         if self.network == Network::Agnostic && self.recurrent {
             return Err(
                 "field `recurrent`: the agnostic network scores single decisions; set false".into(),
@@ -747,13 +756,9 @@ impl Student {
     }
 
     fn load(self, path: &Path) -> Result<Self, TrainError> {
-        let rec = ModuleRecord::load(path).map_err(|e| TrainError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
         Ok(match self {
-            Student::Grid(n) => Student::Grid(n.load_record(rec)),
-            Student::Agnostic(n) => Student::Agnostic(n.load_record(rec)),
+            Student::Grid(n) => Student::Grid(harness::load_weights(n, path)?),
+            Student::Agnostic(n) => Student::Agnostic(harness::load_weights(n, path)?),
         })
     }
 
@@ -974,6 +979,7 @@ fn model_info(
         }),
         agnostic: (cfg.network == Network::Agnostic).then(|| cfg.agnostic()),
         deps: vec!["dep0.bpk".into()],
+        digests: Vec::new(), // filled in by `write_model_toml`
         episode: state.episodes,
         updates: state.updates,
         validation_steps,
@@ -983,10 +989,19 @@ fn model_info(
     }
 }
 
+/// Says that `max_minutes` ran out inside iteration `iteration` (counted from 0), whose work is
+/// dropped.
+fn time_ran_out(iteration: u64) {
+    tracing::warn!(
+        "max_minutes ran out inside iteration {}: its work is dropped; --resume repeats it from the last checkpoint",
+        iteration + 1
+    );
+}
+
 fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
     replace_dir(dir, |tmp| {
         net.save(&tmp.join("dep0.bpk"), true)?;
-        harness::write_toml(&tmp.join("model.toml"), info)
+        harness::write_model_toml(tmp, info)
     })
 }
 
@@ -1066,10 +1081,20 @@ fn train_loop(
         let per = cfg.episodes_per_iteration();
         let first = state.iteration * per;
         let side_max = cfg.side_max_at(state.iteration);
-        let collected: Vec<Collected> = (first..first + per)
+        // The time budget holds inside an iteration too: an episode not started in time is
+        // skipped, and an iteration cut short is dropped whole (the checkpoint is at its start,
+        // so `--resume` repeats it exactly).
+        let collected: Vec<Option<Collected>> = (first..first + per)
             .into_par_iter()
-            .map(|e| collect_episode(cfg, e, side_max, &behaviour))
+            .map(|e| match clock.out_of_time(cfg.max_minutes) {
+                true => Ok(None),
+                false => collect_episode(cfg, e, side_max, &behaviour).map(Some),
+            })
             .collect::<Result<_, _>>()?;
+        let Some(collected) = collected.into_iter().collect::<Option<Vec<Collected>>>() else {
+            time_ran_out(state.iteration);
+            return Ok(());
+        };
         let decisions: usize = collected
             .iter()
             .map(|c| c.robots.iter().map(Vec::len).sum::<usize>())
@@ -1091,6 +1116,10 @@ fn train_loop(
         let mut loss_sum = 0.0;
         let trace_len = if cfg.recurrent { cfg.trace_len } else { 1 };
         for u in 0..cfg.updates_per_iteration {
+            if clock.out_of_time(cfg.max_minutes) {
+                time_ran_out(state.iteration);
+                return Ok(());
+            }
             let mut rng = stream(cfg.seed, "sample", state.updates + u);
             let windows: Vec<&[Labelled]> = (0..cfg.batch_size)
                 .map(|_| {

@@ -329,6 +329,33 @@ impl TrainConfig {
                 return Err(format!("field `{field}`: {msg}"));
             }
         }
+        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        harness::check_sizes(&[
+            ("episodes", self.episodes, 1, 10_000_000),
+            ("map_height", self.map_height as u64, 1, side),
+            ("map_width", self.map_width as u64, 1, side),
+            ("batch_size", self.batch_size as u64, 1, 1024),
+            ("trace_len", self.trace_len as u64, 1, 1024),
+            ("replay_episodes", self.replay_episodes as u64, 1, 100_000),
+            (
+                "updates_per_episode",
+                self.updates_per_episode as u64,
+                0,
+                10_000,
+            ),
+            ("validation_maps", self.validation_maps as u64, 0, 100_000),
+        ])?;
+        let joint = (self.goals() as u64)
+            .checked_pow(self.scenario.num_robots as u32)
+            .unwrap_or(u64::MAX);
+        if self.method == Method::MadeNet && joint > harness::MAX_JOINT_ACTIONS {
+            return Err(format!(
+                "field `scenario.num_robots`: the CEP's joint actions |G|^|I| = {}^{} exceed {}; train fewer robots, or made-net-dt",
+                self.goals(),
+                self.scenario.num_robots,
+                harness::MAX_JOINT_ACTIONS
+            ));
+        }
         if self.validate_every > 0 && self.validation_maps == 0 {
             return Err(
                 "field `validation_maps`: must be at least 1 when validate_every > 0".into(),
@@ -588,13 +615,7 @@ impl Nets {
     }
 
     fn load(mut self, dir: &Path) -> Result<Self, TrainError> {
-        let rec = |stem: &str| -> Result<ModuleRecord, TrainError> {
-            let path = dir.join(format!("{stem}.bpk"));
-            ModuleRecord::load(&path).map_err(|e| TrainError::Io {
-                path: path.display().to_string(),
-                message: e.to_string(),
-            })
-        };
+        let path = |stem: &str| dir.join(format!("{stem}.bpk"));
         let opt = |op: ModuleOptimizer, stem: &str| -> Result<ModuleOptimizer, TrainError> {
             let path = dir.join(format!("{stem}.bpk"));
             op.load(&path).map_err(|e| TrainError::Io {
@@ -604,16 +625,16 @@ impl Nets {
         };
         if let Some((o, t, op)) = self.cep.take() {
             self.cep = Some((
-                o.load_record(rec("cep")?),
-                t.load_record(rec("cep_target")?),
+                harness::load_weights(o, &path("cep"))?,
+                harness::load_weights(t, &path("cep_target"))?,
                 opt(op, "cep_optim")?,
             ));
         }
         let deps = std::mem::take(&mut self.deps);
         for (k, (o, t, op)) in deps.into_iter().enumerate() {
             self.deps.push((
-                o.load_record(rec(&format!("dep{k}"))?),
-                t.load_record(rec(&format!("dep{k}_target"))?),
+                harness::load_weights(o, &path(&format!("dep{k}")))?,
+                harness::load_weights(t, &path(&format!("dep{k}_target")))?,
                 opt(op, &format!("dep{k}_optim"))?,
             ));
         }
@@ -635,6 +656,11 @@ pub struct ModelInfo {
     pub agnostic: Option<AgnosticConfig>,
     /// DEP weight files, one per robot group (one when shared).
     pub deps: Vec<String>,
+    /// Each weight file's digest ([`crate::integrity::digest`]), in the order of `deps`;
+    /// written by training and checked at load. Absent in folders written before it existed
+    /// (then integrity is unchecked, and a warning says so).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub digests: Vec<String>,
     /// Episodes per environment behind these weights.
     pub episode: u64,
     /// Updates behind these weights.
@@ -690,14 +716,16 @@ impl Model {
     /// Loads `dir/model.toml` and its weight files.
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
-        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
+            .map_err(io_err(&path))?;
         let info = Self::parse_info(&text, &path.display().to_string())?;
         let mut files = Vec::new();
         for f in &info.deps {
             let p = dir.join(f);
             files.push((
                 p.display().to_string(),
-                std::fs::read(&p).map_err(io_err(&p))?,
+                madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
+                    .map_err(io_err(&p))?,
             ));
         }
         Self::from_parts(info, files, &path.display().to_string())
@@ -730,8 +758,18 @@ impl Model {
             // Sizes are checked here, by name, before any network is built from them.
             let max_robots = madenet_world::MAX_ROBOTS;
             let checks = [
-                ("dep.map_height", d.map_height, crate::MIN_MAP_SIDE, 1000),
-                ("dep.map_width", d.map_width, crate::MIN_MAP_SIDE, 1000),
+                (
+                    "dep.map_height",
+                    d.map_height,
+                    crate::MIN_MAP_SIDE,
+                    harness::MAX_TRAIN_MAP_SIDE,
+                ),
+                (
+                    "dep.map_width",
+                    d.map_width,
+                    crate::MIN_MAP_SIDE,
+                    harness::MAX_TRAIN_MAP_SIDE,
+                ),
                 ("dep.team_size", d.team_size, 1, max_robots),
                 ("dep.goal_count", d.goal_count, 1, 4 * max_robots),
             ];
@@ -762,6 +800,11 @@ impl Model {
                 ),
             });
         }
+        let config_err = |message: String| TrainError::Config {
+            path: label.to_string(),
+            message,
+        };
+        crate::integrity::check_digests(&info.digests, &files, label)?;
         let record = |name: &String, bytes: Vec<u8>| {
             ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes)).map_err(|e| {
                 TrainError::Io {
@@ -770,10 +813,6 @@ impl Model {
                 }
             })
         };
-        let config_err = |message: String| TrainError::Config {
-            path: label.to_string(),
-            message,
-        };
         match (&info.dep, &info.agnostic) {
             (Some(d), None) => {
                 let cfg = NetConfig {
@@ -781,10 +820,17 @@ impl Model {
                     ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count)
                         .with_concat_fc(d.concat_fc)
                 };
+                let sizes = format!(
+                    "`dep.map_height` {}, `dep.map_width` {}, `dep.team_size` {}, `dep.goal_count` {}, `dep.concat_fc` {}",
+                    d.map_height, d.map_width, d.team_size, d.goal_count, d.concat_fc
+                );
                 let mut deps = Vec::new();
                 for (name, bytes) in files {
                     let rec = record(&name, bytes)?;
-                    deps.push(Arc::new(cfg.init(&cpu())?.load_record(rec)));
+                    let net = cfg.init(&cpu())?.try_load_record(rec);
+                    deps.push(Arc::new(crate::integrity::checked_weights(
+                        net, &name, label, &sizes,
+                    )?));
                 }
                 Ok(Model {
                     info,
@@ -802,7 +848,9 @@ impl Model {
                 }
                 let (name, bytes) = files.into_iter().next().expect("one file");
                 let rec = record(&name, bytes)?;
-                let net = a.init(&cpu()).map_err(config_err)?.load_record(rec);
+                let net = a.init(&cpu()).map_err(config_err)?.try_load_record(rec);
+                let net =
+                    crate::integrity::checked_weights(net, &name, label, "the table `agnostic`")?;
                 Ok(Model {
                     info,
                     deps: Vec::new(),
@@ -1153,6 +1201,7 @@ fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -
         deps: (0..cfg.dep_groups().len())
             .map(|k| format!("dep{k}.bpk"))
             .collect(),
+        digests: Vec::new(), // filled in by `write_model_toml`
         episode: state.episode,
         updates: state.updates,
         validation_steps,
@@ -1181,7 +1230,7 @@ fn save_model(dir: &Path, nets: &Nets, info: &ModelInfo) -> Result<(), TrainErro
         if let Some((o, _, _)) = &nets.cep {
             save("cep.bpk".into(), o)?;
         }
-        harness::write_toml(&tmp.join("model.toml"), info)
+        harness::write_model_toml(tmp, info)
     })
 }
 

@@ -120,8 +120,8 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
         "same seed, same weights"
     );
 
-    // Stopped at the first iteration boundary (a time limit that is always exceeded), then
-    // resumed: the uninterrupted run's logs and weights.
+    // A time limit that is always exceeded stops inside the first iteration: its work is
+    // dropped, nothing is checkpointed.
     train(
         &c,
         Some(RolloutTrainConfig {
@@ -131,6 +131,15 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
         &mut |_| {},
     )
     .unwrap();
+    assert!(!c.join("iterations.csv").exists() && !c.join("checkpoint").exists());
+    // Killed right after the first iteration's checkpoint (the progress report follows it),
+    // then resumed: the uninterrupted run's logs and weights.
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&c, Some(tiny()), &mut |p| {
+            assert!(p.iteration < 1, "killed after iteration 1");
+        })
+    }));
+    assert!(killed.is_err());
     assert_eq!(log_without_time(&c).len(), 2, "stopped after one iteration");
     train(&c, Some(tiny()), &mut |_| {}).unwrap();
     assert_eq!(log_without_time(&c), log);

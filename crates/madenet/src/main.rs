@@ -78,6 +78,17 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // Warnings (an absent robot, a silent teammate, a model folder without digests) go to
+    // stderr, one line each: ours at warn, Zenoh's own only when they are errors.
+    let _ = tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .without_time()
+        .with_target(false)
+        .with_ansi(false)
+        .with_env_filter(tracing_subscriber::EnvFilter::new(
+            "error,madenet_runtime=warn,madenet=warn,madenet_learn=warn,madenet_dme=warn",
+        ))
+        .try_init();
     let result = match cli.command {
         Command::Run(a) => run::run(a),
         Command::Batch(a) => batch::run(a),

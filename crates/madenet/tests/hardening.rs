@@ -564,3 +564,238 @@ fn a_model_with_impossible_sizes_names_the_field() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A copy of shipped model `name` in `dir`, its model.toml passed through `edit`.
+fn model_copy(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(name);
+    std::fs::create_dir_all(dir).unwrap();
+    for e in std::fs::read_dir(&shipped).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let toml = std::fs::read_to_string(dir.join("model.toml")).unwrap();
+    std::fs::write(dir.join("model.toml"), edit(&toml)).unwrap();
+    dir.to_path_buf()
+}
+
+/// `run` on paper map 1 (20 × 20) with 3 robots and the model in `model`.
+fn run_model(model: &Path) -> Output {
+    madenet(&[
+        "run".into(),
+        "--policy".into(),
+        "model".into(),
+        "--model".into(),
+        model.display().to_string(),
+    ])
+}
+
+/// Weights that disagree with model.toml (sizes), are damaged (digest) or hold NaN are
+/// refused by file and field, never burn's panic; a folder without digests still loads.
+#[test]
+fn a_model_folder_is_checked_against_its_weights() {
+    let dir = scratch("weights");
+    let set = |field: &'static str, value: &'static str| {
+        move |t: &str| {
+            t.lines()
+                .map(|l| {
+                    if l.starts_with(&format!("{field} =")) {
+                        format!("{field} = {value}\n")
+                    } else {
+                        format!("{l}\n")
+                    }
+                })
+                .collect::<String>()
+        }
+    };
+    // Sizes that are possible but are not the weights' (a 20 × 20, 3-robot model).
+    for (field, value) in [("map_height", "30"), ("team_size", "5")] {
+        let m = model_copy(&dir.join(field), "made-net", set(field, value));
+        let out = run_model(&m);
+        check_error(
+            field,
+            &out,
+            &["dep0.bpk", "do not fit", &format!("`dep.{field}` {value}")],
+        );
+    }
+    // 1 000 flipped bytes: the digest refuses them.
+    let m = model_copy(&dir.join("flipped"), "made-net", |t| t.to_string());
+    let mut w = std::fs::read(m.join("dep0.bpk")).unwrap();
+    let n = w.len();
+    for i in 0..1000 {
+        w[n / 2 + i] ^= 0x5a;
+    }
+    std::fs::write(m.join("dep0.bpk"), &w).unwrap();
+    check_error("flipped", &run_model(&m), &["dep0.bpk", "digest"]);
+    // NaN weights under a matching digest: refused by parameter.
+    let m = model_copy(&dir.join("nan"), "made-net", |t| t.to_string());
+    let mut w = std::fs::read(m.join("dep0.bpk")).unwrap();
+    let n = w.len();
+    // 4-byte aligned NaNs over a stretch of the tensor data (the file's second half).
+    let at = (n / 2) & !3;
+    for k in 0..64 {
+        w[at + 4 * k..at + 4 * k + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    }
+    std::fs::write(m.join("dep0.bpk"), &w).unwrap();
+    let digest = madenet_learn::integrity::digest(&w);
+    let toml = std::fs::read_to_string(m.join("model.toml")).unwrap();
+    let toml: String = toml
+        .lines()
+        .map(|l| match l.starts_with("digests =") {
+            true => format!("digests = [\"{digest}\"]\n"),
+            false => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(m.join("model.toml"), toml).unwrap();
+    check_error("nan", &run_model(&m), &["dep0.bpk", "NaN"]);
+    let no_digests = |t: &str| {
+        t.lines()
+            .filter(|l| !l.starts_with("digests ="))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+    };
+    // Without digests, intact weights still play (with a warning that nothing was checked).
+    let m = model_copy(&dir.join("old"), "made-net", no_digests);
+    let out = run_model(&m);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("no `digests`"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Training configs bound every size they allocate by, and the time budget holds inside an
+/// iteration: no allocation abort, no run that outlives `--max-minutes` by more than a step.
+#[test]
+fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
+    let dir = scratch("train-bounds");
+    for (name, text, needles) in [
+        (
+            "dme.toml",
+            "method = \"dme-drl\"\nhidden = 1000000000\n",
+            ["`hidden`", "1..=4096"],
+        ),
+        (
+            "grid.toml",
+            "map_height = 10000\n",
+            ["`map_height`", "1..=200"],
+        ),
+        (
+            "rollout.toml",
+            "method = \"made-net-rollout\"\nupdates_per_iteration = 1000000000000\n",
+            ["`updates_per_iteration`", "0..=1000000"],
+        ),
+    ] {
+        let cfg = dir.join(name);
+        std::fs::write(&cfg, text).unwrap();
+        let out = madenet(&[
+            "train".into(),
+            "--config".into(),
+            cfg.display().to_string(),
+            "--out".into(),
+            dir.join(format!("{name}.out")).display().to_string(),
+        ]);
+        check_error(name, &out, &[name, needles[0], needles[1]]);
+    }
+    // A million updates in one iteration, 3 s of budget: it stops inside the iteration.
+    let cfg = dir.join("long.toml");
+    std::fs::write(
+        &cfg,
+        "method = \"made-net-rollout\"\nepisodes = 2\niterations = 1\nrollouts = 1\nupdates_per_iteration = 1000000\nbatch_size = 4\nvalidation_maps = 1\nvalidation_csp = [1.0]\nspread_margins = []\nthreads = 1\n[scenario]\nstep_cap = 30\n",
+    )
+    .unwrap();
+    let t0 = Instant::now();
+    let out = madenet(&[
+        "train".into(),
+        "--config".into(),
+        cfg.display().to_string(),
+        "--out".into(),
+        dir.join("long").display().to_string(),
+        "--max-minutes".into(),
+        "0.05".into(),
+        "-q".into(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("ran out inside iteration 1"), "{err}");
+    assert!(t0.elapsed() < Duration::from_secs(45), "{:?}", t0.elapsed());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Inputs that are devices or FIFOs are read as capped streams: `/dev/zero` as a config stops at
+/// the cap, a FIFO nobody writes reads as empty (a bad map, a bad weight file), never a hang.
+#[test]
+fn devices_and_fifos_as_inputs_are_bounded() {
+    let dir = scratch("streams");
+    let out = madenet(&["run".into(), "--config".into(), "/dev/zero".into()]);
+    check_error("config /dev/zero", &out, &["/dev/zero", "16 MiB"]);
+    let fifo = |p: &Path| {
+        let ok = Command::new("mkfifo").arg(p).status().expect("mkfifo");
+        assert!(ok.success(), "mkfifo {p:?}");
+    };
+    let map = dir.join("fifo.pgm");
+    fifo(&map);
+    let out = madenet(&["run".into(), "--map".into(), map.display().to_string()]);
+    check_error("map fifo", &out, &["fifo.pgm"]);
+    let model = model_copy(&dir.join("model"), "made-net", |t| t.to_string());
+    std::fs::remove_file(model.join("dep0.bpk")).unwrap();
+    fifo(&model.join("dep0.bpk"));
+    check_error("weights fifo", &run_model(&model), &["dep0.bpk"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A map YAML the reader refuses is one line naming the file and the field: no source snippet,
+/// no notes, no advice meant for the programmer; deep nesting and alias bombs end quickly.
+#[test]
+fn yaml_errors_are_one_line_naming_the_field() {
+    let dir = scratch("yaml");
+    let base = "image: m.pgm\nresolution: 1.0\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
+    let mut bomb =
+        String::from("a0: &a0 [\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\"]\n");
+    for i in 1..10 {
+        let refs = vec![format!("*a{}", i - 1); 9].join(",");
+        bomb.push_str(&format!("a{i}: &a{i} [{refs}]\n"));
+    }
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "nan",
+            base.replace("resolution: 1.0", "resolution: .nan"),
+            "`resolution`",
+        ),
+        (
+            "inf",
+            base.replace("occupied_thresh: 0.65", "occupied_thresh: .inf"),
+            "`occupied_thresh`",
+        ),
+        (
+            "origin",
+            base.replace("[0.0, 0.0, 0.0]", "[0.0, -.inf, 0.0]"),
+            "`origin`",
+        ),
+        (
+            "duplicate",
+            format!("{base}resolution: 2.0\n"),
+            "`resolution`",
+        ),
+        ("bomb", format!("{bomb}{base}"), "budget"),
+        (
+            "deep",
+            format!("image: {}{}\n", "[".repeat(100_000), "]".repeat(100_000)),
+            "`image`",
+        ),
+    ];
+    for (case, text, needle) in cases {
+        let yaml = dir.join(format!("{case}.yaml"));
+        std::fs::write(&yaml, text).unwrap();
+        let out = madenet(&["map".into(), "show".into(), yaml.display().to_string()]);
+        check_error(case, &out, &[&format!("{case}.yaml"), needle]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !err.contains("DuplicateKeyPolicy") && !err.contains("-->"),
+            "{case}: {err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -76,8 +76,28 @@ fn tiny_run_resume_and_model() {
         !String::from_utf8_lossy(&o.stderr).contains("nothing left"),
         "it trained"
     );
-    // Resuming to a length the run is already past trains nothing and says so.
+    // Resuming to a length the run is already past trains nothing and says so (and adds no
+    // TensorBoard event file: one per call would pile up).
+    let events = || {
+        std::fs::read_dir(&run)
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with("events.out.tfevents.")
+            })
+            .count()
+    };
+    let before = events();
+    assert!(before >= 1);
     let o = madenet(&["train", "--resume", r, "--episodes", "2", "-q"]);
+    assert_eq!(
+        events(),
+        before,
+        "a resume that trains nothing adds no event file"
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -91,8 +111,27 @@ fn tiny_run_resume_and_model() {
             .count(),
         1 + 4
     );
-    // The trained model plays a generated map.
+    // A size edited in the run's config.toml after the start is refused by field on resume
+    // (not burn's panic on weights that no longer fit); undoing the edit resumes again.
+    let cfg_toml = run.join("config.toml");
+    let text = std::fs::read_to_string(&cfg_toml).unwrap();
+    assert!(text.contains("map_height = 20\n"), "{text}");
+    std::fs::write(
+        &cfg_toml,
+        text.replace("map_height = 20\n", "map_height = 30\n"),
+    )
+    .unwrap();
+    let e = error_line(&madenet(&["train", "--resume", r, "--episodes", "5", "-q"]));
+    assert!(
+        e.contains("config.toml") && e.contains("`map_height` (20 at the start, 30 now)"),
+        "{e}"
+    );
+    std::fs::write(&cfg_toml, &text).unwrap();
+    // The model folder records its weights' digests.
     let best = run.join("best");
+    let info = std::fs::read_to_string(best.join("model.toml")).unwrap();
+    assert!(info.contains("digests = [\""), "{info}");
+    // The trained model plays a generated map.
     let o = madenet(&[
         "run",
         "--map",
