@@ -370,11 +370,27 @@ impl Agent {
     /// (a row-major mask; its own cell included whatever the belief says of it, as the path
     /// searches start there).
     pub fn reachable(&self) -> Vec<bool> {
+        self.reachable_avoiding(&[])
+    }
+
+    /// The cells teammates in view stand on: goal extraction neither passes through nor offers
+    /// them.
+    fn held_cells(&self) -> Vec<Pos> {
+        self.teammates
+            .iter()
+            .filter(|r| r.detected)
+            .filter_map(|r| r.seen_pos)
+            .collect()
+    }
+
+    /// [`Agent::reachable`] without passing through `held` cells.
+    fn reachable_avoiding(&self, held: &[Pos]) -> Vec<bool> {
         let b = &self.belief;
         let (mut seen, mut stack) = (vec![false; b.map().len()], vec![self.pos]);
         seen[b.index(self.pos)] = true;
+        let open = |q: Pos| b.is_free(q) && !held.contains(&q);
         while let Some(p) = stack.pop() {
-            for (q, _) in madenet_nav::neighbours(p, |q| b.is_free(q), b.movement()) {
+            for (q, _) in madenet_nav::neighbours(p, open, b.movement()) {
                 if !std::mem::replace(&mut seen[b.index(q)], true) {
                     stack.push(q);
                 }
@@ -383,11 +399,13 @@ impl Agent {
         seen
     }
 
-    /// Whether a frontier cell other than its own (as goal extraction counts them) is
-    /// reachable: false once, as far as this robot knows, exploration is over.
+    /// Whether a frontier cell other than its own is reachable as goal extraction counts them
+    /// (not through, nor onto, a cell a teammate in view stands on): false once, as far as this
+    /// robot knows, it will be offered no goal.
     pub fn frontier_reachable(&self) -> bool {
+        let held = self.held_cells();
         let here = self.belief.index(self.pos);
-        self.reachable()
+        self.reachable_avoiding(&held)
             .iter()
             .enumerate()
             .any(|(i, &r)| r && i != here && self.belief.is_frontier_index(i))
@@ -552,12 +570,7 @@ impl Agent {
     /// The robot's view for a policy; candidates are extracted first when `with_candidates`.
     pub fn view(&mut self, with_candidates: bool) -> AgentView<'_> {
         if with_candidates {
-            let held: Vec<Pos> = self
-                .teammates
-                .iter()
-                .filter(|r| r.detected)
-                .filter_map(|r| r.seen_pos)
-                .collect();
+            let held = self.held_cells();
             self.candidates = extract_goals_with(
                 &self.belief,
                 self.pos,
@@ -610,12 +623,7 @@ impl Agent {
             fresh,
         } = scratch;
         if with_candidates {
-            let held: Vec<Pos> = self
-                .teammates
-                .iter()
-                .filter(|r| r.detected)
-                .filter_map(|r| r.seen_pos)
-                .collect();
+            let held = self.held_cells();
             *candidates = extract_goals_with(
                 &self.belief,
                 self.pos,
@@ -831,5 +839,69 @@ impl Agent {
             .first()
             .and_then(|&n| Move::between(self.pos, n))
             .unwrap_or(Move::Stay)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::policy::{Decision, DecisionMode};
+    use madenet_map::Occupancy;
+
+    struct Still;
+    impl Policy for Still {
+        fn name(&self) -> &str {
+            "still"
+        }
+        fn mode(&self) -> DecisionMode {
+            DecisionMode::OnTermination
+        }
+        fn decide(&mut self, _: &mut AgentView<'_>) -> Decision {
+            Decision::Idle
+        }
+    }
+
+    /// A corridor along row 0 of a 1 × 5 map, cells 0–3 known free, cell 4 unknown: the only
+    /// frontier is cell 3. Robot 0 at cell 0 reaches it, unless teammate 1 stands on it (goal
+    /// extraction offers no goal then, so the robot must not count it) or in between.
+    #[test]
+    fn a_frontier_a_teammate_in_view_holds_does_not_count() {
+        let scenario = madenet_world::ScenarioConfig::default();
+        let cfg = AgentConfig::from_scenario(&scenario, 0, 12, 12);
+        let frontier_reachable = |mate: Option<Pos>| {
+            let mut agent = Agent::new(cfg.clone(), Pos::new(0, 0), Box::new(Still));
+            let mut seen: Vec<(Pos, Occupancy)> = (0..12)
+                .flat_map(|r| (0..12).map(move |c| Pos::new(r, c)))
+                .filter(|p| !(p.row == 0 && p.col >= 4))
+                .map(|p| {
+                    let free = p.row == 0;
+                    (
+                        p,
+                        if free {
+                            Occupancy::Free
+                        } else {
+                            Occupancy::Obstacle
+                        },
+                    )
+                })
+                .collect();
+            seen.sort_by_key(|(p, _)| (p.row, p.col));
+            agent.observe(&Observation {
+                robot: 0,
+                t: 0,
+                pos: Pos::new(0, 0),
+                seen,
+                teammates: mate.map(|p| (1, p)).into_iter().collect(),
+                exchanged_with: Vec::new(),
+            });
+            agent.frontier_reachable()
+        };
+        assert!(frontier_reachable(None));
+        assert!(!frontier_reachable(Some(Pos::new(0, 3))), "held frontier");
+        assert!(!frontier_reachable(Some(Pos::new(0, 2))), "held corridor");
+        assert!(
+            frontier_reachable(Some(Pos::new(5, 5))),
+            "a teammate elsewhere"
+        );
     }
 }

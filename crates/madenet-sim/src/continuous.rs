@@ -331,10 +331,16 @@ impl ContinuousTrial {
             }
         }
         // 2c. the team's belief: no robot has a reachable frontier left (ends the trial later)
+        // Spared cells are retried when a goal is reached; an idle team reaches none, so
+        // here they are written off once their time is up, and the clock waits for them.
         if self.targets.iter().all(Option::is_none)
             && self.agents.iter().all(|a| !a.frontier_reachable())
         {
-            self.no_frontier_since.get_or_insert(now);
+            if self.write_off_expired_spares() {
+                self.no_frontier_since = None;
+            } else {
+                self.no_frontier_since.get_or_insert(now);
+            }
         } else {
             self.no_frontier_since = None;
         }
@@ -476,7 +482,7 @@ impl ContinuousTrial {
     /// within half a cell diagonal of the line from the robot to the cell's centre (lidar
     /// beams stop at teammates). A spared cell is tried again the next time a goal is
     /// reached, and written off all the same once `planner.stuck_time` has passed since it was
-    /// first spared. Written-off cells count as explored (resolved as far as the team can) and
+    /// first spared (by the idle team's check, stage 2c, when no goal is reached any more). Written-off cells count as explored (resolved as far as the team can) and
     /// are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
         let now = self.world.time();
@@ -547,6 +553,34 @@ impl ContinuousTrial {
             self.written_off += 1;
             self.asks[i] = Ask::Yes;
         }
+    }
+
+    /// Writes off the spared cells (still unknown to their robot) whose `planner.stuck_time`
+    /// has passed; true while any is written off now or still waiting for its time.
+    fn write_off_expired_spares(&mut self) -> bool {
+        let now = self.world.time();
+        let wait = self.world.config().planner.stuck_time;
+        let mut pending = false;
+        let mut expired = Vec::new();
+        for (&(i, q), &since) in &self.spared {
+            let (_, w) = self.world.map(i).coarse_size();
+            if self.world.map(i).coarse()[q.row as usize * w + q.col as usize] != Occupancy::Unknown
+            {
+                continue;
+            }
+            if now - since >= wait {
+                expired.push((i, q));
+            } else {
+                pending = true;
+            }
+        }
+        for &(i, q) in &expired {
+            self.spared.remove(&(i, q));
+            self.world.block(i, q);
+            self.written_off += 1;
+            self.asks[i] = Ask::Yes;
+        }
+        pending || !expired.is_empty()
     }
 
     /// Runs to completion or the time cap.
