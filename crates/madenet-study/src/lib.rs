@@ -70,30 +70,36 @@ pub(crate) fn prepare_out(
     fresh: bool,
 ) -> Result<madenet_files::FolderLock, StudyError> {
     let cfg_path = out.join(cfg_name);
-    if !fresh && cfg_path.exists() {
-        let old = std::fs::read_to_string(&cfg_path).map_err(|e| StudyError::File {
-            path: cfg_path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        if old != cfg_text && (out.join("trials.csv").exists()) {
+    let check = || -> Result<(), StudyError> {
+        if !fresh && cfg_path.exists() {
+            let old = std::fs::read_to_string(&cfg_path).map_err(|e| StudyError::File {
+                path: cfg_path.display().to_string(),
+                message: e.to_string(),
+            })?;
+            if old != cfg_text && (out.join("trials.csv").exists()) {
+                return Err(StudyError::File {
+                    path: out.display().to_string(),
+                    message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
+                });
+            }
+        } else if !fresh && out.join("trials.csv").exists() {
+            // Another kind of study (or `madenet batch`'s table) in this folder: its rows would
+            // be dropped as not planned here.
             return Err(StudyError::File {
                 path: out.display().to_string(),
-                message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
+                message: format!("holds a trials.csv without {cfg_name}: results of another study: choose another output folder or start afresh (--fresh)"),
             });
         }
-    } else if !fresh && out.join("trials.csv").exists() {
-        // Another kind of study (or `madenet batch`'s table) in this folder: its rows would be
-        // dropped as not planned here.
-        return Err(StudyError::File {
-            path: out.display().to_string(),
-            message: format!("holds a trials.csv without {cfg_name}: results of another study: choose another output folder or start afresh (--fresh)"),
-        });
-    }
-    // Refusals above leave the folder untouched; from here on it is this run's.
+        Ok(())
+    };
+    // Refusals leave the folder untouched; from the lock on it is this run's.
+    check()?;
     let lock = madenet_files::lock_folder(out).map_err(|e| StudyError::File {
         path: out.display().to_string(),
         message: e.to_string(),
     })?;
+    // Again under the lock: a run that held the folder may have finished in between.
+    check()?;
     if fresh {
         for f in ["trials.csv", "curves.jsonl"] {
             let _ = std::fs::remove_file(out.join(f));

@@ -37,7 +37,9 @@ pub struct NodeArgs {
     /// First of the run's loopback ports: world on PORT, radio on PORT+1, robot i on PORT+2+i.
     #[arg(long)]
     port: u16,
-    /// Longest wait for any message before the node gives up, naming what it waited for.
+    /// Longest wait for a message before the node gives up, naming what it waited for; a robot
+    /// waits up to twice this plus 1 s for the world, which may itself be waiting this long for
+    /// an absent robot.
     #[arg(long, default_value_t = 30, value_parser = timeout_arg, value_name = "SECONDS")]
     timeout_s: u64,
     /// Print `progress …` lines on stderr (what `launch` shows).
