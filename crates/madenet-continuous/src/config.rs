@@ -163,8 +163,9 @@ pub struct ContinuousConfig {
     pub time_cap: f64,
     /// Seconds no robot's agent may have a reachable frontier before the trial ends
     /// unfinished: the team believes the map explored where the world does not (cells sealed
-    /// off behind written-off ones), and stops as a real team would (10; ≥ `1 / radio_rate_hz`
-    /// lets a last exchange bring news).
+    /// off behind written-off ones), and stops as a real team would (10; at least
+    /// `1 / radio_rate_hz` and `planner.stay_period`, checked: a last exchange may bring news and
+    /// a robot told to stay asks again).
     pub no_frontier_time: f64,
 }
 
@@ -261,6 +262,17 @@ impl ContinuousConfig {
         positive("radio_rate_hz", self.radio_rate_hz, 1000.0)?;
         positive("time_cap", self.time_cap, 1.0e7)?;
         positive("no_frontier_time", self.no_frontier_time, 1.0e7)?;
+        // A team ends only after it could have heard each other and tried staying once more.
+        let least = (1.0 / self.radio_rate_hz).max(p.stay_period);
+        if self.no_frontier_time < least {
+            return Err(ConfigError {
+                field: "no_frontier_time".into(),
+                message: format!(
+                    "must be at least one radio round and one stay period ({least} s), got {}",
+                    self.no_frontier_time
+                ),
+            });
+        }
         if l.rate_hz * self.control_period > 1.0 + 1e-9 {
             return Err(ConfigError {
                 field: "lidar.rate_hz".into(),
@@ -294,6 +306,9 @@ mod tests {
         let mut c = ContinuousConfig::default();
         c.lidar.rate_hz = 50.0;
         assert_eq!(c.validate().unwrap_err().field, "lidar.rate_hz");
+        let mut c = ContinuousConfig::default();
+        c.no_frontier_time = 0.5 * c.planner.stay_period;
+        assert_eq!(c.validate().unwrap_err().field, "no_frontier_time");
     }
 
     #[test]

@@ -64,10 +64,13 @@ impl AtomicFile {
     /// Starts writing `path` (see the crate doc for what each kind of target gets).
     pub fn create(path: &Path) -> io::Result<AtomicFile> {
         let inner = match Target::resolve(path)? {
-            Target::Replace(target) => Inner::Replace {
-                tmp: temp_builder("").tempfile_in(parent_dir(&target))?,
-                target,
-            },
+            Target::Replace(target) => {
+                let tmp = temp_builder("").tempfile_in(parent_dir(&target))?;
+                // Held while it is written, so that [`lock_folder`]'s cleanup of interrupted
+                // writes leaves it alone (best effort: not every file system has `flock`).
+                let _ = tmp.as_file().try_lock();
+                Inner::Replace { tmp, target }
+            }
             Target::Stream(device) => Inner::Stream(OpenOptions::new().write(true).open(device)?),
         };
         Ok(AtomicFile { inner })
@@ -167,7 +170,7 @@ pub struct FolderLock {
 
 /// Takes `dir` (which must exist) for this run: fails with [`io::ErrorKind::WouldBlock`] while
 /// another run holds it. Holding it, removes the temporary files an interrupted write left
-/// there (`.madenet-*`: nobody else can be writing them).
+/// there (`.madenet-*` files nobody holds: an [`AtomicFile`] holds its own while it writes).
 pub fn lock_folder(dir: &Path) -> io::Result<FolderLock> {
     let file = OpenOptions::new()
         .create(true)
@@ -185,8 +188,15 @@ pub fn lock_folder(dir: &Path) -> io::Result<FolderLock> {
         let entry = entry?;
         let name = entry.file_name();
         if name.to_string_lossy().starts_with(".madenet-") && entry.file_type()?.is_file() {
-            // Best effort: a writer outside the lock may have renamed or removed it already.
-            let _ = std::fs::remove_file(entry.path());
+            // Only an interrupted write's: a writer still at work (outside this lock, say a
+            // `run --out` into the same folder) holds its file's lock. Best effort: that writer
+            // may also have renamed or removed it already.
+            let Ok(f) = File::open(entry.path()) else {
+                continue;
+            };
+            if f.try_lock().is_ok() {
+                let _ = std::fs::remove_file(entry.path());
+            }
         }
     }
     Ok(FolderLock { _file: file })

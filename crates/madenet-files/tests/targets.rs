@@ -152,3 +152,32 @@ fn a_folder_is_one_runs_and_its_stale_temporary_files_go() {
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
 }
+
+#[test]
+fn a_write_in_progress_survives_the_cleanup_of_interrupted_ones() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join(".madenet-stale1"), b"torn").unwrap();
+    let mut writing = madenet_files::AtomicFile::create(&dir.path().join("out.csv")).unwrap();
+    writing.write_all(b"a,b\n").unwrap();
+    let _lock = madenet_files::lock_folder(dir.path()).unwrap();
+    assert!(
+        !dir.path().join(".madenet-stale1").exists(),
+        "stale one removed"
+    );
+    let temps = std::fs::read_dir(dir.path())
+        .unwrap()
+        .filter(|e| {
+            let name = e.as_ref().unwrap().file_name();
+            let name = name.to_string_lossy();
+            name.starts_with(".madenet-") && name != ".madenet.lock"
+        })
+        .count();
+    assert_eq!(temps, 1, "the write in progress kept its temporary file");
+    writing.write_all(b"1,2\n").unwrap();
+    writing.commit().unwrap();
+    assert_eq!(
+        std::fs::read(dir.path().join("out.csv")).unwrap(),
+        b"a,b\n1,2\n"
+    );
+}
