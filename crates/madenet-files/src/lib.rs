@@ -76,6 +76,18 @@ impl AtomicFile {
         Ok(AtomicFile { inner })
     }
 
+    /// Syncs what was written so far to disk (a stream: flushes it), so that a [`Self::commit`]
+    /// after it only renames: writers of several files sync every one before committing any.
+    pub fn sync(&mut self) -> io::Result<()> {
+        match &mut self.inner {
+            Inner::Replace { tmp, .. } => {
+                tmp.flush()?;
+                tmp.as_file().sync_all()
+            }
+            Inner::Stream(f) => f.flush(),
+        }
+    }
+
     /// Finishes the file: syncs and renames a replacement over its target, flushes a stream.
     pub fn commit(self) -> io::Result<()> {
         match self.inner {

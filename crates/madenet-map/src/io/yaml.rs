@@ -371,6 +371,8 @@ pub fn save_yaml(grid: &OccGrid, yaml_path: &Path) -> Result<(), MapError> {
         (&mut meta, yaml_path, yaml.into_bytes()),
     ] {
         f.write_all(&bytes).map_err(|e| io_err(p, e))?;
+        // Both on disk before either replaces its target: what is left to fail is a rename.
+        f.sync().map_err(|e| io_err(p, e))?;
     }
     image.commit().map_err(|e| io_err(&image_path, e))?;
     meta.commit().map_err(|e| io_err(yaml_path, e))
@@ -512,15 +514,29 @@ mod tests {
 
     #[test]
     fn a_malformed_document_is_a_format_error() {
-        for text in [
-            "image: [unclosed\n  - : :",
-            "- a list\n",
-            "image: m.pgm\nimage: n.pgm\n",
-            &OK.replace("0.05", ".nan"),
-        ] {
+        for text in ["image: [unclosed\n  - : :", "- a list\n"] {
             let e = parse(text).unwrap_err();
             assert!(matches!(e, MapError::Format { .. }), "{text:?}: {e}");
             assert!(e.to_string().starts_with("maps/m.yaml: "), "{e}");
+            assert_eq!(e.to_string().lines().count(), 1, "{e}");
+        }
+    }
+
+    /// A duplicate key or a non-finite number breaks the document as a whole, but its line
+    /// names the field: the error names it too, on one line.
+    #[test]
+    fn a_document_error_on_a_key_line_names_the_field() {
+        for (text, field) in [
+            ("image: m.pgm\nimage: n.pgm\n".to_string(), "image"),
+            (OK.replace("0.05", ".nan"), "resolution"),
+        ] {
+            let e = parse(&text).unwrap_err();
+            assert!(
+                matches!(&e, MapError::Field { field: f, .. } if f == field),
+                "{text:?}: {e}"
+            );
+            assert_eq!(e.to_string().lines().count(), 1, "{e}");
+            assert!(!e.to_string().contains("DuplicateKeyPolicy"), "{e}");
         }
     }
 }
