@@ -3,8 +3,9 @@
 //!
 //! * a **regular file** larger than its kind's cap is refused before a byte is read;
 //! * anything else — a **FIFO** or a **device** (`/dev/stdin`, `/dev/zero`) — is read as a
-//!   stream, up to the same cap, and never waits for a writer for more than
-//!   [`STREAM_WAIT`]: a FIFO nobody writes reads as empty instead of blocking forever.
+//!   stream, up to the same cap, and never waits more than [`STREAM_WAIT`] of silence for more:
+//!   a FIFO nobody writes is an error at once instead of a hang (an empty one would silently be
+//!   an empty config). A writer must have the FIFO open when it is read.
 //!
 //! ```
 //! use madenet_files::{read_capped, InputKind};
@@ -89,7 +90,17 @@ pub fn read_capped(path: &Path, kind: InputKind) -> io::Result<Vec<u8>> {
         }
         return Ok(bytes);
     }
-    read_stream(path, kind)
+    use std::os::unix::fs::FileTypeExt;
+    let bytes = read_stream(path, kind)?;
+    if bytes.is_empty() && meta.file_type().is_fifo() {
+        // Nobody was writing when it was opened (or the writer sent nothing): an empty config
+        // would silently mean every default.
+        return Err(io::Error::new(
+            io::ErrorKind::UnexpectedEof,
+            "a pipe that ended before sending anything (was anything writing to it?)",
+        ));
+    }
+    Ok(bytes)
 }
 
 /// [`read_capped`] for text: the bytes must be UTF-8.
@@ -172,13 +183,14 @@ mod tests {
     }
 
     #[test]
-    fn a_fifo_without_a_writer_reads_empty_and_a_written_one_whole() {
+    fn a_fifo_without_a_writer_is_an_error_and_a_written_one_reads_whole() {
         let dir = tempfile::tempdir().unwrap();
         let fifo = dir.path().join("fifo");
         let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
         let start = Instant::now();
-        assert!(read_capped(&fifo, InputKind::Config).unwrap().is_empty());
+        let e = read_capped(&fifo, InputKind::Config).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::UnexpectedEof, "{e}");
         assert!(start.elapsed() < Duration::from_secs(5));
         // A writer that holds the FIFO open (read-write: that never blocks on Linux) and
         // writes a little later is waited for.

@@ -75,7 +75,7 @@ impl ModuleVisitor for FiniteCheck {
 }
 
 /// Refuses a model whose `digests` do not match its weight files (a count that differs is a
-/// bad `digests` field); warns once when the folder predates digests.
+/// bad `digests` field); warns (at each load) when the folder predates digests.
 pub fn check_digests(
     digests: &[String],
     files: &[(String, Vec<u8>)],

@@ -90,7 +90,10 @@ pub struct RolloutTrainConfig {
     pub seed: u64,
     /// Labelled episodes in all (split evenly over the iterations).
     pub episodes: u64,
-    /// Stop (with a checkpoint) at the first iteration boundary after this many minutes; 0 = none.
+    /// Wall-time budget of one call, minutes; 0 = none. Checked before each episode and update
+    /// and at iteration boundaries: a call stops at the boundary after it (with a checkpoint), or
+    /// inside an iteration, dropping that iteration (the checkpoint is at its start) — an error
+    /// when it is the call's first (one iteration takes longer than the budget).
     pub max_minutes: f64,
     /// DAgger iterations: collect, then train on everything collected so far.
     pub iterations: u64,
@@ -989,13 +992,30 @@ fn model_info(
     }
 }
 
-/// Says that `max_minutes` ran out inside iteration `iteration` (counted from 0), whose work is
-/// dropped.
-fn time_ran_out(iteration: u64) {
+/// `max_minutes` ran out inside iteration `iteration` (counted from 0), whose work is dropped
+/// (the checkpoint is at its start). After iterations of this call's own: a warning, the run
+/// resumes from there. In the first of this call: an error — one iteration takes longer than the
+/// budget, and resuming with it would drop the same iteration again.
+fn time_ran_out(
+    cfg: &RolloutTrainConfig,
+    iteration: u64,
+    first_iteration: u64,
+) -> Result<(), TrainError> {
+    if iteration == first_iteration {
+        return Err(TrainError::Config {
+            path: "--max-minutes".into(),
+            message: format!(
+                "{} min ran out inside iteration {} before it finished: nothing was trained in this call (one iteration takes longer); raise it, or 0 for no limit",
+                cfg.max_minutes,
+                iteration + 1
+            ),
+        });
+    }
     tracing::warn!(
         "max_minutes ran out inside iteration {}: its work is dropped; --resume repeats it from the last checkpoint",
         iteration + 1
     );
+    Ok(())
 }
 
 fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
@@ -1074,6 +1094,7 @@ fn train_loop(
     let base_registry = PolicyRegistry::builtin();
     let (base_steps, _, _) = validate(cfg, &base_registry, &cfg.base_policy)?;
     let clock = Clock::start(state.wall_s);
+    let first_iteration = state.iteration;
     while state.iteration < cfg.iterations {
         // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then student).
         let student = (state.iteration > 0).then(|| net.model(model_info(cfg, &state, None, None)));
@@ -1092,8 +1113,7 @@ fn train_loop(
             })
             .collect::<Result<_, _>>()?;
         let Some(collected) = collected.into_iter().collect::<Option<Vec<Collected>>>() else {
-            time_ran_out(state.iteration);
-            return Ok(());
+            return time_ran_out(cfg, state.iteration, first_iteration);
         };
         let decisions: usize = collected
             .iter()
@@ -1117,8 +1137,7 @@ fn train_loop(
         let trace_len = if cfg.recurrent { cfg.trace_len } else { 1 };
         for u in 0..cfg.updates_per_iteration {
             if clock.out_of_time(cfg.max_minutes) {
-                time_ran_out(state.iteration);
-                return Ok(());
+                return time_ran_out(cfg, state.iteration, first_iteration);
             }
             let mut rng = stream(cfg.seed, "sample", state.updates + u);
             let windows: Vec<&[Labelled]> = (0..cfg.batch_size)

@@ -121,8 +121,8 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     );
 
     // A time limit that is always exceeded stops inside the first iteration: its work is
-    // dropped, nothing is checkpointed.
-    train(
+    // dropped, nothing is checkpointed, and the call says nothing was trained.
+    let e = train(
         &c,
         Some(RolloutTrainConfig {
             max_minutes: 1e-9,
@@ -130,7 +130,8 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
         }),
         &mut |_| {},
     )
-    .unwrap();
+    .unwrap_err();
+    assert!(e.to_string().contains("ran out inside iteration 1"), "{e}");
     assert!(!c.join("iterations.csv").exists() && !c.join("checkpoint").exists());
     // Killed right after the first iteration's checkpoint (the progress report follows it),
     // then resumed: the uninterrupted run's logs and weights.
