@@ -845,21 +845,8 @@ impl Agent {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::policy::{Decision, DecisionMode};
+    use crate::policy::External;
     use madenet_map::Occupancy;
-
-    struct Still;
-    impl Policy for Still {
-        fn name(&self) -> &str {
-            "still"
-        }
-        fn mode(&self) -> DecisionMode {
-            DecisionMode::OnTermination
-        }
-        fn decide(&mut self, _: &mut AgentView<'_>) -> Decision {
-            Decision::Idle
-        }
-    }
 
     /// A corridor along row 0 of a 1 × 5 map, cells 0–3 known free, cell 4 unknown: the only
     /// frontier is cell 3. Robot 0 at cell 0 reaches it, unless teammate 1 stands on it (goal
@@ -869,7 +856,7 @@ mod tests {
         let scenario = madenet_world::ScenarioConfig::default();
         let cfg = AgentConfig::from_scenario(&scenario, 0, 12, 12);
         let frontier_reachable = |mate: Option<Pos>| {
-            let mut agent = Agent::new(cfg.clone(), Pos::new(0, 0), Box::new(Still));
+            let mut agent = Agent::new(cfg.clone(), Pos::new(0, 0), Box::new(External));
             let mut seen: Vec<(Pos, Occupancy)> = (0..12)
                 .flat_map(|r| (0..12).map(move |c| Pos::new(r, c)))
                 .filter(|p| !(p.row == 0 && p.col >= 4))

@@ -175,14 +175,8 @@ impl DmeTrainConfig {
             ("validation_maps", self.validation_maps as u64, 0, 100_000),
         ])?;
         self.nets().check_size()?;
-        if self.history == 0 {
-            return bad("history", "must be at least 1");
-        }
         if self.critic_history == 0 || self.critic_history > self.history {
             return bad("critic_history", "must lie in 1..=history");
-        }
-        if self.hidden == 0 {
-            return bad("hidden", "must be at least 1");
         }
         if !(0.0..=1.0).contains(&self.gamma) {
             return bad("gamma", "must lie in [0, 1]");
@@ -595,10 +589,11 @@ impl Model {
                 ),
             });
         }
+        let min_side = madenet_learn::MIN_MAP_SIDE as u64;
         let side = harness::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
-            ("map_height", info.map_height as u64, 1, side),
-            ("map_width", info.map_width as u64, 1, side),
+            ("map_height", info.map_height as u64, min_side, side),
+            ("map_width", info.map_width as u64, min_side, side),
             (
                 "team_size",
                 info.team_size as u64,
@@ -612,19 +607,6 @@ impl Model {
             path: label.into(),
             message,
         })?;
-        if info.history == 0
-            || info.hidden == 0
-            || info.map_height < madenet_learn::MIN_MAP_SIDE
-            || info.map_width < madenet_learn::MIN_MAP_SIDE
-        {
-            return Err(TrainError::Config {
-                path: label.into(),
-                message: format!(
-                    "fields `history`, `hidden` must be ≥ 1 and the map sides ≥ {}",
-                    madenet_learn::MIN_MAP_SIDE
-                ),
-            });
-        }
         let cfg = DmeConfig::new()
             .with_map_height(info.map_height)
             .with_map_width(info.map_width)

@@ -234,7 +234,7 @@ impl RolloutTrainConfig {
             (
                 self.map_side_max == 0
                     || (self.map_side_max >= self.map_height
-                        && self.map_side_max <= 200
+                        && self.map_side_max <= harness::MAX_TRAIN_MAP_SIDE
                         && self.map_height == self.map_width),
                 "map_side_max",
                 "0, or in map_height..=200 with square maps (map_height = map_width)",
@@ -269,8 +269,8 @@ impl RolloutTrainConfig {
             (
                 self.map_height >= crate::MIN_MAP_SIDE
                     && self.map_width >= crate::MIN_MAP_SIDE
-                    && self.map_height <= 200
-                    && self.map_width <= 200,
+                    && self.map_height <= harness::MAX_TRAIN_MAP_SIDE
+                    && self.map_width <= harness::MAX_TRAIN_MAP_SIDE,
                 "map_height/map_width",
                 "must be in 12..=200",
             ),
