@@ -80,10 +80,7 @@ impl AtomicFile {
     /// after it only renames: writers of several files sync every one before committing any.
     pub fn sync(&mut self) -> io::Result<()> {
         match &mut self.inner {
-            Inner::Replace { tmp, .. } => {
-                tmp.flush()?;
-                tmp.as_file().sync_all()
-            }
+            Inner::Replace { tmp, .. } => tmp.as_file().sync_all(),
             Inner::Stream(f) => f.flush(),
         }
     }
@@ -101,16 +98,18 @@ impl AtomicFile {
     }
 }
 
+// Through the `File`, not the `NamedTempFile`: its errors would name the temporary path
+// (`… at path ".madenet-XXXXXX"`), which the user never chose; callers name the target.
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         match &mut self.inner {
-            Inner::Replace { tmp, .. } => tmp.write(buf),
+            Inner::Replace { tmp, .. } => tmp.as_file_mut().write(buf),
             Inner::Stream(f) => f.write(buf),
         }
     }
     fn flush(&mut self) -> io::Result<()> {
         match &mut self.inner {
-            Inner::Replace { tmp, .. } => tmp.flush(),
+            Inner::Replace { tmp, .. } => tmp.as_file_mut().flush(),
             Inner::Stream(f) => f.flush(),
         }
     }

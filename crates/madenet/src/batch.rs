@@ -1,7 +1,7 @@
 //! `madenet batch`: many trials in parallel, one CSV row each — a trial set planned and run by
 //! the study runner ([`madenet_study::runner`]), written in its `trials.csv` schema.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use madenet_map::paper::Corner;
 use madenet_sim::PolicyRegistry;
@@ -65,7 +65,8 @@ pub fn run(a: BatchArgs) -> Result<()> {
     let outcomes = run_planned(&planned, &registry, a.threads)?;
     let elapsed = started.elapsed();
     let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
-    madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))?;
+    madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))
+        .with_context(|| format!("--out {}", a.out.display()))?;
     out!(
         "{} trials in {:.2} s → {}",
         outcomes.len(),

@@ -2,7 +2,7 @@
 //! the ceiling a candidate rule or a learned policy is judged against
 //! ([`madenet_sim::rollout`]).
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use madenet_sim::rollout::OracleKind;
 use madenet_study::runner::{self, TrialOutcome};
@@ -92,7 +92,8 @@ pub fn run(a: OracleArgs) -> Result<()> {
     let (base, oracle) = outcomes.split_at(outcomes.len() / 2);
     if let Some(path) = &a.out {
         let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
-        madenet_files::write_atomic(path, &runner::trials_csv(&rows))?;
+        madenet_files::write_atomic(path, &runner::trials_csv(&rows))
+            .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),

@@ -804,3 +804,54 @@ fn yaml_errors_are_one_line_naming_the_field() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn an_output_that_cannot_be_written_is_named_and_leaves_nothing_behind() {
+    // A file-size limit stands in for a full disk (no small file system is needed): the write
+    // fails part-way (EFBIG here, ENOSPC there) exactly where a full disk would fail it.
+    use std::os::unix::process::CommandExt;
+    let dir = scratch("full");
+    let out_csv = dir.join("batch.csv");
+    std::fs::write(&out_csv, b"precious").unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_madenet"));
+    cmd.args([
+        "batch",
+        "--maps",
+        "paper:1,paper:2",
+        "--seeds",
+        "3",
+        "--threads",
+        "1",
+    ])
+    .arg("--out")
+    .arg(&out_csv);
+    // SAFETY: only async-signal-safe calls between fork and exec; an ignored signal stays
+    // ignored across exec, so the write returns an error instead of SIGXFSZ killing madenet.
+    unsafe {
+        cmd.pre_exec(|| {
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            let limit = libc::rlimit {
+                rlim_cur: 2048,
+                rlim_max: 2048,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let out = cmd.output().unwrap();
+    let shown = out_csv.display().to_string();
+    check_error("full", &out, &["--out", &shown, "too large"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !err.contains(".madenet-"),
+        "the temporary path leaks: {err}"
+    );
+    assert_eq!(
+        snapshot(&dir),
+        vec![(out_csv.clone(), b"precious".to_vec())],
+        "the target is kept and no temporary file is left"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
