@@ -190,7 +190,7 @@ impl Ground for RealRobots {
             exchanged_with: Vec::new(),
         }
     }
-    fn step(&mut self, moves: &[Move]) -> Result<(), String> {
+    fn step(&mut self, moves: &[Move], waiting: &mut dyn FnMut()) -> Result<(), String> {
         let t = stamp(SystemTime::now());
         let targets: Vec<Option<Pos>> = moves
             .iter()
@@ -218,6 +218,7 @@ impl Ground for RealRobots {
             if arrived || Instant::now() >= deadline {
                 break;
             }
+            waiting();
             std::thread::sleep(Duration::from_millis(2));
         }
         self.distance += before

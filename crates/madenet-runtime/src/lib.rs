@@ -202,9 +202,15 @@ impl Timeouts {
         }
     }
 
-    /// How long a node waits to hear from the world, which may itself be waiting `node` for an
-    /// absent robot.
+    /// How long a node waits to hear from the world during a trial: the world tells it every
+    /// `peer` that it is still there ([`wire::Body::Waiting`]), so twice that and a second.
     pub fn world_silence(&self) -> Duration {
+        self.peer * 2 + Duration::from_secs(1)
+    }
+
+    /// How long a node waits for the world's first message: the world may itself be waiting
+    /// `node` for the other nodes to come up.
+    pub fn world_start(&self) -> Duration {
         self.node * 2 + Duration::from_secs(1)
     }
 }

@@ -88,17 +88,23 @@ pub fn run_radio_with<T: Transport>(
     let mut exchanges = Vec::new();
     // Whether the world asked for each timestep's exchanges (pictures).
     let mut report = false;
+    // Until the world's first message, it may be waiting for the other nodes to come up.
+    let mut silence = timeouts.world_start();
     loop {
-        let bytes =
-            mb.transport
-                .recv(timeouts.world_silence())
-                .ok_or_else(|| RuntimeError::Timeout {
-                    node: me,
-                    waiting_for: "contacts from the world or a robot's message".into(),
-                    timeout: timeouts.world_silence(),
-                })?;
+        let bytes = mb
+            .transport
+            .recv(silence)
+            .ok_or_else(|| RuntimeError::Timeout {
+                node: me,
+                waiting_for: "contacts from the world or a robot's message".into(),
+                timeout: silence,
+            })?;
         let e = mb.decode(&bytes)?;
+        if e.from == Node::World {
+            silence = timeouts.world_silence();
+        }
         match (e.from, e.to, e.body) {
+            (Node::World, _, Body::Waiting) => {}
             (Node::World, _, Body::Contacts(contacts)) => {
                 if contacts.iter().any(|&(i, j)| i >= j || j >= robots) {
                     return Err(RuntimeError::Unexpected {
@@ -171,7 +177,7 @@ pub fn run_radio_with<T: Transport>(
                     node: me,
                     from,
                     step: e.step,
-                    what: "the radio takes contacts, show and stop from the world and teammates' messages from robots",
+                    what: "the radio takes contacts, show, waiting and stop from the world and teammates' messages from robots",
                 })
             }
         }

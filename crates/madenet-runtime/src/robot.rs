@@ -166,11 +166,11 @@ pub fn run_robot_with<T: Transport>(
         {
             break;
         }
-        if started.elapsed() > timeouts.world_silence() {
+        if started.elapsed() > timeouts.world_start() {
             return Err(RuntimeError::Timeout {
                 node: me,
                 waiting_for: "the world's first message after hello".into(),
-                timeout: timeouts.world_silence(),
+                timeout: timeouts.world_start(),
             });
         }
     }
@@ -194,6 +194,8 @@ pub fn run_robot_with<T: Transport>(
                 show = true;
                 continue;
             }
+            // The world is waiting (for an absent teammate, a slow ground): wait on.
+            Body::Waiting => continue,
             Body::Stop => {
                 let between = Traffic {
                     messages: mb.sent.messages - to_world.messages,
@@ -215,18 +217,16 @@ pub fn run_robot_with<T: Transport>(
                     node: me,
                     from: e.from,
                     step,
-                    what: "the world sends observations, show and stop only",
+                    what: "the world sends observations, show, waiting and stop only",
                 })
             }
         };
         check_observation(me, step, agent.config(), &obs)?;
         // Behind (restarted, or slowed by silent teammates)? Skip to the newest observation.
         mb.drain()?;
-        if mb
-            .pending
-            .iter()
-            .any(|p| p.from == Node::World && p.step > step)
-        {
+        if mb.pending.iter().any(|p| {
+            p.from == Node::World && p.step > step && matches!(p.body, Body::Observation(_))
+        }) {
             continue;
         }
         // β that arrived after their timestep are merged now (a delaying radio, a slow

@@ -13,7 +13,7 @@ use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 5;
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -79,6 +79,9 @@ pub enum Body {
     Move(Move),
     /// World → robots and radio: the trial is over (complete or at the step cap).
     Stop,
+    /// World → robots and radio, while it waits longer than [`crate::Timeouts::peer`] (for
+    /// an absent robot's move, a slow ground): it is still there, wait on.
+    Waiting,
     /// Robot → world when it starts: wait for my moves (again, after a restart). `scenario`:
     /// the digest of the map and scenario the robot was started with ([`scenario_digest`]), so
     /// that a world started with others refuses it by name; `None`: not checked.

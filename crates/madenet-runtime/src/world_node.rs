@@ -3,7 +3,9 @@
 //! once [`Timeouts::node`] has passed: a robot that sent no move is absent (killed, hung,
 //! cut off). An absent robot stays where it is (an obstacle to the others), keeps being sent its
 //! observations, is left out of the radio's contacts, and is waited for again once it says hello
-//! (restarted).
+//! (restarted). While it waits longer than [`Timeouts::peer`] (for an absent robot's move, a
+//! slow ground), it tells every robot and the radio it is still there ([`Body::Waiting`]), so
+//! that they notice a killed world within [`Timeouts::world_silence`].
 
 use crate::mailbox::{Mailbox, Traffic};
 use crate::transport::Transport;
@@ -34,8 +36,10 @@ pub trait Ground {
     fn contacts(&mut self) -> Vec<(usize, usize)>;
     /// Robot `i`'s observation o_i of this timestep.
     fn observation(&mut self, i: usize) -> Observation;
-    /// Carries out one move per robot (`Stay` for an absent one) and ends the timestep.
-    fn step(&mut self, moves: &[Move]) -> Result<(), String>;
+    /// Carries out one move per robot (`Stay` for an absent one) and ends the timestep. A
+    /// ground whose step blocks (real robots driving) calls `waiting` at least every few
+    /// hundred milliseconds meanwhile: the node tells its robots it is still there.
+    fn step(&mut self, moves: &[Move], waiting: &mut dyn FnMut()) -> Result<(), String>;
     /// Records the timestep just ended into the metrics.
     fn record(&self, recorder: &mut MetricsRecorder);
 }
@@ -65,7 +69,7 @@ impl Ground for World {
     fn observation(&mut self, i: usize) -> Observation {
         World::observation(self, i).clone()
     }
-    fn step(&mut self, moves: &[Move]) -> Result<(), String> {
+    fn step(&mut self, moves: &[Move], _waiting: &mut dyn FnMut()) -> Result<(), String> {
         World::step(self, moves);
         Ok(())
     }
@@ -112,6 +116,59 @@ fn check_hello(me: Node, scenario: Option<u64>, e: &Envelope) -> Result<(), Runt
     }
 }
 
+/// The world's life sign: once [`Timeouts::peer`] has passed since it last sent anything to
+/// its robots, it sends each robot and the radio a [`Body::Waiting`].
+struct Heartbeat {
+    every: Duration,
+    last: Instant,
+    to: Vec<Node>,
+}
+
+impl Heartbeat {
+    /// Sends `Waiting` to everyone if `every` has passed since the last beat or
+    /// [`Heartbeat::sent`]. A node that is gone (a killed robot) is skipped: its absence is the
+    /// move wait's to find.
+    fn beat<T: Transport>(&mut self, mb: &mut Mailbox<T>, step: u64) -> Result<(), RuntimeError> {
+        if self.last.elapsed() < self.every {
+            return Ok(());
+        }
+        for &to in &self.to {
+            match mb.send(&Envelope::new(step, Node::World, to, Body::Waiting)) {
+                Ok(()) | Err(RuntimeError::Gone { .. }) => {}
+                Err(e) => return Err(e),
+            }
+        }
+        self.last = Instant::now();
+        Ok(())
+    }
+
+    /// Everyone was just sent something (their observations).
+    fn sent(&mut self) {
+        self.last = Instant::now();
+    }
+
+    /// [`Mailbox::try_take`] that beats while it waits.
+    fn try_take<T: Transport>(
+        &mut self,
+        mb: &mut Mailbox<T>,
+        step: u64,
+        wait: Duration,
+        wanted: impl Fn(&Envelope) -> bool,
+    ) -> Result<Option<Envelope>, RuntimeError> {
+        let deadline = Instant::now() + wait;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            if let Some(e) = mb.try_take(left.min(self.every), &wanted)? {
+                return Ok(Some(e));
+            }
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+            self.beat(mb, step)?;
+        }
+    }
+}
+
 /// What a picture of a timestep draws besides the ground: what each robot shows, and the pairs
 /// exchanging.
 pub type ShowFn<'a, G> = &'a mut dyn FnMut(&G, &[Shown], &[(usize, usize)]);
@@ -148,6 +205,11 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         ask_to_show(&mut mb, to, world.t() as u64)?;
     }
     let mut shown: Vec<Shown> = vec![Shown::default(); n];
+    let mut heartbeat = Heartbeat {
+        every: timeouts.peer,
+        last: Instant::now(),
+        to: addressees.clone(),
+    };
     // The radio is told the pairs in contact among the robots present.
     let send_contacts = |mb: &mut Mailbox<T>, world: &mut G, present: &[bool], step: u64| {
         let in_contact: Vec<(usize, usize)> = world
@@ -222,6 +284,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             let obs = Body::Observation(world.observation(i));
             mb.send(&Envelope::new(step, me, Node::Robot(i), obs))?;
         }
+        heartbeat.sent();
         if let Some(show) = show.as_mut() {
             let pairs = exchanges(&mut mb, step)?;
             show(&world, &shown, &pairs);
@@ -234,7 +297,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             } else {
                 Duration::ZERO
             };
-            let e = mb.try_take(wait, |e| {
+            let e = heartbeat.try_take(&mut mb, step, wait, |e| {
                 e.step == step && e.from == Node::Robot(i) && matches!(e.body, Body::Move(_))
             })?;
             *m = match e.map(|e| e.body) {
@@ -262,7 +325,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             shown.clear();
             for (i, &here) in present.iter().enumerate() {
                 let wait = if here { timeouts.peer } else { Duration::ZERO };
-                let e = mb.try_take(wait, |e| {
+                let e = heartbeat.try_take(&mut mb, step, wait, |e| {
                     e.step == step && e.from == Node::Robot(i) && matches!(e.body, Body::Shown(_))
                 })?;
                 shown.push(match e.map(|e| e.body) {
@@ -271,9 +334,17 @@ pub fn run_ground_with<G: Ground, T: Transport>(
                 });
             }
         }
+        let mut beat_failed = None;
         world
-            .step(&moves)
+            .step(&moves, &mut || {
+                if let Err(e) = heartbeat.beat(&mut mb, step) {
+                    beat_failed.get_or_insert(e);
+                }
+            })
             .map_err(|what| RuntimeError::Ground { node: me, what })?;
+        if let Some(e) = beat_failed {
+            return Err(e);
+        }
         world.record(&mut recorder);
         positions.push(world.positions());
         on_step(&world);

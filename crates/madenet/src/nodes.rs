@@ -37,9 +37,10 @@ pub struct NodeArgs {
     /// First of the run's loopback ports: world on PORT, radio on PORT+1, robot i on PORT+2+i.
     #[arg(long)]
     port: u16,
-    /// Longest wait for a message before the node gives up, naming what it waited for; a robot
-    /// waits up to twice this plus 1 s for the world, which may itself be waiting this long for
-    /// an absent robot.
+    /// Longest wait for a message before the node gives up, naming what it waited for. While
+    /// the world waits this long for an absent robot it tells the others every quarter of it
+    /// (≤ 2 s) that it is still there, so they notice a killed world after twice that plus 1 s
+    /// (5 s at the default); before its first message they wait twice this plus 1 s.
     #[arg(long, default_value_t = 30, value_parser = timeout_arg, value_name = "SECONDS")]
     timeout_s: u64,
     /// Print `progress …` lines on stderr (what `launch` shows).

@@ -27,6 +27,8 @@ struct Run {
     out: tempfile::TempDir,
     children: Vec<(String, Child)>,
     said: Arc<Mutex<Vec<(String, String)>>>,
+    /// Every node's `--timeout-s`.
+    timeout_s: &'static str,
 }
 
 impl Run {
@@ -39,6 +41,7 @@ impl Run {
             out: tempfile::tempdir().unwrap(),
             children: Vec::new(),
             said: Arc::default(),
+            timeout_s: "2",
         }
     }
 
@@ -58,7 +61,7 @@ impl Run {
                 "--port",
                 &self.port,
                 "--timeout-s",
-                "2",
+                self.timeout_s,
                 "--progress",
             ])
             .args(extra)
@@ -147,6 +150,19 @@ impl Run {
             .unwrap();
         child.kill().unwrap(); // SIGKILL
         child.wait().unwrap();
+    }
+
+    /// Waits up to `within` for `label`'s process to end; how long it took, or `None`.
+    fn exits_within(&mut self, label: &str, within: Duration) -> Option<Duration> {
+        let t0 = Instant::now();
+        let (_, child) = self.children.iter_mut().find(|(l, _)| l == label).unwrap();
+        while t0.elapsed() < within {
+            if child.try_wait().unwrap().is_some() {
+                return Some(t0.elapsed());
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        None
     }
 
     /// Waits (bounded) for the world to finish; returns its result.
@@ -296,4 +312,39 @@ fn a_robot_started_on_another_map_is_refused_by_name() {
         std::thread::sleep(Duration::from_millis(20));
     };
     assert!(!status.success(), "{status:?}");
+}
+
+#[test]
+fn robots_wait_through_a_long_absence_and_notice_a_killed_world_soon() {
+    // With --timeout-s 10 the world waits 10 s for an absent robot's move: longer than the
+    // others may hear nothing from it (2 × 2 s + 1 s); its `Waiting` keeps them on. Killed
+    // while it waits, the world is noticed within those 5 s, not the 21 s of protocol 5.
+    let mut run = Run::new("heartbeat");
+    run.timeout_s = "10";
+    run.start_all("40", &[]);
+    run.wait_for("world", |l| l.starts_with("progress step=5 "));
+    run.kill("robot 1");
+    run.wait_for("world", |l| l.contains("robot 1 sent no move"));
+    // Through that 10 s wait robots 0 and 2 stayed (a robot that gave up would have ended).
+    let step = run.step();
+    run.wait_for("robot 0", |l| {
+        l.strip_prefix("progress step=")
+            .and_then(|s| s.split(' ').next()?.parse::<usize>().ok())
+            .is_some_and(|s| s > step)
+    });
+    // Now the world waits 10 s for robot 2's move, and is killed meanwhile.
+    run.kill("robot 2");
+    std::thread::sleep(Duration::from_secs(1));
+    run.kill("world");
+    let took = run.exits_within("robot 0", Duration::from_secs(15));
+    let took =
+        took.unwrap_or_else(|| panic!("robot 0 still waits 15 s after the world was killed"));
+    assert!(took < Duration::from_secs(7), "robot 0 took {took:?}");
+    assert!(
+        run.lines("robot 0")
+            .iter()
+            .any(|l| l.contains("observation from the world")),
+        "{:?}",
+        run.lines("robot 0")
+    );
 }
