@@ -339,6 +339,7 @@ fn robots_wait_through_a_long_absence_and_notice_a_killed_world_soon() {
     let took = run.exits_within("robot 0", Duration::from_secs(15));
     let took =
         took.unwrap_or_else(|| panic!("robot 0 still waits 15 s after the world was killed"));
+    eprintln!("robot 0 noticed the killed world after {took:?}");
     assert!(took < Duration::from_secs(7), "robot 0 took {took:?}");
     assert!(
         run.lines("robot 0")
