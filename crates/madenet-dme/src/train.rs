@@ -248,7 +248,37 @@ impl DmeTrainConfig {
             return bad("validation_csp", "CSPs lie in [0, 1]");
         }
         // Maps, densities and the scenario are checked as MADE-Net's are.
-        self.learn_view().validate()
+        self.learn_view().validate()?;
+        harness::check_memory(&self.memory_needs(), harness::physical_memory())
+    }
+
+    /// The two allocations that grow with the sizes: the replay once it holds `replay_steps`
+    /// timesteps (plus one episode beyond, before the oldest is dropped), every robot's
+    /// bit-packed frame per timestep; and a minibatch's maps (this and the next decision's
+    /// `history` frames per robot, as f32).
+    pub fn memory_needs(&self) -> Vec<(String, u64)> {
+        let (h, w) = (self.map_height as u64, self.map_width as u64);
+        let team = self.scenario.num_robots as u64;
+        let frame_bits = FRAME_CHANNELS as u64 * h * w;
+        let steps = self.replay_steps as u64 + self.scenario.step_cap as u64;
+        let replay = steps * team * frame_bits.div_ceil(64) * 8;
+        let batch = 2 * self.batch_size as u64 * team * self.history as u64 * frame_bits * 4;
+        vec![
+            (
+                format!(
+                    "the replay at capacity (`replay_steps` {} × {team} robots × {h} × {w} frames)",
+                    self.replay_steps
+                ),
+                replay,
+            ),
+            (
+                format!(
+                    "a minibatch (`batch_size` {} × {team} robots × `history` {} × {h} × {w} frames, twice)",
+                    self.batch_size, self.history
+                ),
+                batch,
+            ),
+        ]
     }
 
     /// The networks' sizes.
@@ -1004,4 +1034,35 @@ fn train_loop(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn memory_needs_are_the_replay_at_capacity_and_a_minibatch() {
+        let gib = 1u64 << 30;
+        let cfg = DmeTrainConfig::default();
+        assert!(harness::check_memory(&cfg.memory_needs(), Some(gib)).is_ok());
+        let big = DmeTrainConfig {
+            map_height: 200,
+            map_width: 200,
+            replay_steps: 1_000_000,
+            ..cfg.clone()
+        };
+        let needs = big.memory_needs();
+        // (1 000 000 + step cap) timesteps × 3 robots × 4 × 200 × 200 bits, in u64 words.
+        let steps = 1_000_000 + cfg.scenario.step_cap as u64;
+        assert_eq!(needs[0].1, steps * 3 * 2_500 * 8);
+        let err = harness::check_memory(&needs, Some(24 * gib)).unwrap_err();
+        assert!(
+            err.contains("24.0 GiB") && err.contains("`replay_steps` 1000000"),
+            "{err}"
+        );
+        assert!(
+            harness::check_memory(&needs, None).is_ok(),
+            "unknown: not checked"
+        );
+    }
 }

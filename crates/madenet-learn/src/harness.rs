@@ -168,6 +168,42 @@ pub fn check_sizes(fields: &[(&str, u64, u64, u64)]) -> Result<(), String> {
     Ok(())
 }
 
+/// This machine's physical memory in bytes (`None` where the system does not say).
+pub fn physical_memory() -> Option<u64> {
+    // SAFETY: sysconf only reads system constants.
+    let (pages, page) = unsafe {
+        (
+            libc::sysconf(libc::_SC_PHYS_PAGES),
+            libc::sysconf(libc::_SC_PAGESIZE),
+        )
+    };
+    (pages > 0 && page > 0).then(|| pages as u64 * page as u64)
+}
+
+/// Refuses a config whose largest memory needs (`(what, bytes)`, each naming its fields)
+/// add up to more than `available` bytes (this machine's memory: [`physical_memory`]), so
+/// that training fails at once with the sizes named instead of aborting hours in, when the
+/// replay fills up.
+pub fn check_memory(needs: &[(String, u64)], available: Option<u64>) -> Result<(), String> {
+    let Some(available) = available else {
+        return Ok(());
+    };
+    let total = needs.iter().fold(0u64, |t, (_, b)| t.saturating_add(*b));
+    if total <= available {
+        return Ok(());
+    }
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    let parts: Vec<String> = needs
+        .iter()
+        .map(|(what, b)| format!("{what}: {:.1} GiB", gib(*b)))
+        .collect();
+    Err(format!(
+        "needs more memory than this machine has ({:.1} GiB): {}",
+        gib(available),
+        parts.join("; ")
+    ))
+}
+
 /// Trains into `run_dir`: [`prepare_run`] with `load`, `validate` and `same_run`, then
 /// `train_loop(&cfg, resuming)` on a thread pool of `threads(&cfg)` workers (so a run's results
 /// depend on its config, not on the machine's core count).

@@ -361,7 +361,24 @@ impl TrainConfig {
                 "field `validation_maps`: must be at least 1 when validate_every > 0".into(),
             );
         }
-        Ok(())
+        harness::check_memory(&self.memory_needs(), harness::physical_memory())
+    }
+
+    /// The allocation that grows with the sizes at once: a minibatch of sequences, for the
+    /// DEP and for the CEP, each `batch_size` windows of `trace_len` + 1 decisions of a
+    /// 4-channel map image as f32, built on the host and copied into a tensor. (The replay
+    /// grows with the episodes' decisions, which the config does not fix; not counted.)
+    pub fn memory_needs(&self) -> Vec<(String, u64)> {
+        let (h, w) = (self.map_height as u64, self.map_width as u64);
+        let per_map = crate::MAP_CHANNELS as u64 * h * w * 4;
+        let windows = self.batch_size as u64 * (self.trace_len as u64 + 1);
+        vec![(
+            format!(
+                "a minibatch (`batch_size` {} × (`trace_len` {} + 1) × {h} × {w} map images, for DEP and CEP, host and tensor)",
+                self.batch_size, self.trace_len
+            ),
+            2 * 2 * windows * per_map,
+        )]
     }
 
     /// |G| on the training maps.

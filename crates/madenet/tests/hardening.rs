@@ -684,6 +684,17 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
             ["`map_height`", "1..=200"],
         ),
         (
+            // Every field within its bound, the product not: ≈ 1 TiB of minibatch.
+            "dme-memory.toml",
+            "method = \"dme-drl\"\nmap_height = 200\nmap_width = 200\nhistory = 64\ncritic_history = 1\nbatch_size = 4096\nreplay_steps = 100000\nhidden = 8\n",
+            ["needs more memory", "`batch_size` 4096"],
+        ),
+        (
+            "grid-memory.toml",
+            "map_height = 200\nmap_width = 200\nbatch_size = 1024\ntrace_len = 1024\nreplay_episodes = 1024\n",
+            ["needs more memory", "`trace_len` 1024"],
+        ),
+        (
             "rollout.toml",
             "method = \"made-net-rollout\"\nupdates_per_iteration = 1000000000000\n",
             ["`updates_per_iteration`", "0..=1000000"],
