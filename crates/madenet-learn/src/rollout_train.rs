@@ -396,7 +396,31 @@ impl RolloutTrainConfig {
                 self.goals()
             ));
         }
-        Ok(())
+        harness::check_memory(&self.memory_needs(), harness::physical_memory())
+    }
+
+    /// The allocation that grows with the sizes at once: a grid network's minibatch,
+    /// `batch_size` sequences of `trace_len` + 1 decisions (one when not recurrent) of a
+    /// 4-channel map image as f32, on the host and in a tensor. (The agnostic network's
+    /// crops do not grow with the map; the collected episodes grow with the run, not counted.)
+    pub fn memory_needs(&self) -> Vec<(String, u64)> {
+        if self.network == Network::Agnostic {
+            return Vec::new();
+        }
+        let (h, w) = (self.map_height as u64, self.map_width as u64);
+        let time = if self.recurrent {
+            self.trace_len as u64 + 1
+        } else {
+            1
+        };
+        let bytes = 2 * self.batch_size as u64 * time * crate::MAP_CHANNELS as u64 * h * w * 4;
+        vec![(
+            format!(
+                "a minibatch (`batch_size` {} × {time} decisions (`trace_len` + 1 when `recurrent`) × {h} × {w} map images, host and tensor)",
+                self.batch_size
+            ),
+            bytes,
+        )]
     }
 
     /// The agnostic network's sizes.

@@ -695,6 +695,11 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
             ["needs more memory", "`trace_len` 1024"],
         ),
         (
+            "rollout-memory.toml",
+            "method = \"made-net-rollout\"\nmap_height = 200\nmap_width = 200\nbatch_size = 1024\ntrace_len = 1024\nrecurrent = true\n",
+            ["needs more memory", "`batch_size` 1024"],
+        ),
+        (
             "rollout.toml",
             "method = \"made-net-rollout\"\nupdates_per_iteration = 1000000000000\n",
             ["`updates_per_iteration`", "0..=1000000"],
