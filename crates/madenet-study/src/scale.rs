@@ -503,7 +503,8 @@ pub fn run_scale(
             let dir = out.join("grid");
             std::fs::create_dir_all(&dir).map_err(io)?;
             // `grid/` stays this run's until the report is written, as `out` does.
-            let lock = crate::prepare_out(&dir, "scale.toml", &cfg_text, fresh)?;
+            let twin_text = format!("# The grid twin of ../scale.toml: its trials on each scene's 1 m cells\n# (the paper's discretization) in the grid world, in timesteps, not seconds.\n{cfg_text}");
+            let lock = crate::prepare_out(&dir, "scale.toml", &twin_text, fresh)?;
             let twin = cfg.grid_twin(&planned);
             let runs: Vec<Planned> = twin.iter().map(|p| p.planned.clone()).collect();
             let n = planned.len();
