@@ -76,7 +76,14 @@ pub(crate) fn prepare_out(
                 path: cfg_path.display().to_string(),
                 message: e.to_string(),
             })?;
-            if old != cfg_text && (out.join("trials.csv").exists()) {
+            // Comment lines do not make another study (an earlier run's grid twin had none).
+            let body = |t: &str| -> String {
+                t.lines()
+                    .filter(|l| !l.starts_with('#'))
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            };
+            if body(&old) != body(cfg_text) && (out.join("trials.csv").exists()) {
                 return Err(StudyError::File {
                     path: out.display().to_string(),
                     message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),

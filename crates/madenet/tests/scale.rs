@@ -112,7 +112,10 @@ fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
     assert!(report.contains("(continuous world)"), "{report}");
     // The grid twin's folder says what it holds (its config is the study's).
     let twin = std::fs::read_to_string(out.join("grid").join("scale.toml")).unwrap();
-    assert!(twin.starts_with("# The grid twin of ../scale.toml"), "{twin}");
+    assert!(
+        twin.starts_with("# The grid twin of ../scale.toml"),
+        "{twin}"
+    );
     let twin_trials = std::fs::read_to_string(out.join("grid").join("trials.csv")).unwrap();
     assert_eq!(twin_trials.lines().count(), 4, "{twin_trials}");
     let bad = madenet(&["scale", "--world", "gazebo", "--out", o]);
