@@ -239,6 +239,16 @@ pub fn run_ground_with<G: Ground, T: Transport>(
             }
         })
     };
+    // Every robot's first hello, checked before timestep 0 is played (each waited for at most
+    // `peer`: a robot whose hello is late is checked when it comes, with the next timestep's).
+    for i in 0..n {
+        let from = Node::Robot(i);
+        let step = world.t() as u64;
+        let wanted = |e: &Envelope| e.from == from && matches!(e.body, Body::Hello { .. });
+        if let Some(e) = heartbeat.try_take(&mut mb, step, timeouts.peer, wanted)? {
+            check_hello(me, scenario, &e)?;
+        }
+    }
     let started = Instant::now();
     let mut recorder = MetricsRecorder::new(world.explored_fraction());
     let mut positions = vec![world.positions()];

@@ -282,9 +282,9 @@ fn exploration_completes_with_extra_loss_and_delay() {
     }
 }
 
-/// A robot started on another map than the world's is refused by name at its hello (the run
-/// would otherwise finish with an agent exploring a map that is not there), and the world ends
-/// with one error line.
+/// A robot started on another map than the world's is refused by name at its hello, before
+/// timestep 0 is played (the run would otherwise finish with an agent exploring a map that is
+/// not there), and the world ends with one error line.
 #[test]
 fn a_robot_started_on_another_map_is_refused_by_name() {
     let mut run = Run::new("other-map");
@@ -299,9 +299,18 @@ fn a_robot_started_on_another_map_is_refused_by_name() {
     run.start_on("robot 2", "agent", &other, &["--robot", "2"]);
     let line = run.wait_for("world", |l| l.starts_with("error:"));
     assert!(
-        line.contains("robot 2") && line.contains("another map or scenario"),
+        line.contains("robot 2")
+            && line.contains("another map or scenario")
+            && line.contains("at step 0"),
         "{line}"
     );
+    // Refused before the first timestep was played: the world reported none.
+    let played: Vec<String> = run
+        .lines("world")
+        .into_iter()
+        .filter(|l| l.starts_with("progress step="))
+        .collect();
+    assert!(played.is_empty(), "{played:?}");
     let (_, world) = run.children.iter_mut().find(|(l, _)| l == "world").unwrap();
     let deadline = Instant::now() + Duration::from_secs(30);
     let status = loop {
