@@ -152,6 +152,11 @@ impl DmeTrainConfig {
         harness::read_config(path, Self::validate)
     }
 
+    /// [`Self::from_toml_file`] on `text`, already read from `path`.
+    pub fn from_toml_text(path: &Path, text: &str) -> Result<Self, TrainError> {
+        harness::parse_config(path, text, Self::validate)
+    }
+
     /// One message naming the first bad field.
     pub fn validate(&self) -> Result<(), String> {
         let bad = |field: &str, why: &str| Err(format!("field `{field}`: {why}"));

@@ -136,13 +136,22 @@ pub fn read_config<C: DeserializeOwned>(
     path: &Path,
     validate: impl Fn(&C) -> Result<(), String>,
 ) -> Result<C, TrainError> {
+    let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
+        .map_err(io_err(path))?;
+    parse_config(path, &text, validate)
+}
+
+/// [`read_config`] on `text` already read from `path` (a pipe can be read only once).
+pub fn parse_config<C: DeserializeOwned>(
+    path: &Path,
+    text: &str,
+    validate: impl Fn(&C) -> Result<(), String>,
+) -> Result<C, TrainError> {
     let config_err = |message| TrainError::Config {
         path: path.display().to_string(),
         message,
     };
-    let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
-        .map_err(io_err(path))?;
-    let cfg: C = madenet_files::parse_toml(&text).map_err(config_err)?;
+    let cfg: C = madenet_files::parse_toml(text).map_err(config_err)?;
     validate(&cfg).map_err(config_err)?;
     Ok(cfg)
 }

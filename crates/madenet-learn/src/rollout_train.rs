@@ -218,6 +218,11 @@ impl RolloutTrainConfig {
         harness::read_config(path, Self::validate)
     }
 
+    /// [`Self::from_toml_file`] on `text`, already read from `path`.
+    pub fn from_toml_text(path: &Path, text: &str) -> Result<Self, TrainError> {
+        harness::parse_config(path, text, Self::validate)
+    }
+
     /// Checks every field; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
         self.scenario

@@ -38,12 +38,13 @@ pub struct TrainArgs {
     quiet: bool,
 }
 
-/// The `method` key of a training config file, if it has one.
-fn method_of(path: &Path) -> Result<Option<String>> {
-    let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    let value: toml::Table = toml::from_str(&text)
-        .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
+/// A training config as read (once: a pipe cannot be read again): its path and text.
+type Source = Option<(PathBuf, String)>;
+
+/// The `method` key of a training config, if it has one.
+fn method_of(path: &Path, text: &str) -> Result<Option<String>> {
+    let value: toml::Table =
+        toml::from_str(text).map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.message()))?;
     Ok(value
         .get("method")
         .and_then(|m| m.as_str())
@@ -52,7 +53,7 @@ fn method_of(path: &Path) -> Result<Option<String>> {
 
 /// What `madenet train` sets in either learner's config.
 trait LearnerConfig: Default + Sized {
-    fn from_file(path: &Path) -> Result<Self>;
+    fn from_text(path: &Path, text: &str) -> Result<Self>;
     fn episodes(&mut self) -> &mut u64;
     fn max_minutes(&mut self) -> &mut f64;
     fn seed(&mut self) -> &mut u64;
@@ -63,8 +64,8 @@ trait LearnerConfig: Default + Sized {
 macro_rules! learner_config {
     ($t:ty) => {
         impl LearnerConfig for $t {
-            fn from_file(path: &Path) -> Result<Self> {
-                Ok(<$t>::from_toml_file(path)?)
+            fn from_text(path: &Path, text: &str) -> Result<Self> {
+                Ok(<$t>::from_toml_text(path, text)?)
             }
             fn episodes(&mut self) -> &mut u64 {
                 &mut self.episodes
@@ -89,9 +90,11 @@ learner_config!(madenet_dme::train::DmeTrainConfig);
 learner_config!(madenet_learn::rollout_train::RolloutTrainConfig);
 
 /// The run directory and the config to train with (`None`: resume with the run's saved one),
-/// from the arguments; `set_method` applies `--method` to a new run's config.
+/// from the arguments and the config `source` (`--config`'s, or the run's on `--resume`);
+/// `set_method` applies `--method` to a new run's config.
 fn run_dir_and_config<C: LearnerConfig>(
     a: &TrainArgs,
+    source: &Source,
     set_method: impl FnOnce(&mut C) -> Result<()>,
 ) -> Result<(PathBuf, Option<C>)> {
     match (&a.out, &a.resume) {
@@ -108,7 +111,8 @@ fn run_dir_and_config<C: LearnerConfig>(
             if a.episodes.is_none() && a.max_minutes.is_none() {
                 return Ok((dir.clone(), None));
             }
-            let mut cfg = C::from_file(&dir.join("config.toml"))?;
+            let (path, text) = source.as_ref().expect("read in run()");
+            let mut cfg = C::from_text(path, text)?;
             *cfg.episodes() = a.episodes.unwrap_or(*cfg.episodes());
             *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
             Ok((dir.clone(), Some(cfg)))
@@ -120,8 +124,8 @@ fn run_dir_and_config<C: LearnerConfig>(
                     dir.display()
                 );
             }
-            let mut cfg = match &a.config {
-                Some(p) => C::from_file(p)?,
+            let mut cfg = match source {
+                Some((path, text)) => C::from_text(path, text)?,
                 None => C::default(),
             };
             set_method(&mut cfg)?;
@@ -144,9 +148,17 @@ pub fn run(a: TrainArgs) -> Result<()> {
         .as_ref()
         .map(|d| d.join("config.toml"))
         .or_else(|| a.config.clone());
-    let from_file = match &source {
-        Some(p) if p.exists() => method_of(p)?,
+    let source: Source = match source {
+        Some(p) if p.exists() => {
+            let text = madenet_files::read_text_capped(&p, madenet_files::InputKind::Config)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+            Some((p, text))
+        }
         _ => None,
+    };
+    let from_file = match &source {
+        Some((p, text)) => method_of(p, text)?,
+        None => None,
     };
     let chosen = if a.resume.is_some() {
         from_file.as_deref()
@@ -154,12 +166,12 @@ pub fn run(a: TrainArgs) -> Result<()> {
         a.method.as_deref().or(from_file.as_deref())
     };
     if chosen == Some(madenet_dme::train::METHOD) {
-        return run_dme(a);
+        return run_dme(a, &source);
     }
     if chosen == Some(madenet_learn::rollout_train::METHOD) {
-        return run_rollout(a);
+        return run_rollout(a, &source);
     }
-    let (dir, cfg) = run_dir_and_config::<TrainConfig>(&a, |cfg| {
+    let (dir, cfg) = run_dir_and_config::<TrainConfig>(&a, &source, |cfg| {
         if let Some(m) = &a.method {
             cfg.method = match m.as_str() {
                 "made-net" => Method::MadeNet,
@@ -222,9 +234,10 @@ fn progress_bar(quiet: bool) -> ProgressBar {
 }
 
 /// `madenet train --method dme-drl` (or a DME-DRL config or run directory).
-fn run_dme(a: TrainArgs) -> Result<()> {
+fn run_dme(a: TrainArgs, source: &Source) -> Result<()> {
     // `--method dme-drl` is what brought us here: nothing more to set.
-    let (dir, cfg) = run_dir_and_config::<madenet_dme::train::DmeTrainConfig>(&a, |_| Ok(()))?;
+    let (dir, cfg) =
+        run_dir_and_config::<madenet_dme::train::DmeTrainConfig>(&a, source, |_| Ok(()))?;
     let bar = progress_bar(a.quiet);
     let mut progressed = false;
     let mut on_progress = |p: &madenet_dme::train::Progress| {
@@ -246,9 +259,11 @@ fn run_dme(a: TrainArgs) -> Result<()> {
 
 /// `madenet train --method made-net-rollout` (or such a config or run directory): the DEP
 /// trained from the centralized rollout teacher (`madenet_learn::rollout_train`).
-fn run_rollout(a: TrainArgs) -> Result<()> {
+fn run_rollout(a: TrainArgs, source: &Source) -> Result<()> {
     let (dir, cfg) =
-        run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, |_| Ok(()))?;
+        run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, source, |_| {
+            Ok(())
+        })?;
     let bar = if a.quiet {
         ProgressBar::hidden()
     } else {

@@ -764,6 +764,25 @@ fn devices_and_fifos_as_inputs_are_bounded() {
     std::fs::remove_file(model.join("dep0.bpk")).unwrap();
     fifo(&model.join("dep0.bpk"));
     check_error("weights fifo", &run_model(&model), &["dep0.bpk"]);
+    // A training config from a pipe is read once: its field is what the error names (a
+    // second read found the pipe empty).
+    let cfg = dir.join("train.toml");
+    fifo(&cfg);
+    let writer = {
+        let cfg = cfg.clone();
+        std::thread::spawn(move || {
+            std::fs::write(&cfg, "method = \"dme-drl\"\nhidden = 1000000000\n").unwrap()
+        })
+    };
+    let out = madenet(&[
+        "train".into(),
+        "--config".into(),
+        cfg.display().to_string(),
+        "--out".into(),
+        dir.join("run").display().to_string(),
+    ]);
+    writer.join().unwrap();
+    check_error("train config fifo", &out, &["train.toml", "`hidden`"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
