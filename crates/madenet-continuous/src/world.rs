@@ -235,6 +235,36 @@ impl ContinuousWorld {
             *e &= d;
         }
         let explorable_count = explorable.iter().filter(|&&e| e).count();
+        // A footprint wider than every passage around the starts: nothing to do but wait for
+        // the time cap. Refused, naming the field.
+        let w = coarse_truth.width();
+        let is_start = |k: usize| {
+            starts[..n]
+                .iter()
+                .any(|p| p.row as usize * w + p.col as usize == k)
+        };
+        let beyond_starts = |v: &[bool]| v.iter().enumerate().any(|(k, &e)| e && !is_start(k));
+        let mut free_beyond = vec![false; coarse_truth.len()];
+        for &p in &starts[..n] {
+            if coarse_truth.get(p) == Occupancy::Free {
+                for (f, r) in free_beyond.iter_mut().zip(reachable_from_with(
+                    &coarse_truth,
+                    p,
+                    scenario.movement,
+                )) {
+                    *f |= r;
+                }
+            }
+        }
+        if beyond_starts(&free_beyond) && !beyond_starts(&explorable) {
+            let clearance = cfg.robot.radius + cfg.planner.safety_margin;
+            return Err(ContinuousError::Scenario(format!(
+                "field `robot.radius`: a footprint of radius {} m (with `planner.safety_margin` {} m) cannot leave the start cells: every passage from them is narrower than {:.2} m",
+                cfg.robot.radius,
+                cfg.planner.safety_margin,
+                2.0 * clearance
+            )));
+        }
         let (px_h, px_w) = map_pixels(&scene, &cfg);
         let maps = (0..n)
             .map(|_| {
@@ -842,5 +872,43 @@ mod tests {
         .unwrap()
         .to_string();
         assert!(err.contains("inside an obstacle"), "{err}");
+    }
+
+    #[test]
+    fn a_footprint_wider_than_every_passage_is_refused() {
+        // A 9 m plus of 1 m corridors at 0.1 m per pixel: a footprint of 0.48 m fits at the
+        // start cell's centre, but with the 0.05 m margin (1.06 m across) it cannot drive.
+        let (side, px) = (9usize, 10usize);
+        let cells = (0..side * px * side * px)
+            .map(|k| {
+                let (r, c) = (k / (side * px) / px, k % (side * px) / px);
+                let corridor = (r == 4 && (1..8).contains(&c)) || (c == 4 && (1..8).contains(&r));
+                if corridor {
+                    Occupancy::Free
+                } else {
+                    Occupancy::Obstacle
+                }
+            })
+            .collect();
+        let mut grid = madenet_map::OccGrid::from_cells(side * px, side * px, cells);
+        grid.resolution = 0.1;
+        let scene = Arc::new(Scene::from_grid(&grid, "plus"));
+        let scenario = ScenarioConfig {
+            num_robots: 1,
+            ..Default::default()
+        };
+        let mut cfg = ContinuousConfig::default();
+        cfg.robot.radius = 0.48;
+        let err = ContinuousWorld::new(scene.clone(), &[Pos::new(4, 4)], scenario.clone(), cfg, 1)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.contains("`robot.radius`") && err.contains("cannot leave"),
+            "{err}"
+        );
+        // A footprint that fits drives.
+        cfg.robot.radius = 0.3;
+        assert!(ContinuousWorld::new(scene, &[Pos::new(4, 4)], scenario, cfg, 1).is_ok());
     }
 }
