@@ -261,19 +261,18 @@ impl RobotMap {
         if now == Occupancy::Obstacle {
             return;
         }
-        let n = self.pixels[cell] as f64;
-        let (seen, occupied) = (self.observed_in[cell] as f64, self.occupied_in[cell] as f64);
-        // The rule over the observed pixels, but never fewer than half the cell's: a sensor
-        // sees an obstacle's surface, never its inside, so a cell mostly covered by an obstacle
-        // would stay unknown (and a frontier) for ever under the rule over all pixels; and a
-        // glimpse of a cell (a few pixels by a wall, some of them occupied by range noise) is
-        // not enough to call it an obstacle.
-        let next = if occupied > self.obstacle_fraction * seen.max(0.5 * n) {
-            Occupancy::Obstacle
-        } else if now == Occupancy::Unknown && seen >= self.cfg.known_fraction * n {
-            Occupancy::Free
-        } else {
-            now
+        // Write-once but for the upgrade to an obstacle (module docs).
+        let read = madenet_map::discretize::read_partial_cell(
+            self.pixels[cell],
+            self.observed_in[cell],
+            self.occupied_in[cell],
+            self.obstacle_fraction,
+            self.cfg.known_fraction,
+        );
+        let next = match (now, read) {
+            (_, Occupancy::Obstacle) => Occupancy::Obstacle,
+            (Occupancy::Unknown, Occupancy::Free) => Occupancy::Free,
+            _ => now,
         };
         if next != now {
             self.coarse[cell] = next;

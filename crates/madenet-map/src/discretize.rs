@@ -31,6 +31,31 @@ impl Default for DiscretizeParams {
     }
 }
 
+/// A cell of a map still being built, read from counts of its pixels by the paper's rule: an
+/// obstacle when its `occupied` pixels are more than `obstacle_fraction` of its `observed`
+/// ones, or of half its `pixels` while fewer are observed (a sensor sees an obstacle's surface,
+/// never its inside: under the rule over all pixels a cell mostly covered by an obstacle would
+/// stay unknown, a frontier, for ever; and a glimpse of a few pixels by a wall, some of them
+/// occupied by range noise, is not enough to call it one); else free once `known_fraction` of
+/// its pixels are observed; else unknown. A robot's own map in the continuous world and a real
+/// robot's published grid are both read so.
+pub fn read_partial_cell(
+    pixels: u32,
+    observed: u32,
+    occupied: u32,
+    obstacle_fraction: f64,
+    known_fraction: f64,
+) -> Occupancy {
+    let (n, seen) = (f64::from(pixels), f64::from(observed));
+    if f64::from(occupied) > obstacle_fraction * seen.max(0.5 * n) {
+        Occupancy::Obstacle
+    } else if pixels > 0 && seen >= known_fraction * n {
+        Occupancy::Free
+    } else {
+        Occupancy::Unknown
+    }
+}
+
 /// A built-in grid (the paper's maps and generated maps: cells of `grid.resolution` metres,
 /// 1 m) at robot cell size `cell_size` metres: each cell is read as a pixel (obstacle: occupancy
 /// probability 1; free and unknown: 0) and blocks are merged with [`discretize`], exactly as a

@@ -345,10 +345,12 @@ pub fn pose_stamped(frame: &MapFrame, p: Pos, t: Time) -> PoseStamped {
 }
 
 /// Reads a real robot's `OccupancyGrid` (any resolution, origin and rotation) into the cells of
-/// `frame`, by the paper's rule over the pixels whose centres fall in each cell (Sec. V.B.1): a
-/// cell with no pixels, or more than half of them unknown (−1), is unknown; otherwise it is an
-/// obstacle when more than 25 % of its known pixels are above 65 (occupancy probability
-/// > 0.65), and free else. `topic` names the source in errors.
+/// `frame`, by the paper's rule over the pixels whose centres fall in each cell (Sec. V.B.1) as
+/// a map still being built is read ([`madenet_map::discretize::read_partial_cell`], as the
+/// continuous world's robots read their own maps): an obstacle when more than 25 % of its
+/// known pixels, or of half its pixels while fewer are known, are above 65 (occupancy
+/// probability > 0.65); else free once half its pixels are known (not −1); else unknown.
+/// `topic` names the source in errors.
 pub fn cells_from_grid(
     msg: &OccupancyGrid,
     frame: &MapFrame,
@@ -402,14 +404,7 @@ pub fn cells_from_grid(
     Ok(counts
         .iter()
         .map(|&[n, unknown, occupied]| {
-            let known = n - unknown;
-            if n == 0 || 2 * unknown > n {
-                Occupancy::Unknown
-            } else if occupied as f64 > 0.25 * known as f64 {
-                Occupancy::Obstacle
-            } else {
-                Occupancy::Free
-            }
+            madenet_map::discretize::read_partial_cell(n, n - unknown, occupied, 0.25, 0.5)
         })
         .collect())
 }

@@ -317,6 +317,42 @@ fn a_finer_rotated_robot_map_reads_back_into_the_same_cells() {
     let free_cell_px = (0..fine.data.len()).find(|&i| fine.data[i] == 0).unwrap();
     one.data[free_cell_px] = 100;
     assert_eq!(cells_from_grid(&one, &frame, "t").unwrap(), g.cells());
+    // An obstacle cell as SLAM maps it, its surface seen from one side: one row of 4 pixels
+    // occupied, the rest unknown. Read over half its pixels it is an obstacle (4 > 25 % of
+    // 8), not unknown for ever (a frontier beside every box a robot drives by).
+    let mut surface = fine.clone();
+    let obstacle = (0..h * w)
+        .find(|&i| coarse.data[i] == 100)
+        .expect("an obstacle cell");
+    let (r0, c0) = ((obstacle / w) * 4, (obstacle % w) * 4);
+    for r in 0..4 {
+        for c in 0..4 {
+            surface.data[(r0 + r) * w * 4 + c0 + c] = if r == 0 { 100 } else { -1 };
+        }
+    }
+    assert_eq!(
+        cells_from_grid(&surface, &frame, "t").unwrap(),
+        g.cells(),
+        "the cell seen from one side reads as the obstacle it is"
+    );
+    // A glimpse of a free cell (3 of 16 pixels seen) stays unknown.
+    let mut glimpse = fine.clone();
+    let free = (0..h * w)
+        .find(|&i| coarse.data[i] == 0)
+        .expect("a free cell");
+    let (r0, c0) = ((free / w) * 4, (free % w) * 4);
+    for k in 3..16 {
+        glimpse.data[(r0 + k / 4) * w * 4 + c0 + k % 4] = -1;
+    }
+    let read = cells_from_grid(&glimpse, &frame, "t").unwrap();
+    let changed: Vec<_> = read.iter().zip(g.cells()).filter(|(a, b)| a != b).collect();
+    assert_eq!(
+        changed,
+        [(
+            &madenet_map::Occupancy::Unknown,
+            &madenet_map::Occupancy::Free
+        )]
+    );
     // A message whose data does not fit its size is refused, naming topic and field.
     let mut bad = fine;
     bad.data.pop();
