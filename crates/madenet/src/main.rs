@@ -129,7 +129,15 @@ fn main() -> ExitCode {
 pub fn registry(
     model_dir: Option<&std::path::Path>,
 ) -> anyhow::Result<madenet_sim::PolicyRegistry> {
-    let mut r = madenet_catalogue::shipped()?;
+    registry_with(&Default::default(), model_dir)
+}
+
+/// [`registry`] with the baselines' parameters of a config (a study's `[baselines]`).
+pub fn registry_with(
+    baselines: &madenet_baselines::BaselineParams,
+    model_dir: Option<&std::path::Path>,
+) -> anyhow::Result<madenet_sim::PolicyRegistry> {
+    let mut r = madenet_catalogue::catalogue(baselines)?;
     if let Some(dir) = model_dir {
         madenet_catalogue::register_model(&mut r, "model", "the model given with --model", dir)?;
     }

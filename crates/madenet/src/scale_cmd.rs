@@ -82,7 +82,8 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     if let Some(s) = a.seeds {
         cfg.seeds = s;
     }
-    let registry = crate::registry(a.model.as_deref())?;
+    // The config's own `[baselines]` parameters (ub, pb), as `madenet compare` uses its own.
+    let registry = crate::registry_with(&cfg.baselines, a.model.as_deref())?;
     let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     let result = pool
         .install(|| {

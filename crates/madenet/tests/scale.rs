@@ -127,3 +127,48 @@ fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_configs_baseline_parameters_are_the_ones_played() {
+    // PB with one iteration of its planner and with the paper's 50, on the same trials: the
+    // tables differ (before, `madenet scale` played the defaults whatever `[baselines]` said).
+    let dir = std::env::temp_dir().join(format!("madenet-scale-pb-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let trials = |iterations: u32| {
+        let cfg = dir.join(format!("pb{iterations}.toml"));
+        std::fs::write(
+            &cfg,
+            format!("methods = [\"pb\"]\nsides = [20]\nteams = [3]\nseeds = 2\n[baselines.pb]\niterations = {iterations}\n"),
+        )
+        .unwrap();
+        let out = dir.join(format!("out{iterations}"));
+        let r = madenet(&[
+            "scale",
+            "--config",
+            cfg.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--threads",
+            "2",
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+        // Everything but the wall-clock columns.
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let keep: Vec<usize> = (0..header.len())
+            .filter(|&k| !header[k].ends_with("_s") || header[k] == "et_s")
+            .collect();
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                keep.iter().map(|&k| f[k]).collect::<Vec<_>>().join(",")
+            })
+            .collect::<Vec<_>>()
+    };
+    let (one, fifty) = (trials(1), trials(50));
+    assert_eq!(one.len(), fifty.len());
+    assert_ne!(one, fifty, "[baselines.pb] iterations had no effect");
+    let _ = std::fs::remove_dir_all(&dir);
+}
