@@ -413,6 +413,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<CoreEnv>()?;
     m.add_class::<vector::CoreVecEnv>()?;
     m.add_class::<study::CoreStudy>()?;
+    m.add_class::<study::CoreScale>()?;
     m.add_function(wrap_pyfunction!(policies, m)?)?;
     m.add_function(wrap_pyfunction!(run_trial, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

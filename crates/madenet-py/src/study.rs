@@ -1,11 +1,13 @@
 //! `CoreStudy`: the comparison study (`madenet compare`) planned once, its trials run in any
 //! subset — all of them here, or batches in Ray workers — with the same result per trial.
+//! `CoreScale`: the scalability study (`madenet scale`, grid or continuous world) the same way.
 
 use crate::value_error;
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::PolicyRegistry;
 use madenet_study::runner::{self, TrialOutcome};
-use madenet_study::StudyConfig;
+use madenet_study::scale::ScalePlanned;
+use madenet_study::{ScaleConfig, ScaleWorld, StudyConfig};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -20,6 +22,17 @@ pub struct CoreStudy {
 /// `config` (a study TOML file, optional) with `overrides` (a JSON object of top-level fields)
 /// on top, parsed with the study's own field checks.
 fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyConfig> {
+    config_with(config, None, overrides_json, "study")
+}
+
+/// `config` (a TOML file; `None`: `defaults`, or every field's default) with `overrides` (a
+/// JSON object of top-level fields) on top, parsed into `T` with its own field checks.
+fn config_with<T: serde::de::DeserializeOwned>(
+    config: Option<&str>,
+    defaults: Option<toml::Table>,
+    overrides_json: &str,
+    what: &str,
+) -> PyResult<T> {
     let mut table = match config {
         Some(path) => {
             let text = madenet_files::read_text_capped(
@@ -30,7 +43,7 @@ fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyCon
             text.parse::<toml::Table>()
                 .map_err(|e| value_error(format!("{path}: {}", e.message())))?
         }
-        None => toml::Table::new(),
+        None => defaults.unwrap_or_default(),
     };
     let extra: serde_json::Value = serde_json::from_str(overrides_json)
         .map_err(|e| value_error(format!("keyword arguments: {e}")))?;
@@ -39,7 +52,7 @@ fn study_config(config: Option<&str>, overrides_json: &str) -> PyResult<StudyCon
     table.extend(extra);
     let text = toml::to_string(&table).map_err(value_error)?;
     madenet_files::parse_toml(&text)
-        .map_err(|message| value_error(format!("{}: {message}", config.unwrap_or("study"))))
+        .map_err(|message| value_error(format!("{}: {message}", config.unwrap_or(what))))
 }
 
 fn outcome_dict<'py>(py: Python<'py>, o: &TrialOutcome) -> PyResult<Bound<'py, PyDict>> {
@@ -64,7 +77,50 @@ fn outcome_dict<'py>(py: Python<'py>, o: &TrialOutcome) -> PyResult<Bound<'py, P
         // -1: that coverage was never reached (an empty cell in trials.csv).
         d.set_item(format!("to_{level}"), s.map_or(-1, |v| v as i64))?;
     }
+    if let Some(c) = &r.continuous {
+        d.set_item("et_s", c.et_s)?;
+        d.set_item("obstacle_collisions", c.obstacle_collisions)?;
+        d.set_item("robot_collisions", c.robot_collisions)?;
+        d.set_item("impassable_cells", c.impassable_cells)?;
+        d.set_item("stuck", c.stuck)?;
+        d.set_item("written_off_cells", c.written_off_cells)?;
+        d.set_item("unread_cells", c.unread_cells)?;
+        d.set_item("explorable_cells", c.explorable_cells)?;
+    }
     Ok(d)
+}
+
+/// Runs `indices` of `planned` on `threads` threads (all cores if `None`) with the GIL
+/// released; outcomes in the order of `indices`.
+fn run_indices(
+    py: Python<'_>,
+    planned: &[&runner::Planned],
+    registry: &PolicyRegistry,
+    indices: Option<Vec<usize>>,
+    threads: Option<usize>,
+) -> PyResult<(Vec<usize>, Vec<TrialOutcome>)> {
+    let indices = indices.unwrap_or_else(|| (0..planned.len()).collect());
+    if let Some(&bad) = indices.iter().find(|&&i| i >= planned.len()) {
+        return Err(value_error(format!(
+            "indices: {bad} is not a trial of this study ({} planned)",
+            planned.len()
+        )));
+    }
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        pool = pool.num_threads(t.max(1));
+    }
+    let pool = pool.build().map_err(value_error)?;
+    let outcomes: Result<Vec<TrialOutcome>, _> = py.detach(|| {
+        use rayon::prelude::*;
+        pool.install(|| {
+            indices
+                .par_iter()
+                .map(|&i| runner::run_one(planned[i], registry))
+                .collect()
+        })
+    });
+    Ok((indices, outcomes.map_err(value_error)?))
 }
 
 #[pymethods]
@@ -121,33 +177,9 @@ impl CoreStudy {
         indices: Option<Vec<usize>>,
         threads: Option<usize>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let indices = indices.unwrap_or_else(|| (0..self.planned.len()).collect());
-        if let Some(&bad) = indices.iter().find(|&&i| i >= self.planned.len()) {
-            return Err(value_error(format!(
-                "indices: {bad} is not a trial of this study ({} planned)",
-                self.planned.len()
-            )));
-        }
-        let mut pool = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = threads {
-            pool = pool.num_threads(t.max(1));
-        }
-        let pool = pool.build().map_err(value_error)?;
-        let (planned, registry) = (&self.planned, &self.registry);
-        let outcomes: Result<Vec<TrialOutcome>, _> = py.detach(|| {
-            use rayon::prelude::*;
-            pool.install(|| {
-                indices
-                    .par_iter()
-                    .map(|&i| runner::run_one(&planned[i], registry))
-                    .collect()
-            })
-        });
-        outcomes
-            .map_err(value_error)?
-            .iter()
-            .map(|o| outcome_dict(py, o))
-            .collect()
+        let planned: Vec<&runner::Planned> = self.planned.iter().collect();
+        let (_, outcomes) = run_indices(py, &planned, &self.registry, indices, threads)?;
+        outcomes.iter().map(|o| outcome_dict(py, o)).collect()
     }
 
     /// Runs the whole study into folder `out` exactly as `madenet compare --out OUT` does
@@ -180,6 +212,104 @@ impl CoreStudy {
         let (maps, starts) = config.validate(&registry).map_err(value_error)?;
         let planned = runner::plan(&config, &maps, &starts);
         Ok(CoreStudy {
+            config,
+            registry,
+            planned,
+        })
+    }
+}
+
+/// A validated scalability study (`madenet scale`): its configuration, policies and planned
+/// trials (side × team × start × method × seed, on generated maps or cluttered scenes).
+#[pyclass(module = "madenet._core", unsendable)]
+pub struct CoreScale {
+    config: ScaleConfig,
+    registry: PolicyRegistry,
+    planned: Vec<ScalePlanned>,
+}
+
+#[pymethods]
+impl CoreScale {
+    /// `config` (a scale TOML file, optional) with `overrides` (JSON of top-level fields) on
+    /// top. Without a file, `world = "continuous"` starts from the continuous study's
+    /// defaults, as `madenet scale --world continuous` does.
+    #[new]
+    #[pyo3(signature = (config = None, overrides = "{}"))]
+    fn new(config: Option<&str>, overrides: &str) -> PyResult<Self> {
+        let continuous = serde_json::from_str::<serde_json::Value>(overrides)
+            .ok()
+            .and_then(|v| v.get("world").cloned())
+            == Some(serde_json::Value::from("continuous"));
+        let defaults = match (config, continuous) {
+            (None, true) => Some(
+                toml::Table::try_from(ScaleConfig::continuous_default()).map_err(value_error)?,
+            ),
+            _ => None,
+        };
+        Self::build(config_with(config, defaults, overrides, "scale")?)
+    }
+
+    /// The study from the TOML text `toml_text()` returned (how Ray workers rebuild it).
+    #[staticmethod]
+    fn from_toml(text: &str) -> PyResult<Self> {
+        Self::build(
+            madenet_files::parse_toml(text)
+                .map_err(|message| value_error(format!("scale: {message}")))?,
+        )
+    }
+
+    /// The full configuration as TOML (every field, defaults included).
+    fn toml_text(&self) -> PyResult<String> {
+        toml::to_string(&self.config).map_err(value_error)
+    }
+
+    /// Number of planned trials.
+    fn __len__(&self) -> usize {
+        self.planned.len()
+    }
+
+    /// The columns of its rows, in order: `side`, `team`, then those of `trials.csv`.
+    fn columns(&self) -> Vec<String> {
+        let mut c = vec!["side".to_string(), "team".to_string()];
+        c.extend(match self.config.world {
+            ScaleWorld::Grid => runner::header(),
+            ScaleWorld::Continuous => runner::continuous_header(),
+        });
+        c
+    }
+
+    /// Runs the planned trials `indices` (all if `None`) on `threads` threads (all cores if
+    /// `None`) with the GIL released; one dict per trial in the order of `indices`: its map
+    /// side and team size, then the columns of the study's `trials.csv`. Only the trials
+    /// themselves: the grid twin of a continuous study and the report are `madenet scale`'s.
+    #[pyo3(signature = (indices = None, threads = None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        indices: Option<Vec<usize>>,
+        threads: Option<usize>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let planned: Vec<&runner::Planned> = self.planned.iter().map(|p| &p.planned).collect();
+        let (indices, outcomes) = run_indices(py, &planned, &self.registry, indices, threads)?;
+        indices
+            .iter()
+            .zip(&outcomes)
+            .map(|(&i, o)| {
+                let d = outcome_dict(py, o)?;
+                d.set_item("side", self.planned[i].side)?;
+                d.set_item("team", self.planned[i].team)?;
+                Ok(d)
+            })
+            .collect()
+    }
+}
+
+impl CoreScale {
+    fn build(config: ScaleConfig) -> PyResult<Self> {
+        let registry = madenet_catalogue::catalogue(&config.baselines).map_err(value_error)?;
+        config.validate(&registry).map_err(value_error)?;
+        let planned = config.plan().map_err(value_error)?;
+        Ok(CoreScale {
             config,
             registry,
             planned,

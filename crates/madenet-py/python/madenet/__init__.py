@@ -8,16 +8,17 @@ simulator in Rust.
   observation);
 * ``VectorEnv`` — N environments stepped together in Rust into preallocated numpy arrays;
 * ``policy(name)`` — the shipped policies (NF, UB, PB, MADE-Net, DME-DRL, …) acting in an env;
-* ``run_trial`` and ``compare`` — one trial and the comparison study; ``madenet.ray.compare``
-  fans the study out over a Ray cluster.
+* ``run_trial``, ``compare`` and ``scale`` — one trial, the comparison study and the
+  scalability study (grid or continuous world); ``madenet.ray.compare`` and
+  ``madenet.ray.scale`` fan them out over a Ray cluster.
 """
 
 from madenet._core import __version__
 from madenet.centralized import CentralizedEnv
 from madenet.env import ExplorationEnv
 from madenet.policies import Policy, policies, policy
-from madenet.study import TIMING_COLUMNS, compare, run_trial, table
+from madenet.study import TIMING_COLUMNS, compare, run_trial, scale, table
 from madenet.vector import VectorEnv
 
 __all__ = ["CentralizedEnv", "ExplorationEnv", "Policy", "TIMING_COLUMNS", "VectorEnv", "__version__", "compare",
-           "policies", "policy", "run_trial", "table"]
+           "policies", "policy", "run_trial", "scale", "table"]

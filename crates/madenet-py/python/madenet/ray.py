@@ -1,4 +1,4 @@
-"""The comparison study fanned out as Ray tasks (``pip install 'madenet[ray]'``)."""
+"""The comparison and scalability studies fanned out as Ray tasks (``pip install 'madenet[ray]'``)."""
 
 from __future__ import annotations
 
@@ -10,26 +10,19 @@ from madenet.study import table
 _remote = None
 
 
-def _run_batch(config_toml: str, indices: list) -> list:
+def _run_batch(kind: str, config_toml: str, indices: list) -> list:
     # Runs inside a Ray worker: the study is rebuilt from its TOML text there, so no Rust
     # object is ever pickled; one thread per task, Ray spreads the tasks.
-    from madenet._core import CoreStudy
-    return CoreStudy.from_toml(config_toml).run(indices, 1)
+    from madenet import _core
+    return getattr(_core, kind).from_toml(config_toml).run(indices, 1)
 
 
-def compare(config=None, address: str | None = None, batch_size: int | None = None,
-            as_dataframe: bool = False, **fields):
-    """``madenet.compare`` with the trials distributed as Ray tasks (one task per batch of
-    ``batch_size`` trials; by default about four batches per CPU of the cluster). Connects to
-    ``address`` (``None``: the running Ray instance, or a new local one). Returns the same table
-    as ``madenet.compare`` — the same values for the same configuration and seeds, in the same
-    order (wall-clock columns aside)."""
+def _fan_out(kind: str, study, address: str | None, batch_size: int | None) -> list:
+    """Runs every trial of ``study`` (a ``_core`` study of class ``kind``) as Ray tasks of
+    ``batch_size`` trials; rows in the study's order."""
     import ray
-    from madenet._core import CoreStudy
 
     global _remote
-    path, extra = study_overrides(config, fields)
-    study = CoreStudy(path, extra)
     text = study.toml_text()
     n = len(study)
     if batch_size is not None and (not isinstance(batch_size, int) or batch_size < 1):
@@ -44,6 +37,32 @@ def compare(config=None, address: str | None = None, batch_size: int | None = No
     if _remote is None:
         _remote = ray.remote(_run_batch)
     batches = [list(range(i, min(i + batch_size, n))) for i in range(0, n, batch_size)]
-    results = ray.get([_remote.remote(text, b) for b in batches])
-    rows = [row for batch in results for row in batch]
+    results = ray.get([_remote.remote(kind, text, b) for b in batches])
+    return [row for batch in results for row in batch]
+
+
+def compare(config=None, address: str | None = None, batch_size: int | None = None,
+            as_dataframe: bool = False, **fields):
+    """``madenet.compare`` with the trials distributed as Ray tasks (one task per batch of
+    ``batch_size`` trials; by default about four batches per CPU of the cluster). Connects to
+    ``address`` (``None``: the running Ray instance, or a new local one). Returns the same table
+    as ``madenet.compare`` — the same values for the same configuration and seeds, in the same
+    order (wall-clock columns aside)."""
+    from madenet._core import CoreStudy
+
+    path, extra = study_overrides(config, fields)
+    rows = _fan_out("CoreStudy", CoreStudy(path, extra), address, batch_size)
     return table(rows, as_dataframe)
+
+
+def scale(config=None, address: str | None = None, batch_size: int | None = None,
+          as_dataframe: bool = False, **fields):
+    """``madenet.scale`` (grid or continuous world) with the trials distributed as Ray tasks,
+    as ``compare`` here: the same rows as ``madenet.scale`` for the same configuration and
+    seeds, in the same order (wall-clock columns aside)."""
+    from madenet._core import CoreScale
+
+    path, extra = study_overrides(config, fields)
+    study = CoreScale(path, extra)
+    rows = _fan_out("CoreScale", study, address, batch_size)
+    return table(rows, as_dataframe, study.columns())

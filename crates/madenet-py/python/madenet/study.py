@@ -29,10 +29,10 @@ def run_trial(map: str = "paper:1", start: str = "top-left", policy: str = "nf",
     return result
 
 
-def table(rows: list, as_dataframe: bool = False):
+def table(rows: list, as_dataframe: bool = False, columns: list | None = None):
     """Rows (dicts with the columns of ``trials.csv``) → a dict of numpy arrays, column by
-    column in ``trials.csv``'s order (or a pandas DataFrame)."""
-    columns = _core.CoreStudy.columns()
+    column in ``trials.csv``'s order (or ``columns``'), or a pandas DataFrame."""
+    columns = _core.CoreStudy.columns() if columns is None else columns
     data = {c: np.array([r[c] for r in rows]) for c in columns}
     if as_dataframe:
         import pandas as pd
@@ -56,3 +56,18 @@ def compare(config=None, out: str | os.PathLike | None = None, threads: int | No
     else:
         rows = study.run(None, threads)
     return table(rows, as_dataframe)
+
+
+def scale(config=None, threads: int | None = None, as_dataframe: bool = False, **fields):
+    """The scalability study's trials (``madenet scale``): ``config`` is a scale TOML file (see
+    ``configs/scale.toml``) or a dict of its fields, keyword arguments override fields
+    (``world="continuous"``, ``methods=["nf", "spread"]``, ``sides=[20]``, ``teams=[2, 4]``,
+    ``seeds=1`` …; ``world="continuous"`` without a file starts from the continuous study's
+    defaults, as ``madenet scale --world continuous`` does). Runs in memory on ``threads``
+    threads (all cores by default) and returns one row per trial: ``side``, ``team``, then the
+    columns of the study's ``trials.csv`` (a continuous study's include ``et_s`` and the
+    collisions) — the same values as ``madenet scale`` writes for the same configuration and
+    seeds, wall-clock columns aside. The report, figure and grid twin are ``madenet scale``'s."""
+    path, extra = study_overrides(config, fields)
+    study = _core.CoreScale(path, extra)
+    return table(study.run(None, threads), as_dataframe, study.columns())

@@ -1,0 +1,76 @@
+"""madenet.scale against `madenet scale` (grid and continuous world), and madenet.ray.scale
+against madenet.scale."""
+
+import csv
+import subprocess
+
+import pytest
+
+import madenet
+
+GRID = dict(methods=["nf", "spread"], sides=[20, 30], teams=[2, 3], seeds=1)
+CONTINUOUS = dict(world="continuous", methods=["spread"], sides=[12], teams=[2], seeds=1)
+
+
+def assert_same_rows(table: dict, rows: list, extra=("side", "team")):
+    """`table` (madenet.scale's) holds `rows` (a trials.csv's), value for value."""
+    assert len(table["method"]) == len(rows)
+    for i, row in enumerate(rows):
+        for column, value in row.items():
+            if column in madenet.TIMING_COLUMNS:
+                continue
+            got = table[column][i]
+            if column in ("method", "map", "start"):
+                assert got == value, column
+            elif column.startswith("to_"):
+                assert got == (int(value) if value else -1), column
+            elif column == "completed":
+                assert bool(got) == (value == "true"), column
+            else:
+                assert float(got) == pytest.approx(float(value), abs=1e-9), (column, i)
+    for column in extra:
+        assert column in table
+
+
+def cli_rows(cli, tmp_path, name, flags):
+    out = tmp_path / name
+    subprocess.run([cli, "scale", "--out", str(out), "--threads", "2", *flags], check=True, capture_output=True)
+    with open(out / "trials.csv") as f:
+        return list(csv.DictReader(f))
+
+
+def test_scale_matches_the_command_line_grid_and_continuous(cli, tmp_path):
+    rows = cli_rows(cli, tmp_path, "grid", ["--methods", "nf,spread", "--sides", "20,30", "--teams", "2,3", "--seeds", "1"])
+    table = madenet.scale(**GRID, threads=2)
+    assert len(rows) == 2 * 2 * 4 * 2 * 3  # methods × sides × maps per side × teams × starts
+    assert_same_rows(table, rows)
+    assert sorted(set(table["side"])) == [20, 30] and sorted(set(table["team"])) == [2, 3]
+    rows = cli_rows(cli, tmp_path, "continuous",
+                    ["--world", "continuous", "--methods", "spread", "--sides", "12", "--teams", "2", "--seeds", "1"])
+    table = madenet.scale(**CONTINUOUS, threads=2)
+    assert len(rows) == 3 and "et_s" in table
+    assert_same_rows(table, rows)
+
+
+def test_scale_rejects_bad_fields():
+    with pytest.raises(ValueError, match="no_such_field"):
+        madenet.scale(no_such_field=1)
+    with pytest.raises(ValueError, match="methods"):
+        madenet.scale(methods=["no-such-method"])
+
+
+def test_ray_scale_equals_the_local_study():
+    ray = pytest.importorskip("ray")
+    import madenet.ray
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        grid = madenet.ray.scale(**GRID, batch_size=5)
+        continuous = madenet.ray.scale(**CONTINUOUS, batch_size=2)
+    finally:
+        ray.shutdown()
+    for distributed, local in ((grid, madenet.scale(**GRID)), (continuous, madenet.scale(**CONTINUOUS))):
+        assert list(distributed) == list(local)
+        for column in local:
+            if column in madenet.TIMING_COLUMNS:
+                continue
+            assert list(distributed[column]) == list(local[column]), column
