@@ -2,7 +2,7 @@
 //! world with the robots (footprints, headings, scans, local paths, target cells), the team's
 //! coarse map as the agents read it, and each robot's own fine map.
 
-use crate::draw::{line, rgba, text, Rgb};
+use crate::draw::{line, mix, rgba, text, Rgb};
 use crate::{robot_rgb, save_image_png, RenderError, BACKGROUND, FREE, TITLE_FG, UNKNOWN};
 use image::RgbaImage;
 use imageproc::drawing::{draw_filled_circle_mut, draw_filled_rect_mut, draw_hollow_rect_mut};
@@ -58,6 +58,17 @@ pub fn continuous_picture(trial: &ContinuousTrial, scale: f64) -> RgbaImage {
         },
     );
     let cell = w.scenario().cell_size;
+    // Where each robot has driven, under everything else.
+    for i in 0..n {
+        let trail = trial.trail(i);
+        let colour = mix(robot_rgb(i), FREE, 0.55);
+        for seg in trail.windows(2) {
+            let (a, b) = (seg[0], seg[1]);
+            let a = to_px(o, f64::from(a.0), f64::from(a.1));
+            let b = to_px(o, f64::from(b.0), f64::from(b.1));
+            line(&mut img, (a, b), 2, colour, None);
+        }
+    }
     for i in 0..n {
         let colour = robot_rgb(i);
         let p = w.pose(i);

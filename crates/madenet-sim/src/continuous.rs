@@ -172,8 +172,13 @@ pub struct ContinuousTrial {
     held_up: u64,
     explored: Vec<f64>,
     distance: Vec<f64>,
+    /// Per robot, where it was every [`TRAIL_EVERY`] control periods (pictures).
+    trails: Vec<Vec<(f32, f32)>>,
     started: Instant,
 }
+
+/// Control periods between two points of a robot's trail ([`ContinuousTrial::trail`]).
+const TRAIL_EVERY: u64 = 4;
 
 impl ContinuousTrial {
     /// Builds the world and the agents (policies from `registry`).
@@ -244,6 +249,12 @@ impl ContinuousTrial {
             held_up: 0,
             explored: vec![world.explored_fraction()],
             distance: vec![0.0],
+            trails: (0..n)
+                .map(|i| {
+                    let p = world.pose(i);
+                    vec![(p.x as f32, p.y as f32)]
+                })
+                .collect(),
             started: Instant::now(),
             agents,
             world,
@@ -257,6 +268,11 @@ impl ContinuousTrial {
     /// The agents, robot i at index i.
     pub fn agents(&self) -> &[Agent] {
         &self.agents
+    }
+    /// Where robot `i` has been (metres, every fifth of a second at the default control period,
+    /// the start first): the trail pictures draw.
+    pub fn trail(&self, i: usize) -> &[(f32, f32)] {
+        &self.trails[i]
     }
     /// Robot `i`'s local planner (its local path, for pictures).
     pub fn planner(&self, i: usize) -> &LocalPlanner {
@@ -415,6 +431,12 @@ impl ContinuousTrial {
         }
         for r in &mut self.replan {
             *r = self.ticks.is_multiple_of(4);
+        }
+        if self.ticks.is_multiple_of(TRAIL_EVERY) {
+            for (i, t) in self.trails.iter_mut().enumerate() {
+                let p = self.world.pose(i);
+                t.push((p.x as f32, p.y as f32));
+            }
         }
         let second = self.world.time().floor() as usize;
         if second >= self.explored.len() {
@@ -675,6 +697,32 @@ mod tests {
             continuous: ContinuousConfig::default(),
             policy: policy.into(),
             seed,
+        }
+    }
+
+    #[test]
+    fn each_robot_leaves_a_trail_from_its_start_to_where_it_is() {
+        let registry = PolicyRegistry::builtin();
+        let mut t = ContinuousTrial::new(spec("nf", 1), &registry).unwrap();
+        for _ in 0..200 {
+            t.step();
+        }
+        for i in 0..3 {
+            let trail = t.trail(i);
+            assert_eq!(trail.len(), 1 + 200 / TRAIL_EVERY as usize);
+            let (x0, y0) = madenet_continuous::Scene::cell_centre(spec("nf", 1).starts[i], 1.0);
+            assert_eq!(
+                trail[0],
+                (x0 as f32, y0 as f32),
+                "robot {i} starts at its cell centre"
+            );
+            let p = t.world().pose(i);
+            assert_eq!(*trail.last().unwrap(), (p.x as f32, p.y as f32));
+            // A trail point per 0.2 s: never farther apart than max speed allows.
+            let step = 0.5 * 0.2 + 1e-3;
+            assert!(trail
+                .windows(2)
+                .all(|w| (w[1].0 - w[0].0).hypot(w[1].1 - w[0].1) as f64 <= step));
         }
     }
 
