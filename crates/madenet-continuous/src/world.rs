@@ -65,6 +65,8 @@ pub struct ContinuousWorld {
     ticks: u64,
     scan_every: u64,
     rng_sensor: Vec<Rng>,
+    /// Per robot, the localization error of each scan ([`crate::config::MappingConfig::localization_noise_m`]).
+    rng_localization: Vec<Rng>,
     coarse_truth: OccGrid,
     explorable: Vec<bool>,
     explorable_count: usize,
@@ -276,6 +278,9 @@ impl ContinuousWorld {
             .round()
             .max(1.0) as u64;
         let mut w = ContinuousWorld {
+            rng_localization: (0..n)
+                .map(|i| stream(seed, "continuous-localization", i as u64))
+                .collect(),
             rng_sensor: (0..n)
                 .map(|i| stream(seed, "continuous-sensor", i as u64))
                 .collect(),
@@ -590,7 +595,26 @@ impl ContinuousWorld {
                 }
             }
         }
-        self.maps[i].integrate_scan(p.x, p.y, &ends);
+        // Where the robot believes it is (the true pose unless localization error is on): the
+        // scan is integrated relative to that pose.
+        let m = self.cfg.mapping;
+        let (mut ox, mut oy) = (p.x, p.y);
+        if m.localization_noise_m > 0.0 || m.localization_noise_rad > 0.0 {
+            let rng = &mut self.rng_localization[i];
+            let mut g = || rng.sample::<f64, _>(StandardNormal);
+            let (ex, ey, et) = (
+                g() * m.localization_noise_m,
+                g() * m.localization_noise_m,
+                g() * m.localization_noise_rad,
+            );
+            let (s, c) = et.sin_cos();
+            for e in ends.iter_mut() {
+                let (dx, dy) = (e.0 - p.x, e.1 - p.y);
+                *e = (p.x + ex + dx * c - dy * s, p.y + ey + dx * s + dy * c, e.2);
+            }
+            (ox, oy) = (p.x + ex, p.y + ey);
+        }
+        self.maps[i].integrate_scan(ox, oy, &ends);
         self.ends = ends;
         self.scans[i] = beams;
         self.near = near;
@@ -872,6 +896,40 @@ mod tests {
         .unwrap()
         .to_string();
         assert!(err.contains("inside an obstacle"), "{err}");
+    }
+
+    #[test]
+    fn localization_error_blurs_the_map_and_repeats_itself() {
+        let noisy = |seed: u64| {
+            let mut cfg = ContinuousConfig::default();
+            cfg.mapping.localization_noise_m = 0.1;
+            cfg.mapping.localization_noise_rad = 0.05;
+            let scene = Arc::new(generate_cluttered(20.0, 0.1, 1));
+            let starts = [Pos::new(17, 2), Pos::new(17, 3), Pos::new(18, 2)];
+            let mut w =
+                ContinuousWorld::new(scene, &starts, ScenarioConfig::default(), cfg, seed).unwrap();
+            for _ in 0..40 {
+                w.step(&[(0.0, 0.0); 3]);
+            }
+            w.map(0).probabilities()
+        };
+        let mut exact = world(1);
+        for _ in 0..40 {
+            exact.step(&[(0.0, 0.0); 3]);
+        }
+        let occupied = |p: &[f64]| p.iter().filter(|&&v| v > 0.65).count();
+        let (a, b, truth) = (noisy(1), noisy(1), exact.map(0).probabilities());
+        assert_eq!(a, b, "same seed, same map");
+        assert_ne!(a, truth);
+        // Ten scans from a standing robot at jittered poses smear each surface over the pixels
+        // around it: the map differs from the exact one but keeps its walls (the occupied
+        // count stays of the same order).
+        let (n, m) = (occupied(&a), occupied(&truth));
+        assert!(n > m / 4 && n < m * 4, "{n} vs {m}");
+        let mut bad = ContinuousConfig::default();
+        bad.mapping.localization_noise_m = f64::NAN;
+        let e = bad.validate().unwrap_err().to_string();
+        assert!(e.contains("mapping.localization_noise_m"), "{e}");
     }
 
     #[test]

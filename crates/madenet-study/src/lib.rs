@@ -44,8 +44,7 @@ pub fn run_study(
         message: e.to_string(),
     };
     std::fs::create_dir_all(out).map_err(io)?;
-    let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
-    let _lock = prepare_out(out, "study.toml", &cfg_text, fresh)?;
+    let _lock = prepare_out(out, "study.toml", cfg, "", fresh)?;
     let started = std::time::Instant::now();
     let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
@@ -58,32 +57,35 @@ pub fn run_study(
     Ok((report, outcomes))
 }
 
-/// Readies output folder `out` for a study whose config (as text) is saved there as
-/// `cfg_name`: with `fresh`, earlier trials are discarded; otherwise trials recorded by another
-/// configuration are refused (the folder is not touched) and those of this one kept. The folder
-/// is this run's while the returned lock lives (a second run on it is refused), and the temporary
-/// files of an interrupted write are removed.
-pub(crate) fn prepare_out(
+/// Readies output folder `out` for a study whose config is saved there as `cfg_name` (its TOML
+/// after the comment lines `header`): with `fresh`, earlier trials are discarded; otherwise
+/// trials recorded by another configuration are refused (the folder is not touched) and those
+/// of this one kept. A saved config is the same when it reads as `cfg` (comments aside, and
+/// fields added to the config since it was saved taking their defaults). The folder is this
+/// run's while the returned lock lives (a second run on it is refused), and the temporary files
+/// of an interrupted write are removed.
+pub(crate) fn prepare_out<T: serde::Serialize + serde::de::DeserializeOwned>(
     out: &Path,
     cfg_name: &str,
-    cfg_text: &str,
+    cfg: &T,
+    header: &str,
     fresh: bool,
 ) -> Result<madenet_files::FolderLock, StudyError> {
     let cfg_path = out.join(cfg_name);
+    let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
+    let same = |old: &str| {
+        toml::from_str::<T>(old)
+            .ok()
+            .and_then(|c| toml::to_string(&c).ok())
+            .is_some_and(|t| t == cfg_text)
+    };
     let check = || -> Result<(), StudyError> {
         if !fresh && cfg_path.exists() {
             let old = std::fs::read_to_string(&cfg_path).map_err(|e| StudyError::File {
                 path: cfg_path.display().to_string(),
                 message: e.to_string(),
             })?;
-            // Comment lines do not make another study (an earlier run's grid twin had none).
-            let body = |t: &str| -> String {
-                t.lines()
-                    .filter(|l| !l.starts_with('#'))
-                    .collect::<Vec<_>>()
-                    .join("\n")
-            };
-            if body(&old) != body(cfg_text) && (out.join("trials.csv").exists()) {
+            if !same(&old) && out.join("trials.csv").exists() {
                 return Err(StudyError::File {
                     path: out.display().to_string(),
                     message: "holds results of a different study configuration: choose another output folder or start afresh (--fresh)".into(),
@@ -112,6 +114,46 @@ pub(crate) fn prepare_out(
             let _ = std::fs::remove_file(out.join(f));
         }
     }
-    runner::write_atomic(&cfg_path, cfg_text.as_bytes())?;
+    runner::write_atomic(&cfg_path, format!("{header}{cfg_text}").as_bytes())?;
     Ok(lock)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_saved_before_a_field_was_added_resumes_and_another_study_is_refused() {
+        let dir = std::env::temp_dir().join(format!("madenet-prepare-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let cfg = ScaleConfig::continuous_default();
+        // As an earlier madenet saved it: without a field added since, and with a comment.
+        let text = toml::to_string(&cfg).unwrap();
+        let old: String = text
+            .lines()
+            .filter(|l| !l.starts_with("localization_noise_m"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_ne!(old, text);
+        std::fs::write(dir.join("scale.toml"), format!("# saved earlier\n{old}")).unwrap();
+        std::fs::write(dir.join("trials.csv"), "method\n").unwrap();
+        let lock = prepare_out(&dir, "scale.toml", &cfg, "", false).expect("the same study");
+        drop(lock);
+        // Saved now as the whole config.
+        assert_eq!(
+            std::fs::read_to_string(dir.join("scale.toml")).unwrap(),
+            text
+        );
+        let other = ScaleConfig {
+            seeds: cfg.seeds + 1,
+            ..cfg.clone()
+        };
+        let Err(e) = prepare_out(&dir, "scale.toml", &other, "", false) else {
+            panic!("another study was taken for this one");
+        };
+        let e = e.to_string();
+        assert!(e.contains("different study configuration"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -493,8 +493,7 @@ pub fn run_scale(
         message: e.to_string(),
     };
     std::fs::create_dir_all(out).map_err(io)?;
-    let cfg_text = toml::to_string(cfg).map_err(|e| StudyError::Other(e.to_string()))?;
-    let _lock = crate::prepare_out(out, "scale.toml", &cfg_text, fresh)?;
+    let _lock = crate::prepare_out(out, "scale.toml", cfg, "", fresh)?;
     let started = std::time::Instant::now();
     // A continuous study runs its grid twin first (`grid/`; fast), in one progress count.
     let twin = match cfg.world {
@@ -503,8 +502,8 @@ pub fn run_scale(
             let dir = out.join("grid");
             std::fs::create_dir_all(&dir).map_err(io)?;
             // `grid/` stays this run's until the report is written, as `out` does.
-            let twin_text = format!("# The grid twin of ../scale.toml: its trials on each scene's 1 m cells\n# (the paper's discretization) in the grid world, in timesteps, not seconds.\n{cfg_text}");
-            let lock = crate::prepare_out(&dir, "scale.toml", &twin_text, fresh)?;
+            let header = "# The grid twin of ../scale.toml: its trials on each scene's 1 m cells\n# (the paper's discretization) in the grid world, in timesteps, not seconds.\n";
+            let lock = crate::prepare_out(&dir, "scale.toml", cfg, header, fresh)?;
             let twin = cfg.grid_twin(&planned);
             let runs: Vec<Planned> = twin.iter().map(|p| p.planned.clone()).collect();
             let n = planned.len();
