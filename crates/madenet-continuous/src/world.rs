@@ -221,10 +221,11 @@ impl ContinuousWorld {
                 }
             }
         }
-        let mut explorable = vec![false; coarse_truth.len()];
+        // Reachable on the true cells from a start; explorable where a footprint can also drive.
+        let mut reachable = vec![false; coarse_truth.len()];
         for &p in &starts[..n] {
             if coarse_truth.get(p) == Occupancy::Free {
-                for (e, r) in explorable.iter_mut().zip(reachable_from_with(
+                for (e, r) in reachable.iter_mut().zip(reachable_from_with(
                     &coarse_truth,
                     p,
                     scenario.movement,
@@ -233,9 +234,11 @@ impl ContinuousWorld {
                 }
             }
         }
-        for (e, &d) in explorable.iter_mut().zip(&enterable) {
-            *e &= d;
-        }
+        let explorable: Vec<bool> = reachable
+            .iter()
+            .zip(&enterable)
+            .map(|(&r, &d)| r && d)
+            .collect();
         let explorable_count = explorable.iter().filter(|&&e| e).count();
         // A footprint wider than every passage around the starts: nothing to do but wait for
         // the time cap. Refused, naming the field.
@@ -246,19 +249,7 @@ impl ContinuousWorld {
                 .any(|p| p.row as usize * w + p.col as usize == k)
         };
         let beyond_starts = |v: &[bool]| v.iter().enumerate().any(|(k, &e)| e && !is_start(k));
-        let mut free_beyond = vec![false; coarse_truth.len()];
-        for &p in &starts[..n] {
-            if coarse_truth.get(p) == Occupancy::Free {
-                for (f, r) in free_beyond.iter_mut().zip(reachable_from_with(
-                    &coarse_truth,
-                    p,
-                    scenario.movement,
-                )) {
-                    *f |= r;
-                }
-            }
-        }
-        if beyond_starts(&free_beyond) && !beyond_starts(&explorable) {
+        if beyond_starts(&reachable) && !beyond_starts(&explorable) {
             let clearance = cfg.robot.radius + cfg.planner.safety_margin;
             return Err(ContinuousError::Scenario(format!(
                 "field `robot.radius`: a footprint of radius {} m (with `planner.safety_margin` {} m) cannot leave the start cells: every passage from them is narrower than {:.2} m",

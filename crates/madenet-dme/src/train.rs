@@ -253,7 +253,7 @@ impl DmeTrainConfig {
             return bad("validation_csp", "CSPs lie in [0, 1]");
         }
         // Maps, densities and the scenario are checked as MADE-Net's are.
-        self.learn_view().validate()?;
+        self.learn_view().check_fields()?;
         harness::check_memory(&self.memory_needs(), harness::physical_memory())
     }
 

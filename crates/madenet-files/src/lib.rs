@@ -65,7 +65,9 @@ impl AtomicFile {
     pub fn create(path: &Path) -> io::Result<AtomicFile> {
         let inner = match Target::resolve(path)? {
             Target::Replace(target) => {
-                let tmp = temp_builder("").tempfile_in(parent_dir(&target))?;
+                let tmp = temp_builder("")
+                    .tempfile_in(parent_dir(&target))
+                    .map_err(without_temp_path)?;
                 // Held while it is written, so that [`lock_folder`]'s cleanup of interrupted
                 // writes leaves it alone (best effort: not every file system has `flock`).
                 let _ = tmp.as_file().try_lock();
@@ -112,6 +114,16 @@ impl Write for AtomicFile {
             Inner::Replace { tmp, .. } => tmp.as_file_mut().flush(),
             Inner::Stream(f) => f.flush(),
         }
+    }
+}
+
+/// `e` without the `… at path ".madenet-XXXXXX"` tempfile appends: callers name the target,
+/// the temporary file is none of the user's business.
+fn without_temp_path(e: io::Error) -> io::Error {
+    let text = e.to_string();
+    match text.split_once(" at path ") {
+        Some((cause, _)) => io::Error::new(e.kind(), cause.to_string()),
+        None => e,
     }
 }
 

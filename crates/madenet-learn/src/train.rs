@@ -240,8 +240,15 @@ impl TrainConfig {
         harness::parse_config(path, text, Self::validate)
     }
 
-    /// Checks every field; the message names the field.
+    /// Checks every field and the memory the sizes ask for ([`Self::memory_needs`]); the
+    /// message names the field.
     pub fn validate(&self) -> Result<(), String> {
+        self.check_fields()?;
+        harness::check_memory(&self.memory_needs(), harness::physical_memory())
+    }
+
+    /// Checks every field (not the memory: DME-DRL borrows these checks for its own sizes).
+    pub fn check_fields(&self) -> Result<(), String> {
         if self.method == Method::MadeNetRollout {
             return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", crate::rollout_train::METHOD));
         }
@@ -366,7 +373,7 @@ impl TrainConfig {
                 "field `validation_maps`: must be at least 1 when validate_every > 0".into(),
             );
         }
-        harness::check_memory(&self.memory_needs(), harness::physical_memory())
+        Ok(())
     }
 
     /// The allocation that grows with the sizes at once: a minibatch of sequences, for the

@@ -55,7 +55,7 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
             Duration::from_secs(20),
         )
         .unwrap();
-        let result = run_ground_with(real, world_bus, timeouts, None, None, |_| {});
+        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {});
         stop.store(true, Ordering::Relaxed);
         let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
         (result, paths)

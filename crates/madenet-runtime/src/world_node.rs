@@ -95,10 +95,10 @@ pub fn run_world_with<T: Transport>(
     mut world: World,
     transport: T,
     timeouts: Timeouts,
-    on_step: impl FnMut(&World),
+    mut on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
-    run_ground_with(world, transport, timeouts, None, None, on_step)
+    run_ground_with(world, transport, timeouts, None, None, |w, _| on_step(w))
 }
 
 /// Refuses a robot whose hello carries another scenario digest than this world's (both known).
@@ -133,7 +133,7 @@ impl Heartbeat {
             return Ok(());
         }
         for &to in &self.to {
-            match mb.send(&Envelope::new(step, Node::World, to, Body::Waiting)) {
+            match mb.send_uncounted(&Envelope::new(step, Node::World, to, Body::Waiting)) {
                 Ok(()) | Err(RuntimeError::Gone { .. }) => {}
                 Err(e) => return Err(e),
             }
@@ -158,7 +158,8 @@ impl Heartbeat {
         let deadline = Instant::now() + wait;
         loop {
             let left = deadline.saturating_duration_since(Instant::now());
-            if let Some(e) = mb.try_take(left.min(self.every), &wanted)? {
+            let due = self.every.saturating_sub(self.last.elapsed());
+            if let Some(e) = mb.try_take(left.min(due), &wanted)? {
                 return Ok(Some(e));
             }
             if Instant::now() >= deadline {
@@ -167,6 +168,23 @@ impl Heartbeat {
             self.beat(mb, step)?;
         }
     }
+}
+
+/// Runs `f` with a `waiting` callback that beats when due (for work that blocks: a ground's
+/// step, the caller's pace); a failed beat is returned after `f`.
+fn with_beats<T: Transport, R>(
+    heartbeat: &mut Heartbeat,
+    mb: &mut Mailbox<T>,
+    step: u64,
+    f: impl FnOnce(&mut dyn FnMut()) -> R,
+) -> Result<R, RuntimeError> {
+    let mut failed = None;
+    let r = f(&mut || {
+        if let Err(e) = heartbeat.beat(mb, step) {
+            failed.get_or_insert(e);
+        }
+    });
+    failed.map_or(Ok(r), Err)
 }
 
 /// What a picture of a timestep draws besides the ground: what each robot shows, and the pairs
@@ -185,7 +203,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
     timeouts: Timeouts,
     scenario: Option<u64>,
     mut show: Option<ShowFn<'_, G>>,
-    mut on_step: impl FnMut(&G),
+    mut on_step: impl FnMut(&G, &mut dyn FnMut()),
 ) -> Result<LockstepResult, RuntimeError> {
     let n = world.robots();
     let me = Node::World;
@@ -225,8 +243,11 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         ))
     };
     // The radio's exchanges of `step` (pictures only).
-    let exchanges = |mb: &mut Mailbox<T>, step: u64| -> Result<Vec<(usize, usize)>, RuntimeError> {
-        let e = mb.try_take(timeouts.peer, |e| {
+    let exchanges = |mb: &mut Mailbox<T>,
+                     heartbeat: &mut Heartbeat,
+                     step: u64|
+     -> Result<Vec<(usize, usize)>, RuntimeError> {
+        let e = heartbeat.try_take(mb, step, timeouts.peer, |e| {
             e.step == step && e.from == Node::Radio && matches!(e.body, Body::Exchanges(_))
         })?;
         Ok(match e.map(|e| e.body) {
@@ -270,7 +291,9 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         }
         if present.iter().all(|&p| !p) {
             // Nobody to wait for: give a restarted robot the time to say hello, then give up.
-            let hello = mb.try_take(timeouts.node, |e| matches!(e.body, Body::Hello { .. }))?;
+            let hello = heartbeat.try_take(&mut mb, step, timeouts.node, |e| {
+                matches!(e.body, Body::Hello { .. })
+            })?;
             if let Some(e) = &hello {
                 check_hello(me, scenario, e)?;
             }
@@ -296,8 +319,9 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         }
         heartbeat.sent();
         if let Some(show) = show.as_mut() {
-            let pairs = exchanges(&mut mb, step)?;
+            let pairs = exchanges(&mut mb, &mut heartbeat, step)?;
             show(&world, &shown, &pairs);
+            heartbeat.beat(&mut mb, step)?;
         }
         // Every present robot's move by one deadline; an absent robot's only if already here.
         let deadline = Instant::now() + timeouts.node;
@@ -344,26 +368,22 @@ pub fn run_ground_with<G: Ground, T: Transport>(
                 });
             }
         }
-        let mut beat_failed = None;
-        world
-            .step(&moves, &mut || {
-                if let Err(e) = heartbeat.beat(&mut mb, step) {
-                    beat_failed.get_or_insert(e);
-                }
-            })
-            .map_err(|what| RuntimeError::Ground { node: me, what })?;
-        if let Some(e) = beat_failed {
-            return Err(e);
-        }
+        with_beats(&mut heartbeat, &mut mb, step, |waiting| {
+            world.step(&moves, waiting)
+        })?
+        .map_err(|what| RuntimeError::Ground { node: me, what })?;
         world.record(&mut recorder);
         positions.push(world.positions());
-        on_step(&world);
+        // The caller may take its time here (a pace): the robots hear the world meanwhile.
+        with_beats(&mut heartbeat, &mut mb, step, |waiting| {
+            on_step(&world, waiting)
+        })?;
     }
     let step = world.t() as u64;
     if let Some(show) = show.as_mut() {
         // The last picture's exchanges: the radio's for a timestep that will not be played.
         send_contacts(&mut mb, &mut world, &present, step)?;
-        let pairs = exchanges(&mut mb, step)?;
+        let pairs = exchanges(&mut mb, &mut heartbeat, step)?;
         show(&world, &shown, &pairs);
     }
     for to in (0..n).map(Node::Robot).chain([Node::Radio]) {

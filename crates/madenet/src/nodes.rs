@@ -324,7 +324,9 @@ pub fn world(a: WorldArgs) -> Result<()> {
         a.pictures.any().then_some(&mut draw);
     let scenario = Some(scenario_of(&spec));
     serve_world(&a, &spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w| on_step(w))
+        madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w, waiting| {
+            on_step(w, waiting)
+        })
     })?;
     if let Some(e) = failed {
         return Err(e);
@@ -365,7 +367,9 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
     .context("--ros2-robots")?;
     let scenario = Some(scenario_of(spec));
     serve_world(a, spec, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g| on_step(g))
+        madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g, waiting| {
+            on_step(g, waiting)
+        })
     })
 }
 
@@ -382,19 +386,29 @@ fn serve_world(
     run: impl FnOnce(
         &ZenohBus,
         Timeouts,
-        &mut dyn FnMut(&dyn madenet_runtime::Ground),
+        &mut dyn FnMut(&dyn madenet_runtime::Ground, &mut dyn FnMut()),
     ) -> Result<LockstepResult, madenet_runtime::RuntimeError>,
 ) -> Result<()> {
     let bus = a.node.bus(Node::World, spec.starts.len())?;
     let progress = a.node.progress;
     let pace = Duration::from_millis(a.pace_ms);
     let mut last = std::time::Instant::now();
-    let r = run(&bus, a.node.timeouts(), &mut |w| {
+    let r = run(&bus, a.node.timeouts(), &mut |w, waiting| {
         if progress {
             let explored = w.explored_fraction();
             eprintln!("progress step={} explored={explored:.3}", w.t());
         }
-        std::thread::sleep(pace.saturating_sub(last.elapsed()));
+        // The pace in slices, the robots told the world is still there (a pace may be longer
+        // than they wait in silence).
+        let until = last + pace;
+        loop {
+            let left = until.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            std::thread::sleep(left.min(Duration::from_millis(100)));
+            waiting();
+        }
         last = std::time::Instant::now();
     })?;
     bus.close();

@@ -143,18 +143,19 @@ fn run_dir_and_config<C: LearnerConfig>(
 
 pub fn run(a: TrainArgs) -> Result<()> {
     // Which learner: --method, else the config's (the run's own on --resume), else MADE-Net.
-    let source = a
-        .resume
-        .as_ref()
-        .map(|d| d.join("config.toml"))
-        .or_else(|| a.config.clone());
-    let source: Source = match source {
-        Some(p) if p.exists() => {
+    // A run directory without config.toml is reported by `run_dir_and_config`; a --config that
+    // cannot be read is an error here.
+    let path = match (&a.resume, &a.config) {
+        (Some(dir), _) => Some(dir.join("config.toml")).filter(|p| p.exists()),
+        (None, config) => config.clone(),
+    };
+    let source: Source = match path {
+        Some(p) => {
             let text = madenet_files::read_text_capped(&p, madenet_files::InputKind::Config)
                 .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
             Some((p, text))
         }
-        _ => None,
+        None => None,
     };
     let from_file = match &source {
         Some((p, text)) => method_of(p, text)?,

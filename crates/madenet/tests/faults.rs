@@ -358,3 +358,24 @@ fn robots_wait_through_a_long_absence_and_notice_a_killed_world_soon() {
         run.lines("robot 0")
     );
 }
+
+#[test]
+fn a_world_paced_slower_than_the_robots_wait_in_silence_keeps_them() {
+    // --pace-ms 3000 with --timeout-s 2: each timestep lasts 3 s, longer than the 2 s a node
+    // waits for the world in silence (2 × 0.5 s + 1 s); the world tells them it is there.
+    let mut run = Run::new("pace");
+    run.start_all("3000", &[]);
+    run.wait_for("world", |l| l.starts_with("progress step=3 "));
+    for label in ["robot 0", "robot 1", "robot 2", "radio"] {
+        let errors: Vec<String> = run
+            .lines(label)
+            .into_iter()
+            .filter(|l| l.contains("error") || l.contains("nothing arrived"))
+            .collect();
+        assert!(errors.is_empty(), "{label}: {errors:?}");
+        assert!(
+            run.exits_within(label, Duration::from_millis(50)).is_none(),
+            "{label} ended"
+        );
+    }
+}

@@ -783,6 +783,17 @@ fn devices_and_fifos_as_inputs_are_bounded() {
     ]);
     writer.join().unwrap();
     check_error("train config fifo", &out, &["train.toml", "`hidden`"]);
+    // A --config that is not there is an error, not the defaults.
+    let missing = dir.join("no-such-config.toml");
+    let out = madenet(&[
+        "train".into(),
+        "--config".into(),
+        missing.display().to_string(),
+        "--out".into(),
+        dir.join("run-missing").display().to_string(),
+    ]);
+    check_error("train config missing", &out, &["no-such-config.toml"]);
+    assert!(!dir.join("run-missing").exists(), "nothing written");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
