@@ -9,7 +9,7 @@ use burn::tensor::Device;
 use madenet_dme::maddpg::Maddpg;
 use madenet_dme::policy::DmePolicy;
 use madenet_dme::train::{validate, DmeTrainConfig, Model};
-use madenet_learn::train::validate_policy;
+use madenet_learn::scenario;
 use madenet_sim::PolicyRegistry;
 use std::sync::{Arc, RwLock};
 
@@ -37,13 +37,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .sampling(rng),
         )
     });
-    let (steps, _, done, n) = validate_policy(&cfg.learn_view(), &registry, "sampling")?;
+    let maps = cfg.validation_maps()?;
+    let v = scenario::validate(&maps, &cfg.validation_csp, &registry, "sampling")?;
+    let (steps, done, n) = (v.mean_steps, v.completed, v.trials);
     println!("initial actors, sampling: {steps:.1} mean steps, {done}/{n} complete");
     if let Some(dir) = std::env::args().nth(1) {
         let model = Model::load(std::path::Path::new(&dir))?;
         let mut registry = PolicyRegistry::default();
         model.register(&mut registry, "model", "the given model");
-        let (steps, _, done, n) = validate_policy(&cfg.learn_view(), &registry, "model")?;
+        let v = scenario::validate(&maps, &cfg.validation_csp, &registry, "model")?;
+        let (steps, done, n) = (v.mean_steps, v.completed, v.trials);
         println!("{dir}: {steps:.1} mean steps, {done}/{n} complete");
     }
     Ok(())

@@ -21,8 +21,13 @@ pub fn model() -> Result<Model, TrainError> {
     Model::from_bytes(MODEL_TOML, &ACTORS, "models/dme-drl/model.toml")
 }
 
-/// Registers the shipped model as policy `dme-drl`.
-pub fn register(registry: &mut PolicyRegistry) -> Result<(), TrainError> {
-    model()?.register(registry, NAME, ABOUT);
-    Ok(())
+/// Registers the shipped model as policy `dme-drl`, loaded when a trial first asks for it.
+pub fn register(registry: &mut PolicyRegistry) {
+    registry.register_lazy(
+        NAME,
+        ABOUT,
+        || model().map_err(|e| e.to_string()),
+        |m: &Model, ctx| m.check(ctx.height, ctx.width, ctx.config),
+        |m, ctx| m.policy(NAME, ctx.robot),
+    );
 }

@@ -25,8 +25,10 @@ use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
-use madenet_learn::harness::{self, replace_dir, Clock, Logs, Seen};
-use madenet_learn::train::{io_err, training_scenario, validate_policy};
+use madenet_agent::Policy;
+use madenet_learn::error::io_err;
+use madenet_learn::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
+use madenet_learn::scenario::{self, ScenarioDraw};
 use madenet_learn::{TrainConfig, TrainError};
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -168,7 +170,7 @@ impl DmeTrainConfig {
                 ),
             );
         }
-        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        let side = madenet_learn::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("episodes", self.episodes, 1, 10_000_000),
             ("map_height", self.map_height as u64, 1, side),
@@ -295,6 +297,24 @@ impl DmeTrainConfig {
             .with_history(self.history)
             .with_critic_history(self.critic_history)
             .with_hidden(self.hidden)
+    }
+
+    /// How this run draws its training and validation scenarios: as MADE-Net's runs do, so the
+    /// two methods train and validate on the same generated maps.
+    pub fn scenario_draw(&self) -> ScenarioDraw {
+        ScenarioDraw::new(
+            self.map_height,
+            self.map_width,
+            (self.density_min, self.density_max),
+            self.scenario.num_robots,
+            self.scenario.movement,
+        )
+    }
+
+    /// The run's fixed validation maps ([`ScenarioDraw::validation_maps`]).
+    pub fn validation_maps(&self) -> Result<Vec<TrialSpec>, TrainError> {
+        self.scenario_draw()
+            .validation_maps(self.seed, self.validation_maps, &self.scenario)
     }
 
     /// The fields MADE-Net's trainer shares with this one (map generation, validation set), as
@@ -503,23 +523,6 @@ impl Replay {
     }
 }
 
-/// What [`train`] reports after each episode (for a progress bar).
-#[derive(Clone, Debug)]
-pub struct Progress {
-    /// Episodes played so far, this one included.
-    pub episode: u64,
-    /// Episodes the run is to play (`episodes` of the config).
-    pub episodes: u64,
-    /// MADDPG updates so far.
-    pub updates: u64,
-    /// The episode's reward, summed over robots and timesteps.
-    pub reward: f64,
-    /// Timesteps the episode lasted.
-    pub steps: usize,
-    /// Mean steps of the latest validation (`None` before the first).
-    pub validation_steps: Option<f64>,
-}
-
 /// Counters saved with a checkpoint.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct State {
@@ -625,7 +628,7 @@ impl Model {
             });
         }
         let min_side = madenet_learn::MIN_MAP_SIDE as u64;
-        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        let side = madenet_learn::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("map_height", info.map_height as u64, min_side, side),
             ("map_width", info.map_width as u64, min_side, side),
@@ -693,23 +696,22 @@ impl Model {
         Ok(())
     }
 
-    /// Registers this model as policy `name` (greedy actors, robot i runs actor i).
+    /// Robot `robot`'s policy under name `name`: its greedy actor (robot i runs actor i).
+    pub fn policy(&self, name: &str, robot: usize) -> Box<dyn Policy> {
+        let actor = Arc::clone(&self.actors[robot.min(self.actors.len() - 1)]);
+        Box::new(DmePolicy::new(name, robot, actor, self.info.history))
+    }
+
+    /// Registers this model as policy `name` ([`Model::policy`]); it refuses scenarios it was
+    /// not built for ([`Model::check`]).
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
-        let actors = self.actors.clone();
-        let history = self.info.history;
+        let (model, checker) = (self.clone(), self.clone());
         let owned = name.to_string();
-        let info = Model {
-            info: self.info.clone(),
-            actors: Vec::new(),
-        };
         registry.register_checked(
             name,
             about,
-            move |ctx| info.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| {
-                let actor = Arc::clone(&actors[ctx.robot.min(actors.len() - 1)]);
-                Box::new(DmePolicy::new(&owned, ctx.robot, actor, history))
-            },
+            move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
+            move |ctx| model.policy(&owned, ctx.robot),
         );
     }
 }
@@ -833,31 +835,79 @@ pub fn validate(
     };
     let mut registry = PolicyRegistry::default();
     model.register(&mut registry, "candidate", "the actors being trained");
-    validate_policy(&cfg.learn_view(), &registry, "candidate")
+    let v = scenario::validate(
+        &cfg.validation_maps()?,
+        &cfg.validation_csp,
+        &registry,
+        "candidate",
+    )?;
+    Ok((v.mean_steps, v.mean_team_return, v.completed, v.trials))
 }
 
-/// Trains into `run_dir` (created; if it holds a checkpoint, the run resumes from it with the
-/// saved config — `cfg`, if given, may differ from it only in `episodes` and `max_minutes`).
+/// DME-DRL as a [`Learner`] (`dme-drl`).
+pub struct DmeLearner;
+
+impl Learner for DmeLearner {
+    type Config = DmeTrainConfig;
+    const METHODS: &'static [&'static str] = &[METHOD];
+
+    fn parse_config(path: &Path, text: &str) -> Result<DmeTrainConfig, TrainError> {
+        DmeTrainConfig::from_toml_text(path, text)
+    }
+
+    fn check(cfg: &DmeTrainConfig) -> Result<(), String> {
+        cfg.validate()
+    }
+
+    fn run_fields(cfg: &DmeTrainConfig) -> RunFields {
+        RunFields {
+            episodes: cfg.episodes,
+            max_minutes: cfg.max_minutes,
+            seed: cfg.seed,
+            threads: cfg.threads,
+        }
+    }
+
+    fn set_run_fields(cfg: &mut DmeTrainConfig, f: RunFields) {
+        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
+            (f.episodes, f.max_minutes, f.seed, f.threads);
+    }
+
+    fn same_run(given: &DmeTrainConfig, saved: &DmeTrainConfig) -> bool {
+        DmeTrainConfig {
+            episodes: saved.episodes,
+            max_minutes: saved.max_minutes,
+            ..given.clone()
+        } == *saved
+    }
+
+    fn train_loop(
+        run_dir: &Path,
+        cfg: &DmeTrainConfig,
+        resuming: bool,
+        progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> Result<(), TrainError> {
+        train_loop(run_dir, cfg, resuming, progress)
+    }
+
+    fn register_model(
+        dir: &Path,
+        registry: &mut PolicyRegistry,
+        name: &str,
+        about: &str,
+    ) -> Result<(), TrainError> {
+        Model::load(dir)?.register(registry, name, about);
+        Ok(())
+    }
+}
+
+/// Trains into `run_dir` ([`harness::train`]), calling `progress` after each episode.
 pub fn train(
     run_dir: &Path,
     cfg: Option<DmeTrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    harness::run(
-        run_dir,
-        cfg,
-        DmeTrainConfig::from_toml_file,
-        DmeTrainConfig::validate,
-        |given, saved| {
-            DmeTrainConfig {
-                episodes: saved.episodes,
-                max_minutes: saved.max_minutes,
-                ..given.clone()
-            } == *saved
-        },
-        |cfg| cfg.threads,
-        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
-    )
+    harness::train::<DmeLearner>(run_dir, cfg, progress)
 }
 
 fn train_loop(
@@ -887,7 +937,7 @@ fn train_loop(
     let mut clock = Clock::start(state.wall_s);
     let params = cfg.update_params();
     let team = cfg.scenario.num_robots;
-    let learn = cfg.learn_view();
+    let draw = cfg.scenario_draw();
     // The acting actors: the policies read them, the trainer replaces them after each update.
     let acting: Vec<SharedActor> = (0..team)
         .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
@@ -902,7 +952,7 @@ fn train_loop(
     while state.episode < cfg.episodes {
         let e = state.episode;
         let seed = derive_seed(cfg.seed, "dme", e);
-        let (map, starts) = training_scenario(&learn, seed)?;
+        let (map, starts) = draw.draw(seed)?;
         let csp = stream(seed, "csp", 0).random::<f64>();
         let recorder: Recorder = Arc::new(Mutex::new(vec![None; team]));
         let mut registry = PolicyRegistry::default();
@@ -1027,12 +1077,13 @@ fn train_loop(
         }
         logs.flush()?;
         progress(&Progress {
-            episode: state.episode,
-            episodes: cfg.episodes,
+            done: state.episode,
+            total: cfg.episodes,
+            unit: "episodes",
             updates: state.updates,
-            reward,
-            steps,
             validation_steps: last_validation,
+            base_steps: None,
+            figures: vec![("reward", reward, 2), ("steps", steps as f64, 0)],
         });
         if stopping {
             break;

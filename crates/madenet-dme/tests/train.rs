@@ -9,7 +9,6 @@
 use madenet_dme::policy::{DmePolicy, Recorder};
 use madenet_dme::train::{train, DmeTrainConfig, Model};
 use madenet_dme::{sector_goals, SECTORS};
-use madenet_learn::train::training_scenario;
 use madenet_nav::Dijkstra;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use std::path::Path;
@@ -145,7 +144,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     let mut four = cfg.scenario.clone();
     four.num_robots = 4;
     assert!(model.check(20, 20, &four).unwrap_err().contains("3 robots"));
-    let (map, starts) = training_scenario(&cfg.learn_view(), 77).unwrap();
+    let (map, starts) = cfg.scenario_draw().draw(77).unwrap();
 
     // Every decision: the goal is the chosen sector's nearest frontier cell on the robot's own
     // map at decision time, and masked sectors are never chosen; between decisions the goal

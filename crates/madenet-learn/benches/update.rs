@@ -17,7 +17,6 @@ use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
 use madenet_learn::learner::{
     cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
 };
-use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
 use madenet_world::rng::stream;
@@ -26,7 +25,7 @@ use rand::RngExt;
 fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<Episode> {
     (0..n)
         .map(|k| {
-            let (map, starts) = training_scenario(cfg, 1000 + k).expect("training map");
+            let (map, starts) = cfg.scenario_draw().draw(1000 + k).expect("training map");
             let spec = TrialSpec {
                 map,
                 map_name: "bench".into(),

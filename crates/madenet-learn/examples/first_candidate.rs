@@ -1,7 +1,6 @@
 //! Debugging aid: the "always goal candidate 0" macro policy on the validation set; prints the
 //! failing trials' last steps.
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
-use madenet_learn::train::training_scenario;
 use madenet_learn::TrainConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::derive_seed;
@@ -35,7 +34,7 @@ fn main() {
         registry.register("first", "", |_| Box::new(First));
         for e in from..to {
             let seed = derive_seed(cfg.seed, &args[1], e);
-            let (map, starts) = training_scenario(&cfg, seed).unwrap();
+            let (map, starts) = cfg.scenario_draw().draw(seed).unwrap();
             let spec = TrialSpec {
                 map,
                 map_name: "t".into(),
@@ -56,7 +55,7 @@ fn main() {
         let mut per_csp = [0usize; 3];
         for m in 0..12 {
             let seed = derive_seed(cfg.seed, "validation", m);
-            let (map, starts) = training_scenario(&cfg, seed).unwrap();
+            let (map, starts) = cfg.scenario_draw().draw(seed).unwrap();
             for (k, csp) in [1.0, 0.5, 0.0].into_iter().enumerate() {
                 let spec = TrialSpec {
                     map: map.clone(),

@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p madenet-learn --example validation_reference [-- train.toml [run_dir/best]]`
 
-use madenet_learn::train::validate_policy;
+use madenet_learn::scenario;
 use madenet_learn::{Model, TrainConfig};
 use madenet_sim::PolicyRegistry;
 use std::path::Path;
@@ -20,8 +20,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Model::load(Path::new(dir))?.register(&mut registry, "model", "the given model");
         names.push("model".into());
     }
+    let maps = cfg.validation_maps()?;
     for name in names {
-        let (steps, ret, done, n) = validate_policy(&cfg, &registry, &name)?;
+        let v = scenario::validate(&maps, &cfg.validation_csp, &registry, &name)?;
+        let (steps, ret, done, n) = (v.mean_steps, v.mean_team_return, v.completed, v.trials);
         println!(
             "{name:<8} mean steps {steps:6.1}  mean team reward {ret:8.0}  completed {done}/{n}"
         );

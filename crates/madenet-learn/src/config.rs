@@ -56,6 +56,10 @@ pub enum ConfigError {
 /// it for any conv specs; this is its value at the paper's.
 pub const MIN_MAP_SIDE: usize = 12;
 
+/// The largest map side a learner trains or a grid model is built for (the paper's maps are
+/// 20; a 200 × 200 grid DEP has ≈ 5 M parameters, a 1 000 × 1 000 one would have ≈ 130 M).
+pub const MAX_TRAIN_MAP_SIDE: usize = 200;
+
 /// Number of binary channels of the map image (paper Sec. III.C.1): explored space, obstacles,
 /// observed robot positions, goal candidates.
 pub const MAP_CHANNELS: usize = 4;

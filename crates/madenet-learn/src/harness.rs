@@ -1,8 +1,8 @@
 //! The one training harness of madenet's learners (MADE-Net, MADE-Net-DT, the rollout teacher,
 //! DME-DRL): what every training run does around its own algorithm.
 //!
-//! - [`run`]: settle the run directory ([`prepare_run`]: `config.toml`, resume or not) and run
-//!   the learner's loop on a pool of the config's threads;
+//! - [`train`]: any [`Learner`] — settle the run directory ([`prepare_run`]: `config.toml`,
+//!   resume or not) and run the learner's loop on a pool of the config's threads;
 //! - [`Logs`]: `episodes.csv`, the updates log, `validation.csv` and TensorBoard events,
 //!   truncated on resume to what the checkpoint has seen, then appended together;
 //! - [`Clock`]: wall time carried across resumes, the `max_minutes` budget and the
@@ -13,7 +13,8 @@
 //!
 //! A learner keeps only what is its own: its networks, data, update and validation.
 
-use crate::train::{io_err, write_atomic, ModelInfo, TrainError};
+use crate::error::{io_err, write_atomic, TrainError};
+use crate::model::ModelInfo;
 use madenet_trainlog::{
     truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, TfEventWriter, UpdateRow,
     ValidationRow,
@@ -156,10 +157,6 @@ pub fn parse_config<C: DeserializeOwned>(
     Ok(cfg)
 }
 
-/// The largest map side a learner trains or a grid model is built for (the paper's maps are
-/// 20; a 200 × 200 grid DEP has ≈ 5 M parameters, a 1 000 × 1 000 one would have ≈ 130 M).
-pub const MAX_TRAIN_MAP_SIDE: usize = 200;
-
 /// The largest CEP joint action space |G|^|I| a learner builds (the paper's is 4³ = 64).
 pub const MAX_JOINT_ACTIONS: u64 = 1 << 16;
 
@@ -213,24 +210,124 @@ pub fn check_memory(needs: &[(String, u64)], available: Option<u64>) -> Result<(
     ))
 }
 
-/// Trains into `run_dir`: [`prepare_run`] with `load`, `validate` and `same_run`, then
-/// `train_loop(&cfg, resuming)` on a thread pool of `threads(&cfg)` workers (so a run's results
-/// depend on its config, not on the machine's core count).
-pub fn run<C: Default + Serialize + Sync>(
+/// What a training run reports after each unit of its work (an iteration, or an episode per
+/// environment), for a progress bar. One type for every learner.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Progress {
+    /// Units done so far.
+    pub done: u64,
+    /// Units the run is to do.
+    pub total: u64,
+    /// What a unit is (`"episodes"` or `"iterations"`).
+    pub unit: &'static str,
+    /// Updates so far.
+    pub updates: u64,
+    /// The latest validation's mean steps (`None` before the first).
+    pub validation_steps: Option<f64>,
+    /// The base rule's validation mean steps, for learners that improve on one.
+    pub base_steps: Option<f64>,
+    /// This unit's own figures, in display order: (name, value, decimals).
+    pub figures: Vec<(&'static str, f64, usize)>,
+}
+
+impl Progress {
+    /// The figures as one line: `name value` pairs, the updates, and the validation.
+    pub fn summary(&self) -> String {
+        let mut parts: Vec<String> = self
+            .figures
+            .iter()
+            .map(|(name, v, decimals)| format!("{name} {v:.decimals$}"))
+            .collect();
+        parts.push(format!("updates {}", self.updates));
+        if let Some(v) = self.validation_steps {
+            parts.push(match self.base_steps {
+                Some(b) => format!("val steps {v:.2} (base rule {b:.2})"),
+                None => format!("val steps {v:.1}"),
+            });
+        }
+        parts.join("  ")
+    }
+}
+
+/// The fields every training config has, which `madenet train` sets from its flags.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunFields {
+    /// The run's length in episodes (per environment).
+    pub episodes: u64,
+    /// Wall-time budget in minutes (0: none).
+    pub max_minutes: f64,
+    /// The seed of every random stream.
+    pub seed: u64,
+    /// Worker threads.
+    pub threads: usize,
+}
+
+/// The contract of a learner: its config, the methods it trains, its loop and its models. The
+/// harness runs any learner through it ([`train`]); the command line, the catalogue and the
+/// Python package need nothing else of a learner.
+pub trait Learner {
+    /// Every hyperparameter of a run (TOML; unknown fields refused).
+    type Config: Default + Clone + Serialize + DeserializeOwned + Send + Sync;
+    /// The `method` names it trains (in configs, `model.toml` and `madenet train --method`).
+    const METHODS: &'static [&'static str];
+    /// The config in `text` (read from `path`, named in errors), checked.
+    fn parse_config(path: &Path, text: &str) -> Result<Self::Config, TrainError>;
+    /// Why `cfg` cannot be trained, naming the field.
+    fn check(cfg: &Self::Config) -> Result<(), String>;
+    /// The fields every config has.
+    fn run_fields(cfg: &Self::Config) -> RunFields;
+    /// Sets the fields every config has.
+    fn set_run_fields(cfg: &mut Self::Config, fields: RunFields);
+    /// Makes `cfg` train `method` (one of [`Self::METHODS`]).
+    fn set_method(_cfg: &mut Self::Config, method: &str) -> Result<(), String> {
+        if Self::METHODS.contains(&method) {
+            Ok(())
+        } else {
+            Err(format!("`{method}` is not trained by this learner"))
+        }
+    }
+    /// Whether `given` continues the run saved with `saved` (they may differ only in the run's
+    /// length).
+    fn same_run(given: &Self::Config, saved: &Self::Config) -> bool;
+    /// The learner's own loop, on the harness's thread pool: from scratch, or from the
+    /// checkpoint in `run_dir` when `resuming`; `progress` after each unit of work.
+    fn train_loop(
+        run_dir: &Path,
+        cfg: &Self::Config,
+        resuming: bool,
+        progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> Result<(), TrainError>;
+    /// Loads the trained model folder `dir` and registers it as policy `name`.
+    fn register_model(
+        dir: &Path,
+        registry: &mut madenet_sim::PolicyRegistry,
+        name: &str,
+        about: &str,
+    ) -> Result<(), TrainError>;
+}
+
+/// Trains learner `L` into `run_dir` (created; if it holds a checkpoint, the run resumes from
+/// it with the saved config — `cfg`, if given, may differ from it only where
+/// [`Learner::same_run`] allows; `None`: the saved config, or the defaults for a new run).
+pub fn train<L: Learner>(
     run_dir: &Path,
-    cfg: Option<C>,
-    load: impl Fn(&Path) -> Result<C, TrainError>,
-    validate: impl Fn(&C) -> Result<(), String>,
-    same_run: impl Fn(&C, &C) -> bool,
-    threads: impl Fn(&C) -> usize,
-    train_loop: impl FnOnce(&C, bool) -> Result<(), TrainError> + Send,
+    cfg: Option<L::Config>,
+    progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    let (cfg, resuming) = prepare_run(run_dir, cfg, load, validate, same_run)?;
+    let (cfg, resuming) = prepare_run(
+        run_dir,
+        cfg,
+        |path| read_config(path, L::check),
+        L::check,
+        L::same_run,
+    )?;
+    // A pool of the config's threads, so a run's results depend on its config, not on the
+    // machine's core count.
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads(&cfg))
+        .num_threads(L::run_fields(&cfg).threads)
         .build()
         .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
-    pool.install(|| train_loop(&cfg, resuming))
+    pool.install(|| L::train_loop(run_dir, &cfg, resuming, progress))
 }
 
 /// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a
@@ -426,15 +523,13 @@ pub struct Seen {
 /// The logs of an episode-based run, written together: `episodes.csv`, the updates log
 /// (`U`), `validation.csv` and TensorBoard events (`episode/*`, `loss/*`, `validation/*`).
 pub struct Logs<U: UpdateLog> {
-    dir: PathBuf,
     /// `episodes.csv`.
     pub episodes: LogWriter<EpisodeRow>,
     /// The updates log (`updates.csv`).
     pub updates: LogWriter<U>,
     /// `validation.csv`.
     pub validation: LogWriter<ValidationRow>,
-    /// Created with the first scalar, so a resume that trains nothing adds no event file.
-    tb: Option<TfEventWriter>,
+    scalars: Scalars,
 }
 
 impl<U: UpdateLog> Logs<U> {
@@ -449,23 +544,51 @@ impl<U: UpdateLog> Logs<U> {
             r.episode <= seen.episodes
         })?;
         let loss_end = seen.updates + seen.first_loss_step;
-        madenet_trainlog::truncate_events(run_dir, |tag, step| match tag.split('/').next() {
+        let scalars = Scalars::open(run_dir, |tag, step| match tag.split('/').next() {
             Some("episode") => step < seen.episodes as i64,
             Some("loss") => step < loss_end as i64,
             Some("validation") => step <= seen.episodes as i64,
             _ => true,
-        })
-        .map_err(io_err(run_dir))?;
+        })?;
         Ok(Logs {
-            dir: run_dir.to_path_buf(),
             episodes: LogWriter::open(path(EpisodeRow::FILE_NAME))?,
             updates: LogWriter::open(path(U::FILE_NAME))?,
             validation: LogWriter::open(path(ValidationRow::FILE_NAME))?,
-            tb: None,
+            scalars,
         })
     }
 
     /// Adds a TensorBoard scalar `tag` = `value` at `step`.
+    pub fn scalar(&mut self, tag: &str, value: f32, step: u64) -> Result<(), TrainError> {
+        self.scalars.scalar(tag, value, step)
+    }
+
+    /// Flushes the TensorBoard events (the CSV logs are written row by row).
+    pub fn flush(&mut self) -> Result<(), TrainError> {
+        self.scalars.flush()
+    }
+}
+
+/// A run's TensorBoard scalars (`events.out.tfevents.*` in the run directory), for every
+/// learner: [`Logs`] writes its through one, an iteration-based learner uses one directly.
+pub struct Scalars {
+    dir: PathBuf,
+    /// Created with the first scalar, so a resume that trains nothing adds no event file.
+    tb: Option<TfEventWriter>,
+}
+
+impl Scalars {
+    /// Opens the scalars of `run_dir`, first dropping the recorded ones that `keep(tag, step)`
+    /// refuses (those of a run killed after its last checkpoint).
+    pub fn open(run_dir: &Path, keep: impl Fn(&str, i64) -> bool) -> Result<Self, TrainError> {
+        madenet_trainlog::truncate_events(run_dir, keep).map_err(io_err(run_dir))?;
+        Ok(Scalars {
+            dir: run_dir.to_path_buf(),
+            tb: None,
+        })
+    }
+
+    /// Adds scalar `tag` = `value` at `step`.
     pub fn scalar(&mut self, tag: &str, value: f32, step: u64) -> Result<(), TrainError> {
         if self.tb.is_none() {
             self.tb = Some(TfEventWriter::create(&self.dir).map_err(io_err(&self.dir))?);
@@ -475,7 +598,7 @@ impl<U: UpdateLog> Logs<U> {
             .map_err(io_err(&self.dir))
     }
 
-    /// Flushes the TensorBoard events (the CSV logs are written row by row).
+    /// Writes the events out.
     pub fn flush(&mut self) -> Result<(), TrainError> {
         match &mut self.tb {
             Some(tb) => tb.flush().map_err(io_err(&self.dir)),

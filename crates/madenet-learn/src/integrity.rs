@@ -16,7 +16,7 @@
 //! assert!(madenet_learn::integrity::check_digest(b"weighTs", &d).is_err());
 //! ```
 
-use crate::train::TrainError;
+use crate::error::TrainError;
 use burn::module::{Module, ModuleVisitor, Param};
 use burn::tensor::Tensor;
 

@@ -11,9 +11,14 @@
 //! * [`replay`] — episodes of primitive steps squeezed into the CEP's and DEPs' macro transitions;
 //! * [`learner`] — the updates of Eq. (5) and (6) (and MADE-Net-DT's double DRQN) on sampled
 //!   windows;
-//! * [`train`](mod@train) — the training loop, its [`TrainConfig`], logs, validation, checkpoints and resume;
-//! * [`policy`] / [`shipped`] — the DEP acting alone at execution, and the models shipped in
-//!   `models/`, registered as the policies `made-net` and `made-net-dt`.
+//! * [`train`](mod@train) — the paper's training loop ([`MadeNetLearner`]) and its [`TrainConfig`];
+//!   [`rollout_train`] the rollout teacher's;
+//! * [`harness`] — what every learner does around its algorithm: the [`Learner`] contract, run
+//!   directories and resume, [`Progress`], logs, checkpoints; [`scenario`] — the generated
+//!   training and validation scenarios and the one validator; [`error`] — [`TrainError`];
+//! * [`model`] / [`policy`] / [`shipped`] — a trained model as shipped and loaded, the DEP acting
+//!   alone at execution, and the models shipped in `models/`, registered as the policies
+//!   `made-net`, `made-net-paper`, `made-net-dt` and `made-net-any` (loaded on first use).
 //!
 //! Built on burn 0.22, whose tensors are not generic over a backend: a [`Tensor<D>`] lives on a
 //! runtime [`Device`]. [`cpu`] is burn's `flex` CPU backend; [`cpu_autodiff`] the same with
@@ -69,14 +74,17 @@ mod actions;
 pub mod agnostic;
 mod config;
 pub mod env;
+pub mod error;
 pub mod harness;
 pub mod integrity;
 pub mod learner;
+pub mod model;
 mod net;
 pub mod obs;
 pub mod policy;
 pub mod replay;
 pub mod rollout_train;
+pub mod scenario;
 pub mod shipped;
 pub mod train;
 
@@ -88,11 +96,14 @@ pub use actions::{
 pub use burn::tensor::{Bool, Device, Int, Tensor, TensorData};
 pub use config::{
     joint_action_count, joint_obs_dim_for, obs_dim_for, ConfigError, ConvSpec, MfeDims, NetConfig,
-    MAP_CHANNELS, MIN_MAP_SIDE,
+    MAP_CHANNELS, MAX_TRAIN_MAP_SIDE, MIN_MAP_SIDE,
 };
+pub use error::TrainError;
+pub use harness::{Learner, Progress};
+pub use model::{Method, Model, ModelInfo};
 pub use net::{LayerShape, LstmState, QNet};
 pub use policy::DepPolicy;
-pub use train::{train, Method, Model, Progress, TrainConfig, TrainError};
+pub use train::{train, MadeNetLearner, TrainConfig};
 
 /// burn's `flex` CPU device, without autodiff (acting, evaluation, target networks).
 ///

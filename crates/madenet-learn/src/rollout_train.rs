@@ -33,19 +33,18 @@
 //! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
-use crate::harness::{self, replace_dir, Clock};
+use crate::error::{write_atomic, TrainError};
+use crate::harness::{self, replace_dir, Clock, Learner, Progress, RunFields};
 use crate::learner::adam_step;
+use crate::model::{Method, Model, ModelInfo, NetConfigToml};
 use crate::obs::{action_mask, pack_bits, unpack_bits, Observation};
-use crate::train::{write_atomic, Method, Model, ModelInfo, NetConfigToml, TrainError};
+use crate::scenario::{validate, ScenarioDraw};
 use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::{Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
-use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
-use madenet_map::paper::Corner;
-use madenet_map::{OccGrid, Pos};
 use madenet_sim::rollout::candidate_values_within;
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
@@ -57,7 +56,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// The `method` of this learner's config and `model.toml`.
-pub const METHOD: &str = "made-net-rollout";
+pub const METHOD: &str = Method::MadeNetRollout.name();
 
 /// The futures the teacher scores candidates in ([`RolloutTrainConfig::futures`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -239,7 +238,7 @@ impl RolloutTrainConfig {
             (
                 self.map_side_max == 0
                     || (self.map_side_max >= self.map_height
-                        && self.map_side_max <= harness::MAX_TRAIN_MAP_SIDE
+                        && self.map_side_max <= crate::MAX_TRAIN_MAP_SIDE
                         && self.map_height == self.map_width),
                 "map_side_max",
                 "0, or in map_height..=200 with square maps (map_height = map_width)",
@@ -274,8 +273,8 @@ impl RolloutTrainConfig {
             (
                 self.map_height >= crate::MIN_MAP_SIDE
                     && self.map_width >= crate::MIN_MAP_SIDE
-                    && self.map_height <= harness::MAX_TRAIN_MAP_SIDE
-                    && self.map_width <= harness::MAX_TRAIN_MAP_SIDE,
+                    && self.map_height <= crate::MAX_TRAIN_MAP_SIDE
+                    && self.map_width <= crate::MAX_TRAIN_MAP_SIDE,
                 "map_height/map_width",
                 "must be in 12..=200",
             ),
@@ -462,46 +461,6 @@ impl RolloutTrainConfig {
     }
 }
 
-/// One scenario drawn from `seed`: a generated map at an obstacle fraction in
-/// `density_min..density_max` and the team's start cells — a shared corner (kept free by the
-/// generator) with probability `corner_start_prob`, else the free cells nearest (by moves) to a
-/// random free cell. Training, validation and held-out sets differ only in their seeds.
-pub fn generated_scenario(
-    height: usize,
-    width: usize,
-    density: (f64, f64),
-    team: usize,
-    corner_start_prob: f64,
-    movement: madenet_map::Movement,
-    seed: u64,
-) -> Result<(OccGrid, Vec<Pos>), TrainError> {
-    let mut rng = stream(seed, "scenario", 0);
-    let corner = (team <= 3 && rng.random::<f64>() < corner_start_prob)
-        .then(|| Corner::ALL[rng.random_range(0..4)]);
-    let keep_free = corner.map_or(Vec::new(), |c| {
-        c.start_cells(height, width)[..team].to_vec()
-    });
-    let gen = GeneratorConfig {
-        height,
-        width,
-        density_min: density.0,
-        density_max: density.1,
-        keep_free: keep_free.clone(),
-    };
-    let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), movement)
-        .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
-    if !keep_free.is_empty() {
-        return Ok((map, keep_free));
-    }
-    random_starts(&map, team, movement, derive_seed(seed, "starts", 0))
-        .map(|starts| (map, starts))
-        .ok_or_else(|| {
-            TrainError::Other(format!(
-                "generated map {seed}: fewer than {team} connected free cells"
-            ))
-        })
-}
-
 /// Episode `index`'s trial spec (policy left empty): its map (square of a side up to `side_max`
 /// with a curriculum), team, starts, CSP and seed.
 fn episode_spec(
@@ -523,15 +482,18 @@ fn episode_spec(
     } else {
         cfg.scenario.num_robots
     };
-    let (map, starts) = generated_scenario(
-        height,
-        width,
-        (cfg.density_min, cfg.density_max),
-        team,
-        cfg.corner_start_prob,
-        cfg.scenario.movement,
-        seed,
-    )?;
+    let (map, starts) = ScenarioDraw {
+        corner_start_prob: cfg.corner_start_prob,
+        starts_stream: "starts",
+        ..ScenarioDraw::new(
+            height,
+            width,
+            (cfg.density_min, cfg.density_max),
+            team,
+            cfg.scenario.movement,
+        )
+    }
+    .draw(seed)?;
     let mut rng = stream(seed, "csp", 0);
     let u = rng.random::<f64>();
     let csp = if u < cfg.csp_extreme_prob / 2.0 {
@@ -904,44 +866,12 @@ fn update_agnostic(
     adam_step(net, optim, cfg.learning_rate, loss)
 }
 
-/// Mean TNS (and completions) of registry policy `policy` on the validation set: maps and
-/// seeds of their own (`validation` stream), every validation CSP; trials run in parallel and
-/// are summed in order.
-pub fn validate(
-    cfg: &RolloutTrainConfig,
-    registry: &PolicyRegistry,
-    policy: &str,
-) -> Result<(f64, usize, usize), TrainError> {
-    let specs: Vec<TrialSpec> = (0..cfg.validation_maps as u64)
+/// The validation set: maps and seeds of their own (`validation` stream), drawn as training
+/// episodes are (sides up to `map_side_max`, teams up to `team_max`).
+pub fn validation_maps(cfg: &RolloutTrainConfig) -> Result<Vec<TrialSpec>, TrainError> {
+    (0..cfg.validation_maps as u64)
         .map(|m| episode_spec(cfg, "validation", m, cfg.map_side_max))
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .flat_map(|s| {
-            cfg.validation_csp.iter().map(move |&csp| TrialSpec {
-                config: ScenarioConfig {
-                    comm_success_prob: csp,
-                    ..s.config.clone()
-                },
-                policy: policy.to_string(),
-                ..s.clone()
-            })
-        })
-        .collect();
-    let results: Vec<(usize, bool)> = specs
-        .into_par_iter()
-        .map(|s| {
-            Trial::with_registry(s, registry)
-                .map(|t| t.timed(false).run().metrics)
-                .map(|m| (m.tns, m.completed))
-        })
-        .collect::<Result<_, _>>()
-        .map_err(|e| TrainError::Other(e.to_string()))?;
-    let n = results.len();
-    Ok((
-        results.iter().map(|r| r.0 as f64).sum::<f64>() / n as f64,
-        results.iter().filter(|r| r.1).count(),
-        n,
-    ))
+        .collect()
 }
 
 /// Counters of a run, checkpointed.
@@ -973,25 +903,6 @@ struct IterationRow {
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
-}
-
-/// What [`train`] reports after each iteration.
-#[derive(Clone, Debug)]
-pub struct Progress {
-    /// DAgger iterations done.
-    pub iteration: u64,
-    /// DAgger iterations the run is to do (`iterations` of the config).
-    pub iterations: u64,
-    /// Episodes collected so far.
-    pub episodes: u64,
-    /// Robot decisions collected in this iteration.
-    pub decisions: usize,
-    /// Mean regression loss over this iteration's updates.
-    pub loss: f64,
-    /// Validation mean steps of this iteration's best variant (greedy DEP or a spread margin).
-    pub validation_steps: f64,
-    /// The base rule's validation mean, for comparison.
-    pub base_steps: f64,
 }
 
 fn model_info(
@@ -1054,28 +965,70 @@ fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainEr
     })
 }
 
-/// Trains into `run_dir` (created; a run directory with a checkpoint resumes from it with its
-/// saved config, which `cfg` may change only in `max_minutes`: the episodes per iteration define
-/// the run). `progress` is called after every iteration.
+/// The rollout teacher's learner as a [`Learner`] (`made-net-rollout`).
+pub struct RolloutLearner;
+
+impl Learner for RolloutLearner {
+    type Config = RolloutTrainConfig;
+    const METHODS: &'static [&'static str] = &[METHOD];
+
+    fn parse_config(path: &Path, text: &str) -> Result<RolloutTrainConfig, TrainError> {
+        RolloutTrainConfig::from_toml_text(path, text)
+    }
+
+    fn check(cfg: &RolloutTrainConfig) -> Result<(), String> {
+        cfg.validate()
+    }
+
+    fn run_fields(cfg: &RolloutTrainConfig) -> RunFields {
+        RunFields {
+            episodes: cfg.episodes,
+            max_minutes: cfg.max_minutes,
+            seed: cfg.seed,
+            threads: cfg.threads,
+        }
+    }
+
+    fn set_run_fields(cfg: &mut RolloutTrainConfig, f: RunFields) {
+        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
+            (f.episodes, f.max_minutes, f.seed, f.threads);
+    }
+
+    /// A resume may change only `max_minutes`: the episodes per iteration define the run.
+    fn same_run(given: &RolloutTrainConfig, saved: &RolloutTrainConfig) -> bool {
+        RolloutTrainConfig {
+            max_minutes: saved.max_minutes,
+            ..given.clone()
+        } == *saved
+    }
+
+    fn train_loop(
+        run_dir: &Path,
+        cfg: &RolloutTrainConfig,
+        resuming: bool,
+        progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> Result<(), TrainError> {
+        train_loop(run_dir, cfg, resuming, progress)
+    }
+
+    fn register_model(
+        dir: &Path,
+        registry: &mut PolicyRegistry,
+        name: &str,
+        about: &str,
+    ) -> Result<(), TrainError> {
+        Model::load(dir)?.register(registry, name, about);
+        Ok(())
+    }
+}
+
+/// Trains into `run_dir` ([`harness::train`]); `progress` is called after every iteration.
 pub fn train(
     run_dir: &Path,
     cfg: Option<RolloutTrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    harness::run(
-        run_dir,
-        cfg,
-        RolloutTrainConfig::from_toml_file,
-        RolloutTrainConfig::validate,
-        |given, saved| {
-            RolloutTrainConfig {
-                max_minutes: saved.max_minutes,
-                ..given.clone()
-            } == *saved
-        },
-        |cfg| cfg.threads,
-        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
-    )
+    harness::train::<RolloutLearner>(run_dir, cfg, progress)
 }
 
 fn train_loop(
@@ -1119,9 +1072,19 @@ fn train_loop(
     } else {
         Vec::new()
     };
+    // TensorBoard scalars (`iteration/*`, step = iteration), cut to the checkpoint as the CSV is.
+    let seen = state.iteration as i64;
+    let mut scalars = harness::Scalars::open(run_dir, |_, step| step < seen)?;
     // The base rule on the validation set: the line to beat.
     let base_registry = PolicyRegistry::builtin();
-    let (base_steps, _, _) = validate(cfg, &base_registry, &cfg.base_policy)?;
+    let validation_maps = validation_maps(cfg)?;
+    let base_steps = validate(
+        &validation_maps,
+        &cfg.validation_csp,
+        &base_registry,
+        &cfg.base_policy,
+    )?
+    .mean_steps;
     let clock = Clock::start(state.wall_s);
     let first_iteration = state.iteration;
     while state.iteration < cfg.iterations {
@@ -1192,7 +1155,13 @@ fn train_loop(
             let model = net.model(model_info(cfg, &state, None, margin));
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEP being trained");
-            let (steps, completed, trials) = validate(cfg, &registry, "candidate")?;
+            let v = validate(
+                &validation_maps,
+                &cfg.validation_csp,
+                &registry,
+                "candidate",
+            )?;
+            let (steps, completed, trials) = (v.mean_steps, v.completed, v.trials);
             tried.push((margin, steps, completed, trials));
         }
         let (margin, steps, completed, trials) = tried
@@ -1235,6 +1204,18 @@ fn train_loop(
             &w.into_inner()
                 .map_err(|e| TrainError::Other(e.to_string()))?,
         )?;
+        let r = rows.last().expect("just pushed");
+        for (tag, value) in [
+            ("iteration/loss", r.loss),
+            ("iteration/validation_steps", r.validation_steps),
+            ("iteration/greedy_steps", r.greedy_steps),
+            ("iteration/base_steps", r.base_steps),
+            ("iteration/behaviour_steps", r.behaviour_steps),
+            ("iteration/decisions", r.decisions as f64),
+        ] {
+            scalars.scalar(tag, value as f32, r.iteration)?;
+        }
+        scalars.flush()?;
         // Checkpoint: counters, dataset, net, optimizer.
         replace_dir(&ckpt, |tmp| {
             harness::write_postcard(&tmp.join("data.bin"), &data)?;
@@ -1251,15 +1232,18 @@ fn train_loop(
             &net,
             &model_info(cfg, &state, Some(steps), margin),
         )?;
-        let r = rows.last().expect("just pushed");
         progress(&Progress {
-            iteration: state.iteration,
-            iterations: cfg.iterations,
-            episodes: state.episodes,
-            decisions,
-            loss: r.loss,
-            validation_steps: steps,
-            base_steps,
+            done: state.iteration,
+            total: cfg.iterations,
+            unit: "iterations",
+            updates: state.updates,
+            validation_steps: Some(steps),
+            base_steps: Some(base_steps),
+            figures: vec![
+                ("episodes", state.episodes as f64, 0),
+                ("decisions", decisions as f64, 0),
+                ("loss", r.loss, 4),
+            ],
         });
         if clock.out_of_time(cfg.max_minutes) {
             break;

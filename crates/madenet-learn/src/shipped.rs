@@ -2,7 +2,8 @@
 //! `madenet run --policy made-net` and `madenet compare` work from any directory. How each was
 //! trained (config, command, wall time, validation) is in `models/README.md`.
 
-use crate::train::{Model, TrainError};
+use crate::error::TrainError;
+use crate::model::Model;
 use madenet_sim::PolicyRegistry;
 
 /// (policy name, description, model.toml, DEP weights).
@@ -49,10 +50,16 @@ pub fn model(name: &str) -> Result<Model, TrainError> {
     Model::from_bytes(toml, &[weights], &format!("models/{name}/model.toml"))
 }
 
-/// Registers every shipped model under its name.
-pub fn register(registry: &mut PolicyRegistry) -> Result<(), TrainError> {
+/// Registers every shipped model under its name; each is loaded when a trial first asks for
+/// it (a process that plays none loads none).
+pub fn register(registry: &mut PolicyRegistry) {
     for (name, about, _, _) in SHIPPED {
-        model(name)?.register(registry, name, about);
+        registry.register_lazy(
+            name,
+            about,
+            move || model(name).map_err(|e| e.to_string()),
+            |m: &Model, ctx| m.check(ctx.height, ctx.width, ctx.config),
+            move |m, ctx| m.policy(name, ctx.robot, ctx.config.sensing_range),
+        );
     }
-    Ok(())
 }

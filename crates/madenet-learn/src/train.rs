@@ -24,21 +24,18 @@
 //! best/                  the weights with the best validation (fewest mean steps): model.toml + *.bpk
 //! ```
 
-use crate::agnostic::{AgnosticConfig, AgnosticNet, AgnosticPolicy};
-use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode, EpisodeError};
-use crate::harness::{self, replace_dir, Clock, Logs, Seen};
+use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
+use crate::error::TrainError;
+use crate::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
+use crate::model::{Method, Model, ModelInfo, NetConfigToml};
 use crate::obs::Observation;
-use crate::policy::DepPolicy;
-use crate::{cpu, cpu_autodiff, ConfigError, NetConfig, QNet};
+use crate::scenario::{validate, ScenarioDraw};
+use crate::{cpu_autodiff, NetConfig, QNet};
 use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
-use burn::store::ModuleRecord;
-use madenet_agent::Policy;
-use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
-use madenet_map::{OccGrid, Pos};
-use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_sim::{PolicyRegistry, TrialSpec};
 use madenet_trainlog::{EpisodeRow, UpdateRow, ValidationRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
@@ -47,30 +44,6 @@ use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
-
-/// Which learner.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// CEP + DEPs trained together (Eq. 5 and 6), two environments.
-    MadeNet,
-    /// The paper's ablation: the DEPs alone on decentralized experience (double DRQN).
-    MadeNetDt,
-    /// The DEP regressed on a centralized rollout teacher's candidate values, DAgger-style
-    /// ([`crate::rollout_train`]; a departure from the paper).
-    MadeNetRollout,
-}
-
-impl Method {
-    /// The method's name in configs, `model.toml` and `madenet train --method`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::MadeNet => "made-net",
-            Method::MadeNetDt => "made-net-dt",
-            Method::MadeNetRollout => crate::rollout_train::METHOD,
-        }
-    }
-}
 
 /// Every knob of a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -187,48 +160,6 @@ impl Default for TrainConfig {
     }
 }
 
-/// Why training cannot start or go on. Messages name the file and field.
-#[derive(Debug, thiserror::Error)]
-pub enum TrainError {
-    /// A config, `model.toml`, checkpoint or weight file that cannot be parsed, holds a bad
-    /// value, or does not fit the run or model.
-    #[error("{path}: {message}")]
-    Config {
-        /// The file, or a label for a model compiled into the binary or a config given in code.
-        path: String,
-        /// What is wrong, naming the field where there is one.
-        message: String,
-    },
-    /// The network sizes cannot be built.
-    #[error("{0}")]
-    Net(#[from] ConfigError),
-    /// A file or directory could not be read, written or decoded.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file or directory (or the label of a compiled-in model's weights).
-        path: String,
-        /// The underlying error.
-        message: String,
-    },
-    /// A training episode could not be run or recorded.
-    #[error(transparent)]
-    Episode(#[from] EpisodeError),
-    /// A training log could not be read or written.
-    #[error(transparent)]
-    Log(#[from] madenet_trainlog::TrainLogError),
-    /// Anything else (thread pool, encoding, generated maps, unknown shipped model, …).
-    #[error("{0}")]
-    Other(String),
-}
-
-/// An I/O error naming `path`.
-pub fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> TrainError + '_ {
-    move |e| TrainError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    }
-}
-
 impl TrainConfig {
     /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
     pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
@@ -250,7 +181,7 @@ impl TrainConfig {
     /// Checks every field (not the memory: DME-DRL borrows these checks for its own sizes).
     pub fn check_fields(&self) -> Result<(), String> {
         if self.method == Method::MadeNetRollout {
-            return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", crate::rollout_train::METHOD));
+            return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", Method::MadeNetRollout.name()));
         }
         self.scenario
             .validate()
@@ -341,7 +272,7 @@ impl TrainConfig {
                 return Err(format!("field `{field}`: {msg}"));
             }
         }
-        let side = harness::MAX_TRAIN_MAP_SIDE as u64;
+        let side = crate::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("episodes", self.episodes, 1, 10_000_000),
             ("map_height", self.map_height as u64, 1, side),
@@ -443,52 +374,23 @@ impl TrainConfig {
     }
 }
 
-/// A training map and start cells drawn from `seed`: a generated map at a density in the
-/// configured range and the team on the free cells nearest (by moves) to a random free cell.
-pub fn training_scenario(cfg: &TrainConfig, seed: u64) -> Result<(OccGrid, Vec<Pos>), TrainError> {
-    let gen = GeneratorConfig {
-        height: cfg.map_height,
-        width: cfg.map_width,
-        density_min: cfg.density_min,
-        density_max: cfg.density_max,
-        keep_free: Vec::new(),
-    };
-    // Connected under the scenario's movement rule, so any free anchor reaches the whole team.
-    let map = generate_with_movement(&gen, derive_seed(seed, "map", 0), cfg.scenario.movement)
-        .map_err(|e| TrainError::Other(format!("map generator: {e}")))?;
-    let team = cfg.team();
-    // The anchor is the first draw of the `scenario` stream, as it always was.
-    random_starts(
-        &map,
-        team,
-        cfg.scenario.movement,
-        derive_seed(seed, "scenario", 0),
-    )
-    .map(|starts| (map, starts))
-    .ok_or_else(|| {
-        TrainError::Other(format!(
-            "training map {seed}: fewer than {team} connected free cells"
-        ))
-    })
-}
+impl TrainConfig {
+    /// How this run draws its training and validation scenarios.
+    pub fn scenario_draw(&self) -> ScenarioDraw {
+        ScenarioDraw::new(
+            self.map_height,
+            self.map_width,
+            (self.density_min, self.density_max),
+            self.team(),
+            self.scenario.movement,
+        )
+    }
 
-/// What [`train`] reports after each iteration (for a progress bar).
-#[derive(Clone, Debug)]
-pub struct Progress {
-    /// Episodes per environment done.
-    pub episode: u64,
-    /// Episodes per environment the run is to play (`episodes` of the config).
-    pub episodes: u64,
-    /// ε of the last iteration's episodes.
-    pub epsilon: f32,
-    /// Updates so far (each one step of the CEP and of every DEP; no CEP for MADE-Net-DT).
-    pub updates: u64,
-    /// Mean team return (Σ r, Eq. 8) of the last iteration's episodes, one per environment.
-    pub team_reward: f64,
-    /// Mean primitive steps of the last iteration's episodes.
-    pub steps: f64,
-    /// Last validation's mean steps, if any.
-    pub validation_steps: Option<f64>,
+    /// The run's fixed validation maps ([`ScenarioDraw::validation_maps`]).
+    pub fn validation_maps(&self) -> Result<Vec<TrialSpec>, TrainError> {
+        self.scenario_draw()
+            .validation_maps(self.seed, self.validation_maps, &self.scenario)
+    }
 }
 
 /// Counters saved with a checkpoint.
@@ -671,354 +573,79 @@ impl Nets {
     }
 }
 
-/// The trained DEPs as shipped: `model.toml` (method, net config, |I|, |G|) and the weights.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ModelInfo {
-    /// The learner that trained the DEPs.
-    pub method: Method,
-    /// The paper's (grid) DEP's sizes; absent for an agnostic model.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dep: Option<NetConfigToml>,
-    /// The agnostic DEP's sizes ([`crate::agnostic`]); absent for a grid model.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub agnostic: Option<AgnosticConfig>,
-    /// DEP weight files, one per robot group (one when shared).
-    pub deps: Vec<String>,
-    /// Each weight file's digest ([`crate::integrity::digest`]), in the order of `deps`;
-    /// written by training and checked at load. Absent in folders written before it existed
-    /// (then integrity is unchecked, and a warning says so).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub digests: Vec<String>,
-    /// Episodes per environment behind these weights.
-    pub episode: u64,
-    /// Updates behind these weights.
-    pub updates: u64,
-    /// Their validation mean steps.
-    pub validation_steps: Option<f64>,
-    /// The DEP's observation vector (default: the paper's).
-    #[serde(default)]
-    pub observation: Observation,
-    /// Whether the DEP carries its LSTM state from one decision to the next (default: yes, the
-    /// paper's); a model trained on single decisions acts from zero state at each.
-    #[serde(default = "yes")]
-    pub recurrent: bool,
-    /// Conservative acting (ours, rollout-teacher models): take the candidate the `spread` rule
-    /// takes unless the DEP values another more by at least this margin (in the model's value
-    /// units). Unset: the DEP's greedy choice alone (the paper's).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub spread_margin: Option<f32>,
-}
+/// MADE-Net and MADE-Net-DT as a [`Learner`] (`made-net`, `made-net-dt`).
+pub struct MadeNetLearner;
 
-fn yes() -> bool {
-    true
-}
+impl Learner for MadeNetLearner {
+    type Config = TrainConfig;
+    const METHODS: &'static [&'static str] = &[Method::MadeNet.name(), Method::MadeNetDt.name()];
 
-/// The DEP's [`NetConfig`] fields that vary, for `model.toml`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct NetConfigToml {
-    /// Map height H in cells ([`NetConfig::map_height`]).
-    pub map_height: usize,
-    /// Map width W in cells ([`NetConfig::map_width`]).
-    pub map_width: usize,
-    /// Team size |I| ([`NetConfig::team_size`]).
-    pub team_size: usize,
-    /// Goal candidates per robot |G| ([`NetConfig::goal_count`]).
-    pub goal_count: usize,
-    /// CONCAT as a learned layer ([`NetConfig::concat_fc`]).
-    pub concat_fc: bool,
-}
-
-/// A loaded model: the DEP nets on the plain CPU device.
-#[derive(Clone)]
-pub struct Model {
-    /// What `model.toml` says: method, sizes, provenance, how to act.
-    pub info: ModelInfo,
-    /// The grid DEPs (empty for an agnostic model).
-    pub deps: Vec<Arc<QNet>>,
-    /// The agnostic DEP, shared by every robot.
-    pub agnostic: Option<Arc<AgnosticNet>>,
-}
-
-impl Model {
-    /// Loads `dir/model.toml` and its weight files.
-    pub fn load(dir: &Path) -> Result<Self, TrainError> {
-        let path = dir.join("model.toml");
-        let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
-            .map_err(io_err(&path))?;
-        let info = Self::parse_info(&text, &path.display().to_string())?;
-        let mut files = Vec::new();
-        for f in &info.deps {
-            let p = dir.join(f);
-            files.push((
-                p.display().to_string(),
-                madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
-                    .map_err(io_err(&p))?,
-            ));
-        }
-        Self::from_parts(info, files, &path.display().to_string())
+    fn parse_config(path: &Path, text: &str) -> Result<TrainConfig, TrainError> {
+        TrainConfig::from_toml_text(path, text)
     }
 
-    /// A model from the text of its `model.toml` and its weight files' bytes, in the order of
-    /// its `deps` list (`label` names it in errors).
-    pub fn from_bytes(
-        model_toml: &str,
-        weights: &[&[u8]],
-        label: &str,
-    ) -> Result<Self, TrainError> {
-        let info = Self::parse_info(model_toml, label)?;
-        let files = info
-            .deps
-            .iter()
-            .cloned()
-            .zip(weights.iter().map(|w| w.to_vec()))
-            .collect();
-        Self::from_parts(info, files, label)
+    fn check(cfg: &TrainConfig) -> Result<(), String> {
+        cfg.validate()
     }
 
-    fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
-        let info: ModelInfo =
-            madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
-                path: label.to_string(),
-                message,
-            })?;
-        if let Some(d) = &info.dep {
-            // Sizes are checked here, by name, before any network is built from them.
-            let max_robots = madenet_world::MAX_ROBOTS;
-            let checks = [
-                (
-                    "dep.map_height",
-                    d.map_height,
-                    crate::MIN_MAP_SIDE,
-                    harness::MAX_TRAIN_MAP_SIDE,
-                ),
-                (
-                    "dep.map_width",
-                    d.map_width,
-                    crate::MIN_MAP_SIDE,
-                    harness::MAX_TRAIN_MAP_SIDE,
-                ),
-                ("dep.team_size", d.team_size, 1, max_robots),
-                ("dep.goal_count", d.goal_count, 1, 4 * max_robots),
-            ];
-            for (field, v, lo, hi) in checks {
-                if !(lo..=hi).contains(&v) {
-                    return Err(TrainError::Config {
-                        path: label.to_string(),
-                        message: format!("field `{field}`: must lie in {lo}..={hi}, got {v}"),
-                    });
-                }
-            }
-        }
-        Ok(info)
-    }
-
-    fn from_parts(
-        info: ModelInfo,
-        files: Vec<(String, Vec<u8>)>,
-        label: &str,
-    ) -> Result<Self, TrainError> {
-        if files.len() != info.deps.len() || files.is_empty() {
-            return Err(TrainError::Config {
-                path: label.to_string(),
-                message: format!(
-                    "field `deps`: {} weight files listed, {} given",
-                    info.deps.len(),
-                    files.len()
-                ),
-            });
-        }
-        let config_err = |message: String| TrainError::Config {
-            path: label.to_string(),
-            message,
-        };
-        crate::integrity::check_digests(&info.digests, &files, label)?;
-        let record = |name: &String, bytes: Vec<u8>| {
-            ModuleRecord::from_bytes(burn::tensor::Bytes::from_bytes_vec(bytes)).map_err(|e| {
-                TrainError::Io {
-                    path: name.clone(),
-                    message: e.to_string(),
-                }
-            })
-        };
-        match (&info.dep, &info.agnostic) {
-            (Some(d), None) => {
-                let cfg = NetConfig {
-                    obs_dim: info.observation.dim(d.team_size, d.goal_count),
-                    ..NetConfig::dep(d.map_height, d.map_width, d.team_size, d.goal_count)
-                        .with_concat_fc(d.concat_fc)
-                };
-                let sizes = format!(
-                    "`dep.map_height` {}, `dep.map_width` {}, `dep.team_size` {}, `dep.goal_count` {}, `dep.concat_fc` {}",
-                    d.map_height, d.map_width, d.team_size, d.goal_count, d.concat_fc
-                );
-                let mut deps = Vec::new();
-                for (name, bytes) in files {
-                    let rec = record(&name, bytes)?;
-                    let net = cfg.init(&cpu())?.try_load_record(rec);
-                    deps.push(Arc::new(crate::integrity::checked_weights(
-                        net, &name, label, &sizes,
-                    )?));
-                }
-                Ok(Model {
-                    info,
-                    deps,
-                    agnostic: None,
-                })
-            }
-            (None, Some(a)) => {
-                a.validate()
-                    .map_err(|m| config_err(format!("table `agnostic`: {m}")))?;
-                if files.len() != 1 {
-                    return Err(config_err(
-                        "field `deps`: an agnostic model has one weight file".into(),
-                    ));
-                }
-                let (name, bytes) = files.into_iter().next().expect("one file");
-                let rec = record(&name, bytes)?;
-                let net = a.init(&cpu()).map_err(config_err)?.try_load_record(rec);
-                let net =
-                    crate::integrity::checked_weights(net, &name, label, "the table `agnostic`")?;
-                Ok(Model {
-                    info,
-                    deps: Vec::new(),
-                    agnostic: Some(Arc::new(net)),
-                })
-            }
-            _ => Err(config_err(
-                "exactly one of the tables `dep` (grid network) and `agnostic` is needed".into(),
-            )),
+    fn run_fields(cfg: &TrainConfig) -> RunFields {
+        RunFields {
+            episodes: cfg.episodes,
+            max_minutes: cfg.max_minutes,
+            seed: cfg.seed,
+            threads: cfg.threads,
         }
     }
 
-    /// Why this model cannot act in a scenario, if it cannot: the networks are built for one
-    /// map size, team size and |G| (the paper trains one model per environment and team).
-    pub fn check(
-        &self,
-        height: usize,
-        width: usize,
-        scenario: &ScenarioConfig,
-    ) -> Result<(), String> {
-        let Some(d) = &self.info.dep else {
-            // The agnostic DEP plays any map size, team and |G|.
-            return Ok(());
-        };
-        let goals = scenario.goal_count_for(height * width);
-        if (height, width, scenario.num_robots, goals)
-            != (d.map_height, d.map_width, d.team_size, d.goal_count)
-        {
-            return Err(format!(
-                "the model was trained for {}×{} maps, {} robots and |G| = {}; this scenario has {height}×{width}, {} robots and |G| = {goals} (train a model for it with `madenet train`)",
-                d.map_height, d.map_width, d.team_size, d.goal_count, scenario.num_robots
-            ));
-        }
+    fn set_run_fields(cfg: &mut TrainConfig, f: RunFields) {
+        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
+            (f.episodes, f.max_minutes, f.seed, f.threads);
+    }
+
+    fn set_method(cfg: &mut TrainConfig, method: &str) -> Result<(), String> {
+        cfg.method = [Method::MadeNet, Method::MadeNetDt]
+            .into_iter()
+            .find(|m| m.name() == method)
+            .ok_or_else(|| format!("`{method}` is not trained by MADE-Net's learner"))?;
         Ok(())
     }
 
-    /// Registers this model as policy `name` (robot i uses DEP i, or the shared one); it
-    /// refuses scenarios it was not built for ([`Model::check`]).
-    pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
-        let model = self.clone();
-        let checker = self.clone();
-        let owned = name.to_string();
-        registry.register_checked(
-            name,
-            about,
-            move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| model.policy(&owned, ctx.robot, ctx.config.sensing_range),
-        );
+    fn same_run(given: &TrainConfig, saved: &TrainConfig) -> bool {
+        TrainConfig {
+            episodes: saved.episodes,
+            max_minutes: saved.max_minutes,
+            ..given.clone()
+        } == *saved
     }
 
-    /// Robot `robot`'s policy under name `name` (d_s = `sensing_range`): its grid DEP (or the
-    /// shared one), or the agnostic DEP.
-    pub fn policy(&self, name: &str, robot: usize, sensing_range: i32) -> Box<dyn Policy> {
-        let margin = self.info.spread_margin;
-        if let (Some(net), Some(a)) = (&self.agnostic, &self.info.agnostic) {
-            return Box::new(
-                AgnosticPolicy::new(name, Arc::clone(net), a.crop_radius, sensing_range)
-                    .with_spread_margin(margin),
-            );
-        }
-        let deps = &self.deps;
-        let net = Arc::clone(&deps[robot.min(deps.len() - 1)]);
-        Box::new(
-            DepPolicy::new(name, net)
-                .with_observation(self.info.observation, sensing_range)
-                .with_recurrence(self.info.recurrent)
-                .with_spread_margin(margin),
-        )
+    fn train_loop(
+        run_dir: &Path,
+        cfg: &TrainConfig,
+        resuming: bool,
+        progress: &mut (dyn FnMut(&Progress) + Send),
+    ) -> Result<(), TrainError> {
+        train_loop(run_dir, cfg, resuming, progress)
+    }
+
+    fn register_model(
+        dir: &Path,
+        registry: &mut PolicyRegistry,
+        name: &str,
+        about: &str,
+    ) -> Result<(), TrainError> {
+        Model::load(dir)?.register(registry, name, about);
+        Ok(())
     }
 }
 
-/// Writes `bytes` to `path` ([`madenet_files::write_atomic`]).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), TrainError> {
-    madenet_files::write_atomic(path, bytes).map_err(io_err(path))
-}
-
-/// Validation: the greedy DEPs, decentralized, on the fixed generated validation maps at each
-/// validation CSP. Returns (mean steps, mean team return, completed, trials).
-pub fn validate_policy(
-    cfg: &TrainConfig,
-    registry: &PolicyRegistry,
-    policy: &str,
-) -> Result<(f64, f64, usize, usize), TrainError> {
-    let (mut steps, mut ret, mut done, mut n) = (0.0, 0.0, 0, 0);
-    for m in 0..cfg.validation_maps {
-        let seed = derive_seed(cfg.seed, "validation", m as u64);
-        let (map, starts) = training_scenario(cfg, seed)?;
-        for &csp in &cfg.validation_csp {
-            let spec = TrialSpec {
-                map: map.clone(),
-                map_name: format!("validation_{m}"),
-                starts: starts.clone(),
-                config: ScenarioConfig {
-                    comm_success_prob: csp,
-                    ..cfg.scenario.clone()
-                },
-                policy: policy.to_string(),
-                seed,
-            };
-            let mut trial = Trial::with_registry(spec, registry)
-                .map_err(|e| TrainError::Other(e.to_string()))?;
-            let mut team = 0.0;
-            while trial.step() {
-                team += trial.rewards().team;
-            }
-            let r = trial.finish();
-            steps += r.metrics.tns as f64;
-            ret += team;
-            done += r.metrics.completed as usize;
-            n += 1;
-        }
-    }
-    Ok((steps / n.max(1) as f64, ret / n.max(1) as f64, done, n))
-}
-
-/// Trains MADE-Net or MADE-Net-DT into `run_dir` (created; if it holds a checkpoint, the run
-/// resumes from it with the saved config — `cfg`, if given, may differ from it only in
-/// `episodes` and `max_minutes`; `None`: the saved config, or the defaults for a new run),
-/// calling `progress` after each iteration.
+/// Trains MADE-Net or MADE-Net-DT into `run_dir` ([`harness::train`]), calling `progress`
+/// after each iteration.
 pub fn train(
     run_dir: &Path,
     cfg: Option<TrainConfig>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
-    harness::run(
-        run_dir,
-        cfg,
-        TrainConfig::from_toml_file,
-        TrainConfig::validate,
-        |given, saved| {
-            TrainConfig {
-                episodes: saved.episodes,
-                max_minutes: saved.max_minutes,
-                ..given.clone()
-            } == *saved
-        },
-        |cfg| cfg.threads,
-        |cfg, resuming| train_loop(run_dir, cfg, resuming, progress),
-    )
+    harness::train::<MadeNetLearner>(run_dir, cfg, progress)
 }
 
 fn train_loop(
@@ -1055,6 +682,8 @@ fn train_loop(
     let params = cfg.update_params();
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
+    let draw = cfg.scenario_draw();
+    let validation_maps = cfg.validation_maps()?;
     while state.episode < cfg.episodes {
         let e = state.episode;
         let epsilon = cfg.epsilon(e);
@@ -1066,7 +695,7 @@ fn train_loop(
         };
         for (k, &kind) in envs.iter().enumerate() {
             let seed = derive_seed(cfg.seed, kind.short(), e);
-            let (map, starts) = training_scenario(cfg, seed)?;
+            let (map, starts) = draw.draw(seed)?;
             let csp = match kind {
                 EnvKind::Centralized => 1.0,
                 EnvKind::Decentralized => stream(seed, "csp", 0).random::<f64>(),
@@ -1170,7 +799,13 @@ fn train_loop(
             };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
-            let (steps, ret, done, n) = validate_policy(cfg, &registry, "candidate")?;
+            let v = validate(
+                &validation_maps,
+                &cfg.validation_csp,
+                &registry,
+                "candidate",
+            )?;
+            let (steps, ret, done, n) = (v.mean_steps, v.mean_team_return, v.completed, v.trials);
             let id = state.episode * per_iter;
             logs.validation.append(&ValidationRow {
                 episode: id,
@@ -1200,13 +835,17 @@ fn train_loop(
         }
         logs.flush()?;
         progress(&Progress {
-            episode: state.episode,
-            episodes: cfg.episodes,
-            epsilon,
+            done: state.episode,
+            total: cfg.episodes,
+            unit: "episodes",
             updates: state.updates,
-            team_reward: reward_sum / envs.len() as f64,
-            steps: steps_sum / envs.len() as f64,
             validation_steps: last_validation,
+            base_steps: None,
+            figures: vec![
+                ("ε", epsilon as f64, 2),
+                ("reward", reward_sum / envs.len() as f64, 0),
+                ("steps", steps_sum / envs.len() as f64, 0),
+            ],
         });
         if stopping {
             break;

@@ -52,6 +52,17 @@ fn q_of(dir: &Path) -> Vec<f32> {
 }
 
 /// iterations.csv without the wall-time column (the last).
+/// The run's TensorBoard scalars (tag, step, value bits), sorted.
+fn scalars(dir: &Path) -> Vec<(String, i64, u32)> {
+    let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
+        .unwrap()
+        .into_iter()
+        .map(|(tag, step, v)| (tag, step, v.to_bits()))
+        .collect();
+    s.sort();
+    s
+}
+
 fn log_without_time(dir: &Path) -> Vec<String> {
     read(&dir.join("iterations.csv"))
         .lines()
@@ -137,13 +148,20 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     // then resumed: the uninterrupted run's logs and weights.
     let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         train(&c, Some(tiny()), &mut |p| {
-            assert!(p.iteration < 1, "killed after iteration 1");
+            assert!(p.done < 1, "killed after iteration 1");
         })
     }));
     assert!(killed.is_err());
     assert_eq!(log_without_time(&c).len(), 2, "stopped after one iteration");
     train(&c, Some(tiny()), &mut |_| {}).unwrap();
     assert_eq!(log_without_time(&c), log);
+    // TensorBoard: one point per iteration and figure, each once after the resume.
+    let want = scalars(&a);
+    assert_eq!(want.len(), 2 * 6, "2 iterations × 6 figures: {want:?}");
+    assert!(want
+        .iter()
+        .any(|s| s.0 == "iteration/validation_steps" && s.1 == 1));
+    assert_eq!(scalars(&c), want, "resumed run's TensorBoard scalars");
     assert!(
         q_of(&c.join("last")) == q_of(&a.join("last")),
         "resumed, the uninterrupted run's weights"

@@ -8,7 +8,7 @@ use madenet_world::ScenarioConfig;
 #[test]
 fn shipped_models_play_and_refuse_other_sizes() {
     let mut registry = PolicyRegistry::builtin();
-    madenet_learn::shipped::register(&mut registry).unwrap();
+    madenet_learn::shipped::register(&mut registry);
     for name in madenet_learn::shipped::names() {
         let map = madenet_map::paper::paper_map(3).unwrap();
         let spec = TrialSpec {

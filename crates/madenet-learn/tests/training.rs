@@ -4,7 +4,7 @@
 //! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
 //! initialises networks lives in this one test (tests of a binary run on parallel threads).
 
-use madenet_learn::train::validate_policy;
+use madenet_learn::scenario;
 use madenet_learn::{train, Model, Tensor, TrainConfig, TrainError};
 use madenet_sim::PolicyRegistry;
 use std::path::Path;
@@ -151,9 +151,11 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     let model = Model::load(&straight.join("best")).unwrap();
     let mut registry = PolicyRegistry::default();
     model.register(&mut registry, "m", "test model");
-    let (steps, _, _, n) = validate_policy(&tiny(1), &registry, "m").unwrap();
-    assert_eq!(n, 1);
-    assert!(steps > 0.0 && steps <= 40.0);
+    let cfg = tiny(1);
+    let maps = cfg.validation_maps().unwrap();
+    let v = scenario::validate(&maps, &cfg.validation_csp, &registry, "m").unwrap();
+    assert_eq!(v.trials, 1);
+    assert!(v.mean_steps > 0.0 && v.mean_steps <= 40.0);
 
     // A changed config on resume is refused; extending `episodes` is not.
     let other = TrainConfig {

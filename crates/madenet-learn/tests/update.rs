@@ -7,7 +7,6 @@ use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
 use madenet_learn::learner::{
     cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
 };
-use madenet_learn::train::training_scenario;
 use madenet_learn::{cpu_autodiff, TrainConfig};
 use madenet_sim::TrialSpec;
 use madenet_world::rng::stream;
@@ -15,7 +14,7 @@ use madenet_world::rng::stream;
 fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<Episode> {
     (0..n)
         .map(|k| {
-            let (map, starts) = training_scenario(cfg, 100 + k).unwrap();
+            let (map, starts) = cfg.scenario_draw().draw(100 + k).unwrap();
             let spec = TrialSpec {
                 map,
                 map_name: "t".into(),

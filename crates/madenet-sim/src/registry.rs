@@ -23,6 +23,21 @@ pub struct PolicyContext<'a> {
 type Factory = Arc<dyn Fn(&PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync>;
 type Check = Arc<dyn Fn(&PolicyContext<'_>) -> Result<(), String> + Send + Sync>;
 
+/// State built at most once, on first use ([`PolicyRegistry::register_lazy`]).
+struct Lazy<T, L> {
+    cell: std::sync::OnceLock<Result<T, String>>,
+    load: L,
+}
+
+impl<T, L: Fn() -> Result<T, String>> Lazy<T, L> {
+    fn get(&self) -> Result<&T, String> {
+        self.cell
+            .get_or_init(&self.load)
+            .as_ref()
+            .map_err(String::clone)
+    }
+}
+
 /// Named policy factories. [`PolicyRegistry::builtin`] holds the policies of the simulator
 /// core; later crates register theirs with [`PolicyRegistry::register`].
 #[derive(Clone, Default)]
@@ -79,6 +94,32 @@ impl PolicyRegistry {
         self.checks.insert(name.to_string(), Arc::new(check));
     }
 
+    /// Like [`PolicyRegistry::register_checked`], for a policy whose shared state `T` (a
+    /// network's weights) is built only when a trial first asks for it: `load` runs at most
+    /// once, at the first check or make of `name` (a registry whose policy is never used never
+    /// loads it), and a load error is what the check says.
+    pub fn register_lazy<T: Send + Sync + 'static>(
+        &mut self,
+        name: &str,
+        about: &str,
+        load: impl Fn() -> Result<T, String> + Send + Sync + 'static,
+        check: impl Fn(&T, &PolicyContext<'_>) -> Result<(), String> + Send + Sync + 'static,
+        make: impl Fn(&T, &PolicyContext<'_>) -> Box<dyn Policy> + Send + Sync + 'static,
+    ) {
+        let lazy = Arc::new(Lazy {
+            cell: std::sync::OnceLock::new(),
+            load,
+        });
+        let for_check = Arc::clone(&lazy);
+        self.register_checked(
+            name,
+            about,
+            move |ctx| check(for_check.get()?, ctx),
+            // `make` checks first, so the state is loaded by the time a policy is built.
+            move |ctx| make(lazy.get().expect("loaded by the check"), ctx),
+        );
+    }
+
     /// Whether `name` exists and can run in `ctx` (checked before any trial by studies).
     pub fn check(&self, name: &str, ctx: &PolicyContext<'_>) -> Result<(), crate::SimError> {
         if !self.factories.contains_key(name) {
@@ -123,5 +164,61 @@ impl PolicyRegistry {
             .iter()
             .map(|(k, (a, _))| (k.clone(), a.clone()))
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    fn ctx(config: &ScenarioConfig) -> PolicyContext<'_> {
+        PolicyContext {
+            seed: 1,
+            robot: 0,
+            config,
+            height: 20,
+            width: 20,
+        }
+    }
+
+    /// A lazy policy loads nothing when registered, loads once however often it is checked
+    /// and made, and a failed load is its check's error.
+    #[test]
+    fn lazy_policies_load_once_on_first_use() {
+        let loads = Arc::new(AtomicUsize::new(0));
+        let mut r = PolicyRegistry::builtin();
+        let counter = Arc::clone(&loads);
+        r.register_lazy(
+            "lazy-nf",
+            "nearest frontier, loaded late",
+            move || {
+                counter.fetch_add(1, Ordering::SeqCst);
+                Ok(7usize)
+            },
+            |&v, _| if v == 7 { Ok(()) } else { Err("wrong".into()) },
+            |_, _| Box::new(NearestFrontier),
+        );
+        r.register_lazy(
+            "broken",
+            "fails to load",
+            || Err::<usize, _>("weights missing".to_string()),
+            |_, _| Ok(()),
+            |_, _| Box::new(NearestFrontier),
+        );
+        assert_eq!(
+            loads.load(Ordering::SeqCst),
+            0,
+            "nothing loaded at registration"
+        );
+        assert!(r.names().iter().any(|n| n == "lazy-nf"));
+        let config = ScenarioConfig::default();
+        for _ in 0..3 {
+            r.check("lazy-nf", &ctx(&config)).unwrap();
+            assert_eq!(r.make("lazy-nf", &ctx(&config)).unwrap().name(), "nf");
+        }
+        assert_eq!(loads.load(Ordering::SeqCst), 1, "loaded once");
+        let e = r.make("broken", &ctx(&config)).err().expect("a load error");
+        assert!(e.to_string().contains("weights missing"), "{e}");
     }
 }

@@ -1,10 +1,15 @@
-//! `madenet train`: trains MADE-Net, MADE-Net-DT or DME-DRL into a run directory, with a progress bar;
+//! `madenet train`: trains any learner (MADE-Net, MADE-Net-DT, the rollout teacher's DEP, DME-DRL:
+//! `madenet_catalogue::LearnerKind`) into a run directory, with a progress bar;
 //! `--resume DIR` continues a run from its last checkpoint.
 
 use anyhow::{bail, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use madenet_learn::{Method, TrainConfig};
+use madenet_catalogue::LearnerKind;
+use madenet_dme::train::DmeLearner;
+use madenet_learn::harness::RunFields;
+use madenet_learn::rollout_train::RolloutLearner;
+use madenet_learn::{Learner, MadeNetLearner, Progress};
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
@@ -51,52 +56,13 @@ fn method_of(path: &Path, text: &str) -> Result<Option<String>> {
         .map(str::to_string))
 }
 
-/// What `madenet train` sets in either learner's config.
-trait LearnerConfig: Default + Sized {
-    fn from_text(path: &Path, text: &str) -> Result<Self>;
-    fn episodes(&mut self) -> &mut u64;
-    fn max_minutes(&mut self) -> &mut f64;
-    fn seed(&mut self) -> &mut u64;
-    fn threads(&mut self) -> &mut usize;
-    fn check(&self) -> Result<(), String>;
-}
-
-macro_rules! learner_config {
-    ($t:ty) => {
-        impl LearnerConfig for $t {
-            fn from_text(path: &Path, text: &str) -> Result<Self> {
-                Ok(<$t>::from_toml_text(path, text)?)
-            }
-            fn episodes(&mut self) -> &mut u64 {
-                &mut self.episodes
-            }
-            fn max_minutes(&mut self) -> &mut f64 {
-                &mut self.max_minutes
-            }
-            fn seed(&mut self) -> &mut u64 {
-                &mut self.seed
-            }
-            fn threads(&mut self) -> &mut usize {
-                &mut self.threads
-            }
-            fn check(&self) -> Result<(), String> {
-                self.validate()
-            }
-        }
-    };
-}
-learner_config!(TrainConfig);
-learner_config!(madenet_dme::train::DmeTrainConfig);
-learner_config!(madenet_learn::rollout_train::RolloutTrainConfig);
-
 /// The run directory and the config to train with (`None`: resume with the run's saved one),
 /// from the arguments and the config `source` (`--config`'s, or the run's on `--resume`);
 /// `set_method` applies `--method` to a new run's config.
-fn run_dir_and_config<C: LearnerConfig>(
+fn run_dir_and_config<L: Learner>(
     a: &TrainArgs,
     source: &Source,
-    set_method: impl FnOnce(&mut C) -> Result<()>,
-) -> Result<(PathBuf, Option<C>)> {
+) -> Result<(PathBuf, Option<L::Config>)> {
     match (&a.out, &a.resume) {
         (_, Some(dir)) => {
             if !dir.join("config.toml").exists() {
@@ -112,9 +78,14 @@ fn run_dir_and_config<C: LearnerConfig>(
                 return Ok((dir.clone(), None));
             }
             let (path, text) = source.as_ref().expect("read in run()");
-            let mut cfg = C::from_text(path, text)?;
-            *cfg.episodes() = a.episodes.unwrap_or(*cfg.episodes());
-            *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
+            let mut cfg = L::parse_config(path, text)?;
+            let f = L::run_fields(&cfg);
+            let fields = RunFields {
+                episodes: a.episodes.unwrap_or(f.episodes),
+                max_minutes: a.max_minutes.unwrap_or(f.max_minutes),
+                ..f
+            };
+            L::set_run_fields(&mut cfg, fields);
             Ok((dir.clone(), Some(cfg)))
         }
         (Some(dir), None) => {
@@ -125,16 +96,21 @@ fn run_dir_and_config<C: LearnerConfig>(
                 );
             }
             let mut cfg = match source {
-                Some((path, text)) => C::from_text(path, text)?,
-                None => C::default(),
+                Some((path, text)) => L::parse_config(path, text)?,
+                None => L::Config::default(),
             };
-            set_method(&mut cfg)?;
-            *cfg.episodes() = a.episodes.unwrap_or(*cfg.episodes());
-            *cfg.max_minutes() = a.max_minutes.unwrap_or(*cfg.max_minutes());
-            *cfg.seed() = a.seed.unwrap_or(*cfg.seed());
-            *cfg.threads() = a.threads.unwrap_or(*cfg.threads());
-            cfg.check()
-                .map_err(|m| anyhow::anyhow!("train config: {m}"))?;
+            if let Some(m) = &a.method {
+                L::set_method(&mut cfg, m).map_err(|e| anyhow::anyhow!("--method: {e}"))?;
+            }
+            let f = L::run_fields(&cfg);
+            let fields = RunFields {
+                episodes: a.episodes.unwrap_or(f.episodes),
+                max_minutes: a.max_minutes.unwrap_or(f.max_minutes),
+                seed: a.seed.unwrap_or(f.seed),
+                threads: a.threads.unwrap_or(f.threads),
+            };
+            L::set_run_fields(&mut cfg, fields);
+            L::check(&cfg).map_err(|m| anyhow::anyhow!("train config: {m}"))?;
             Ok((dir.clone(), Some(cfg)))
         }
         (None, None) => bail!("give --out DIR for a new run or --resume DIR to continue one"),
@@ -166,39 +142,65 @@ pub fn run(a: TrainArgs) -> Result<()> {
     } else {
         a.method.as_deref().or(from_file.as_deref())
     };
-    if chosen == Some(madenet_dme::train::METHOD) {
-        return run_dme(a, &source);
-    }
-    if chosen == Some(madenet_learn::rollout_train::METHOD) {
-        return run_rollout(a, &source);
-    }
-    let (dir, cfg) = run_dir_and_config::<TrainConfig>(&a, &source, |cfg| {
-        if let Some(m) = &a.method {
-            cfg.method = match m.as_str() {
-                "made-net" => Method::MadeNet,
-                "made-net-dt" => Method::MadeNetDt,
-                other => bail!("--method `{other}`: expected made-net, made-net-dt, made-net-rollout or dme-drl"),
+    let kind = match chosen {
+        None => LearnerKind::MadeNet,
+        Some(m) => LearnerKind::for_method(m).ok_or_else(|| {
+            let source = if a.method.as_deref() == Some(m) {
+                "--method".to_string()
+            } else {
+                format!("{}: field `method`", path_of(&source))
             };
-        }
-        Ok(())
-    })?;
-    let bar = progress_bar(a.quiet);
-    let mut progressed = false;
-    let mut on_progress = |p: &madenet_learn::Progress| {
-        progressed = true;
-        bar.set_length(p.episodes);
-        bar.set_position(p.episode);
-        let val = p
-            .validation_steps
-            .map_or(String::new(), |v| format!("  val steps {v:.1}"));
-        bar.set_message(format!(
-            "ε {:.2}  reward {:.0}  steps {:.0}  updates {}{val}",
-            p.epsilon, p.team_reward, p.steps, p.updates
-        ));
+            anyhow::anyhow!(
+                "{source} `{m}`: expected {}",
+                LearnerKind::all_methods().join(", ")
+            )
+        })?,
     };
-    madenet_learn::train(&dir, cfg, &mut on_progress)?;
+    match kind {
+        LearnerKind::MadeNet => train_with::<MadeNetLearner>(&a, &source),
+        LearnerKind::Rollout => train_with::<RolloutLearner>(&a, &source),
+        LearnerKind::DmeDrl => train_with::<DmeLearner>(&a, &source),
+    }
+}
+
+fn path_of(source: &Source) -> String {
+    source
+        .as_ref()
+        .map_or("train config".into(), |(p, _)| p.display().to_string())
+}
+
+/// Trains learner `L` with a progress bar of its units (episodes or iterations); a learner
+/// that counts iterations also prints a line per iteration.
+fn train_with<L: Learner>(a: &TrainArgs, source: &Source) -> Result<()> {
+    let (dir, cfg) = run_dir_and_config::<L>(a, source)?;
+    let bar = if a.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0)
+    };
+    let mut progressed = false;
+    let mut on_progress = |p: &Progress| {
+        if !progressed {
+            bar.set_style(
+                ProgressStyle::with_template(&format!(
+                    "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {}  {{msg}}",
+                    p.unit
+                ))
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
+        }
+        progressed = true;
+        bar.set_length(p.total);
+        bar.set_position(p.done);
+        bar.set_message(p.summary());
+        if p.unit == "iterations" && !a.quiet {
+            bar.println(format!("iteration {}: {}", p.done, p.summary()));
+        }
+    };
+    madenet_learn::harness::train::<L>(&dir, cfg, &mut on_progress)?;
     bar.finish();
-    finished(&a, &dir, progressed)
+    finished(a, &dir, progressed)
 }
 
 /// Prints the run directory; a resumed run that had nothing left to train says so on stderr
@@ -218,81 +220,4 @@ fn finished(a: &TrainArgs, dir: &Path, progressed: bool) -> Result<()> {
     }
     out!("{}", dir.display())?;
     Ok(())
-}
-
-fn progress_bar(quiet: bool) -> ProgressBar {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(0)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} episodes  {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar
-}
-
-/// `madenet train --method dme-drl` (or a DME-DRL config or run directory).
-fn run_dme(a: TrainArgs, source: &Source) -> Result<()> {
-    // `--method dme-drl` is what brought us here: nothing more to set.
-    let (dir, cfg) =
-        run_dir_and_config::<madenet_dme::train::DmeTrainConfig>(&a, source, |_| Ok(()))?;
-    let bar = progress_bar(a.quiet);
-    let mut progressed = false;
-    let mut on_progress = |p: &madenet_dme::train::Progress| {
-        progressed = true;
-        bar.set_length(p.episodes);
-        bar.set_position(p.episode);
-        let val = p
-            .validation_steps
-            .map_or(String::new(), |v| format!("  val steps {v:.1}"));
-        bar.set_message(format!(
-            "reward {:.2}  steps {}  updates {}{val}",
-            p.reward, p.steps, p.updates
-        ));
-    };
-    madenet_dme::train::train(&dir, cfg, &mut on_progress)?;
-    bar.finish();
-    finished(&a, &dir, progressed)
-}
-
-/// `madenet train --method made-net-rollout` (or such a config or run directory): the DEP
-/// trained from the centralized rollout teacher (`madenet_learn::rollout_train`).
-fn run_rollout(a: TrainArgs, source: &Source) -> Result<()> {
-    let (dir, cfg) =
-        run_dir_and_config::<madenet_learn::rollout_train::RolloutTrainConfig>(&a, source, |_| {
-            Ok(())
-        })?;
-    let bar = if a.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(0)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} iterations  {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    let mut progressed = false;
-    let mut on_progress = |p: &madenet_learn::rollout_train::Progress| {
-        progressed = true;
-        bar.set_length(p.iterations);
-        bar.set_position(p.iteration);
-        bar.set_message(format!(
-            "episodes {}  decisions {}  loss {:.3}  val steps {:.1} (base rule {:.1})",
-            p.episodes, p.decisions, p.loss, p.validation_steps, p.base_steps
-        ));
-        if a.quiet {
-            return;
-        }
-        bar.println(format!(
-            "iteration {}: val steps {:.2} (base {:.2}), loss {:.4}",
-            p.iteration, p.validation_steps, p.base_steps, p.loss
-        ));
-    };
-    madenet_learn::rollout_train::train(&dir, cfg, &mut on_progress)?;
-    bar.finish();
-    finished(&a, &dir, progressed)
 }
