@@ -29,7 +29,7 @@ use madenet_agent::Policy;
 use madenet_learn::error::io_err;
 use madenet_learn::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
 use madenet_learn::scenario::{self, ScenarioDraw};
-use madenet_learn::{TrainConfig, TrainError};
+use madenet_learn::TrainError;
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_trainlog::{EpisodeRow, MaddpgUpdateRow, ValidationRow};
@@ -254,8 +254,17 @@ impl DmeTrainConfig {
         if self.validation_csp.iter().any(|c| !(0.0..=1.0).contains(c)) {
             return bad("validation_csp", "CSPs lie in [0, 1]");
         }
-        // Maps, densities and the scenario are checked as MADE-Net's are.
-        self.learn_view().check_fields()?;
+        // The scenario, maps and densities are checked as every learner's are.
+        self.scenario
+            .validate()
+            .map_err(|e| format!("scenario: {e}"))?;
+        self.scenario_draw().check()?;
+        if self.validate_every > 0 && self.validation_maps == 0 {
+            return bad(
+                "validation_maps",
+                "must be at least 1 when validate_every > 0",
+            );
+        }
         harness::check_memory(&self.memory_needs(), harness::physical_memory())
     }
 
@@ -315,24 +324,6 @@ impl DmeTrainConfig {
     pub fn validation_maps(&self) -> Result<Vec<TrialSpec>, TrainError> {
         self.scenario_draw()
             .validation_maps(self.seed, self.validation_maps, &self.scenario)
-    }
-
-    /// The fields MADE-Net's trainer shares with this one (map generation, validation set), as
-    /// its config — the two methods train and validate on the same generated maps.
-    pub fn learn_view(&self) -> TrainConfig {
-        TrainConfig {
-            seed: self.seed,
-            scenario: self.scenario.clone(),
-            map_height: self.map_height,
-            map_width: self.map_width,
-            density_min: self.density_min,
-            density_max: self.density_max,
-            validate_every: self.validate_every,
-            validation_maps: self.validation_maps,
-            validation_csp: self.validation_csp.clone(),
-            threads: self.threads,
-            ..TrainConfig::default()
-        }
     }
 
     fn update_params(&self) -> UpdateParams {
@@ -871,14 +862,6 @@ impl Learner for DmeLearner {
     fn set_run_fields(cfg: &mut DmeTrainConfig, f: RunFields) {
         (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
             (f.episodes, f.max_minutes, f.seed, f.threads);
-    }
-
-    fn same_run(given: &DmeTrainConfig, saved: &DmeTrainConfig) -> bool {
-        DmeTrainConfig {
-            episodes: saved.episodes,
-            max_minutes: saved.max_minutes,
-            ..given.clone()
-        } == *saved
     }
 
     fn train_loop(

@@ -293,3 +293,25 @@ fn shipped_config_is_the_defaults() {
         DmeTrainConfig::default()
     );
 }
+
+/// DME-DRL's config is checked by its own fields and the shared scenario draw: a team whose
+/// joint action space would be too large for MADE-Net's CEP is fine here (DME-DRL has no CEP;
+/// it was refused while its checks borrowed MADE-Net's), and a map below the networks'
+/// smallest side is refused naming the field.
+#[test]
+fn checks_are_dme_drl_own_and_the_shared_draw() {
+    let nine = DmeTrainConfig {
+        scenario: madenet_world::ScenarioConfig {
+            num_robots: 9,
+            ..Default::default()
+        },
+        ..DmeTrainConfig::default()
+    };
+    assert_eq!(nine.validate(), Ok(()));
+    let small = DmeTrainConfig {
+        map_height: 8,
+        ..DmeTrainConfig::default()
+    };
+    let e = small.validate().unwrap_err();
+    assert!(e.starts_with("field `map_height/map_width`"), "{e}");
+}

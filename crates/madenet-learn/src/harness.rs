@@ -267,7 +267,7 @@ pub struct RunFields {
 /// Python package need nothing else of a learner.
 pub trait Learner {
     /// Every hyperparameter of a run (TOML; unknown fields refused).
-    type Config: Default + Clone + Serialize + DeserializeOwned + Send + Sync;
+    type Config: Default + Clone + PartialEq + Serialize + DeserializeOwned + Send + Sync;
     /// The `method` names it trains (in configs, `model.toml` and `madenet train --method`).
     const METHODS: &'static [&'static str];
     /// The config in `text` (read from `path`, named in errors), checked.
@@ -286,9 +286,29 @@ pub trait Learner {
             Err(format!("`{method}` is not trained by this learner"))
         }
     }
-    /// Whether `given` continues the run saved with `saved` (they may differ only in the run's
-    /// length).
-    fn same_run(given: &Self::Config, saved: &Self::Config) -> bool;
+    /// Whether a resume may give a larger `episodes` (for a learner whose run is fixed by
+    /// other fields, such as iterations, it may not).
+    const RESUME_EXTENDS_EPISODES: bool = true;
+    /// Whether `given` continues the run saved with `saved`: equal but for `max_minutes` and,
+    /// where [`Self::RESUME_EXTENDS_EPISODES`], `episodes`.
+    fn same_run(given: &Self::Config, saved: &Self::Config) -> bool {
+        let (g, s) = (Self::run_fields(given), Self::run_fields(saved));
+        let mut given = given.clone();
+        let episodes = if Self::RESUME_EXTENDS_EPISODES {
+            s.episodes
+        } else {
+            g.episodes
+        };
+        Self::set_run_fields(
+            &mut given,
+            RunFields {
+                episodes,
+                max_minutes: s.max_minutes,
+                ..g
+            },
+        );
+        given == *saved
+    }
     /// The learner's own loop, on the harness's thread pool: from scratch, or from the
     /// checkpoint in `run_dir` when `resuming`; `progress` after each unit of work.
     fn train_loop(

@@ -971,6 +971,8 @@ pub struct RolloutLearner;
 impl Learner for RolloutLearner {
     type Config = RolloutTrainConfig;
     const METHODS: &'static [&'static str] = &[METHOD];
+    /// The episodes per iteration define the run: a resume may change only `max_minutes`.
+    const RESUME_EXTENDS_EPISODES: bool = false;
 
     fn parse_config(path: &Path, text: &str) -> Result<RolloutTrainConfig, TrainError> {
         RolloutTrainConfig::from_toml_text(path, text)
@@ -992,14 +994,6 @@ impl Learner for RolloutLearner {
     fn set_run_fields(cfg: &mut RolloutTrainConfig, f: RunFields) {
         (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
             (f.episodes, f.max_minutes, f.seed, f.threads);
-    }
-
-    /// A resume may change only `max_minutes`: the episodes per iteration define the run.
-    fn same_run(given: &RolloutTrainConfig, saved: &RolloutTrainConfig) -> bool {
-        RolloutTrainConfig {
-            max_minutes: saved.max_minutes,
-            ..given.clone()
-        } == *saved
     }
 
     fn train_loop(

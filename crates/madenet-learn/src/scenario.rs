@@ -67,6 +67,33 @@ impl ScenarioDraw {
         }
     }
 
+    /// Why maps cannot be drawn this way, naming the config field: sides in
+    /// [`crate::MIN_MAP_SIDE`]..=[`crate::MAX_TRAIN_MAP_SIDE`] (the networks' bounds; checked by
+    /// every learner's config), `0 ≤ density_min ≤ density_max < 0.9`.
+    pub fn check(&self) -> Result<(), String> {
+        if self.height < crate::MIN_MAP_SIDE || self.width < crate::MIN_MAP_SIDE {
+            return Err(format!(
+                "field `map_height/map_width`: must be at least {}",
+                crate::MIN_MAP_SIDE
+            ));
+        }
+        let max = crate::MAX_TRAIN_MAP_SIDE;
+        for (field, side) in [("map_height", self.height), ("map_width", self.width)] {
+            if side > max {
+                return Err(format!(
+                    "field `{field}`: must lie in 1..={max}, got {side}"
+                ));
+            }
+        }
+        let (lo, hi) = self.density;
+        if !(0.0 <= lo && lo <= hi && hi < 0.9) {
+            return Err(
+                "field `density_min/density_max`: need 0 ≤ density_min ≤ density_max < 0.9".into(),
+            );
+        }
+        Ok(())
+    }
+
     /// The scenario of `seed`: its map (stream `"map"`) and start cells. Training, validation
     /// and held-out sets differ only in their seeds.
     pub fn draw(&self, seed: u64) -> Result<(OccGrid, Vec<Pos>), TrainError> {

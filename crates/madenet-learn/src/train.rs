@@ -186,24 +186,13 @@ impl TrainConfig {
         self.scenario
             .validate()
             .map_err(|e| format!("scenario: {e}"))?;
-        let checks: [(bool, &str, String); 16] = [
+        self.scenario_draw().check()?;
+        let checks: [(bool, &str, String); 14] = [
             (self.episodes >= 1, "episodes", "must be at least 1".into()),
             (
                 self.max_minutes >= 0.0 && self.max_minutes.is_finite(),
                 "max_minutes",
                 "must be ≥ 0".into(),
-            ),
-            (
-                self.map_height >= crate::MIN_MAP_SIDE && self.map_width >= crate::MIN_MAP_SIDE,
-                "map_height/map_width",
-                format!("must be at least {}", crate::MIN_MAP_SIDE),
-            ),
-            (
-                0.0 <= self.density_min
-                    && self.density_min <= self.density_max
-                    && self.density_max < 0.9,
-                "density_min/density_max",
-                "need 0 ≤ density_min ≤ density_max < 0.9".into(),
             ),
             (
                 (0.0..=1.0).contains(&self.gamma),
@@ -272,11 +261,8 @@ impl TrainConfig {
                 return Err(format!("field `{field}`: {msg}"));
             }
         }
-        let side = crate::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("episodes", self.episodes, 1, 10_000_000),
-            ("map_height", self.map_height as u64, 1, side),
-            ("map_width", self.map_width as u64, 1, side),
             ("batch_size", self.batch_size as u64, 1, 1024),
             ("trace_len", self.trace_len as u64, 1, 1024),
             ("replay_episodes", self.replay_episodes as u64, 1, 100_000),
@@ -608,14 +594,6 @@ impl Learner for MadeNetLearner {
             .find(|m| m.name() == method)
             .ok_or_else(|| format!("`{method}` is not trained by MADE-Net's learner"))?;
         Ok(())
-    }
-
-    fn same_run(given: &TrainConfig, saved: &TrainConfig) -> bool {
-        TrainConfig {
-            episodes: saved.episodes,
-            max_minutes: saved.max_minutes,
-            ..given.clone()
-        } == *saved
     }
 
     fn train_loop(
