@@ -8,28 +8,8 @@ use image::{AnimationDecoder, Delay, Rgba, RgbaImage};
 use madenet_map::generate::{generate, GeneratorConfig};
 use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_render::{render, Frame, GifWriter, RenderOptions, RobotFrame};
-use std::path::{Path, PathBuf};
-
-/// A fresh scratch directory under the system temp dir, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("madenet-gif-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn file(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use madenet_testkit::Scratch;
+use std::path::Path;
 
 /// The writer as it was: every frame whole, through `image`'s encoder at speed 10.
 fn write_full_frames(images: &[RgbaImage], delay_ms: u32, path: &Path) {
@@ -74,8 +54,8 @@ fn decode(path: &Path) -> Vec<(RgbaImage, (u32, u32))> {
 /// Writes `images` both ways and checks the decoded animations are identical; returns the
 /// file sizes (delta, whole frames).
 fn same_animation(name: &str, images: &[RgbaImage], delay_ms: u32) -> (u64, u64) {
-    let dir = Scratch::new(name);
-    let (delta, full) = (dir.file("delta.gif"), dir.file("full.gif"));
+    let dir = Scratch::new(&format!("gif-{name}"));
+    let (delta, full) = (dir.join("delta.gif"), dir.join("full.gif"));
     let written = write_delta(images, delay_ms, &delta);
     write_full_frames(images, delay_ms, &full);
     let size = std::fs::metadata(&delta).unwrap().len();

@@ -4,36 +4,17 @@ use madenet_render::{
     render, robot_color, save_gif, save_png, Frame, GifWriter, Layout, Panel, RenderError,
     RenderOptions, RobotFrame,
 };
-use std::path::PathBuf;
+use madenet_testkit::Scratch;
+use std::path::Path;
 
-/// A fresh scratch directory under the system temp dir, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir =
-            std::env::temp_dir().join(format!("madenet-render-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn file(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-    fn entries(&self) -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
+/// The names of the files in `dir`, sorted.
+fn entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
 }
 
 /// 20 × 20: a wall in truth, the right half of the team map unknown, three robots.
@@ -211,7 +192,7 @@ fn degenerate_frames_do_not_panic() {
 #[test]
 fn gif_with_three_frames_decodes_back() {
     let dir = Scratch::new("gif3");
-    let path = dir.file("episode.gif");
+    let path = dir.join("episode.gif");
     let opts = RenderOptions::default();
     let mut frames = vec![frame20(), frame20(), frame20()];
     for (k, f) in frames.iter_mut().enumerate() {
@@ -219,7 +200,7 @@ fn gif_with_three_frames_decodes_back() {
         f.robots[0].pos = Pos::new(2, 2 + k as i32);
     }
     save_gif(&frames, &opts, 200, &path).unwrap();
-    assert_eq!(dir.entries(), ["episode.gif"], "no temp file left behind");
+    assert_eq!(entries(&dir), ["episode.gif"], "no temp file left behind");
 
     let file = std::io::BufReader::new(std::fs::File::open(&path).unwrap());
     let decoded = image::codecs::gif::GifDecoder::new(file)
@@ -248,7 +229,7 @@ fn gif_with_three_frames_decodes_back() {
 #[test]
 fn gif_writer_streams_and_checks_sizes() {
     let dir = Scratch::new("stream");
-    let path = dir.file("s.gif");
+    let path = dir.join("s.gif");
     let opts = RenderOptions {
         cell_px: 8,
         show_truth: false,
@@ -274,14 +255,14 @@ fn gif_writer_streams_and_checks_sizes() {
         .into_frames()
         .count();
     assert_eq!(n, 2);
-    assert_eq!(dir.entries(), ["s.gif"]);
+    assert_eq!(entries(&dir), ["s.gif"]);
 
     // Dropping an unfinished writer leaves nothing behind.
-    let other = dir.file("dropped.gif");
+    let other = dir.join("dropped.gif");
     let mut w = GifWriter::new(&other, &opts, 100).unwrap();
     w.push(&frame20()).unwrap();
     drop(w);
-    assert_eq!(dir.entries(), ["s.gif"]);
+    assert_eq!(entries(&dir), ["s.gif"]);
 
     // No frames is an error, not an empty file.
     let err = GifWriter::new(&other, &opts, 100)
@@ -291,18 +272,18 @@ fn gif_writer_streams_and_checks_sizes() {
     assert!(matches!(err, RenderError::NoFrames { .. }), "{err}");
     let err = save_gif(&[], &opts, 100, &other).unwrap_err();
     assert!(err.to_string().contains("dropped.gif"), "{err}");
-    assert_eq!(dir.entries(), ["s.gif"]);
+    assert_eq!(entries(&dir), ["s.gif"]);
 }
 
 #[test]
 fn png_round_trips() {
     let dir = Scratch::new("png");
-    let path = dir.file("snap.png");
+    let path = dir.join("snap.png");
     let opts = RenderOptions::default();
     save_png(&frame20(), &opts, &path).unwrap();
     // Overwriting works too.
     save_png(&frame20(), &opts, &path).unwrap();
-    assert_eq!(dir.entries(), ["snap.png"]);
+    assert_eq!(entries(&dir), ["snap.png"]);
     let back = image::open(&path).unwrap().to_rgba8();
     assert_eq!(back, render(&frame20(), &opts));
 }
@@ -311,12 +292,12 @@ fn png_round_trips() {
 fn missing_directory_is_an_error_naming_the_path() {
     let dir = Scratch::new("missing");
     let opts = RenderOptions::default();
-    let png = dir.file("no/such/dir/snap.png");
+    let png = dir.join("no/such/dir/snap.png");
     let err = save_png(&frame20(), &opts, &png).unwrap_err();
     assert!(matches!(err, RenderError::Io { .. }), "{err:?}");
     assert!(err.to_string().contains(&*png.to_string_lossy()), "{err}");
 
-    let gif = dir.file("no/such/dir/ep.gif");
+    let gif = dir.join("no/such/dir/ep.gif");
     let err = save_gif(&[frame20()], &opts, 100, &gif).unwrap_err();
     assert!(err.to_string().contains(&*gif.to_string_lossy()), "{err}");
     assert!(GifWriter::new(&gif, &opts, 100).is_err());

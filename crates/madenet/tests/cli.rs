@@ -1,38 +1,16 @@
 //! The `madenet` binary end to end: good runs produce their outputs, bad input gives one
 //! clear line naming the file and field, exit code 2, and never a panic.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use madenet_testkit::{assert_clean_error, run, Scratch};
+use std::process::Output;
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .output()
-        .expect("run madenet")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("madenet-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-/// Exit code 2, one stderr line starting `error:` that contains every `needle`, no panic.
-fn assert_clean_error(out: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "`{n}` missing from: {err}");
-    }
+    run(env!("CARGO_BIN_EXE_madenet"), args)
 }
 
 #[test]
 fn run_prints_metrics_and_writes_pictures() {
-    let dir = scratch("run");
+    let dir = Scratch::new("cli-run");
     let gif = dir.join("trial.gif");
     let png = dir.join("trial.png");
     let out = madenet(&[
@@ -102,7 +80,7 @@ fn json_output_is_deterministic() {
 
 #[test]
 fn map_convert_generate_show_round_trip() {
-    let dir = scratch("maps");
+    let dir = Scratch::new("cli-maps");
     let yaml = dir.join("gen.yaml");
     let txt = dir.join("gen.txt");
     assert!(
@@ -141,7 +119,7 @@ fn missing_map_file() {
 
 #[test]
 fn malformed_yaml_names_file_and_field() {
-    let dir = scratch("bad-yaml");
+    let dir = Scratch::new("cli-bad-yaml");
     let yaml = dir.join("bad.yaml");
     std::fs::write(&yaml, "image: x.pgm\nresolution: fast\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n").unwrap();
     assert_clean_error(
@@ -152,7 +130,7 @@ fn malformed_yaml_names_file_and_field() {
 
 #[test]
 fn truncated_pgm_names_the_image() {
-    let dir = scratch("bad-pgm");
+    let dir = Scratch::new("cli-bad-pgm");
     std::fs::write(dir.join("m.pgm"), b"P5\n20 20\n255\n\x00\x00").unwrap();
     std::fs::write(dir.join("m.yaml"), "image: m.pgm\nresolution: 1.0\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n").unwrap();
     assert_clean_error(
@@ -177,7 +155,7 @@ fn start_in_obstacle() {
 
 #[test]
 fn more_robots_than_start_cells() {
-    let dir = scratch("robots");
+    let dir = Scratch::new("cli-robots");
     let cfg = dir.join("four.toml");
     std::fs::write(&cfg, "num_robots = 4\n").unwrap();
     assert_clean_error(
@@ -196,7 +174,7 @@ fn unknown_policy() {
 
 #[test]
 fn bad_config_values() {
-    let dir = scratch("cfg");
+    let dir = Scratch::new("cli-cfg");
     let cases = [
         ("comm_success_prob = 1.5\n", "comm_success_prob"),
         ("sensing_rnage = 4\n", "sensing_rnage"),
@@ -270,7 +248,7 @@ fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
     );
     assert!(String::from_utf8_lossy(&out.stdout).contains("\"policy\": \"spread\""));
     // A map whose free cells are single pockets: no three connected free cells anywhere.
-    let dir = scratch("pockets");
+    let dir = Scratch::new("cli-pockets");
     let map = dir.join("pockets.txt");
     std::fs::write(&map, ".#.#.#\n######\n.#.#.#\n######\n.#.#.#\n######\n").unwrap();
     assert_clean_error(
@@ -281,7 +259,7 @@ fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
 
 #[test]
 fn a_continuous_run_explores_draws_and_refuses_bad_input() {
-    let dir = scratch("continuous");
+    let dir = Scratch::new("cli-continuous");
     let png = dir.join("run.png");
     let out = madenet(&[
         "run",

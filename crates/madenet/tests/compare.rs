@@ -2,40 +2,12 @@
 //! outputs; running it again resumes (no trial runs twice); bad input gives exit code 2 and one
 //! `error:` line naming the field, before any trial runs.
 
-use std::path::{Path, PathBuf};
+use madenet_testkit::{assert_clean_error, run, Scratch};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .output()
-        .expect("run madenet")
-}
-
-/// A temp folder removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let p = std::env::temp_dir().join(format!(
-            "madenet-compare-test-{}-{name}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).expect("temp dir");
-        Scratch(p)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        if std::env::var_os("MADENET_KEEP_TEST_DIRS").is_none() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
+    run(env!("CARGO_BIN_EXE_madenet"), args)
 }
 
 const SMALL: &str = r#"methods = ["nf", "ub"]
@@ -49,19 +21,6 @@ oracles = []
 fn write(path: &Path, text: &str) -> String {
     std::fs::write(path, text).unwrap();
     path.display().to_string()
-}
-
-/// Exit code 2, one stderr line starting `error:` that contains every needle, no panic.
-fn assert_clean_error(out: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err:?}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "`{n}` missing from: {err}");
-    }
 }
 
 /// The rows of a CSV file (header first) without the wall-clock columns `trial_s` and

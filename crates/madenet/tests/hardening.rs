@@ -3,47 +3,10 @@
 //! hang), and nothing the user pointed at is written. Outputs given as symlinks or devices are
 //! written through, never replaced.
 
+use madenet_testkit::{assert_clean_error_in, run_limited, Scratch};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
-
-/// Runs madenet, killing it after 60 s (a hang or a runaway allocation fails the test).
-fn madenet(args: &[String]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run madenet");
-    let t0 = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if t0.elapsed() > Duration::from_secs(60) {
-            child.kill().unwrap();
-            panic!("madenet {args:?} ran for over 60 s");
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    child.wait_with_output().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("madenet-hard-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn check_error(case: &str, out: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{case}: stderr: {err}");
-    assert!(!err.contains("panicked"), "{case}: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{case}: one line expected: {err}");
-    assert!(lines[0].starts_with("error: "), "{case}: {err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{case}: `{n}` missing from: {err}");
-    }
-}
 
 /// Every file below `dir` with its bytes.
 fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
@@ -60,11 +23,16 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     v
 }
 
+/// Runs madenet, killing it after 60 s (a hang or a runaway allocation fails the test).
+fn madenet(args: &[String]) -> Output {
+    run_limited(env!("CARGO_BIN_EXE_madenet"), args, Duration::from_secs(60))
+}
+
 const STUDY: &str = "methods = [\"nf\"]\nmaps = [\"paper:1\"]\nstarts = [\"top-left\"]\ncsp = [1.0]\nseeds = 1\noracles = []\n";
 
 #[test]
 fn bad_values_are_one_clear_error_and_write_nothing() {
-    let dir = scratch("table");
+    let dir = Scratch::new("hard-table");
     let d = dir.display().to_string();
     // A file the user points an output at: it must survive every refused command.
     std::fs::write(dir.join("keep.png"), b"precious").unwrap();
@@ -297,7 +265,7 @@ fn bad_values_are_one_clear_error_and_write_nothing() {
     for (case, args, needles) in &cases {
         let out = madenet(args);
         let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
-        check_error(case, &out, &needles);
+        assert_clean_error_in(case, &out, &needles);
         assert_eq!(snapshot(&dir), before, "{case}: a file changed");
         for sub in ["cmp", "run"] {
             assert!(!dir.join(sub).exists(), "{case}: wrote {sub}/");
@@ -309,7 +277,7 @@ fn bad_values_are_one_clear_error_and_write_nothing() {
 #[cfg(unix)]
 #[test]
 fn outputs_through_symlinks_and_devices() {
-    let dir = scratch("links");
+    let dir = Scratch::new("hard-links");
     let target_dir = dir.join("results");
     std::fs::create_dir_all(&target_dir).unwrap();
     let s = |p: &Path| p.display().to_string();
@@ -417,7 +385,7 @@ fn outputs_through_symlinks_and_devices() {
 /// Issue 27's second pass, the cases that held up badly: each a row that failed before.
 #[test]
 fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
-    let dir = scratch("second");
+    let dir = Scratch::new("hard-second");
     let s = |p: &Path| p.display().to_string();
     // Unknown fields under [discretize] and in a model's model.toml are refused by name.
     std::fs::write(
@@ -430,7 +398,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
         "--config".into(),
         s(&dir.join("scenario.toml")),
     ]);
-    check_error(
+    assert_clean_error_in(
         "[discretize] typo",
         &out,
         &["scenario.toml", "obstacle_fractoin"],
@@ -457,7 +425,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
         "--model".into(),
         s(&model),
     ]);
-    check_error("model.toml typo", &out, &["model.toml", "colour"]);
+    assert_clean_error_in("model.toml typo", &out, &["model.toml", "colour"]);
     // `none` is no oracle at all: not beside others.
     let out = madenet(&[
         "compare".into(),
@@ -466,7 +434,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
         "--out".into(),
         s(&dir.join("cmp")),
     ]);
-    check_error("--oracles none,placebo", &out, &["--oracles", "none"]);
+    assert_clean_error_in("--oracles none,placebo", &out, &["--oracles", "none"]);
     assert!(!dir.join("cmp").exists());
     // A YAML map whose YAML target is a folder: its image beside it stays untouched.
     std::fs::create_dir_all(dir.join("keep.yaml")).unwrap();
@@ -477,7 +445,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
         "paper:2".into(),
         s(&dir.join("keep.yaml")),
     ]);
-    check_error("convert onto a folder", &out, &["keep.yaml"]);
+    assert_clean_error_in("convert onto a folder", &out, &["keep.yaml"]);
     assert_eq!(std::fs::read(dir.join("keep.pgm")).unwrap(), b"precious");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -485,7 +453,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
 /// Unknown cells of a ground truth are obstacles: `explored` never exceeds 100 %.
 #[test]
 fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
-    let dir = scratch("unknown");
+    let dir = Scratch::new("hard-unknown");
     let mut text = String::new();
     for r in 0..12 {
         let row: String = (0..12)
@@ -525,7 +493,7 @@ fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
 /// A model.toml whose sizes are impossible is refused by field before any network is built.
 #[test]
 fn a_model_with_impossible_sizes_names_the_field() {
-    let dir = scratch("sizes");
+    let dir = Scratch::new("hard-sizes");
     let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net");
     for (field, bad) in [
         ("goal_count", "0"),
@@ -560,7 +528,7 @@ fn a_model_with_impossible_sizes_names_the_field() {
             "--model".into(),
             model.display().to_string(),
         ]);
-        check_error(field, &out, &["model.toml", &format!("dep.{field}")]);
+        assert_clean_error_in(field, &out, &["model.toml", &format!("dep.{field}")]);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -597,7 +565,7 @@ fn run_model(model: &Path) -> Output {
 /// refused by file and field, never burn's panic; a folder without digests still loads.
 #[test]
 fn a_model_folder_is_checked_against_its_weights() {
-    let dir = scratch("weights");
+    let dir = Scratch::new("hard-weights");
     let set = |field: &'static str, value: &'static str| {
         move |t: &str| {
             t.lines()
@@ -615,7 +583,7 @@ fn a_model_folder_is_checked_against_its_weights() {
     for (field, value) in [("map_height", "30"), ("team_size", "5")] {
         let m = model_copy(&dir.join(field), "made-net", set(field, value));
         let out = run_model(&m);
-        check_error(
+        assert_clean_error_in(
             field,
             &out,
             &["dep0.bpk", "do not fit", &format!("`dep.{field}` {value}")],
@@ -629,7 +597,7 @@ fn a_model_folder_is_checked_against_its_weights() {
         w[n / 2 + i] ^= 0x5a;
     }
     std::fs::write(m.join("dep0.bpk"), &w).unwrap();
-    check_error("flipped", &run_model(&m), &["dep0.bpk", "digest"]);
+    assert_clean_error_in("flipped", &run_model(&m), &["dep0.bpk", "digest"]);
     // NaN weights under a matching digest: refused by parameter.
     let m = model_copy(&dir.join("nan"), "made-net", |t| t.to_string());
     let mut w = std::fs::read(m.join("dep0.bpk")).unwrap();
@@ -650,7 +618,7 @@ fn a_model_folder_is_checked_against_its_weights() {
         })
         .collect();
     std::fs::write(m.join("model.toml"), toml).unwrap();
-    check_error("nan", &run_model(&m), &["dep0.bpk", "NaN"]);
+    assert_clean_error_in("nan", &run_model(&m), &["dep0.bpk", "NaN"]);
     let no_digests = |t: &str| {
         t.lines()
             .filter(|l| !l.starts_with("digests ="))
@@ -671,7 +639,7 @@ fn a_model_folder_is_checked_against_its_weights() {
 /// outlives `--max-minutes` by more than an episode, an update and a validation.
 #[test]
 fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
-    let dir = scratch("train-bounds");
+    let dir = Scratch::new("hard-train-bounds");
     for (name, text, needles) in [
         (
             "dme.toml",
@@ -714,7 +682,7 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
             "--out".into(),
             dir.join(format!("{name}.out")).display().to_string(),
         ]);
-        check_error(name, &out, &[name, needles[0], needles[1]]);
+        assert_clean_error_in(name, &out, &[name, needles[0], needles[1]]);
     }
     // A million updates in one iteration, 3 s of budget: it stops inside the iteration.
     let cfg = dir.join("long.toml");
@@ -736,7 +704,7 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
     ]);
     // The call's first iteration cut: nothing trained, which is an error (resuming with the same
     // budget would cut it again), not a success that loops.
-    check_error(
+    assert_clean_error_in(
         "time budget",
         &out,
         &["--max-minutes", "ran out inside iteration 1", "raise it"],
@@ -749,9 +717,9 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
 /// the cap, a FIFO nobody writes reads as empty (a bad map, a bad weight file), never a hang.
 #[test]
 fn devices_and_fifos_as_inputs_are_bounded() {
-    let dir = scratch("streams");
+    let dir = Scratch::new("hard-streams");
     let out = madenet(&["run".into(), "--config".into(), "/dev/zero".into()]);
-    check_error("config /dev/zero", &out, &["/dev/zero", "16 MiB"]);
+    assert_clean_error_in("config /dev/zero", &out, &["/dev/zero", "16 MiB"]);
     let fifo = |p: &Path| {
         let ok = Command::new("mkfifo").arg(p).status().expect("mkfifo");
         assert!(ok.success(), "mkfifo {p:?}");
@@ -759,11 +727,11 @@ fn devices_and_fifos_as_inputs_are_bounded() {
     let map = dir.join("fifo.pgm");
     fifo(&map);
     let out = madenet(&["run".into(), "--map".into(), map.display().to_string()]);
-    check_error("map fifo", &out, &["fifo.pgm"]);
+    assert_clean_error_in("map fifo", &out, &["fifo.pgm"]);
     let model = model_copy(&dir.join("model"), "made-net", |t| t.to_string());
     std::fs::remove_file(model.join("dep0.bpk")).unwrap();
     fifo(&model.join("dep0.bpk"));
-    check_error("weights fifo", &run_model(&model), &["dep0.bpk"]);
+    assert_clean_error_in("weights fifo", &run_model(&model), &["dep0.bpk"]);
     // A training config from a pipe is read once: its field is what the error names (a
     // second read found the pipe empty).
     let cfg = dir.join("train.toml");
@@ -782,7 +750,7 @@ fn devices_and_fifos_as_inputs_are_bounded() {
         dir.join("run").display().to_string(),
     ]);
     writer.join().unwrap();
-    check_error("train config fifo", &out, &["train.toml", "`hidden`"]);
+    assert_clean_error_in("train config fifo", &out, &["train.toml", "`hidden`"]);
     // A --config that is not there is an error, not the defaults.
     let missing = dir.join("no-such-config.toml");
     let out = madenet(&[
@@ -792,7 +760,7 @@ fn devices_and_fifos_as_inputs_are_bounded() {
         "--out".into(),
         dir.join("run-missing").display().to_string(),
     ]);
-    check_error("train config missing", &out, &["no-such-config.toml"]);
+    assert_clean_error_in("train config missing", &out, &["no-such-config.toml"]);
     assert!(!dir.join("run-missing").exists(), "nothing written");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -801,7 +769,7 @@ fn devices_and_fifos_as_inputs_are_bounded() {
 /// no notes, no advice meant for the programmer; deep nesting and alias bombs end quickly.
 #[test]
 fn yaml_errors_are_one_line_naming_the_field() {
-    let dir = scratch("yaml");
+    let dir = Scratch::new("hard-yaml");
     let base = "image: m.pgm\nresolution: 1.0\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
     let mut bomb =
         String::from("a0: &a0 [\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\",\"x\"]\n");
@@ -841,7 +809,7 @@ fn yaml_errors_are_one_line_naming_the_field() {
         let yaml = dir.join(format!("{case}.yaml"));
         std::fs::write(&yaml, text).unwrap();
         let out = madenet(&["map".into(), "show".into(), yaml.display().to_string()]);
-        check_error(case, &out, &[&format!("{case}.yaml"), needle]);
+        assert_clean_error_in(case, &out, &[&format!("{case}.yaml"), needle]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
             !err.contains("DuplicateKeyPolicy") && !err.contains("-->"),
@@ -856,7 +824,7 @@ fn an_output_that_cannot_be_written_is_named_and_leaves_nothing_behind() {
     // A file-size limit stands in for a full disk (no small file system is needed): the write
     // fails part-way (EFBIG here, ENOSPC there) exactly where a full disk would fail it.
     use std::os::unix::process::CommandExt;
-    let dir = scratch("full");
+    let dir = Scratch::new("hard-full");
     let out_csv = dir.join("batch.csv");
     std::fs::write(&out_csv, b"precious").unwrap();
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_madenet"));
@@ -888,7 +856,7 @@ fn an_output_that_cannot_be_written_is_named_and_leaves_nothing_behind() {
     }
     let out = cmd.output().unwrap();
     let shown = out_csv.display().to_string();
-    check_error("full", &out, &["--out", &shown, "too large"]);
+    assert_clean_error_in("full", &out, &["--out", &shown, "too large"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         !err.contains(".madenet-"),

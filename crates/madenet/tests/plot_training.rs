@@ -1,40 +1,12 @@
 //! `madenet plot-training` end to end: a run directory's `episodes.csv` becomes a PNG (at the
 //! default path or `--out`); bad input gives exit code 2 and one `error:` line naming the file.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use madenet_testkit::{assert_clean_error, run, Scratch};
+use std::path::Path;
+use std::process::Output;
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .output()
-        .expect("run madenet")
-}
-
-/// A temp folder removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        let p = std::env::temp_dir().join(format!(
-            "madenet-plot-training-test-{}-{name}",
-            std::process::id()
-        ));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).expect("temp dir");
-        Scratch(p)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        if std::env::var_os("MADENET_KEEP_TEST_DIRS").is_none() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
+    run(env!("CARGO_BIN_EXE_madenet"), args)
 }
 
 const EPISODES: &str = "episode,env,csp,steps,team_reward,complete,epsilon,updates,wall_s
@@ -44,19 +16,6 @@ const EPISODES: &str = "episode,env,csp,steps,team_reward,complete,epsilon,updat
 3,cen,1,150,-30.5,1,0.7,51,4.0
 4,dec,0.5,120,-22,1,0.6,70,4.8
 ";
-
-/// Exit code 2, one stderr line starting `error:` that contains every needle, no panic.
-fn assert_clean_error(out: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err}");
-    assert!(lines[0].starts_with("error: "), "{err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "`{n}` missing from: {err}");
-    }
-}
 
 fn png_size(path: &Path) -> (u32, u32) {
     // PNG IHDR: width and height are the big-endian u32s at bytes 16..24.

@@ -2,24 +2,11 @@
 //! shipped agnostic model plays every side and team of it, and bad input gives exit code 2 and
 //! one `error:` line naming the flag or file and field.
 
-use std::process::{Command, Output};
+use madenet_testkit::{assert_clean_error, run};
+use std::process::Output;
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .output()
-        .expect("run madenet")
-}
-
-fn assert_clean_error(out: &Output, needles: &[&str]) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
-    assert!(!err.contains("panicked"), "{err}");
-    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
-    assert_eq!(lines.len(), 1, "one line expected: {err:?}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{n:?} missing from {:?}", lines[0]);
-    }
+    run(env!("CARGO_BIN_EXE_madenet"), args)
 }
 
 #[test]

@@ -2,42 +2,18 @@
 //! `--model` playing the result, and bad input: exit code 2 and one `error:` line naming the
 //! file or flag.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use madenet_testkit::{error_line, run, Scratch};
+use std::process::Output;
 
 fn madenet(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args(args)
-        .output()
-        .expect("run madenet")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("madenet-train-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    std::fs::create_dir_all(&p).expect("temp dir");
-    p
-}
-
-fn error_line(o: &Output) -> String {
-    assert_eq!(
-        o.status.code(),
-        Some(2),
-        "stdout {} stderr {}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let err = String::from_utf8_lossy(&o.stderr).to_string();
-    assert_eq!(err.lines().count(), 1, "one line: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    err
+    run(env!("CARGO_BIN_EXE_madenet"), args)
 }
 
 const TINY: &str = "episodes = 3\nwarmup_episodes = 1\nbatch_size = 2\ntrace_len = 4\nreplay_episodes = 4\nvalidate_every = 3\nvalidation_maps = 1\nvalidation_csp = [0.5]\ncheckpoint_every = 2\nthreads = 1\n[scenario]\nstep_cap = 30\n";
 
 #[test]
 fn tiny_run_resume_and_model() {
-    let dir = scratch("run");
+    let dir = Scratch::new("train-cli-run");
     let cfg = dir.join("tiny.toml");
     std::fs::write(&cfg, TINY).unwrap();
     let run = dir.join("run");
@@ -149,7 +125,7 @@ fn tiny_run_resume_and_model() {
 
 #[test]
 fn bad_training_input_is_one_line() {
-    let dir = scratch("bad");
+    let dir = Scratch::new("train-cli-bad");
     let cfg = dir.join("bad.toml");
     std::fs::write(&cfg, "gamma = 2.0\n").unwrap();
     let out = dir.join("out");
@@ -197,7 +173,7 @@ const TINY_DME: &str = "method = \"dme-drl\"\nepisodes = 2\nbatch_size = 4\nrepl
 
 #[test]
 fn dme_drl_tiny_run_resume_model_and_bad_input() {
-    let dir = scratch("dme");
+    let dir = Scratch::new("train-cli-dme");
     let cfg = dir.join("tiny-dme.toml");
     std::fs::write(&cfg, TINY_DME).unwrap();
     let run = dir.join("run");

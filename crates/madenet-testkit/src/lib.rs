@@ -1,0 +1,162 @@
+//! What the workspace's integration tests share (a dev-dependency only, never part of a
+//! binary): running the command line with a time limit ([`run`]), scratch folders removed
+//! after the test ([`Scratch`]), and the contract every bad input is held to
+//! ([`assert_clean_error`]: exit code 2, one `error:` line naming what is wrong, no panic).
+//!
+//! ```
+//! use madenet_testkit::Scratch;
+//!
+//! let dir = Scratch::new("doc");
+//! let file = dir.write("a.toml", "seeds = 1\n");
+//! assert_eq!(madenet_testkit::read(&file), "seeds = 1\n");
+//! let path = dir.to_path_buf();
+//! drop(dir);
+//! assert!(!path.exists()); // gone with the scratch folder
+//! ```
+
+use std::ffi::OsStr;
+use std::fmt::Debug;
+use std::ops::Deref;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// How long [`run`] lets a command run before the test fails.
+pub const RUN_LIMIT: Duration = Duration::from_secs(600);
+
+/// Runs `bin` (in a test: `env!("CARGO_BIN_EXE_madenet")`) with `args` and collects its output;
+/// kills it and fails the test after `limit` (a hang or a runaway allocation).
+pub fn run_limited<S: AsRef<OsStr> + Debug>(bin: &str, args: &[S], limit: Duration) -> Output {
+    use std::io::Read;
+    let mut child = Command::new(bin)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("run {bin}: {e}"));
+    // The pipes are drained while the command runs, so a chatty one cannot block on a full pipe.
+    let drain = |mut pipe: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut buf = Vec::new();
+            let _ = pipe.read_to_end(&mut buf);
+            buf
+        })
+    };
+    let stdout = drain(Box::new(child.stdout.take().expect("piped")));
+    let stderr = drain(Box::new(child.stderr.take().expect("piped")));
+    let t0 = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{bin} {args:?} ran for over {} s", limit.as_secs());
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    Output {
+        status,
+        stdout: stdout.join().expect("stdout reader"),
+        stderr: stderr.join().expect("stderr reader"),
+    }
+}
+
+/// [`run_limited`] with [`RUN_LIMIT`].
+pub fn run<S: AsRef<OsStr> + Debug>(bin: &str, args: &[S]) -> Output {
+    run_limited(bin, args, RUN_LIMIT)
+}
+
+/// A scratch folder, removed when dropped (kept, to look at, when `MADENET_KEEP_TEST_DIRS` is
+/// set). Dereferences to its path.
+pub struct Scratch {
+    dir: Option<tempfile::TempDir>,
+    path: PathBuf,
+}
+
+impl Scratch {
+    /// A new empty folder under the system's temp folder, its name starting `madenet-<tag>-`.
+    pub fn new(tag: &str) -> Self {
+        let dir = tempfile::Builder::new()
+            .prefix(&format!("madenet-{tag}-"))
+            .tempdir()
+            .expect("scratch folder");
+        let path = dir.path().to_path_buf();
+        Scratch {
+            dir: Some(dir),
+            path,
+        }
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes `text` to `name` in the folder and returns its path.
+    pub fn write(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.path.join(name);
+        std::fs::write(&p, text).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        p
+    }
+}
+
+impl Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::env::var_os("MADENET_KEEP_TEST_DIRS").is_some() {
+            if let Some(d) = self.dir.take() {
+                let _ = d.keep();
+            }
+        }
+    }
+}
+
+/// The text of `path` (the test fails naming the file if it cannot be read).
+pub fn read(path: impl AsRef<Path>) -> String {
+    let p = path.as_ref();
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The error contract: exit code 2, no panic, and one non-empty stderr line starting `error: `
+/// that contains every `needle`. Returns the line.
+pub fn assert_clean_error(out: &Output, needles: &[&str]) -> String {
+    assert_clean_error_in("", out, needles)
+}
+
+/// The one error line of `out`, checked as [`assert_clean_error`] checks it.
+pub fn error_line(out: &Output) -> String {
+    assert_clean_error(out, &[])
+}
+
+/// [`assert_clean_error`], naming `case` in its failures.
+pub fn assert_clean_error_in(case: &str, out: &Output, needles: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&out.stderr);
+    let out_text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{case}: stdout {out_text} stderr {err}"
+    );
+    assert!(!err.contains("panicked"), "{case}: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "{case}: one line expected: {err:?}");
+    assert!(lines[0].starts_with("error: "), "{case}: {err}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{case}: `{n}` missing from: {err}");
+    }
+    lines[0].to_string()
+}
