@@ -55,6 +55,7 @@
 
 #![deny(missing_docs)]
 
+pub mod launch;
 mod mailbox;
 mod radio_node;
 mod robot;

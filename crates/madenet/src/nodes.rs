@@ -7,12 +7,11 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
+use madenet_runtime::launch::{run_nodes, LaunchError, LaunchEvent};
 use madenet_runtime::wire::{Node, Shown};
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
 use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, ZenohBus};
-use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
 /// Longest wait a node accepts (`--timeout-s`), seconds.
@@ -493,18 +492,6 @@ pub struct LaunchArgs {
     pictures: crate::run::PictureArgs,
 }
 
-/// The node processes of a launch; dropping it kills any still running.
-struct Children(Vec<(Node, Child)>);
-
-impl Drop for Children {
-    fn drop(&mut self) {
-        for (_, c) in &mut self.0 {
-            let _ = c.kill();
-            let _ = c.wait();
-        }
-    }
-}
-
 pub fn launch(a: LaunchArgs) -> Result<()> {
     // Check the trial here once (world and every agent built), so a bad flag is one error
     // rather than five.
@@ -527,7 +514,13 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     loop {
         let port = free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?;
         match launch_on(&a, n, port) {
-            Err(e) if attempt < PORT_ATTEMPTS && e.downcast_ref::<PortsTaken>().is_some() => {
+            Err(e)
+                if attempt < PORT_ATTEMPTS
+                    && matches!(
+                        e.downcast_ref::<LaunchError>(),
+                        Some(LaunchError::PortsTaken { .. })
+                    ) =>
+            {
                 tracing::warn!("{e}: trying again on other ports");
                 attempt += 1;
             }
@@ -538,11 +531,6 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
 
 /// Runs of `launch --port 0` tried before giving up on ports taken by other programs.
 const PORT_ATTEMPTS: usize = 3;
-
-/// A node of a launch could not listen on its port: another program took it.
-#[derive(Debug, thiserror::Error)]
-#[error("the run over processes failed: a port of tcp/127.0.0.1:{0}… was taken ({1})")]
-struct PortsTaken(u16, String);
 
 /// One launch on the loopback ports from `port` on.
 fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
@@ -564,64 +552,50 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
             "--progress".into(),
         ])
         .collect();
-    let mut children = Children(Vec::new());
-    let (tx, rx) = std::sync::mpsc::channel::<(Node, String)>();
-    let nodes = madenet_runtime::nodes_of(n);
-    for &node in &nodes {
-        let mut cmd = Command::new(&exe);
-        match node {
-            Node::World => {
-                cmd.arg("world")
-                    .args(&common)
-                    .arg("--out")
-                    .arg(&result_path)
-                    .args(a.real.to_args());
-                if a.pictures.any() {
-                    cmd.args(a.pictures.to_args());
+    let nodes: Vec<(Node, Vec<String>)> = madenet_runtime::nodes_of(n)
+        .into_iter()
+        .map(|node| {
+            let mut args: Vec<String> = Vec::new();
+            match node {
+                Node::World => {
+                    args.push("world".into());
+                    args.extend(common.iter().cloned());
+                    args.push("--out".into());
+                    args.push(result_path.display().to_string());
+                    args.extend(a.real.to_args());
+                    if a.pictures.any() {
+                        args.extend(a.pictures.to_args());
+                    }
+                    if a.trajectory {
+                        args.push("--trajectory".into());
+                    }
                 }
-                if a.trajectory {
-                    cmd.arg("--trajectory");
-                }
-            }
-            Node::Radio => {
-                cmd.arg("radio").args(&common).args([
+                Node::Radio => {
+                    args.push("radio".into());
+                    args.extend(common.iter().cloned());
                     // As `--csp` (ScenarioArgs::to_args): −0.0 must not reach a child as "-0".
-                    format!("--loss={}", a.faults.loss + 0.0),
-                    format!("--delay={}", a.faults.delay),
-                ]);
-            }
-            Node::Robot(i) => {
-                cmd.arg("agent")
-                    .args(&common)
-                    .args(["--robot", &i.to_string()])
-                    .args(a.ros2.to_args());
-            }
-        }
-        let mut child = cmd
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .with_context(|| format!("starting the {node} process"))?;
-        let stderr = child.stderr.take().expect("piped");
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                if tx.send((node, line)).is_err() {
-                    break;
+                    args.push(format!("--loss={}", a.faults.loss + 0.0));
+                    args.push(format!("--delay={}", a.faults.delay));
+                }
+                Node::Robot(i) => {
+                    args.push("agent".into());
+                    args.extend(common.iter().cloned());
+                    args.extend(["--robot".to_string(), i.to_string()]);
+                    args.extend(a.ros2.to_args());
                 }
             }
-        });
-        children.0.push((node, child));
-    }
-    drop(tx);
+            (node, args)
+        })
+        .collect();
 
+    // A progress line per node; warnings shown as they come (errors end the run and are in
+    // its one-line error).
     let bars = indicatif::MultiProgress::new();
     let style =
         indicatif::ProgressStyle::with_template("{prefix:>8} {msg}").expect("a valid template");
     let bar_of: Vec<indicatif::ProgressBar> = nodes
         .iter()
-        .map(|node| {
+        .map(|(node, _)| {
             bars.add(
                 indicatif::ProgressBar::new_spinner()
                     .with_style(style.clone())
@@ -630,83 +604,23 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
             )
         })
         .collect();
-    let index = |node: Node| {
-        nodes
-            .iter()
-            .position(|&m| m == node)
-            .expect("a node of the run")
-    };
-    // Last words of each node that are not progress (an error explains a failure).
-    let mut said: Vec<Vec<String>> = vec![Vec::new(); nodes.len()];
-    let mut failures: Vec<String> = Vec::new();
-    let mut running = nodes.len();
-    while running > 0 {
-        match rx.recv_timeout(Duration::from_millis(100)) {
-            Ok((node, line)) => {
-                let k = index(node);
-                match line.strip_prefix("progress ") {
-                    Some(p) => bar_of[k].set_message(p.to_string()),
-                    None => {
-                        // Warnings of the nodes are shown as they come (errors end the run
-                        // and are in its one-line error).
-                        let warning = !line.starts_with("error");
-                        if warning && bars.is_hidden() {
-                            eprintln!("{node}: {line}");
-                        } else if warning {
-                            bars.println(format!("{node}: {line}")).ok();
-                        }
-                        said[k].push(line);
-                        if said[k].len() > 5 {
-                            said[k].remove(0);
-                        }
-                    }
-                }
-            }
-            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
-            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {}
-        }
-        running = 0;
-        for (k, (node, child)) in children.0.iter_mut().enumerate() {
-            match child.try_wait()? {
-                None => running += 1,
-                Some(status) if !status.success() && !bar_of[k].is_finished() => {
-                    bar_of[k].finish_with_message("failed");
-                    failures.push(format!("{node} exited with {status}"));
-                }
-                Some(_) if !bar_of[k].is_finished() => bar_of[k].finish_with_message("done"),
-                Some(_) => {}
+    let bar = |node: Node| &bar_of[nodes.iter().position(|n| n.0 == node).expect("a node")];
+    let outcome = run_nodes(&exe, &nodes, port, &mut |event| match event {
+        LaunchEvent::Progress(node, p) => bar(node).set_message(p.to_string()),
+        LaunchEvent::Said(node, line) if !line.starts_with("error") => {
+            if bars.is_hidden() {
+                eprintln!("{node}: {line}");
+            } else {
+                bars.println(format!("{node}: {line}")).ok();
             }
         }
-        if !failures.is_empty() {
-            // One node failed: the others would only time out; stop them now.
-            break;
+        LaunchEvent::Said(..) => {}
+        LaunchEvent::Finished(node, ok) => {
+            bar(node).finish_with_message(if ok { "done" } else { "failed" })
         }
-    }
-    // Drain what the nodes said last.
-    drop(children);
-    while let Ok((node, line)) = rx.recv_timeout(Duration::from_millis(50)) {
-        if !line.starts_with("progress ") {
-            said[index(node)].push(line);
-        }
-    }
+    });
     bars.clear().ok();
-    if !failures.is_empty() {
-        let taken = said
-            .iter()
-            .flatten()
-            .find(|l| l.starts_with("error") && l.contains("Address already in use"));
-        if let Some(line) = taken {
-            return Err(PortsTaken(port, line.clone()).into());
-        }
-        let mut msg = failures.join("; ");
-        for (k, node) in nodes.iter().enumerate() {
-            if let Some(last) = said[k].iter().rev().find(|l| l.starts_with("error")) {
-                // Already shown above as it came; repeated in the one-line error.
-                msg.push_str(&format!("; {node}: {last}"));
-            }
-        }
-        anyhow::bail!("the run over processes failed: {msg}");
-    }
+    outcome?;
     let json = std::fs::read_to_string(&result_path).context("the world's result")?;
     if a.json {
         out!("{}", json.trim_end())?;

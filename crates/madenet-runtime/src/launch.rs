@@ -1,0 +1,224 @@
+//! Starting a run's nodes as processes and watching them until they end ([`run_nodes`]): the
+//! launcher behind `madenet launch`, for the tests and the Python package as well as the
+//! command line. Each node is a process of the same binary (`madenet world | radio | agent`);
+//! what a node says on stderr comes back as events: lines starting `progress ` as progress,
+//! any other line as something it said (a warning as it happens, an error before it exits).
+//! When one node fails the others are stopped (they would only wait for it to time out), and
+//! the error names every failed node with its last error line.
+
+use crate::wire::Node;
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// What a node did, as [`run_nodes`] reports it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LaunchEvent<'a> {
+    /// A progress line (the text after `progress `).
+    Progress(Node, &'a str),
+    /// Any other line it printed on stderr (warnings; an error line before it fails).
+    Said(Node, &'a str),
+    /// It exited, successfully or not.
+    Finished(Node, bool),
+}
+
+/// Why a launch failed.
+#[derive(Debug, thiserror::Error)]
+pub enum LaunchError {
+    /// A node's process could not be started.
+    #[error("starting the {node} process: {source}")]
+    Spawn {
+        /// The node.
+        node: Node,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A node could not listen on its port: another program took it (worth another try on
+    /// other ports).
+    #[error("the run over processes failed: a port of tcp/127.0.0.1:{port}… was taken ({line})")]
+    PortsTaken {
+        /// The run's first port.
+        port: u16,
+        /// The node's error line.
+        line: String,
+    },
+    /// A node failed: every failed node with its exit status, and each node's last error line.
+    #[error("the run over processes failed: {0}")]
+    Failed(String),
+    /// The processes could not be waited for.
+    #[error("waiting for the node processes: {0}")]
+    Wait(std::io::Error),
+}
+
+/// The node processes of a launch; dropping it kills any still running.
+struct Children(Vec<(Node, Child)>);
+
+impl Drop for Children {
+    fn drop(&mut self) {
+        for (_, c) in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// Lines of each node kept to explain a failure.
+const LAST_WORDS: usize = 5;
+
+/// Runs `exe` once per node with its arguments (`nodes`: the run's nodes in order) until all
+/// have exited, or one has failed (then the others are stopped). `port` is the run's first
+/// loopback port, named when a node finds its port taken. `on_event` hears every line and exit
+/// as it happens.
+pub fn run_nodes(
+    exe: &Path,
+    nodes: &[(Node, Vec<String>)],
+    port: u16,
+    on_event: &mut dyn FnMut(LaunchEvent<'_>),
+) -> Result<(), LaunchError> {
+    let mut children = Children(Vec::new());
+    let (tx, rx) = std::sync::mpsc::channel::<(usize, String)>();
+    for (k, (node, args)) in nodes.iter().enumerate() {
+        let mut child = Command::new(exe)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .map_err(|source| LaunchError::Spawn {
+                node: *node,
+                source,
+            })?;
+        let stderr = child.stderr.take().expect("piped");
+        let tx = tx.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if tx.send((k, line)).is_err() {
+                    break;
+                }
+            }
+        });
+        children.0.push((*node, child));
+    }
+    drop(tx);
+    // Last words of each node that are not progress (an error explains a failure).
+    let mut said: Vec<Vec<String>> = vec![Vec::new(); nodes.len()];
+    let mut keep = |k: usize, line: String| {
+        said[k].push(line);
+        if said[k].len() > LAST_WORDS {
+            said[k].remove(0);
+        }
+    };
+    let mut finished = vec![false; nodes.len()];
+    let mut failures: Vec<String> = Vec::new();
+    let mut running = nodes.len();
+    while running > 0 {
+        if let Ok((k, line)) = rx.recv_timeout(Duration::from_millis(100)) {
+            let node = nodes[k].0;
+            match line.strip_prefix("progress ") {
+                Some(p) => on_event(LaunchEvent::Progress(node, p)),
+                None => {
+                    on_event(LaunchEvent::Said(node, &line));
+                    keep(k, line);
+                }
+            }
+        }
+        running = 0;
+        for (k, (node, child)) in children.0.iter_mut().enumerate() {
+            match child.try_wait().map_err(LaunchError::Wait)? {
+                None => running += 1,
+                Some(status) if !finished[k] => {
+                    finished[k] = true;
+                    on_event(LaunchEvent::Finished(*node, status.success()));
+                    if !status.success() {
+                        failures.push(format!("{node} exited with {status}"));
+                    }
+                }
+                Some(_) => {}
+            }
+        }
+        if !failures.is_empty() {
+            // One node failed: the others would only time out; stop them now.
+            break;
+        }
+    }
+    // Drain what the nodes said last.
+    drop(children);
+    while let Ok((k, line)) = rx.recv_timeout(Duration::from_millis(50)) {
+        if !line.starts_with("progress ") {
+            keep(k, line);
+        }
+    }
+    if failures.is_empty() {
+        return Ok(());
+    }
+    let taken = said
+        .iter()
+        .flatten()
+        .find(|l| l.starts_with("error") && l.contains("Address already in use"));
+    if let Some(line) = taken {
+        return Err(LaunchError::PortsTaken {
+            port,
+            line: line.clone(),
+        });
+    }
+    let mut msg = failures.join("; ");
+    for (k, (node, _)) in nodes.iter().enumerate() {
+        if let Some(last) = said[k].iter().rev().find(|l| l.starts_with("error")) {
+            msg.push_str(&format!("; {node}: {last}"));
+        }
+    }
+    Err(LaunchError::Failed(msg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stand-in binary (the shell) for three nodes: progress and a warning come back as
+    /// events; a failing node stops the others and its error line is in the message.
+    #[test]
+    fn events_and_failures_of_node_processes() {
+        let sh = Path::new("/bin/sh");
+        let script = |s: &str| vec!["-c".to_string(), s.to_string()];
+        let nodes = vec![
+            (
+                Node::World,
+                script("echo 'progress t=1' >&2; echo 'warning: slow' >&2"),
+            ),
+            (Node::Radio, script("exit 0")),
+        ];
+        let mut events = Vec::new();
+        run_nodes(sh, &nodes, 7000, &mut |e| events.push(format!("{e:?}"))).unwrap();
+        assert!(events.contains(&format!("{:?}", LaunchEvent::Progress(Node::World, "t=1"))));
+        assert!(events.contains(&format!(
+            "{:?}",
+            LaunchEvent::Said(Node::World, "warning: slow")
+        )));
+        assert!(events.contains(&format!("{:?}", LaunchEvent::Finished(Node::Radio, true))));
+
+        let t0 = std::time::Instant::now();
+        let nodes = vec![
+            (Node::World, script("sleep 30")),
+            (Node::Robot(0), script("echo 'error: no map' >&2; exit 2")),
+        ];
+        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}).unwrap_err();
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "the sleeper was stopped"
+        );
+        let text = e.to_string();
+        assert!(text.contains("robot 0 exited with"), "{text}");
+        assert!(text.contains("robot 0: error: no map"), "{text}");
+
+        let nodes = vec![(
+            Node::Radio,
+            script("echo 'error: listen: Address already in use' >&2; exit 2"),
+        )];
+        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}).unwrap_err();
+        assert!(
+            matches!(e, LaunchError::PortsTaken { port: 7000, .. }),
+            "{e}"
+        );
+    }
+}
