@@ -11,6 +11,31 @@
 //!
 //! Policies implement [`Policy`] (one per robot) or [`JointPolicy`] (centralized). The
 //! nearest-frontier baseline [`NearestFrontier`] ships here.
+//!
+//! ```
+//! use madenet_agent::{Agent, AgentConfig, NearestFrontier};
+//! use madenet_map::paper::{paper_map, Corner};
+//! use madenet_world::{ScenarioConfig, World};
+//!
+//! let cfg = ScenarioConfig { num_robots: 1, ..ScenarioConfig::default() };
+//! let map = paper_map(3).unwrap();
+//! let starts = Corner::TopLeft.start_cells(map.height(), map.width());
+//! let (h, w) = (map.height(), map.width());
+//! let mut world = World::new(map, &starts, cfg.clone(), 7).unwrap();
+//! let seen = world.explored_fraction();
+//! // One robot: each timestep it sees, decides when its macro action ends, plans and moves.
+//! let mut agent = Agent::new(AgentConfig::from_scenario(&cfg, 0, h, w), starts[0], Box::new(NearestFrontier));
+//! for _ in 0..10 {
+//!     agent.observe(world.observation(0));
+//!     if agent.needs_decision() {
+//!         agent.decide();
+//!     }
+//!     agent.plan();
+//!     world.step(&[agent.next_move()]);
+//! }
+//! assert!(world.explored_fraction() > seen, "it explored");
+//! assert_ne!(world.positions()[0], starts[0]);
+//! ```
 
 #![deny(missing_docs)]
 

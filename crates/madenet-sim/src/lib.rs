@@ -15,6 +15,28 @@
 //!    contact & communication).
 //!
 //! The same seed gives byte-identical trajectories and metrics.
+//!
+//! ```
+//! use madenet_map::paper::{paper_map, Corner};
+//! use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+//! use madenet_world::ScenarioConfig;
+//!
+//! let map = paper_map(3).unwrap();
+//! let spec = TrialSpec {
+//!     starts: Corner::TopLeft.start_cells(map.height(), map.width()).to_vec(),
+//!     map,
+//!     map_name: "paper_3".into(),
+//!     config: ScenarioConfig { comm_success_prob: 0.5, ..ScenarioConfig::default() },
+//!     policy: "spread".into(),
+//!     seed: 7,
+//! };
+//! let registry = PolicyRegistry::builtin();
+//! let result = Trial::with_registry(spec.clone(), &registry).unwrap().run();
+//! assert!(result.metrics.completed);
+//! // Same seed, same trial.
+//! let again = Trial::with_registry(spec, &registry).unwrap().run();
+//! assert_eq!(again.metrics.tns, result.metrics.tns);
+//! ```
 
 #![deny(missing_docs)]
 

@@ -17,6 +17,21 @@
 //! Robots see the world only through [`Observation`]s and act only through [`Move`]s; the
 //! messages they exchange are delivered by the trial runner along [`World::exchanges`].
 //! All parameters live in [`ScenarioConfig`], whose defaults are the paper's values.
+//!
+//! ```
+//! use madenet_map::paper::{paper_map, Corner};
+//! use madenet_world::{Move, ScenarioConfig, World};
+//!
+//! let map = paper_map(3).unwrap();
+//! let starts = Corner::TopLeft.start_cells(map.height(), map.width());
+//! let mut world = World::new(map, &starts, ScenarioConfig::default(), 7).unwrap();
+//! let seen = world.explored_fraction(); // the start's first sensing (t = 0)
+//! assert!(seen > 0.0);
+//! // Each robot senses its window every timestep; staying put, it learns nothing new.
+//! world.step(&[Move::Stay; 3]);
+//! assert_eq!((world.t(), world.explored_fraction()), (1, seen));
+//! assert_eq!(world.observation(0).pos, starts[0]);
+//! ```
 
 #![deny(missing_docs)]
 
