@@ -108,6 +108,20 @@ impl<'a> AgentView<'a> {
         z
     }
 
+    /// A cell as the networks read it: (row, col) divided by the map's last row and column, so
+    /// both lie in [0, 1]; `[-1, -1]` for no cell (a position or goal not known).
+    pub fn normalized(&self, p: Option<Pos>) -> [f32; 2] {
+        let b = self.belief;
+        let (sr, sc) = (
+            (b.height().max(2) - 1) as f32,
+            (b.width().max(2) - 1) as f32,
+        );
+        match p {
+            Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
+            None => [-1.0, -1.0],
+        }
+    }
+
     /// [`AgentView::macro_observation`] written into `z` (of exactly
     /// [`AgentView::macro_observation_len`] values): batched callers allocate nothing.
     ///
@@ -120,14 +134,7 @@ impl<'a> AgentView<'a> {
             "macro observation length"
         );
         let b = self.belief;
-        let (sr, sc) = (
-            (b.height().max(2) - 1) as f32,
-            (b.width().max(2) - 1) as f32,
-        );
-        let coords = |p: Option<Pos>| match p {
-            Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
-            None => [-1.0, -1.0],
-        };
+        let coords = |p: Option<Pos>| self.normalized(p);
         let mut k = 0;
         let mut put = |vals: &[f32]| {
             z[k..k + vals.len()].copy_from_slice(vals);

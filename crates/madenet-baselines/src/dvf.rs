@@ -94,16 +94,19 @@ pub struct DistributedValueFunctions {
     queue: std::collections::VecDeque<usize>,
 }
 
-const DIRS: [(isize, isize); 8] = [
-    (-1, 0),
-    (-1, 1),
-    (0, 1),
-    (1, 1),
-    (1, 0),
-    (1, -1),
-    (0, -1),
-    (-1, -1),
-];
+/// [`madenet_map::RING8`] as offsets into padded index arithmetic.
+const DIRS: [(isize, isize); 8] = {
+    let mut d = [(0isize, 0isize); 8];
+    let mut k = 0;
+    while k < 8 {
+        d[k] = (
+            madenet_map::RING8[k].0 as isize,
+            madenet_map::RING8[k].1 as isize,
+        );
+        k += 1;
+    }
+    d
+};
 
 impl DistributedValueFunctions {
     /// The PB policy of a robot on a `height` × `width` map (cells), moving by `cfg`'s

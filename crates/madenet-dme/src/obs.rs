@@ -36,15 +36,7 @@ pub fn frame(view: &AgentView<'_>) -> Vec<u8> {
 
 /// The pose vector, `2 · team` values.
 pub fn pose_vector(view: &AgentView<'_>) -> Vec<f32> {
-    let b = view.belief;
-    let (sr, sc) = (
-        (b.height().max(2) - 1) as f32,
-        (b.width().max(2) - 1) as f32,
-    );
-    let coords = |p: Option<Pos>| match p {
-        Some(p) => [p.row as f32 / sr, p.col as f32 / sc],
-        None => [-1.0, -1.0],
-    };
+    let coords = |p: Option<Pos>| view.normalized(p);
     view.teammates
         .iter()
         .enumerate()

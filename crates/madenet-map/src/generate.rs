@@ -211,17 +211,6 @@ const DIRS: [(i32, i32); 8] = [
     (1, -1),
     (-1, -1),
 ];
-/// The 8 unit steps in ring order (each neighbour is 45° from the next).
-const RING: [(i32, i32); 8] = [
-    (-1, 0),
-    (-1, 1),
-    (0, 1),
-    (1, 1),
-    (1, 0),
-    (1, -1),
-    (0, -1),
-    (-1, -1),
-];
 
 /// Consecutive rejected additions after which shapes shrink to one or two cells.
 const SHRINK_AFTER: usize = 30;
@@ -387,7 +376,7 @@ fn random_shape(
                 break;
             }
             out.push(p);
-            let (dr, dc) = RING[dir];
+            let (dr, dc) = crate::RING8[dir];
             p = Pos::new(p.row + dr, p.col + dc);
         }
     } else {

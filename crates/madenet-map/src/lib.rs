@@ -31,6 +31,19 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::PathBuf;
 
+/// The 8 unit steps (row, column) in ring order, clockwise from north: each is 45° from the
+/// next (the generator's shapes and PB's value functions walk it).
+pub const RING8: [(i32, i32); 8] = [
+    (-1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+    (1, 0),
+    (1, -1),
+    (0, -1),
+    (-1, -1),
+];
+
 /// A cell coordinate: `row` counts down from the top row, `col` to the right.
 #[derive(
     Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, Default,
