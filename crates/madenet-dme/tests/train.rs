@@ -90,15 +90,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     train(&resumed, Some(tiny(4)), &mut |_| {}).unwrap();
     assert_eq!(without_time(&resumed), eps);
     assert_eq!(read(&resumed.join("updates.csv")), updates);
-    let scalars = |dir: &Path| {
-        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
-            .unwrap()
-            .into_iter()
-            .map(|(t, step, v)| (t, step, v.to_bits()))
-            .collect();
-        s.sort();
-        s
-    };
+    let scalars = madenet_testkit::tb_scalars;
     let want = scalars(&straight);
     assert!(
         want.iter().any(|s| s.0.starts_with("loss/"))

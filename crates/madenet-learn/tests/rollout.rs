@@ -52,17 +52,6 @@ fn q_of(dir: &Path) -> Vec<f32> {
 }
 
 /// iterations.csv without the wall-time column (the last).
-/// The run's TensorBoard scalars (tag, step, value bits), sorted.
-fn scalars(dir: &Path) -> Vec<(String, i64, u32)> {
-    let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
-        .unwrap()
-        .into_iter()
-        .map(|(tag, step, v)| (tag, step, v.to_bits()))
-        .collect();
-    s.sort();
-    s
-}
-
 fn log_without_time(dir: &Path) -> Vec<String> {
     read(&dir.join("iterations.csv"))
         .lines()
@@ -156,6 +145,7 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     train(&c, Some(tiny()), &mut |_| {}).unwrap();
     assert_eq!(log_without_time(&c), log);
     // TensorBoard: one point per iteration and figure, each once after the resume.
+    let scalars = madenet_testkit::tb_scalars;
     let want = scalars(&a);
     assert_eq!(want.len(), 2 * 6, "2 iterations × 6 figures: {want:?}");
     assert!(want

@@ -131,15 +131,7 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     );
     // TensorBoard holds each scalar once: the resumed run dropped what it wrote after the
     // checkpoint before writing it again.
-    let scalars = |dir: &Path| {
-        let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
-            .unwrap()
-            .into_iter()
-            .map(|(t, step, v)| (t, step, v.to_bits()))
-            .collect();
-        s.sort();
-        s
-    };
+    let scalars = madenet_testkit::tb_scalars;
     let want = scalars(&straight);
     assert!(
         want.iter().any(|s| s.0.starts_with("loss/"))

@@ -125,6 +125,19 @@ impl Drop for Scratch {
     }
 }
 
+/// A training run's TensorBoard scalars in `dir` as (tag, step, value bits), sorted: what two
+/// runs (an uninterrupted one and a resumed one) are compared by.
+pub fn tb_scalars(dir: impl AsRef<Path>) -> Vec<(String, i64, u32)> {
+    let dir = dir.as_ref();
+    let mut s: Vec<(String, i64, u32)> = madenet_trainlog::read_scalars(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .into_iter()
+        .map(|(tag, step, v)| (tag, step, v.to_bits()))
+        .collect();
+    s.sort();
+    s
+}
+
 /// The text of `path` (the test fails naming the file if it cannot be read).
 pub fn read(path: impl AsRef<Path>) -> String {
     let p = path.as_ref();
