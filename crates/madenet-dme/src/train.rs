@@ -1062,7 +1062,7 @@ fn train_loop(
         progress(&Progress {
             done: state.episode,
             total: cfg.episodes,
-            unit: "episodes",
+            unit: DmeLearner::UNIT,
             updates: state.updates,
             validation_steps: last_validation,
             base_steps: None,

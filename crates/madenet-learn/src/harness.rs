@@ -270,6 +270,8 @@ pub trait Learner {
     type Config: Default + Clone + PartialEq + Serialize + DeserializeOwned + Send + Sync;
     /// The `method` names it trains (in configs, `model.toml` and `madenet train --method`).
     const METHODS: &'static [&'static str];
+    /// What its loop counts ([`Progress::unit`]): `"episodes"` or `"iterations"`.
+    const UNIT: &'static str = "episodes";
     /// The config in `text` (read from `path`, named in errors), checked.
     fn parse_config(path: &Path, text: &str) -> Result<Self::Config, TrainError>;
     /// Why `cfg` cannot be trained, naming the field.

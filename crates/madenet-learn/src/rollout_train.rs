@@ -973,6 +973,7 @@ impl Learner for RolloutLearner {
     const METHODS: &'static [&'static str] = &[METHOD];
     /// The episodes per iteration define the run: a resume may change only `max_minutes`.
     const RESUME_EXTENDS_EPISODES: bool = false;
+    const UNIT: &'static str = "iterations";
 
     fn parse_config(path: &Path, text: &str) -> Result<RolloutTrainConfig, TrainError> {
         RolloutTrainConfig::from_toml_text(path, text)
@@ -1229,7 +1230,7 @@ fn train_loop(
         progress(&Progress {
             done: state.iteration,
             total: cfg.iterations,
-            unit: "iterations",
+            unit: RolloutLearner::UNIT,
             updates: state.updates,
             validation_steps: Some(steps),
             base_steps: Some(base_steps),

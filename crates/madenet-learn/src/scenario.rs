@@ -68,8 +68,9 @@ impl ScenarioDraw {
     }
 
     /// Why maps cannot be drawn this way, naming the config field: sides in
-    /// [`crate::MIN_MAP_SIDE`]..=[`crate::MAX_TRAIN_MAP_SIDE`] (the networks' bounds; checked by
-    /// every learner's config), `0 ≤ density_min ≤ density_max < 0.9`.
+    /// [`crate::MIN_MAP_SIDE`]..=[`crate::MAX_TRAIN_MAP_SIDE`] (the networks' bounds),
+    /// `0 ≤ density_min ≤ density_max < 0.9`. MADE-Net's and DME-DRL's configs check their
+    /// maps with it; the rollout learner's config checks its curriculum's sides itself.
     pub fn check(&self) -> Result<(), String> {
         if self.height < crate::MIN_MAP_SIDE || self.width < crate::MIN_MAP_SIDE {
             return Err(format!(
@@ -181,22 +182,20 @@ pub fn validate(
     registry: &PolicyRegistry,
     policy: &str,
 ) -> Result<Validation, TrainError> {
-    let specs: Vec<TrialSpec> = maps
-        .iter()
-        .flat_map(|s| {
-            csps.iter().map(move |&csp| TrialSpec {
+    // Trial k is map k / |csps| at CSP k % |csps|; its spec is built when it runs, so at most
+    // one copy of a map per worker exists beside `maps`.
+    let results: Vec<(usize, f64, bool)> = (0..maps.len() * csps.len())
+        .into_par_iter()
+        .map(|k| {
+            let s = &maps[k / csps.len()];
+            let spec = TrialSpec {
                 config: ScenarioConfig {
-                    comm_success_prob: csp,
+                    comm_success_prob: csps[k % csps.len()],
                     ..s.config.clone()
                 },
                 policy: policy.to_string(),
                 ..s.clone()
-            })
-        })
-        .collect();
-    let results: Vec<(usize, f64, bool)> = specs
-        .into_par_iter()
-        .map(|spec| {
+            };
             let mut trial = Trial::with_registry(spec, registry)
                 .map_err(|e| TrainError::Other(e.to_string()))?
                 .timed(false);

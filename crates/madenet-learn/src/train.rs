@@ -178,7 +178,7 @@ impl TrainConfig {
         harness::check_memory(&self.memory_needs(), harness::physical_memory())
     }
 
-    /// Checks every field (not the memory: DME-DRL borrows these checks for its own sizes).
+    /// Checks every field (not the memory).
     pub fn check_fields(&self) -> Result<(), String> {
         if self.method == Method::MadeNetRollout {
             return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", Method::MadeNetRollout.name()));
@@ -661,7 +661,8 @@ fn train_loop(
     let groups = cfg.dep_groups();
     let mut last_validation = state.best_validation;
     let draw = cfg.scenario_draw();
-    let validation_maps = cfg.validation_maps()?;
+    // Drawn at the first validation (a run that never validates draws none), then kept.
+    let mut validation_maps: Option<Vec<TrialSpec>> = None;
     while state.episode < cfg.episodes {
         let e = state.episode;
         let epsilon = cfg.epsilon(e);
@@ -777,8 +778,11 @@ fn train_loop(
             };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
+            if validation_maps.is_none() {
+                validation_maps = Some(cfg.validation_maps()?);
+            }
             let v = validate(
-                &validation_maps,
+                validation_maps.as_deref().expect("drawn above"),
                 &cfg.validation_csp,
                 &registry,
                 "candidate",
@@ -815,7 +819,7 @@ fn train_loop(
         progress(&Progress {
             done: state.episode,
             total: cfg.episodes,
-            unit: "episodes",
+            unit: MadeNetLearner::UNIT,
             updates: state.updates,
             validation_steps: last_validation,
             base_steps: None,

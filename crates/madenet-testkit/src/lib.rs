@@ -30,6 +30,7 @@ pub fn run_limited<S: AsRef<OsStr> + Debug>(bin: &str, args: &[S], limit: Durati
     use std::io::Read;
     let mut child = Command::new(bin)
         .args(args)
+        .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

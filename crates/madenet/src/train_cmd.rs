@@ -178,23 +178,21 @@ fn train_with<L: Learner>(a: &TrainArgs, source: &Source) -> Result<()> {
     } else {
         ProgressBar::new(0)
     };
+    bar.set_style(
+        ProgressStyle::with_template(&format!(
+            "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {}  {{msg}}",
+            L::UNIT
+        ))
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
     let mut progressed = false;
     let mut on_progress = |p: &Progress| {
-        if !progressed {
-            bar.set_style(
-                ProgressStyle::with_template(&format!(
-                    "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {}  {{msg}}",
-                    p.unit
-                ))
-                .expect("valid template")
-                .progress_chars("=> "),
-            );
-        }
         progressed = true;
         bar.set_length(p.total);
         bar.set_position(p.done);
         bar.set_message(p.summary());
-        if p.unit == "iterations" && !a.quiet {
+        if L::UNIT == "iterations" && !a.quiet {
             bar.println(format!("iteration {}: {}", p.done, p.summary()));
         }
     };
