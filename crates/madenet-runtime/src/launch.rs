@@ -112,16 +112,19 @@ pub fn run_nodes(
     let mut finished = vec![false; nodes.len()];
     let mut failures: Vec<String> = Vec::new();
     let mut running = nodes.len();
+    let mut hear = |k: usize, line: String, on_event: &mut dyn FnMut(LaunchEvent<'_>)| {
+        let node = nodes[k].0;
+        match line.strip_prefix("progress ") {
+            Some(p) => on_event(LaunchEvent::Progress(node, p)),
+            None => {
+                on_event(LaunchEvent::Said(node, &line));
+                keep(k, line);
+            }
+        }
+    };
     while running > 0 {
         if let Ok((k, line)) = rx.recv_timeout(Duration::from_millis(100)) {
-            let node = nodes[k].0;
-            match line.strip_prefix("progress ") {
-                Some(p) => on_event(LaunchEvent::Progress(node, p)),
-                None => {
-                    on_event(LaunchEvent::Said(node, &line));
-                    keep(k, line);
-                }
-            }
+            hear(k, line, on_event);
         }
         running = 0;
         for (k, (node, child)) in children.0.iter_mut().enumerate() {
@@ -142,11 +145,14 @@ pub fn run_nodes(
             break;
         }
     }
-    // Drain what the nodes said last.
+    // What the nodes said last: their pipes close as they end (the stopped ones too), so the
+    // readers finish; a pipe a node's own child still holds is waited for 2 s at most.
     drop(children);
-    while let Ok((k, line)) = rx.recv_timeout(Duration::from_millis(50)) {
-        if !line.starts_with("progress ") {
-            keep(k, line);
+    let deadline = std::time::Instant::now() + Duration::from_secs(2);
+    while let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) {
+        match rx.recv_timeout(left) {
+            Ok((k, line)) => hear(k, line, on_event),
+            Err(_) => break, // every reader done, or the 2 s are up
         }
     }
     if failures.is_empty() {
