@@ -9,7 +9,7 @@
 //!
 //! Greedy (argmax of the actor's logits) for evaluation; in training the action is sampled
 //! from the softmax over the valid sectors (the original samples even at evaluation, see the
-//! design brief), and each decision is written to a [`Recorder`] for the replay.
+//! design brief), and each decision is written to the [`DecisionSlots`] for the replay.
 
 use crate::nets::Actor;
 use crate::obs::{frame, pose_vector, History};
@@ -46,7 +46,7 @@ pub struct StepRecord {
 
 /// Where the policies of a training episode leave their decisions: one slot per robot,
 /// taken by the trainer after each timestep.
-pub type Recorder = Arc<Mutex<Vec<Option<StepRecord>>>>;
+pub type DecisionSlots = Arc<Mutex<Vec<Option<StepRecord>>>>;
 
 /// One robot's DME-DRL policy.
 pub struct DmePolicy {
@@ -55,7 +55,7 @@ pub struct DmePolicy {
     actor: SharedActor,
     history: History,
     sample: Option<Rng>,
-    recorder: Option<Recorder>,
+    recorder: Option<DecisionSlots>,
     device: Device,
     /// The macro action in force: sector and goal.
     action: Option<u8>,
@@ -89,7 +89,7 @@ impl DmePolicy {
     }
 
     /// Writes every decision into `recorder[robot]`.
-    pub fn recording(mut self, recorder: Recorder) -> Self {
+    pub fn recording(mut self, recorder: DecisionSlots) -> Self {
         self.recorder = Some(recorder);
         self
     }

@@ -20,12 +20,13 @@
 use crate::maddpg::{Batch, Maddpg, UpdateParams};
 use crate::nets::DmeConfig;
 use crate::obs::{history_step, FRAME_CHANNELS};
-use crate::policy::{DmePolicy, Recorder, SharedActor};
+use crate::policy::{DecisionSlots, DmePolicy, SharedActor};
 use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use madenet_agent::Policy;
+use madenet_learn::episode;
 use madenet_learn::error::io_err;
 use madenet_learn::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
 use madenet_learn::scenario::{self, ScenarioDraw};
@@ -402,6 +403,76 @@ impl Episode {
     /// Sum of all robots' rewards.
     pub fn team_return(&self) -> f64 {
         self.rewards.iter().map(|&r| f64::from(r)).sum()
+    }
+}
+
+/// DME-DRL's episode recorder: the robots' own (sampling, recording) policies decide; after
+/// each timestep their decisions and rewards go into the episode, and every `update_every`
+/// timesteps, once the replay is warm, one MADDPG update runs and the acting actors take the
+/// new weights.
+struct Stepping<'a> {
+    cfg: &'a DmeTrainConfig,
+    net_cfg: &'a DmeConfig,
+    params: &'a UpdateParams,
+    slots: DecisionSlots,
+    acting: &'a [SharedActor],
+    episode: Episode,
+    nets: &'a mut Maddpg,
+    replay: &'a Replay,
+    state: &'a mut State,
+    logs: &'a mut Logs<MaddpgUpdateRow>,
+}
+
+impl episode::Recorder for Stepping<'_> {
+    type Error = TrainError;
+
+    fn stepped(&mut self, trial: &Trial) -> Result<(), TrainError> {
+        let (cfg, team) = (self.cfg, self.cfg.scenario.num_robots);
+        let records: Vec<_> = self
+            .slots
+            .lock()
+            .expect("recorder lock")
+            .iter_mut()
+            .map(|r| r.take())
+            .collect();
+        let records: Vec<_> = records
+            .into_iter()
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| TrainError::Other("a robot skipped its decision".into()))?;
+        let moved = trial.world().executed_moves();
+        let r: Vec<f32> = (0..team)
+            .map(|i| (trial.rewards().robots[i] - cfg.move_cost * moved[i].length()) as f32)
+            .collect();
+        self.episode.push(&records, &r);
+        let (state, replay) = (&mut *self.state, self.replay);
+        state.steps += 1;
+        let ready =
+            replay.steps >= cfg.warmup_steps && (0..team).all(|i| replay.transitions(i) > 0);
+        if ready && state.steps % cfg.update_every == 0 {
+            let mut rng = stream(cfg.seed, "dme/batch", state.updates);
+            let batches: Vec<Batch> = (0..team)
+                .map(|i| replay.sample(i, cfg.batch_size, self.net_cfg, cfg.gamma, &mut rng))
+                .collect();
+            let stats = self.nets.update(
+                &batches,
+                &mut stream(cfg.seed, "dme/gumbel", state.updates),
+                self.params,
+            );
+            for (i, a) in self.acting.iter().enumerate() {
+                *a.write().expect("actor lock") = self.nets.acting_actor(i);
+            }
+            self.logs.updates.append(&MaddpgUpdateRow {
+                update: state.updates,
+                critic_loss: stats.critic_loss.into(),
+                actor_loss: stats.actor_loss.into(),
+            })?;
+            self.logs
+                .scalar("loss/critic", stats.critic_loss, state.updates)?;
+            self.logs
+                .scalar("loss/actor", stats.actor_loss, state.updates)?;
+            state.updates += 1;
+        }
+        Ok(())
     }
 }
 
@@ -937,7 +1008,7 @@ fn train_loop(
         let seed = derive_seed(cfg.seed, "dme", e);
         let (map, starts) = draw.draw(seed)?;
         let csp = stream(seed, "csp", 0).random::<f64>();
-        let recorder: Recorder = Arc::new(Mutex::new(vec![None; team]));
+        let recorder: DecisionSlots = Arc::new(Mutex::new(vec![None; team]));
         let mut registry = PolicyRegistry::default();
         {
             let (acting, recorder, history) = (acting.clone(), recorder.clone(), cfg.history);
@@ -968,50 +1039,21 @@ fn train_loop(
         let mut trial = Trial::with_registry(spec, &registry)
             .map_err(|err| TrainError::Other(err.to_string()))?
             .reward_config(rewards.clone());
-        let mut episode = Episode::new(team);
-        while trial.step() {
-            let records: Vec<_> = recorder
-                .lock()
-                .expect("recorder lock")
-                .iter_mut()
-                .map(|r| r.take())
-                .collect();
-            let records: Vec<_> = records
-                .into_iter()
-                .collect::<Option<Vec<_>>>()
-                .ok_or_else(|| TrainError::Other("a robot skipped its decision".into()))?;
-            let moved = trial.world().executed_moves();
-            let r: Vec<f32> = (0..team)
-                .map(|i| (trial.rewards().robots[i] - cfg.move_cost * moved[i].length()) as f32)
-                .collect();
-            episode.push(&records, &r);
-            state.steps += 1;
-            let ready =
-                replay.steps >= cfg.warmup_steps && (0..team).all(|i| replay.transitions(i) > 0);
-            if ready && state.steps % cfg.update_every == 0 {
-                let mut rng = stream(cfg.seed, "dme/batch", state.updates);
-                let batches: Vec<Batch> = (0..team)
-                    .map(|i| replay.sample(i, cfg.batch_size, &net_cfg, cfg.gamma, &mut rng))
-                    .collect();
-                let stats = nets.update(
-                    &batches,
-                    &mut stream(cfg.seed, "dme/gumbel", state.updates),
-                    &params,
-                );
-                for (i, a) in acting.iter().enumerate() {
-                    *a.write().expect("actor lock") = nets.acting_actor(i);
-                }
-                logs.updates.append(&MaddpgUpdateRow {
-                    update: state.updates,
-                    critic_loss: stats.critic_loss.into(),
-                    actor_loss: stats.actor_loss.into(),
-                })?;
-                logs.scalar("loss/critic", stats.critic_loss, state.updates)?;
-                logs.scalar("loss/actor", stats.actor_loss, state.updates)?;
-                state.updates += 1;
-            }
-        }
-        episode.complete = trial.is_done() && trial.world().is_complete();
+        let mut stepping = Stepping {
+            cfg,
+            net_cfg: &net_cfg,
+            params: &params,
+            slots: recorder,
+            acting: &acting,
+            episode: Episode::new(team),
+            nets: &mut nets,
+            replay: &replay,
+            state: &mut state,
+            logs: &mut logs,
+        };
+        let end = episode::run(&mut trial, &mut stepping)?;
+        let mut episode = stepping.episode;
+        episode.complete = end.complete;
         let (steps, reward) = (episode.len(), episode.team_return());
         logs.episodes.append(&EpisodeRow {
             episode: e,

@@ -6,7 +6,7 @@
 //! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
 //! initialises networks lives in this one test.
 
-use madenet_dme::policy::{DmePolicy, Recorder};
+use madenet_dme::policy::{DecisionSlots, DmePolicy};
 use madenet_dme::train::{train, DmeTrainConfig, Model};
 use madenet_dme::{sector_goals, SECTORS};
 use madenet_nav::Dijkstra;
@@ -141,7 +141,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     // Every decision: the goal is the chosen sector's nearest frontier cell on the robot's own
     // map at decision time, and masked sectors are never chosen; between decisions the goal
     // stays, an unreached frontier cell; no valid sector ⇒ no goal.
-    let recorder: Recorder = Arc::new(Mutex::new(vec![None; 3]));
+    let recorder: DecisionSlots = Arc::new(Mutex::new(vec![None; 3]));
     let mut registry = PolicyRegistry::default();
     let (actors, rec) = (model.actors.clone(), recorder.clone());
     registry.register("dme-test", "recording", move |ctx| {

@@ -1,10 +1,12 @@
 //! The training environments (paper Sec. III.C.4, *Parallel Environments*): a team driven by
 //! the CEP with full communication (centralized) and a team driven by the DEPs whose CSP is
 //! drawn from U(0, 1) each episode (decentralized). Both run the real simulator pipeline
-//! ([`madenet_sim::Trial`]) through a [`JointPolicy`] that acts ε-greedily and records, at
-//! every joint decision, what the networks saw and chose. An [`Episode`] is one such run: its
-//! primitive steps (for [`crate::replay`]) and its decisions' observations.
+//! ([`madenet_sim::Trial`], through the one episode runner [`crate::episode::run`]) with an
+//! [`Actor`] — a [`JointPolicy`] that acts ε-greedily and records, at every joint decision,
+//! what the networks saw and chose. An [`Episode`] is one such run: its primitive steps (for
+//! [`crate::replay`]) and its decisions' observations.
 
+use crate::episode::{self, Recorder};
 use crate::obs::{joint_obs, robot_obs, running_action, JointObs, RobotObs};
 use crate::replay::{squeeze_robot, squeeze_team, MacroTransition, PrimitiveStep, ReplayError};
 use crate::{
@@ -17,7 +19,6 @@ use madenet_sim::{SimError, Trial, TrialSpec};
 use madenet_world::rng::Rng;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
-use std::sync::{Arc, Mutex};
 
 /// Which of the two training environments.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -88,7 +89,7 @@ pub struct Actor {
     device: Device,
     cep_state: Option<LstmState>,
     dep_states: Vec<Option<LstmState>>,
-    out: Arc<Mutex<Vec<JointStep>>>,
+    decisions: Vec<JointStep>,
 }
 
 impl Actor {
@@ -116,13 +117,8 @@ impl Actor {
             device: crate::cpu(),
             cep_state: None,
             dep_states: vec![None; team],
-            out: Arc::new(Mutex::new(Vec::new())),
+            decisions: Vec::new(),
         }
-    }
-
-    /// Where the recorded joint steps go.
-    pub fn record(&self) -> Arc<Mutex<Vec<JointStep>>> {
-        Arc::clone(&self.out)
     }
 
     fn input(&self, map: &[u64], vec: &[f32], h: usize, w: usize) -> (Tensor<4>, Tensor<2>) {
@@ -206,7 +202,7 @@ impl JointPolicy for Actor {
             robots[i] = Some(o);
         }
         let decisions = (0..n).map(|i| Decision::Candidate(actions[i])).collect();
-        self.out.lock().expect("recorder lock").push(JointStep {
+        self.decisions.push(JointStep {
             t: views[0].t,
             decided: needs.to_vec(),
             actions,
@@ -267,42 +263,67 @@ pub enum EpisodeError {
     Replay(#[from] ReplayError),
 }
 
-/// Runs one episode of `spec` (its config's CSP and step cap apply) with `actor`.
-pub fn run_episode(spec: TrialSpec, actor: Actor) -> Result<Episode, EpisodeError> {
-    let kind = actor.kind;
-    let record = actor.record();
-    let csp = spec.config.comm_success_prob;
-    let mut trial = Trial::with_joint_policy(spec, Box::new(actor))?;
-    let n = trial.agents().len();
-    let mut steps = Vec::new();
-    let mut actions = vec![0usize; n];
-    let mut team_return = 0.0;
-    loop {
-        let t = trial.world().t();
-        if !trial.step() {
-            break;
-        }
-        let rec = record.lock().expect("recorder lock");
-        let decided = match rec.last() {
-            Some(js) if js.t == t => {
-                actions.clone_from(&js.actions);
-                js.decided.clone()
+/// The recorder of a MADE-Net episode: the actor decides for the deciding robots; each
+/// timestep becomes a [`PrimitiveStep`] with the actions in force and its rewards.
+struct Recording {
+    actor: Actor,
+    steps: Vec<PrimitiveStep>,
+    actions: Vec<usize>,
+    decided: Vec<bool>,
+    team_return: f64,
+}
+
+impl Recorder for Recording {
+    type Error = std::convert::Infallible;
+
+    fn decide(&mut self, trial: &mut Trial) -> Result<(), Self::Error> {
+        let before = self.actor.decisions.len();
+        trial.decide_jointly(&mut self.actor);
+        match self.actor.decisions.last() {
+            Some(js) if self.actor.decisions.len() > before => {
+                self.actions.clone_from(&js.actions);
+                self.decided.clone_from(&js.decided);
             }
-            _ => vec![false; n],
-        };
-        drop(rec);
+            _ => self.decided.fill(false),
+        }
+        Ok(())
+    }
+
+    fn stepped(&mut self, trial: &Trial) -> Result<(), Self::Error> {
         let r = trial.rewards();
-        team_return += r.team;
-        steps.push(PrimitiveStep {
-            decided,
-            actions: actions.clone(),
+        self.team_return += r.team;
+        self.steps.push(PrimitiveStep {
+            decided: self.decided.clone(),
+            actions: self.actions.clone(),
             robot_rewards: r.robots.iter().map(|&x| x as f32).collect(),
             team_reward: r.team as f32,
         });
+        Ok(())
     }
-    let complete = trial.world().is_complete();
-    drop(trial);
-    let decisions = std::mem::take(&mut *record.lock().expect("recorder lock"));
+}
+
+/// Runs one episode of `spec` (its config's CSP and step cap apply) with `actor`.
+pub fn run_episode(spec: TrialSpec, actor: Actor) -> Result<Episode, EpisodeError> {
+    let kind = actor.kind;
+    let csp = spec.config.comm_success_prob;
+    let name = actor.name().to_string();
+    let mut trial = Trial::driven_from_outside(spec, &name)?;
+    let n = trial.agents().len();
+    let mut rec = Recording {
+        actor,
+        steps: Vec::new(),
+        actions: vec![0; n],
+        decided: vec![false; n],
+        team_return: 0.0,
+    };
+    let Ok(end) = episode::run(&mut trial, &mut rec);
+    let Recording {
+        actor,
+        steps,
+        team_return,
+        ..
+    } = rec;
+    let decisions = actor.decisions;
     let cep = squeeze_team(&steps)?;
     let mut dep = Vec::with_capacity(n);
     let mut dep_at = Vec::with_capacity(n);
@@ -326,7 +347,7 @@ pub fn run_episode(spec: TrialSpec, actor: Actor) -> Result<Episode, EpisodeErro
         cep,
         dep,
         dep_at,
-        complete,
+        complete: end.complete,
         team_return,
     })
 }

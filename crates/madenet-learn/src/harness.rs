@@ -319,13 +319,17 @@ pub trait Learner {
         resuming: bool,
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError>;
-    /// Loads the trained model folder `dir` and registers it as policy `name`.
+    /// Loads the trained model folder `dir` and registers it as policy `name`. By default the
+    /// folder is a MADE-Net [`crate::model::Model`] (`model.toml` + DEP weights).
     fn register_model(
         dir: &Path,
         registry: &mut madenet_sim::PolicyRegistry,
         name: &str,
         about: &str,
-    ) -> Result<(), TrainError>;
+    ) -> Result<(), TrainError> {
+        crate::model::Model::load(dir)?.register(registry, name, about);
+        Ok(())
+    }
 }
 
 /// Trains learner `L` into `run_dir` (created; if it holds a checkpoint, the run resumes from

@@ -8,6 +8,8 @@
 //!   observation with the merged map);
 //! * [`env`](mod@env) — the two training environments (CEP-driven with full communication, DEP-driven
 //!   with CSP ~ U(0, 1)) as an ε-greedy [`madenet_agent::JointPolicy`] recording [`env::Episode`]s;
+//! * [`episode`] — the one episode runner of every learner (the trial's staged step with a
+//!   [`episode::Recorder`] per learner);
 //! * [`replay`] — episodes of primitive steps squeezed into the CEP's and DEPs' macro transitions;
 //! * [`learner`] — the updates of Eq. (5) and (6) (and MADE-Net-DT's double DRQN) on sampled
 //!   windows;
@@ -74,6 +76,7 @@ mod actions;
 pub mod agnostic;
 mod config;
 pub mod env;
+pub mod episode;
 pub mod error;
 pub mod harness;
 pub mod integrity;
@@ -103,7 +106,7 @@ pub use harness::{Learner, Progress};
 pub use model::{Method, Model, ModelInfo};
 pub use net::{LayerShape, LstmState, QNet};
 pub use policy::DepPolicy;
-pub use train::{train, MadeNetLearner, TrainConfig};
+pub use train::{train, MadeNetLearner, PaperMethod, TrainConfig};
 
 /// burn's `flex` CPU device, without autodiff (acting, evaluation, target networks).
 ///

@@ -33,6 +33,7 @@
 //! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
+use crate::episode::{self, Recorder};
 use crate::error::{write_atomic, TrainError};
 use crate::harness::{self, replace_dir, Clock, Learner, Progress, RunFields};
 use crate::learner::adam_step;
@@ -569,34 +570,28 @@ pub struct Collected {
     pub rollouts: usize,
 }
 
-/// Runs training episode `index` under `behaviour` (a registry holding policy "behaviour") and
-/// labels every decision with a choice.
-fn collect_episode(
-    cfg: &RolloutTrainConfig,
-    index: u64,
-    side_max: usize,
-    behaviour: &PolicyRegistry,
-) -> Result<Collected, TrainError> {
-    let spec = TrialSpec {
-        policy: "behaviour".into(),
-        ..episode_spec(cfg, "train", index, side_max)?
-    };
-    let seed = spec.seed;
-    let cells = spec.map.height() * spec.map.width();
-    let label_prob = (cfg.label_prob * 400.0 / cells as f64).min(1.0);
-    let mut label_rng = stream(seed, "label", 0);
-    let horizon = (cfg.horizon > 0).then_some(cfg.horizon);
-    let base = PolicyRegistry::builtin();
-    let mut trial = Trial::with_registry(spec, behaviour)
-        .map_err(|e| TrainError::Other(e.to_string()))?
-        .timed(false);
-    let n = trial.agents().len();
-    let mut robots = vec![Vec::new(); n];
-    let mut rollouts = 0;
-    let ds = cfg.scenario.sensing_range;
-    while trial.begin_step() {
+/// The rollout teacher as an episode recorder: at each timestep, before the behaviour policy
+/// decides, it labels the decisions with a choice (with probability `label_prob`) by the
+/// values of their candidates.
+struct Labelling<'a> {
+    cfg: &'a RolloutTrainConfig,
+    seed: u64,
+    label_prob: f64,
+    label_rng: Rng,
+    horizon: Option<usize>,
+    base: PolicyRegistry,
+    robots: Vec<Vec<Labelled>>,
+    rollouts: usize,
+}
+
+impl Recorder for Labelling<'_> {
+    type Error = TrainError;
+
+    fn decide(&mut self, trial: &mut Trial) -> Result<(), TrainError> {
+        let cfg = self.cfg;
+        let ds = cfg.scenario.sensing_range;
         let t = trial.world().t() as u64;
-        #[allow(clippy::needless_range_loop)] // i indexes the trial's agents and `robots`
+        let n = trial.agents().len();
         for i in 0..n {
             if !trial.deciding()[i] {
                 continue;
@@ -605,7 +600,7 @@ fn collect_episode(
             // area). The grid network keeps every decision in the robot's sequence (recurrent
             // windows need them); the agnostic one keeps only labelled decisions.
             let choice = trial.agent_mut(i).view(true).candidates().cells.len() >= 2;
-            let labelled = choice && label_rng.random::<f64>() < label_prob;
+            let labelled = choice && self.label_rng.random::<f64>() < self.label_prob;
             if !labelled && cfg.network == Network::Agnostic {
                 continue;
             }
@@ -633,7 +628,7 @@ fn collect_episode(
                     Futures::Salted => (0..cfg.rollouts as u64)
                         .map(|s| {
                             Future::Salted(derive_seed(
-                                seed,
+                                self.seed,
                                 "future",
                                 (t * 64 + i as u64) * 64 + s,
                             ))
@@ -641,16 +636,16 @@ fn collect_episode(
                         .collect(),
                 };
                 let values = candidate_values_within(
-                    &trial,
+                    trial,
                     i,
                     &[],
                     &cfg.base_policy,
-                    &base,
+                    &self.base,
                     &salts,
-                    horizon,
+                    self.horizon,
                 )
                 .map_err(|e| TrainError::Other(e.to_string()))?;
-                rollouts += values.iter().flatten().count() * salts.len();
+                self.rollouts += values.iter().flatten().count() * salts.len();
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
                 for (k, v) in values.iter().enumerate() {
@@ -661,7 +656,7 @@ fn collect_episode(
                     }
                 }
             }
-            robots[i].push(Labelled {
+            self.robots[i].push(Labelled {
                 map,
                 vec,
                 train_mask,
@@ -669,13 +664,42 @@ fn collect_episode(
             });
         }
         trial.decide_with(&vec![None; n]);
-        trial.finish_step();
+        Ok(())
     }
-    let steps = trial.world().t();
+}
+
+/// Runs training episode `index` under `behaviour` (a registry holding policy "behaviour") and
+/// labels every decision with a choice.
+fn collect_episode(
+    cfg: &RolloutTrainConfig,
+    index: u64,
+    side_max: usize,
+    behaviour: &PolicyRegistry,
+) -> Result<Collected, TrainError> {
+    let spec = TrialSpec {
+        policy: "behaviour".into(),
+        ..episode_spec(cfg, "train", index, side_max)?
+    };
+    let seed = spec.seed;
+    let cells = spec.map.height() * spec.map.width();
+    let mut trial = Trial::with_registry(spec, behaviour)
+        .map_err(|e| TrainError::Other(e.to_string()))?
+        .timed(false);
+    let mut teacher = Labelling {
+        cfg,
+        seed,
+        label_prob: (cfg.label_prob * 400.0 / cells as f64).min(1.0),
+        label_rng: stream(seed, "label", 0),
+        horizon: (cfg.horizon > 0).then_some(cfg.horizon),
+        base: PolicyRegistry::builtin(),
+        robots: vec![Vec::new(); trial.agents().len()],
+        rollouts: 0,
+    };
+    let end = episode::run(&mut trial, &mut teacher)?;
     Ok(Collected {
-        robots,
-        steps,
-        rollouts,
+        robots: teacher.robots,
+        steps: end.steps,
+        rollouts: teacher.rollouts,
     })
 }
 
@@ -1004,16 +1028,6 @@ impl Learner for RolloutLearner {
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError> {
         train_loop(run_dir, cfg, resuming, progress)
-    }
-
-    fn register_model(
-        dir: &Path,
-        registry: &mut PolicyRegistry,
-        name: &str,
-        about: &str,
-    ) -> Result<(), TrainError> {
-        Model::load(dir)?.register(registry, name, about);
-        Ok(())
     }
 }
 

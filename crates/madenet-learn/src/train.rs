@@ -45,12 +45,35 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
+/// The two methods of the paper this loop trains (the trained model's [`Method`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PaperMethod {
+    /// CEP + DEPs trained together (Eq. 5 and 6), two environments.
+    MadeNet,
+    /// The paper's ablation: the DEPs alone on decentralized experience (double DRQN).
+    MadeNetDt,
+}
+
+impl PaperMethod {
+    /// Both, in the order `madenet train` lists them.
+    pub const ALL: [PaperMethod; 2] = [PaperMethod::MadeNet, PaperMethod::MadeNetDt];
+
+    /// The model's method.
+    pub const fn method(self) -> Method {
+        match self {
+            PaperMethod::MadeNet => Method::MadeNet,
+            PaperMethod::MadeNetDt => Method::MadeNetDt,
+        }
+    }
+}
+
 /// Every knob of a training run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TrainConfig {
     /// `made-net` or `made-net-dt`.
-    pub method: Method,
+    pub method: PaperMethod,
     /// Master seed of every stream.
     pub seed: u64,
     /// Episodes per environment (the paper: ≈ 250 000 to converge, in 350 h).
@@ -125,7 +148,7 @@ pub struct TrainConfig {
 impl Default for TrainConfig {
     fn default() -> Self {
         TrainConfig {
-            method: Method::MadeNet,
+            method: PaperMethod::MadeNet,
             seed: 1,
             episodes: 20_000,
             max_minutes: 55.0,
@@ -180,9 +203,6 @@ impl TrainConfig {
 
     /// Checks every field (not the memory).
     pub fn check_fields(&self) -> Result<(), String> {
-        if self.method == Method::MadeNetRollout {
-            return Err(format!("field `method`: `{}` is trained from its own config (see configs/train-rollout.toml)", Method::MadeNetRollout.name()));
-        }
         self.scenario
             .validate()
             .map_err(|e| format!("scenario: {e}"))?;
@@ -277,7 +297,7 @@ impl TrainConfig {
         let joint = (self.goals() as u64)
             .checked_pow(self.scenario.num_robots as u32)
             .unwrap_or(u64::MAX);
-        if self.method == Method::MadeNet && joint > harness::MAX_JOINT_ACTIONS {
+        if self.method == PaperMethod::MadeNet && joint > harness::MAX_JOINT_ACTIONS {
             return Err(format!(
                 "field `scenario.num_robots`: the CEP's joint actions |G|^|I| = {}^{} exceed {}; train fewer robots, or made-net-dt",
                 self.goals(),
@@ -467,12 +487,12 @@ impl Nets {
                 .init()
         };
         let cep = match cfg.method {
-            Method::MadeNet => {
+            PaperMethod::MadeNet => {
                 let net = cfg.cep_config().init(&device)?;
                 let target = target_of(&net);
                 Some((net, target, optim()))
             }
-            Method::MadeNetDt | Method::MadeNetRollout => None,
+            PaperMethod::MadeNetDt => None,
         };
         let mut deps = Vec::new();
         for _ in cfg.dep_groups() {
@@ -564,7 +584,10 @@ pub struct MadeNetLearner;
 
 impl Learner for MadeNetLearner {
     type Config = TrainConfig;
-    const METHODS: &'static [&'static str] = &[Method::MadeNet.name(), Method::MadeNetDt.name()];
+    const METHODS: &'static [&'static str] = &[
+        PaperMethod::MadeNet.method().name(),
+        PaperMethod::MadeNetDt.method().name(),
+    ];
 
     fn parse_config(path: &Path, text: &str) -> Result<TrainConfig, TrainError> {
         TrainConfig::from_toml_text(path, text)
@@ -589,9 +612,9 @@ impl Learner for MadeNetLearner {
     }
 
     fn set_method(cfg: &mut TrainConfig, method: &str) -> Result<(), String> {
-        cfg.method = [Method::MadeNet, Method::MadeNetDt]
+        cfg.method = PaperMethod::ALL
             .into_iter()
-            .find(|m| m.name() == method)
+            .find(|m| m.method().name() == method)
             .ok_or_else(|| format!("`{method}` is not trained by MADE-Net's learner"))?;
         Ok(())
     }
@@ -603,16 +626,6 @@ impl Learner for MadeNetLearner {
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError> {
         train_loop(run_dir, cfg, resuming, progress)
-    }
-
-    fn register_model(
-        dir: &Path,
-        registry: &mut PolicyRegistry,
-        name: &str,
-        about: &str,
-    ) -> Result<(), TrainError> {
-        Model::load(dir)?.register(registry, name, about);
-        Ok(())
     }
 }
 
@@ -643,8 +656,8 @@ fn train_loop(
         (State::default(), Replay::default(), Replay::default())
     };
     let per_iter = match cfg.method {
-        Method::MadeNet => 2,
-        Method::MadeNetDt | Method::MadeNetRollout => 1,
+        PaperMethod::MadeNet => 2,
+        PaperMethod::MadeNetDt => 1,
     };
     // Logs keep what the checkpoint has seen; a resumed run appends from there.
     let seen = state.episode * per_iter;
@@ -669,8 +682,8 @@ fn train_loop(
         let actor_nets = nets.actor_nets();
         let (mut reward_sum, mut steps_sum) = (0.0, 0.0);
         let envs: &[EnvKind] = match cfg.method {
-            Method::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
-            Method::MadeNetDt | Method::MadeNetRollout => &[EnvKind::Decentralized],
+            PaperMethod::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
+            PaperMethod::MadeNetDt => &[EnvKind::Decentralized],
         };
         for (k, &kind) in envs.iter().enumerate() {
             let seed = derive_seed(cfg.seed, kind.short(), e);
@@ -839,7 +852,7 @@ fn train_loop(
 fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -> ModelInfo {
     let d = cfg.dep_config();
     ModelInfo {
-        method: cfg.method,
+        method: cfg.method.method(),
         agnostic: None,
         dep: Some(NetConfigToml {
             map_height: d.map_height,

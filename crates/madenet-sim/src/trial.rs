@@ -340,11 +340,19 @@ impl Trial {
         spec: TrialSpec,
         joint: Box<dyn JointPolicy>,
     ) -> Result<Self, SimError> {
+        let mut trial = Self::driven_from_outside(spec, joint.name())?;
+        trial.joint = Some(joint);
+        Ok(trial)
+    }
+
+    /// A trial whose robots decide only from outside: each robot's policy is the
+    /// [`External`] stand-in (it decides at macro terminations and idles if asked itself), so
+    /// a caller gives the decisions with [`Trial::decide_jointly`] or
+    /// [`Trial::apply_decisions`] between [`Trial::begin_step`] and [`Trial::finish_step`].
+    /// `policy` names the deciding policy in the result.
+    pub fn driven_from_outside(spec: TrialSpec, policy: &str) -> Result<Self, SimError> {
         let mut registry = PolicyRegistry::default();
-        registry.register("external", "decisions from a joint policy", |_| {
-            Box::new(External)
-        });
-        let name = joint.name().to_string();
+        registry.register("external", "decisions from outside", |_| Box::new(External));
         let mut trial = Self::with_registry(
             TrialSpec {
                 policy: "external".into(),
@@ -352,8 +360,7 @@ impl Trial {
             },
             &registry,
         )?;
-        trial.policy = name;
-        trial.joint = Some(joint);
+        trial.policy = policy.to_string();
         Ok(trial)
     }
 
@@ -472,25 +479,37 @@ impl Trial {
     /// 3b. The deciding robots ask their own policies, or the joint policy decides for them.
     fn decide(&mut self) {
         let started = self.clock();
-        let n = self.agents.len();
-        if self.joint.is_none() {
-            for (i, a) in self.agents.iter_mut().enumerate() {
-                if self.decided[i] {
-                    a.decide();
+        match self.joint.take() {
+            None => {
+                for (i, a) in self.agents.iter_mut().enumerate() {
+                    if self.decided[i] {
+                        a.decide();
+                    }
                 }
             }
-        }
-        if let Some(joint) = self.joint.as_mut().filter(|_| self.decided.contains(&true)) {
-            let mut views: Vec<_> = self.agents.iter_mut().map(|a| a.view(true)).collect();
-            let decisions = joint.decide(&mut views, &self.decided, self.world.team_map());
-            drop(views);
-            for (i, d) in decisions.into_iter().enumerate().take(n) {
-                if self.decided[i] {
-                    self.agents[i].apply_decision(d);
-                }
+            Some(mut joint) => {
+                self.decide_jointly(joint.as_mut());
+                self.joint = Some(joint);
             }
         }
         self.add_elapsed(started);
+    }
+
+    /// 3b by a centralized policy: if any robot decides now, `joint` sees every robot's view
+    /// and the team's merged map, and each deciding robot takes its decision.
+    pub fn decide_jointly(&mut self, joint: &mut dyn JointPolicy) {
+        if !self.decided.contains(&true) {
+            return;
+        }
+        let n = self.agents.len();
+        let mut views: Vec<_> = self.agents.iter_mut().map(|a| a.view(true)).collect();
+        let decisions = joint.decide(&mut views, &self.decided, self.world.team_map());
+        drop(views);
+        for (i, d) in decisions.into_iter().enumerate().take(n) {
+            if self.decided[i] {
+                self.agents[i].apply_decision(d);
+            }
+        }
     }
 
     /// 3b from outside: `decisions[i]` for each deciding robot i (the others' entries are
