@@ -491,6 +491,44 @@ impl RobotTopics {
     }
 }
 
+/// A robot process's own ROS 2 output (`madenet agent --ros2`): its session on one zenoh
+/// endpoint and its [`RobotTopics`]. A message that cannot be published is a warning, not the
+/// end of the robot: exploring goes on without the view.
+pub struct RobotPublisher {
+    _ctx: Ros2Context,
+    robot: usize,
+    topics: RobotTopics,
+}
+
+impl RobotPublisher {
+    /// Robot `robot`'s topics on a map of `map`'s size, through a zenoh session connected to
+    /// `endpoint` (the rmw_zenoh router, e.g. `tcp/127.0.0.1:7447`).
+    pub fn connect(
+        endpoint: &str,
+        robot: usize,
+        map: &madenet_map::OccGrid,
+    ) -> Result<Self, Ros2Error> {
+        let opts = Ros2Options {
+            connect: vec![endpoint.to_string()],
+            ..Default::default()
+        };
+        let ctx = opts.context()?;
+        let topics = RobotTopics::new(&ctx, robot, MapFrame::of(map))?;
+        Ok(RobotPublisher {
+            _ctx: ctx,
+            robot,
+            topics,
+        })
+    }
+
+    /// [`RobotTopics::publish`]; a failure is logged as a warning.
+    pub fn publish(&mut self, belief: &[Occupancy], pos: Pos, goal: Option<Pos>) {
+        if let Err(e) = self.topics.publish(belief, pos, goal) {
+            tracing::warn!("robot {}: ROS 2: {e}", self.robot);
+        }
+    }
+}
+
 /// A real robot's `/robot<i>/map` and `/robot<i>/pose`, read into madenet cells of `frame`:
 /// what a robot stack provides in place of madenet's simulated world.
 pub struct RobotFeed {

@@ -58,6 +58,7 @@
 pub mod launch;
 mod mailbox;
 mod radio_node;
+mod report;
 mod robot;
 pub mod transport;
 pub mod wire;
@@ -66,6 +67,7 @@ pub mod zenoh_bus;
 
 pub use mailbox::Traffic;
 pub use radio_node::{run_radio, run_radio_with, RadioFaults, MAX_DELAY_STEPS};
+pub use report::{RuntimeReport, WorldOutput};
 pub use robot::{run_robot, run_robot_with};
 pub use world_node::{run_ground_with, run_world, run_world_with, Ground, ShowFn};
 

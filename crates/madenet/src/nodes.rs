@@ -10,7 +10,7 @@ use clap::Args;
 use madenet_runtime::launch::{run_nodes, LaunchError, LaunchEvent};
 use madenet_runtime::wire::{Node, Shown};
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
-use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, ZenohBus};
+use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, WorldOutput, ZenohBus};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -187,29 +187,22 @@ impl Ros2Args {
 
 /// Robot `i`'s ROS 2 publishers, when `--ros2` asked for them.
 #[cfg(feature = "ros2")]
-struct Ros2Out(Option<(madenet_ros2::Ros2Context, madenet_ros2::RobotTopics)>);
+struct Ros2Out(Option<madenet_ros2::RobotPublisher>);
 
 #[cfg(feature = "ros2")]
 impl Ros2Out {
     fn open(a: &Ros2Args, i: usize, map: &madenet_map::OccGrid) -> Result<Self> {
-        let Some(endpoint) = &a.ros2 else {
-            return Ok(Ros2Out(None));
-        };
-        let opts = madenet_ros2::Ros2Options {
-            connect: vec![endpoint.clone()],
-            ..Default::default()
-        };
-        let ctx = opts.context().context("--ros2")?;
-        let topics = madenet_ros2::RobotTopics::new(&ctx, i, madenet_ros2::MapFrame::of(map))
-            .context("--ros2")?;
-        Ok(Ros2Out(Some((ctx, topics))))
+        a.ros2
+            .as_ref()
+            .map(|endpoint| madenet_ros2::RobotPublisher::connect(endpoint, i, map))
+            .transpose()
+            .context("--ros2")
+            .map(Ros2Out)
     }
 
     fn publish(&mut self, agent: &madenet_agent::Agent) {
-        if let Some((_, topics)) = &mut self.0 {
-            if let Err(e) = topics.publish(agent.belief().map(), agent.pos(), agent.goal()) {
-                tracing::warn!("robot {}: ROS 2: {e}", agent.id());
-            }
+        if let Some(p) = &mut self.0 {
+            p.publish(agent.belief().map(), agent.pos(), agent.goal());
         }
     }
 }
@@ -226,58 +219,6 @@ impl Ros2Out {
         Ok(Ros2Out)
     }
     fn publish(&mut self, _: &madenet_agent::Agent) {}
-}
-
-/// What a run over processes adds to `run --json` (key `runtime`).
-#[derive(serde::Serialize, serde::Deserialize)]
-struct RuntimeReport {
-    /// Robots' observation-to-move latency (waits for teammates included).
-    latency: madenet_runtime::Latency,
-    /// Robot-timesteps a robot was absent (sent no move in time).
-    absent_robot_steps: usize,
-    /// Messages and bytes the world sent (observations, contacts, stops).
-    world_messages: usize,
-    world_bytes: usize,
-}
-
-/// What the world node writes: `run --json`'s object, field order kept, then what the run over
-/// processes adds (and the positions when asked); what `launch` reads back.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct WorldOutput {
-    #[serde(flatten)]
-    result: madenet_sim::TrialResult,
-    runtime: RuntimeReport,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    positions: Option<Vec<Vec<madenet_map::Pos>>>,
-}
-
-/// The JSON of a run over nodes.
-fn result_json(
-    scenario: &ScenarioArgs,
-    spec: &madenet_sim::TrialSpec,
-    r: LockstepResult,
-    trajectory: bool,
-) -> Result<String> {
-    let v = WorldOutput {
-        result: madenet_sim::TrialResult {
-            map: spec.map_name.clone(),
-            policy: scenario.policy.clone(),
-            seed: spec.seed,
-            comm_success_prob: spec.config.comm_success_prob,
-            starts: spec.starts.clone(),
-            metrics: r.metrics,
-            trajectory: Vec::new(),
-            timing: r.timing,
-        },
-        runtime: RuntimeReport {
-            latency: r.latency,
-            absent_robot_steps: r.absent_robot_steps,
-            world_messages: r.world_sent.messages,
-            world_bytes: r.world_sent.bytes,
-        },
-        positions: trajectory.then_some(r.positions),
-    };
-    Ok(serde_json::to_string_pretty(&v)?)
 }
 
 pub fn world(a: WorldArgs) -> Result<()> {
@@ -411,7 +352,8 @@ fn serve_world(
         last = std::time::Instant::now();
     })?;
     bus.close();
-    let json = result_json(&a.scenario, spec, r, a.trajectory)?;
+    let out = WorldOutput::new(spec, &a.scenario.policy, r, a.trajectory);
+    let json = serde_json::to_string_pretty(&out)?;
     match &a.out {
         Some(p) => madenet_files::write_atomic(p, format!("{json}\n").as_bytes())
             .with_context(|| format!("--out {}", p.display()))?,
