@@ -1,5 +1,10 @@
-//! The rewards of MADE-Net's training (paper Eq. 7 and 8), computed for every timestep of a
-//! trial so that learners and the Python environments read them off the same simulator.
+//! The trial's reward signal (paper Eq. 7 and 8): what a timestep was worth to each robot and
+//! to the team, computed by the trial's last stage as a Gym environment computes its reward.
+//! It is part of the simulator, not of a learner: it needs what only the trial sees between
+//! the world's move and the robots' next observation (the cells each robot had not explored
+//! yet, the contacts), and every consumer reads the same numbers — the Python environments,
+//! MADE-Net's learners (Eq. 7 and 8 as written) and DME-DRL's (its own constants through
+//! [`RewardConfig`]). No learning algorithm lives here.
 
 use serde::{Deserialize, Serialize};
 
