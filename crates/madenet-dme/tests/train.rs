@@ -11,6 +11,7 @@ use madenet_dme::train::{train, DmeTrainConfig, Model};
 use madenet_dme::{sector_goals, SECTORS};
 use madenet_nav::Dijkstra;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_testkit::{read, Scratch};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -34,13 +35,9 @@ fn tiny(episodes: u64) -> DmeTrainConfig {
     cfg
 }
 
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
 /// A log without its wall-time column (the last one in episodes.csv).
 fn without_time(dir: &Path) -> Vec<String> {
-    read(&dir.join("episodes.csv"))
+    read(dir.join("episodes.csv"))
         .lines()
         .map(|l| l.rsplit_once(',').expect("columns").0.to_string())
         .collect()
@@ -48,8 +45,7 @@ fn without_time(dir: &Path) -> Vec<String> {
 
 #[test]
 fn tiny_run_resumes_exactly_and_its_actors_play() {
-    let root = std::env::temp_dir().join(format!("madenet-dme-train-test-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
+    let root = Scratch::new("dme-train-test");
     let (straight, resumed) = (root.join("straight"), root.join("resumed"));
 
     train(&straight, Some(tiny(4)), &mut |_| {}).unwrap();
@@ -68,10 +64,10 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     }
     let eps = without_time(&straight);
     assert_eq!(eps.len(), 1 + 4, "header + 4 episodes");
-    let updates = read(&straight.join("updates.csv"));
+    let updates = read(straight.join("updates.csv"));
     assert!(updates.lines().count() > 10, "updates ran:\n{updates}");
     assert_eq!(
-        read(&straight.join("validation.csv")).lines().count(),
+        read(straight.join("validation.csv")).lines().count(),
         1 + 2,
         "validated at episodes 2 and 4"
     );
@@ -89,7 +85,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     }
     train(&resumed, Some(tiny(4)), &mut |_| {}).unwrap();
     assert_eq!(without_time(&resumed), eps);
-    assert_eq!(read(&resumed.join("updates.csv")), updates);
+    assert_eq!(read(resumed.join("updates.csv")), updates);
     let scalars = madenet_testkit::tb_scalars;
     let want = scalars(&straight);
     assert!(
@@ -258,7 +254,7 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     for f in ["actor0.bpk", "actor1.bpk", "actor2.bpk"] {
         std::fs::copy(straight.join("last").join(f), broken.join(f)).unwrap();
     }
-    let toml = read(&straight.join("last/model.toml")).replace("hidden = 32", "hidden = 64");
+    let toml = read(straight.join("last/model.toml")).replace("hidden = 32", "hidden = 64");
     std::fs::write(broken.join("model.toml"), toml).unwrap();
     let err = Model::load(&broken)
         .err()
@@ -274,7 +270,6 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("bad.toml") && err.contains("gamma"), "{err}");
-    std::fs::remove_dir_all(&root).ok();
 }
 
 #[test]

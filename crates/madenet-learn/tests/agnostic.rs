@@ -13,6 +13,7 @@ use madenet_learn::rollout_train::{train, Network, RolloutTrainConfig};
 use madenet_learn::Model;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_testkit::Scratch;
 use madenet_world::ScenarioConfig;
 
 /// A decision's inputs taken from the first decision of a spread trial on a generated map.
@@ -145,8 +146,7 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         cfg.scenario.step_cap = 120;
         cfg
     };
-    let root = std::env::temp_dir().join(format!("madenet-agnostic-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
+    let root = Scratch::new("agnostic");
     let (a, b) = (root.join("a"), root.join("b"));
     train(&a, Some(tiny()), &mut |_| {}).unwrap();
     let toml = std::fs::read_to_string(a.join("last/model.toml")).unwrap();
@@ -189,5 +189,4 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     let again = Model::load(&b.join("last")).unwrap();
     let (m1, m2) = (model.agnostic.unwrap(), again.agnostic.unwrap());
     assert_eq!(m1.scores(&x), m2.scores(&x));
-    let _ = std::fs::remove_dir_all(&root);
 }

@@ -8,6 +8,7 @@
 use madenet_learn::rollout_train::{train, RolloutTrainConfig};
 use madenet_learn::Model;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_testkit::{read, Scratch};
 use std::path::Path;
 
 fn tiny() -> RolloutTrainConfig {
@@ -25,10 +26,6 @@ fn tiny() -> RolloutTrainConfig {
     };
     cfg.scenario.step_cap = 60;
     cfg
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// The Q values of a saved model's DEP on a fixed input (weight files also hold random
@@ -53,7 +50,7 @@ fn q_of(dir: &Path) -> Vec<f32> {
 
 /// iterations.csv without the wall-time column (the last).
 fn log_without_time(dir: &Path) -> Vec<String> {
-    read(&dir.join("iterations.csv"))
+    read(dir.join("iterations.csv"))
         .lines()
         .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string())
         .collect()
@@ -61,8 +58,7 @@ fn log_without_time(dir: &Path) -> Vec<String> {
 
 #[test]
 fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
-    let root = std::env::temp_dir().join(format!("madenet-rollout-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
+    let root = Scratch::new("rollout");
     let (a, b, c) = (root.join("a"), root.join("b"), root.join("c"));
     let mut calls = 0;
     train(&a, Some(tiny()), &mut |_| calls += 1).unwrap();
@@ -166,7 +162,6 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("different config"), "{e}");
-    std::fs::remove_dir_all(&root).unwrap();
 }
 
 #[test]
@@ -176,8 +171,7 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
         RolloutTrainConfig::from_toml_file(&path).unwrap(),
         RolloutTrainConfig::default()
     );
-    let dir = std::env::temp_dir().join(format!("madenet-rollout-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("rollout-bad");
     for (text, needle) in [
         ("method = \"made-net\"\n", "method"),
         ("rollouts = 0\n", "rollouts"),
@@ -188,8 +182,7 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
         ("threads = 100000\n", "threads"),
         ("nonsense = 1\n", "nonsense"),
     ] {
-        let p = dir.join("bad.toml");
-        std::fs::write(&p, text).unwrap();
+        let p = dir.write("bad.toml", text);
         let e = RolloutTrainConfig::from_toml_file(&p)
             .unwrap_err()
             .to_string();
@@ -198,5 +191,4 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
             "{text:?} gave {e}"
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -7,6 +7,7 @@
 use madenet_learn::scenario;
 use madenet_learn::{train, Model, Tensor, TrainConfig, TrainError};
 use madenet_sim::PolicyRegistry;
+use madenet_testkit::{read, Scratch};
 use std::path::Path;
 
 fn tiny(episodes: u64) -> TrainConfig {
@@ -30,13 +31,9 @@ fn tiny(episodes: u64) -> TrainConfig {
     cfg
 }
 
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
 /// episodes.csv without the wall-time column.
 fn episodes_without_time(dir: &Path) -> Vec<String> {
-    read(&dir.join("episodes.csv"))
+    read(dir.join("episodes.csv"))
         .lines()
         .map(|l| l.rsplit_once(',').expect("columns").0.to_string())
         .collect()
@@ -44,8 +41,7 @@ fn episodes_without_time(dir: &Path) -> Vec<String> {
 
 #[test]
 fn tiny_training_logs_checkpoints_resumes_and_repeats() {
-    let root = std::env::temp_dir().join(format!("madenet-train-test-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
+    let root = Scratch::new("train-test");
     let (straight, again, resumed) = (
         root.join("straight"),
         root.join("again"),
@@ -85,7 +81,7 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
         ("0", "cen", 1.0)
     );
     assert_eq!((second[0].as_str(), second[1].as_str()), ("1", "dec"));
-    let updates = read(&straight.join("updates.csv"));
+    let updates = read(straight.join("updates.csv"));
     assert_eq!(
         updates.lines().count(),
         1 + 5,
@@ -95,15 +91,12 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
         .split(',')
         .skip(1)
         .all(|v| v.parse::<f32>().is_ok_and(f32::is_finite))));
-    assert_eq!(
-        read(&straight.join("validation.csv")).lines().count(),
-        1 + 2
-    );
+    assert_eq!(read(straight.join("validation.csv")).lines().count(), 1 + 2);
 
     // Same seed ⇒ the same episodes and the same updates.
     train(&again, Some(tiny(6)), &mut |_| {}).unwrap();
     assert_eq!(episodes_without_time(&again), eps);
-    assert_eq!(read(&again.join("updates.csv")), updates);
+    assert_eq!(read(again.join("updates.csv")), updates);
 
     // Stopped after 3 iterations (checkpoint at 2, one more iteration logged and lost), then
     // resumed to 6: the same as the uninterrupted run.
@@ -121,7 +114,7 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
         "resumed run differs in its episodes"
     );
     assert_eq!(
-        read(&resumed.join("updates.csv")),
+        read(resumed.join("updates.csv")),
         updates,
         "resumed run differs in its updates"
     );
@@ -161,7 +154,6 @@ fn tiny_training_logs_checkpoints_resumes_and_repeats() {
     );
     train(&straight, Some(tiny(7)), &mut |_| {}).unwrap();
     assert_eq!(episodes_without_time(&straight).len(), 1 + 14);
-    std::fs::remove_dir_all(&root).unwrap();
 }
 
 /// The final DEP's Q values on a fixed input.
@@ -188,8 +180,7 @@ fn copy_dir(from: &Path, to: &Path) {
 
 #[test]
 fn bad_train_configs_name_file_and_field() {
-    let dir = std::env::temp_dir().join(format!("madenet-train-cfg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("train-cfg");
     for (text, needle) in [
         ("batch_size = 0\n", "batch_size"),
         ("gamma = 1.5\n", "gamma"),
@@ -197,15 +188,13 @@ fn bad_train_configs_name_file_and_field() {
         ("method = \"dqn\"\n", "dqn"),
         ("[scenario]\nsensing_range = 0\n", "sensing_range"),
     ] {
-        let p = dir.join("bad.toml");
-        std::fs::write(&p, text).unwrap();
+        let p = dir.write("bad.toml", text);
         let e = TrainConfig::from_toml_file(&p).unwrap_err().to_string();
         assert!(
             e.contains("bad.toml") && e.contains(needle),
             "{text:?} gave {e}"
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

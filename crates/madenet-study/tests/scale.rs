@@ -5,7 +5,7 @@
 use madenet_sim::PolicyRegistry;
 use madenet_study::scale::{ScaleConfig, ScaleStart};
 use madenet_study::{run_scale, StudyConfig};
-use std::path::PathBuf;
+use madenet_testkit::Scratch;
 
 fn tiny() -> ScaleConfig {
     ScaleConfig {
@@ -21,12 +21,6 @@ fn tiny() -> ScaleConfig {
 
 fn registry() -> PolicyRegistry {
     StudyConfig::default().registry().unwrap()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let p = std::env::temp_dir().join(format!("madenet-scale-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&p);
-    p
 }
 
 /// trials.csv without its wall-clock columns (13th and 15th: trial_s, per_decision_s).
@@ -77,7 +71,8 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
             s.starts
         );
     }
-    let out = scratch("tiny");
+    let dir = Scratch::new("scale-tiny");
+    let out = dir.join("out");
     let r = run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
     assert_eq!(r.trials, 48);
     assert_eq!(r.cells.len(), 2 * 3 * 2, "sides × teams × methods");
@@ -141,7 +136,6 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
         e.to_string().contains("different study configuration"),
         "{e}"
     );
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]
@@ -157,7 +151,8 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     let plan = cfg.plan().unwrap();
     assert_eq!(plan.len(), 2 * 3 * 2, "methods × teams × seeds");
     assert!(plan.iter().all(|p| p.planned.continuous.is_some()));
-    let out = scratch("continuous");
+    let dir = Scratch::new("scale-continuous");
+    let out = dir.join("out");
     let r = run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
     assert_eq!(r.trials, 12);
     let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();
@@ -233,7 +228,6 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
     assert_eq!(trials_without_time(&out), full);
     assert_eq!(trials_without_time(&out.join("grid")), grid_full);
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]

@@ -8,9 +8,9 @@
 
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_study::{run_study, StudyConfig, TrialOutcome};
+use madenet_testkit::{read, Scratch};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Columns of `trials.csv` holding wall-clock times: the only non-deterministic ones.
@@ -21,34 +21,6 @@ const METRICS: [&str; 4] = ["TNS", "TTD", "NOLI", "OFV"];
 
 // ---------------------------------------------------------------------------------------------
 // Helpers
-
-/// A temp folder removed on drop (kept if `MADENET_KEEP_TEST_DIRS` is set, for debugging).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Self {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let p = std::env::temp_dir().join(format!(
-            "madenet-study-test-{}-{}-{name}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).expect("temp dir");
-        Scratch(p)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        if std::env::var_os("MADENET_KEEP_TEST_DIRS").is_none() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
-}
 
 fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| s.to_string()).collect()
@@ -136,14 +108,10 @@ impl Table {
     }
 }
 
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
 /// `bad` is refused with a one-line message containing every needle, before any trial runs:
 /// no progress, no record files.
 fn assert_refused(bad: &StudyConfig, needles: &[&str]) {
-    let dir = Scratch::new("refused");
+    let dir = Scratch::new("study-refused");
     let out = dir.path().join("out");
     let (r, calls) = run(bad, &out, false);
     let msg = match r {
@@ -190,7 +158,7 @@ fn empty_or_duplicate_methods_are_refused() {
 
 #[test]
 fn missing_map_folder_or_file_is_refused_naming_the_path() {
-    let dir = Scratch::new("missing-maps");
+    let dir = Scratch::new("study-missing-maps");
     let folder = dir.path().join("no_such_maps_folder");
     let file = dir.path().join("no_such_map.yaml");
     for missing in [&folder, &file] {
@@ -245,7 +213,7 @@ fn bad_starts_are_refused_naming_starts() {
 
 #[test]
 fn malformed_study_toml_names_file_and_line() {
-    let dir = Scratch::new("toml");
+    let dir = Scratch::new("study-toml");
     let cases: [(&str, &str, &[&str]); 4] = [
         // A value of the wrong type on line 3.
         (
@@ -295,7 +263,7 @@ fn malformed_study_toml_names_file_and_line() {
 #[test]
 fn study_toml_values_are_validated_after_parsing() {
     // Well-formed TOML with values the study cannot run: parsing succeeds, validation refuses.
-    let dir = Scratch::new("toml-values");
+    let dir = Scratch::new("study-toml-values");
     let path = dir.path().join("study.toml");
     std::fs::write(
         &path,
@@ -352,7 +320,7 @@ fn calibration_rows(report: &str) -> Vec<(String, String, String)> {
 
 #[test]
 fn small_study_writes_every_output_consistently() {
-    let dir = Scratch::new("outputs");
+    let dir = Scratch::new("study-outputs");
     let out = dir.path();
     let methods = ["nf", "ub", "pb"];
     let cfg = small(&methods, &[1.0, 0.0], 2);
@@ -488,7 +456,7 @@ fn small_study_writes_every_output_consistently() {
     );
 
     // curves.jsonl: one line per trial, same order, consistent with the row.
-    let curves = read(&out.join("curves.jsonl"));
+    let curves = read(out.join("curves.jsonl"));
     let lines: Vec<&str> = curves.lines().collect();
     assert_eq!(lines.len(), total);
     for (line, r) in lines.iter().zip(&trials.rows) {
@@ -576,7 +544,7 @@ fn small_study_writes_every_output_consistently() {
             );
         }
     }
-    let md = read(&out.join("summary.md"));
+    let md = read(out.join("summary.md"));
     assert_eq!(
         md.lines()
             .filter(|l| l.starts_with("| ") && l.contains('±'))
@@ -642,7 +610,7 @@ fn small_study_writes_every_output_consistently() {
         );
         assert!(stats.num(r, "n") <= 8.0);
     }
-    let smd = read(&out.join("statistics.md"));
+    let smd = read(out.join("statistics.md"));
     assert!(
         smd.contains("Friedman") && smd.contains("nf vs ub"),
         "{smd}"
@@ -654,7 +622,7 @@ fn small_study_writes_every_output_consistently() {
             is_png(&out.join(format!("{f}.png"))),
             "{f}.png is not a PNG"
         );
-        let svg = read(&out.join(format!("{f}.svg")));
+        let svg = read(out.join(format!("{f}.svg")));
         assert!(svg.contains("<svg"), "{f}.svg");
         for m in ["NF", "UB", "PB"] {
             assert!(svg.contains(m), "{f}.svg has no legend entry {m}");
@@ -698,7 +666,7 @@ fn toml_cfg(path: &Path) -> StudyConfig {
 #[test]
 fn calibration_only_for_baselines_on_paper_maps() {
     // `random` has no published counterpart; generated maps are not the paper's.
-    let dir = Scratch::new("calibration");
+    let dir = Scratch::new("study-calibration");
     let mut cfg = small(&["random", "nf"], &[1.0], 1);
     cfg.maps = vec!["paper:3".into(), "generate:7".into()];
     let (report, outcomes, _) = run_ok(&cfg, dir.path(), false);
@@ -762,16 +730,16 @@ fn first_lines(text: &str, k: usize) -> String {
 
 #[test]
 fn interrupted_study_resumes_with_only_complete_consistent_trials() {
-    let dir = Scratch::new("resume");
+    let dir = Scratch::new("study-resume");
     let out = dir.path();
     let cfg = small(&["nf", "ub"], &[1.0, 0.0], 2);
     let total = 2 * 2 * 2 * 2 * 2;
     let (_, first, _) = run_ok(&cfg, out, false);
     assert_eq!(first.len(), total);
-    let trials_full = read(&out.join("trials.csv"));
-    let curves_full = read(&out.join("curves.jsonl"));
+    let trials_full = read(out.join("trials.csv"));
+    let curves_full = read(out.join("curves.jsonl"));
     let summary_full = Table::read(&out.join("summary.csv")).without(&SUMMARY_CT);
-    let stats_full = read(&out.join("statistics.csv"));
+    let stats_full = read(out.join("statistics.csv"));
 
     // Interrupt: trials.csv keeps its header, 10 whole rows and half of the 11th; curves.jsonl
     // its first 7 lines. Complete trials: the 7 with both a row and a curve.
@@ -809,39 +777,39 @@ fn interrupted_study_resumes_with_only_complete_consistent_trials() {
         deterministic_trials(out),
         Table::read_str(&trials_full).without(&WALL_CLOCK)
     );
-    assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
+    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
     assert_eq!(
         Table::read(&out.join("summary.csv")).without(&SUMMARY_CT),
         summary_full
     );
-    assert_eq!(read(&out.join("statistics.csv")), stats_full);
+    assert_eq!(read(out.join("statistics.csv")), stats_full);
     // … and the trials kept were not run again: their rows are byte-identical, timings included.
     let kept = first_lines(&trials_full, 1 + k_curves);
     assert!(
-        read(&out.join("trials.csv")).starts_with(&kept),
+        read(out.join("trials.csv")).starts_with(&kept),
         "the first {k_curves} rows were kept as recorded"
     );
-    assert!(trials_full.ends_with('\n') && read(&out.join("trials.csv")).ends_with('\n'));
+    assert!(trials_full.ends_with('\n') && read(out.join("trials.csv")).ends_with('\n'));
 
     // Resuming a finished study runs nothing and changes nothing.
-    let before = read(&out.join("trials.csv"));
+    let before = read(out.join("trials.csv"));
     let (_, _, calls) = run_ok(&cfg, out, false);
     assert_eq!(calls, vec![(total, total)]);
-    assert_eq!(read(&out.join("trials.csv")), before);
-    assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
+    assert_eq!(read(out.join("trials.csv")), before);
+    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
 }
 
 #[test]
 fn resume_drops_a_row_torn_inside_its_last_field() {
     // A row cut just before its end still has every field, but its last field is cut short:
     // without its newline it cannot be trusted and must be run again.
-    let dir = Scratch::new("resume-last-field");
+    let dir = Scratch::new("study-resume-last-field");
     let out = dir.path();
     let cfg = small(&["nf"], &[1.0], 2);
     let total = 2 * 2 * 2;
     run_ok(&cfg, out, false);
-    let trials_full = read(&out.join("trials.csv"));
-    let curves_full = read(&out.join("curves.jsonl"));
+    let trials_full = read(out.join("trials.csv"));
+    let curves_full = read(out.join("curves.jsonl"));
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     // The first row whose last field (to_100) is not empty.
     let i = (1..lines.len())
@@ -864,7 +832,7 @@ fn resume_drops_a_row_torn_inside_its_last_field() {
         deterministic_trials(out),
         Table::read_str(&trials_full).without(&WALL_CLOCK)
     );
-    assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
+    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
 }
 
 impl Table {
@@ -881,13 +849,13 @@ impl Table {
 
 #[test]
 fn resume_ignores_records_outside_the_plan_and_garbage_lines() {
-    let dir = Scratch::new("resume-garbage");
+    let dir = Scratch::new("study-resume-garbage");
     let out = dir.path();
     let cfg = small(&["nf"], &[1.0], 1);
     let total = 2 * 2;
     run_ok(&cfg, out, false);
-    let trials_full = read(&out.join("trials.csv"));
-    let curves_full = read(&out.join("curves.jsonl"));
+    let trials_full = read(out.join("trials.csv"));
+    let curves_full = read(out.join("curves.jsonl"));
     // A line of garbage in each file, and a well-formed record of a trial this study does not plan.
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     let alien = lines[1].replacen("nf,", "ub,", 1);
@@ -914,21 +882,21 @@ fn resume_ignores_records_outside_the_plan_and_garbage_lines() {
         deterministic_trials(out),
         Table::read_str(&trials_full).without(&WALL_CLOCK)
     );
-    assert_curves_close(&read(&out.join("curves.jsonl")), &curves_full);
+    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
 }
 
 #[test]
 fn resumed_curves_are_byte_identical() {
     // Resuming a finished study reads every curve back and writes it again; the bytes must not
     // change (runner.rs: "the same bytes whatever the thread count or interruptions").
-    let dir = Scratch::new("curves-bytes");
+    let dir = Scratch::new("study-curves-bytes");
     let out = dir.path();
     let cfg = small(&["nf"], &[1.0], 1);
     run_ok(&cfg, out, false);
-    let curves = read(&out.join("curves.jsonl"));
+    let curves = read(out.join("curves.jsonl"));
     let (_, _, calls) = run_ok(&cfg, out, false);
     assert_eq!(calls, vec![(4, 4)], "nothing ran again");
-    let again = read(&out.join("curves.jsonl"));
+    let again = read(out.join("curves.jsonl"));
     for (i, (a, b)) in again.lines().zip(curves.lines()).enumerate() {
         assert_eq!(a, b, "curve {i} changed by resuming");
     }
@@ -946,7 +914,7 @@ fn resumed_curves_are_byte_identical() {
 
 #[test]
 fn different_config_in_same_folder_is_refused_unless_fresh() {
-    let dir = Scratch::new("different");
+    let dir = Scratch::new("study-different");
     let out = dir.path().join("study out");
     let a = StudyConfig {
         maps: vec!["paper:1".into()],
@@ -954,8 +922,8 @@ fn different_config_in_same_folder_is_refused_unless_fresh() {
         ..small(&["nf"], &[1.0], 1)
     };
     run_ok(&a, &out, false);
-    let trials_a = read(&out.join("trials.csv"));
-    let study_a = read(&out.join("study.toml"));
+    let trials_a = read(out.join("trials.csv"));
+    let study_a = read(out.join("study.toml"));
 
     let b = StudyConfig {
         seeds: 2,
@@ -972,12 +940,12 @@ fn different_config_in_same_folder_is_refused_unless_fresh() {
     assert!(msg.contains("fresh"), "the remedy is named: {msg}");
     assert!(calls.is_empty(), "{calls:?}");
     assert_eq!(
-        read(&out.join("trials.csv")),
+        read(out.join("trials.csv")),
         trials_a,
         "old results untouched"
     );
     assert_eq!(
-        read(&out.join("study.toml")),
+        read(out.join("study.toml")),
         study_a,
         "old configuration untouched"
     );
@@ -1004,7 +972,7 @@ fn different_config_in_same_folder_is_refused_unless_fresh() {
 
 #[test]
 fn results_do_not_depend_on_thread_count() {
-    let dir = Scratch::new("threads");
+    let dir = Scratch::new("study-threads");
     // One seed keeps it fast: 24 trials, still more than enough to interleave on 2 threads.
     let cfg = small(&["nf", "ub", "pb"], &[1.0, 0.0], 1);
     let outs: Vec<PathBuf> = [1, 2]
@@ -1023,20 +991,20 @@ fn results_do_not_depend_on_thread_count() {
     let (one, two) = (&outs[0], &outs[1]);
     assert_eq!(deterministic_trials(one), deterministic_trials(two));
     assert_eq!(
-        read(&one.join("curves.jsonl")),
-        read(&two.join("curves.jsonl"))
+        read(one.join("curves.jsonl")),
+        read(two.join("curves.jsonl"))
     );
     assert_eq!(
         Table::read(&one.join("summary.csv")).without(&SUMMARY_CT),
         Table::read(&two.join("summary.csv")).without(&SUMMARY_CT)
     );
     assert_eq!(
-        read(&one.join("statistics.csv")),
-        read(&two.join("statistics.csv"))
+        read(one.join("statistics.csv")),
+        read(two.join("statistics.csv"))
     );
     assert_eq!(
-        read(&one.join("statistics.md")),
-        read(&two.join("statistics.md"))
+        read(one.join("statistics.md")),
+        read(two.join("statistics.md"))
     );
 }
 
@@ -1045,7 +1013,7 @@ fn results_do_not_depend_on_thread_count() {
 
 #[test]
 fn statistics_have_one_friedman_per_metric_and_every_pair() {
-    let dir = Scratch::new("stats");
+    let dir = Scratch::new("study-stats");
     let cfg = small(&["nf", "ub", "pb"], &[0.5], 3);
     let (_, outcomes, _) = run_ok(&cfg, dir.path(), false);
     assert_eq!(outcomes.len(), 3 * 2 * 2 * 3);
@@ -1223,7 +1191,7 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
 #[test]
 fn oracles_run_beside_the_methods_and_are_reported_apart() {
     use madenet_sim::rollout::{run_oracle, OracleKind};
-    let dir = Scratch::new("oracles");
+    let dir = Scratch::new("study-oracles");
     let out = dir.path();
     let cfg = StudyConfig {
         maps: strings(&["paper:1"]),
@@ -1251,8 +1219,8 @@ fn oracles_run_beside_the_methods_and_are_reported_apart() {
         assert_eq!(row.noli, direct.metrics.noli, "{:?}", p.key);
     }
     // Only the methods are summarised and tested.
-    let summary = read(&out.join("summary.csv"));
-    let stats = read(&out.join("statistics.csv"));
+    let summary = read(out.join("summary.csv"));
+    let stats = read(out.join("statistics.csv"));
     for text in [&summary, &stats] {
         assert!(
             !text.contains("oracle") && !text.contains("spread"),
@@ -1324,7 +1292,7 @@ fn bad_oracle_fields_are_refused() {
 /// and left as it was, unless the study starts afresh.
 #[test]
 fn a_folder_with_a_foreign_trials_csv_is_refused() {
-    let dir = Scratch::new("foreign");
+    let dir = Scratch::new("study-foreign");
     let out = dir.path();
     std::fs::create_dir_all(out).unwrap();
     let foreign = "method,map\nnf,elsewhere\n";

@@ -2,7 +2,7 @@
 //! shipped agnostic model plays every side and team of it, and bad input gives exit code 2 and
 //! one `error:` line naming the flag or file and field.
 
-use madenet_testkit::{assert_clean_error, run};
+use madenet_testkit::{assert_clean_error, run, Scratch};
 use std::process::Output;
 
 fn madenet(args: &[&str]) -> Output {
@@ -11,8 +11,7 @@ fn madenet(args: &[&str]) -> Output {
 
 #[test]
 fn tiny_grid_with_the_agnostic_model_and_bad_input() {
-    let dir = std::env::temp_dir().join(format!("madenet-scale-cli-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = Scratch::new("scale-cli");
     let out = dir.join("s");
     let o = out.to_str().unwrap();
     let r = madenet(&[
@@ -57,19 +56,16 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
         &madenet(&["scale", "--out", o, "--methods", "teleport"]),
         &["--methods", "teleport"],
     );
-    let bad = dir.join("bad.toml");
-    std::fs::write(&bad, "sides = [20]\nseeds = \"three\"\n").unwrap();
+    let bad = dir.write("bad.toml", "sides = [20]\nseeds = \"three\"\n");
     assert_clean_error(
         &madenet(&["scale", "--config", bad.to_str().unwrap(), "--out", o]),
         &["bad.toml", "seeds", "line 2"],
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
-    let dir = std::env::temp_dir().join(format!("madenet-scale-cont-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = Scratch::new("scale-cont");
     let out = dir.join("s");
     let o = out.to_str().unwrap();
     let r = madenet(&[
@@ -112,16 +108,13 @@ fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
         err.contains("--world") && !err.contains("panicked"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn the_configs_baseline_parameters_are_the_ones_played() {
     // PB with one iteration of its planner and with the paper's 50, on the same trials: the
     // tables differ (before, `madenet scale` played the defaults whatever `[baselines]` said).
-    let dir = std::env::temp_dir().join(format!("madenet-scale-pb-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("scale-pb");
     let trials = |iterations: u32| {
         let cfg = dir.join(format!("pb{iterations}.toml"));
         std::fs::write(
@@ -157,5 +150,4 @@ fn the_configs_baseline_parameters_are_the_ones_played() {
     let (one, fifty) = (trials(1), trials(50));
     assert_eq!(one.len(), fifty.len());
     assert_ne!(one, fifty, "[baselines.pb] iterations had no effect");
-    let _ = std::fs::remove_dir_all(&dir);
 }

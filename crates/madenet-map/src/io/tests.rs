@@ -5,23 +5,10 @@ use super::raster::classify_pixel;
 use super::yaml::{parse_map_yaml, MapMeta};
 use super::*;
 use crate::Pos;
+use madenet_testkit::Scratch;
 use proptest::prelude::*;
 use std::fs;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
-
-/// A fresh, empty folder under the system temp dir, unique to this process and call.
-fn temp_dir(name: &str) -> PathBuf {
-    static N: AtomicU64 = AtomicU64::new(0);
-    let dir = std::env::temp_dir().join(format!(
-        "madenet-map-test-{}-{name}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ));
-    let _ = fs::remove_dir_all(&dir);
-    fs::create_dir_all(&dir).expect("create temp dir");
-    dir
-}
 
 fn grid_strategy(max: usize) -> impl Strategy<Value = OccGrid> {
     (1..=max, 1..=max).prop_flat_map(|(h, w)| {
@@ -76,7 +63,7 @@ fn save_thresholds_round_trip_the_three_pixel_values() {
 
 #[test]
 fn reads_yaml_with_pgm() {
-    let dir = temp_dir("yaml-ok");
+    let dir = Scratch::new("map-test-yaml-ok");
     write(&dir, "m.pgm", &small_pgm());
     let yaml = write(
         &dir,
@@ -90,12 +77,11 @@ fn reads_yaml_with_pgm() {
     assert_eq!(to_text(&g), "#.?\n..#\n");
     assert_eq!(g.origin, [1.5, -2.0, 0.0]);
     assert_eq!(g.resolution, 1.0);
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
 fn negate_and_modes() {
-    let dir = temp_dir("modes");
+    let dir = Scratch::new("map-test-modes");
     write(&dir, "m.pgm", &small_pgm());
     let negated = write(
         &dir,
@@ -127,24 +113,22 @@ fn negate_and_modes() {
         matches!(e, MapError::Field { ref field, .. } if field == "mode"),
         "{e}"
     );
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
 fn ascii_pgm_and_maxval_scaling() {
-    let dir = temp_dir("p2");
+    let dir = Scratch::new("map-test-p2");
     // maxval 1: 0 → 0 (obstacle), 1 → 255 (free).
     let p = write(&dir, "a.pgm", b"P2\n# comment\n2 2\n1\n0 1\n1 0\n");
     assert_eq!(
         to_text(&load(&p, &LoadOptions::default()).expect("p2")),
         "#.\n.#\n"
     );
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
 fn bad_inputs_give_the_right_error() {
-    let dir = temp_dir("bad");
+    let dir = Scratch::new("map-test-bad");
     let opts = LoadOptions::default();
     write(&dir, "m.pgm", &small_pgm());
 
@@ -319,12 +303,11 @@ fn bad_inputs_give_the_right_error() {
     )
     .unwrap_err();
     assert!(matches!(e, MapError::Invalid(_)), "{e}");
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
 fn resolution_must_not_be_coarser_than_the_cell_size() {
-    let dir = temp_dir("res");
+    let dir = Scratch::new("map-test-res");
     write(&dir, "m.pgm", &small_pgm());
     let yaml = write(&dir, "m.yaml", YAML_OK.as_bytes());
     let e = load(
@@ -363,7 +346,6 @@ fn resolution_must_not_be_coarser_than_the_cell_size() {
     )
     .expect("bare");
     assert_eq!((g.height(), g.width(), g.resolution), (1, 2, 2.0));
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -389,7 +371,7 @@ fn discretizes_a_fine_yaml_map() {
     for c in 4..8 {
         set(7, c, PIXEL_OBSTACLE);
     }
-    let dir = temp_dir("fine");
+    let dir = Scratch::new("map-test-fine");
     let mut pgm = b"P5\n8 8\n255\n".to_vec();
     pgm.extend_from_slice(&px);
     write(&dir, "fine.pgm", &pgm);
@@ -421,12 +403,11 @@ fn discretizes_a_fine_yaml_map() {
         (g.height(), g.width(), g.count(Occupancy::Unknown)),
         (8, 8, 32 - 4)
     );
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
 fn partial_bottom_block_moves_the_origin_down() {
-    let dir = temp_dir("origin");
+    let dir = Scratch::new("map-test-origin");
     write(&dir, "m.pgm", &small_pgm()); // 3 wide, 2 high
     let yaml = write(
         &dir,
@@ -449,7 +430,6 @@ fn partial_bottom_block_moves_the_origin_down() {
     // 2 rows → 1 cell of 3 pixel rows: one padding row of 0.5 m below the image.
     assert_eq!((g.height(), g.width()), (1, 1));
     assert!((g.origin[1] + 0.5).abs() < 1e-12 && g.origin[0].abs() < 1e-12);
-    let _ = fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -465,7 +445,7 @@ fn text_parsing_details() {
 
 #[test]
 fn png_round_trip_and_save_dispatch() {
-    let dir = temp_dir("png");
+    let dir = Scratch::new("map-test-png");
     let g = parse_text("#.?\n..#\n", Path::new("x")).expect("parse");
     for name in ["a.png", "a.pgm", "a.txt", "a.map", "a.yml"] {
         let p = dir.join(name);
@@ -497,7 +477,6 @@ fn png_round_trip_and_save_dispatch() {
         to_text(&load(&p, &LoadOptions::default()).expect("rgba")),
         "#.?\n"
     );
-    let _ = fs::remove_dir_all(dir);
 }
 
 proptest! {
@@ -505,13 +484,12 @@ proptest! {
 
     #[test]
     fn yaml_pgm_round_trip(grid in grid_strategy(12), x in -100.0f64..100.0, y in -100.0f64..100.0, yaw in -3.2f64..3.2) {
-        let dir = temp_dir("rt");
+        let dir = Scratch::new("map-test-rt");
         let mut grid = grid;
         grid.origin = [x, y, yaw];
         let path = dir.join("map.yaml");
         save_yaml(&grid, &path).expect("save");
         let back = load(&path, &LoadOptions::default()).expect("load");
-        let _ = fs::remove_dir_all(&dir);
         prop_assert_eq!(back, grid);
     }
 
