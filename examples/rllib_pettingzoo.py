@@ -3,7 +3,7 @@ ExplorationEnv, through RLlib's ParallelPettingZooEnv wrapper.
 
 NOT run in CI: RLlib pulls in PyTorch (several GB). To try it:
 
-    pip install ./crates/madenet-py "ray[rllib]" torch
+    pip install ./crates/drivers/py "ray[rllib]" torch
     python examples/rllib_pettingzoo.py --iterations 20
 
 The env is macro mode on generated maps (never the paper's evaluation maps); robots whose macro

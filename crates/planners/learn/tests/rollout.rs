@@ -1,0 +1,194 @@
+//! The rollout-teacher learner end to end on a tiny run: logs, best/last models that load and
+//! play, same seed ⇒ same run, a run stopped at an iteration boundary and resumed equal to an
+//! uninterrupted one, bad configs. Not convergence.
+//!
+//! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
+//! initialises networks lives in one test.
+
+use madenet_learn::rollout_train::{train, RolloutTrainConfig};
+use madenet_learn::Model;
+use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
+use madenet_testkit::{read, Scratch};
+use std::path::Path;
+
+fn tiny() -> RolloutTrainConfig {
+    let mut cfg = RolloutTrainConfig {
+        episodes: 4,
+        iterations: 2,
+        max_minutes: 0.0,
+        updates_per_iteration: 3,
+        batch_size: 4,
+        validation_maps: 2,
+        validation_csp: vec![1.0, 0.0],
+        spread_margins: vec![0.1],
+        threads: 1,
+        ..RolloutTrainConfig::default()
+    };
+    cfg.scenario.step_cap = 60;
+    cfg
+}
+
+/// The Q values of a saved model's DEP on a fixed input (weight files also hold random
+/// parameter ids, so the files themselves differ between identical runs).
+fn q_of(dir: &Path) -> Vec<f32> {
+    use madenet_learn::{Tensor, TensorData};
+    let model = Model::load(dir).unwrap();
+    let net = &model.deps[0];
+    let device = madenet_learn::cpu();
+    let maps: Vec<f32> = (0..4 * 400)
+        .map(|i| ((i * 7) % 3 == 0) as u8 as f32)
+        .collect();
+    let maps = Tensor::<4>::from_data(TensorData::new(maps, [1, 4, 20, 20]), &device);
+    let obs: Vec<f32> = (0..net.obs_dim).map(|i| (i as f32 * 0.37).sin()).collect();
+    let obs = Tensor::<2>::from_data(TensorData::new(obs, [1, net.obs_dim]), &device);
+    net.act(maps, obs, None)
+        .0
+        .into_data()
+        .try_into_vec_as::<f32>()
+        .unwrap()
+}
+
+/// iterations.csv without the wall-time column (the last).
+fn log_without_time(dir: &Path) -> Vec<String> {
+    read(dir.join("iterations.csv"))
+        .lines()
+        .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string())
+        .collect()
+}
+
+#[test]
+fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
+    let root = Scratch::new("rollout");
+    let (a, b, c) = (root.join("a"), root.join("b"), root.join("c"));
+    let mut calls = 0;
+    train(&a, Some(tiny()), &mut |_| calls += 1).unwrap();
+    assert_eq!(calls, 2, "one progress report per iteration");
+    let log = log_without_time(&a);
+    assert_eq!(log.len(), 3, "header + one row per iteration: {log:?}");
+    assert!(log[0].starts_with("iteration,episodes,decisions,rollouts"));
+    for f in [
+        "config.toml",
+        "best/model.toml",
+        "best/dep0.bpk",
+        "last/model.toml",
+        "last/dep0.bpk",
+        "checkpoint/state.json",
+        "checkpoint/data.bin",
+    ] {
+        assert!(a.join(f).exists(), "{f}");
+    }
+    // Labelled decisions and teacher rollouts were made.
+    let row: Vec<&str> = log[1].split(',').collect();
+    assert!(
+        row[2].parse::<usize>().unwrap() > 0 && row[3].parse::<usize>().unwrap() > 0,
+        "{row:?}"
+    );
+
+    // The model loads, says what it reads, and plays a whole trial as a registered policy.
+    let model = Model::load(&a.join("best")).unwrap();
+    assert_eq!(
+        model.info.observation,
+        madenet_learn::obs::Observation::CandidateFeatures
+    );
+    assert!(!model.info.recurrent);
+    let mut registry = PolicyRegistry::builtin();
+    model.register(&mut registry, "student", "the tiny run's model");
+    let grid = madenet_map::paper::paper_map(3).unwrap();
+    let starts = madenet_map::paper::Corner::TopLeft
+        .start_cells(20, 20)
+        .to_vec();
+    let spec = TrialSpec {
+        map: grid,
+        map_name: "test_3".into(),
+        starts,
+        config: Default::default(),
+        policy: "student".into(),
+        seed: 1,
+    };
+    let r = Trial::with_registry(spec, &registry).unwrap().run();
+    assert!(r.metrics.tns > 0 && r.timing.decisions > 0);
+
+    // Same seed, same run: logs and weights.
+    train(&b, Some(tiny()), &mut |_| {}).unwrap();
+    assert_eq!(log_without_time(&b), log);
+    assert!(
+        q_of(&b.join("last")) == q_of(&a.join("last")),
+        "same seed, same weights"
+    );
+
+    // A time limit that is always exceeded stops inside the first iteration: its work is
+    // dropped, nothing is checkpointed, and the call says nothing was trained.
+    let e = train(
+        &c,
+        Some(RolloutTrainConfig {
+            max_minutes: 1e-9,
+            ..tiny()
+        }),
+        &mut |_| {},
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("ran out inside iteration 1"), "{e}");
+    assert!(!c.join("iterations.csv").exists() && !c.join("checkpoint").exists());
+    // Killed right after the first iteration's checkpoint (the progress report follows it),
+    // then resumed: the uninterrupted run's logs and weights.
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&c, Some(tiny()), &mut |p| {
+            assert!(p.done < 1, "killed after iteration 1");
+        })
+    }));
+    assert!(killed.is_err());
+    assert_eq!(log_without_time(&c).len(), 2, "stopped after one iteration");
+    train(&c, Some(tiny()), &mut |_| {}).unwrap();
+    assert_eq!(log_without_time(&c), log);
+    // TensorBoard: one point per iteration and figure, each once after the resume.
+    let scalars = madenet_testkit::tb_scalars;
+    let want = scalars(&a);
+    assert_eq!(want.len(), 2 * 6, "2 iterations × 6 figures: {want:?}");
+    assert!(want
+        .iter()
+        .any(|s| s.0 == "iteration/validation_steps" && s.1 == 1));
+    assert_eq!(scalars(&c), want, "resumed run's TensorBoard scalars");
+    assert!(
+        q_of(&c.join("last")) == q_of(&a.join("last")),
+        "resumed, the uninterrupted run's weights"
+    );
+
+    // A resumed run may change only its time limit.
+    let e = train(
+        &c,
+        Some(RolloutTrainConfig { seed: 2, ..tiny() }),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("different config"), "{e}");
+}
+
+#[test]
+fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../configs/train-rollout.toml");
+    assert_eq!(
+        RolloutTrainConfig::from_toml_file(&path).unwrap(),
+        RolloutTrainConfig::default()
+    );
+    let dir = Scratch::new("rollout-bad");
+    for (text, needle) in [
+        ("method = \"made-net\"\n", "method"),
+        ("rollouts = 0\n", "rollouts"),
+        ("density_max = 0.95\n", "density"),
+        ("base_policy = \"nope\"\n", "base_policy"),
+        ("spread_margins = [-1.0]\n", "spread_margins"),
+        ("iterations = 0\n", "iterations"),
+        ("threads = 100000\n", "threads"),
+        ("nonsense = 1\n", "nonsense"),
+    ] {
+        let p = dir.write("bad.toml", text);
+        let e = RolloutTrainConfig::from_toml_file(&p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.toml") && e.contains(needle),
+            "{text:?} gave {e}"
+        );
+    }
+}
