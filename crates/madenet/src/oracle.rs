@@ -18,6 +18,9 @@ enum Kind {
     Placebo,
     /// Each candidate scored in the noiseless future (knows the map; no luck).
     Noiseless,
+    /// The known-map reference: a clairvoyant team plan over the true map, in the trial's own
+    /// world (the base rule only names the pairing).
+    KnownMap,
 }
 
 #[derive(Args, Debug)]
@@ -71,6 +74,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Averaged => OracleKind::Averaged,
         Kind::Placebo => OracleKind::Placebo,
         Kind::Noiseless => OracleKind::Noiseless,
+        Kind::KnownMap => OracleKind::KnownMap,
     };
     let mut cfg = crate::batch::trial_set(
         &a.maps,
@@ -97,7 +101,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
     }
     let futures = match a.kind {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
-        Kind::Replay | Kind::Noiseless => String::new(),
+        Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
     };
     out!(
         "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}",

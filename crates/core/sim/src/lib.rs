@@ -41,6 +41,7 @@
 #![deny(missing_docs)]
 
 pub mod continuous;
+pub mod reference;
 mod registry;
 pub mod rewards;
 pub mod rollout;

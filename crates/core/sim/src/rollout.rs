@@ -125,15 +125,19 @@ pub enum OracleKind {
     /// What it gains over the base rule is luck alone — the part of the replay oracle's gain
     /// no policy can learn.
     Placebo,
+    /// The known-map reference ([`crate::reference`]): a clairvoyant team plan over the true
+    /// map, executed in the trial's own world. No base rule: the plan makes every move.
+    KnownMap,
 }
 
 impl OracleKind {
-    /// Every oracle: replay, averaged, noiseless, placebo.
-    pub const ALL: [OracleKind; 4] = [
+    /// Every oracle: replay, averaged, noiseless, placebo, known-map.
+    pub const ALL: [OracleKind; 5] = [
         OracleKind::Replay,
         OracleKind::Averaged,
         OracleKind::Noiseless,
         OracleKind::Placebo,
+        OracleKind::KnownMap,
     ];
 
     /// The name in configs and on the command line.
@@ -143,6 +147,7 @@ impl OracleKind {
             OracleKind::Averaged => "averaged",
             OracleKind::Noiseless => "noiseless",
             OracleKind::Placebo => "placebo",
+            OracleKind::KnownMap => "known-map",
         }
     }
 
@@ -180,6 +185,11 @@ pub fn run_oracle(
     kind: OracleKind,
     futures: usize,
 ) -> Result<TrialResult, SimError> {
+    if kind == OracleKind::KnownMap {
+        let (mut result, _) = crate::reference::run(&spec)?;
+        result.policy = spec.policy;
+        return Ok(result);
+    }
     let base = spec.policy.clone();
     let seed = spec.seed;
     let mut trial = Trial::with_registry(spec, registry)?.timed(false);
@@ -239,6 +249,7 @@ pub fn run_oracle(
                         trial.reseed_noise(salt);
                     }
                 }
+                OracleKind::KnownMap => {} // played by `crate::reference` above
             }
         }
         trial.decide_with(&fixed);

@@ -102,6 +102,20 @@ pub struct Visibility {
     cells: Vec<(Pos, Occupancy, u32)>,
 }
 
+impl Visibility {
+    /// The cells (row-major indices) visible from cell `from` (a row-major index), misses
+    /// ignored; none from a blocked cell.
+    pub fn visible_from(&self, from: usize) -> impl Iterator<Item = usize> + '_ {
+        let (start, end) = self.range[from];
+        let cells = if (start, end) == NOT_CAST {
+            &[][..]
+        } else {
+            &self.cells[start as usize..end as usize]
+        };
+        cells.iter().map(|&(_, _, i)| i as usize)
+    }
+}
+
 impl World {
     /// Builds the world and performs the initial sensing and contact stage (t = 0). Unknown
     /// cells of `truth` (a map's unmapped area) are obstacles: nobody can enter or explore them.
@@ -304,6 +318,11 @@ impl World {
     #[inline]
     fn passable(&self, p: Pos) -> bool {
         self.truth.in_bounds(p) && !self.is_blocked(p)
+    }
+
+    /// Whether a robot may stand on `p`: on the map and not an obstacle (nor unmapped).
+    pub fn is_passable(&self, p: Pos) -> bool {
+        self.passable(p)
     }
 
     /// Advances one timestep: every robot executes its move simultaneously, then all sense,

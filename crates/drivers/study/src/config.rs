@@ -63,7 +63,11 @@ impl Default for StudyConfig {
             seeds: 5,
             seed_base: 1,
             scenario: ScenarioConfig::default(),
-            oracles: vec![OracleKind::Placebo, OracleKind::Noiseless],
+            oracles: vec![
+                OracleKind::Placebo,
+                OracleKind::Noiseless,
+                OracleKind::KnownMap,
+            ],
             oracle_base: "spread".into(),
             oracle_futures: 4,
             baselines: BaselineParams::default(),

@@ -53,8 +53,38 @@ pub fn run_study(
         .filter(|m| m.paper)
         .map(|m| m.name.clone())
         .collect();
-    let report = report::write_all(cfg, &outcomes, &paper_maps, out, wall)?;
+    let bounds = lower_bounds(cfg, &maps, &starts)?;
+    let report = report::write_all(cfg, &outcomes, &paper_maps, &bounds, out, wall)?;
     Ok((report, outcomes))
+}
+
+/// The lower bound of every trial the known-map reference runs (none if it does not run), by
+/// map, start and seed.
+fn lower_bounds(
+    cfg: &StudyConfig,
+    maps: &[config::StudyMap],
+    starts: &[madenet_sim::StartSpec],
+) -> Result<report::Bounds, StudyError> {
+    use rayon::prelude::*;
+    let kind = madenet_sim::rollout::OracleKind::KnownMap;
+    let mut specs = std::collections::BTreeMap::new();
+    for p in runner::plan(cfg, maps, starts) {
+        if p.oracle.is_some_and(|(k, _)| k == kind) {
+            let k = &p.key;
+            specs
+                .entry((k.map.clone(), k.start.clone(), k.seed))
+                .or_insert(p.spec);
+        }
+    }
+    let specs: Vec<_> = specs.into_iter().collect();
+    specs
+        .into_par_iter()
+        .map(|(key, spec)| {
+            madenet_sim::reference::lower_bound(&spec)
+                .map(|b| (key, b))
+                .map_err(|e| StudyError::Other(format!("{}: {e}", spec.map_name)))
+        })
+        .collect()
 }
 
 /// Readies output folder `out` for a study whose config is saved there as `cfg_name` (its TOML

@@ -138,6 +138,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
             OracleKind::Placebo => format!("keeps `{base}`'s own choice and lives the luckiest of {f} futures of the noise: its gain is luck that no policy can learn"),
             OracleKind::Replay => "scores in the trial's own future: it knows the map and the luck to come (an upper bound that includes luck)".to_string(),
             OracleKind::Averaged => format!("scores over {f} other futures: it knows the map, its scores carry the futures' luck"),
+            OracleKind::KnownMap => "is the known-map reference (`madenet_sim::reference`): a team plan over the true map — viewpoints that see every cell left after t = 0, the robot with the least planned time taking the nearest one that sees something new — walked on true shortest paths in the trial's own world; it ignores the base rule".to_string(),
         };
         let _ = writeln!(s, "- **{}** {text}.", oracle_method(*kind));
     }
@@ -172,6 +173,96 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
             match tns(&noiseless, c) {
                 Some(o) if !oracles.contains(m) && b - o > 1e-9 => {
                     let _ = write!(s, "; {:.0} % of the gain", 100.0 * (b - v) / (b - o));
+                }
+                _ => {}
+            }
+            s.push_str(") |");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Lower bounds of the trials (see [`madenet_sim::reference::lower_bound`]), by map, start and
+/// seed (a bound does not depend on the CSP).
+pub type Bounds = std::collections::BTreeMap<(String, String, u64), u32>;
+
+/// The headroom: every run's mean TNS against the known-map reference and the lower bound,
+/// and the share of the base rule's gap to the reference each method closes.
+fn headroom_md(
+    cfg: &StudyConfig,
+    outcomes: &[TrialOutcome],
+    bounds: &Bounds,
+    cs: &[(f64, String)],
+) -> String {
+    let base = &cfg.oracle_base;
+    let reference = oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let mut runs = vec![base.clone()];
+    runs.extend(cfg.methods.iter().filter(|m| *m != base).cloned());
+    runs.extend(cfg.oracles.iter().map(|&k| oracle_method(k)));
+    let rows = summary(outcomes, &runs);
+    let tns = |m: &str, c: &str| {
+        rows.iter()
+            .find(|r| r.method == m && r.csp == c)
+            .map(|r| r.metrics[0].0)
+    };
+    // The mean bound over the reference's own trials of each CSP.
+    let bound = |c: &str| {
+        let v: Vec<f64> = outcomes
+            .iter()
+            .filter(|o| o.row.key.method == reference && o.row.key.csp == c)
+            .filter_map(|o| {
+                let k = &o.row.key;
+                bounds.get(&(k.map.clone(), k.start.clone(), k.seed))
+            })
+            .map(|&b| b as f64)
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let mut s = String::from(
+        "How far every run is from what is possible at all. The **lower bound** of a trial: no \
+         team explores its map in fewer timesteps — the largest, over the cells left unknown \
+         after t = 0, of the fewest moves any robot needs to reach a cell that sees it (slips \
+         never shorten a path, misses only add time). The **known-map reference** \
+         (`oracle-known-map`) is a team that knows the map. Each cell: mean TNS (% above the \
+         reference; % above the bound); for methods, the share of the base rule's gap to the \
+         reference they close.\n\n| run |",
+    );
+    for (_, c) in cs {
+        let _ = write!(s, " CSP {} |", pct(c));
+    }
+    s.push_str("\n|---|");
+    s.push_str(&"---|".repeat(cs.len()));
+    s.push_str("\n| lower bound |");
+    for (_, c) in cs {
+        match bound(c) {
+            Some(b) => {
+                let _ = write!(s, " {b:.1} |");
+            }
+            None => s.push_str(" — |"),
+        }
+    }
+    s.push('\n');
+    for m in &runs {
+        let role = if m == base { " (base)" } else { "" };
+        let _ = write!(s, "| {m}{role} |");
+        for (_, c) in cs {
+            let (Some(v), Some(r)) = (tns(m, c), tns(&reference, c)) else {
+                s.push_str(" — |");
+                continue;
+            };
+            let _ = write!(s, " {v:.1} ({:+.1} %", 100.0 * (v / r - 1.0));
+            if let Some(b) = bound(c) {
+                let _ = write!(s, "; {:+.1} %", 100.0 * (v / b.max(1.0) - 1.0));
+            }
+            match tns(base, c) {
+                Some(bt)
+                    if m != base
+                        && *m != reference
+                        && bt - r > 1e-9
+                        && !m.starts_with("oracle-") =>
+                {
+                    let _ = write!(s, "; closes {:.0} %", 100.0 * (bt - v) / (bt - r));
                 }
                 _ => {}
             }
@@ -338,6 +429,7 @@ pub fn write_all(
     cfg: &StudyConfig,
     outcomes: &[TrialOutcome],
     paper_maps: &[String],
+    bounds: &Bounds,
     out: &Path,
     wall_s: f64,
 ) -> Result<std::path::PathBuf, StudyError> {
@@ -457,6 +549,16 @@ pub fn write_all(
             r,
             "## The ceiling: rollout oracles\n\n{}",
             ceiling_md(cfg, outcomes, &cs)
+        );
+    }
+    if cfg
+        .oracles
+        .contains(&madenet_sim::rollout::OracleKind::KnownMap)
+    {
+        let _ = writeln!(
+            r,
+            "## Headroom: the known-map reference and the lower bound\n\n{}",
+            headroom_md(cfg, outcomes, bounds, &cs)
         );
     }
     let _ = writeln!(r, "## Statistics\n\n{}", statistics_md(&stats, alpha));
