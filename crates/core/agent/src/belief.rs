@@ -21,6 +21,29 @@ pub struct Belief {
 }
 
 impl Belief {
+    /// A belief drawn as text, one row per string: `.` observed free, `#` observed obstacle,
+    /// anything else unknown (for tests and examples; rows as long as the first).
+    ///
+    /// ```
+    /// let b = madenet_agent::Belief::from_rows(&["?.#", "..?"], Default::default());
+    /// assert_eq!(b.map()[1], madenet_map::Occupancy::Free);
+    /// assert_eq!(b.map()[2], madenet_map::Occupancy::Obstacle);
+    /// ```
+    pub fn from_rows(rows: &[&str], movement: Movement) -> Self {
+        let mut b = Belief::new(rows.len(), rows.first().map_or(0, |r| r.len()), movement);
+        for (r, line) in rows.iter().enumerate() {
+            for (c, ch) in line.chars().enumerate() {
+                let occ = match ch {
+                    '.' => Occupancy::Free,
+                    '#' => Occupancy::Obstacle,
+                    _ => continue,
+                };
+                b.observe(Pos::new(r as i32, c as i32), occ);
+            }
+        }
+        b
+    }
+
     /// A `height` × `width` map (cells) with every cell unknown, whose frontier follows
     /// `movement`.
     pub fn new(height: usize, width: usize, movement: Movement) -> Self {

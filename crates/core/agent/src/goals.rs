@@ -191,21 +191,9 @@ fn sq_dist(a: Pos, b: Pos) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use madenet_map::Occupancy;
 
     fn belief_from(rows: &[&str]) -> Belief {
-        let mut b = Belief::new(rows.len(), rows[0].len(), madenet_map::Movement::default());
-        for (r, line) in rows.iter().enumerate() {
-            for (c, ch) in line.chars().enumerate() {
-                let occ = match ch {
-                    '.' => Occupancy::Free,
-                    '#' => Occupancy::Obstacle,
-                    _ => continue,
-                };
-                b.observe(Pos::new(r as i32, c as i32), occ);
-            }
-        }
-        b
+        Belief::from_rows(rows, madenet_map::Movement::default())
     }
 
     #[test]

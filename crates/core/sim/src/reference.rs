@@ -108,15 +108,20 @@ impl Known {
     }
 }
 
-/// The fewest timesteps in which any team could observe every cell of `spec` left unknown
-/// after t = 0 (see the module docs); 0 if none is left.
-pub fn lower_bound(spec: &TrialSpec) -> Result<u32, SimError> {
-    let mut world = World::new(
+/// The trial's world as every method meets it (same map, starts, scenario and noise streams).
+fn world_of(spec: &TrialSpec) -> Result<World, SimError> {
+    Ok(World::new(
         spec.map.clone(),
         &spec.starts,
         spec.config.clone(),
         spec.seed,
-    )?;
+    )?)
+}
+
+/// The fewest timesteps in which any team could observe every cell of `spec` left unknown
+/// after t = 0 (see the module docs); 0 if none is left.
+pub fn lower_bound(spec: &TrialSpec) -> Result<u32, SimError> {
+    let mut world = world_of(spec)?;
     let known = Known::new(&mut world);
     Ok(bound_of(&known, world.positions()))
 }
@@ -147,12 +152,7 @@ fn bound_of(known: &Known, starts: &[Pos]) -> u32 {
 
 /// The reference plan of `spec` (noiseless; [`run`] executes it).
 pub fn plan(spec: &TrialSpec) -> Result<ReferencePlan, SimError> {
-    let mut world = World::new(
-        spec.map.clone(),
-        &spec.starts,
-        spec.config.clone(),
-        spec.seed,
-    )?;
+    let mut world = world_of(spec)?;
     let known = Known::new(&mut world);
     Ok(plan_of(&known, world.positions()))
 }
@@ -372,12 +372,7 @@ impl Fields<'_> {
 /// `spec.seed`) to completion or the step cap. The result's policy is `reference`.
 pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
     let started = std::time::Instant::now();
-    let mut world = World::new(
-        spec.map.clone(),
-        &spec.starts,
-        spec.config.clone(),
-        spec.seed,
-    )?;
+    let mut world = world_of(spec)?;
     let known = Known::new(&mut world);
     let plan = plan_of(&known, world.positions());
     let n = world.positions().len();
@@ -578,7 +573,10 @@ mod tests {
                     seen[c] = true;
                 }
             }
-            assert!((0..seen.len()).all(|c| seen[c] || !known.target[c]), "map {map}");
+            assert!(
+                (0..seen.len()).all(|c| seen[c] || !known.target[c]),
+                "map {map}"
+            );
             let tns = r.metrics.tns as u32;
             assert!(
                 tns >= plan.lower_bound,

@@ -113,7 +113,7 @@ pub fn view_sector_goals(view: &mut AgentView<'_>) -> SectorGoals {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use madenet_map::{Movement, Occupancy};
+    use madenet_map::Movement;
 
     #[test]
     fn compass_directions_and_boundaries() {
@@ -142,18 +142,7 @@ mod tests {
     }
 
     fn belief_from(rows: &[&str]) -> Belief {
-        let mut b = Belief::new(rows.len(), rows[0].len(), Movement::default());
-        for (r, line) in rows.iter().enumerate() {
-            for (c, ch) in line.chars().enumerate() {
-                let occ = match ch {
-                    '.' => Occupancy::Free,
-                    '#' => Occupancy::Obstacle,
-                    _ => continue,
-                };
-                b.observe(Pos::new(r as i32, c as i32), occ);
-            }
-        }
-        b
+        Belief::from_rows(rows, Movement::default())
     }
 
     #[test]
