@@ -53,34 +53,30 @@ pub fn run_study(
         .filter(|m| m.paper)
         .map(|m| m.name.clone())
         .collect();
-    let bounds = lower_bounds(cfg, &maps, &starts)?;
+    let bounds = lower_bounds(runner::plan(cfg, &maps, &starts).iter())?;
     let report = report::write_all(cfg, &outcomes, &paper_maps, &bounds, out, wall)?;
     Ok((report, outcomes))
 }
 
-/// The lower bound of every trial the known-map reference runs (none if it does not run), by
-/// map, start and seed.
-fn lower_bounds(
-    cfg: &StudyConfig,
-    maps: &[config::StudyMap],
-    starts: &[madenet_sim::StartSpec],
+/// The lower bound ([`madenet_sim::reference::lower_bound`]) of every trial of `planned` the
+/// known-map reference runs, by map, start and seed (in parallel; none if it does not run).
+pub(crate) fn lower_bounds<'a>(
+    planned: impl Iterator<Item = &'a runner::Planned>,
 ) -> Result<report::Bounds, StudyError> {
     use rayon::prelude::*;
     let kind = madenet_sim::rollout::OracleKind::KnownMap;
     let mut specs = std::collections::BTreeMap::new();
-    for p in runner::plan(cfg, maps, starts) {
-        if p.oracle.is_some_and(|(k, _)| k == kind) {
-            let k = &p.key;
-            specs
-                .entry((k.map.clone(), k.start.clone(), k.seed))
-                .or_insert(p.spec);
-        }
+    for p in planned.filter(|p| p.oracle.is_some_and(|(k, _)| k == kind)) {
+        let k = &p.key;
+        specs
+            .entry((k.map.clone(), k.start.clone(), k.seed))
+            .or_insert(&p.spec);
     }
     let specs: Vec<_> = specs.into_iter().collect();
     specs
         .into_par_iter()
         .map(|(key, spec)| {
-            madenet_sim::reference::lower_bound(&spec)
+            madenet_sim::reference::lower_bound(spec)
                 .map(|b| (key, b))
                 .map_err(|e| StudyError::Other(format!("{}: {e}", spec.map_name)))
         })

@@ -138,7 +138,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
             OracleKind::Placebo => format!("keeps `{base}`'s own choice and lives the luckiest of {f} futures of the noise: its gain is luck that no policy can learn"),
             OracleKind::Replay => "scores in the trial's own future: it knows the map and the luck to come (an upper bound that includes luck)".to_string(),
             OracleKind::Averaged => format!("scores over {f} other futures: it knows the map, its scores carry the futures' luck"),
-            OracleKind::KnownMap => "is the known-map reference (`madenet_sim::reference`): a team plan over the true map — viewpoints that see every cell left after t = 0, the robot with the least planned time taking the nearest one that sees something new — walked on true shortest paths in the trial's own world; it ignores the base rule".to_string(),
+            OracleKind::KnownMap => "is the known-map reference (`madenet_sim::reference`): a team that knows the map — viewpoints that see every cell left after t = 0 (set cover), routes that keep the longest robot's time short (min–max insertion, 2-opt, relocation), walked on true shortest paths in the trial's own world and re-planned as misses and slips demand; it ignores the base rule and the radio (see Headroom)".to_string(),
         };
         let _ = writeln!(s, "- **{}** {text}.", oracle_method(*kind));
     }

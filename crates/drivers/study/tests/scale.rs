@@ -45,8 +45,8 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     let plan = cfg.plan().unwrap();
     assert_eq!(
         plan.len(),
-        2 * 2 * 2 * 3 * 2,
-        "methods × sides × starts × teams × seeds (one map per side)"
+        (2 + 1) * 2 * 2 * 3 * 2,
+        "(methods + the known-map reference) × sides × starts × teams × seeds (one map per side)"
     );
     for p in &plan {
         let s = &p.planned.spec;
@@ -74,7 +74,7 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     let dir = Scratch::new("scale-tiny");
     let out = dir.join("out");
     let r = run_scale(&cfg, &registry(), &out, false, &|_, _| {}).unwrap();
-    assert_eq!(r.trials, 48);
+    assert_eq!(r.trials, 72);
     assert_eq!(r.cells.len(), 2 * 3 * 2, "sides × teams × methods");
     for c in &r.cells {
         assert_eq!(c.trials, 4, "maps × starts × seeds per cell");
@@ -105,6 +105,10 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
         "2→3",
         "## spread against the others",
         "| nf |",
+        "## Headroom: the known-map reference and the lower bound",
+        "| oracle-known-map |",
+        "| lower bound |",
+        "that spread closes: nf",
     ] {
         assert!(
             report.contains(needle),
@@ -122,6 +126,25 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     }
     let cells = std::fs::read_to_string(out.join("cells.csv")).unwrap();
     assert_eq!(cells.lines().count(), 1 + 12);
+    // The reference's trials are paired with the methods' (same maps, starts, teams, seeds)
+    // and never beat their lower bound.
+    let reference: Vec<&madenet_study::scale::ScalePlanned> = plan
+        .iter()
+        .filter(|p| p.planned.key.method == "oracle-known-map")
+        .collect();
+    assert_eq!(reference.len(), 24);
+    let rows = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    for p in reference {
+        let (tns, _) = madenet_sim::reference::run(&p.planned.spec)
+            .map(|(r, pl)| (r.metrics.tns, pl))
+            .unwrap();
+        let bound = madenet_sim::reference::lower_bound(&p.planned.spec).unwrap() as usize;
+        assert!(tns >= bound, "{}: {tns} < {bound}", p.planned.key);
+        assert!(rows.lines().any(|l| l.starts_with(&format!(
+            "oracle-known-map,{},{},",
+            p.planned.key.map, p.planned.key.start
+        ))));
+    }
     // Resuming after losing the last trials recomputes exactly them.
     let full = trials_without_time(&out);
     let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();

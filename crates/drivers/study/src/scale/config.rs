@@ -90,6 +90,10 @@ pub struct ScaleConfig {
     pub world: ScaleWorld,
     /// The continuous world's parameters (`world = "continuous"` only).
     pub continuous: madenet_continuous::ContinuousConfig,
+    /// Run the known-map reference (`oracle-known-map`, [`madenet_sim::reference`]) on every
+    /// (map, start, team, seed) beside the methods, and report every method's distance to it
+    /// and to the trials' lower bound. Grid world only (ignored in the continuous world).
+    pub known_map: bool,
     /// Everything else about the world (`num_robots` and `comm_success_prob` are set per trial).
     pub scenario: ScenarioConfig,
     /// Parameters of the classical baselines.
@@ -119,6 +123,7 @@ impl Default for ScaleConfig {
             steps_per_cell: 1.0,
             world: ScaleWorld::Grid,
             continuous: madenet_continuous::ContinuousConfig::default(),
+            known_map: true,
             scenario: ScenarioConfig::default(),
             baselines: BaselineParams::default(),
         }

@@ -29,7 +29,7 @@ pub use plan::ScalePlanned;
 use crate::config::StudyError;
 use crate::runner::{run_planned, write_atomic, Planned};
 use cells::ContinuousCellRow;
-use report::{figure, report_text, twin_text};
+use report::{figure, headroom_text, report_text, twin_text};
 use std::path::{Path, PathBuf};
 
 /// What [`run_scale`] produced.
@@ -110,6 +110,8 @@ pub fn run_scale(
     figure(cfg, &cells, out)?;
     let report = out.join("scale.md");
     let mut text = report_text(cfg, &planned, &outcomes, &cells, wall);
+    let bounds = crate::lower_bounds(planned.iter().map(|p| &p.planned))?;
+    text.push_str(&headroom_text(cfg, &planned, &outcomes, &bounds));
     if let Some((twin_planned, twin_outcomes, _)) = &twin {
         text.push_str(&twin_text(
             cfg,

@@ -7,6 +7,7 @@ use crate::runner::{Planned, PlannedContinuous, TrialKey};
 use madenet_continuous::scene::generate_cluttered;
 use madenet_map::generate::{generate_with_movement, starts_near, GeneratorConfig};
 use madenet_map::Pos;
+use madenet_sim::rollout::OracleKind;
 use madenet_sim::TrialSpec;
 use madenet_world::rng::derive_seed;
 use madenet_world::ScenarioConfig;
@@ -89,7 +90,19 @@ impl ScaleConfig {
             }
         }
         let mut v = Vec::new();
-        for method in &self.methods {
+        // The methods, then the known-map reference (its "policy" only names the pairing).
+        let reference = crate::config::oracle_method(OracleKind::KnownMap);
+        let mut runs: Vec<(&String, Option<(OracleKind, usize)>)> =
+            self.methods.iter().map(|m| (m, None)).collect();
+        if self.known_map && self.world == ScaleWorld::Grid && !self.methods.is_empty() {
+            runs.push((&reference, Some((OracleKind::KnownMap, 1))));
+        }
+        for (method, oracle) in runs {
+            let policy = if oracle.is_some() {
+                &self.methods[0]
+            } else {
+                method
+            };
             for (side, name, grid, continuous) in &maps {
                 for start in &self.starts {
                     for &team in &self.teams {
@@ -122,7 +135,7 @@ impl ScaleConfig {
                                 map_name: name.clone(),
                                 starts: cells.clone(),
                                 config,
-                                policy: method.clone(),
+                                policy: policy.clone(),
                                 seed,
                             };
                             v.push(ScalePlanned {
@@ -131,7 +144,7 @@ impl ScaleConfig {
                                 planned: Planned {
                                     key,
                                     spec,
-                                    oracle: None,
+                                    oracle,
                                     continuous: continuous.clone(),
                                 },
                             });

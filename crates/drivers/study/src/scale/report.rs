@@ -337,3 +337,110 @@ pub(super) fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result
         .map_err(|e| StudyError::Other(e.to_string()))?;
     Ok(())
 }
+
+/// The headroom: per map side and team, the mean lower bound, the known-map reference's mean
+/// TNS, and every method's mean TNS above both; the first method's share of each other
+/// method's gap to the reference that it closes, pooled per side. Empty without the reference.
+pub(super) fn headroom_text(
+    cfg: &ScaleConfig,
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+    bounds: &crate::report::Bounds,
+) -> String {
+    let reference = crate::config::oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let tns_of = |m: &str, side: usize, team: Option<usize>| {
+        mean(&paired(planned, outcomes, m, Some(side), team, tns))
+    };
+    if paired(planned, outcomes, &reference, None, None, tns).is_empty() {
+        return String::new();
+    }
+    let bound_of = |side: usize, team: Option<usize>| {
+        let v: Vec<f64> = planned
+            .iter()
+            .filter(|p| {
+                p.planned.key.method == reference
+                    && p.side == side
+                    && team.is_none_or(|t| p.team == t)
+            })
+            .filter_map(|p| {
+                let k = &p.planned.key;
+                bounds.get(&(k.map.clone(), k.start.clone(), k.seed))
+            })
+            .map(|&b| b as f64)
+            .collect();
+        mean(&v)
+    };
+    let mut s = String::from(
+        "## Headroom: the known-map reference and the lower bound\n\n\
+         The **lower bound** of a trial: no team explores its map in fewer steps (the largest, \
+         over the cells left unknown after t = 0, of the fewest moves any robot needs to reach a \
+         cell that sees it). The **known-map reference** (`oracle-known-map`, \
+         `madenet_sim::reference`) is a team that knows the map: set-cover viewpoints, min–max \
+         routes, re-planned as misses and slips demand, in each trial's own world. Each cell: \
+         mean TNS (% above the reference; % above the bound).\n\n",
+    );
+    for &side in &cfg.sides {
+        let _ = writeln!(
+            s,
+            "### {side} × {side}\n\n| run | {} |\n|---|{}",
+            cfg.teams
+                .iter()
+                .map(|t| format!("{t} robots"))
+                .collect::<Vec<_>>()
+                .join(" | "),
+            "---|".repeat(cfg.teams.len())
+        );
+        let bounds_row: Vec<String> = cfg
+            .teams
+            .iter()
+            .map(|&t| format!("{:.1}", bound_of(side, Some(t))))
+            .collect();
+        let _ = writeln!(s, "| lower bound | {} |", bounds_row.join(" | "));
+        for m in std::iter::once(&reference).chain(&cfg.methods) {
+            let row: Vec<String> = cfg
+                .teams
+                .iter()
+                .map(|&t| {
+                    let (v, r, b) = (
+                        tns_of(m, side, Some(t)),
+                        tns_of(&reference, side, Some(t)),
+                        bound_of(side, Some(t)),
+                    );
+                    format!(
+                        "{v:.1} ({:+.0} %; {:+.0} %)",
+                        100.0 * (v / r - 1.0),
+                        100.0 * (v / b.max(1.0) - 1.0)
+                    )
+                })
+                .collect();
+            let _ = writeln!(s, "| {m} | {} |", row.join(" | "));
+        }
+        if let Some(focus) = cfg.methods.first() {
+            let closes: Vec<String> = cfg.methods[1..]
+                .iter()
+                .map(|other| {
+                    let (o, f, r) = (
+                        tns_of(other, side, None),
+                        tns_of(focus, side, None),
+                        tns_of(&reference, side, None),
+                    );
+                    if o - r > 1e-9 {
+                        format!("{other} {:.0} %", 100.0 * (o - f) / (o - r))
+                    } else {
+                        format!("{other} — (not above the reference)")
+                    }
+                })
+                .collect();
+            if !closes.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "\nShare of each method's gap to the reference (all teams pooled) that {focus} closes: {}.",
+                    closes.join(", ")
+                );
+            }
+        }
+        let _ = writeln!(s);
+    }
+    s
+}
