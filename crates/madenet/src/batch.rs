@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// Maps (comma-separated): `paper` for all 10 paper maps, `paper:N`, `generate:SEED`, `generate-wide:SEED`, or files.
+    /// Maps (comma-separated): `paper` for all 10 paper maps, `paper:N`, `generate:SEED`, `generate-wide:SEED`, `floorplan:SEED`, or files.
     #[arg(long, value_delimiter = ',', default_value = "paper")]
     maps: Vec<String>,
     /// Starts (comma-separated): `all` for the four corners, corner names, or `random`.

@@ -25,7 +25,7 @@ enum Kind {
 
 #[derive(Args, Debug)]
 pub struct OracleArgs {
-    /// Maps (comma-separated): `paper`, `paper:N`, `generate:SEED`, `generate-wide:SEED`, or files.
+    /// Maps (comma-separated): `paper`, `paper:N`, `generate:SEED`, `generate-wide:SEED`, `floorplan:SEED`, or files.
     #[arg(
         long,
         value_delimiter = ',',

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
 pub struct ScenarioArgs {
-    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), `generate:SEED` or `generate-wide:SEED` (15–60 % obstacles).
+    /// Map: a file (ROS YAML, PGM, PNG, or text grid), `paper:N` (N = 1..10), `generate:SEED`, `generate-wide:SEED` (15–60 % obstacles) or `floorplan:SEED` (rooms and corridors).
     #[arg(long, default_value = "paper:1", conflicts_with = "generate")]
     pub map: MapSource,
     /// Use a generated map with this seed (same as `--map generate:SEED`).
@@ -41,12 +41,7 @@ impl ScenarioArgs {
     pub fn to_args(&self) -> Vec<String> {
         let mut v = vec![
             "--map".to_string(),
-            match self.source() {
-                MapSource::Paper(n) => format!("paper:{n}"),
-                MapSource::Generated(seed) => format!("generate:{seed}"),
-                MapSource::GeneratedWide(seed) => format!("generate-wide:{seed}"),
-                MapSource::File(p) => p.display().to_string(),
-            },
+            self.source().to_string(),
             "--start".into(),
             self.start.name(),
             "--policy".into(),

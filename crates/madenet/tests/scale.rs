@@ -31,9 +31,9 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
     ]);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let stdout = String::from_utf8_lossy(&r.stdout);
-    // 2 methods × 2 sides × 4 maps × 3 starts × 2 teams × 1 seed.
+    // (2 methods + the known-map reference) × 2 sides × 4 maps × 3 starts × 2 teams × 1 seed.
     assert!(
-        stdout.starts_with("96 trials → ") && stdout.contains("scale.md"),
+        stdout.starts_with("144 trials → ") && stdout.contains("scale.md"),
         "{stdout}"
     );
     let report = std::fs::read_to_string(out.join("scale.md")).unwrap();
@@ -42,7 +42,7 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
         "{report}"
     );
     let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
-    assert_eq!(trials.lines().count(), 97);
+    assert_eq!(trials.lines().count(), 145);
     assert!(trials
         .lines()
         .any(|l| l.starts_with("made-net-any,side24-map3,middle:4,")));

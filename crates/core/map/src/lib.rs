@@ -12,6 +12,7 @@
 //!   probability above 0.65.
 //! * [`generate`]: a seeded random map generator for training and tests (connected free space,
 //!   irregular obstacles made of wall strokes and blobs).
+//! * [`floorplan`]: a seeded floor-plan generator (rooms, doors, corridors, some furniture).
 //! * [`paper`]: the paper's 10 evaluation maps (embedded, so a fresh clone needs nothing
 //!   else) and its four corner starts.
 //!
@@ -23,6 +24,7 @@
 #![deny(missing_docs)]
 
 pub mod discretize;
+pub mod floorplan;
 pub mod generate;
 pub mod io;
 pub mod paper;

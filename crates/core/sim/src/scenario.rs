@@ -14,7 +14,8 @@ use std::str::FromStr;
 /// Where a map comes from: `paper:N` (the paper's evaluation map N, embedded),
 /// `generate:SEED` (the seeded generator at its defaults: 15–40 % obstacles),
 /// `generate-wide:SEED` (the generator at [`WIDE_DENSITY`], 15–60 %, the learned policy's
-/// training range; the corner start cells kept free) or a file path.
+/// training range; the corner start cells kept free), `floorplan:SEED` (rooms and corridors)
+/// or a file path.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MapSource {
     /// `paper:N`: the paper's evaluation map N (Fig. 3), N in 1..=[`PAPER_MAP_COUNT`].
@@ -23,6 +24,9 @@ pub enum MapSource {
     Generated(u64),
     /// `generate-wide:SEED`: the generator at [`WIDE_DENSITY`], with this seed.
     GeneratedWide(u64),
+    /// `floorplan:SEED`: a 20 × 20 floor plan (rooms, doors, corridors, some furniture) of
+    /// [`madenet_map::floorplan`], its look drawn from the seed ([`madenet_map::floorplan::varied`]).
+    FloorPlan(u64),
     /// A map file (ROS `map_server` YAML, PGM, PNG or a plain-text grid).
     File(PathBuf),
 }
@@ -42,6 +46,10 @@ impl FromStr for MapSource {
             seed.parse()
                 .map(MapSource::GeneratedWide)
                 .map_err(|_| format!("`{s}`: expected generate-wide:SEED with an integer seed"))
+        } else if let Some(seed) = s.strip_prefix("floorplan:") {
+            seed.parse()
+                .map(MapSource::FloorPlan)
+                .map_err(|_| format!("`{s}`: expected floorplan:SEED with an integer seed"))
         } else if let Some(seed) = s.strip_prefix("generate:") {
             seed.parse()
                 .map(MapSource::Generated)
@@ -52,17 +60,38 @@ impl FromStr for MapSource {
     }
 }
 
+/// The form [`MapSource::from_str`] reads (`paper:3`, `floorplan:7`, a path).
+impl std::fmt::Display for MapSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MapSource::Paper(n) => write!(f, "paper:{n}"),
+            MapSource::Generated(seed) => write!(f, "generate:{seed}"),
+            MapSource::GeneratedWide(seed) => write!(f, "generate-wide:{seed}"),
+            MapSource::FloorPlan(seed) => write!(f, "floorplan:{seed}"),
+            MapSource::File(p) => write!(f, "{}", p.display()),
+        }
+    }
+}
+
 impl MapSource {
     /// The true geometry of this map for the continuous world: a map file at its native
     /// resolution (one pixel per obstacle square: thin walls stay thin), a paper map's 1 m
-    /// cells, or for `generate:SEED` / `generate-wide:SEED` the continuous world's generator of
-    /// cluttered `side` × `side` metre worlds (bookshelves, bins, cylinders) with this seed.
+    /// cells, for `generate:SEED` / `generate-wide:SEED` the continuous world's generator of
+    /// cluttered `side` × `side` metre worlds (bookshelves, bins, cylinders) with this seed, or
+    /// for `floorplan:SEED` a `side` × `side` metre floor plan of 1 m wall squares.
     pub fn scene(&self, side: f64) -> Result<madenet_continuous::Scene, MapError> {
         use madenet_continuous::{scene::generate_cluttered, Scene};
         Ok(match self {
             MapSource::Paper(n) => Scene::from_grid(&paper_map(*n)?, &format!("paper:{n}")),
             MapSource::Generated(seed) | MapSource::GeneratedWide(seed) => {
                 generate_cluttered(side, 0.1, *seed)
+            }
+            MapSource::FloorPlan(seed) => {
+                // A floor plan of side × side 1 m cells: walls as cell squares.
+                let n = (side.round() as usize).max(8);
+                let cfg = madenet_map::floorplan::varied(n, n, *seed);
+                let grid = madenet_map::floorplan::floor_plan(&cfg, *seed)?;
+                Scene::from_grid(&grid, &format!("floorplan:{seed}"))
             }
             MapSource::File(p) => {
                 let resolution = madenet_map::io::native_resolution(p)?;
@@ -112,6 +141,11 @@ impl MapSource {
                 };
                 generate_with_movement(&gen, *seed, cfg.movement)
             }
+            MapSource::FloorPlan(seed) => madenet_map::floorplan::floor_plan_with_movement(
+                &madenet_map::floorplan::varied(20, 20, *seed),
+                *seed,
+                cfg.movement,
+            ),
             MapSource::File(p) => {
                 return load(
                     p,
@@ -123,13 +157,12 @@ impl MapSource {
             }
         }?;
         // Built-in maps are grids of 1 m cells, read at the robot cell size like a map file.
-        let label = match self {
-            MapSource::Paper(n) => format!("paper:{n}"),
-            MapSource::Generated(seed) => format!("generate:{seed}"),
-            MapSource::GeneratedWide(seed) => format!("generate-wide:{seed}"),
-            MapSource::File(p) => p.display().to_string(),
-        };
-        madenet_map::discretize::coarsen(&builtin, cfg.cell_size, &cfg.discretize, &label)
+        madenet_map::discretize::coarsen(
+            &builtin,
+            cfg.cell_size,
+            &cfg.discretize,
+            &self.to_string(),
+        )
     }
 
     /// A short label for outputs.
@@ -138,6 +171,7 @@ impl MapSource {
             MapSource::Paper(n) => paper_map_name(*n),
             MapSource::Generated(seed) => format!("generated_{seed}"),
             MapSource::GeneratedWide(seed) => format!("generated_wide_{seed}"),
+            MapSource::FloorPlan(seed) => format!("floorplan_{seed}"),
             MapSource::File(p) => p
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -343,6 +377,21 @@ mod tests {
             "generate-wide:9".parse::<MapSource>().unwrap(),
             MapSource::GeneratedWide(9)
         );
+        for s in [
+            "paper:3",
+            "generate:4",
+            "generate-wide:5",
+            "floorplan:6",
+            "maps/x.yaml",
+        ] {
+            assert_eq!(s.parse::<MapSource>().unwrap().to_string(), s);
+        }
+        assert!("floorplan:x".parse::<MapSource>().is_err());
+        let plan = MapSource::FloorPlan(6)
+            .load(&ScenarioConfig::default())
+            .unwrap();
+        assert_eq!((plan.height(), plan.width()), (20, 20));
+        assert!(madenet_map::generate::is_connected(&plan));
         let cfg = ScenarioConfig::default();
         let map = MapSource::GeneratedWide(9).load(&cfg).unwrap();
         let starts = StartSpec::Random.cells(&map, 3, cfg.movement);
