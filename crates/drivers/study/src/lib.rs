@@ -150,9 +150,7 @@ mod tests {
 
     #[test]
     fn a_folder_saved_before_a_field_was_added_resumes_and_another_study_is_refused() {
-        let dir = std::env::temp_dir().join(format!("madenet-prepare-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = madenet_testkit::Scratch::new("prepare");
         let cfg = ScaleConfig::continuous_default();
         // As an earlier madenet saved it: without a field added since, and with a comment.
         let text = toml::to_string(&cfg).unwrap();
@@ -180,6 +178,5 @@ mod tests {
         };
         let e = e.to_string();
         assert!(e.contains("different study configuration"), "{e}");
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -70,14 +70,14 @@ fn pictures(n: usize, steps: usize, opts: &RenderOptions) -> Vec<RgbaImage> {
 
 fn bench(c: &mut Criterion) {
     let opts = RenderOptions::default();
-    let dir = std::env::temp_dir();
+    let dir = madenet_testkit::Scratch::new("bench-gif");
     let mut g = c.benchmark_group("gif");
     g.sample_size(10);
     let last = frames(100, 60).pop().expect("frames");
     g.bench_function("render/100", |b| b.iter(|| render(&last, &opts)));
     for n in [40, 100] {
         let images = pictures(n, 60, &opts);
-        let path = dir.join(format!("madenet-bench-{}-{n}.gif", std::process::id()));
+        let path = dir.join(format!("{n}.gif"));
         g.bench_with_input(BenchmarkId::new("changed_rect", n), &images, |b, images| {
             b.iter(|| {
                 let mut w = GifWriter::new(&path, &opts, 150).expect("writer");

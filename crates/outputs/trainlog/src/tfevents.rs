@@ -500,11 +500,12 @@ mod tests {
         )
     }
 
-    fn temp_dir(name: &str) -> PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("madenet-trainlog-tf-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        d
+    /// A scratch folder, removed when dropped (this crate is below the test kit).
+    fn temp_dir(name: &str) -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix(&format!("madenet-trainlog-tf-{name}-"))
+            .tempdir()
+            .unwrap()
     }
 
     #[test]
@@ -543,7 +544,8 @@ mod tests {
 
     #[test]
     fn a_scalar_event_has_the_hand_encoded_bytes() {
-        let dir = temp_dir("bytes");
+        let tmp = temp_dir("bytes");
+        let dir = tmp.path().to_path_buf();
         let mut w = TfEventWriter::create(&dir).unwrap();
         w.add_scalar("a", 1.0, 2, 0.5).unwrap();
         w.flush().unwrap();
@@ -566,12 +568,12 @@ mod tests {
         framed.extend_from_slice(&want);
         framed.extend_from_slice(&masked_crc32c(&want).to_le_bytes());
         assert!(file.ends_with(&framed));
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn written_files_decode_to_the_version_and_the_scalars() {
-        let dir = temp_dir("decode").join("nested");
+        let tmp = temp_dir("decode");
+        let dir = tmp.path().join("nested");
         let before = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .unwrap()
@@ -616,12 +618,12 @@ mod tests {
             assert_eq!((t2, step2, &tag2), (*t, *step, tag));
             assert_eq!(v2.to_bits(), v.to_bits(), "{tag}");
         }
-        std::fs::remove_dir_all(dir.parent().unwrap()).unwrap();
     }
 
     #[test]
     fn a_second_writer_in_the_same_directory_gets_its_own_file() {
-        let dir = temp_dir("resume");
+        let tmp = temp_dir("resume");
+        let dir = tmp.path().to_path_buf();
         let mut a = TfEventWriter::create(&dir).unwrap();
         let mut b = TfEventWriter::create(&dir).unwrap();
         assert_ne!(a.path(), b.path());
@@ -640,12 +642,12 @@ mod tests {
             .map(|p| scalar(&records(&std::fs::read(p).unwrap())[1]).3)
             .collect();
         assert_eq!(values, [1.0, 2.0], "names sort in creation order");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn truncating_keeps_what_the_checkpoint_saw_and_drops_a_torn_tail() {
-        let dir = temp_dir("truncate");
+        let tmp = temp_dir("truncate");
+        let dir = tmp.path().to_path_buf();
         // An earlier run: episodes 0..6 and losses 1..=4, then a second file from a resume.
         let mut a = TfEventWriter::create(&dir).unwrap();
         for e in 0..6 {
@@ -734,12 +736,12 @@ mod tests {
         assert_eq!(truncate_events(&dir, keep).unwrap(), 0);
         assert_eq!(std::fs::read(&names[0]).unwrap(), before);
         assert_eq!(truncate_events(dir.join("missing"), keep).unwrap(), 0);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn an_unwritable_directory_is_an_error_naming_it() {
-        let dir = temp_dir("blocked");
+        let tmp = temp_dir("blocked");
+        let dir = tmp.path().to_path_buf();
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("not-a-dir");
         std::fs::write(&file, b"x").unwrap();
@@ -749,6 +751,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("not-a-dir"), "{err}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
