@@ -30,7 +30,8 @@ impl Belief {
     /// assert_eq!(b.map()[2], madenet_map::Occupancy::Obstacle);
     /// ```
     pub fn from_rows(rows: &[&str], movement: Movement) -> Self {
-        let mut b = Belief::new(rows.len(), rows.first().map_or(0, |r| r.len()), movement);
+        let width = rows.first().map_or(0, |r| r.chars().count());
+        let mut b = Belief::new(rows.len(), width, movement);
         for (r, line) in rows.iter().enumerate() {
             for (c, ch) in line.chars().enumerate() {
                 let occ = match ch {

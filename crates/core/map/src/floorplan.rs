@@ -6,11 +6,11 @@
 //! its longer side is split across that side by a one-cell wall with a door `door_width`
 //! cells wide, or — with probability `corridor_prob`, when there is room — by a corridor
 //! `corridor_width` cells wide between two walls, each with a door into the corridor. The
-//! halves are divided again. Then furniture: single obstacle cells inside rooms up to a
-//! `clutter` fraction of the area, each kept only if the free space stays connected. Finally
-//! the `keep_free` cells are cleared and any pocket a door did not reach (where a wall ends in
-//! front of an earlier door) is joined to the rest by opening the wall cell between them, so
-//! the free cells always form one connected component under the movement rule.
+//! halves are divided again. Then the `keep_free` cells are cleared and any pocket a door did
+//! not reach (where a wall ends in front of an earlier door) is joined to the rest by opening
+//! the wall cell between them. Last, furniture: single obstacle cells inside rooms up to a
+//! `clutter` fraction of the area, each kept only if the free space stays connected — so the
+//! free cells always form one connected component under the movement rule.
 //!
 //! ```
 //! use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
@@ -32,9 +32,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FloorPlanConfig {
-    /// Rows (default 20, at least 8).
+    /// Rows (default 20, 8 to 256).
     pub height: usize,
-    /// Columns (default 20, at least 8).
+    /// Columns (default 20, 8 to 256).
     pub width: usize,
     /// The smallest room side, cells (default 4, at least 2); a room is split only if both
     /// halves keep at least this much.
@@ -85,8 +85,10 @@ impl FloorPlanConfig {
             )))
         };
         for (name, v) in [("height", self.height), ("width", self.width)] {
-            if !(8..=2000).contains(&v) {
-                return bad(name, format!("must lie in 8..=2000, got {v}"));
+            // Each piece of furniture checks connectivity over the whole grid: 256 keeps a
+            // plan under a second.
+            if !(8..=256).contains(&v) {
+                return bad(name, format!("must lie in 8..=256, got {v}"));
             }
         }
         if self.min_room < 2 {
@@ -239,7 +241,11 @@ pub fn floor_plan_with_movement(
     for &p in &cfg.keep_free {
         grid.set(p, Occupancy::Free);
     }
-    connect(&mut grid, movement);
+    if !connect(&mut grid, movement) {
+        return Err(MapError::Invalid(format!(
+            "floor plan (seed {seed}): its rooms could not be joined (please report this seed and config)"
+        )));
+    }
     // Furniture inside the rooms, each piece kept only if the free space stays connected.
     let target = (cfg.clutter * grid.len() as f64).round() as usize;
     let mut placed = 0;
@@ -271,16 +277,16 @@ pub fn floor_plan(cfg: &FloorPlanConfig, seed: u64) -> Result<OccGrid, MapError>
 
 /// Opens wall cells until the free cells form one component: each time, the obstacle cell
 /// (lowest index) with free neighbours both inside and outside the component of the first free
-/// cell.
-fn connect(grid: &mut OccGrid, movement: Movement) {
+/// cell. False if no such cell is left (walls are one cell thick, so this does not happen).
+fn connect(grid: &mut OccGrid, movement: Movement) -> bool {
     loop {
         let Some(first) = grid.cells().iter().position(|&c| c == Occupancy::Free) else {
-            return;
+            return true;
         };
         let reach = reachable_from_with(grid, grid.pos(first), movement);
         let free = grid.count(Occupancy::Free);
         if reach.iter().filter(|&&r| r).count() == free {
-            return;
+            return true;
         }
         let near = |p: Pos, inside: bool| {
             crate::RING8.iter().any(|&(dr, dc)| {
@@ -296,7 +302,7 @@ fn connect(grid: &mut OccGrid, movement: Movement) {
             .find(|&p| grid.get(p) == Occupancy::Obstacle && near(p, true) && near(p, false));
         match opening {
             Some(p) => grid.set(p, Occupancy::Free),
-            None => return, // cannot happen on a grid whose walls are one cell thick
+            None => return false,
         }
     }
 }

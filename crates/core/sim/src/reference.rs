@@ -65,21 +65,31 @@ impl Known {
             .zip(world.team_map())
             .map(|(&e, &m)| e && m == Occupancy::Unknown)
             .collect();
-        let mut seers = vec![Vec::new(); truth.len()];
-        for p in 0..truth.len() {
-            if world.is_passable(truth.pos(p)) {
-                for c in visibility.visible_from(p) {
-                    seers[c].push(p as u32);
-                }
-            }
-        }
-        Known {
+        let mut known = Known {
             truth,
             movement,
             visibility,
             target,
-            seers,
+            seers: Vec::new(),
+        };
+        // Viewpoints: the cells some robot can reach (a free pocket no robot reaches sees the
+        // walls it shares with the rest, but is no viewpoint).
+        let mut reachable = vec![false; known.truth.len()];
+        let mut dist = Vec::new();
+        for &s in world.positions() {
+            known.distances(s, &mut dist);
+            for (r, &d) in reachable.iter_mut().zip(&dist) {
+                *r |= d != FAR;
+            }
         }
+        let mut seers = vec![Vec::new(); known.truth.len()];
+        for p in (0..known.truth.len()).filter(|&p| reachable[p]) {
+            for c in known.visibility.visible_from(p) {
+                seers[c].push(p as u32);
+            }
+        }
+        known.seers = seers;
+        known
     }
 
     fn passable(&self, p: Pos) -> bool {
@@ -387,7 +397,8 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
         .map(|r| r.iter().copied().collect())
         .collect();
     let mut idle: Vec<bool> = routes.iter().map(|r| r.is_empty()).collect();
-    let mut blocked_for = vec![0u32; n];
+    // Steps without getting closer to the viewpoint (after two, a robot steps around).
+    let mut stalled = vec![0u32; n];
     let mut moves = vec![Move::Stay; n];
     // A viewpoint is still useful while a cell to observe that it sees is unknown to the team.
     let useful = |world: &World, p: Pos| {
@@ -398,11 +409,9 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
             .any(|c| known.target[c] && map[c] == Occupancy::Unknown)
     };
     while !world.is_done() {
-        // Re-plan from here when a robot reached its viewpoint or the team saw what it was for
-        // (slips and misses make the first plan stale).
-        // A robot blocked for a while gives its viewpoint up (another may reach it).
         // Follow the routes, skipping viewpoints reached or no longer needed; re-plan from here
-        // when a robot's route ran out while cells are missing, or a robot was blocked.
+        // when a robot's route ran out while cells are missing, or a robot made no progress
+        // towards its viewpoint for four steps (teammates in a passage, slips).
         for (i, r) in routes.iter_mut().enumerate() {
             while r
                 .front()
@@ -411,7 +420,7 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
                 r.pop_front();
             }
         }
-        if (0..n).any(|i| (routes[i].is_empty() && !idle[i]) || blocked_for[i] >= 3) {
+        if (0..n).any(|i| (routes[i].is_empty() && !idle[i]) || stalled[i] >= 4) {
             let map = world.team_map();
             let covered: Vec<bool> = (0..known.truth.len())
                 .map(|c| !known.target[c] || map[c] != Occupancy::Unknown)
@@ -420,7 +429,7 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
             routes = r.into_iter().map(VecDeque::from).collect();
             for i in 0..n {
                 idle[i] = routes[i].is_empty();
-                blocked_for[i] = 0;
+                stalled[i] = 0;
             }
         }
         let goals: Vec<Option<Pos>> = routes.iter().map(|r| r.front().copied()).collect();
@@ -445,7 +454,7 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
                         .min_by_key(|&m| (occupied(m.apply(at)), d(m.apply(at))));
                     match down {
                         Some(m) if !occupied(m.apply(at)) => m,
-                        _ if blocked_for[i] >= 2 => options
+                        _ if stalled[i] >= 2 => options
                             .iter()
                             .copied()
                             .filter(|&m| !occupied(m.apply(at)))
@@ -484,8 +493,18 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
         let before = world.positions().to_vec();
         world.step(&moves);
         for i in 0..n {
-            let stayed = world.positions()[i] == before[i] && moves[i] != Move::Stay;
-            blocked_for[i] = if stayed { blocked_for[i] + 1 } else { 0 };
+            stalled[i] = match goals[i] {
+                Some(g) if g != before[i] => {
+                    let field = fields.field(g);
+                    let d = |p: Pos| field[known.truth.index(p)];
+                    if d(world.positions()[i]) < d(before[i]) {
+                        0
+                    } else {
+                        stalled[i] + 1
+                    }
+                }
+                _ => 0,
+            };
         }
         record_step(&mut recorder, &world);
     }
@@ -494,7 +513,7 @@ pub fn run(spec: &TrialSpec) -> Result<(TrialResult, ReferencePlan), SimError> {
         policy: "reference".into(),
         seed: spec.seed,
         comm_success_prob: spec.config.comm_success_prob,
-        starts: spec.starts.clone(),
+        starts: spec.starts.iter().take(n).copied().collect(),
         metrics: recorder.finish(world.is_complete()),
         trajectory: Vec::new(),
         timing: Timing {
@@ -588,6 +607,42 @@ mod tests {
                 tns <= plan.planned_steps + 10,
                 "map {map}: {tns} vs {plan:?}"
             );
+        }
+    }
+
+    #[test]
+    fn it_completes_in_rooms_and_passages_without_livelock() {
+        // Floor plans (doors and corridors one or two cells wide) and the paper's maps under
+        // the strict movement rule (which splits test_9 into pockets no robot reaches): every
+        // run completes, never faster than its bound.
+        let strict = ScenarioConfig {
+            movement: Movement::NoCornerCutting,
+            ..ScenarioConfig::default()
+        };
+        let mut specs = Vec::new();
+        for seed in 1..=12 {
+            let map = crate::MapSource::FloorPlan(seed).load(&strict).unwrap();
+            let starts = crate::StartSpec::Random.cells(&map, 3, strict.movement);
+            specs.push(TrialSpec {
+                map,
+                map_name: format!("floorplan:{seed}"),
+                starts,
+                config: strict.clone(),
+                policy: "reference".into(),
+                seed,
+            });
+        }
+        for map in 1..=10 {
+            specs.push(spec(map, Corner::TopRight, 2, strict.clone()));
+        }
+        for s in &specs {
+            let (r, plan) = run(s).unwrap();
+            assert!(
+                r.metrics.completed,
+                "{}: {} steps",
+                s.map_name, r.metrics.tns
+            );
+            assert!(r.metrics.tns as u32 >= plan.lower_bound, "{}", s.map_name);
         }
     }
 

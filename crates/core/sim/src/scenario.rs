@@ -90,7 +90,12 @@ impl MapSource {
                 // A floor plan of side × side 1 m cells: walls as cell squares.
                 let n = (side.round() as usize).max(8);
                 let cfg = madenet_map::floorplan::varied(n, n, *seed);
-                let grid = madenet_map::floorplan::floor_plan(&cfg, *seed)?;
+                // Squares touching at a corner leave no gap: connected without corner cuts.
+                let grid = madenet_map::floorplan::floor_plan_with_movement(
+                    &cfg,
+                    *seed,
+                    madenet_map::Movement::NoCornerCutting,
+                )?;
                 Scene::from_grid(&grid, &format!("floorplan:{seed}"))
             }
             MapSource::File(p) => {

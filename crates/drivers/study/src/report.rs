@@ -251,7 +251,7 @@ fn headroom_md(
                 s.push_str(" — |");
                 continue;
             };
-            let _ = write!(s, " {v:.1} ({:+.1} %", 100.0 * (v / r - 1.0));
+            let _ = write!(s, " {v:.1} ({:+.1} %", 100.0 * (v / r.max(1.0) - 1.0));
             if let Some(b) = bound(c) {
                 let _ = write!(s, "; {:+.1} %", 100.0 * (v / b.max(1.0) - 1.0));
             }

@@ -32,9 +32,14 @@ pub(super) fn report_text(
     };
     let _ = writeln!(
         s,
-        "# Scalability study ({world})\n\n{} trials ({} methods × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean {what} ({unit}) / TTD (m) / NOLI, completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
+        "# Scalability study ({world})\n\n{} trials (({} methods{}) × sides {:?} × {} maps × starts {} × teams {:?} × {} seeds) at CSP {}, {:.1} min of this run's wall time.\nMean {what} ({unit}) / TTD (m) / NOLI, completed trials in brackets when not all; figure `fig7_scalability.png`.\n",
         outcomes.len(),
         cfg.methods.len(),
+        if planned.iter().any(|p| p.planned.oracle.is_some()) {
+            " + the known-map reference"
+        } else {
+            ""
+        },
         cfg.sides,
         cfg.maps_per_side,
         cfg.starts.iter().map(|s| s.name()).collect::<Vec<_>>().join(", "),
@@ -409,7 +414,7 @@ pub(super) fn headroom_text(
                     );
                     format!(
                         "{v:.1} ({:+.0} %; {:+.0} %)",
-                        100.0 * (v / r - 1.0),
+                        100.0 * (v / r.max(1.0) - 1.0),
                         100.0 * (v / b.max(1.0) - 1.0)
                     )
                 })
