@@ -42,7 +42,8 @@ def cli_rows(cli, tmp_path, name, flags):
 def test_scale_matches_the_command_line_grid_and_continuous(cli, tmp_path):
     rows = cli_rows(cli, tmp_path, "grid", ["--methods", "nf,spread", "--sides", "20,30", "--teams", "2,3", "--seeds", "1"])
     table = madenet.scale(**GRID, threads=2)
-    assert len(rows) == 2 * 2 * 4 * 2 * 3  # methods × sides × maps per side × teams × starts
+    # (methods + the known-map reference) × sides × maps per side × teams × starts
+    assert len(rows) == (2 + 1) * 2 * 4 * 2 * 3
     assert_same_rows(table, rows)
     assert sorted(set(table["side"])) == [20, 30] and sorted(set(table["team"])) == [2, 3]
     rows = cli_rows(cli, tmp_path, "continuous",
