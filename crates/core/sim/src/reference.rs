@@ -96,7 +96,8 @@ impl Known {
         self.truth.in_bounds(p) && self.truth.get(p) == Occupancy::Free
     }
 
-    /// Moves from `from` to every cell (FAR where unreachable), into `dist`.
+    /// Moves from `from` to every cell (FAR where unreachable), into `dist`. By hand: time is
+    /// moves, a diagonal one step, where `madenet_nav::Dijkstra` weighs diagonals by length.
     fn distances(&self, from: Pos, dist: &mut Vec<u32>) {
         dist.clear();
         dist.resize(self.truth.len(), FAR);
@@ -158,13 +159,6 @@ fn bound_of(known: &Known, starts: &[Pos]) -> u32 {
         .filter(|&d| d != FAR)
         .max()
         .unwrap_or(0)
-}
-
-/// The reference plan of `spec` (noiseless; [`run`] executes it).
-pub fn plan(spec: &TrialSpec) -> Result<ReferencePlan, SimError> {
-    let mut world = world_of(spec)?;
-    let known = Known::new(&mut world);
-    Ok(plan_of(&known, world.positions()))
 }
 
 /// Viewpoints that see every uncovered cell: greedy set cover (the cell seeing the most

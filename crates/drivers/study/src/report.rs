@@ -183,6 +183,14 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
     s
 }
 
+/// What the headroom sections of `report.md` and `scale.md` measure against.
+pub(crate) const HEADROOM_DEFINITIONS: &str = "How far every run is from what is possible at all. \
+    The **lower bound** of a trial: no team explores its map in fewer timesteps — the largest, \
+    over the cells left unknown after t = 0, of the fewest moves any robot needs to reach a cell \
+    that sees it (slips never shorten a path, misses only add time). The **known-map reference** \
+    (`oracle-known-map`, `madenet_sim::reference`) is a team that knows the map: set-cover \
+    viewpoints, min–max routes, re-planned as misses and slips demand, in each trial's own world.";
+
 /// Lower bounds of the trials (see [`madenet_sim::reference::lower_bound`]), by map, start and
 /// seed (a bound does not depend on the CSP).
 pub type Bounds = std::collections::BTreeMap<(String, String, u64), u32>;
@@ -219,14 +227,9 @@ fn headroom_md(
             .collect();
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
-    let mut s = String::from(
-        "How far every run is from what is possible at all. The **lower bound** of a trial: no \
-         team explores its map in fewer timesteps — the largest, over the cells left unknown \
-         after t = 0, of the fewest moves any robot needs to reach a cell that sees it (slips \
-         never shorten a path, misses only add time). The **known-map reference** \
-         (`oracle-known-map`) is a team that knows the map. Each cell: mean TNS (% above the \
-         reference; % above the bound); for methods, the share of the base rule's gap to the \
-         reference they close.\n\n| run |",
+    let mut s = format!(
+        "{HEADROOM_DEFINITIONS} Each cell: mean TNS (% above the reference; % above the bound); \
+         for methods, the share of the base rule's gap to the reference they close.\n\n| run |"
     );
     for (_, c) in cs {
         let _ = write!(s, " CSP {} |", pct(c));

@@ -376,14 +376,10 @@ pub(super) fn headroom_text(
             .collect();
         mean(&v)
     };
-    let mut s = String::from(
-        "## Headroom: the known-map reference and the lower bound\n\n\
-         The **lower bound** of a trial: no team explores its map in fewer steps (the largest, \
-         over the cells left unknown after t = 0, of the fewest moves any robot needs to reach a \
-         cell that sees it). The **known-map reference** (`oracle-known-map`, \
-         `madenet_sim::reference`) is a team that knows the map: set-cover viewpoints, min–max \
-         routes, re-planned as misses and slips demand, in each trial's own world. Each cell: \
-         mean TNS (% above the reference; % above the bound).\n\n",
+    let mut s = format!(
+        "## Headroom: the known-map reference and the lower bound\n\n{} Each cell: mean TNS \
+         (% above the reference; % above the bound).\n\n",
+        crate::report::HEADROOM_DEFINITIONS
     );
     for &side in &cfg.sides {
         let _ = writeln!(
