@@ -120,6 +120,17 @@ pub struct RolloutTrainConfig {
     pub csp_extreme_prob: f64,
     /// The rule the teacher's continuations follow and iteration 0 behaves by.
     pub base_policy: String,
+    /// Expert iteration: from iteration 2 on, the teacher's continuations follow the best
+    /// student validated so far (acting with its margin) instead of `base_policy`, once that
+    /// student beats `base_policy` on validation — so the teacher's one step of improvement
+    /// lands on the student's level, not on the base rule's.
+    pub expert_iteration: bool,
+    /// Stop rule: the run ends after this many iterations in a row without a new best on
+    /// validation; 0: run all `iterations`.
+    pub patience: u64,
+    /// Probability that a training or validation map is a generated floor plan (rooms, doors,
+    /// corridors) instead of clutter ([`ScenarioDraw::floorplan_prob`]).
+    pub floorplan_prob: f64,
     /// Which futures the teacher scores a candidate in: `noiseless` (default: one continuation
     /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
     pub futures: Futures,
@@ -189,6 +200,9 @@ impl Default for RolloutTrainConfig {
             corner_start_prob: 0.5,
             csp_extreme_prob: 0.5,
             base_policy: "spread".into(),
+            expert_iteration: false,
+            patience: 0,
+            floorplan_prob: 0.0,
             futures: Futures::Noiseless,
             horizon: 0,
             label_prob: 1.0,
@@ -288,11 +302,12 @@ impl RolloutTrainConfig {
             ),
             (
                 unit(self.corner_start_prob)
+                    && unit(self.floorplan_prob)
                     && unit(self.csp_extreme_prob)
                     && unit(self.behaviour_epsilon)
                     && unit(self.label_prob)
                     && self.label_prob > 0.0,
-                "corner_start_prob/csp_extreme_prob/behaviour_epsilon/label_prob",
+                "corner_start_prob/floorplan_prob/csp_extreme_prob/behaviour_epsilon/label_prob",
                 "must be in [0, 1] (label_prob above 0)",
             ),
             (
@@ -355,6 +370,7 @@ impl RolloutTrainConfig {
                 1_000_000,
             ),
             ("horizon", self.horizon as u64, 0, 100_000),
+            ("patience", self.patience, 0, 1000),
         ])?;
         if self.network == Network::Agnostic && self.recurrent {
             return Err(
@@ -485,6 +501,7 @@ fn episode_spec(
     };
     let (map, starts) = ScenarioDraw {
         corner_start_prob: cfg.corner_start_prob,
+        floorplan_prob: cfg.floorplan_prob,
         starts_stream: "starts",
         ..ScenarioDraw::new(
             height,
@@ -568,6 +585,46 @@ pub struct Collected {
     pub steps: usize,
     /// Continuations the teacher ran to label it (candidates valued × futures).
     pub rollouts: usize,
+    /// Σ over labelled decisions of the teacher's gain over its base rule: the value (steps
+    /// left) of the base rule's own choice minus the best candidate's.
+    #[serde(default)]
+    pub teacher_gain: f64,
+    /// Labelled decisions (the count `teacher_gain` sums over).
+    #[serde(default)]
+    pub labelled: usize,
+}
+
+/// The rule the teacher's continuations follow: policy `name` of `registry` (the base rule, or
+/// with expert iteration the best student so far).
+pub struct TeacherBase {
+    /// Holds `name`.
+    pub registry: PolicyRegistry,
+    /// The policy continuations follow.
+    pub name: String,
+}
+
+impl TeacherBase {
+    /// The config's `base_policy`.
+    pub fn rule(cfg: &RolloutTrainConfig) -> Self {
+        TeacherBase {
+            registry: PolicyRegistry::builtin(),
+            name: cfg.base_policy.clone(),
+        }
+    }
+
+    /// A student (with its margin) as the base: registered as `student`.
+    pub fn student(model: &Model) -> Self {
+        let mut registry = PolicyRegistry::default();
+        model.register(
+            &mut registry,
+            "student",
+            "the teacher's base: the best student so far",
+        );
+        TeacherBase {
+            registry,
+            name: "student".into(),
+        }
+    }
 }
 
 /// The rollout teacher as an episode recorder: at each timestep, before the behaviour policy
@@ -579,9 +636,11 @@ struct Labelling<'a> {
     label_prob: f64,
     label_rng: Rng,
     horizon: Option<usize>,
-    base: PolicyRegistry,
+    base: &'a TeacherBase,
     robots: Vec<Vec<Labelled>>,
     rollouts: usize,
+    teacher_gain: f64,
+    labelled: usize,
 }
 
 impl Recorder for Labelling<'_> {
@@ -639,13 +698,40 @@ impl Recorder for Labelling<'_> {
                     trial,
                     i,
                     &[],
-                    &cfg.base_policy,
-                    &self.base,
+                    &self.base.name,
+                    &self.base.registry,
                     &salts,
                     self.horizon,
                 )
                 .map_err(|e| TrainError::Other(e.to_string()))?;
                 self.rollouts += values.iter().flatten().count() * salts.len();
+                // The teacher's gain over its base here: what the base's own choice leaves
+                // minus what the best candidate leaves (an instance made as a fork makes its).
+                let ctx = madenet_sim::PolicyContext {
+                    seed: self.seed,
+                    robot: i,
+                    config: trial.world().config(),
+                    height: trial.world().truth().height(),
+                    width: trial.world().truth().width(),
+                };
+                let mut base = self
+                    .base
+                    .registry
+                    .make(&self.base.name, &ctx)
+                    .map_err(|e| TrainError::Other(e.to_string()))?;
+                let own = match base.decide(&mut trial.agent_mut(i).view(true)) {
+                    Decision::Candidate(k) => values.get(k).copied().flatten(),
+                    _ => None,
+                };
+                let best = values
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .fold(f64::INFINITY, f64::min);
+                if let Some(own) = own {
+                    self.teacher_gain += own - best;
+                    self.labelled += 1;
+                }
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
                 for (k, v) in values.iter().enumerate() {
@@ -675,6 +761,7 @@ fn collect_episode(
     index: u64,
     side_max: usize,
     behaviour: &PolicyRegistry,
+    base: &TeacherBase,
 ) -> Result<Collected, TrainError> {
     let spec = TrialSpec {
         policy: "behaviour".into(),
@@ -691,15 +778,19 @@ fn collect_episode(
         label_prob: (cfg.label_prob * 400.0 / cells as f64).min(1.0),
         label_rng: stream(seed, "label", 0),
         horizon: (cfg.horizon > 0).then_some(cfg.horizon),
-        base: PolicyRegistry::builtin(),
+        base,
         robots: vec![Vec::new(); trial.agents().len()],
         rollouts: 0,
+        teacher_gain: 0.0,
+        labelled: 0,
     };
     let end = episode::run(&mut trial, &mut teacher)?;
     Ok(Collected {
         robots: teacher.robots,
         steps: end.steps,
         rollouts: teacher.rollouts,
+        teacher_gain: teacher.teacher_gain,
+        labelled: teacher.labelled,
     })
 }
 
@@ -906,6 +997,13 @@ struct State {
     updates: u64,
     best_validation: Option<f64>,
     wall_s: f64,
+    /// Iterations in a row without a new best (the `patience` stop rule).
+    #[serde(default)]
+    since_best: u64,
+    /// With expert iteration: the iteration (from 0) whose student the teacher's continuations
+    /// follow (kept in `checkpoint/base/`); `None`: the base rule.
+    #[serde(default)]
+    teacher_base: Option<u64>,
 }
 
 /// One row of `iterations.csv`.
@@ -924,6 +1022,16 @@ struct IterationRow {
     #[serde(default)]
     spread_margin: Option<f32>,
     base_steps: f64,
+    /// What the teacher's continuations followed: the base rule, or `student@K` (iteration K's).
+    #[serde(default)]
+    teacher_base: String,
+    /// The teacher's mean gain over its base per labelled decision, steps (value of the base's
+    /// own choice minus the best candidate's).
+    #[serde(default)]
+    teacher_gain: f64,
+    /// The student's gain over the base rule on validation, % of the base rule's steps.
+    #[serde(default)]
+    student_gain_pct: f64,
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
@@ -956,6 +1064,19 @@ fn model_info(
     }
 }
 
+/// The stop rule: `patience` iterations in a row without a new best on validation.
+fn out_of_patience(cfg: &RolloutTrainConfig, state: &State) -> bool {
+    let stop = cfg.patience > 0 && state.since_best >= cfg.patience;
+    if stop {
+        tracing::info!(
+            "stopping after iteration {}: no new best on validation for {} iterations (`patience`)",
+            state.iteration,
+            state.since_best
+        );
+    }
+    stop
+}
+
 /// `max_minutes` ran out inside iteration `iteration` (counted from 0), whose work is dropped
 /// (the checkpoint is at its start). After iterations of this call's own: a warning, the run
 /// resumes from there. In the first of this call: an error — one iteration takes longer than the
@@ -983,10 +1104,36 @@ fn time_ran_out(
 }
 
 fn save_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
-    replace_dir(dir, |tmp| {
-        net.save(&tmp.join("dep0.bpk"), true)?;
-        harness::write_model_toml(tmp, info)
-    })
+    replace_dir(dir, |tmp| write_model(tmp, net, info))
+}
+
+/// A model folder (weights and `model.toml`) at `dir`, which must not be in use.
+fn write_model(dir: &Path, net: &Student, info: &ModelInfo) -> Result<(), TrainError> {
+    std::fs::create_dir_all(dir).map_err(|e| TrainError::Io {
+        path: dir.display().to_string(),
+        message: e.to_string(),
+    })?;
+    net.save(&dir.join("dep0.bpk"), true)?;
+    harness::write_model_toml(dir, info)
+}
+
+/// Copies the files of folder `from` into a new folder `to`.
+fn copy_dir(from: &Path, to: &Path) -> Result<(), TrainError> {
+    let io = |p: &Path| {
+        let p = p.display().to_string();
+        move |e: std::io::Error| TrainError::Io {
+            path: p,
+            message: e.to_string(),
+        }
+    };
+    std::fs::create_dir_all(to).map_err(io(to))?;
+    for entry in std::fs::read_dir(from).map_err(io(from))? {
+        let path = entry.map_err(io(from))?.path();
+        if let Some(name) = path.file_name() {
+            std::fs::copy(&path, to.join(name)).map_err(io(&path))?;
+        }
+    }
+    Ok(())
 }
 
 /// The rollout teacher's learner as a [`Learner`] (`made-net-rollout`).
@@ -1094,12 +1241,25 @@ fn train_loop(
         &cfg.base_policy,
     )?
     .mean_steps;
+    // The teacher's base: the base rule, or (expert iteration) the best student so far.
+    let mut base_model = match state.teacher_base {
+        Some(_) => Some(Model::load(&ckpt.join("base"))?),
+        None => None,
+    };
     let clock = Clock::start(state.wall_s);
     let first_iteration = state.iteration;
-    while state.iteration < cfg.iterations {
+    while state.iteration < cfg.iterations && !out_of_patience(cfg, &state) {
         // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then student).
         let student = (state.iteration > 0).then(|| net.model(model_info(cfg, &state, None, None)));
         let behaviour = behaviour_registry(cfg, student);
+        let teacher = match &base_model {
+            Some(m) => TeacherBase::student(m),
+            None => TeacherBase::rule(cfg),
+        };
+        let teacher_base = match state.teacher_base {
+            Some(k) => format!("student@{k}"),
+            None => cfg.base_policy.clone(),
+        };
         let per = cfg.episodes_per_iteration();
         let first = state.iteration * per;
         let side_max = cfg.side_max_at(state.iteration);
@@ -1110,7 +1270,7 @@ fn train_loop(
             .into_par_iter()
             .map(|e| match clock.out_of_time(cfg.max_minutes) {
                 true => Ok(None),
-                false => collect_episode(cfg, e, side_max, &behaviour).map(Some),
+                false => collect_episode(cfg, e, side_max, &behaviour, &teacher).map(Some),
             })
             .collect::<Result<_, _>>()?;
         let Some(collected) = collected.into_iter().collect::<Option<Vec<Collected>>>() else {
@@ -1121,6 +1281,9 @@ fn train_loop(
             .map(|c| c.robots.iter().map(Vec::len).sum::<usize>())
             .sum();
         let rollouts: usize = collected.iter().map(|c| c.rollouts).sum();
+        let labelled: usize = collected.iter().map(|c| c.labelled).sum();
+        let teacher_gain =
+            collected.iter().map(|c| c.teacher_gain).sum::<f64>() / labelled.max(1) as f64;
         let behaviour_steps =
             collected.iter().map(|c| c.steps as f64).sum::<f64>() / collected.len().max(1) as f64;
         data.extend(
@@ -1179,12 +1342,18 @@ fn train_loop(
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .expect("the greedy DEP is tried");
         let greedy_steps = tried[0].1;
+        let best_info = model_info(cfg, &state, Some(steps), margin);
+        let mut base_changed = false;
         if harness::new_best(&mut state.best_validation, steps) {
-            save_model(
-                &run_dir.join("best"),
-                &net,
-                &model_info(cfg, &state, Some(steps), margin),
-            )?;
+            save_model(&run_dir.join("best"), &net, &best_info)?;
+            state.since_best = 0;
+            // Expert iteration: a student that beats the base rule becomes the teacher's base.
+            if cfg.expert_iteration && steps < base_steps {
+                state.teacher_base = Some(state.iteration - 1);
+                base_changed = true;
+            }
+        } else {
+            state.since_best += 1;
         }
         state.wall_s = clock.wall();
         rows.push(IterationRow {
@@ -1199,6 +1368,9 @@ fn train_loop(
             greedy_steps,
             spread_margin: margin,
             base_steps,
+            teacher_base,
+            teacher_gain,
+            student_gain_pct: 100.0 * (base_steps - steps) / base_steps.max(1e-9),
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,
@@ -1221,12 +1393,19 @@ fn train_loop(
             ("iteration/base_steps", r.base_steps),
             ("iteration/behaviour_steps", r.behaviour_steps),
             ("iteration/decisions", r.decisions as f64),
+            ("iteration/teacher_gain", r.teacher_gain),
+            ("iteration/student_gain_pct", r.student_gain_pct),
         ] {
             scalars.scalar(tag, value as f32, r.iteration)?;
         }
         scalars.flush()?;
-        // Checkpoint: counters, dataset, net, optimizer.
+        // Checkpoint: counters, dataset, net, optimizer, the teacher's base student.
         replace_dir(&ckpt, |tmp| {
+            if base_changed {
+                write_model(&tmp.join("base"), &net, &best_info)?;
+            } else if state.teacher_base.is_some() {
+                copy_dir(&ckpt.join("base"), &tmp.join("base"))?;
+            }
             harness::write_postcard(&tmp.join("data.bin"), &data)?;
             net.save(&tmp.join("dep0.bpk"), false)?;
             let p = tmp.join("optim.bpk");
@@ -1241,6 +1420,9 @@ fn train_loop(
             &net,
             &model_info(cfg, &state, Some(steps), margin),
         )?;
+        if base_changed {
+            base_model = Some(net.model(best_info));
+        }
         progress(&Progress {
             done: state.iteration,
             total: cfg.iterations,
@@ -1252,6 +1434,7 @@ fn train_loop(
                 ("episodes", state.episodes as f64, 0),
                 ("decisions", decisions as f64, 0),
                 ("loss", r.loss, 4),
+                ("teacher gain", r.teacher_gain, 2),
             ],
         });
         if clock.out_of_time(cfg.max_minutes) {

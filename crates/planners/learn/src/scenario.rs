@@ -13,6 +13,7 @@
 //! ```
 
 use crate::error::TrainError;
+use madenet_map::floorplan::{floor_plan_with_movement, varied};
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_map::paper::Corner;
 use madenet_map::{Movement, OccGrid, Pos};
@@ -45,6 +46,10 @@ pub struct ScenarioDraw {
     /// MADE-Net, MADE-Net-DT and DME-DRL; `"starts"` for the rollout learner, whose
     /// `"scenario"` stream decides the corner.
     pub starts_stream: &'static str,
+    /// Probability that the map is a generated floor plan (rooms, doors, corridors;
+    /// [`madenet_map::floorplan::varied`]) instead of clutter; its team starts around a random
+    /// free cell. Default 0 (never drawn then, so runs without floor plans stay as they were).
+    pub floorplan_prob: f64,
 }
 
 impl ScenarioDraw {
@@ -64,6 +69,7 @@ impl ScenarioDraw {
             movement,
             corner_start_prob: 0.0,
             starts_stream: "scenario",
+            floorplan_prob: 0.0,
         }
     }
 
@@ -92,6 +98,9 @@ impl ScenarioDraw {
                 "field `density_min/density_max`: need 0 ≤ density_min ≤ density_max < 0.9".into(),
             );
         }
+        if !(0.0..=1.0).contains(&self.floorplan_prob) {
+            return Err("field `floorplan_prob`: must be in [0, 1]".into());
+        }
         Ok(())
     }
 
@@ -99,6 +108,14 @@ impl ScenarioDraw {
     /// and held-out sets differ only in their seeds.
     pub fn draw(&self, seed: u64) -> Result<(OccGrid, Vec<Pos>), TrainError> {
         let (height, width, team) = (self.height, self.width, self.team);
+        if self.floorplan_prob > 0.0
+            && stream(seed, "layout", 0).random::<f64>() < self.floorplan_prob
+        {
+            let s = derive_seed(seed, "floorplan", 0);
+            let map = floor_plan_with_movement(&varied(height, width, s), s, self.movement)
+                .map_err(|e| TrainError::Other(format!("floor-plan generator: {e}")))?;
+            return self.around_random_cell(map, seed);
+        }
         let mut rng = stream(seed, "scenario", 0);
         let corner = (self.corner_start_prob > 0.0
             && team <= 3
@@ -120,6 +137,16 @@ impl ScenarioDraw {
         if !keep_free.is_empty() {
             return Ok((map, keep_free));
         }
+        self.around_random_cell(map, seed)
+    }
+
+    /// `map` with the team on the free cells nearest to a random free cell.
+    fn around_random_cell(
+        &self,
+        map: OccGrid,
+        seed: u64,
+    ) -> Result<(OccGrid, Vec<Pos>), TrainError> {
+        let team = self.team;
         random_starts(
             &map,
             team,
@@ -268,5 +295,35 @@ mod tests {
             other.draw(3).unwrap().0,
             "same maps"
         );
+    }
+
+    /// With `floorplan_prob` the draw mixes floor plans (their rooms leave long straight walls:
+    /// a wall run the clutter generator does not make) with clutter, each seed the same map
+    /// every time; without it the maps are the clutter they always were.
+    #[test]
+    fn floor_plans_join_the_draw_only_when_asked() {
+        let clutter = ScenarioDraw::new(24, 24, (0.15, 0.3), 3, Movement::default());
+        let mixed = ScenarioDraw {
+            floorplan_prob: 0.5,
+            ..clutter.clone()
+        };
+        let plans = (0..12u64)
+            .filter(|&s| mixed.draw(s).unwrap().0 != clutter.draw(s).unwrap().0)
+            .collect::<Vec<_>>();
+        assert!(!plans.is_empty() && plans.len() < 12, "{plans:?}");
+        for &s in &plans {
+            let (map, starts) = mixed.draw(s).unwrap();
+            assert_eq!(mixed.draw(s).unwrap().1, starts);
+            assert!(starts.iter().all(|&p| map.is_free(p)));
+            let s2 = derive_seed(s, "floorplan", 0);
+            let plan =
+                floor_plan_with_movement(&varied(24, 24, s2), s2, Movement::default()).unwrap();
+            assert_eq!(map, plan, "seed {s}: the floor plan of its own stream");
+        }
+        let bad = ScenarioDraw {
+            floorplan_prob: 1.5,
+            ..clutter
+        };
+        assert!(bad.check().unwrap_err().contains("floorplan_prob"));
     }
 }

@@ -143,7 +143,7 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     // TensorBoard: one point per iteration and figure, each once after the resume.
     let scalars = madenet_testkit::tb_scalars;
     let want = scalars(&a);
-    assert_eq!(want.len(), 2 * 6, "2 iterations × 6 figures: {want:?}");
+    assert_eq!(want.len(), 2 * 8, "2 iterations × 8 figures: {want:?}");
     assert!(want
         .iter()
         .any(|s| s.0 == "iteration/validation_steps" && s.1 == 1));
@@ -162,6 +162,84 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("different config"), "{e}");
+
+    // Expert iteration over a weak base rule (random candidates): the teacher gains over its
+    // base, a student that beats the base becomes the next iteration's base (kept in the
+    // checkpoint: a killed and resumed run equals an uninterrupted one), and the run stops by
+    // the patience rule, not by hand.
+    // (Continuations cut after 30 steps: under random, most would hit the step cap and tie.)
+    let expert = || RolloutTrainConfig {
+        base_policy: "random".into(),
+        expert_iteration: true,
+        patience: 1,
+        iterations: 4,
+        episodes: 8,
+        horizon: 30,
+        ..tiny()
+    };
+    let (d, e) = (root.join("d"), root.join("e"));
+    train(&d, Some(expert()), &mut |_| {}).unwrap();
+    let rows = table(&d);
+    let col = |r: &std::collections::HashMap<String, String>, k: &str| r[k].clone();
+    let num =
+        |r: &std::collections::HashMap<String, String>, k: &str| -> f64 { r[k].parse().unwrap() };
+    assert_eq!(col(&rows[0], "teacher_base"), "random");
+    assert!(
+        num(&rows[0], "teacher_gain") > 0.0,
+        "one step over random gains"
+    );
+    let (mut best, mut stale, mut base) = (f64::INFINITY, 0, "random".to_string());
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(col(r, "teacher_base"), base, "iteration {k}");
+        let v = num(r, "validation_steps");
+        let gain = 100.0 * (num(r, "base_steps") - v) / num(r, "base_steps");
+        assert!((num(r, "student_gain_pct") - gain).abs() < 1e-6);
+        if v < best {
+            (best, stale) = (v, 0);
+            if v < num(r, "base_steps") {
+                base = format!("student@{k}");
+            }
+        } else {
+            stale += 1;
+        }
+        let last = k + 1 == rows.len();
+        // Patience 1: an iteration without a new best is the last; a run ends early only so.
+        assert!(
+            stale == 0 || last,
+            "ran on after iteration {k} without a new best"
+        );
+        assert!(
+            !last || k + 1 == 4 || stale >= 1,
+            "stopped early at {k} with a new best"
+        );
+    }
+    assert!(
+        rows.iter()
+            .any(|r| col(r, "teacher_base").starts_with("student@")),
+        "a student beat random and became the base: {rows:?}"
+    );
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&e, Some(expert()), &mut |p| {
+            assert!(p.done < 2, "killed after iteration 2");
+        })
+    }));
+    assert!(killed.is_err());
+    train(&e, Some(expert()), &mut |_| {}).unwrap();
+    assert_eq!(log_without_time(&e), log_without_time(&d));
+}
+
+/// iterations.csv as rows of column → value.
+fn table(dir: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let mut r = csv::Reader::from_path(dir.join("iterations.csv")).unwrap();
+    let head: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+    r.records()
+        .map(|rec| {
+            head.iter()
+                .cloned()
+                .zip(rec.unwrap().iter().map(String::from))
+                .collect()
+        })
+        .collect()
 }
 
 #[test]
