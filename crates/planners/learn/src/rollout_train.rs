@@ -7,7 +7,8 @@
 //!    (15–60 % by default: the paper's training maps are 40–60 %, its evaluation maps 18–36 %),
 //!    the team in a shared corner or around a random cell, CSP drawn per episode. With
 //!    `network = "agnostic"` a curriculum: square maps whose largest side grows over the
-//!    iterations up to `map_side_max`, teams up to `team_max`.
+//!    iterations up to `map_side_max`, teams up to `team_max`; with `floorplan_prob`, generated
+//!    floor plans (rooms, doors, corridors) among the clutter.
 //! 2. **Behaviour** (DAgger): iteration 0 follows the base rule (`spread`), later iterations the
 //!    DEP being trained (greedy); both take a random valid candidate with probability
 //!    `behaviour_epsilon`.
@@ -18,8 +19,13 @@
 //!    communication keeps the trial's own draws), or with `futures = "salted"` over `rollouts`
 //!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k).
 //!    The label of k is the mean number of steps left until the map is explored: one step of
-//!    policy improvement over the base rule. With `horizon`, continuations stop after that many
-//!    steps and the rest is estimated; `label_prob` thins the labelled decisions on large maps.
+//!    policy improvement over the base rule. With `expert_iteration`, once a student beats the
+//!    base rule on validation the best student so far (with its margin) is the base of the
+//!    continuations, so the improvements can compound; each iteration logs the teacher's gain
+//!    over its base (per labelled decision) and the student's over the base rule (validation),
+//!    and `patience` stops the run when validation stops improving. With `horizon`,
+//!    continuations stop after that many steps and the rest is estimated; `label_prob` thins
+//!    the labelled decisions on large maps.
 //! 4. **Student**: the paper's DEP (MFE, F3, LSTM, F6; `observation` may add per-candidate
 //!    features), or the size- and team-agnostic DEP ([`crate::agnostic`]), regresses the
 //!    labels' *advantages* (label minus its mean over the valid candidates) with Adam — by default on single decisions from zero LSTM state
