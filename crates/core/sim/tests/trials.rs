@@ -372,7 +372,10 @@ fn no_livelock_between_robots_that_cannot_talk() {
 #[test]
 fn rollouts_from_a_fork_are_the_trial_itself() {
     use madenet_agent::Decision;
-    use madenet_sim::rollout::{candidate_values, candidate_values_within, run_oracle, OracleKind};
+    use madenet_sim::rollout::{
+        candidate_values, candidate_values_by, candidate_values_within, run_oracle, Lookahead,
+        OracleKind, Value,
+    };
     use madenet_sim::{Future, PolicyRegistry};
     let registry = PolicyRegistry::builtin();
     let mut checked = 0;
@@ -426,6 +429,38 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
             assert!(!w.is_done(), "test_{map}: five steps do not finish the map");
             let left = (w.explorable_count() - w.known_count()) as f64;
             assert_eq!(cut[0], Some(5.0 + left / rate), "test_{map}");
+        }
+        // Valued by mean discovery time: each cell counts the steps until it is known (capped
+        // at the horizon), so a value lies below the steps left (full) and the horizon (cut),
+        // and the horizon cuts exactly the mean of the capped discovery times.
+        let by = |horizon, value| {
+            let look = Lookahead { horizon, value };
+            candidate_values_by(&trial, 0, &[], "spread", &registry, &[Future::Own], look).unwrap()
+        };
+        let discovery = by(None, Value::MeanDiscovery);
+        for (d, v) in discovery.iter().zip(&values) {
+            assert_eq!(d.is_some(), v.is_some());
+            if let (Some(d), Some(v)) = (d, v) {
+                assert!(*d > 0.0 && d <= v, "test_{map}: {d} vs steps left {v}");
+            }
+        }
+        let cut = by(Some(4), Value::MeanDiscovery);
+        {
+            let mut fork = trial.fork("spread", &registry, Future::Own).unwrap();
+            let mut fixed = vec![None; 3];
+            fixed[0] = Some(Decision::Candidate(0));
+            fork.decide_with(&fixed);
+            fork.finish_step();
+            let unknown =
+                |f: &Trial| (f.world().explorable_count() - f.world().known_count()) as f64;
+            let mut area = unknown(&fork);
+            for _ in 1..4 {
+                assert!(fork.step());
+                area += unknown(&fork);
+            }
+            let want = area / fork.world().explorable_count() as f64;
+            assert!((cut[0].unwrap() - want).abs() < 1e-9, "test_{map}");
+            assert!(cut[0].unwrap() <= 4.0);
         }
         let salted =
             candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Salted(7)]).unwrap();

@@ -18,8 +18,9 @@
 //!    afterwards — by default once, in the noiseless future (no sensor misses, no slips;
 //!    communication keeps the trial's own draws), or with `futures = "salted"` over `rollouts`
 //!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k).
-//!    The label of k is the mean number of steps left until the map is explored: one step of
-//!    policy improvement over the base rule. With `expert_iteration`, once a student beats the
+//!    The label of k is the mean number of steps left until the map is explored (`value =
+//!    "mean-discovery"`: the mean over cells of the steps until each is known, capped at
+//!    `horizon`): one step of policy improvement over the base rule. With `expert_iteration`, once a student beats the
 //!    base rule on validation the best student so far (with its margin) is the base of the
 //!    continuations, so the improvements can compound; each iteration logs the teacher's gain
 //!    over its base (per labelled decision) and the student's over the base rule (validation),
@@ -52,7 +53,7 @@ use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::{Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
-use madenet_sim::rollout::candidate_values_within;
+use madenet_sim::rollout::{candidate_values_by, Lookahead, Value};
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
 use madenet_world::ScenarioConfig;
@@ -143,6 +144,10 @@ pub struct RolloutTrainConfig {
     /// Steps after which a continuation is cut and its rest estimated at the trial's exploration
     /// rate so far ([`madenet_sim::rollout::continuation_within`]); 0: run to the end.
     pub horizon: usize,
+    /// What a continuation's value measures ([`madenet_sim::rollout::Value`]): `steps-left`
+    /// (default: steps until the map is explored) or `mean-discovery` (the mean over cells of
+    /// the steps until each is known, capped at `horizon`; the better teacher on large maps).
+    pub value: Value,
     /// Probability that a decision with a choice is labelled, at 400 cells (20 × 20); on a map
     /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
     /// about what a small one does.
@@ -211,6 +216,7 @@ impl Default for RolloutTrainConfig {
             floorplan_prob: 0.0,
             futures: Futures::Noiseless,
             horizon: 0,
+            value: Value::StepsLeft,
             label_prob: 1.0,
             rollouts: 4,
             behaviour_epsilon: 0.1,
@@ -700,14 +706,18 @@ impl Recorder for Labelling<'_> {
                         })
                         .collect(),
                 };
-                let values = candidate_values_within(
+                let look = Lookahead {
+                    horizon: self.horizon,
+                    value: cfg.value,
+                };
+                let values = candidate_values_by(
                     trial,
                     i,
                     &[],
                     &self.base.name,
                     &self.base.registry,
                     &salts,
-                    self.horizon,
+                    look,
                 )
                 .map_err(|e| TrainError::Other(e.to_string()))?;
                 self.rollouts += values.iter().flatten().count() * salts.len();
