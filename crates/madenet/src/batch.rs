@@ -141,6 +141,7 @@ pub fn plan(
                 ("methods", policy_flag, true),
                 ("oracle_base", policy_flag, true),
                 ("oracle_futures", "--futures", true),
+                ("oracle_lookahead.horizon", "--horizon", true),
                 ("maps", "--maps", true),
                 ("starts", "--starts", true),
                 ("csp", "--csp", true),

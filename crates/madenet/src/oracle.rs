@@ -4,7 +4,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use madenet_sim::rollout::OracleKind;
+use madenet_sim::rollout::{Lookahead, OracleKind, Value};
 use madenet_study::runner::{self, TrialOutcome};
 use std::path::PathBuf;
 
@@ -21,6 +21,15 @@ enum Kind {
     /// The known-map reference: a clairvoyant team plan over the true map, in the trial's own
     /// world (the base rule only names the pairing).
     KnownMap,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum ValueArg {
+    /// Steps until the map is explored (past --horizon: estimated at the rate so far).
+    StepsLeft,
+    /// The mean over cells of the steps until each is known, capped at --horizon: on large
+    /// maps the better ranking of candidates.
+    MeanDiscovery,
 }
 
 #[derive(Args, Debug)]
@@ -44,6 +53,12 @@ pub struct OracleArgs {
     /// Futures per candidate (averaged) or to choose from (placebo); 1–64.
     #[arg(long, default_value_t = 4)]
     futures: usize,
+    /// Cut the scoring oracles' continuations after this many steps (0: run to the end).
+    #[arg(long, default_value_t = 0)]
+    horizon: usize,
+    /// What a continuation's value measures (scoring oracles).
+    #[arg(long, value_enum, default_value = "steps-left")]
+    value: ValueArg,
     /// Communication success probabilities (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "1.0,0.0")]
     csp: Vec<f64>,
@@ -88,6 +103,13 @@ pub fn run(a: OracleArgs) -> Result<()> {
     cfg.oracles = vec![kind];
     cfg.oracle_base = a.base.clone();
     cfg.oracle_futures = a.futures;
+    cfg.oracle_lookahead = Lookahead {
+        horizon: (a.horizon > 0).then_some(a.horizon),
+        value: match a.value {
+            ValueArg::StepsLeft => Value::StepsLeft,
+            ValueArg::MeanDiscovery => Value::MeanDiscovery,
+        },
+    };
     let flag = format!("--base {}", a.base);
     // The base rule's trials, then the oracle's on the same (map, start, CSP, seed), in order.
     let planned = crate::batch::plan(&cfg, &registry, a.config.as_deref(), &flag)?;
@@ -103,8 +125,19 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
     };
+    let look = match a.kind {
+        Kind::Replay | Kind::Averaged | Kind::Noiseless => format!(
+            ", valued by {:?}{}",
+            a.value,
+            match a.horizon {
+                0 => String::new(),
+                h => format!(" over {h} steps"),
+            }
+        ),
+        Kind::Placebo | Kind::KnownMap => String::new(),
+    };
     out!(
-        "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}",
+        "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}{look}",
         base.len(),
         started.elapsed().as_secs_f64(),
         a.kind,

@@ -227,6 +227,33 @@ fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
         &["--base", "nf"],
     );
     assert_clean_error(&madenet(&["oracle", "--base", "nope"]), &["--base", "nope"]);
+    // Continuations cut and valued by mean discovery: the same trials, said in the summary.
+    let cut = madenet(&[
+        "oracle",
+        "--maps",
+        "generate-wide:5",
+        "--starts",
+        "top-left,random",
+        "--kind",
+        "noiseless",
+        "--csp",
+        "1",
+        "--horizon",
+        "30",
+        "--value",
+        "mean-discovery",
+    ]);
+    let cut_text = String::from_utf8_lossy(&cut.stdout);
+    assert!(
+        cut.status.success()
+            && cut_text.contains("2 trials")
+            && cut_text.contains("valued by MeanDiscovery over 30 steps"),
+        "{cut_text}"
+    );
+    assert_clean_error(
+        &madenet(&["oracle", "--kind", "noiseless", "--horizon", "100001"]),
+        &["--horizon"],
+    );
 }
 
 #[test]

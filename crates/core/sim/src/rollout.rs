@@ -74,6 +74,7 @@ pub enum Value {
 
 /// How far a continuation runs and how it is valued.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Lookahead {
     /// Steps after which a continuation is cut (`None`: run to the end).
     pub horizon: Option<usize>,
@@ -263,6 +264,18 @@ pub fn run_oracle(
     kind: OracleKind,
     futures: usize,
 ) -> Result<TrialResult, SimError> {
+    run_oracle_by(spec, registry, kind, futures, Lookahead::default())
+}
+
+/// [`run_oracle`] with the scoring oracles' (replay, averaged, noiseless) continuations cut
+/// and valued by `look`.
+pub fn run_oracle_by(
+    spec: TrialSpec,
+    registry: &PolicyRegistry,
+    kind: OracleKind,
+    futures: usize,
+    look: Lookahead,
+) -> Result<TrialResult, SimError> {
     if kind == OracleKind::KnownMap {
         let (mut result, _) = crate::reference::run(&spec)?;
         result.policy = spec.policy;
@@ -301,7 +314,8 @@ pub fn run_oracle(
                         OracleKind::Noiseless => vec![Future::Noiseless],
                         _ => salts,
                     };
-                    let values = candidate_values(&trial, i, &fixed, &base, registry, &futures)?;
+                    let values =
+                        candidate_values_by(&trial, i, &fixed, &base, registry, &futures, look)?;
                     let best = values
                         .iter()
                         .enumerate()

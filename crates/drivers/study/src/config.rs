@@ -2,7 +2,7 @@
 
 use madenet_baselines::BaselineParams;
 use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
-use madenet_sim::rollout::OracleKind;
+use madenet_sim::rollout::{Lookahead, OracleKind};
 use madenet_sim::{MapSource, PolicyRegistry, StartSpec};
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
@@ -38,6 +38,10 @@ pub struct StudyConfig {
     pub oracle_base: String,
     /// Futures per decision of the `placebo` and `averaged` oracles (1–64).
     pub oracle_futures: usize,
+    /// How the scoring oracles (replay, averaged, noiseless) cut and value their continuations
+    /// (`horizon`: steps, none by default; `value`: `steps-left` by default or
+    /// `mean-discovery`; [`madenet_sim::rollout::Value`]).
+    pub oracle_lookahead: Lookahead,
     /// Parameters of the classical baselines.
     pub baselines: BaselineParams,
 }
@@ -70,6 +74,7 @@ impl Default for StudyConfig {
             ],
             oracle_base: "spread".into(),
             oracle_futures: 4,
+            oracle_lookahead: Lookahead::default(),
             baselines: BaselineParams::default(),
         }
     }
@@ -200,6 +205,14 @@ impl StudyConfig {
                     "oracle_futures",
                     format!("{} is not in 1..=64", self.oracle_futures),
                 ));
+            }
+            if let Some(h) = self.oracle_lookahead.horizon {
+                if !(1..=100_000).contains(&h) {
+                    return Err(field(
+                        "oracle_lookahead.horizon",
+                        format!("{h} is not in 1..=100000"),
+                    ));
+                }
             }
         }
         if self.csp.is_empty() {

@@ -3,7 +3,7 @@
 use crate::config::{oracle_method, StudyConfig, StudyError, StudyMap};
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::continuous::{ContinuousSpec, ContinuousTrial};
-use madenet_sim::rollout::{run_oracle, OracleKind};
+use madenet_sim::rollout::{run_oracle_by, OracleKind};
 use madenet_sim::{PolicyRegistry, StartSpec, Trial, TrialSpec};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -319,6 +319,8 @@ pub struct Planned {
     pub spec: TrialSpec,
     /// The oracle and its number of futures.
     pub oracle: Option<(OracleKind, usize)>,
+    /// How a scoring oracle cuts and values its continuations.
+    pub look: madenet_sim::rollout::Lookahead,
     /// `Some`: the trial runs in the continuous world on this geometry, `spec.map` being its
     /// coarse truth and `spec.starts` the cells whose centres the robots start at.
     pub continuous: Option<PlannedContinuous>,
@@ -400,6 +402,7 @@ pub fn plan(cfg: &StudyConfig, maps: &[StudyMap], starts: &[StartSpec]) -> Vec<P
                             key,
                             spec,
                             oracle,
+                            look: cfg.oracle_lookahead,
                             continuous: None,
                         });
                     }
@@ -445,7 +448,7 @@ pub fn run_one(p: &Planned, registry: &PolicyRegistry) -> Result<TrialOutcome, S
             .map_err(failed)?
             .run(),
         Some((kind, futures)) => {
-            run_oracle(spec.clone(), registry, kind, futures).map_err(failed)?
+            run_oracle_by(spec.clone(), registry, kind, futures, p.look).map_err(failed)?
         }
     };
     let t = &result.timing;

@@ -145,6 +145,7 @@ impl ScaleConfig {
                                     key,
                                     spec,
                                     oracle,
+                                    look: Default::default(),
                                     continuous: continuous.clone(),
                                 },
                             });
