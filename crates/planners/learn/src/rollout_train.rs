@@ -148,6 +148,10 @@ pub struct RolloutTrainConfig {
     /// (default: steps until the map is explored) or `mean-discovery` (the mean over cells of
     /// the steps until each is known, capped at `horizon`; the better teacher on large maps).
     pub value: Value,
+    /// The team teacher: when two or more robots choose together, their candidates are valued
+    /// by this many passes of coordinate descent over the robots (each valued with the others
+    /// at their current choices); 0: each robot valued with the others asking the base.
+    pub team_rounds: usize,
     /// Probability that a decision with a choice is labelled, at 400 cells (20 × 20); on a map
     /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
     /// about what a small one does.
@@ -217,6 +221,7 @@ impl Default for RolloutTrainConfig {
             futures: Futures::Noiseless,
             horizon: 0,
             value: Value::StepsLeft,
+            team_rounds: 0,
             label_prob: 1.0,
             rollouts: 4,
             behaviour_epsilon: 0.1,
@@ -383,6 +388,7 @@ impl RolloutTrainConfig {
             ),
             ("horizon", self.horizon as u64, 0, 100_000),
             ("patience", self.patience, 0, 1000),
+            ("team_rounds", self.team_rounds as u64, 0, 8),
         ])?;
         if self.network == Network::Agnostic && self.recurrent {
             return Err(
@@ -655,24 +661,128 @@ struct Labelling<'a> {
     labelled: usize,
 }
 
+impl Labelling<'_> {
+    /// The futures robot `i`'s candidates are scored in at timestep `t`.
+    fn futures(&self, t: u64, i: usize) -> Vec<Future> {
+        match self.cfg.futures {
+            Futures::Noiseless => vec![Future::Noiseless],
+            Futures::Salted => (0..self.cfg.rollouts as u64)
+                .map(|s| {
+                    Future::Salted(derive_seed(
+                        self.seed,
+                        "future",
+                        (t * 64 + i as u64) * 64 + s,
+                    ))
+                })
+                .collect(),
+        }
+    }
+
+    /// Robot `i`'s candidate values, the deciding robots with a decision in `fixed` taking it.
+    fn values(
+        &mut self,
+        trial: &Trial,
+        i: usize,
+        fixed: &[Option<Decision>],
+    ) -> Result<Vec<Option<f64>>, TrainError> {
+        let futures = self.futures(trial.world().t() as u64, i);
+        let look = Lookahead {
+            horizon: self.horizon,
+            value: self.cfg.value,
+        };
+        let (name, registry) = (&self.base.name, &self.base.registry);
+        let values = candidate_values_by(trial, i, fixed, name, registry, &futures, look)
+            .map_err(|e| TrainError::Other(e.to_string()))?;
+        self.rollouts += values.iter().flatten().count() * futures.len();
+        Ok(values)
+    }
+
+    /// What the teacher's base would decide for robot `i` now (an instance made as a fork
+    /// makes its).
+    fn base_choice(&self, trial: &mut Trial, i: usize) -> Result<Decision, TrainError> {
+        let ctx = madenet_sim::PolicyContext {
+            seed: self.seed,
+            robot: i,
+            config: trial.world().config(),
+            height: trial.world().truth().height(),
+            width: trial.world().truth().width(),
+        };
+        let mut base = self
+            .base
+            .registry
+            .make(&self.base.name, &ctx)
+            .map_err(|e| TrainError::Other(e.to_string()))?;
+        Ok(base.decide(&mut trial.agent_mut(i).view(true)))
+    }
+}
+
+/// The best candidate of `values` (lowest value; ties keep `current`, then the lower slot).
+fn best_candidate(values: &[Option<f64>], current: Option<Decision>) -> Option<Decision> {
+    let min = values
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    if let Some(Decision::Candidate(k)) = current {
+        if values.get(k).copied().flatten() == Some(min) {
+            return current;
+        }
+    }
+    let k = values.iter().position(|v| *v == Some(min))?;
+    Some(Decision::Candidate(k))
+}
+
 impl Recorder for Labelling<'_> {
     type Error = TrainError;
 
     fn decide(&mut self, trial: &mut Trial) -> Result<(), TrainError> {
         let cfg = self.cfg;
         let ds = cfg.scenario.sensing_range;
-        let t = trial.world().t() as u64;
         let n = trial.agents().len();
+        // 1. A decision with a choice is labelled with probability `label_prob` (scaled by the
+        //    area), drawn in robot order.
+        let mut choosers = Vec::new();
+        let mut labelled = vec![false; n];
         for i in 0..n {
             if !trial.deciding()[i] {
                 continue;
             }
-            // A decision with a choice is labelled with probability `label_prob` (scaled by the
-            // area). The grid network keeps every decision in the robot's sequence (recurrent
-            // windows need them); the agnostic one keeps only labelled decisions.
-            let choice = trial.agent_mut(i).view(true).candidates().cells.len() >= 2;
-            let labelled = choice && self.label_rng.random::<f64>() < self.label_prob;
-            if !labelled && cfg.network == Network::Agnostic {
+            if trial.agent_mut(i).view(true).candidates().cells.len() >= 2 {
+                choosers.push(i);
+                labelled[i] = self.label_rng.random::<f64>() < self.label_prob;
+            }
+        }
+        // 2. The teacher values the labelled robots' candidates: each with the other deciding
+        //    robots asking the base; with `team_rounds`, when two or more robots choose together,
+        //    by coordinate descent — each robot's candidates valued with the others at their
+        //    current choices (the base's to begin with), its best taken, for `team_rounds`
+        //    passes over the robots — so a label says what is best beside what the teammates do.
+        let mut values: Vec<Option<Vec<Option<f64>>>> = vec![None; n];
+        let mut base_choice: Vec<Option<Decision>> = vec![None; n];
+        let team = cfg.team_rounds > 0 && choosers.len() >= 2;
+        if team && choosers.iter().any(|&i| labelled[i]) {
+            let mut fixed = vec![None; n];
+            for &i in &choosers {
+                base_choice[i] = Some(self.base_choice(trial, i)?);
+                fixed[i] = base_choice[i];
+            }
+            for _ in 0..cfg.team_rounds {
+                for &i in &choosers {
+                    let v = self.values(trial, i, &fixed)?;
+                    fixed[i] = best_candidate(&v, fixed[i]);
+                    values[i] = Some(v);
+                }
+            }
+        } else {
+            for &i in choosers.iter().filter(|&&i| labelled[i]) {
+                values[i] = Some(self.values(trial, i, &[])?);
+                base_choice[i] = Some(self.base_choice(trial, i)?);
+            }
+        }
+        // 3. Each labelled decision (the grid network: every decision, its recurrent windows
+        //    need them) with its inputs and the candidates' advantages.
+        for i in 0..n {
+            if !trial.deciding()[i] || (!labelled[i] && cfg.network == Network::Agnostic) {
                 continue;
             }
             let (map, vec, mask) = {
@@ -693,60 +803,19 @@ impl Recorder for Labelling<'_> {
             };
             let mut target = vec![0.0; mask.len()];
             let mut train_mask = vec![false; mask.len()];
-            if labelled {
-                let salts: Vec<Future> = match cfg.futures {
-                    Futures::Noiseless => vec![Future::Noiseless],
-                    Futures::Salted => (0..cfg.rollouts as u64)
-                        .map(|s| {
-                            Future::Salted(derive_seed(
-                                self.seed,
-                                "future",
-                                (t * 64 + i as u64) * 64 + s,
-                            ))
-                        })
-                        .collect(),
-                };
-                let look = Lookahead {
-                    horizon: self.horizon,
-                    value: cfg.value,
-                };
-                let values = candidate_values_by(
-                    trial,
-                    i,
-                    &[],
-                    &self.base.name,
-                    &self.base.registry,
-                    &salts,
-                    look,
-                )
-                .map_err(|e| TrainError::Other(e.to_string()))?;
-                self.rollouts += values.iter().flatten().count() * salts.len();
+            if let (true, Some(values)) = (labelled[i], &values[i]) {
                 // The teacher's gain over its base here: what the base's own choice leaves
-                // minus what the best candidate leaves (an instance made as a fork makes its).
-                let ctx = madenet_sim::PolicyContext {
-                    seed: self.seed,
-                    robot: i,
-                    config: trial.world().config(),
-                    height: trial.world().truth().height(),
-                    width: trial.world().truth().width(),
-                };
-                let mut base = self
-                    .base
-                    .registry
-                    .make(&self.base.name, &ctx)
-                    .map_err(|e| TrainError::Other(e.to_string()))?;
-                let own = match base.decide(&mut trial.agent_mut(i).view(true)) {
-                    Decision::Candidate(k) => values.get(k).copied().flatten(),
-                    _ => None,
-                };
+                // minus what the best candidate leaves.
                 let best = values
                     .iter()
                     .flatten()
                     .copied()
                     .fold(f64::INFINITY, f64::min);
-                if let Some(own) = own {
-                    self.teacher_gain += own - best;
-                    self.labelled += 1;
+                if let Some(Decision::Candidate(k)) = base_choice[i] {
+                    if let Some(own) = values.get(k).copied().flatten() {
+                        self.teacher_gain += own - best;
+                        self.labelled += 1;
+                    }
                 }
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
@@ -1458,4 +1527,21 @@ fn train_loop(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The team teacher's step: the lowest value wins; a tie keeps the robot's current choice,
+    /// else goes to the lower slot; no valid candidate, no choice.
+    #[test]
+    fn best_candidate_keeps_the_current_choice_on_ties() {
+        let c = Decision::Candidate;
+        let v = [Some(3.0), None, Some(2.0), Some(2.0)];
+        assert_eq!(best_candidate(&v, Some(c(0))), Some(c(2)));
+        assert_eq!(best_candidate(&v, Some(c(3))), Some(c(3)));
+        assert_eq!(best_candidate(&v, None), Some(c(2)));
+        assert_eq!(best_candidate(&[None, None], Some(c(1))), None);
+    }
 }

@@ -163,6 +163,29 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     .to_string();
     assert!(e.contains("different config"), "{e}");
 
+    // The team teacher: the first iteration's episodes are the same (the base rule behaves,
+    // the same decisions are labelled), but robots choosing together are valued by coordinate
+    // descent — more continuations, other labels.
+    let f = root.join("f");
+    train(
+        &f,
+        Some(RolloutTrainConfig {
+            team_rounds: 2,
+            iterations: 1,
+            episodes: 2,
+            ..tiny()
+        }),
+        &mut |_| {},
+    )
+    .unwrap();
+    let (solo, team) = (&table(&a)[0], &table(&f)[0]);
+    assert_eq!(solo["decisions"], team["decisions"]);
+    assert_eq!(solo["behaviour_steps"], team["behaviour_steps"]);
+    let count =
+        |r: &std::collections::HashMap<String, String>| -> usize { r["rollouts"].parse().unwrap() };
+    assert!(count(team) > count(solo), "{solo:?} vs {team:?}");
+    assert_ne!(solo["loss"], team["loss"]);
+
     // Expert iteration over a weak base rule (random candidates): the teacher gains over its
     // base, a student that beats the base becomes the next iteration's base (kept in the
     // checkpoint: a killed and resumed run equals an uninterrupted one), and the run stops by
