@@ -781,8 +781,8 @@ impl Recorder for Labelling<'_> {
         }
         // 3. Each labelled decision (the grid network: every decision, its recurrent windows
         //    need them) with its inputs and the candidates' advantages.
-        for i in 0..n {
-            if !trial.deciding()[i] || (!labelled[i] && cfg.network == Network::Agnostic) {
+        for (i, &is_labelled) in labelled.iter().enumerate() {
+            if !trial.deciding()[i] || (!is_labelled && cfg.network == Network::Agnostic) {
                 continue;
             }
             let (map, vec, mask) = {
@@ -803,7 +803,7 @@ impl Recorder for Labelling<'_> {
             };
             let mut target = vec![0.0; mask.len()];
             let mut train_mask = vec![false; mask.len()];
-            if let (true, Some(values)) = (labelled[i], &values[i]) {
+            if let (true, Some(values)) = (is_labelled, &values[i]) {
                 // The teacher's gain over its base here: what the base's own choice leaves
                 // minus what the best candidate leaves.
                 let best = values
