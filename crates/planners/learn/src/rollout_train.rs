@@ -743,13 +743,13 @@ impl Recorder for Labelling<'_> {
         //    area), drawn in robot order.
         let mut choosers = Vec::new();
         let mut labelled = vec![false; n];
-        for i in 0..n {
+        for (i, label) in labelled.iter_mut().enumerate() {
             if !trial.deciding()[i] {
                 continue;
             }
             if trial.agent_mut(i).view(true).candidates().cells.len() >= 2 {
                 choosers.push(i);
-                labelled[i] = self.label_rng.random::<f64>() < self.label_prob;
+                *label = self.label_rng.random::<f64>() < self.label_prob;
             }
         }
         // 2. The teacher values the labelled robots' candidates: each with the other deciding
