@@ -5,6 +5,10 @@
 //! * `cep_forward_b16_t20` — one CEP `forward` over 16 sequences × 20 macro steps (the paper's
 //!   batch of 16), no gradient.
 //! * `dep_act_b1` — one DEP decision, for comparison.
+//! * `agnostic_decide/{20,60}` — one decision of the size- and team-agnostic DEP
+//!   (`made-net-any`) mid-trial on a generated 20 × 20 map with 3 robots and a 60 × 60 map with
+//!   5 (|G| = 4 and 8): inputs, forward pass and choice; `agnostic_inputs/*` and
+//!   `agnostic_scores/*` are its two parts.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_learn::{cpu, NetConfig, Tensor};
@@ -48,5 +52,70 @@ fn bench(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench);
+/// A trial on a generated `side` × `side` map with `team` robots, stopped mid-trial at a
+/// timestep where robot 0 decides among two or more candidates (its view is then ready).
+fn mid_trial(side: usize, team: usize) -> madenet_sim::Trial {
+    use madenet_learn::scenario::ScenarioDraw;
+    use madenet_sim::{Trial, TrialSpec};
+    let config = madenet_world::ScenarioConfig {
+        num_robots: team,
+        step_cap: 2000,
+        ..Default::default()
+    };
+    let draw = ScenarioDraw::new(side, side, (0.15, 0.3), team, config.movement);
+    let (map, starts) = draw.draw(3).expect("a generated scenario");
+    let spec = TrialSpec {
+        map,
+        map_name: format!("bench{side}"),
+        starts,
+        config,
+        policy: "spread".into(),
+        seed: 1,
+    };
+    let mut trial = Trial::new(spec).expect("trial");
+    let mut choices = 0;
+    while trial.begin_step() {
+        if trial.deciding()[0] && trial.agent_mut(0).view(true).candidates().cells.len() >= 2 {
+            choices += 1;
+            if choices == 4 {
+                return trial;
+            }
+        }
+        trial.decide_with(&[]);
+        trial.finish_step();
+    }
+    panic!("robot 0 never chose four times on the {side} × {side} bench map");
+}
+
+fn agnostic(c: &mut Criterion) {
+    use madenet_agent::Policy;
+    use madenet_learn::agnostic::{inputs, AgnosticConfig, AgnosticPolicy};
+    let device = cpu();
+    device.seed(1);
+    let cfg = AgnosticConfig::new();
+    let net = std::sync::Arc::new(cfg.init(&device).expect("agnostic DEP"));
+    let ds = madenet_world::ScenarioConfig::default().sensing_range;
+    for (side, team) in [(20, 3), (60, 5)] {
+        let mut trial = mid_trial(side, team);
+        let mut policy = AgnosticPolicy::new("any", net.clone(), cfg.crop_radius, ds);
+        c.bench_function(&format!("agnostic_decide/{side}"), |b| {
+            b.iter(|| black_box(policy.decide(&mut trial.agent_mut(0).view(true))))
+        });
+        c.bench_function(&format!("agnostic_inputs/{side}"), |b| {
+            b.iter(|| {
+                black_box(inputs(
+                    &mut trial.agent_mut(0).view(true),
+                    ds,
+                    cfg.crop_radius,
+                ))
+            })
+        });
+        let input = inputs(&mut trial.agent_mut(0).view(true), ds, cfg.crop_radius);
+        c.bench_function(&format!("agnostic_scores/{side}"), |b| {
+            b.iter(|| black_box(net.scores(&input)))
+        });
+    }
+}
+
+criterion_group!(benches, bench, agnostic);
 criterion_main!(benches);
