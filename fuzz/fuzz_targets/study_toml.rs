@@ -3,7 +3,7 @@
 //! `StudyConfig::validate` with the registry the study builds, which loads the maps and checks
 //! every method on them. Map entries that name files or folders are dropped before validation
 //! so the fuzzer never reads the machine's files (map files have their own targets); the
-//! embedded `paper` maps and the seeded `generate:` maps stay.
+//! embedded `paper` maps and the seeded `generate:` and `floorplan:` maps stay.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -23,7 +23,12 @@ static INPUT: LazyLock<PathBuf> =
 fuzz_target!(|data: &[u8]| {
     std::fs::write(&*INPUT, data).expect("write the fuzz input");
     let Ok(mut cfg) = StudyConfig::from_toml_file(&INPUT) else { return };
-    cfg.maps.retain(|m| m == "paper" || m.starts_with("paper:") || m.starts_with("generate"));
+    cfg.maps.retain(|m| {
+        m == "paper"
+            || m.starts_with("paper:")
+            || m.starts_with("generate")
+            || m.starts_with("floorplan:")
+    });
     // `StudyConfig::registry` is the shared part plus the baselines at this config's parameters.
     let mut registry = REGISTRY.clone();
     madenet_baselines::register(&mut registry, &cfg.baselines);
