@@ -27,8 +27,8 @@ enum Kind {
 enum ValueArg {
     /// Steps until the map is explored (past --horizon: estimated at the rate so far).
     StepsLeft,
-    /// The mean over cells of the steps until each is known, capped at --horizon: on large
-    /// maps the better ranking of candidates.
+    /// The mean over cells of the steps until each is known, capped at --horizon (every
+    /// discovery counts, not only the last).
     MeanDiscovery,
 }
 

@@ -57,18 +57,15 @@ pub fn candidate_values_within(
 #[serde(rename_all = "kebab-case")]
 pub enum Value {
     /// Steps left until the map is explored (past a horizon: estimated,
-    /// [`continuation_within`]). Measured on generated 40 × 40 and 60 × 60 maps with 4 and 6
-    /// robots (36 trials), the noiseless oracle over `spread` valued so is worse than `spread`
-    /// itself when continuations run to the end (+13 % steps on 12 of them) and 5 % better with
-    /// a 40-step horizon: the finishing time of a long continuation hinges on a few far cells
-    /// and ranks candidates by chance.
+    /// [`continuation_within`]). On large maps a long continuation's finishing time hinges on a
+    /// few far cells and ranks candidates almost by chance: the noiseless oracle over `spread`
+    /// valued so is worse than `spread` itself (README, "On large maps").
     #[default]
     StepsLeft,
     /// The mean over the map's explorable cells of the steps from now until each is known,
     /// each capped at the horizon (the area under the continuation's unknown-cells curve,
     /// divided by the explorable cells): every cell's discovery counts, so candidates are
-    /// ranked by how soon they open the map. On the same maps with a 60-step horizon the
-    /// noiseless oracle valued so is 15 % better than `spread` (23 trials, 18 wins, 4 losses).
+    /// ranked by how soon they open the map.
     MeanDiscovery,
 }
 

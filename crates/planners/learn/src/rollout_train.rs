@@ -146,7 +146,7 @@ pub struct RolloutTrainConfig {
     pub horizon: usize,
     /// What a continuation's value measures ([`madenet_sim::rollout::Value`]): `steps-left`
     /// (default: steps until the map is explored) or `mean-discovery` (the mean over cells of
-    /// the steps until each is known, capped at `horizon`; the better teacher on large maps).
+    /// the steps until each is known, capped at `horizon`: every discovery counts).
     pub value: Value,
     /// The team teacher: when two or more robots choose together, their candidates are valued
     /// by this many passes of coordinate descent over the robots (each valued with the others
