@@ -26,7 +26,8 @@ fuzz_target!(|data: &[u8]| {
     cfg.maps.retain(|m| {
         m == "paper"
             || m.starts_with("paper:")
-            || m.starts_with("generate")
+            || m.starts_with("generate:")
+            || m.starts_with("generate-wide:")
             || m.starts_with("floorplan:")
     });
     // `StudyConfig::registry` is the shared part plus the baselines at this config's parameters.

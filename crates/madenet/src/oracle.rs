@@ -83,6 +83,10 @@ pub fn run(a: OracleArgs) -> Result<()> {
     if !(1..=64).contains(&a.futures) {
         bail!("--futures {}: must be in 1..=64", a.futures);
     }
+    let scoring = matches!(a.kind, Kind::Replay | Kind::Averaged | Kind::Noiseless);
+    if !scoring && (a.horizon > 0 || !matches!(a.value, ValueArg::StepsLeft)) {
+        bail!("--horizon/--value: only the scoring oracles (replay, averaged, noiseless) value continuations");
+    }
     let registry = crate::registry(None)?;
     let kind = match a.kind {
         Kind::Replay => OracleKind::Replay,
@@ -125,16 +129,18 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
     };
-    let look = match a.kind {
-        Kind::Replay | Kind::Averaged | Kind::Noiseless => format!(
-            ", valued by {:?}{}",
-            a.value,
-            match a.horizon {
+    let look = match (a.horizon, a.value) {
+        (0, ValueArg::StepsLeft) => String::new(),
+        (h, v) => format!(
+            ", valued by {}{}",
+            v.to_possible_value()
+                .expect("no skipped variants")
+                .get_name(),
+            match h {
                 0 => String::new(),
                 h => format!(" over {h} steps"),
             }
         ),
-        Kind::Placebo | Kind::KnownMap => String::new(),
     };
     out!(
         "{} trials in {:.1} s; oracle {:?} over base `{}`{futures}{look}",

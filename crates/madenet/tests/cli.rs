@@ -247,12 +247,38 @@ fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
     assert!(
         cut.status.success()
             && cut_text.contains("2 trials")
-            && cut_text.contains("valued by MeanDiscovery over 30 steps"),
+            && cut_text.contains("valued by mean-discovery over 30 steps"),
         "{cut_text}"
     );
+    // … and it ran so: the same base trials, other oracle choices (94.5 vs 91.0 steps here).
+    let oracle_tns = |t: &str| {
+        let line = t
+            .lines()
+            .find(|l| l.starts_with("csp 1.00"))
+            .unwrap()
+            .to_string();
+        let base = line.split("oracle TNS").next().unwrap().to_string();
+        (
+            base,
+            line.split("oracle TNS")
+                .nth(1)
+                .unwrap()
+                .split_whitespace()
+                .next()
+                .unwrap()
+                .to_string(),
+        )
+    };
+    let (full, cut) = (oracle_tns(&text), oracle_tns(&cut_text));
+    assert_eq!(full.0, cut.0, "same base trials");
+    assert_ne!(full.1, cut.1, "the lookahead changed the oracle's choices");
     assert_clean_error(
         &madenet(&["oracle", "--kind", "noiseless", "--horizon", "100001"]),
         &["--horizon"],
+    );
+    assert_clean_error(
+        &madenet(&["oracle", "--kind", "placebo", "--value", "mean-discovery"]),
+        &["--horizon/--value"],
     );
 }
 

@@ -151,20 +151,25 @@ pub fn continuation_by(
 ) -> Result<f64, SimError> {
     let now = trial.world().t() as f64;
     let rate = (trial.world().known_count() as f64 / now.max(1.0)).max(1.0);
-    let mut fork = trial.fork(base, registry, future)?;
-    fork.decide_with(fixed);
-    fork.finish_step();
     let unknown = |t: &Trial| {
         let w = t.world();
         w.explorable_count().saturating_sub(w.known_count()) as f64
     };
+    // Σ over the continuation's timesteps of the cells still unknown before each: a cell first
+    // known after step d counts d, one still unknown at the horizon counts the horizon.
+    let mut area = unknown(trial);
+    let mut fork = trial.fork(base, registry, future)?;
+    fork.decide_with(fixed);
+    fork.finish_step();
     let limit = look.horizon.unwrap_or(usize::MAX).max(1);
     let mut steps = 1;
-    // Σ over the continuation's timesteps of the cells still unknown after each.
-    let mut area = unknown(&fork);
-    while steps < limit && fork.step() {
+    while steps < limit {
+        let before = unknown(&fork);
+        if !fork.step() {
+            break;
+        }
+        area += before;
         steps += 1;
-        area += unknown(&fork);
     }
     let left = unknown(&fork);
     match look.value {

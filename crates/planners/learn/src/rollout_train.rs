@@ -24,7 +24,9 @@
 //!    base rule on validation the best student so far (with its margin) is the base of the
 //!    continuations, so the improvements can compound; each iteration logs the teacher's gain
 //!    over its base (per labelled decision) and the student's over the base rule (validation),
-//!    and `patience` stops the run when validation stops improving. With `horizon`,
+//!    and `patience` stops the run when validation stops improving. With `team_rounds`, robots
+//!    choosing at the same timestep are valued by coordinate descent over the robots, each
+//!    beside the others' current choices. With `horizon`,
 //!    continuations stop after that many steps and the rest is estimated; `label_prob` thins
 //!    the labelled decisions on large maps.
 //! 4. **Student**: the paper's DEP (MFE, F3, LSTM, F6; `observation` may add per-candidate
@@ -36,8 +38,9 @@
 //!    candidate unless the DEP values another more by the margin); the best (iteration, margin)
 //!    is kept in `best/`, the last iteration in `last/`.
 //!
-//! Checkpoints are written after every iteration (dataset, net, optimizer, counters), so a
-//! killed run resumes at its last iteration boundary and ends as an uninterrupted one would.
+//! Checkpoints are written after every iteration (dataset, net, optimizer, counters, the
+//! teacher's base student), so a killed run resumes at its last iteration boundary and ends as
+//! an uninterrupted one would.
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
 use crate::episode::{self, Recorder};
@@ -141,16 +144,18 @@ pub struct RolloutTrainConfig {
     /// Which futures the teacher scores a candidate in: `noiseless` (default: one continuation
     /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
     pub futures: Futures,
-    /// Steps after which a continuation is cut and its rest estimated at the trial's exploration
-    /// rate so far ([`madenet_sim::rollout::continuation_within`]); 0: run to the end.
+    /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
+    /// the trial's exploration rate so far, [`madenet_sim::rollout::continuation_within`]; with
+    /// `mean-discovery` the cells still unknown count the horizon); 0: run to the end.
     pub horizon: usize,
     /// What a continuation's value measures ([`madenet_sim::rollout::Value`]): `steps-left`
     /// (default: steps until the map is explored) or `mean-discovery` (the mean over cells of
     /// the steps until each is known, capped at `horizon`: every discovery counts).
     pub value: Value,
-    /// The team teacher: when two or more robots choose together, their candidates are valued
-    /// by this many passes of coordinate descent over the robots (each valued with the others
-    /// at their current choices); 0: each robot valued with the others asking the base.
+    /// The team teacher: when two or more robots choose together and one is labelled, all of
+    /// them are valued by at most this many passes of coordinate descent over the robots (each
+    /// valued with the others at their current choices, starting from the base's; a pass that
+    /// changes nothing ends it); 0: each labelled robot valued with the others asking the base.
     pub team_rounds: usize,
     /// Probability that a decision with a choice is labelled, at 400 cells (20 × 20); on a map
     /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
@@ -603,11 +608,12 @@ pub struct Collected {
     pub steps: usize,
     /// Continuations the teacher ran to label it (candidates valued × futures).
     pub rollouts: usize,
-    /// Σ over labelled decisions of the teacher's gain over its base rule: the value (steps
-    /// left) of the base rule's own choice minus the best candidate's.
+    /// Σ of the teacher's gain over its base: per labelled decision, the value of the base's own
+    /// choice minus the best candidate's; per team-valued timestep (`team_rounds`), once, the
+    /// value of everyone at the base's choices minus everyone at the final ones.
     #[serde(default)]
     pub teacher_gain: f64,
-    /// Labelled decisions (the count `teacher_gain` sums over).
+    /// Labelled decisions and team-valued timesteps (what `teacher_gain` sums over).
     #[serde(default)]
     pub labelled: usize,
 }
@@ -758,25 +764,59 @@ impl Recorder for Labelling<'_> {
         //    current choices (the base's to begin with), its best taken, for `team_rounds`
         //    passes over the robots — so a label says what is best beside what the teammates do.
         let mut values: Vec<Option<Vec<Option<f64>>>> = vec![None; n];
-        let mut base_choice: Vec<Option<Decision>> = vec![None; n];
         let team = cfg.team_rounds > 0 && choosers.len() >= 2;
         if team && choosers.iter().any(|&i| labelled[i]) {
             let mut fixed = vec![None; n];
             for &i in &choosers {
-                base_choice[i] = Some(self.base_choice(trial, i)?);
-                fixed[i] = base_choice[i];
+                fixed[i] = Some(self.base_choice(trial, i)?);
             }
+            // The value of everyone at the base's choices (the first robot's first valuation
+            // at its base choice); passes end early when one changes nothing.
+            let mut at_base = None;
+            let mut changed = true;
             for _ in 0..cfg.team_rounds {
+                if !changed {
+                    break;
+                }
+                changed = false;
                 for &i in &choosers {
                     let v = self.values(trial, i, &fixed)?;
-                    fixed[i] = best_candidate(&v, fixed[i]);
+                    if let (None, Some(Decision::Candidate(k))) = (at_base, fixed[i]) {
+                        at_base = v.get(k).copied().flatten();
+                    }
+                    let next = best_candidate(&v, fixed[i]);
+                    changed |= next != fixed[i];
+                    fixed[i] = next;
                     values[i] = Some(v);
                 }
             }
+            // The team's gain, counted once: everyone at the base's choices against everyone at
+            // the final ones (the last robot's best, valued beside the others' final choices).
+            let last = choosers[choosers.len() - 1];
+            let at_final = values[last]
+                .as_deref()
+                .unwrap_or(&[])
+                .iter()
+                .flatten()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            if let Some(at_base) = at_base.filter(|_| at_final.is_finite()) {
+                self.teacher_gain += at_base - at_final;
+                self.labelled += 1;
+            }
         } else {
             for &i in choosers.iter().filter(|&&i| labelled[i]) {
-                values[i] = Some(self.values(trial, i, &[])?);
-                base_choice[i] = Some(self.base_choice(trial, i)?);
+                let v = self.values(trial, i, &[])?;
+                // The teacher's gain over its base here: what the base's own choice leaves
+                // minus what the best candidate leaves.
+                let best = v.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+                if let Decision::Candidate(k) = self.base_choice(trial, i)? {
+                    if let Some(own) = v.get(k).copied().flatten() {
+                        self.teacher_gain += own - best;
+                        self.labelled += 1;
+                    }
+                }
+                values[i] = Some(v);
             }
         }
         // 3. Each labelled decision (the grid network: every decision, its recurrent windows
@@ -804,19 +844,6 @@ impl Recorder for Labelling<'_> {
             let mut target = vec![0.0; mask.len()];
             let mut train_mask = vec![false; mask.len()];
             if let (true, Some(values)) = (is_labelled, &values[i]) {
-                // The teacher's gain over its base here: what the base's own choice leaves
-                // minus what the best candidate leaves.
-                let best = values
-                    .iter()
-                    .flatten()
-                    .copied()
-                    .fold(f64::INFINITY, f64::min);
-                if let Some(Decision::Candidate(k)) = base_choice[i] {
-                    if let Some(own) = values.get(k).copied().flatten() {
-                        self.teacher_gain += own - best;
-                        self.labelled += 1;
-                    }
-                }
                 let known: Vec<f64> = values.iter().flatten().copied().collect();
                 let mean = known.iter().sum::<f64>() / known.len() as f64;
                 for (k, v) in values.iter().enumerate() {

@@ -241,6 +241,12 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
             .any(|r| col(r, "teacher_base").starts_with("student@")),
         "a student beat random and became the base: {rows:?}"
     );
+    // The kill below lands after iteration 2 while a student is the base and the run goes on:
+    // the resumed run must restore that base from the checkpoint.
+    assert!(
+        rows.len() > 2 && col(&rows[2], "teacher_base").starts_with("student@"),
+        "{rows:?}"
+    );
     let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         train(&e, Some(expert()), &mut |p| {
             assert!(p.done < 2, "killed after iteration 2");
