@@ -369,6 +369,62 @@ fn no_livelock_between_robots_that_cannot_talk() {
 /// candidate (`Future::Own`) is exactly the steps left when the trial itself takes it and
 /// everyone follows the base rule; another future differs somewhere; the noiseless future
 /// never slips.
+/// A continuation cut by the trial's step cap before its horizon: valued by mean discovery, the
+/// cells still unknown count every step up to the horizon (they stay unknown there).
+#[test]
+fn mean_discovery_counts_cells_left_at_the_step_cap_to_the_horizon() {
+    use madenet_agent::Decision;
+    use madenet_sim::rollout::{candidate_values_by, Lookahead, Value};
+    use madenet_sim::{Future, PolicyRegistry};
+    let registry = PolicyRegistry::builtin();
+    let mut s = spec(3, Corner::TopLeft, "spread", 1.0, 2);
+    s.config.step_cap = 12;
+    let mut trial = Trial::new(s).unwrap();
+    // To the first timestep after t = 5 at which robot 0 decides with a choice.
+    loop {
+        assert!(trial.begin_step(), "robot 0 chose before the cap");
+        if trial.world().t() > 5 && trial.deciding()[0] {
+            trial.agent_mut(0).view(true);
+            if trial.agents()[0].candidates().cells.len() >= 2 {
+                break;
+            }
+        }
+        trial.decide_with(&[]);
+        trial.finish_step();
+    }
+    let horizon = 40;
+    let look = Lookahead {
+        horizon: Some(horizon),
+        value: Value::MeanDiscovery,
+    };
+    let got = candidate_values_by(&trial, 0, &[], "spread", &registry, &[Future::Own], look)
+        .unwrap()[0]
+        .unwrap();
+    let unknown = |f: &Trial| (f.world().explorable_count() - f.world().known_count()) as f64;
+    let mut area = unknown(&trial);
+    let mut fork = trial.fork("spread", &registry, Future::Own).unwrap();
+    let mut fixed = vec![None; 3];
+    fixed[0] = Some(Decision::Candidate(0));
+    fork.decide_with(&fixed);
+    fork.finish_step();
+    let mut steps = 1;
+    loop {
+        let before = unknown(&fork);
+        if !fork.step() {
+            break;
+        }
+        area += before;
+        steps += 1;
+    }
+    assert!(
+        steps < horizon && unknown(&fork) > 0.0,
+        "the cap ends it first"
+    );
+    area += unknown(&fork) * (horizon - steps) as f64;
+    let want = area / fork.world().explorable_count() as f64;
+    assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+}
+
 #[test]
 fn rollouts_from_a_fork_are_the_trial_itself() {
     use madenet_agent::Decision;

@@ -130,6 +130,24 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
          scores each candidate by continuing the trial with it under `{base}`, and takes the best. \
          Oracles are never ranked with the methods.\n\n"
     );
+    let look = cfg.oracle_lookahead;
+    if look != Default::default() {
+        let value = match look.value {
+            madenet_sim::rollout::Value::StepsLeft => "the steps left until the map is explored",
+            madenet_sim::rollout::Value::MeanDiscovery => {
+                "the mean over cells of the steps until each is known"
+            }
+        };
+        let cut = match look.horizon {
+            Some(h) => format!(", continuations cut after {h} steps"),
+            None => String::new(),
+        };
+        let _ = write!(
+            s,
+            "The scoring oracles (replay, averaged, noiseless) value a candidate by {value}{cut} \
+             (`oracle_lookahead`).\n\n"
+        );
+    }
     for kind in &cfg.oracles {
         use madenet_sim::rollout::OracleKind;
         let f = cfg.oracle_futures;

@@ -1249,6 +1249,39 @@ fn oracles_run_beside_the_methods_and_are_reported_apart() {
             "`{needle}` missing from: {ceiling}"
         );
     }
+    assert!(
+        !ceiling.contains("oracle_lookahead"),
+        "the default is not announced"
+    );
+
+    // Cut and valued by mean discovery: each row is `run_oracle_by` with that lookahead, and
+    // the report says how the oracle valued.
+    use madenet_sim::rollout::{run_oracle_by, Lookahead, Value};
+    let look = Lookahead {
+        horizon: Some(30),
+        value: Value::MeanDiscovery,
+    };
+    let cut_cfg = StudyConfig {
+        oracles: vec![OracleKind::Noiseless],
+        oracle_lookahead: look,
+        ..cfg.clone()
+    };
+    let cut_dir = Scratch::new("study-oracles-cut");
+    let (cut_report, cut_outcomes, _) = run_ok(&cut_cfg, cut_dir.path(), false);
+    let planned = madenet_study::runner::plan(&cut_cfg, &maps, &starts);
+    for p in planned.iter().filter(|p| p.oracle.is_some()) {
+        let (kind, futures) = p.oracle.unwrap();
+        let direct = run_oracle_by(p.spec.clone(), &registry, kind, futures, look).unwrap();
+        let row = &cut_outcomes
+            .iter()
+            .find(|o| o.row.key == p.key)
+            .unwrap()
+            .row;
+        assert_eq!(row.tns, direct.metrics.tns, "{:?}", p.key);
+    }
+    assert!(read(&cut_report).contains(
+        "value a candidate by the mean over cells of the steps until each is known, continuations cut after 30 steps"
+    ));
 }
 
 #[test]
@@ -1278,6 +1311,16 @@ fn bad_oracle_fields_are_refused() {
             ..base.clone()
         },
         &["oracle_base", "teleport"],
+    );
+    assert_refused(
+        &StudyConfig {
+            oracle_lookahead: madenet_sim::rollout::Lookahead {
+                horizon: Some(0),
+                ..Default::default()
+            },
+            ..base.clone()
+        },
+        &["oracle_lookahead.horizon", "1..=100000"],
     );
     assert_refused(
         &StudyConfig {
