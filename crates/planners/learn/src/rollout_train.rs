@@ -616,6 +616,10 @@ pub struct Collected {
     /// Labelled decisions and team-valued timesteps (what `teacher_gain` sums over).
     #[serde(default)]
     pub labelled: usize,
+    /// Labelled decisions valued alone (not by the team teacher), and how many of them the
+    /// base's own choice is among the teacher's best candidates.
+    #[serde(default)]
+    pub base_agreement: (usize, usize),
 }
 
 /// The rule the teacher's continuations follow: policy `name` of `registry` (the base rule, or
@@ -665,6 +669,7 @@ struct Labelling<'a> {
     rollouts: usize,
     teacher_gain: f64,
     labelled: usize,
+    base_agreement: (usize, usize),
 }
 
 impl Labelling<'_> {
@@ -814,6 +819,8 @@ impl Recorder for Labelling<'_> {
                     if let Some(own) = v.get(k).copied().flatten() {
                         self.teacher_gain += own - best;
                         self.labelled += 1;
+                        self.base_agreement.0 += 1;
+                        self.base_agreement.1 += (own == best) as usize;
                     }
                 }
                 values[i] = Some(v);
@@ -895,6 +902,7 @@ fn collect_episode(
         rollouts: 0,
         teacher_gain: 0.0,
         labelled: 0,
+        base_agreement: (0, 0),
     };
     let end = episode::run(&mut trial, &mut teacher)?;
     Ok(Collected {
@@ -903,6 +911,7 @@ fn collect_episode(
         rollouts: teacher.rollouts,
         teacher_gain: teacher.teacher_gain,
         labelled: teacher.labelled,
+        base_agreement: teacher.base_agreement,
     })
 }
 
@@ -944,6 +953,41 @@ impl Student {
                 Student::Agnostic(cfg.agnostic().init(device).map_err(TrainError::Other)?)
             }
         })
+    }
+
+    /// Share of `labelled` decisions (those with targets) at which the greedy student's choice
+    /// is among the teacher's best candidates; `None` for the grid network or no decision.
+    fn agreement<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> Option<f64> {
+        let Student::Agnostic(net) = self else {
+            return None;
+        };
+        let net = net.valid();
+        let (mut n, mut agree) = (0usize, 0usize);
+        for l in labelled.filter(|l| l.train_mask.iter().any(|&m| m)) {
+            let input = AgnosticInput {
+                context: l.vec[..CONTEXT_FEATURES].to_vec(),
+                features: l.vec[CONTEXT_FEATURES..].to_vec(),
+                crops: l.map.clone(),
+                mask: l.train_mask.clone(),
+            };
+            let q = net.scores(&input);
+            let masked = |v: &[f32], k: usize| {
+                if l.train_mask[k] {
+                    v[k]
+                } else {
+                    f32::NEG_INFINITY
+                }
+            };
+            let pick = (0..l.train_mask.len())
+                .max_by(|&a, &b| masked(&q, a).total_cmp(&masked(&q, b)).then(b.cmp(&a)))
+                .expect("a labelled decision has slots");
+            let best = (0..l.train_mask.len())
+                .map(|k| masked(&l.target, k))
+                .fold(f32::NEG_INFINITY, f32::max);
+            n += 1;
+            agree += (l.target[pick] == best) as usize;
+        }
+        (n > 0).then(|| agree as f64 / n as f64)
     }
 
     /// The student on the plain CPU device as a model acting with `info`'s margin.
@@ -1144,6 +1188,13 @@ struct IterationRow {
     /// The student's gain over the base rule on validation, % of the base rule's steps.
     #[serde(default)]
     student_gain_pct: f64,
+    /// Share of this iteration's labelled decisions (valued alone) at which the base's own
+    /// choice is among the teacher's best candidates.
+    #[serde(default)]
+    base_agreement: Option<f64>,
+    /// The same for the student as it entered the iteration (greedy; agnostic network only).
+    #[serde(default)]
+    student_agreement: Option<f64>,
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
@@ -1398,6 +1449,14 @@ fn train_loop(
             collected.iter().map(|c| c.teacher_gain).sum::<f64>() / labelled.max(1) as f64;
         let behaviour_steps =
             collected.iter().map(|c| c.steps as f64).sum::<f64>() / collected.len().max(1) as f64;
+        // Imitation: how often the base's choice, and the student's (as trained so far), is
+        // among the teacher's best candidates on this iteration's fresh labels.
+        let (valued, agree) = collected.iter().fold((0, 0), |(n, a), c| {
+            (n + c.base_agreement.0, a + c.base_agreement.1)
+        });
+        let base_agreement = (valued > 0).then(|| agree as f64 / valued as f64);
+        let student_agreement =
+            net.agreement(collected.iter().flat_map(|c| c.robots.iter().flatten()));
         data.extend(
             collected
                 .into_iter()
@@ -1483,6 +1542,8 @@ fn train_loop(
             teacher_base,
             teacher_gain,
             student_gain_pct: 100.0 * (base_steps - steps) / base_steps.max(1e-9),
+            base_agreement,
+            student_agreement,
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,

@@ -149,6 +149,19 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     let root = Scratch::new("agnostic");
     let (a, b) = (root.join("a"), root.join("b"));
     train(&a, Some(tiny()), &mut |_| {}).unwrap();
+    // Imitation is measured on each iteration's fresh labels: the base's and the student's
+    // agreement with the teacher's best candidates, shares in [0, 1].
+    let mut log = csv::Reader::from_path(a.join("iterations.csv")).unwrap();
+    let head = log.headers().unwrap().clone();
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let (base_col, student_col) = (col("base_agreement"), col("student_agreement"));
+    for row in log.records() {
+        let row = row.unwrap();
+        for c in [base_col, student_col] {
+            let share: f64 = row[c].parse().unwrap();
+            assert!((0.0..=1.0).contains(&share), "{row:?}");
+        }
+    }
     let toml = std::fs::read_to_string(a.join("last/model.toml")).unwrap();
     assert!(
         toml.contains("[agnostic]") && !toml.contains("[dep]"),

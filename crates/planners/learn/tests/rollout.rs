@@ -207,6 +207,15 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     let num =
         |r: &std::collections::HashMap<String, String>, k: &str| -> f64 { r[k].parse().unwrap() };
     assert_eq!(col(&rows[0], "teacher_base"), "random");
+    // The grid network logs no student agreement; the base's agreement with the teacher is a
+    // share, and `spread` agrees with it more often than random candidates do.
+    assert_eq!(col(&rows[0], "student_agreement"), "");
+    let spread_agrees = num(&table(&a)[0], "base_agreement");
+    let random_agrees = num(&rows[0], "base_agreement");
+    assert!(
+        0.0 < random_agrees && random_agrees < spread_agrees && spread_agrees <= 1.0,
+        "random {random_agrees}, spread {spread_agrees}"
+    );
     assert!(
         num(&rows[0], "teacher_gain") > 0.0,
         "one step over random gains"
