@@ -365,10 +365,6 @@ fn no_livelock_between_robots_that_cannot_talk() {
     assert!(failures.is_empty(), "livelocks:\n{}", failures.join("\n"));
 }
 
-/// A fork living the trial's own future is the trial: the value the rollout machinery gives a
-/// candidate (`Future::Own`) is exactly the steps left when the trial itself takes it and
-/// everyone follows the base rule; another future differs somewhere; the noiseless future
-/// never slips.
 /// A continuation cut by the trial's step cap before its horizon: valued by mean discovery, the
 /// cells still unknown count every step up to the horizon (they stay unknown there).
 #[test]
@@ -425,6 +421,10 @@ fn mean_discovery_counts_cells_left_at_the_step_cap_to_the_horizon() {
     assert!((got - want).abs() < 1e-9, "{got} vs {want}");
 }
 
+/// A fork living the trial's own future is the trial: the value the rollout machinery gives a
+/// candidate (`Future::Own`) is exactly the steps left when the trial itself takes it and
+/// everyone follows the base rule; another future differs somewhere; the noiseless future
+/// never slips.
 #[test]
 fn rollouts_from_a_fork_are_the_trial_itself() {
     use madenet_agent::Decision;
@@ -517,6 +517,10 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
             }
             let want = area / fork.world().explorable_count() as f64;
             assert!((cut[0].unwrap() - want).abs() < 1e-9, "test_{map}");
+            assert!(
+                cut[0].unwrap() <= 4.0,
+                "no cell counts more than the horizon"
+            );
         }
         let salted =
             candidate_values(&trial, 0, &[], "spread", &registry, &[Future::Salted(7)]).unwrap();

@@ -1269,6 +1269,7 @@ fn oracles_run_beside_the_methods_and_are_reported_apart() {
     let cut_dir = Scratch::new("study-oracles-cut");
     let (cut_report, cut_outcomes, _) = run_ok(&cut_cfg, cut_dir.path(), false);
     let planned = madenet_study::runner::plan(&cut_cfg, &maps, &starts);
+    assert!(planned.iter().any(|p| p.oracle.is_some()));
     for p in planned.iter().filter(|p| p.oracle.is_some()) {
         let (kind, futures) = p.oracle.unwrap();
         let direct = run_oracle_by(p.spec.clone(), &registry, kind, futures, look).unwrap();

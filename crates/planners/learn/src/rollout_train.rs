@@ -778,6 +778,7 @@ impl Recorder for Labelling<'_> {
             // The value of everyone at the base's choices (the first robot's first valuation
             // at its base choice); passes end early when one changes nothing.
             let mut at_base = None;
+            let mut first_valuation = true;
             let mut changed = true;
             for _ in 0..cfg.team_rounds {
                 if !changed {
@@ -786,9 +787,10 @@ impl Recorder for Labelling<'_> {
                 changed = false;
                 for &i in &choosers {
                     let v = self.values(trial, i, &fixed)?;
-                    if let (None, Some(Decision::Candidate(k))) = (at_base, fixed[i]) {
+                    if let (true, Some(Decision::Candidate(k))) = (first_valuation, fixed[i]) {
                         at_base = v.get(k).copied().flatten();
                     }
+                    first_valuation = false;
                     let next = best_candidate(&v, fixed[i]);
                     changed |= next != fixed[i];
                     fixed[i] = next;
@@ -797,6 +799,8 @@ impl Recorder for Labelling<'_> {
             }
             // The team's gain, counted once: everyone at the base's choices against everyone at
             // the final ones (the last robot's best, valued beside the others' final choices).
+            // With `futures = "salted"` the two come from different robots' futures, so the
+            // gain carries their luck.
             let last = choosers[choosers.len() - 1];
             let at_final = values[last]
                 .as_deref()
@@ -978,9 +982,10 @@ impl Student {
                     f32::NEG_INFINITY
                 }
             };
-            let pick = (0..l.train_mask.len())
-                .max_by(|&a, &b| masked(&q, a).total_cmp(&masked(&q, b)).then(b.cmp(&a)))
-                .expect("a labelled decision has slots");
+            // The choice the acting policy makes greedily.
+            let Some(pick) = crate::actions::masked_argmax_slice(&q, &l.train_mask) else {
+                continue;
+            };
             let best = (0..l.train_mask.len())
                 .map(|k| masked(&l.target, k))
                 .fold(f32::NEG_INFINITY, f32::max);
@@ -1192,7 +1197,8 @@ struct IterationRow {
     /// choice is among the teacher's best candidates.
     #[serde(default)]
     base_agreement: Option<f64>,
-    /// The same for the student as it entered the iteration (greedy; agnostic network only).
+    /// The share for the greedy student as it entered the iteration, over every labelled
+    /// decision (team-valued ones too; agnostic network only).
     #[serde(default)]
     student_agreement: Option<f64>,
     validation_completed: usize,
