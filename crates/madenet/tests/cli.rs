@@ -110,6 +110,53 @@ fn map_convert_generate_show_round_trip() {
 }
 
 #[test]
+fn map_show_warns_of_passages_through_thin_walls() {
+    let dir = Scratch::new("cli-passages");
+    // 60 × 60 pixels of 0.1 m (6 × 6 cells of 1 m): a solid block bottom-left (kept: most
+    // obstacle pixels stay in obstacle cells) and a one-pixel wall down pixel column 20 from
+    // the top to row 40, 10 % of each cell it crosses (erased at the default 25 %).
+    let mut px = vec![254u8; 3600];
+    for r in 40..60 {
+        px[r * 60..r * 60 + 10].fill(0);
+    }
+    for r in 0..40 {
+        px[r * 60 + 20] = 0;
+    }
+    let mut pgm = b"P5\n60 60\n255\n".to_vec();
+    pgm.extend(&px);
+    std::fs::write(dir.join("rooms.pgm"), pgm).unwrap();
+    let yaml = dir.join("rooms.yaml");
+    std::fs::write(
+        &yaml,
+        "image: rooms.pgm\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let out = madenet(&["map", "show", yaml.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: ")
+            && err.contains("rooms.yaml")
+            && err.contains("opens passages the map does not have at 3 free cells")
+            && err.contains("discretize.obstacle_fraction"),
+        "{err}"
+    );
+    // With the setting the warning names, the wall stays and nothing is said.
+    let keep = dir.join("keep.toml");
+    std::fs::write(&keep, "[discretize]\nobstacle_fraction = 0.05\n").unwrap();
+    let out = madenet(&[
+        "map",
+        "show",
+        yaml.to_str().unwrap(),
+        "--config",
+        keep.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+}
+
+#[test]
 fn missing_map_file() {
     assert_clean_error(
         &madenet(&["run", "--map", "no/such/map.yaml"]),

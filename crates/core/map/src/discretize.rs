@@ -190,6 +190,11 @@ pub struct Erasure {
     pub erased_pixels: usize,
     /// Obstacle cells of the coarse map.
     pub obstacle_cells: usize,
+    /// Free cells through which the coarse map opens a passage the fine map does not have
+    /// ([`opened_passages`]).
+    pub opened_cells: usize,
+    /// The first of them (row-major), if any.
+    pub first_opened: Option<crate::Pos>,
 }
 
 impl Erasure {
@@ -205,18 +210,30 @@ impl Erasure {
     /// A warning when the discretization erased most of the obstacles (more than half their
     /// pixels lie in free cells) or all of them, naming the setting that keeps walls; `None`
     /// when it kept them.
+    ///
+    /// Short of that, a warning when it opened passages through walls the fine map has
+    /// ([`opened_passages`]), naming the first such cell and the same setting.
     pub fn warning(&self, name: &str, params: &DiscretizeParams) -> Option<String> {
         let most = self.erased_fraction() > 0.5;
         let all = self.obstacle_cells == 0 && self.obstacle_pixels > 0;
-        (most || all).then(|| {
-            format!(
+        if most || all {
+            return Some(format!(
                 "{name}: the discretization into cells left {:.0} % of the map's obstacle pixels in free cells ({} obstacle cells): walls thinner than {:.0} % of a cell vanish, and a robot on the cells plans through them; a lower `discretize.obstacle_fraction` (now {}) keeps them",
                 100.0 * self.erased_fraction(),
                 self.obstacle_cells,
                 100.0 * params.obstacle_fraction,
                 params.obstacle_fraction
-            )
-        })
+            ));
+        }
+        let first = self.first_opened?;
+        Some(format!(
+            "{name}: the discretization into cells opens passages the map does not have at {} free cells (the first at row {}, column {}): a wall thinner than {:.0} % of a cell runs through or beside them, and a robot on the cells plans through it; a lower `discretize.obstacle_fraction` (now {}) keeps such walls",
+            self.opened_cells,
+            first.row,
+            first.col,
+            100.0 * params.obstacle_fraction,
+            params.obstacle_fraction
+        ))
     }
 }
 
@@ -227,10 +244,13 @@ impl Erasure {
 pub fn erasure(fine: &OccGrid, coarse: &OccGrid) -> Erasure {
     let cell_px = (coarse.resolution / fine.resolution).max(1.0);
     let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as i32;
+    let opened = opened_passages(fine, coarse);
     let mut e = Erasure {
         obstacle_pixels: 0,
         erased_pixels: 0,
         obstacle_cells: coarse.count(Occupancy::Obstacle),
+        opened_cells: opened.len(),
+        first_opened: opened.first().copied(),
     };
     for r in 0..fine.height() {
         for c in 0..fine.width() {
@@ -244,6 +264,113 @@ pub fn erasure(fine: &OccGrid, coarse: &OccGrid) -> Erasure {
         }
     }
     e
+}
+
+/// The free cells of `coarse` (the discretization of `fine`, as in [`erasure`]) through which
+/// it opens a passage that `fine` does not have, row-major. Pixels are passable unless they
+/// are obstacles; parts of a cell are its passable pixels joined by passable paths inside the
+/// 3 × 3 cells around it (a detour that stays near is no new passage), counted when they
+/// hold at least a tenth of the cell's pixels (slivers and speckle are not places a robot
+/// stands). A cell opens a passage when it holds two or more parts (a wall runs through it),
+/// or when it shares no part with a free side neighbour (a wall runs between them).
+pub fn opened_passages(fine: &OccGrid, coarse: &OccGrid) -> Vec<crate::Pos> {
+    use crate::Pos;
+    let cell_px = (coarse.resolution / fine.resolution).max(1.0);
+    let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as usize;
+    let (fh, fw) = (fine.height(), fine.width());
+    let (ch, cw) = (coarse.height(), coarse.width());
+    // The pixel range of each coarse row and column.
+    let ranges = |px: usize, cells: usize| {
+        let mut r = vec![(usize::MAX, 0usize); cells];
+        for k in 0..px {
+            let c = cell_of(k);
+            if c < cells {
+                r[c].0 = r[c].0.min(k);
+                r[c].1 = r[c].1.max(k + 1);
+            }
+        }
+        r
+    };
+    let (rows, cols) = (ranges(fh, ch), ranges(fw, cw));
+    let free = |p: Pos| coarse.get(p) == Occupancy::Free;
+    let mut opened = Vec::new();
+    // Component labels of one window (reused), and a stack for the flood fill.
+    let mut label = Vec::new();
+    let mut stack = Vec::new();
+    for cr in 0..ch {
+        for cc in 0..cw {
+            let a = Pos::new(cr as i32, cc as i32);
+            if !free(a) || rows[cr].0 >= rows[cr].1 || cols[cc].0 >= cols[cc].1 {
+                continue;
+            }
+            let r0 = rows[cr.saturating_sub(1)].0.min(rows[cr].0);
+            let r1 = rows[(cr + 1).min(ch - 1)].1.max(rows[cr].1);
+            let c0 = cols[cc.saturating_sub(1)].0.min(cols[cc].0);
+            let c1 = cols[(cc + 1).min(cw - 1)].1.max(cols[cc].1);
+            let ww = c1 - c0;
+            label.clear();
+            label.resize((r1 - r0) * ww, u32::MAX);
+            let passable =
+                |r: usize, c: usize| fine.get(Pos::new(r as i32, c as i32)) != Occupancy::Obstacle;
+            let mut parts = 0u32;
+            for r in r0..r1 {
+                for c in c0..c1 {
+                    if label[(r - r0) * ww + c - c0] != u32::MAX || !passable(r, c) {
+                        continue;
+                    }
+                    label[(r - r0) * ww + c - c0] = parts;
+                    stack.push((r, c));
+                    while let Some((r, c)) = stack.pop() {
+                        let next = [
+                            (r.wrapping_sub(1), c),
+                            (r + 1, c),
+                            (r, c.wrapping_sub(1)),
+                            (r, c + 1),
+                        ];
+                        for (nr, nc) in next {
+                            if (r0..r1).contains(&nr) && (c0..c1).contains(&nc) {
+                                let l = &mut label[(nr - r0) * ww + nc - c0];
+                                if *l == u32::MAX && passable(nr, nc) {
+                                    *l = parts;
+                                    stack.push((nr, nc));
+                                }
+                            }
+                        }
+                    }
+                    parts += 1;
+                }
+            }
+            // The parts of a cell of the window: components holding a tenth of its pixels.
+            let parts_of = |p: Pos| -> Vec<u32> {
+                let (pr, pc) = (rows[p.row as usize], cols[p.col as usize]);
+                if pr.0 >= pr.1 || pc.0 >= pc.1 {
+                    return Vec::new();
+                }
+                let mut count = vec![0usize; parts as usize];
+                for r in pr.0..pr.1 {
+                    for c in pc.0..pc.1 {
+                        let l = label[(r - r0) * ww + c - c0];
+                        if l != u32::MAX {
+                            count[l as usize] += 1;
+                        }
+                    }
+                }
+                let min = ((pr.1 - pr.0) * (pc.1 - pc.0)).div_ceil(10);
+                (0..parts).filter(|&l| count[l as usize] >= min).collect()
+            };
+            let here = parts_of(a);
+            let split = here.len() >= 2;
+            // Each side pair once: the neighbours below and to the right.
+            let walled = [Pos::new(a.row + 1, a.col), Pos::new(a.row, a.col + 1)]
+                .into_iter()
+                .filter(|b| (b.row as usize) < ch && (b.col as usize) < cw && free(*b))
+                .any(|b| !parts_of(b).iter().any(|l| here.contains(l)));
+            if split || walled {
+                opened.push(a);
+            }
+        }
+    }
+    opened
 }
 
 #[cfg(test)]
@@ -329,6 +456,103 @@ mod tests {
         let e = erasure(&fine, &coarse);
         assert_eq!((e.erased_pixels, e.obstacle_cells), (0, 2));
         assert_eq!(e.warning("wall.yaml", &keep), None);
+    }
+
+    /// 60 × 60 pixels of 0.1 m (6 × 6 cells of 1 m) holding a solid 2 × 1-cell block in the
+    /// bottom-left corner and a one-pixel wall down pixel column `wall` from the top to row
+    /// `door` (a door below it), plus `extra` obstacle pixels: the fine map and its
+    /// discretization by `p`.
+    fn walled(
+        wall: usize,
+        door: usize,
+        extra: &[(usize, usize)],
+        p: &DiscretizeParams,
+    ) -> (OccGrid, OccGrid) {
+        let mut probs = vec![0.0; 3600];
+        for r in 40..60 {
+            for c in 0..10 {
+                probs[r * 60 + c] = 1.0;
+            }
+        }
+        for r in 0..door {
+            probs[r * 60 + wall] = 1.0;
+        }
+        for &(r, c) in extra {
+            probs[r * 60 + c] = 1.0;
+        }
+        let mut fine = discretize(&probs, 60, 60, 1, p);
+        fine.resolution = 0.1;
+        let mut coarse = discretize(&probs, 60, 60, 10, p);
+        coarse.resolution = 1.0;
+        (fine, coarse)
+    }
+
+    #[test]
+    fn a_thin_wall_through_or_between_free_cells_opens_passages_and_is_warned_about() {
+        let p = DiscretizeParams::default();
+        let cells = |v: &[(i32, i32)]| v.iter().map(|&(r, c)| Pos::new(r, c)).collect::<Vec<_>>();
+        // Through the middle of cell column 2, cell rows 0–3 (the door is in rows 4 and 5):
+        // cells 0–2 join the two sides; cell 3's sides meet below the wall's end, inside its
+        // neighbourhood.
+        let (fine, coarse) = walled(25, 40, &[], &p);
+        assert_eq!(coarse.count(Occupancy::Obstacle), 2, "the block stays");
+        assert_eq!(
+            opened_passages(&fine, &coarse),
+            cells(&[(0, 2), (1, 2), (2, 2)])
+        );
+        // Along the border between cell columns 1 and 2 (pixel column 20 is cell 2's first):
+        // the pairs (row, 1)–(row, 2) of rows 0–2 are walled; row 3's pair meets below the
+        // wall's end, inside the neighbourhood.
+        let (fine, coarse) = walled(20, 40, &[], &p);
+        assert_eq!(
+            opened_passages(&fine, &coarse),
+            cells(&[(0, 1), (1, 1), (2, 1)])
+        );
+        // The warning: 40 of 240 obstacle pixels erased is not "most", but the passages are
+        // named, with the setting that keeps them.
+        let e = erasure(&fine, &coarse);
+        assert_eq!((e.obstacle_pixels, e.erased_pixels), (240, 40));
+        let w = e.warning("rooms.yaml", &p).expect("a warning");
+        assert!(
+            w.contains("rooms.yaml")
+                && w.contains("at 3 free cells")
+                && w.contains("row 0, column 1")
+                && w.contains("discretize.obstacle_fraction"),
+            "{w}"
+        );
+        // At obstacle_fraction 0.05 the wall's cells are obstacles: no passage, no warning.
+        let keep = DiscretizeParams {
+            obstacle_fraction: 0.05,
+            ..p
+        };
+        let (fine, coarse) = walled(20, 40, &[], &keep);
+        assert_eq!(opened_passages(&fine, &coarse), vec![]);
+        assert_eq!(erasure(&fine, &coarse).warning("rooms.yaml", &keep), None);
+    }
+
+    #[test]
+    fn pillars_stubs_and_speckle_open_no_passage() {
+        let p = DiscretizeParams::default();
+        // A wall stub from the top ending half way down cell (0, 2); a 2 × 2-pixel pillar in
+        // the middle of cell (3, 3); speckle: single pixels here and there; a ring of eight
+        // pixels in cell (2, 4) enclosing one free pixel (a part of its own, below a tenth of
+        // the cell).
+        let mut extra: Vec<(usize, usize)> = vec![(34, 34), (34, 35), (35, 34), (35, 35)];
+        extra.extend([(12, 12), (27, 48), (51, 33)]);
+        extra.extend([
+            (24, 44),
+            (24, 45),
+            (24, 46),
+            (25, 44),
+            (25, 46),
+            (26, 44),
+            (26, 45),
+            (26, 46),
+        ]);
+        let (fine, coarse) = walled(25, 5, &extra, &p);
+        assert_eq!(coarse.count(Occupancy::Obstacle), 2);
+        assert_eq!(opened_passages(&fine, &coarse), vec![]);
+        assert_eq!(erasure(&fine, &coarse).warning("open.yaml", &p), None);
     }
 
     #[test]
