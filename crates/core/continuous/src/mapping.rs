@@ -227,11 +227,12 @@ impl RobotMap {
         let before = self.log_odds[i];
         let after =
             (before + delta).clamp(self.cfg.min_log_odds as f32, self.cfg.max_log_odds as f32);
-        let was_observed = self.observed[i];
-        // Saturated (most free pixels near a robot): nothing changes.
-        if after == before && was_observed {
+        // Saturated (most free pixels near a robot): nothing changes. A pixel whose log-odds
+        // are not 0 (the prior) has been written, so is observed: the flag is read only at 0.
+        if after == before && (before != 0.0 || self.observed[i]) {
             return;
         }
+        let was_observed = self.observed[i];
         self.log_odds[i] = after;
         let (was_occ, is_occ) = (
             before > self.occupied_log_odds,
