@@ -244,17 +244,23 @@ fn bad_config_values() {
 
 #[test]
 fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
-    let out = madenet(&[
-        "oracle",
-        "--maps",
-        "generate-wide:5",
-        "--starts",
-        "top-left,random",
-        "--kind",
-        "noiseless",
-        "--csp",
-        "1",
-    ]);
+    // The noiseless oracle on two trials, with `extra` flags.
+    let noiseless = |extra: &[&str]| {
+        let mut args = vec![
+            "oracle",
+            "--maps",
+            "generate-wide:5",
+            "--starts",
+            "top-left,random",
+            "--kind",
+            "noiseless",
+            "--csp",
+            "1",
+        ];
+        args.extend_from_slice(extra);
+        madenet(&args)
+    };
+    let out = noiseless(&[]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),
@@ -275,21 +281,7 @@ fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
     );
     assert_clean_error(&madenet(&["oracle", "--base", "nope"]), &["--base", "nope"]);
     // Continuations cut and valued by mean discovery: the same trials, said in the summary.
-    let cut = madenet(&[
-        "oracle",
-        "--maps",
-        "generate-wide:5",
-        "--starts",
-        "top-left,random",
-        "--kind",
-        "noiseless",
-        "--csp",
-        "1",
-        "--horizon",
-        "30",
-        "--value",
-        "mean-discovery",
-    ]);
+    let cut = noiseless(&["--horizon", "30", "--value", "mean-discovery"]);
     let cut_text = String::from_utf8_lossy(&cut.stdout);
     assert!(
         cut.status.success()

@@ -30,36 +30,30 @@ pub fn candidate_values(
     registry: &PolicyRegistry,
     futures: &[Future],
 ) -> Result<Vec<Option<f64>>, SimError> {
-    candidate_values_within(trial, i, fixed, base, registry, futures, None)
-}
-
-/// [`candidate_values`] with each continuation cut after `horizon` steps (`None`: run to the
-/// end) and its remainder estimated ([`continuation_within`]): what makes the teacher
-/// affordable on large maps.
-pub fn candidate_values_within(
-    trial: &Trial,
-    i: usize,
-    fixed: &[Option<Decision>],
-    base: &str,
-    registry: &PolicyRegistry,
-    futures: &[Future],
-    horizon: Option<usize>,
-) -> Result<Vec<Option<f64>>, SimError> {
-    let look = Lookahead {
-        horizon,
-        value: Value::StepsLeft,
-    };
-    candidate_values_by(trial, i, fixed, base, registry, futures, look)
+    candidate_values_by(
+        trial,
+        i,
+        fixed,
+        base,
+        registry,
+        futures,
+        Lookahead::default(),
+    )
 }
 
 /// How a continuation values the decision it starts with (lower is better), in steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Value {
-    /// Steps left until the map is explored (past a horizon: estimated,
-    /// [`continuation_within`]). On large maps a long continuation's finishing time hinges on a
-    /// few far cells and ranks candidates almost by chance: the noiseless oracle over `spread`
-    /// valued so is worse than `spread` itself (README, "On large maps").
+    /// Steps left until the map is explored. Past a horizon they are estimated as the horizon
+    /// plus (explorable cells still unknown) / r, with r the rate at which the team came to know
+    /// cells in the trial so far (known cells now / timesteps now, at least one per step). r is
+    /// the same for every continuation from one present, so candidates are ranked by how much
+    /// of the map they leave unknown at the horizon; a rate measured within each continuation
+    /// instead explodes when a continuation happens to learn little. On large maps a long
+    /// continuation's finishing time hinges on a few far cells and ranks candidates almost by
+    /// chance: the noiseless oracle over `spread` valued so is worse than `spread` itself
+    /// (README, "On large maps").
     #[default]
     StepsLeft,
     /// The mean over the map's explorable cells of the steps from now until each is known,
@@ -114,28 +108,7 @@ pub fn continuation(
     registry: &PolicyRegistry,
     future: Future,
 ) -> Result<f64, SimError> {
-    continuation_within(trial, fixed, base, registry, future, None)
-}
-
-/// [`continuation`] cut after `horizon` steps: if the trial is not over by then, the steps left
-/// are estimated as `horizon` + (explorable cells still unknown) / r, with r the rate at which
-/// the team came to know cells in the trial so far (known cells now / timesteps now, at least
-/// one per step). r is the same for every continuation from this present, so candidates are
-/// ranked by how much of the map they leave unknown at the horizon; a rate measured within each
-/// continuation instead explodes when a continuation happens to learn little.
-pub fn continuation_within(
-    trial: &Trial,
-    fixed: &[Option<Decision>],
-    base: &str,
-    registry: &PolicyRegistry,
-    future: Future,
-    horizon: Option<usize>,
-) -> Result<f64, SimError> {
-    let look = Lookahead {
-        horizon,
-        value: Value::StepsLeft,
-    };
-    continuation_by(trial, fixed, base, registry, future, look)
+    continuation_by(trial, fixed, base, registry, future, Lookahead::default())
 }
 
 /// The value of a continuation in which the deciding robots of `trial` take `fixed` (or ask

@@ -429,8 +429,7 @@ fn mean_discovery_counts_cells_left_at_the_step_cap_to_the_horizon() {
 fn rollouts_from_a_fork_are_the_trial_itself() {
     use madenet_agent::Decision;
     use madenet_sim::rollout::{
-        candidate_values, candidate_values_by, candidate_values_within, run_oracle, Lookahead,
-        OracleKind, Value,
+        candidate_values, candidate_values_by, run_oracle, Lookahead, OracleKind, Value,
     };
     use madenet_sim::{Future, PolicyRegistry};
     let registry = PolicyRegistry::builtin();
@@ -466,11 +465,12 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
         let now = trial.world().t();
         // Cut continuations: a horizon past the end changes nothing; a short one estimates the
         // rest at the trial's exploration rate so far — by hand from a fork cut at 5 steps.
-        let within = |h| {
-            candidate_values_within(&trial, 0, &[], "spread", &registry, &[Future::Own], h).unwrap()
+        let by = |horizon, value| {
+            let look = Lookahead { horizon, value };
+            candidate_values_by(&trial, 0, &[], "spread", &registry, &[Future::Own], look).unwrap()
         };
-        assert_eq!(within(Some(100_000)), values);
-        let cut = within(Some(5));
+        assert_eq!(by(Some(100_000), Value::StepsLeft), values);
+        let cut = by(Some(5), Value::StepsLeft);
         {
             let mut fork = trial.fork("spread", &registry, Future::Own).unwrap();
             let mut fixed = vec![None; 3];
@@ -489,10 +489,6 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
         // Valued by mean discovery time: each cell counts the steps until it is known (capped
         // at the horizon), so a value lies below the steps left (full) and the horizon (cut),
         // and the horizon cuts exactly the mean of the capped discovery times.
-        let by = |horizon, value| {
-            let look = Lookahead { horizon, value };
-            candidate_values_by(&trial, 0, &[], "spread", &registry, &[Future::Own], look).unwrap()
-        };
         let discovery = by(None, Value::MeanDiscovery);
         for (d, v) in discovery.iter().zip(&values) {
             assert_eq!(d.is_some(), v.is_some());

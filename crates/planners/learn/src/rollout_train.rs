@@ -145,7 +145,7 @@ pub struct RolloutTrainConfig {
     /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
     pub futures: Futures,
     /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
-    /// the trial's exploration rate so far, [`madenet_sim::rollout::continuation_within`]; with
+    /// the trial's exploration rate so far, [`madenet_sim::rollout::Value::StepsLeft`]; with
     /// `mean-discovery` the cells still unknown count the horizon); 0: run to the end.
     pub horizon: usize,
     /// What a continuation's value measures ([`madenet_sim::rollout::Value`]): `steps-left`
