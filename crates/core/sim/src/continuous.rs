@@ -131,6 +131,34 @@ enum Ask {
     Yes,
 }
 
+/// A cell spared from a robot's write-off ([`ContinuousTrial::write_off_around`]): since when
+/// it has been spared without a break, and when it was spared last.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Spare {
+    first: f64,
+    last: f64,
+}
+
+impl Spare {
+    fn at(now: f64) -> Self {
+        Spare {
+            first: now,
+            last: now,
+        }
+    }
+
+    /// Spares the cell again at `now`; whether it stays spared. Sparing lasts `stuck_time`
+    /// from its first time, unless it lapsed: a spare not renewed within `stuck_time` (the
+    /// robot went elsewhere) is over, and sparing the cell later starts afresh.
+    fn renew(&mut self, now: f64, stuck_time: f64) -> bool {
+        if now - self.last > stuck_time {
+            *self = Spare::at(now);
+        }
+        self.last = now;
+        now - self.first < stuck_time
+    }
+}
+
 /// A trial in the continuous world.
 pub struct ContinuousTrial {
     world: ContinuousWorld,
@@ -151,11 +179,13 @@ pub struct ContinuousTrial {
     written_off: u64,
     /// The cells each robot has stood in (row-major masks of the coarse grid).
     visited: Vec<Vec<bool>>,
-    /// When a cell was first spared from robot i's write-off (a teammate may hide it, or it is
-    /// a corner cell with a side cell not yet stood in).
-    spared: BTreeMap<(usize, Pos), f64>,
-    /// When each robot's current target was named (the stuck rule).
+    /// The cells spared from robot i's write-off (a teammate may hide it, or it is a corner
+    /// cell with a side cell not yet stood in), and since when.
+    spared: BTreeMap<(usize, Pos), Spare>,
+    /// When each robot's current target was named (the stuck rule), and the cell the robot
+    /// was in then.
     target_since: Vec<f64>,
+    target_from: Vec<Pos>,
     stuck: u64,
     /// Since when no robot's agent has had a reachable frontier.
     no_frontier_since: Option<f64>,
@@ -234,6 +264,7 @@ impl ContinuousTrial {
             visited,
             spared: BTreeMap::new(),
             target_since: vec![0.0; n],
+            target_from: vec![Pos::new(-1, -1); n],
             stuck: 0,
             no_frontier_since: None,
             exchanged: vec![Vec::new(); n],
@@ -487,7 +518,15 @@ impl ContinuousTrial {
         } else {
             if self.targets[i] != Some(next) {
                 self.planners[i].reset();
-                self.target_since[i] = self.world.time();
+                // The stuck clock runs on while the robot has not left the cell it was in
+                // when the clock started: a robot held in place whose agent names one first
+                // step, then another (two ways round to one goal), would otherwise restart
+                // it with every new name and never be found stuck (measured: a 40 m trial
+                // held 500 s in one cell until the time cap).
+                if self.targets[i].is_none() || self.target_from[i] != here {
+                    self.target_since[i] = self.world.time();
+                    self.target_from[i] = here;
+                }
             }
             self.targets[i] = Some(next);
         }
@@ -504,7 +543,8 @@ impl ContinuousTrial {
     /// within half a cell diagonal of the line from the robot to the cell's centre (lidar
     /// beams stop at teammates). A spared cell is tried again the next time a goal is
     /// reached, and written off all the same once `planner.stuck_time` has passed since it was
-    /// first spared (by the idle team's check, stage 2c, when no goal is reached any more). Written-off cells count as explored (resolved as far as the team can) and
+    /// first spared (by the idle team's check, stage 2c, when no goal is reached any more); a
+    /// spare not renewed within `planner.stuck_time` has lapsed, and the next one starts afresh. Written-off cells count as explored (resolved as far as the team can) and
     /// are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
         let now = self.world.time();
@@ -562,11 +602,13 @@ impl ContinuousTrial {
                 // hiding each other's cells, or one going back and forth, would wait for ever).
                 let corner = dr != 0 && dc != 0 && unvisited_side(q);
                 if corner || hidden(q) {
-                    let since = *self.spared.entry((i, q)).or_insert(now);
-                    if now - since < self.world.config().planner.stuck_time {
+                    let stuck_time = self.world.config().planner.stuck_time;
+                    let spare = self.spared.entry((i, q)).or_insert(Spare::at(now));
+                    if spare.renew(now, stuck_time) {
                         continue;
                     }
                 }
+                self.spared.remove(&(i, q));
                 write_off.push(q);
             }
         }
@@ -584,13 +626,14 @@ impl ContinuousTrial {
         let wait = self.world.config().planner.stuck_time;
         let mut pending = false;
         let mut expired = Vec::new();
-        for (&(i, q), &since) in &self.spared {
-            let (_, w) = self.world.map(i).coarse_size();
-            if self.world.map(i).coarse()[q.row as usize * w + q.col as usize] != Occupancy::Unknown
-            {
-                continue;
-            }
-            if now - since >= wait {
+        // Spares of cells their robot has read since are done with.
+        let world = &self.world;
+        self.spared.retain(|&(i, q), _| {
+            let (_, w) = world.map(i).coarse_size();
+            world.map(i).coarse()[q.row as usize * w + q.col as usize] == Occupancy::Unknown
+        });
+        for (&(i, q), spare) in &self.spared {
+            if now - spare.first >= wait {
                 expired.push((i, q));
             } else {
                 pending = true;
@@ -698,6 +741,29 @@ mod tests {
             policy: policy.into(),
             seed,
         }
+    }
+
+    #[test]
+    fn a_spare_lasts_the_stuck_time_from_its_first_time_unless_it_lapsed() {
+        let stuck_time = 30.0;
+        let mut s = Spare::at(100.0);
+        // Renewed within the stuck time: spared until 30 s after the first time.
+        assert!(s.renew(100.0, stuck_time));
+        assert!(s.renew(120.0, stuck_time));
+        assert!(s.renew(129.9, stuck_time));
+        assert!(!s.renew(130.0, stuck_time), "30 s since the first spare");
+        assert_eq!(s.first, 100.0);
+        // Not renewed for longer than the stuck time: the old spare is forgotten, and the
+        // cell is spared afresh (it used to be written off at once).
+        let mut s = Spare::at(100.0);
+        assert!(s.renew(500.0, stuck_time), "a lapsed spare starts afresh");
+        assert_eq!(s, Spare::at(500.0));
+        assert!(s.renew(520.0, stuck_time));
+        assert!(!s.renew(530.0, stuck_time));
+        // Exactly the stuck time since the last spare has not lapsed.
+        let mut s = Spare::at(0.0);
+        assert!(s.renew(20.0, stuck_time));
+        assert!(!s.renew(50.0, stuck_time), "renewed at 20, first at 0");
     }
 
     #[test]

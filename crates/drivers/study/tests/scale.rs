@@ -161,6 +161,35 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     );
 }
 
+/// A robot held in one cell whose agent names one first step towards its goal, then another
+/// (two ways round), restarted the stuck clock with each name: in the continuous study's 40 m
+/// scene (top-right, 2 robots, second seed, spread) it sat 500 s in one cell and the trial
+/// idled to the time cap at 95.6 % explored. The clock now runs on until the robot leaves the
+/// cell.
+#[test]
+fn a_robot_held_in_one_cell_is_found_stuck_though_its_target_alternates() {
+    let cfg = ScaleConfig {
+        methods: vec!["spread".into()],
+        sides: vec![40],
+        teams: vec![2],
+        starts: vec![ScaleStart::TopRight],
+        seeds: 2,
+        ..ScaleConfig::continuous_default()
+    };
+    let plan = cfg.plan().unwrap();
+    assert_eq!(plan[1].planned.key.seed, cfg.seed_base + 1);
+    let o = madenet_study::runner::run_one(&plan[1].planned, &registry()).unwrap();
+    let c = o.row.continuous.expect("continuous columns");
+    assert!(
+        o.row.completed && c.et_s < 1_700.0,
+        "explored {:.3} at {} s, stuck {}",
+        o.row.explored,
+        c.et_s,
+        c.stuck
+    );
+    assert!(c.stuck > 0, "found stuck at least once");
+}
+
 #[test]
 fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_same_trials() {
     let cfg = ScaleConfig {
