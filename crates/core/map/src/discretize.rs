@@ -293,6 +293,22 @@ pub fn opened_passages(fine: &OccGrid, coarse: &OccGrid) -> Vec<crate::Pos> {
     };
     let (rows, cols) = (ranges(fh, ch), ranges(fw, cw));
     let free = |p: Pos| coarse.get(p) == Occupancy::Free;
+    // Passable pixels, and obstacle pixels per cell: a cell whose 3 × 3 neighbourhood holds
+    // none is one part shared with its neighbours (most cells of a map), skipped unsearched.
+    let passable_px: Vec<bool> = fine
+        .cells()
+        .iter()
+        .map(|&o| o != Occupancy::Obstacle)
+        .collect();
+    let mut obstacles_in = vec![0u32; ch * cw];
+    for r in 0..fh {
+        for c in 0..fw {
+            let (cr, cc) = (cell_of(r), cell_of(c));
+            if !passable_px[r * fw + c] && cr < ch && cc < cw {
+                obstacles_in[cr * cw + cc] += 1;
+            }
+        }
+    }
     let mut opened = Vec::new();
     // Component labels of one window (reused), and a stack for the flood fill.
     let mut label = Vec::new();
@@ -303,6 +319,10 @@ pub fn opened_passages(fine: &OccGrid, coarse: &OccGrid) -> Vec<crate::Pos> {
             if !free(a) || rows[cr].0 >= rows[cr].1 || cols[cc].0 >= cols[cc].1 {
                 continue;
             }
+            let near = |lo: usize, n: usize| lo.saturating_sub(1)..(lo + 2).min(n);
+            if near(cr, ch).all(|r| near(cc, cw).all(|c| obstacles_in[r * cw + c] == 0)) {
+                continue;
+            }
             let r0 = rows[cr.saturating_sub(1)].0.min(rows[cr].0);
             let r1 = rows[(cr + 1).min(ch - 1)].1.max(rows[cr].1);
             let c0 = cols[cc.saturating_sub(1)].0.min(cols[cc].0);
@@ -310,8 +330,7 @@ pub fn opened_passages(fine: &OccGrid, coarse: &OccGrid) -> Vec<crate::Pos> {
             let ww = c1 - c0;
             label.clear();
             label.resize((r1 - r0) * ww, u32::MAX);
-            let passable =
-                |r: usize, c: usize| fine.get(Pos::new(r as i32, c as i32)) != Occupancy::Obstacle;
+            let passable = |r: usize, c: usize| passable_px[r * fw + c];
             let mut parts = 0u32;
             for r in r0..r1 {
                 for c in c0..c1 {
@@ -364,6 +383,11 @@ pub fn opened_passages(fine: &OccGrid, coarse: &OccGrid) -> Vec<crate::Pos> {
             let walled = [Pos::new(a.row + 1, a.col), Pos::new(a.row, a.col + 1)]
                 .into_iter()
                 .filter(|b| (b.row as usize) < ch && (b.col as usize) < cw && free(*b))
+                // A cell without pixels (a fine map smaller than the coarse one) tells nothing.
+                .filter(|b| {
+                    let (pr, pc) = (rows[b.row as usize], cols[b.col as usize]);
+                    pr.0 < pr.1 && pc.0 < pc.1
+                })
                 .any(|b| !parts_of(b).iter().any(|l| here.contains(l)));
             if split || walled {
                 opened.push(a);
