@@ -244,6 +244,16 @@ fn safe(
                     return false;
                 }
             }
+            // It may also stop where it stands (it brakes for us as we do for it, and a
+            // prediction at constant velocity then has it elsewhere): within the first second,
+            // never closer than a touch plus 2 cm to where it is now, unless moving away.
+            if k < 10 {
+                let gap_now = (n.pose.x - x).hypot(n.pose.y - y);
+                let keep_now = 2.0 * r.radius + 0.02;
+                if gap_now < keep_now && gap_now < (n.pose.x - pose.x).hypot(n.pose.y - pose.y) {
+                    return false;
+                }
+            }
         }
     }
     true
@@ -475,6 +485,53 @@ mod tests {
         let c = lp.command(&cfg, 1.0, &m, pose, (0.0, 0.0), Pos::new(1, 2), &[], true);
         assert!(!matches!(c, Command::Impassable), "{c:?}");
         assert!(lp.path().iter().any(|&(_, y)| y > 3.0), "{:?}", lp.path());
+    }
+
+    #[test]
+    fn a_teammate_that_may_stop_where_it_stands_is_not_driven_into() {
+        let cfg = ContinuousConfig::default();
+        let m = RobotMap::new(
+            40,
+            40,
+            1.0,
+            crate::config::MappingConfig::default(),
+            &DiscretizeParams::default(),
+        );
+        // 0.6 m ahead, driving away at full speed: at constant velocity it stays ahead, but
+        // if it stops where it stands we would touch it within the second.
+        let ahead = Neighbour {
+            pose: Pose {
+                x: 1.6,
+                y: 2.0,
+                theta: 0.0,
+            },
+            velocity: (0.5, 0.0),
+            priority: false,
+        };
+        let at = |theta: f64| Pose {
+            x: 1.0,
+            y: 2.0,
+            theta,
+        };
+        let strict = rollout_clearance(&cfg, &m, at(0.0), 0.0);
+        let go = |pose: Pose, n: Neighbour| {
+            safe(
+                &cfg,
+                &m,
+                pose,
+                (0.3, 0.0),
+                (0.5, 0.0),
+                0.5,
+                &[n],
+                (strict, strict),
+            )
+        };
+        assert!(!go(at(0.0), ahead), "towards where it stands");
+        // Away from it, always; and beside it, out of reach, too.
+        assert!(go(at(std::f64::consts::PI), ahead));
+        let mut beside = ahead;
+        beside.pose.y = 2.5;
+        assert!(go(at(0.0), beside));
     }
 
     #[test]

@@ -132,11 +132,13 @@ enum Ask {
 }
 
 /// A cell spared from a robot's write-off ([`ContinuousTrial::write_off_around`]): since when
-/// it has been spared without a break, and when it was spared last.
+/// it has been spared without a break, when it was spared last, and whether it has started
+/// afresh once already.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Spare {
     first: f64,
     last: f64,
+    restarted: bool,
 }
 
 impl Spare {
@@ -144,15 +146,22 @@ impl Spare {
         Spare {
             first: now,
             last: now,
+            restarted: false,
         }
     }
 
     /// Spares the cell again at `now`; whether it stays spared. Sparing lasts `stuck_time`
     /// from its first time, unless it lapsed: a spare not renewed within `stuck_time` (the
-    /// robot went elsewhere) is over, and sparing the cell later starts afresh.
+    /// robot went elsewhere) is over, and sparing the cell later starts afresh — once: a
+    /// robot that keeps coming back to a cell it cannot read, less often than every
+    /// `stuck_time`, would otherwise spare it for ever (an unread cell stays a frontier, so
+    /// the idle team's write-off never comes).
     fn renew(&mut self, now: f64, stuck_time: f64) -> bool {
-        if now - self.last > stuck_time {
-            *self = Spare::at(now);
+        if now - self.last > stuck_time && !self.restarted {
+            *self = Spare {
+                restarted: true,
+                ..Spare::at(now)
+            };
         }
         self.last = now;
         now - self.first < stuck_time
@@ -544,7 +553,7 @@ impl ContinuousTrial {
     /// beams stop at teammates). A spared cell is tried again the next time a goal is
     /// reached, and written off all the same once `planner.stuck_time` has passed since it was
     /// first spared (by the idle team's check, stage 2c, when no goal is reached any more); a
-    /// spare not renewed within `planner.stuck_time` has lapsed, and the next one starts afresh. Written-off cells count as explored (resolved as far as the team can) and
+    /// spare not renewed within `planner.stuck_time` has lapsed, and the next one starts afresh (once per cell, [`Spare::renew`]). Written-off cells count as explored (resolved as far as the team can) and
     /// are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
         let now = self.world.time();
@@ -754,12 +763,16 @@ mod tests {
         assert!(!s.renew(130.0, stuck_time), "30 s since the first spare");
         assert_eq!(s.first, 100.0);
         // Not renewed for longer than the stuck time: the old spare is forgotten, and the
-        // cell is spared afresh (it used to be written off at once).
+        // cell is spared afresh (it used to be written off at once) — once.
         let mut s = Spare::at(100.0);
         assert!(s.renew(500.0, stuck_time), "a lapsed spare starts afresh");
-        assert_eq!(s, Spare::at(500.0));
+        assert_eq!((s.first, s.last, s.restarted), (500.0, 500.0, true));
         assert!(s.renew(520.0, stuck_time));
         assert!(!s.renew(530.0, stuck_time));
+        assert!(
+            !s.renew(900.0, stuck_time),
+            "a second lapse does not start afresh: a robot coming back for ever"
+        );
         // Exactly the stuck time since the last spare has not lapsed.
         let mut s = Spare::at(0.0);
         assert!(s.renew(20.0, stuck_time));
