@@ -217,6 +217,12 @@ fn safe(
         .iter()
         .map(|n| (n.pose.x, n.pose.y, n.pose.theta))
         .collect();
+    // Contact plus 2 cm; and how far each teammate stands from us now.
+    let touch = 2.0 * r.radius + 0.02;
+    let apart: Vec<f64> = neighbours
+        .iter()
+        .map(|n| (n.pose.x - pose.x).hypot(n.pose.y - pose.y))
+        .collect();
     let mut driven = 0.0;
     for k in 0..steps {
         let target_v = if driven < reach { command.0 } else { 0.0 };
@@ -227,7 +233,7 @@ fn safe(
         if map.disc_hits_occupied(x, y, clearance) {
             return false;
         }
-        for (o, n) in others.iter_mut().zip(neighbours) {
+        for ((o, n), &apart) in others.iter_mut().zip(neighbours).zip(&apart) {
             *o = integrate(o.0, o.1, o.2, n.velocity.0, n.velocity.1, dt);
             let gap = (o.0 - x).hypot(o.1 - y);
             // Right of way: keep out of its predicted path by a margin; otherwise only the
@@ -235,7 +241,7 @@ fn safe(
             let keep = if n.priority {
                 2.0 * mate_clearance
             } else {
-                2.0 * r.radius + 0.02
+                touch
             };
             if gap < keep && (n.priority || k < 10) {
                 // Moving away from it is always allowed.
@@ -249,8 +255,7 @@ fn safe(
             // never closer than a touch plus 2 cm to where it is now, unless moving away.
             if k < 10 {
                 let gap_now = (n.pose.x - x).hypot(n.pose.y - y);
-                let keep_now = 2.0 * r.radius + 0.02;
-                if gap_now < keep_now && gap_now < (n.pose.x - pose.x).hypot(n.pose.y - pose.y) {
+                if gap_now < touch && gap_now < apart {
                     return false;
                 }
             }

@@ -553,8 +553,9 @@ impl ContinuousTrial {
     /// beams stop at teammates). A spared cell is tried again the next time a goal is
     /// reached, and written off all the same once `planner.stuck_time` has passed since it was
     /// first spared (by the idle team's check, stage 2c, when no goal is reached any more); a
-    /// spare not renewed within `planner.stuck_time` has lapsed, and the next one starts afresh (once per cell, [`Spare::renew`]). Written-off cells count as explored (resolved as far as the team can) and
-    /// are reported (`written_off_cells`).
+    /// spare not renewed within `planner.stuck_time` has lapsed, and the next one starts
+    /// afresh (once per cell, [`Spare::renew`]). Written-off cells count as explored (resolved
+    /// as far as the team can) and are reported (`written_off_cells`).
     fn write_off_around(&mut self, i: usize, cell: Pos) {
         let now = self.world.time();
         let cell_size = self.world.scenario().cell_size;
