@@ -52,6 +52,11 @@ pub enum Command {
     Impassable,
 }
 
+/// How far past a cell's edge (in cell sides) a robot must be to have entered it: a robot
+/// turning on the line between two cells would otherwise enter both by turns, and its agent,
+/// asked at every entry, would send it back and forth for ever.
+pub const ENTER_DEPTH: f64 = 0.1;
+
 /// One robot's local planner (it keeps its local path between calls).
 #[derive(Clone, Debug, Default)]
 pub struct LocalPlanner {
@@ -71,6 +76,17 @@ impl LocalPlanner {
         self.path
             .last()
             .is_some_and(|&(px, py)| (px - pose.x).hypot(py - pose.y) < PASSED)
+    }
+
+    /// Whether a robot at `pose` has entered `cell` (cells of `cell_size` metres): it stands
+    /// [`ENTER_DEPTH`] of a cell past the cell's edge, or at the end of its local path there.
+    pub fn entered(&self, pose: Pose, cell: Pos, cell_size: f64) -> bool {
+        let (x0, y0) = (cell.col as f64 * cell_size, cell.row as f64 * cell_size);
+        let depth = (pose.x - x0)
+            .min(x0 + cell_size - pose.x)
+            .min(pose.y - y0)
+            .min(y0 + cell_size - pose.y);
+        depth >= ENTER_DEPTH * cell_size || (depth >= 0.0 && self.arrived(pose))
     }
 
     /// Forgets the local path (the target changed or the map did).

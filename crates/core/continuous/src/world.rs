@@ -694,8 +694,9 @@ fn cast_beam(
     hit
 }
 
-/// Bytes a robot's map takes per pixel (log-odds, the observed flag, the inflation count).
-const MAP_BYTES_PER_PIXEL: f64 = 9.0;
+/// Bytes a robot's map takes per pixel (log-odds, the observed flag, the scan's hit mark, the
+/// inflation count).
+const MAP_BYTES_PER_PIXEL: f64 = 10.0;
 /// The most memory the robots' maps of one trial may take (4 GB).
 const MAX_MAP_BYTES: f64 = 4.0e9;
 

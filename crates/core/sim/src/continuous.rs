@@ -5,8 +5,8 @@
 //! 1. **Radio** (at `radio_rate_hz`): pairs within d_s with line of sight try to exchange
 //!    (CSP, dropouts: [`madenet_world::Radio`]); β goes both ways along each success.
 //! 2. **Agents**: a robot asks its agent for a move when it enters its target cell (a tenth
-//!    of a cell past its edge, [`ENTER_DEPTH`], or at the local path's end; cells a detour
-//!    passes through do not count), when its agent said "stay" `stay_period` seconds ago,
+//!    of a cell past its edge, or at the local path's end: [`LocalPlanner::entered`]; cells a
+//!    detour passes through do not count), when its agent said "stay" `stay_period` seconds ago,
 //!    when its local planner found the target cell impassable, or when teammates have held it
 //!    up for `wait_time` seconds. A scan after a robot reached its goal, the neighbours of that
 //!    cell its map still cannot read are written off as obstacles to it (seen from the frontier
@@ -168,6 +168,40 @@ impl Spare {
     }
 }
 
+/// The stuck rule's clock of one robot: since when its current target has been named, and
+/// the cell it stood in then.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct StuckClock {
+    since: f64,
+    from: Pos,
+}
+
+impl Default for StuckClock {
+    fn default() -> Self {
+        StuckClock {
+            since: 0.0,
+            from: Pos::new(-1, -1),
+        }
+    }
+}
+
+impl StuckClock {
+    /// A new target named at `now` from cell `here` (`had_target`: the robot was driving to
+    /// another). The clock restarts, but runs on while the robot has not left the cell it was
+    /// in when the clock started: a robot held in place whose agent names one first step, then
+    /// another (two ways round to one goal), would otherwise restart it with every new name
+    /// and never be found stuck (measured: a 40 m trial held 500 s in one cell until the time
+    /// cap).
+    fn named(&mut self, had_target: bool, here: Pos, now: f64) {
+        if !had_target || self.from != here {
+            *self = StuckClock {
+                since: now,
+                from: here,
+            };
+        }
+    }
+}
+
 /// A trial in the continuous world.
 pub struct ContinuousTrial {
     world: ContinuousWorld,
@@ -193,8 +227,7 @@ pub struct ContinuousTrial {
     spared: BTreeMap<(usize, Pos), Spare>,
     /// When each robot's current target was named (the stuck rule), and the cell the robot
     /// was in then.
-    target_since: Vec<f64>,
-    target_from: Vec<Pos>,
+    clocks: Vec<StuckClock>,
     stuck: u64,
     /// Since when no robot's agent has had a reachable frontier.
     no_frontier_since: Option<f64>,
@@ -272,8 +305,7 @@ impl ContinuousTrial {
             written_off: 0,
             visited,
             spared: BTreeMap::new(),
-            target_since: vec![0.0; n],
-            target_from: vec![Pos::new(-1, -1); n],
+            clocks: vec![StuckClock::default(); n],
             stuck: 0,
             no_frontier_since: None,
             exchanged: vec![Vec::new(); n],
@@ -378,8 +410,7 @@ impl ContinuousTrial {
             // Only the target counts: cells the local path passes through on a detour do not.
             let entered = cell != self.cells[i]
                 && self.targets[i] == Some(cell)
-                && (depth_in_cell(pose, cell, cell_size) >= ENTER_DEPTH * cell_size
-                    || self.planners[i].arrived(pose));
+                && self.planners[i].entered(pose, cell, cell_size);
             let due = self.targets[i].is_none() && now >= self.ask_at[i];
             if entered || due || self.asks[i] == Ask::Yes {
                 self.cells[i] = cell;
@@ -408,7 +439,7 @@ impl ContinuousTrial {
             let Some(target) = self.targets[i] else {
                 continue;
             };
-            if now - self.target_since[i] >= cfg.planner.stuck_time {
+            if now - self.clocks[i].since >= cfg.planner.stuck_time {
                 // The stuck rule (`planner.stuck_time`).
                 self.stuck += 1;
                 self.world.block(i, target);
@@ -527,15 +558,8 @@ impl ContinuousTrial {
         } else {
             if self.targets[i] != Some(next) {
                 self.planners[i].reset();
-                // The stuck clock runs on while the robot has not left the cell it was in
-                // when the clock started: a robot held in place whose agent names one first
-                // step, then another (two ways round to one goal), would otherwise restart
-                // it with every new name and never be found stuck (measured: a 40 m trial
-                // held 500 s in one cell until the time cap).
-                if self.targets[i].is_none() || self.target_from[i] != here {
-                    self.target_since[i] = self.world.time();
-                    self.target_from[i] = here;
-                }
+                let had_target = self.targets[i].is_some();
+                self.clocks[i].named(had_target, here, self.world.time());
             }
             self.targets[i] = Some(next);
         }
@@ -710,21 +734,6 @@ impl ContinuousTrial {
     }
 }
 
-/// How far past a cell's edge (in cell sides) a robot must be to have entered it: a robot
-/// turning on the line between two cells would otherwise enter both by turns, and its agent,
-/// asked at every entry, would send it back and forth for ever.
-const ENTER_DEPTH: f64 = 0.1;
-
-/// How far `pose` lies inside `cell` (cells of `cell_size` metres): the distance to its
-/// nearest edge.
-fn depth_in_cell(pose: madenet_continuous::Pose, cell: Pos, cell_size: f64) -> f64 {
-    let (x0, y0) = (cell.col as f64 * cell_size, cell.row as f64 * cell_size);
-    (pose.x - x0)
-        .min(x0 + cell_size - pose.x)
-        .min(pose.y - y0)
-        .min(y0 + cell_size - pose.y)
-}
-
 /// The distance from `p` to the segment `a`–`b`.
 fn segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
@@ -751,6 +760,36 @@ mod tests {
             policy: policy.into(),
             seed,
         }
+    }
+
+    #[test]
+    fn the_stuck_clock_runs_on_while_the_robot_stays_in_its_cell() {
+        let (a, b) = (Pos::new(3, 3), Pos::new(3, 4));
+        let mut c = StuckClock::default();
+        c.named(false, a, 10.0);
+        assert_eq!(
+            c,
+            StuckClock {
+                since: 10.0,
+                from: a
+            }
+        );
+        // Other first steps named from the same cell while driving: the clock runs on.
+        c.named(true, a, 25.0);
+        c.named(true, a, 39.0);
+        assert_eq!(c.since, 10.0);
+        // Named from another cell (the robot moved): a new clock.
+        c.named(true, b, 41.0);
+        assert_eq!(
+            c,
+            StuckClock {
+                since: 41.0,
+                from: b
+            }
+        );
+        // After a stay (no target) in the same cell: a new clock too.
+        c.named(false, b, 60.0);
+        assert_eq!(c.since, 60.0);
     }
 
     #[test]

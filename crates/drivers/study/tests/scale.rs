@@ -162,32 +162,33 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
 }
 
 /// A robot held in one cell whose agent names one first step towards its goal, then another
-/// (two ways round), restarted the stuck clock with each name: in the continuous study's 40 m
-/// scene (top-right, 2 robots, second seed, spread) it sat 500 s in one cell and the trial
-/// idled to the time cap at 95.6 % explored. The clock now runs on until the robot leaves the
-/// cell.
+/// (two ways round), restarted the stuck clock with each name and was never found stuck (an
+/// earlier version's 40 m trial sat 500 s in one cell until the time cap). The clock now runs
+/// on until the robot leaves the cell (`StuckClock`, unit-tested in madenet-sim). In the
+/// continuous study's 40 m scene (top-right, 6 robots, first seed, spread) the rule finds a
+/// robot stuck twice and the team is done at 327 s; without it, none is found stuck and the
+/// team takes 492 s (measured with the rule disabled).
 #[test]
 fn a_robot_held_in_one_cell_is_found_stuck_though_its_target_alternates() {
     let cfg = ScaleConfig {
         methods: vec!["spread".into()],
         sides: vec![40],
-        teams: vec![2],
+        teams: vec![6],
         starts: vec![ScaleStart::TopRight],
-        seeds: 2,
+        seeds: 1,
         ..ScaleConfig::continuous_default()
     };
     let plan = cfg.plan().unwrap();
-    assert_eq!(plan[1].planned.key.seed, cfg.seed_base + 1);
-    let o = madenet_study::runner::run_one(&plan[1].planned, &registry()).unwrap();
+    assert_eq!(plan[0].planned.key.seed, cfg.seed_base);
+    let o = madenet_study::runner::run_one(&plan[0].planned, &registry()).unwrap();
     let c = o.row.continuous.expect("continuous columns");
     assert!(
-        o.row.completed && c.et_s < 1_700.0,
+        o.row.completed && c.et_s < 400.0 && c.stuck > 0,
         "explored {:.3} at {} s, stuck {}",
         o.row.explored,
         c.et_s,
         c.stuck
     );
-    assert!(c.stuck > 0, "found stuck at least once");
 }
 
 #[test]
@@ -218,15 +219,27 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     let mut rdr = csv::Reader::from_reader(text.as_bytes());
     let cols = rdr.headers().unwrap().clone();
     let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let mut incomplete = 0;
     for rec in rdr.records() {
         let rec = rec.unwrap();
         let et: f64 = rec[col("et_s")].parse().unwrap();
         let tns: f64 = rec[col("tns")].parse().unwrap();
         // TNS counts whole simulated seconds: ET rounded up.
         assert_eq!(tns, et.ceil(), "{rec:?}");
-        assert_eq!(&rec[col("completed")], "true", "{rec:?}");
         assert!(et > 10.0 && et < 600.0, "{rec:?}");
+        assert_eq!(&rec[col("obstacle_collisions")], "0", "{rec:?}");
+        assert_eq!(&rec[col("robot_collisions")], "0", "{rec:?}");
+        // A trial that ends incomplete says so, and ends well before the time cap: nf's lone
+        // robot (seed 1) squeezes past a shelf's end into a cell its map then reads as walled
+        // in (cells with 25 % of their pixels occupied are obstacles), and stops with 1 cell
+        // of 130 unknown — the README's trap of the paper's rule.
+        if &rec[col("completed")] != "true" {
+            incomplete += 1;
+            let explored: f64 = rec[col("explored")].parse().unwrap();
+            assert!(explored > 0.95 && et < 300.0, "{rec:?}");
+        }
     }
+    assert!(incomplete <= 1, "{incomplete} of 12 trials incomplete");
     // Seconds, as means per cell; more robots explore the 12 m scene faster than one.
     let et = |team| {
         r.cells
