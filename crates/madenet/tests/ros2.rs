@@ -144,3 +144,68 @@ fn launch_on_real_robots_explores_through_their_maps_and_poses() {
         assert!(path.len() > 5, "robot {i} hardly moved");
     }
 }
+
+#[test]
+fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
+    // The continuous world stands in for the robots: three simulated differential-drive robots
+    // publish their lidar scans, their own 0.1 m occupancy grids and their poses, and drive to
+    // the goals `launch --ros2-robots` sends; the world node reads the fine maps by the paper's
+    // rule. A 10 × 10 m room with a free-standing 2 × 2 m block.
+    use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+    let (_router, endpoint) = router();
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.clone()],
+        ..Default::default()
+    };
+    let room = "..........\n".repeat(4) + &"....##....\n".repeat(2) + &"..........\n".repeat(4);
+    let dir = madenet_testkit::Scratch::new("ros2-continuous");
+    let map = dir.join("room.txt");
+    std::fs::write(&map, &room).unwrap();
+    let truth = madenet_map::io::load(&map, &Default::default()).unwrap();
+    let starts = [Pos::new(0, 0), Pos::new(0, 1), Pos::new(1, 0)];
+    let scene = std::sync::Arc::new(Scene::from_grid(&truth, "room"));
+    let world = ContinuousWorld::new(
+        scene,
+        &starts,
+        Default::default(),
+        ContinuousConfig::default(),
+        5,
+    )
+    .unwrap();
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let (out, run) = std::thread::scope(|s| {
+        let (opts, stop) = (&opts, &stop);
+        let team = s
+            .spawn(move || madenet_ros2::run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
+        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args([
+                "launch",
+                "--json",
+                "--trajectory",
+                "--map",
+                map.to_str().unwrap(),
+            ])
+            .args(["--start", "0,0;0,1;1,0", "--policy", "nf"])
+            .args(["--ros2-robots", &endpoint, "--step-timeout-s", "2"])
+            .output()
+            .unwrap();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        (out, team.join().unwrap())
+    });
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    assert_eq!(run.collisions.obstacle + run.collisions.robot, 0, "{run:?}");
+    let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
+    for i in 0..3 {
+        // Each robot drove through free cells only; the world node's last cell of it is where
+        // the simulated robot stands.
+        assert!(run.cells[i].len() > 3, "robot {i}: {:?}", run.cells[i]);
+        assert!(run.cells[i].iter().all(|&p| truth.is_free(p)));
+        assert_eq!(positions.last().unwrap()[i], *run.cells[i].last().unwrap());
+    }
+}

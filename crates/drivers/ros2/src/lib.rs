@@ -12,6 +12,9 @@
 //! madenet cells ([`cells_from_grid`], [`MapFrame::cell_at`]). [`RealRobots`] puts real robots
 //! in place of madenet's simulated world: the world node ([`madenet_runtime::run_ground_with`])
 //! observes them through their maps and poses and sends each move as `/robot<i>/goal_pose`.
+//! [`run_continuous_stand_in`] lets madenet's continuous world be those robots: each simulated
+//! robot publishes `/robot<i>/scan` (`sensor_msgs/msg/LaserScan`), its own fine
+//! `/robot<i>/map` and `/robot<i>/pose`, and drives to each `/robot<i>/goal_pose`.
 //!
 //! The wire format is rmw_zenoh's (ROS 2 Jazzy): key expressions
 //! `<domain>/<topic>/<type>/<RIHS01 type hash>`, CDR payloads, liveliness tokens for the ROS
@@ -47,10 +50,12 @@ use madenet_runtime::zenoh_bus::zenoh_config;
 use msgs::{Header, MapMetaData, OccupancyGrid, Point, Pose, PoseStamped, Quaternion, Time};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
+pub use continuous_stand_in::{run_continuous_stand_in, StandInRun};
 pub use real::RealRobots;
 pub use rmw::{Durability, Node, Publisher, QosProfile, Reliability, Ros2Context, Subscription};
 pub use stand_in::run_stand_in;
 
+pub mod continuous_stand_in;
 pub mod msgs;
 mod real;
 pub mod rmw;
@@ -289,7 +294,7 @@ pub fn stamp(t: SystemTime) -> Time {
     }
 }
 
-fn header(t: Time) -> Header {
+pub(crate) fn header(t: Time) -> Header {
     Header {
         stamp: t,
         frame_id: FRAME_ID.into(),
@@ -565,7 +570,12 @@ impl RobotFeed {
     pub fn latest(&mut self, wait: Duration) -> Result<Option<(&[Occupancy], Pos)>, Ros2Error> {
         let deadline = std::time::Instant::now() + wait;
         loop {
+            // Only the newest map counts: read the cells of that one alone.
+            let mut newest = None;
             while let Some(m) = self.map.recv_timeout(Duration::ZERO)? {
+                newest = Some(m);
+            }
+            if let Some(m) = newest {
                 self.cells = Some(cells_from_grid(&m, &self.frame, &self.topics[0])?);
             }
             while let Some(p) = self.pose.recv_timeout(Duration::ZERO)? {

@@ -167,6 +167,32 @@ pub struct OccupancyGrid {
     pub data: Vec<i8>,
 }
 
+/// `sensor_msgs/msg/LaserScan`: ranges counter-clockwise from `angle_min` (REP 103: 0 ahead
+/// along the sensor frame's x), +∞ where a beam returned nothing within `range_max` (REP 117).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LaserScan {
+    /// Stamp (of the first beam) and the sensor's frame.
+    pub header: Header,
+    /// Angle of the first beam (rad).
+    pub angle_min: f32,
+    /// Angle of the last beam (rad).
+    pub angle_max: f32,
+    /// Angle between beams (rad).
+    pub angle_increment: f32,
+    /// Time between beams (s).
+    pub time_increment: f32,
+    /// Time between scans (s).
+    pub scan_time: f32,
+    /// Shortest range measured (m).
+    pub range_min: f32,
+    /// Longest range measured (m).
+    pub range_max: f32,
+    /// One range per beam (m).
+    pub ranges: Vec<f32>,
+    /// One intensity per beam (madenet's lidar has none: empty).
+    pub intensities: Vec<f32>,
+}
+
 /// An `int8[]` written as one byte block (the same bytes as a sequence of `int8`, without a
 /// serializer call per element).
 mod int8_sequence {
@@ -218,6 +244,12 @@ impl RosMessage for OccupancyGrid {
         "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7";
 }
 
+impl RosMessage for LaserScan {
+    const TYPE_NAME: &'static str = "sensor_msgs/msg/LaserScan";
+    const TYPE_HASH: &'static str =
+        "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828";
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,6 +265,10 @@ mod tests {
         assert_eq!(
             PoseStamped::TYPE_HASH,
             "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8"
+        );
+        assert_eq!(
+            LaserScan::TYPE_HASH,
+            "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828"
         );
         assert_eq!(
             OccupancyGrid::dds_type_name(),

@@ -6,7 +6,7 @@
 
 use madenet_map::paper::{paper_map, Corner};
 use madenet_map::Pos;
-use madenet_ros2::{loopback_router, run_stand_in, MapFrame, RealRobots};
+use madenet_ros2::{loopback_router, run_continuous_stand_in, run_stand_in, MapFrame, RealRobots};
 use madenet_runtime::transport::ChannelBus;
 use madenet_runtime::{nodes_of, run_ground_with, run_radio, run_robot, Timeouts};
 use madenet_sim::{PolicyRegistry, TrialSpec};
@@ -76,5 +76,91 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
         assert!(path.windows(2).all(|w| w[0].chebyshev(w[1]) == 1));
         assert!(path.iter().all(|&p| truth.is_free(p)));
         assert_eq!(last[i], *path.last().unwrap(), "robot {i}");
+    }
+}
+
+/// The continuous world in place of real robots: three simulated differential-drive robots
+/// ([`run_continuous_stand_in`]) publish their lidar scans, their own fine occupancy grids and
+/// their poses, and drive with the local planner to the cells `/robot<i>/goal_pose` names. The
+/// world node stands on [`RealRobots`], which reads the fine maps by the paper's rule; the nf
+/// agents explore the room (a free-standing 2 × 2 m block in a 10 × 10 m room) to completion
+/// through ROS 2 alone, without a collision.
+#[test]
+fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
+    use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+    use madenet_map::{OccGrid, Occupancy};
+    use std::sync::Arc;
+
+    let (_router, opts) = loopback_router().unwrap();
+    let mut truth = OccGrid::new(10, 10, Occupancy::Free);
+    for (r, c) in [(4, 4), (4, 5), (5, 4), (5, 5)] {
+        truth.set(Pos::new(r, c), Occupancy::Obstacle);
+    }
+    let spec = TrialSpec {
+        map: truth.clone(),
+        map_name: "room".into(),
+        starts: vec![Pos::new(0, 0), Pos::new(0, 1), Pos::new(1, 0)],
+        config: Default::default(),
+        policy: "nf".into(),
+        seed: 3,
+    };
+    let n = spec.starts.len();
+    let scene = Arc::new(Scene::from_grid(&truth, "room"));
+    let world = ContinuousWorld::new(
+        scene,
+        &spec.starts,
+        spec.config.clone(),
+        ContinuousConfig::default(),
+        spec.seed,
+    )
+    .unwrap();
+    let registry = PolicyRegistry::builtin();
+    let timeouts = Timeouts::new(Duration::from_secs(10));
+    let stop = AtomicBool::new(false);
+    let (result, run) = std::thread::scope(|s| {
+        let (opts, stop) = (&opts, &stop);
+        // 20 simulated seconds per second: a cell's drive in a fraction of the step timeout.
+        let team = s.spawn(move || run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
+        let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
+        let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
+        let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
+        s.spawn(move || run_radio(radio, n, radio_bus, timeouts).unwrap());
+        for (i, bus) in buses.enumerate() {
+            let agent = madenet_sim::build_agent(&spec, &registry, i).unwrap();
+            s.spawn(move || run_robot(agent, bus, timeouts).unwrap());
+        }
+        let ctx = opts.context().unwrap();
+        let real = RealRobots::new(
+            &ctx,
+            n,
+            MapFrame::of(&truth),
+            spec.config.clone(),
+            // A robot held up by a teammate (both sent into one cell) stays after 2 s (40 s
+            // simulated), as a real robot that did not get there.
+            Duration::from_secs(2),
+            Duration::from_secs(20),
+        )
+        .unwrap();
+        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {});
+        stop.store(true, Ordering::Relaxed);
+        (result, team.join().unwrap())
+    });
+    let r = result.unwrap();
+    eprintln!(
+        "continuous robots: {} timesteps, {:.1} s simulated, {} goals aborted, explored {:.3}",
+        r.metrics.tns, run.time, run.aborted, r.metrics.explored
+    );
+    assert!(r.metrics.completed, "no frontier left: {:?}", r.metrics);
+    assert_eq!(r.absent_robot_steps, 0);
+    assert_eq!(run.collisions.obstacle + run.collisions.robot, 0, "{run:?}");
+    let last = r.positions.last().unwrap();
+    for (i, &at) in last.iter().enumerate() {
+        // Each robot drove through free cells only, went where it was sent, and the world
+        // node's last position of it is where the simulated robot stands.
+        let cells = &run.cells[i];
+        assert!(cells.len() > 3, "robot {i} hardly moved: {cells:?}");
+        assert!(cells.iter().all(|&p| truth.is_free(p)), "{cells:?}");
+        assert!(run.goals[i].len() > 3, "robot {i}: {:?}", run.goals[i]);
+        assert_eq!(at, *cells.last().unwrap(), "robot {i}");
     }
 }

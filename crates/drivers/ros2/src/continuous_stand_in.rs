@@ -1,0 +1,349 @@
+//! The continuous world as a stand-in for a real robot team over ROS 2: each simulated
+//! differential-drive robot publishes what a TurtleBot with a lidar and SLAM would —
+//! `/robot<i>/scan` (`sensor_msgs/LaserScan`), `/robot<i>/map` (its own fine occupancy grid,
+//! `nav_msgs/OccupancyGrid`) and `/robot<i>/pose` — and drives to the cell each
+//! `/robot<i>/goal_pose` names with the continuous world's local planner, the way nav2 would
+//! drive to a goal. [`crate::RealRobots`] (the world node of `launch --ros2-robots`) reads the
+//! fine maps through the paper's rule, as it would a real robot's.
+//!
+//! Coordinates: the world's x runs right and y down from the map's top-left corner; ROS's
+//! `map` frame has y up from the bottom-left corner (the map_server convention, as
+//! [`crate::MapFrame`]), so y and headings are mirrored. A goal is reached when the robot has
+//! entered its cell ([`madenet_continuous::LocalPlanner::entered`]); a goal the local planner
+//! finds impassable is dropped (nav2 aborts it) and the robot stays.
+
+use crate::msgs::{LaserScan, OccupancyGrid, PoseStamped, Time};
+use crate::{
+    header, map_qos, MapFrame, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription,
+};
+use madenet_continuous::{Collisions, Command, ContinuousWorld, LocalPlanner, Neighbour, Pose};
+use madenet_map::Pos;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// What a stand-in run did, for checks: per robot the cells it stood in (in order, each once
+/// per visit) and the goals it was sent; the team's collisions; the simulated seconds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StandInRun {
+    /// Per robot, the cells it passed through, in order.
+    pub cells: Vec<Vec<Pos>>,
+    /// Per robot, the goal cells it was sent.
+    pub goals: Vec<Vec<Pos>>,
+    /// Goals dropped because the local planner found them impassable.
+    pub aborted: usize,
+    /// Collisions counted by the world.
+    pub collisions: Collisions,
+    /// Simulated seconds.
+    pub time: f64,
+}
+
+/// The ROS `/robot<i>/scan` topic of robot `i`.
+pub fn scan_topic(i: usize) -> String {
+    format!("/robot{i}/scan")
+}
+
+/// The sensor frame of robot `i`'s scans (`robot<i>/base_link`, REP 105).
+pub fn base_frame(i: usize) -> String {
+    format!("robot{i}/base_link")
+}
+
+/// Runs `world`'s robots as a ROS 2 robot team until `stop` is set: each robot publishes its
+/// pose at 10 Hz; every scan its `LaserScan` and, when it changed, its fine map.
+/// `realtime` simulated seconds pass per wall-clock second (≤ 0: as fast as it runs).
+pub fn run_continuous_stand_in(
+    opts: &Ros2Options,
+    mut world: ContinuousWorld,
+    realtime: f64,
+    stop: &AtomicBool,
+) -> Result<StandInRun, Ros2Error> {
+    let ctx = opts.context()?;
+    let n = world.robots();
+    let frame = MapFrame::of(world.coarse_truth());
+    let top = frame.height as f64 * frame.resolution;
+    let cell_size = world.scenario().cell_size;
+    let cfg = *world.config();
+    let mut nodes = Vec::with_capacity(n);
+    let mut pubs: Vec<(
+        Publisher<LaserScan>,
+        Publisher<OccupancyGrid>,
+        Publisher<PoseStamped>,
+    )> = Vec::with_capacity(n);
+    let mut goal_subs: Vec<Subscription<PoseStamped>> = Vec::with_capacity(n);
+    for i in 0..n {
+        let node = ctx.create_node(&format!("stand_in{i}"))?;
+        let [map_t, pose_t, goal_t] = crate::topics(i);
+        pubs.push((
+            node.create_pub(&scan_topic(i), QosProfile::default())?,
+            node.create_pub(&map_t, map_qos())?,
+            node.create_pub(&pose_t, QosProfile::default())?,
+        ));
+        goal_subs.push(node.create_sub(&goal_t, QosProfile::default())?);
+        nodes.push(node);
+    }
+    let mut planners = vec![LocalPlanner::default(); n];
+    let mut targets: Vec<Option<Pos>> = vec![None; n];
+    let mut run = StandInRun {
+        cells: (0..n).map(|i| vec![world.cell_of(i)]).collect(),
+        goals: vec![Vec::new(); n],
+        ..Default::default()
+    };
+    let scan_every = (1.0 / (cfg.lidar.rate_hz * cfg.control_period))
+        .round()
+        .max(1.0) as u64;
+    // Poses at 10 Hz (a robot's odometry or localization rate), at least every period.
+    let pose_every = (0.1 / cfg.control_period).round().max(1.0) as u64;
+    let mut last_maps: Vec<Option<Vec<i8>>> = vec![None; n];
+    let started = Instant::now();
+    let mut ticks: u64 = 0;
+    while !stop.load(Ordering::Relaxed) {
+        let t = sim_stamp(world.time());
+        for i in 0..n {
+            while let Some(g) = goal_subs[i].recv_timeout(Duration::ZERO)? {
+                let (x, y) = (g.pose.position.x, g.pose.position.y);
+                if let Some(cell) = frame.cell_at(x, y) {
+                    if targets[i] != Some(cell) {
+                        planners[i].reset();
+                    }
+                    targets[i] = Some(cell);
+                    run.goals[i].push(cell);
+                }
+            }
+        }
+        let mut commands = vec![(0.0, 0.0); n];
+        for i in 0..n {
+            let Some(target) = targets[i] else { continue };
+            let pose = world.pose(i);
+            if world.cell_of(i) == target && planners[i].entered(pose, target, cell_size) {
+                targets[i] = None;
+                planners[i].reset();
+                continue;
+            }
+            let neighbours: Vec<Neighbour> = (0..n)
+                .filter(|&j| j != i && world.in_view(i, j))
+                .map(|j| Neighbour {
+                    pose: world.pose(j),
+                    velocity: world.velocity(j),
+                    priority: j < i,
+                })
+                .collect();
+            let replan = ticks.is_multiple_of(scan_every);
+            match planners[i].command(
+                &cfg,
+                cell_size,
+                world.map(i),
+                pose,
+                world.velocity(i),
+                target,
+                &neighbours,
+                replan,
+            ) {
+                Command::Drive(v, w) | Command::Held(v, w) => commands[i] = (v, w),
+                Command::Impassable => {
+                    targets[i] = None;
+                    planners[i].reset();
+                    run.aborted += 1;
+                }
+            }
+        }
+        world.step(&commands);
+        ticks += 1;
+        let t_after = sim_stamp(world.time());
+        for (i, (scan_pub, map_pub, pose_pub)) in pubs.iter().enumerate() {
+            let cell = world.cell_of(i);
+            if run.cells[i].last() != Some(&cell) {
+                run.cells[i].push(cell);
+            }
+            if ticks.is_multiple_of(scan_every) {
+                scan_pub.publish(&laser_scan(&world, i, t))?;
+                let grid = fine_grid(&world, i, top, t_after);
+                if last_maps[i].as_ref() != Some(&grid.data) {
+                    map_pub.publish(&grid)?;
+                    last_maps[i] = Some(grid.data);
+                }
+            }
+            if ticks.is_multiple_of(pose_every) {
+                pose_pub.publish(&pose_stamped(world.pose(i), top, t_after))?;
+            }
+        }
+        if realtime > 0.0 {
+            let due = Duration::from_secs_f64(world.time() / realtime);
+            if let Some(wait) = due.checked_sub(started.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+    }
+    run.collisions = world.collisions();
+    run.time = world.time();
+    Ok(run)
+}
+
+/// Simulated seconds as a ROS stamp.
+fn sim_stamp(seconds: f64) -> Time {
+    Time {
+        sec: seconds.floor() as i32,
+        nanosec: ((seconds - seconds.floor()) * 1e9)
+            .round()
+            .min(999_999_999.0) as u32,
+    }
+}
+
+/// A world pose (y down) in the ROS `map` frame (y up from `top` metres below the world's
+/// top edge).
+fn pose_stamped(p: Pose, top: f64, t: Time) -> PoseStamped {
+    let yaw = -p.theta;
+    let mut msg = PoseStamped {
+        header: header(t),
+        ..Default::default()
+    };
+    msg.pose.position.x = p.x;
+    msg.pose.position.y = top - p.y;
+    msg.pose.orientation.z = (yaw / 2.0).sin();
+    msg.pose.orientation.w = (yaw / 2.0).cos();
+    msg
+}
+
+/// Robot `i`'s last scan as a `LaserScan` in its own frame: beam k of the world's sensor
+/// (clockwise in ROS's y-up frame) is range `N − 1 − k`, so ranges run counter-clockwise.
+fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
+    let lidar = world.config().lidar;
+    let n = lidar.beams;
+    let fov = lidar.fov_deg.to_radians();
+    let inc = fov / n as f64;
+    let range_max = world.sensing_m();
+    let theta = world.pose(i).theta;
+    let mut ranges = vec![f32::INFINITY; n];
+    for &(a, d, returned) in world.scan_beams(i) {
+        // a = θ − fov/2 + (k + ½)·inc (world frame, y down).
+        let k = ((a - theta + fov / 2.0) / inc - 0.5).round() as i64;
+        if (0..n as i64).contains(&k) && (returned || d < range_max) {
+            ranges[n - 1 - k as usize] = d as f32;
+        }
+    }
+    LaserScan {
+        header: crate::msgs::Header {
+            stamp: t,
+            frame_id: base_frame(i),
+        },
+        angle_min: (-fov / 2.0 + inc / 2.0) as f32,
+        angle_max: (fov / 2.0 - inc / 2.0) as f32,
+        angle_increment: inc as f32,
+        time_increment: 0.0,
+        scan_time: (1.0 / lidar.rate_hz) as f32,
+        range_min: 0.0,
+        range_max: range_max as f32,
+        ranges,
+        intensities: Vec::new(),
+    }
+}
+
+/// Robot `i`'s fine map as an `OccupancyGrid`: occupancy probability in percent, −1 where
+/// unobserved; ROS row 0 is the world's bottom pixel row.
+fn fine_grid(world: &ContinuousWorld, i: usize, top: f64, t: Time) -> OccupancyGrid {
+    let map = world.map(i);
+    let (h, w, res) = (map.height(), map.width(), map.resolution());
+    let probs = map.probabilities();
+    let mut data = Vec::with_capacity(h * w);
+    for r in (0..h).rev() {
+        for c in 0..w {
+            data.push(if map.observed(r, c) {
+                (probs[r * w + c] * 100.0).round() as i8
+            } else {
+                -1
+            });
+        }
+    }
+    let mut msg = OccupancyGrid {
+        header: header(t),
+        data,
+        ..Default::default()
+    };
+    msg.info.map_load_time = t;
+    msg.info.resolution = res as f32;
+    msg.info.width = w as u32;
+    msg.info.height = h as u32;
+    msg.info.origin.position.y = top - h as f64 * res;
+    msg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use madenet_continuous::{ContinuousConfig, Scene};
+    use madenet_map::{OccGrid, Occupancy};
+    use std::sync::Arc;
+
+    /// A 10 × 10 m room: a wall at x ∈ [7, 8] m (every row) and one at image y ∈ [8, 9] m
+    /// (every column), the robot at (2.5, 5.5) m facing +x.
+    fn world() -> ContinuousWorld {
+        let mut g = OccGrid::new(10, 10, Occupancy::Free);
+        for k in 0..10 {
+            g.set(Pos::new(k, 7), Occupancy::Obstacle);
+            g.set(Pos::new(8, k), Occupancy::Obstacle);
+        }
+        let mut cfg = ContinuousConfig::default();
+        cfg.lidar.miss_prob = 0.0;
+        let scenario = madenet_world::ScenarioConfig {
+            num_robots: 1,
+            ..Default::default()
+        };
+        let scene = Arc::new(Scene::from_grid(&g, "walls"));
+        ContinuousWorld::new(scene, &[Pos::new(5, 2)], scenario, cfg, 1).unwrap()
+    }
+
+    #[test]
+    fn scans_run_counter_clockwise_in_the_robots_frame() {
+        let w = world();
+        let scan = laser_scan(&w, 0, Time::default());
+        assert_eq!(scan.ranges.len(), 360);
+        assert_eq!(scan.header.frame_id, "robot0/base_link");
+        let at = |angle: f64| {
+            let j = ((angle - scan.angle_min as f64) / scan.angle_increment as f64).round();
+            scan.ranges[j as usize] as f64
+        };
+        // Ahead: the wall at x = 7, 4.5 m away: beyond d_s = 4 m, no return.
+        assert!(at(0.0).is_infinite(), "{}", at(0.0));
+        // To the right (ROS −y, the image's +y): the wall at image y = 8, 2.5 m away.
+        assert!((at(-std::f64::consts::FRAC_PI_2) - 2.5).abs() < 0.05);
+        // To the left: free up to the map's edge at image y = 0, 5.5 m: no return.
+        assert!(at(std::f64::consts::FRAC_PI_2).is_infinite());
+        assert!(scan.angle_min < 0.0 && scan.angle_max > 0.0 && scan.angle_increment > 0.0);
+    }
+
+    #[test]
+    fn fine_maps_and_poses_are_in_the_map_frame_with_y_up() {
+        let w = world();
+        let top = 10.0;
+        let grid = fine_grid(&w, 0, top, Time::default());
+        let (h, width) = (grid.info.height as usize, grid.info.width as usize);
+        assert_eq!((h, width), (100, 100));
+        assert_eq!(grid.info.origin.position.y, 0.0);
+        // The wall at image y ∈ [8, 9] m is at ROS y ∈ [1, 2] m: ROS rows 10–19. Below the
+        // robot (ROS x = 2.5 m, column 25) the first occupied pixel going down from the robot
+        // (ROS y = 4.5 m, row 45) is in row 19.
+        let v = |row: usize| grid.data[row * width + 25];
+        let first = (0..45)
+            .rev()
+            .find(|&r| v(r) > 65)
+            .expect("the wall is mapped");
+        assert_eq!(first, 19, "{:?}", (10..46).map(v).collect::<Vec<_>>());
+        // Seen free once: one miss, probability 0.4.
+        assert!((20..40).all(|r| (0..50).contains(&v(r))), "free between");
+        assert_eq!(v(5), -1, "behind the wall: unobserved");
+        let p = pose_stamped(
+            Pose {
+                x: 2.5,
+                y: 5.5,
+                theta: std::f64::consts::FRAC_PI_2,
+            },
+            top,
+            Time::default(),
+        );
+        // Facing the image's +y (down) is facing ROS −y: yaw −90°.
+        assert_eq!((p.pose.position.x, p.pose.position.y), (2.5, 4.5));
+        let q = p.pose.orientation;
+        let yaw = 2.0 * q.z.atan2(q.w);
+        assert!((yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-9, "{yaw}");
+        let frame = MapFrame::of(w.coarse_truth());
+        assert_eq!(frame.cell_at(2.5, 4.5), Some(w.cell_of(0)));
+    }
+}
