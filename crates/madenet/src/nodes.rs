@@ -395,9 +395,10 @@ pub fn agent(a: AgentArgs) -> Result<()> {
     let bus = a.node.bus(Node::Robot(a.robot), n)?;
     let progress = a.node.progress;
     let scenario = Some(scenario_of(&spec));
-    madenet_runtime::run_robot_with(agent, &bus, a.node.timeouts(), scenario, |step, agent| {
+    let timeouts = a.node.timeouts();
+    madenet_runtime::run_robot_with(agent, &bus, timeouts, scenario, |step, agent, last| {
         ros2.publish(agent);
-        if progress {
+        if progress && !last {
             match agent.goal() {
                 Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
                 None => eprintln!("progress step={step} goal=none"),

@@ -45,6 +45,7 @@
 //! ```
 #![deny(missing_docs)]
 
+use madenet_map::discretize::DiscretizeParams;
 use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_runtime::zenoh_bus::zenoh_config;
 use msgs::{Header, MapMetaData, OccupancyGrid, Point, Pose, PoseStamped, Quaternion, Time};
@@ -361,6 +362,18 @@ pub fn cells_from_grid(
     frame: &MapFrame,
     topic: &str,
 ) -> Result<Vec<Occupancy>, Ros2Error> {
+    cells_from_grid_by(msg, frame, topic, &DiscretizeParams::default())
+}
+
+/// [`cells_from_grid`] by `rule`'s thresholds (a pixel is occupied above `occupied_prob` × 100,
+/// a cell an obstacle above `obstacle_fraction` of its known pixels, or of half its pixels).
+pub fn cells_from_grid_by(
+    msg: &OccupancyGrid,
+    frame: &MapFrame,
+    topic: &str,
+    rule: &DiscretizeParams,
+) -> Result<Vec<Occupancy>, Ros2Error> {
+    let occupied_above = rule.occupied_prob * 100.0;
     let bad = |field, why: String| Ros2Error::BadMessage {
         topic: topic.into(),
         field,
@@ -400,7 +413,7 @@ pub fn cells_from_grid(
                 k[0] += 1;
                 if v < 0 {
                     k[1] += 1;
-                } else if v > 65 {
+                } else if f64::from(v) > occupied_above {
                     k[2] += 1;
                 }
             }
@@ -409,7 +422,13 @@ pub fn cells_from_grid(
     Ok(counts
         .iter()
         .map(|&[n, unknown, occupied]| {
-            madenet_map::discretize::read_partial_cell(n, n - unknown, occupied, 0.25, 0.5)
+            madenet_map::discretize::read_partial_cell(
+                n,
+                n - unknown,
+                occupied,
+                rule.obstacle_fraction,
+                0.5,
+            )
         })
         .collect())
 }
@@ -544,6 +563,7 @@ pub struct RobotFeed {
     pose: Subscription<PoseStamped>,
     cells: Option<Vec<Occupancy>>,
     at: Option<Pos>,
+    rule: DiscretizeParams,
 }
 
 impl RobotFeed {
@@ -561,7 +581,14 @@ impl RobotFeed {
             pose,
             cells: None,
             at: None,
+            rule: DiscretizeParams::default(),
         })
+    }
+
+    /// This feed reading maps by `rule` ([`cells_from_grid_by`]; default: the paper's).
+    pub fn with_rule(mut self, rule: DiscretizeParams) -> Self {
+        self.rule = rule;
+        self
     }
 
     /// Takes what arrived (waiting up to `wait` for the first map and pose) and returns the
@@ -576,7 +603,8 @@ impl RobotFeed {
                 newest = Some(m);
             }
             if let Some(m) = newest {
-                self.cells = Some(cells_from_grid(&m, &self.frame, &self.topics[0])?);
+                let topic = &self.topics[0];
+                self.cells = Some(cells_from_grid_by(&m, &self.frame, topic, &self.rule)?);
             }
             while let Some(p) = self.pose.recv_timeout(Duration::ZERO)? {
                 let (x, y) = (p.pose.position.x, p.pose.position.y);

@@ -50,7 +50,7 @@ impl RealRobots {
         let mut feeds = Vec::with_capacity(robots);
         let mut goals = Vec::with_capacity(robots);
         for i in 0..robots {
-            feeds.push(RobotFeed::new(ctx, i, frame)?);
+            feeds.push(RobotFeed::new(ctx, i, frame)?.with_rule(config.discretize));
             let topic = &crate::topics(i)[2];
             goals.push(node.create_pub::<PoseStamped>(topic, QosProfile::default())?);
         }

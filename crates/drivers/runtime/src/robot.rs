@@ -135,18 +135,20 @@ pub fn run_robot<T: Transport>(
     transport: T,
     timeouts: Timeouts,
 ) -> Result<(Traffic, Traffic), RuntimeError> {
-    run_robot_with(agent, transport, timeouts, None, |_, _| {})
+    run_robot_with(agent, transport, timeouts, None, |_, _, _| {})
 }
 
 /// [`run_robot`], its hello carrying `scenario` (the [`scenario_digest`](crate::wire::scenario_digest)
 /// of what it was started with; a world started with others refuses it), calling
-/// `on_step(timestep, agent)` after each move it sends (progress).
+/// `on_step(timestep, agent, false)` after each move it sends (progress), and
+/// `on_step(timestep, agent, true)` once the trial is over, after the agent observed where it
+/// ended ([`Body::Final`]).
 pub fn run_robot_with<T: Transport>(
     mut agent: Agent,
     transport: T,
     timeouts: Timeouts,
     scenario: Option<u64>,
-    mut on_step: impl FnMut(u64, &Agent),
+    mut on_step: impl FnMut(u64, &Agent, bool),
 ) -> Result<(Traffic, Traffic), RuntimeError> {
     let i = agent.id();
     let me = Node::Robot(i);
@@ -196,6 +198,14 @@ pub fn run_robot_with<T: Transport>(
             }
             // The world is waiting (for an absent teammate, a slow ground): wait on.
             Body::Waiting => continue,
+            // The trial is over: observe where it ended (for what this robot shows); the
+            // world's stop follows.
+            Body::Final(o) => {
+                check_observation(me, step, agent.config(), &o)?;
+                agent.observe(&o);
+                on_step(step, &agent, true);
+                continue;
+            }
             Body::Stop => {
                 let between = Traffic {
                     messages: mb.sent.messages - to_world.messages,
@@ -335,7 +345,7 @@ pub fn run_robot_with<T: Transport>(
         }
         to_world.messages += mb.sent.messages - before.messages;
         to_world.bytes += mb.sent.bytes - before.bytes;
-        on_step(step, &agent);
+        on_step(step, &agent, false);
     }
 }
 

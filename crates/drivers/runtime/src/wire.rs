@@ -13,7 +13,7 @@ use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -111,6 +111,10 @@ pub enum Body {
     /// Robot → world after its move, when asked by `Show`: what a picture of the timestep
     /// draws of it besides its cell.
     Shown(Shown),
+    /// World → each robot, just before `Stop`: what it observes where the trial ended (the
+    /// last timestep's outcome), so that what it shows — its ROS 2 topics — ends there too. No
+    /// move is asked for it.
+    Final(Observation),
 }
 
 /// What a robot shows in a picture of a timestep: its macro action's goal, its planned path,

@@ -386,6 +386,11 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         let pairs = exchanges(&mut mb, &mut heartbeat, step)?;
         show(&world, &shown, &pairs);
     }
+    // The last timestep's outcome, for what the robots show (their ROS 2 topics), then stop.
+    for i in 0..n {
+        let last = Body::Final(world.observation(i));
+        mb.send(&Envelope::new(step, me, Node::Robot(i), last))?;
+    }
     for to in (0..n).map(Node::Robot).chain([Node::Radio]) {
         mb.send(&Envelope::new(step, me, to, Body::Stop))?;
     }

@@ -63,11 +63,16 @@ fn nodes_over_messages_equal_the_in_process_trial() {
                         together.trajectory.iter().map(|r| r.exchanges.len()).sum();
                     exchanged += exchanges;
                     // Traffic: one observation per robot and one contact list per step plus a
-                    // stop each from the world; one move per robot and step, and two β per
+                    // final observation per robot and a stop each from the world; one move per
+                    // robot and step, and two β per
                     // exchange, from robots; the radio forwards every robot-to-robot message
                     // (all of them travel along links that are up) and sends links.
                     let (n, steps) = (3, together.trajectory.len());
-                    assert_eq!(apart.world_sent.messages, (n + 1) * steps + n + 1, "{case}");
+                    assert_eq!(
+                        apart.world_sent.messages,
+                        (n + 1) * steps + 2 * n + 1,
+                        "{case}"
+                    );
                     // Links: one per robot and timestep.
                     assert_eq!(
                         apart.radio_sent.messages,
