@@ -202,10 +202,11 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
     assert_eq!(run.collisions.obstacle + run.collisions.robot, 0, "{run:?}");
     let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
     for i in 0..3 {
-        // Each robot drove through free cells only; the world node's last cell of it is where
-        // the simulated robot stands.
+        // Each robot drove through free cells only; the world node's last cell of it is one
+        // the simulated robot drove through.
         assert!(run.cells[i].len() > 3, "robot {i}: {:?}", run.cells[i]);
         assert!(run.cells[i].iter().all(|&p| truth.is_free(p)));
-        assert_eq!(positions.last().unwrap()[i], *run.cells[i].last().unwrap());
+        // (A robot still driving when the world node ended may have gone on.)
+        assert!(run.cells[i].contains(&positions.last().unwrap()[i]));
     }
 }

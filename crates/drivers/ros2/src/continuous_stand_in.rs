@@ -7,19 +7,21 @@
 //! fine maps through the paper's rule, as it would a real robot's.
 //!
 //! Coordinates: the world's x runs right and y down from the map's top-left corner; ROS's
-//! `map` frame has y up from the bottom-left corner (the map_server convention, as
-//! [`crate::MapFrame`]), so y and headings are mirrored. A goal is reached when the robot has
-//! entered its cell ([`madenet_continuous::LocalPlanner::entered`]); a goal the local planner
-//! finds impassable is dropped (nav2 aborts it) and the robot stays.
+//! `map` frame has y up from the bottom-left corner, shifted and rotated by the map's origin
+//! (the map_server convention, as [`crate::MapFrame`]), so y and headings are mirrored. Stamps
+//! are wall clock, as every madenet topic's. Each robot's scan and map go out when its lidar
+//! has scanned (the robots' scans are staggered over the scan period). A goal is reached when
+//! the robot has entered its cell ([`madenet_continuous::LocalPlanner::entered`]); a goal the
+//! local planner finds impassable is dropped (nav2 aborts it) and the robot stays.
 
 use crate::msgs::{LaserScan, OccupancyGrid, PoseStamped, Time};
 use crate::{
-    header, map_qos, MapFrame, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription,
+    header, map_qos, stamp, MapFrame, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription,
 };
 use madenet_continuous::{Collisions, Command, ContinuousWorld, LocalPlanner, Neighbour, Pose};
 use madenet_map::Pos;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 /// What a stand-in run did, for checks: per robot the cells it stood in (in order, each once
 /// per visit) and the goals it was sent; the team's collisions; the simulated seconds.
@@ -59,7 +61,6 @@ pub fn run_continuous_stand_in(
     let ctx = opts.context()?;
     let n = world.robots();
     let frame = MapFrame::of(world.coarse_truth());
-    let top = frame.height as f64 * frame.resolution;
     let cell_size = world.scenario().cell_size;
     let cfg = *world.config();
     let mut nodes = Vec::with_capacity(n);
@@ -96,7 +97,6 @@ pub fn run_continuous_stand_in(
     let started = Instant::now();
     let mut ticks: u64 = 0;
     while !stop.load(Ordering::Relaxed) {
-        let t = sim_stamp(world.time());
         for i in 0..n {
             while let Some(g) = goal_subs[i].recv_timeout(Duration::ZERO)? {
                 let (x, y) = (g.pose.position.x, g.pose.position.y);
@@ -147,22 +147,24 @@ pub fn run_continuous_stand_in(
         }
         world.step(&commands);
         ticks += 1;
-        let t_after = sim_stamp(world.time());
+        let t = stamp(SystemTime::now());
         for (i, (scan_pub, map_pub, pose_pub)) in pubs.iter().enumerate() {
             let cell = world.cell_of(i);
             if run.cells[i].last() != Some(&cell) {
                 run.cells[i].push(cell);
             }
-            if ticks.is_multiple_of(scan_every) {
+            // The world scans robot i at the end of the periods where (ticks + i) is a
+            // multiple of the scan period, from the pose it has now.
+            if (ticks + i as u64).is_multiple_of(scan_every) {
                 scan_pub.publish(&laser_scan(&world, i, t))?;
-                let grid = fine_grid(&world, i, top, t_after);
+                let grid = fine_grid(&world, i, &frame, t);
                 if last_maps[i].as_ref() != Some(&grid.data) {
                     map_pub.publish(&grid)?;
                     last_maps[i] = Some(grid.data);
                 }
             }
             if ticks.is_multiple_of(pose_every) {
-                pose_pub.publish(&pose_stamped(world.pose(i), top, t_after))?;
+                pose_pub.publish(&pose_stamped(world.pose(i), &frame, t))?;
             }
         }
         if realtime > 0.0 {
@@ -177,29 +179,19 @@ pub fn run_continuous_stand_in(
     Ok(run)
 }
 
-/// Simulated seconds as a ROS stamp.
-fn sim_stamp(seconds: f64) -> Time {
-    Time {
-        sec: seconds.floor() as i32,
-        nanosec: ((seconds - seconds.floor()) * 1e9)
-            .round()
-            .min(999_999_999.0) as u32,
-    }
+/// A world point (x right, y down from the top-left corner, metres) in the `map` frame.
+fn map_point(frame: &MapFrame, x: f64, y: f64) -> (f64, f64) {
+    frame.point(x, frame.height as f64 * frame.resolution - y)
 }
 
-/// A world pose (y down) in the ROS `map` frame (y up from `top` metres below the world's
-/// top edge).
-fn pose_stamped(p: Pose, top: f64, t: Time) -> PoseStamped {
-    let yaw = -p.theta;
-    let mut msg = PoseStamped {
+/// A world pose in the `map` frame: position by [`map_point`], heading mirrored (y down → y
+/// up) and turned by the origin's yaw.
+fn pose_stamped(p: Pose, frame: &MapFrame, t: Time) -> PoseStamped {
+    let (x, y) = map_point(frame, p.x, p.y);
+    PoseStamped {
         header: header(t),
-        ..Default::default()
-    };
-    msg.pose.position.x = p.x;
-    msg.pose.position.y = top - p.y;
-    msg.pose.orientation.z = (yaw / 2.0).sin();
-    msg.pose.orientation.w = (yaw / 2.0).cos();
-    msg
+        pose: frame.pose(x, y, frame.origin[2] - p.theta),
+    }
 }
 
 /// Robot `i`'s last scan as a `LaserScan` in its own frame: beam k of the world's sensor
@@ -211,12 +203,27 @@ fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
     let inc = fov / n as f64;
     let range_max = world.sensing_m();
     let theta = world.pose(i).theta;
-    let mut ranges = vec![f32::INFINITY; n];
+    // Missed returns (the sensor's dropouts) are invalid readings: NaN (REP 117).
+    let mut ranges = vec![f32::NAN; n];
+    let res = world.config().mapping.resolution;
     for &(a, d, returned) in world.scan_beams(i) {
         // a = θ − fov/2 + (k + ½)·inc (world frame, y down).
         let k = ((a - theta + fov / 2.0) / inc - 0.5).round() as i64;
-        if (0..n as i64).contains(&k) && (returned || d < range_max) {
-            ranges[n - 1 - k as usize] = d as f32;
+        let k = if lidar.fov_deg >= 360.0 {
+            k.rem_euclid(n as i64)
+        } else {
+            k
+        };
+        if (0..n as i64).contains(&k) {
+            ranges[n - 1 - k as usize] = if returned {
+                d as f32
+            } else if d < range_max {
+                // A teammate: the world keeps its beams a pixel short (they do not mark it).
+                (d + res).min(range_max) as f32
+            } else {
+                // Nothing within range: +∞ (REP 117).
+                f32::INFINITY
+            };
         }
     }
     LaserScan {
@@ -237,8 +244,8 @@ fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
 }
 
 /// Robot `i`'s fine map as an `OccupancyGrid`: occupancy probability in percent, −1 where
-/// unobserved; ROS row 0 is the world's bottom pixel row.
-fn fine_grid(world: &ContinuousWorld, i: usize, top: f64, t: Time) -> OccupancyGrid {
+/// unobserved; ROS row 0 is the world's bottom pixel row, the origin where its corner lies.
+fn fine_grid(world: &ContinuousWorld, i: usize, frame: &MapFrame, t: Time) -> OccupancyGrid {
     let map = world.map(i);
     let (h, w, res) = (map.height(), map.width(), map.resolution());
     let probs = map.probabilities();
@@ -261,7 +268,8 @@ fn fine_grid(world: &ContinuousWorld, i: usize, top: f64, t: Time) -> OccupancyG
     msg.info.resolution = res as f32;
     msg.info.width = w as u32;
     msg.info.height = h as u32;
-    msg.info.origin.position.y = top - h as f64 * res;
+    let (x0, y0) = map_point(frame, 0.0, h as f64 * res);
+    msg.info.origin = frame.pose(x0, y0, frame.origin[2]);
     msg
 }
 
@@ -312,8 +320,8 @@ mod tests {
     #[test]
     fn fine_maps_and_poses_are_in_the_map_frame_with_y_up() {
         let w = world();
-        let top = 10.0;
-        let grid = fine_grid(&w, 0, top, Time::default());
+        let frame = MapFrame::of(w.coarse_truth());
+        let grid = fine_grid(&w, 0, &frame, Time::default());
         let (h, width) = (grid.info.height as usize, grid.info.width as usize);
         assert_eq!((h, width), (100, 100));
         assert_eq!(grid.info.origin.position.y, 0.0);
@@ -329,21 +337,31 @@ mod tests {
         // Seen free once: one miss, probability 0.4.
         assert!((20..40).all(|r| (0..50).contains(&v(r))), "free between");
         assert_eq!(v(5), -1, "behind the wall: unobserved");
-        let p = pose_stamped(
-            Pose {
-                x: 2.5,
-                y: 5.5,
-                theta: std::f64::consts::FRAC_PI_2,
-            },
-            top,
-            Time::default(),
-        );
+        let facing_down = Pose {
+            x: 2.5,
+            y: 5.5,
+            theta: std::f64::consts::FRAC_PI_2,
+        };
+        let p = pose_stamped(facing_down, &frame, Time::default());
         // Facing the image's +y (down) is facing ROS −y: yaw −90°.
         assert_eq!((p.pose.position.x, p.pose.position.y), (2.5, 4.5));
-        let q = p.pose.orientation;
-        let yaw = 2.0 * q.z.atan2(q.w);
-        assert!((yaw + std::f64::consts::FRAC_PI_2).abs() < 1e-9, "{yaw}");
-        let frame = MapFrame::of(w.coarse_truth());
+        let yaw = |q: crate::msgs::Quaternion| 2.0 * q.z.atan2(q.w);
+        assert!((yaw(p.pose.orientation) + std::f64::consts::FRAC_PI_2).abs() < 1e-9);
         assert_eq!(frame.cell_at(2.5, 4.5), Some(w.cell_of(0)));
+        // A map file's origin (x, y, yaw) moves and turns everything with it: the goal cell a
+        // pose names is still the robot's cell.
+        let moved = MapFrame {
+            origin: [-3.0, 7.0, std::f64::consts::FRAC_PI_2],
+            ..frame
+        };
+        let p = pose_stamped(facing_down, &moved, Time::default());
+        let (x, y) = (p.pose.position.x, p.pose.position.y);
+        assert!((x - (-3.0 - 4.5)).abs() < 1e-9 && (y - (7.0 + 2.5)).abs() < 1e-9);
+        assert_eq!(moved.cell_at(x, y), Some(w.cell_of(0)));
+        assert!(yaw(p.pose.orientation).abs() < 1e-9, "−90° + 90°");
+        let g = fine_grid(&w, 0, &moved, Time::default());
+        let o = g.info.origin;
+        assert!((o.position.x + 3.0).abs() < 1e-9 && (o.position.y - 7.0).abs() < 1e-9);
+        assert!((yaw(o.orientation) - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
     }
 }

@@ -252,6 +252,12 @@ impl MapFrame {
     pub fn cell_center(&self, p: Pos) -> (f64, f64) {
         let lx = (p.col as f64 + 0.5) * self.resolution;
         let ly = ((self.height as f64 - 1.0 - p.row as f64) + 0.5) * self.resolution;
+        self.point(lx, ly)
+    }
+
+    /// The point `(lx, ly)` metres right of and up from the grid's lower-left corner, in the
+    /// `map` frame (rotated by the origin's yaw, shifted by its x, y).
+    pub fn point(&self, lx: f64, ly: f64) -> (f64, f64) {
         let [x0, y0, yaw] = self.origin;
         let (s, c) = yaw.sin_cos();
         (x0 + lx * c - ly * s, y0 + lx * s + ly * c)
@@ -272,7 +278,7 @@ impl MapFrame {
             .then(|| Pos::new((self.height - 1 - up) as i32, col as i32))
     }
 
-    fn pose(&self, x: f64, y: f64, yaw: f64) -> Pose {
+    pub(crate) fn pose(&self, x: f64, y: f64, yaw: f64) -> Pose {
         let (s, c) = (yaw / 2.0).sin_cos();
         Pose {
             position: Point { x, y, z: 0.0 },

@@ -227,7 +227,7 @@ pub fn run_robot_with<T: Transport>(
                     node: me,
                     from: e.from,
                     step,
-                    what: "the world sends observations, show, waiting and stop only",
+                    what: "the world sends observations, show, waiting, final and stop only",
                 })
             }
         };

@@ -5,7 +5,8 @@
 //! each robot its observation and the radio the pairs in contact; the radio tells each robot in
 //! contact with whom its link is up; robots send β to those teammates and plans to the
 //! lower-priority ones — through the radio, which forwards only along links that are up; each
-//! robot sends the world its move; the world ends the run with `Stop`.
+//! robot sends the world its move; the world ends the run with each robot's `Final` observation
+//! (where the trial ended, not acted on) and `Stop`.
 
 use madenet_agent::{Beta, PlanMessage};
 use madenet_map::{Occupancy, Pos};
