@@ -21,7 +21,7 @@
 use crate::registry::PolicyRegistry;
 use crate::trial::{build_agent, TrialSpec};
 use crate::SimError;
-use madenet_agent::{Agent, Beta};
+use madenet_agent::{Agent, Beta, Decision};
 use madenet_continuous::{
     Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Neighbour, Scene,
 };
@@ -247,6 +247,12 @@ pub struct ContinuousTrial {
     /// Per robot, where it was every [`TRAIL_EVERY`] control periods (pictures).
     trails: Vec<Vec<(f32, f32)>>,
     started: Instant,
+    /// Decisions come from outside ([`ContinuousTrial::with_external_decisions`]).
+    external: bool,
+    /// Robots waiting for an outside decision.
+    deciding: Vec<bool>,
+    /// A control period is half done: its agents were asked, its motion is still to come.
+    resuming: bool,
 }
 
 /// Control periods between two points of a robot's trail ([`ContinuousTrial::trail`]).
@@ -328,9 +334,54 @@ impl ContinuousTrial {
                 })
                 .collect(),
             started: Instant::now(),
+            external: false,
+            deciding: vec![false; n],
+            resuming: false,
             agents,
             world,
         })
+    }
+
+    /// This trial taking its decisions from outside (an environment's caller): a robot whose
+    /// macro action ended waits, in the middle of its control period, until
+    /// [`ContinuousTrial::apply_decisions`] gives it one; [`ContinuousTrial::step`] then
+    /// finishes the period.
+    pub fn with_external_decisions(mut self, on: bool) -> Self {
+        self.external = on;
+        self
+    }
+
+    /// Which robots wait for an outside decision ([`ContinuousTrial::with_external_decisions`]).
+    pub fn deciding(&self) -> &[bool] {
+        &self.deciding
+    }
+
+    /// Robot `i`'s agent (an environment observes it, and reads its goal candidates).
+    pub fn agent_mut(&mut self, i: usize) -> &mut Agent {
+        &mut self.agents[i]
+    }
+
+    /// Gives each robot waiting for a decision its own: `Some(d)` from outside (a candidate
+    /// index, a goal cell, or idling), `None` from its own policy. Robots not waiting are
+    /// skipped. The robots then plan and name their next cells, and the next
+    /// [`ContinuousTrial::step`] finishes the control period they were asked in.
+    pub fn apply_decisions(&mut self, decisions: &[Option<Decision>]) {
+        for i in 0..self.agents.len() {
+            if !std::mem::take(&mut self.deciding[i]) {
+                continue;
+            }
+            let a = &mut self.agents[i];
+            match decisions.get(i).copied().flatten() {
+                Some(d) => {
+                    if matches!(d, Decision::Candidate(_)) {
+                        let _ = a.view(true);
+                    }
+                    a.apply_decision(d);
+                }
+                None => a.decide(),
+            }
+            self.act(i);
+        }
     }
 
     /// The world.
@@ -369,10 +420,31 @@ impl ContinuousTrial {
     }
 
     /// One control period (the stages of the module docs). Returns false once done.
+    ///
+    /// With [`ContinuousTrial::with_external_decisions`], a period whose agents wait for
+    /// decisions stops after stage 2b ([`ContinuousTrial::deciding`]); after
+    /// [`ContinuousTrial::apply_decisions`] the next call finishes it. Called while decisions
+    /// are still awaited, it does nothing.
     pub fn step(&mut self) -> bool {
         if self.is_done() {
             return false;
         }
+        if self.deciding.contains(&true) {
+            return true;
+        }
+        if !std::mem::take(&mut self.resuming) {
+            self.ask_agents();
+            if self.deciding.contains(&true) {
+                self.resuming = true;
+                return true;
+            }
+        }
+        self.move_robots();
+        true
+    }
+
+    /// Stages 1 to 2b of a control period: the radio, write-offs, and the agents that ask.
+    fn ask_agents(&mut self) {
         let n = self.agents.len();
         let now = self.world.time();
         // 1. radio
@@ -417,6 +489,13 @@ impl ContinuousTrial {
                 self.ask(i);
             }
         }
+    }
+
+    /// Stages 2c to 4 of a control period: the team's frontier check, local planning, motion.
+    fn move_robots(&mut self) {
+        let n = self.agents.len();
+        let now = self.world.time();
+        let cell_size = self.world.scenario().cell_size;
         // 2c. the team's belief: no robot has a reachable frontier left (ends the trial later)
         // Spared cells are retried when a goal is reached; an idle team reaches none, so
         // here they are written off once their time is up, and the clock waits for them.
@@ -514,7 +593,6 @@ impl ContinuousTrial {
             self.explored.push(self.world.explored_fraction());
             self.distance.push(self.team_distance());
         }
-        true
     }
 
     /// Robot `i` asks its agent: observe, decide if the macro action ended, plan, move.
@@ -546,8 +624,19 @@ impl ContinuousTrial {
             self.reached[i] = Some((self.cells[i], self.world.time()));
         }
         if a.needs_decision() {
+            if self.external {
+                // Waits for [`ContinuousTrial::apply_decisions`], which then acts.
+                self.deciding[i] = true;
+                return;
+            }
             a.decide();
         }
+        self.act(i);
+    }
+
+    /// Robot `i`'s agent plans and names its next cell: the robot's target.
+    fn act(&mut self, i: usize) {
+        let a = &mut self.agents[i];
         a.plan();
         let (dr, dc) = a.next_move().delta();
         let here = self.cells[i];
@@ -760,6 +849,53 @@ mod tests {
             policy: policy.into(),
             seed,
         }
+    }
+
+    #[test]
+    fn decisions_from_outside_by_each_robots_own_policy_give_the_same_trial() {
+        let reg = PolicyRegistry::builtin();
+        for policy in ["nf", "spread"] {
+            let inside = ContinuousTrial::new(spec(policy, 3), &reg).unwrap().run();
+            let mut t = ContinuousTrial::new(spec(policy, 3), &reg)
+                .unwrap()
+                .with_external_decisions(true);
+            let mut waits = 0;
+            while t.step() {
+                if t.deciding().contains(&true) {
+                    waits += 1;
+                    // Stepping on without decisions changes nothing.
+                    let before = t.world().time();
+                    assert!(t.step());
+                    assert_eq!(t.world().time(), before);
+                    t.apply_decisions(&[None, None, None]);
+                }
+            }
+            let mut outside = t.finish();
+            assert!(waits > 10, "{policy}: {waits}");
+            outside.wall_s = inside.wall_s;
+            assert_eq!(outside, inside, "{policy}");
+        }
+    }
+
+    #[test]
+    fn outside_decisions_are_obeyed() {
+        // Every robot told to idle at every decision: nobody drives anywhere.
+        let reg = PolicyRegistry::builtin();
+        let mut t = ContinuousTrial::new(spec("nf", 1), &reg)
+            .unwrap()
+            .with_external_decisions(true);
+        for _ in 0..400 {
+            if t.deciding().contains(&true) {
+                t.apply_decisions(&[Some(Decision::Idle); 3]);
+            }
+            t.step();
+        }
+        assert!(t.world().time() > 15.0);
+        assert!(
+            (0..3).all(|i| t.world().distance(i) < 0.05),
+            "{:?}",
+            t.world().distance(0)
+        );
     }
 
     #[test]

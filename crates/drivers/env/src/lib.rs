@@ -35,8 +35,10 @@
 
 #![deny(missing_docs)]
 
+pub mod continuous;
 pub mod vector;
 
+pub use continuous::{ContinuousEnv, ContinuousStep};
 pub use vector::{VecBuffers, VecEnv};
 
 pub use madenet_agent::Decision;
