@@ -7,6 +7,7 @@
 
 #![deny(missing_docs)]
 
+mod continuous;
 mod study;
 mod vector;
 
@@ -411,6 +412,7 @@ impl CoreEnv {
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<CoreEnv>()?;
+    m.add_class::<continuous::CoreContinuousEnv>()?;
     m.add_class::<vector::CoreVecEnv>()?;
     m.add_class::<study::CoreStudy>()?;
     m.add_class::<study::CoreScale>()?;

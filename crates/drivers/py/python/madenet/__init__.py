@@ -4,6 +4,9 @@ simulator in Rust.
 * ``ExplorationEnv`` — a PettingZoo ``ParallelEnv`` over the real world: macro actions (choose
   goal candidate k) or primitive moves, the paper's rewards, the same trajectories as the
   ``madenet`` command line for the same seed and decisions;
+* ``ContinuousExplorationEnv`` — the same agents' macro actions in the continuous world
+  (differential-drive robots, lidar maps, a local planner, seconds), as a PettingZoo
+  ``ParallelEnv``;
 * ``CentralizedEnv`` — a Gymnasium ``Env`` of the whole team (joint macro action, merged
   observation);
 * ``VectorEnv`` — N environments stepped together in Rust into preallocated numpy arrays;
@@ -15,10 +18,11 @@ simulator in Rust.
 
 from madenet._core import __version__
 from madenet.centralized import CentralizedEnv
+from madenet.continuous import ContinuousExplorationEnv
 from madenet.env import ExplorationEnv
 from madenet.policies import Policy, policies, policy
 from madenet.study import TIMING_COLUMNS, compare, run_trial, scale, table
 from madenet.vector import VectorEnv
 
-__all__ = ["CentralizedEnv", "ExplorationEnv", "Policy", "TIMING_COLUMNS", "VectorEnv", "__version__", "compare",
+__all__ = ["CentralizedEnv", "ContinuousExplorationEnv", "ExplorationEnv", "Policy", "TIMING_COLUMNS", "VectorEnv", "__version__", "compare",
            "policies", "policy", "run_trial", "scale", "table"]

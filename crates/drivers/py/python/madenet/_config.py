@@ -29,13 +29,13 @@ def check_render(render_mode, cell_px, modes) -> None:
         raise ValueError(f"cell_px: {cell_px!r} is not an int in 1..64")
 
 
-def path_or_none(config) -> str | None:
-    """A config file argument: ``None`` or a path."""
+def path_or_none(config, name: str = "config") -> str | None:
+    """A config file argument ``name``: ``None`` or a path."""
     if config is None:
         return None
     if isinstance(config, (str, os.PathLike)):
         return os.fspath(config)
-    raise ValueError(f"config: expected a TOML file path, got {type(config).__name__}")
+    raise ValueError(f"{name}: expected a TOML file path, got {type(config).__name__}")
 
 
 def study_overrides(config, fields: dict) -> tuple[str | None, str]:
