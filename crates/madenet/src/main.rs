@@ -15,6 +15,7 @@ mod map_cmd;
 mod nodes;
 mod oracle;
 mod plot_training;
+mod record;
 mod run;
 mod scale_cmd;
 mod scenario_args;

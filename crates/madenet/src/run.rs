@@ -36,6 +36,10 @@ pub struct RunArgs {
     /// Simulated seconds per GIF frame of a continuous run.
     #[arg(long, default_value_t = 1.0)]
     frame_s: f64,
+    /// Record the trial as a ROS 2 bag: a rosbag2 folder (metadata.yaml and one MCAP file) at
+    /// this new path (or empty folder), in simulated time — maps, poses, goals, /tf, /clock.
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
 }
 
 /// Pictures of a trial (`run`, `launch` and `world`).
@@ -175,6 +179,9 @@ pub fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -
 
 pub fn run(a: RunArgs) -> Result<()> {
     if a.world == "continuous" {
+        if a.record.is_some() {
+            anyhow::bail!("--record: the continuous world is not recorded yet (grid world only)");
+        }
         return run_continuous(a);
     }
     let (spec, registry) = a.scenario.spec()?;
@@ -187,15 +194,25 @@ pub fn run(a: RunArgs) -> Result<()> {
     if a.pictures.any() {
         pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
     }
+    let mut recorder = match &a.record {
+        Some(path) => Some(crate::record::Recorder::start(path, &trial)?),
+        None => None,
+    };
     while trial.step() {
         if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
             p.push(&madenet_render::trial_frame(&trial))?;
         }
+        if let Some(r) = recorder.as_mut() {
+            r.step(&trial).context("--record")?;
+        }
     }
-    let wrote = match pictures {
+    let mut wrote = match pictures {
         Some(p) => p.finish(&madenet_render::trial_frame(&trial))?,
         None => Vec::new(),
     };
+    if let Some(r) = recorder {
+        wrote.push(r.finish()?);
+    }
     let result = trial.finish();
     if a.json {
         out!("{}", serde_json::to_string_pretty(&result)?)?;

@@ -56,7 +56,9 @@ pub use real::RealRobots;
 pub use rmw::{Durability, Node, Publisher, QosProfile, Reliability, Ros2Context, Subscription};
 pub use stand_in::run_stand_in;
 
+pub mod bag;
 pub mod continuous_stand_in;
+pub mod msgdefs;
 pub mod msgs;
 mod real;
 pub mod rmw;

@@ -29,6 +29,8 @@ pub trait RosMessage: Serialize + for<'de> Deserialize<'de> {
     const TYPE_NAME: &'static str;
     /// The Jazzy type description hash (REP 2011, `RIHS01_` and 64 hex digits).
     const TYPE_HASH: &'static str;
+    /// The full `ros2msg` definition, nested types included ([`crate::msgdefs`]).
+    const DEFINITION: &'static str;
 
     /// The DDS type name rmw_zenoh puts in key expressions, e.g.
     /// `nav_msgs::msg::dds_::OccupancyGrid_`.
@@ -193,6 +195,51 @@ pub struct LaserScan {
     pub intensities: Vec<f32>,
 }
 
+/// `rosgraph_msgs/msg/Clock`: simulated time, for nodes with `use_sim_time`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Clock {
+    /// The time.
+    pub clock: Time,
+}
+
+/// `geometry_msgs/msg/Vector3`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Vector3 {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+}
+
+/// `geometry_msgs/msg/Transform`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Transform {
+    /// Translation (m).
+    pub translation: Vector3,
+    /// Rotation.
+    pub rotation: Quaternion,
+}
+
+/// `geometry_msgs/msg/TransformStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TransformStamped {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// The child frame.
+    pub child_frame_id: String,
+    /// The child frame's pose in the parent's.
+    pub transform: Transform,
+}
+
+/// `tf2_msgs/msg/TFMessage` (`/tf`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TFMessage {
+    /// The transforms.
+    pub transforms: Vec<TransformStamped>,
+}
+
 /// An `int8[]` written as one byte block (the same bytes as a sequence of `int8`, without a
 /// serializer call per element).
 mod int8_sequence {
@@ -236,18 +283,35 @@ impl RosMessage for PoseStamped {
     const TYPE_NAME: &'static str = "geometry_msgs/msg/PoseStamped";
     const TYPE_HASH: &'static str =
         "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8";
+    const DEFINITION: &'static str = crate::msgdefs::POSE_STAMPED;
 }
 
 impl RosMessage for OccupancyGrid {
     const TYPE_NAME: &'static str = "nav_msgs/msg/OccupancyGrid";
     const TYPE_HASH: &'static str =
         "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7";
+    const DEFINITION: &'static str = crate::msgdefs::OCCUPANCY_GRID;
 }
 
 impl RosMessage for LaserScan {
     const TYPE_NAME: &'static str = "sensor_msgs/msg/LaserScan";
     const TYPE_HASH: &'static str =
         "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828";
+    const DEFINITION: &'static str = crate::msgdefs::LASER_SCAN;
+}
+
+impl RosMessage for Clock {
+    const TYPE_NAME: &'static str = "rosgraph_msgs/msg/Clock";
+    const TYPE_HASH: &'static str =
+        "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564";
+    const DEFINITION: &'static str = crate::msgdefs::CLOCK;
+}
+
+impl RosMessage for TFMessage {
+    const TYPE_NAME: &'static str = "tf2_msgs/msg/TFMessage";
+    const TYPE_HASH: &'static str =
+        "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087";
+    const DEFINITION: &'static str = crate::msgdefs::TF_MESSAGE;
 }
 
 #[cfg(test)]

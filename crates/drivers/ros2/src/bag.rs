@@ -1,0 +1,274 @@
+//! Runs recorded as ROS 2 bags: a rosbag2 directory — `metadata.yaml` and one MCAP file in the
+//! ROS 2 profile (`cdr` messages, `ros2msg` schemas with the full definitions, ROS type names,
+//! LZ4-compressed chunks) — that `ros2 bag info` / `ros2 bag play`, RViz, Foxglove and the
+//! Python `rosbags` and `mcap` readers open. The messages are the same CDR the live topics
+//! carry ([`crate::msgs`]).
+//!
+//! The bag is written into a hidden sibling directory and renamed into place by
+//! [`Bag::finish`]; a bag dropped unfinished (an error, a full disk) removes it, so nothing
+//! half-written is left behind as a bag. Times are the caller's (madenet records simulated
+//! time), so the same run gives the same bytes.
+//!
+//! ```
+//! use madenet_ros2::bag::Bag;
+//! use madenet_ros2::msgs::{Clock, Time};
+//!
+//! let dir = std::env::temp_dir().join(format!("madenet-bag-doc-{}", std::process::id()));
+//! let mut bag = Bag::create(&dir).unwrap();
+//! bag.write("/clock", &Clock { clock: Time { sec: 1, nanosec: 0 } }, 1_000_000_000).unwrap();
+//! let dir = bag.finish().unwrap();
+//! assert!(dir.join("metadata.yaml").is_file());
+//! # std::fs::remove_dir_all(&dir).unwrap();
+//! ```
+
+use crate::msgs::RosMessage;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// What can go wrong writing a bag; the message names the path.
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    /// The place is taken: a file, or a directory that is not empty.
+    #[error("{0}: already exists (a file, or a folder that is not empty): choose a new name")]
+    Exists(PathBuf),
+    /// A file system error.
+    #[error("{path}: {source}")]
+    Io {
+        /// Where.
+        path: PathBuf,
+        /// What.
+        source: std::io::Error,
+    },
+    /// The MCAP writer's error (a full disk, say).
+    #[error("{path}: writing MCAP: {why}")]
+    Mcap {
+        /// The MCAP file.
+        path: PathBuf,
+        /// Why.
+        why: String,
+    },
+}
+
+/// One topic of a bag: its MCAP channel, ROS type, type hash and message count.
+struct Topic {
+    channel: u16,
+    type_name: &'static str,
+    type_hash: &'static str,
+    count: u64,
+}
+
+/// A rosbag2 directory being written ([module docs](self)).
+pub struct Bag {
+    dir: PathBuf,
+    tmp: PathBuf,
+    file: String,
+    writer: Option<mcap::Writer<BufWriter<File>>>,
+    topics: BTreeMap<String, Topic>,
+    first_ns: Option<u64>,
+    last_ns: u64,
+    finished: bool,
+}
+
+impl Bag {
+    /// Starts a bag that [`Bag::finish`] puts at `dir`: a new path, or an empty directory.
+    pub fn create(dir: &Path) -> Result<Self, BagError> {
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| BagError::Io { path, source }
+        };
+        if dir.is_file()
+            || (dir.is_dir() && std::fs::read_dir(dir).map_err(io(dir))?.next().is_some())
+            || (dir.exists() && !dir.is_dir())
+        {
+            return Err(BagError::Exists(dir.to_path_buf()));
+        }
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .filter(|n| !n.is_empty() && n != "." && n != "..")
+            .ok_or_else(|| BagError::Io {
+                path: dir.to_path_buf(),
+                source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a folder name"),
+            })?;
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
+        if tmp.exists() {
+            std::fs::remove_dir_all(&tmp).map_err(io(&tmp))?;
+        }
+        std::fs::create_dir(&tmp).map_err(io(&tmp))?;
+        let file = format!("{name}_0.mcap");
+        let path = tmp.join(&file);
+        let mut bag = Bag {
+            dir: dir.to_path_buf(),
+            tmp,
+            file,
+            writer: None,
+            topics: BTreeMap::new(),
+            first_ns: None,
+            last_ns: 0,
+            finished: false,
+        };
+        let out = File::create(&path).map_err(io(&path))?;
+        let opts = mcap::WriteOptions::new()
+            .profile("ros2")
+            .library("madenet")
+            .compression(Some(mcap::Compression::Lz4));
+        bag.writer = Some(
+            opts.create(BufWriter::new(out))
+                .map_err(|e| bag.mcap_error(e))?,
+        );
+        Ok(bag)
+    }
+
+    fn mcap_error(&self, e: mcap::McapError) -> BagError {
+        BagError::Mcap {
+            path: self.tmp.join(&self.file),
+            why: e.to_string(),
+        }
+    }
+
+    /// Writes `msg` on `topic` at `t_ns` nanoseconds (the log and publish time); the topic's
+    /// channel and schema are added on its first message.
+    pub fn write<T: RosMessage>(
+        &mut self,
+        topic: &str,
+        msg: &T,
+        t_ns: u64,
+    ) -> Result<(), BagError> {
+        let writer = self.writer.as_mut().expect("open until finished");
+        let channel = match self.topics.get(topic) {
+            Some(t) => t.channel,
+            None => {
+                let schema = writer
+                    .add_schema(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes())
+                    .map_err(|e| self.mcap_error(e))?;
+                let writer = self.writer.as_mut().expect("open");
+                let channel = writer
+                    .add_channel(schema, topic, "cdr", &BTreeMap::new())
+                    .map_err(|e| self.mcap_error(e))?;
+                self.topics.insert(
+                    topic.to_string(),
+                    Topic {
+                        channel,
+                        type_name: T::TYPE_NAME,
+                        type_hash: T::TYPE_HASH,
+                        count: 0,
+                    },
+                );
+                channel
+            }
+        };
+        let t = self.topics.get_mut(topic).expect("added above");
+        t.count += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: t.count as u32,
+            log_time: t_ns,
+            publish_time: t_ns,
+        };
+        self.first_ns.get_or_insert(t_ns);
+        self.last_ns = self.last_ns.max(t_ns);
+        let data = msg.to_cdr();
+        let writer = self.writer.as_mut().expect("open");
+        writer
+            .write_to_known_channel(&header, &data)
+            .map_err(|e| self.mcap_error(e))
+    }
+
+    /// Messages written so far.
+    pub fn messages(&self) -> u64 {
+        self.topics.values().map(|t| t.count).sum()
+    }
+
+    /// Finishes the MCAP file, writes `metadata.yaml` and moves the bag into place; returns
+    /// its directory.
+    pub fn finish(mut self) -> Result<PathBuf, BagError> {
+        let mut writer = self.writer.take().expect("open until finished");
+        writer.finish().map_err(|e| self.mcap_error(e))?;
+        let out = writer.into_inner();
+        out.into_inner()
+            .map_err(|e| BagError::Io {
+                path: self.tmp.join(&self.file),
+                source: e.into_error(),
+            })?
+            .sync_all()
+            .map_err(|source| BagError::Io {
+                path: self.tmp.join(&self.file),
+                source,
+            })?;
+        let meta = self.tmp.join("metadata.yaml");
+        std::fs::write(&meta, self.metadata()).map_err(|source| BagError::Io {
+            path: meta.clone(),
+            source,
+        })?;
+        if self.dir.is_dir() {
+            // An empty folder the caller named (checked at the start): the bag takes its place.
+            std::fs::remove_dir(&self.dir).map_err(|source| BagError::Io {
+                path: self.dir.clone(),
+                source,
+            })?;
+        }
+        std::fs::rename(&self.tmp, &self.dir).map_err(|source| BagError::Io {
+            path: self.dir.clone(),
+            source,
+        })?;
+        self.finished = true;
+        Ok(self.dir.clone())
+    }
+
+    /// rosbag2's `metadata.yaml` (version 9, Jazzy's) for what was written.
+    fn metadata(&self) -> String {
+        let start = self.first_ns.unwrap_or(0);
+        let duration = self.last_ns.saturating_sub(start);
+        let count = self.messages();
+        let mut y = String::new();
+        y.push_str("rosbag2_bagfile_information:\n");
+        y.push_str("  version: 9\n");
+        y.push_str("  storage_identifier: mcap\n");
+        y.push_str(&format!("  duration:\n    nanoseconds: {duration}\n"));
+        y.push_str(&format!(
+            "  starting_time:\n    nanoseconds_since_epoch: {start}\n"
+        ));
+        y.push_str(&format!("  message_count: {count}\n"));
+        y.push_str("  topics_with_message_count:\n");
+        for (name, t) in &self.topics {
+            y.push_str("    - topic_metadata:\n");
+            y.push_str(&format!("        name: {name}\n"));
+            y.push_str(&format!("        type: {}\n", t.type_name));
+            y.push_str("        serialization_format: cdr\n");
+            y.push_str("        offered_qos_profiles: []\n");
+            y.push_str(&format!("        type_description_hash: {}\n", t.type_hash));
+            y.push_str(&format!("      message_count: {}\n", t.count));
+        }
+        y.push_str("  compression_format: \"\"\n");
+        y.push_str("  compression_mode: \"\"\n");
+        y.push_str(&format!("  relative_file_paths:\n    - {}\n", self.file));
+        y.push_str("  files:\n");
+        y.push_str(&format!("    - path: {}\n", self.file));
+        y.push_str(&format!(
+            "      starting_time:\n        nanoseconds_since_epoch: {start}\n"
+        ));
+        y.push_str(&format!(
+            "      duration:\n        nanoseconds: {duration}\n"
+        ));
+        y.push_str(&format!("      message_count: {count}\n"));
+        y.push_str("  custom_data: ~\n");
+        y.push_str("  ros_distro: jazzy\n");
+        y
+    }
+}
+
+impl Drop for Bag {
+    fn drop(&mut self) {
+        if !self.finished {
+            // Unfinished (an error on the way): no half-written bag is left behind.
+            self.writer.take();
+            let _ = std::fs::remove_dir_all(&self.tmp);
+        }
+    }
+}
