@@ -49,7 +49,7 @@ mod imp {
             };
             let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
             r.bag.write("/truth_map", &msg, 0).context("--record")?;
-            r.step(trial)?;
+            r.step(trial).context("--record")?;
             Ok(r)
         }
 

@@ -190,14 +190,15 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
-    let mut pictures = None;
-    if a.pictures.any() {
-        pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
-    }
+    // The bag first: a refused --record leaves no picture behind either.
     let mut recorder = match &a.record {
         Some(path) => Some(crate::record::Recorder::start(path, &trial)?),
         None => None,
     };
+    let mut pictures = None;
+    if a.pictures.any() {
+        pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
+    }
     while trial.step() {
         if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
             p.push(&madenet_render::trial_frame(&trial))?;

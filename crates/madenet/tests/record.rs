@@ -56,11 +56,12 @@ fn a_run_is_recorded_the_same_for_the_same_seed() {
     let meta = std::fs::read_to_string(dir.join("a/metadata.yaml")).unwrap();
     for needle in [
         "storage_identifier: mcap",
-        "name: /truth_map",
-        "type: nav_msgs/msg/OccupancyGrid",
-        "name: /robot2/pose",
-        "type: tf2_msgs/msg/TFMessage",
-        "type: rosgraph_msgs/msg/Clock",
+        "name: \"/truth_map\"",
+        "type: \"nav_msgs/msg/OccupancyGrid\"",
+        "name: \"/robot2/pose\"",
+        "type: \"tf2_msgs/msg/TFMessage\"",
+        "type: \"rosgraph_msgs/msg/Clock\"",
+        "- path: \"a_0.mcap\"",
         "serialization_format: cdr",
     ] {
         assert!(meta.contains(needle), "{needle}: {meta}");

@@ -103,10 +103,21 @@ impl ContinuousEnv {
         Ok(())
     }
 
-    /// Runs control periods until a robot waits for a decision or the trial is over.
+    /// Runs control periods until a robot waits for a decision or the trial is over. A
+    /// period whose first half ended the trial is finished with the robots' own decisions.
     fn advance(&mut self) {
         let trial = self.trial.as_mut().expect("an episode is running");
-        while !trial.deciding().contains(&true) && trial.step() {}
+        loop {
+            if trial.deciding().contains(&true) {
+                if !trial.is_done() {
+                    break;
+                }
+                trial.apply_decisions(&[]);
+            }
+            if !trial.step() {
+                break;
+            }
+        }
     }
 
     /// The trial (its world, agents, planners), for pictures and checks.
@@ -234,6 +245,8 @@ impl ContinuousEnv {
                 // The candidates the caller saw, if it observed this state; else extracted.
                 if self.scratch_current[i] {
                     trial.agent_mut(i).adopt_candidates(&mut self.scratch[i]);
+                } else {
+                    let _ = trial.agent_mut(i).view(true);
                 }
             }
         }

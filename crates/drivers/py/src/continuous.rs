@@ -40,7 +40,8 @@ impl CoreContinuousEnv {
             )));
         }
         let continuous: ContinuousConfig = match continuous_config {
-            Some(p) => madenet_files::read_toml(std::path::Path::new(p)).map_err(value_error)?,
+            Some(p) => madenet_files::read_toml(std::path::Path::new(p))
+                .map_err(|e| value_error(format!("continuous_config: {e}")))?,
             None => ContinuousConfig::default(),
         };
         continuous

@@ -6,7 +6,10 @@
 //!
 //! The bag is written into a hidden sibling directory and renamed into place by
 //! [`Bag::finish`]; a bag dropped unfinished (an error, a full disk) removes it, so nothing
-//! half-written is left behind as a bag. Times are the caller's (madenet records simulated
+//! half-written is left behind as a bag (a process killed outright leaves the hidden folder).
+//! Topics are recorded with rosbag2's default QoS (`offered_qos_profiles: []`): `ros2 bag
+//! play` republishes them volatile, so a subscriber that asks for transient local (RViz's map
+//! display) needs `--qos-profile-overrides-path`. Times are the caller's (madenet records simulated
 //! time), so the same run gives the same bytes.
 //!
 //! ```
@@ -96,11 +99,21 @@ impl Bag {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
-        if tmp.exists() {
-            std::fs::remove_dir_all(&tmp).map_err(io(&tmp))?;
-        }
-        std::fs::create_dir(&tmp).map_err(io(&tmp))?;
+        // A hidden sibling of our own (never one another bag is writing): the first free name.
+        let mut k = 0u32;
+        let tmp = loop {
+            let tmp = parent.join(format!(".{name}.partial-{}-{k}", std::process::id()));
+            match std::fs::create_dir(&tmp) {
+                Ok(()) => break tmp,
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && k < 1000 => k += 1,
+                Err(source) => {
+                    return Err(BagError::Io {
+                        path: dir.to_path_buf(),
+                        source,
+                    })
+                }
+            }
+        };
         let file = format!("{name}_0.mcap");
         let path = tmp.join(&file);
         let mut bag = Bag {
@@ -221,8 +234,10 @@ impl Bag {
         Ok(self.dir.clone())
     }
 
-    /// rosbag2's `metadata.yaml` (version 9, Jazzy's) for what was written.
+    /// rosbag2's `metadata.yaml` (version 9, Jazzy's) for what was written; names and paths
+    /// as double-quoted YAML strings (a JSON string is one), whatever characters they hold.
     fn metadata(&self) -> String {
+        let q = |s: &str| serde_json::to_string(s).expect("a string serializes");
         let start = self.first_ns.unwrap_or(0);
         let duration = self.last_ns.saturating_sub(start);
         let count = self.messages();
@@ -238,18 +253,24 @@ impl Bag {
         y.push_str("  topics_with_message_count:\n");
         for (name, t) in &self.topics {
             y.push_str("    - topic_metadata:\n");
-            y.push_str(&format!("        name: {name}\n"));
-            y.push_str(&format!("        type: {}\n", t.type_name));
+            y.push_str(&format!("        name: {}\n", q(name)));
+            y.push_str(&format!("        type: {}\n", q(t.type_name)));
             y.push_str("        serialization_format: cdr\n");
             y.push_str("        offered_qos_profiles: []\n");
-            y.push_str(&format!("        type_description_hash: {}\n", t.type_hash));
+            y.push_str(&format!(
+                "        type_description_hash: {}\n",
+                q(t.type_hash)
+            ));
             y.push_str(&format!("      message_count: {}\n", t.count));
         }
         y.push_str("  compression_format: \"\"\n");
         y.push_str("  compression_mode: \"\"\n");
-        y.push_str(&format!("  relative_file_paths:\n    - {}\n", self.file));
+        y.push_str(&format!(
+            "  relative_file_paths:\n    - {}\n",
+            q(&self.file)
+        ));
         y.push_str("  files:\n");
-        y.push_str(&format!("    - path: {}\n", self.file));
+        y.push_str(&format!("    - path: {}\n", q(&self.file)));
         y.push_str(&format!(
             "      starting_time:\n        nanoseconds_since_epoch: {start}\n"
         ));

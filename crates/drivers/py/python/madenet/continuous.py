@@ -13,6 +13,15 @@ from madenet._config import path_or_none, scenario_overrides
 from madenet._core import CoreContinuousEnv
 
 
+def _action(agent: str, value):
+    """An action: ``None`` (the robot's own policy) or an integer candidate index."""
+    if value is None:
+        return None
+    if isinstance(value, (bool, float)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"actions[{agent!r}]: expected a candidate index or None, got {value!r}")
+    return int(value)
+
+
 class ContinuousExplorationEnv(ParallelEnv):
     """The team exploring a continuous world — differential-drive robots, lidar, each robot's
     own occupancy grid read into 1 m cells, a local planner, time in seconds — as a PettingZoo
@@ -87,7 +96,7 @@ class ContinuousExplorationEnv(ParallelEnv):
     def step(self, actions: dict):
         if not self.agents:
             raise ValueError("step() after the episode ended; call reset()")
-        acts = [None if actions.get(a) is None else int(actions[a]) for a in self.possible_agents]
+        acts = [_action(a, actions.get(a)) for a in self.possible_agents]
         team, seconds, terminated, truncated = self._core.step(acts)
         obs = self._observations()
         infos = self._infos(seconds)
