@@ -13,7 +13,7 @@
 //! seconds it took (the paper's exploration time is their sum).
 
 use crate::EnvError;
-use madenet_agent::{action_mask, AgentView, Decision, ViewScratch};
+use madenet_agent::{AgentView, Decision, ViewScratch};
 use madenet_sim::continuous::{ContinuousResult, ContinuousSpec, ContinuousTrial};
 use madenet_sim::PolicyRegistry;
 
@@ -154,18 +154,8 @@ impl ContinuousEnv {
         vector: &mut [f32],
         mask: &mut [u8],
     ) -> Result<(), EnvError> {
-        let n = self.num_robots();
-        if robot >= n {
-            return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
-        }
-        if map.len() != self.map_len()
-            || vector.len() != self.vector_len()
-            || mask.len() != self.action_count()
-        {
-            return Err(EnvError::Usage(
-                "observation buffers of the wrong length".into(),
-            ));
-        }
+        let lengths = (self.map_len(), self.vector_len(), self.action_count());
+        crate::check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
         let trial = self
             .trial
             .as_ref()
@@ -174,9 +164,7 @@ impl ContinuousEnv {
         self.scratch_current[robot] = true;
         view.write_map_image(map);
         view.write_macro_observation(vector);
-        for (m, v) in mask.iter_mut().zip(action_mask(&view)) {
-            *m = v as u8;
-        }
+        crate::write_action_mask(&view, mask);
         Ok(())
     }
 

@@ -91,6 +91,34 @@ pub enum EnvError {
     Usage(String),
 }
 
+/// Checks an observation request: `robot` of a team of `n`, and buffers of the `lengths`
+/// (map image, vector, mask) the environment writes.
+pub(crate) fn check_observation(
+    robot: usize,
+    n: usize,
+    lengths: (usize, usize, usize),
+    map: &[f32],
+    vector: &[f32],
+    mask: &[u8],
+) -> Result<(), EnvError> {
+    if robot >= n {
+        return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
+    }
+    if (map.len(), vector.len(), mask.len()) != lengths {
+        return Err(EnvError::Usage(
+            "observation buffers of the wrong length".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The macro action mask of `view` into `mask` (1 = valid candidate).
+pub(crate) fn write_action_mask(view: &AgentView<'_>, mask: &mut [u8]) {
+    for (m, v) in mask.iter_mut().zip(action_mask(view)) {
+        *m = v as u8;
+    }
+}
+
 /// The stand-in policy of every robot: decisions come from the caller.
 struct Driven(DecisionMode);
 
@@ -394,18 +422,8 @@ impl ExplorationEnv {
         vector: &mut [f32],
         mask: &mut [u8],
     ) -> Result<(), EnvError> {
-        let n = self.num_robots();
-        if robot >= n {
-            return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
-        }
-        if map.len() != self.map_len()
-            || vector.len() != self.vector_len()
-            || mask.len() != self.action_count()
-        {
-            return Err(EnvError::Usage(
-                "observation buffers of the wrong length".into(),
-            ));
-        }
+        let lengths = (self.map_len(), self.vector_len(), self.action_count());
+        check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
         let mode = self.mode;
         let trial = self
             .trial
@@ -417,11 +435,7 @@ impl ExplorationEnv {
         view.write_map_image(map);
         view.write_macro_observation(vector);
         match mode {
-            ActionMode::Macro => {
-                for (m, v) in mask.iter_mut().zip(action_mask(&view)) {
-                    *m = v as u8;
-                }
-            }
+            ActionMode::Macro => write_action_mask(&view, mask),
             ActionMode::Primitive => {
                 for (m, mv) in mask.iter_mut().zip(Move::ALL) {
                     *m = primitive_allowed(view.pos, view.belief, view.teammates, mv) as u8;

@@ -1,12 +1,11 @@
 //! `CoreContinuousEnv`: the continuous world as a step-wise environment
 //! ([`madenet_env::ContinuousEnv`]), for the Python package's `ContinuousExplorationEnv`.
 
-use crate::{registry, scenario, value_error, Observation};
+use crate::{observation, registry, scenario, value_error, Observation};
 use madenet_continuous::ContinuousConfig;
 use madenet_env::ContinuousEnv;
 use madenet_sim::continuous::ContinuousSpec;
 use madenet_sim::{MapSource, StartSpec};
-use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use std::str::FromStr;
 
@@ -141,13 +140,7 @@ impl CoreContinuousEnv {
         self.env
             .observe_into(robot, &mut map, &mut vector, &mut mask)
             .map_err(value_error)?;
-        let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
-        let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
-        Ok((
-            map,
-            PyArray1::from_vec(py, vector),
-            PyArray1::from_vec(py, mask),
-        ))
+        observation(py, (h, w), map, vector, mask)
     }
 
     /// Applies one action per robot (a candidate index, or `None`: the robot's own policy);

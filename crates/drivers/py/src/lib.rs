@@ -170,6 +170,24 @@ type Observation<'py> = (
     Bound<'py, PyArray1<i8>>,
 );
 
+/// An observation's buffers as numpy arrays: the map image `[4, H, W]`, the vector, the mask
+/// (int8).
+fn observation<'py>(
+    py: Python<'py>,
+    (h, w): (usize, usize),
+    map: Vec<f32>,
+    vector: Vec<f32>,
+    mask: Vec<u8>,
+) -> PyResult<Observation<'py>> {
+    let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
+    let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
+    Ok((
+        map,
+        PyArray1::from_vec(py, vector),
+        PyArray1::from_vec(py, mask),
+    ))
+}
+
 /// One environment (see `madenet_env`): `map` is `paper:N`, `generate:SEED` or a map file,
 /// `start` a corner name or `r,c;r,c;…`, `mode` `macro` or `primitive`.
 #[pyclass(module = "madenet._core", unsendable)]
@@ -279,13 +297,7 @@ impl CoreEnv {
         self.env
             .observe_into(robot, &mut map, &mut vector, &mut mask)
             .map_err(value_error)?;
-        let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
-        let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
-        Ok((
-            map,
-            PyArray1::from_vec(py, vector),
-            PyArray1::from_vec(py, mask),
-        ))
+        observation(py, (h, w), map, vector, mask)
     }
 
     /// The centralized observation: merged map image `[4, H, W]`, every robot's vector, the
@@ -299,13 +311,7 @@ impl CoreEnv {
         self.env
             .observe_joint_into(&mut map, &mut vector, &mut mask)
             .map_err(value_error)?;
-        let map = PyArray1::from_vec(py, map).reshape([4, h, w])?;
-        let mask: Vec<i8> = mask.into_iter().map(|m| m as i8).collect();
-        Ok((
-            map,
-            PyArray1::from_vec(py, vector),
-            PyArray1::from_vec(py, mask),
-        ))
+        observation(py, (h, w), map, vector, mask)
     }
 
     /// Applies one action per robot; returns (rewards, team reward, timesteps, terminated,
