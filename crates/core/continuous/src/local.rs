@@ -360,7 +360,7 @@ fn local_astar(
     keep: f64,
 ) -> Option<Vec<(f64, f64)>> {
     let res = map.resolution();
-    let px = |m: f64| (m / res).floor() as i64;
+    let px = |m: f64| crate::mapping::floor(m / res);
     let cell_px = cell_size / res;
     let (fr, fc) = (px(from.1), px(from.0));
     let tr0 = (target.row as f64 * cell_px).floor() as i64;
