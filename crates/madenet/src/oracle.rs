@@ -21,6 +21,9 @@ enum Kind {
     /// The known-map reference: a clairvoyant team plan over the true map, in the trial's own
     /// world (the base rule only names the pairing).
     KnownMap,
+    /// Each candidate scored over --futures noiseless futures whose unseen cells are redrawn by
+    /// the map generator (knows what the team knows, not the map).
+    Redrawn,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -50,7 +53,7 @@ pub struct OracleArgs {
     /// Which oracle.
     #[arg(long, value_enum, default_value = "replay")]
     kind: Kind,
-    /// Futures per candidate (averaged) or to choose from (placebo); 1–64.
+    /// Futures per candidate (averaged, redrawn) or to choose from (placebo); 1–64.
     #[arg(long, default_value_t = 4)]
     futures: usize,
     /// Cut the scoring oracles' continuations after this many steps (0: run to the end).
@@ -83,9 +86,12 @@ pub fn run(a: OracleArgs) -> Result<()> {
     if !(1..=64).contains(&a.futures) {
         bail!("--futures {}: must be in 1..=64", a.futures);
     }
-    let scoring = matches!(a.kind, Kind::Replay | Kind::Averaged | Kind::Noiseless);
+    let scoring = matches!(
+        a.kind,
+        Kind::Replay | Kind::Averaged | Kind::Noiseless | Kind::Redrawn
+    );
     if !scoring && (a.horizon > 0 || !matches!(a.value, ValueArg::StepsLeft)) {
-        bail!("--horizon/--value: only the scoring oracles (replay, averaged, noiseless) value continuations");
+        bail!("--horizon/--value: only the scoring oracles (replay, averaged, noiseless, redrawn) value continuations");
     }
     let registry = crate::registry(None)?;
     let kind = match a.kind {
@@ -94,6 +100,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Placebo => OracleKind::Placebo,
         Kind::Noiseless => OracleKind::Noiseless,
         Kind::KnownMap => OracleKind::KnownMap,
+        Kind::Redrawn => OracleKind::Redrawn,
     };
     let mut cfg = crate::batch::trial_set(
         &a.maps,
@@ -126,7 +133,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
             .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
-        Kind::Averaged | Kind::Placebo => format!(" ({} futures)", a.futures),
+        Kind::Averaged | Kind::Placebo | Kind::Redrawn => format!(" ({} futures)", a.futures),
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
     };
     let look = match (a.horizon, a.value) {

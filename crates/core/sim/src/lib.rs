@@ -84,4 +84,7 @@ pub enum SimError {
     /// A bad config on its own (the world's own validation arrives as [`SimError::Scenario`]).
     #[error(transparent)]
     Config(#[from] madenet_world::ConfigError),
+    /// The map generator cannot draw a map of the trial's size ([`rollout::OracleKind::Redrawn`]).
+    #[error("the redrawn oracle cannot draw a map of the trial's size: {0}")]
+    Redraw(madenet_map::MapError),
 }

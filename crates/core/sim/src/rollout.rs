@@ -91,8 +91,8 @@ pub fn candidate_values_by(
         with_k.resize(trial.agents().len(), None);
         with_k[i] = Some(Decision::Candidate(k));
         let mut sum = 0.0;
-        for &future in futures {
-            sum += continuation_by(trial, &with_k, base, registry, future, look)?;
+        for future in futures {
+            sum += continuation_by(trial, &with_k, base, registry, future.clone(), look)?;
         }
         *value = Some(sum / futures.len() as f64);
     }
@@ -182,16 +182,22 @@ pub enum OracleKind {
     /// The known-map reference ([`crate::reference`]): a clairvoyant team plan over the true
     /// map, executed in the trial's own world. No base rule: the plan makes every move.
     KnownMap,
+    /// Every candidate scored over `futures` noiseless futures whose unseen cells are redrawn
+    /// by the map generator ([`Future::Redrawn`]; the same draws for every candidate of a
+    /// decision): it knows what the team knows and the kind of map, not this map — the
+    /// teacher a student that sees only the team's knowledge can learn from.
+    Redrawn,
 }
 
 impl OracleKind {
-    /// Every oracle: replay, averaged, noiseless, placebo, known-map.
-    pub const ALL: [OracleKind; 5] = [
+    /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn.
+    pub const ALL: [OracleKind; 6] = [
         OracleKind::Replay,
         OracleKind::Averaged,
         OracleKind::Noiseless,
         OracleKind::Placebo,
         OracleKind::KnownMap,
+        OracleKind::Redrawn,
     ];
 
     /// The name in configs and on the command line.
@@ -202,12 +208,17 @@ impl OracleKind {
             OracleKind::Noiseless => "noiseless",
             OracleKind::Placebo => "placebo",
             OracleKind::KnownMap => "known-map",
+            OracleKind::Redrawn => "redrawn",
         }
     }
 
-    /// Whether `futures` matters (the placebo and averaged oracles draw that many futures).
+    /// Whether `futures` matters (the placebo, averaged and redrawn oracles draw that many
+    /// futures).
     pub fn uses_futures(self) -> bool {
-        matches!(self, OracleKind::Averaged | OracleKind::Placebo)
+        matches!(
+            self,
+            OracleKind::Averaged | OracleKind::Placebo | OracleKind::Redrawn
+        )
     }
 }
 
@@ -283,10 +294,14 @@ pub fn run_oracle_by(
                 })
                 .collect();
             match kind {
-                OracleKind::Replay | OracleKind::Averaged | OracleKind::Noiseless => {
+                OracleKind::Replay
+                | OracleKind::Averaged
+                | OracleKind::Noiseless
+                | OracleKind::Redrawn => {
                     let futures = match kind {
                         OracleKind::Replay => vec![Future::Own],
                         OracleKind::Noiseless => vec![Future::Noiseless],
+                        OracleKind::Redrawn => redrawn_futures(&trial, seed, decision, futures)?,
                         _ => salts,
                     };
                     let values =
@@ -307,7 +322,7 @@ pub fn run_oracle_by(
                         let Future::Salted(salt) = future else {
                             continue;
                         };
-                        let v = continuation(&trial, &fixed, &base, registry, future)?;
+                        let v = continuation(&trial, &fixed, &base, registry, future.clone())?;
                         if best.is_none_or(|(_, b)| v < b) {
                             best = Some((salt, v));
                         }
@@ -323,4 +338,29 @@ pub fn run_oracle_by(
         trial.finish_step();
     }
     Ok(trial.finish())
+}
+
+/// `count` belief-consistent futures for decision number `decision` of the trial of `seed`
+/// ([`Future::Redrawn`]): maps drawn by the default map generator at the trial's size (as
+/// `madenet map generate`) under its movement rule, seeds from the stream `oracle/redraw`.
+pub fn redrawn_futures(
+    trial: &Trial,
+    seed: u64,
+    decision: u64,
+    count: usize,
+) -> Result<Vec<Future>, SimError> {
+    let truth = trial.world().truth();
+    let cfg = madenet_map::generate::GeneratorConfig {
+        height: truth.height(),
+        width: truth.width(),
+        ..Default::default()
+    };
+    (0..count.max(1) as u64)
+        .map(|k| {
+            let s = madenet_world::rng::derive_seed(seed, "oracle/redraw", decision * 4096 + k);
+            madenet_map::generate::generate_with_movement(&cfg, s, trial.world().config().movement)
+                .map(|m| Future::Redrawn(std::sync::Arc::new(m)))
+                .map_err(SimError::Redraw)
+        })
+        .collect()
 }

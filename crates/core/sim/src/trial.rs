@@ -73,7 +73,7 @@ pub struct TrialResult {
 }
 
 /// Which future a [`Trial::fork`] lives.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Future {
     /// This trial's own: the same noise draws (a replay, which knows the luck to come).
     Own,
@@ -85,6 +85,12 @@ pub enum Future {
     /// keeps this trial's own draws, so at a CSP strictly between 0 and 1 it knows which
     /// exchanges will succeed).
     Noiseless,
+    /// The noiseless future on another world that agrees with what the team knows: the cells
+    /// nobody has seen yet are those of this map (a draw of the map generator; the same size;
+    /// [`madenet_world::World::redraw_unseen`]). Averaged over several draws, a rollout's value
+    /// is an expectation over what the team cannot know — a label its belief can predict, where
+    /// the noiseless future's value knows the true map.
+    Redrawn(std::sync::Arc<OccGrid>),
 }
 
 /// A trial in progress.
@@ -290,6 +296,10 @@ impl Trial {
             Future::Own => {}
             Future::Salted(salt) => world.reseed_noise(self.seed, salt),
             Future::Noiseless => world.set_noiseless(),
+            Future::Redrawn(map) => {
+                world.set_noiseless();
+                world.redraw_unseen(&map);
+            }
         }
         Ok(Trial {
             spec_map: self.spec_map.clone(),

@@ -563,3 +563,84 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
     assert!(checked >= 6, "{checked} candidates checked");
     assert!(salted_differs, "another future changes some value");
 }
+
+/// The redrawn (belief-consistent) future: a fork whose unseen cells come from another map
+/// agrees with the team's knowledge and keeps the robots where they stand; redrawn with the
+/// true map it is the noiseless future exactly; with generator draws it values candidates
+/// otherwise; its oracle completes and repeats itself.
+#[test]
+fn a_redrawn_future_agrees_with_what_the_team_knows() {
+    use madenet_map::Occupancy;
+    use madenet_sim::rollout::{candidate_values, redrawn_futures, run_oracle, OracleKind};
+    use madenet_sim::{Future, PolicyRegistry};
+    use std::sync::Arc;
+    let registry = PolicyRegistry::builtin();
+    let mut values_differ = false;
+    for (map, corner) in [(2, Corner::TopLeft), (6, Corner::BottomRight)] {
+        let s = spec(map, corner, "spread", 1.0, 3);
+        let mut trial = Trial::new(s.clone()).unwrap();
+        // Walk to the second step at which robot 0 decides with a choice.
+        let mut seen = 0;
+        while trial.begin_step() {
+            if trial.deciding()[0] {
+                trial.agent_mut(0).view(true); // extracts the candidates
+                if trial.agents()[0].candidates().cells.len() >= 2 {
+                    seen += 1;
+                    if seen == 2 {
+                        break;
+                    }
+                }
+            }
+            trial.decide_with(&[]);
+            trial.finish_step();
+        }
+        assert_eq!(seen, 2, "test_{map}");
+        let w = trial.world();
+        let truth = Arc::new(w.truth().clone());
+        let value = |f: Future| candidate_values(&trial, 0, &[], "spread", &registry, &[f]);
+        assert_eq!(
+            value(Future::Redrawn(truth)).unwrap(),
+            value(Future::Noiseless).unwrap(),
+            "test_{map}: redrawn with the true map is the noiseless future"
+        );
+        let draws = redrawn_futures(&trial, s.seed, 1, 2).unwrap();
+        for f in &draws {
+            let Future::Redrawn(other) = f else {
+                panic!("a redrawn future")
+            };
+            let fork = trial.fork("spread", &registry, f.clone()).unwrap();
+            let (fw, unseen) = (fork.world(), |i: usize| {
+                w.team_map()[i] == Occupancy::Unknown
+            });
+            let cells = w.truth().len();
+            for i in 0..cells {
+                let want = if unseen(i) {
+                    match other.cells()[i] {
+                        Occupancy::Unknown => Occupancy::Obstacle,
+                        c => c,
+                    }
+                } else {
+                    w.truth().cells()[i]
+                };
+                assert_eq!(fw.truth().cells()[i], want, "test_{map} cell {i}");
+                assert!(
+                    unseen(i) || fw.explorable()[i],
+                    "a seen cell stays explorable"
+                );
+            }
+            assert!(
+                (0..cells).any(|i| unseen(i) && fw.truth().cells()[i] != w.truth().cells()[i]),
+                "test_{map}: the draw changes some unseen cell"
+            );
+            assert_eq!(fw.positions(), w.positions());
+            assert_eq!(fw.known_count(), w.known_count());
+            assert!(!fw.is_done());
+        }
+        values_differ |= value(draws[0].clone()).unwrap() != value(Future::Noiseless).unwrap();
+        let a = run_oracle(s.clone(), &registry, OracleKind::Redrawn, 2).unwrap();
+        assert!(a.metrics.completed, "test_{map}");
+        let b = run_oracle(s, &registry, OracleKind::Redrawn, 2).unwrap();
+        assert_eq!(a.metrics, b.metrics, "test_{map}: same seed, same trial");
+    }
+    assert!(values_differ, "another map values some candidate otherwise");
+}

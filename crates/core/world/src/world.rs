@@ -230,6 +230,43 @@ impl World {
         }
     }
 
+    /// Gives every cell the team has not seen yet (unknown in the team map) the occupancy it has
+    /// in `other` (unknown there: an obstacle) — another world that agrees with everything the
+    /// team knows: the belief-consistent future of a rollout, where `other` is a draw of the map
+    /// generator (madenet-sim's `Future::Redrawn`). Robots stand on cells they have seen, so
+    /// they keep their places; what is explorable is recomputed from where they stand, and
+    /// every cell the team has seen stays explorable (a cell seen past a missed one could
+    /// otherwise fall out of the count the team's progress is measured against).
+    ///
+    /// # Panics
+    /// When `other` is not the size of this world's map.
+    pub fn redraw_unseen(&mut self, other: &OccGrid) {
+        assert_eq!(
+            (other.height(), other.width()),
+            (self.truth.height(), self.truth.width()),
+            "the redrawn map must be the world's size"
+        );
+        for (i, cell) in self.truth.cells_mut().iter_mut().enumerate() {
+            if self.team_map[i] == Occupancy::Unknown {
+                *cell = match other.cells()[i] {
+                    Occupancy::Unknown => Occupancy::Obstacle,
+                    c => c,
+                };
+            }
+            self.blocked[i] = *cell != Occupancy::Free;
+        }
+        // The cast rays were cast on the old map.
+        self.shared_visible = None;
+        self.visible_range.clear();
+        self.visible_range.resize(self.truth.len(), NOT_CAST);
+        self.visible.clear();
+        self.compute_explorable();
+        for (e, &k) in self.explorable.iter_mut().zip(&self.team_map) {
+            *e |= k != Occupancy::Unknown;
+        }
+        self.explorable_count = self.explorable.iter().filter(|&&e| e).count();
+    }
+
     /// The world of `World::new(truth, starts, cfg, seed)` for the same map, starts and
     /// scenario, reusing this one's allocations and its cache of cast rays (the costly part of
     /// building and sensing): an episode restarts without casting again what earlier episodes
