@@ -86,3 +86,72 @@ def test_the_same_seed_gives_the_same_bytes(cli, tmp_path):
     assert (tmp_path / "a/a_0.mcap").read_bytes() == (tmp_path / "b/b_0.mcap").read_bytes()
     meta = lambda p: (tmp_path / p / "metadata.yaml").read_text().replace(f"{p}_0.mcap", "X")
     assert meta("a") == meta("b")
+
+
+def decoded(path):
+    """Every message of a bag, by topic: (log time, message), read by `rosbags` (Jazzy)."""
+    by_topic = {}
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
+        for conn, t, raw in reader.messages():
+            by_topic.setdefault(conn.topic, []).append((t, reader.deserialize(raw, conn.msgtype)))
+    return by_topic
+
+
+def xy(p):
+    return (round(p.x, 6), round(p.y, 6))
+
+
+def test_plans_candidates_comms_and_metrics(cli, tmp_path):
+    """A spread trial (robots choose among goal candidates): each /robot<i>/candidates marks
+    the goal the robot then heads for, each plan runs from the robot's pose to its goal, the
+    radio's lines are green where β was exchanged (CSP 1) and red where it dropped (CSP 0), and
+    the metrics end at the trial's own."""
+    args = ["run", "--map", "paper:5", "--start", "bottom-left", "--policy", "spread",
+            "--seed", "4", "--json"]
+    for csp in ["1", "0"]:
+        bag = tmp_path / f"csp{csp}"
+        out = subprocess.run([cli, *args, "--csp", csp, "--record", str(bag)], check=True,
+                             capture_output=True, text=True)
+        result = json.loads(out.stdout)
+        topics = decoded(bag)
+        for i in range(3):
+            goals = {t: xy(m.pose.position) for t, m in topics[f"/robot{i}/goal_pose"]}
+            poses = {t: xy(m.pose.position) for t, m in topics[f"/robot{i}/pose"]}
+            chosen = 0
+            for t, msg in topics[f"/robot{i}/candidates"]:
+                assert msg.markers[0].action == 3  # DELETEALL: the last decision's markers go
+                points = [xy(p) for p in msg.markers[1].points]
+                assert 2 <= len(points) <= 8 and len(set(points)) == len(points)
+                labels = [m for m in msg.markers if m.type == 9]
+                assert [m.text for m in labels] == [str(k) for k in range(len(points))]
+                pick = [m for m in msg.markers if m.type == 2]
+                if pick and t in goals:
+                    # A new goal is published with the decision that chose it.
+                    assert xy(pick[0].pose.position) == goals[t] and goals[t] in points
+                    chosen += 1
+            assert chosen >= 3, f"robot {i}: {chosen} decisions with a new goal"
+            last_goal = None
+            for t, msg in sorted(topics[f"/robot{i}/goal_pose"] + topics[f"/robot{i}/plan"],
+                                 key=lambda e: (e[0], e[1].__msgtype__ != "geometry_msgs/msg/PoseStamped")):
+                if msg.__msgtype__ == "geometry_msgs/msg/PoseStamped":
+                    last_goal = xy(msg.pose.position)
+                    continue
+                cells = [xy(p.pose.position) for p in msg.poses]
+                assert cells[0] == poses[t], "a plan starts where the robot stands"
+                if len(cells) > 1:
+                    assert cells[-1] == last_goal, "and ends at its goal"
+                    # One cell per step after the first, which may follow a slip (the agent
+                    # re-plans from where it landed at its next timestep).
+                    steps = [max(abs(a[0] - b[0]), abs(a[1] - b[1])) for a, b in zip(cells[1:], cells[2:])]
+                    assert all(s == 1.0 for s in steps), "one cell per step"
+        comms = [m for _, m in topics["/comms"]]
+        green = sum(len(m.markers[0].points) for m in comms)
+        red = sum(len(m.markers[1].points) for m in comms)
+        if csp == "1":
+            assert green > 0 and red == 0
+        else:
+            assert green == 0 and red > 0
+        explored = [m.data for _, m in topics["/metrics/explored"]]
+        assert explored == sorted(explored) and explored[-1] == 1.0
+        distance = topics["/metrics/distance"][-1][1].data
+        assert abs(distance - result["metrics"]["ttd"]) < 1e-9

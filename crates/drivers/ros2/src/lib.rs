@@ -61,6 +61,7 @@ pub mod continuous_stand_in;
 pub mod msgdefs;
 pub mod msgs;
 mod real;
+pub mod record;
 pub mod rmw;
 mod stand_in;
 

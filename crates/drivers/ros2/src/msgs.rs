@@ -240,6 +240,143 @@ pub struct TFMessage {
     pub transforms: Vec<TransformStamped>,
 }
 
+/// `nav_msgs/msg/Path`: a planned path.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Path {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The poses along the path, first to last.
+    pub poses: Vec<PoseStamped>,
+}
+
+/// `std_msgs/msg/ColorRGBA`, each channel 0–1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ColorRGBA {
+    /// Red.
+    pub r: f32,
+    /// Green.
+    pub g: f32,
+    /// Blue.
+    pub b: f32,
+    /// Opacity.
+    pub a: f32,
+}
+
+/// `builtin_interfaces/msg/Duration`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Duration {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+/// `sensor_msgs/msg/CompressedImage` (in a [`Marker`]'s texture; madenet leaves it empty).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct CompressedImage {
+    /// Stamp and frame.
+    pub header: Header,
+    /// `jpeg` or `png`.
+    pub format: String,
+    /// The image.
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/msg/UVCoordinate`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct UVCoordinate {
+    /// u.
+    pub u: f32,
+    /// v.
+    pub v: f32,
+}
+
+/// `visualization_msgs/msg/MeshFile` (in a [`Marker`]; madenet leaves it empty).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MeshFile {
+    /// The file's name.
+    pub filename: String,
+    /// Its bytes.
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/msg/Marker` as ROS 2 Jazzy defines it (texture, UV coordinates and
+/// mesh file included: CDR has no field names, so a Humble reader needs Humble's definition,
+/// which a bag carries).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Marker {
+    /// Stamp and frame.
+    pub header: Header,
+    /// Namespace: with `id`, which marker this one replaces.
+    pub ns: String,
+    /// Id within the namespace.
+    pub id: i32,
+    /// Shape: [`Marker::SPHERE`], [`Marker::LINE_LIST`], [`Marker::SPHERE_LIST`], …
+    #[serde(rename = "type")]
+    pub kind: i32,
+    /// [`Marker::ADD`] (also modifies), [`Marker::DELETE`], [`Marker::DELETEALL`].
+    pub action: i32,
+    /// Pose of the shape (of the points' frame for lists).
+    pub pose: Pose,
+    /// Size (m; for lines, `x` is the width).
+    pub scale: Vector3,
+    /// Colour of the whole marker.
+    pub color: ColorRGBA,
+    /// How long it lives (0: until replaced).
+    pub lifetime: Duration,
+    /// Whether it moves with its frame.
+    pub frame_locked: bool,
+    /// Points of list and line shapes.
+    pub points: Vec<Point>,
+    /// Per-point colours (empty: `color`).
+    pub colors: Vec<ColorRGBA>,
+    /// Texture resource (unused).
+    pub texture_resource: String,
+    /// Texture (unused).
+    pub texture: CompressedImage,
+    /// Texture coordinates (unused).
+    pub uv_coordinates: Vec<UVCoordinate>,
+    /// Text of [`Marker::TEXT_VIEW_FACING`].
+    pub text: String,
+    /// Mesh resource (unused).
+    pub mesh_resource: String,
+    /// Mesh file (unused).
+    pub mesh_file: MeshFile,
+    /// Whether a mesh brings its own materials (unused).
+    pub mesh_use_embedded_materials: bool,
+}
+
+impl Marker {
+    /// A sphere at `pose`.
+    pub const SPHERE: i32 = 2;
+    /// Pairs of `points` joined by lines.
+    pub const LINE_LIST: i32 = 5;
+    /// A sphere at each of `points`.
+    pub const SPHERE_LIST: i32 = 7;
+    /// `text` facing the viewer.
+    pub const TEXT_VIEW_FACING: i32 = 9;
+    /// Adds or replaces the marker of this `ns` and `id`.
+    pub const ADD: i32 = 0;
+    /// Deletes the marker of this `ns` and `id`.
+    pub const DELETE: i32 = 2;
+    /// Deletes every marker (of this `ns`, when set).
+    pub const DELETEALL: i32 = 3;
+}
+
+/// `visualization_msgs/msg/MarkerArray`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct MarkerArray {
+    /// The markers.
+    pub markers: Vec<Marker>,
+}
+
+/// `std_msgs/msg/Float64`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Float64 {
+    /// The value.
+    pub data: f64,
+}
+
 /// An `int8[]` written as one byte block (the same bytes as a sequence of `int8`, without a
 /// serializer call per element).
 mod int8_sequence {
@@ -312,6 +449,27 @@ impl RosMessage for TFMessage {
     const TYPE_HASH: &'static str =
         "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087";
     const DEFINITION: &'static str = crate::msgdefs::TF_MESSAGE;
+}
+
+impl RosMessage for Path {
+    const TYPE_NAME: &'static str = "nav_msgs/msg/Path";
+    const TYPE_HASH: &'static str =
+        "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b";
+    const DEFINITION: &'static str = crate::msgdefs::PATH;
+}
+
+impl RosMessage for MarkerArray {
+    const TYPE_NAME: &'static str = "visualization_msgs/msg/MarkerArray";
+    const TYPE_HASH: &'static str =
+        "RIHS01_86cb8800b6fb05b5eff1abd7a56f62a5641d3ae9a1c29e78e67e704f1d067dcf";
+    const DEFINITION: &'static str = crate::msgdefs::MARKER_ARRAY;
+}
+
+impl RosMessage for Float64 {
+    const TYPE_NAME: &'static str = "std_msgs/msg/Float64";
+    const TYPE_HASH: &'static str =
+        "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a";
+    const DEFINITION: &'static str = crate::msgdefs::FLOAT64;
 }
 
 #[cfg(test)]

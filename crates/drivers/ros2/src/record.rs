@@ -1,0 +1,329 @@
+//! A grid trial recorded as a ROS 2 bag ([`crate::bag`]) in simulated time: timestep t is
+//! second t, published on `/clock`. What `madenet run --record DIR` writes.
+//!
+//! | topic | type | when |
+//! | --- | --- | --- |
+//! | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once, at the start |
+//! | `/team_map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the team's merged map 𝓜 (everything any robot observed) |
+//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: robot i's belief with the timestep's own observation |
+//! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
+//! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
+//! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's planned path changes: from its cell to its goal |
+//! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i chose among goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot) and the chosen one (the robot's colour) |
+//! | `/comms` | `visualization_msgs/msg/MarkerArray` | every timestep: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
+//! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
+//! | `/metrics/distance` | `std_msgs/msg/Float64` | every timestep: metres driven by the team so far (TTD) |
+//! | `/tf` | `tf2_msgs/msg/TFMessage` | every timestep: `map` → `robot<i>/base_link` |
+//! | `/clock` | `rosgraph_msgs/msg/Clock` | every timestep |
+//!
+//! ```
+//! use madenet_map::paper::{paper_map, Corner};
+//! use madenet_ros2::record::Recorder;
+//! use madenet_sim::{Trial, TrialSpec};
+//!
+//! let map = paper_map(3).unwrap();
+//! let starts = Corner::TopRight.start_cells(map.height(), map.width()).to_vec();
+//! let spec = TrialSpec {
+//!     map,
+//!     map_name: "test_3".into(),
+//!     starts,
+//!     config: Default::default(),
+//!     policy: "spread".into(),
+//!     seed: 1,
+//! };
+//! let mut trial = Trial::new(spec).unwrap();
+//! let dir = std::env::temp_dir().join(format!("madenet-record-doc-{}", std::process::id()));
+//! let mut bag = Recorder::start(&dir, &trial).unwrap();
+//! while trial.step() {
+//!     bag.step(&trial).unwrap();
+//! }
+//! let (dir, messages) = bag.finish().unwrap();
+//! assert!(messages > 100 && dir.join("metadata.yaml").is_file());
+//! # std::fs::remove_dir_all(&dir).unwrap();
+//! ```
+
+use crate::bag::{Bag, BagError};
+use crate::msgs::{
+    Clock, ColorRGBA, Float64, Header, Marker, MarkerArray, Path, Point, TFMessage, Time,
+    Transform, TransformStamped, Vector3,
+};
+use crate::{occupancy_grid, pose_stamped, MapFrame, FRAME_ID};
+use madenet_map::{Occupancy, Pos};
+use madenet_sim::Trial;
+use std::path::PathBuf;
+
+/// A grid trial being recorded ([module docs](self)).
+pub struct Recorder {
+    bag: Bag,
+    frame: MapFrame,
+    maps: Vec<Option<Vec<Occupancy>>>,
+    team: Option<Vec<Occupancy>>,
+    goals: Vec<Option<Pos>>,
+    plans: Vec<Option<Vec<Pos>>>,
+    /// Decisions each robot had taken when last recorded.
+    decisions: Vec<usize>,
+}
+
+/// Robot i's colour: the palette of madenet's pictures, cycled.
+fn robot_color(i: usize) -> ColorRGBA {
+    const PALETTE: [[f32; 3]; 6] = [
+        [0.89, 0.10, 0.11],
+        [0.22, 0.49, 0.72],
+        [0.30, 0.69, 0.29],
+        [0.60, 0.31, 0.64],
+        [1.00, 0.50, 0.00],
+        [0.65, 0.34, 0.16],
+    ];
+    let [r, g, b] = PALETTE[i % PALETTE.len()];
+    ColorRGBA { r, g, b, a: 1.0 }
+}
+
+impl Recorder {
+    /// Starts the bag at `path` (a new path or an empty folder) with the true map and the
+    /// trial's present.
+    pub fn start(path: &std::path::Path, trial: &Trial) -> Result<Self, BagError> {
+        let bag = Bag::create(path)?;
+        let truth = trial.world().truth();
+        let frame = MapFrame::of(truth);
+        let n = trial.agents().len();
+        let mut r = Recorder {
+            bag,
+            frame,
+            maps: vec![None; n],
+            team: None,
+            goals: vec![None; n],
+            plans: vec![None; n],
+            decisions: vec![0; n],
+        };
+        let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
+        r.bag.write("/truth_map", &msg, 0)?;
+        r.step(trial)?;
+        Ok(r)
+    }
+
+    /// A marker in the map frame at `stamp`.
+    fn marker(stamp: Time, ns: &str, id: i32, kind: i32) -> Marker {
+        Marker {
+            header: Header {
+                stamp,
+                frame_id: FRAME_ID.into(),
+            },
+            ns: ns.into(),
+            id,
+            kind,
+            action: Marker::ADD,
+            ..Default::default()
+        }
+    }
+
+    /// The centre of cell `p` as a point (z: `z` metres).
+    fn point(&self, p: Pos, z: f64) -> Point {
+        let (x, y) = self.frame.cell_center(p);
+        Point { x, y, z }
+    }
+
+    /// Records the trial's current timestep.
+    pub fn step(&mut self, trial: &Trial) -> Result<(), BagError> {
+        let world = trial.world();
+        let t = world.t() as u64;
+        let (ns, stamp) = (
+            t * 1_000_000_000,
+            Time {
+                sec: t as i32,
+                nanosec: 0,
+            },
+        );
+        self.bag.write("/clock", &Clock { clock: stamp }, ns)?;
+        let positions = world.positions();
+        let transforms = positions
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let (x, y) = self.frame.cell_center(p);
+                let q = pose_stamped(&self.frame, p, stamp).pose.orientation;
+                TransformStamped {
+                    header: Header {
+                        stamp,
+                        frame_id: FRAME_ID.into(),
+                    },
+                    child_frame_id: format!("robot{i}/base_link"),
+                    transform: Transform {
+                        translation: Vector3 { x, y, z: 0.0 },
+                        rotation: q,
+                    },
+                }
+            })
+            .collect();
+        self.bag.write("/tf", &TFMessage { transforms }, ns)?;
+        for (i, a) in trial.agents().iter().enumerate() {
+            let [map_t, pose_t, goal_t] = crate::topics(i);
+            // What the robot knows now: its belief and this timestep's observation, which
+            // its agent takes in at the start of the next timestep (or never, at the end).
+            let mut belief = a.belief().clone();
+            for &(p, occ) in &world.observation(i).seen {
+                belief.observe(p, occ);
+            }
+            let cells = belief.map();
+            if self.maps[i].as_deref() != Some(cells) {
+                let msg = occupancy_grid(&self.frame, cells, stamp);
+                self.bag.write(&map_t, &msg, ns)?;
+                self.maps[i] = Some(cells.to_vec());
+            }
+            let pose = pose_stamped(&self.frame, positions[i], stamp);
+            self.bag.write(&pose_t, &pose, ns)?;
+            if let Some(g) = a.goal().filter(|&g| Some(g) != self.goals[i]) {
+                self.bag
+                    .write(&goal_t, &pose_stamped(&self.frame, g, stamp), ns)?;
+            }
+            self.goals[i] = a.goal();
+            // The plan from where the robot stands (the agent plans before it moves, so its
+            // path may still begin with the cell it just left).
+            let path = a.path();
+            let from = path
+                .iter()
+                .position(|&p| p == positions[i])
+                .map_or(0, |k| k + 1);
+            let plan: Vec<Pos> = std::iter::once(positions[i])
+                .chain(path[from..].iter().copied())
+                .collect();
+            if self.plans[i].as_ref() != Some(&plan) {
+                let poses = plan
+                    .iter()
+                    .map(|&p| pose_stamped(&self.frame, p, stamp))
+                    .collect();
+                let msg = Path {
+                    header: pose.header.clone(),
+                    poses,
+                };
+                self.bag.write(&format!("/robot{i}/plan"), &msg, ns)?;
+                self.plans[i] = Some(plan);
+            }
+            let decided = a.stats().decisions;
+            let candidates = &a.candidates().cells;
+            if decided != self.decisions[i] && !candidates.is_empty() {
+                let msg = self.candidate_markers(i, candidates, a.action(), stamp);
+                self.bag.write(&format!("/robot{i}/candidates"), &msg, ns)?;
+            }
+            self.decisions[i] = decided;
+        }
+        let team = world.team_map();
+        if self.team.as_deref() != Some(team) {
+            let msg = occupancy_grid(&self.frame, team, stamp);
+            self.bag.write("/team_map", &msg, ns)?;
+            self.team = Some(team.to_vec());
+        }
+        let comms = self.comm_markers(world, stamp);
+        self.bag.write("/comms", &comms, ns)?;
+        let explored = Float64 {
+            data: world.explored_fraction(),
+        };
+        self.bag.write("/metrics/explored", &explored, ns)?;
+        let distance = Float64 {
+            data: world.distances().iter().sum(),
+        };
+        self.bag.write("/metrics/distance", &distance, ns)?;
+        Ok(())
+    }
+
+    /// Robot `i`'s goal candidates as markers: every one a grey sphere with its slot number,
+    /// the chosen one (slot `chosen`) larger and in the robot's colour.
+    fn candidate_markers(
+        &self,
+        i: usize,
+        cells: &[Pos],
+        chosen: Option<usize>,
+        stamp: Time,
+    ) -> MarkerArray {
+        let ns = format!("robot{i}/candidates");
+        let mut all = Self::marker(stamp, &ns, 0, Marker::SPHERE_LIST);
+        all.scale = Vector3 {
+            x: 0.35,
+            y: 0.35,
+            z: 0.35,
+        };
+        all.color = ColorRGBA {
+            r: 0.5,
+            g: 0.5,
+            b: 0.5,
+            a: 0.8,
+        };
+        all.points = cells.iter().map(|&p| self.point(p, 0.2)).collect();
+        // The previous decision's markers go first (it may have had more slots).
+        let mut markers = vec![Self::marker(stamp, &ns, 0, 0), all];
+        markers[0].action = Marker::DELETEALL;
+        for (k, &p) in cells.iter().enumerate() {
+            let mut label = Self::marker(stamp, &ns, 2 + k as i32, Marker::TEXT_VIEW_FACING);
+            label.pose.position = self.point(p, 0.6);
+            label.scale.z = 0.4;
+            label.color = ColorRGBA {
+                r: 1.0,
+                g: 1.0,
+                b: 1.0,
+                a: 1.0,
+            };
+            label.text = k.to_string();
+            markers.push(label);
+        }
+        if let Some(&p) = chosen.and_then(|k| cells.get(k)) {
+            let mut pick = Self::marker(stamp, &ns, 1, Marker::SPHERE);
+            pick.pose.position = self.point(p, 0.2);
+            pick.scale = Vector3 {
+                x: 0.6,
+                y: 0.6,
+                z: 0.6,
+            };
+            pick.color = robot_color(i);
+            markers.push(pick);
+        }
+        MarkerArray { markers }
+    }
+
+    /// This timestep's radio: a line per pair in contact, green where β was exchanged, red
+    /// where the exchange dropped out.
+    fn comm_markers(&self, world: &madenet_world::World, stamp: Time) -> MarkerArray {
+        let positions = world.positions();
+        let exchanged = world.exchanges();
+        let lines = |id: i32, pairs: Vec<(usize, usize)>, color: ColorRGBA| {
+            let mut m = Self::marker(stamp, "comms", id, Marker::LINE_LIST);
+            m.scale.x = 0.08;
+            m.color = color;
+            m.points = pairs
+                .iter()
+                .flat_map(|&(a, b)| [positions[a], positions[b]])
+                .map(|p| self.point(p, 0.1))
+                .collect();
+            m
+        };
+        let (ok, dropped): (Vec<_>, Vec<_>) = world
+            .contacts()
+            .iter()
+            .copied()
+            .partition(|pair| exchanged.contains(pair));
+        let green = ColorRGBA {
+            r: 0.1,
+            g: 0.8,
+            b: 0.2,
+            a: 1.0,
+        };
+        let red = ColorRGBA {
+            r: 0.9,
+            g: 0.1,
+            b: 0.1,
+            a: 1.0,
+        };
+        MarkerArray {
+            markers: vec![lines(0, ok, green), lines(1, dropped, red)],
+        }
+    }
+
+    /// Messages written so far.
+    pub fn messages(&self) -> u64 {
+        self.bag.messages()
+    }
+
+    /// Finishes the bag: where it is, and how many messages it holds.
+    pub fn finish(self) -> Result<(PathBuf, u64), BagError> {
+        let messages = self.bag.messages();
+        Ok((self.bag.finish()?, messages))
+    }
+}
