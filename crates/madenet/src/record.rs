@@ -1,5 +1,6 @@
-//! `--record PATH`: a grid trial as a ROS 2 bag ([`madenet_ros2::record`]: its topics, in
-//! simulated time), with the CLI's error context and the line it prints.
+//! `--record PATH` and `--foxglove [ADDR]`: a grid trial as ROS 2 messages
+//! ([`madenet_ros2::record`]: its topics, in simulated time) into a bag and/or a live Foxglove
+//! view, with the CLI's error context and the line it prints.
 
 #[cfg(feature = "ros2")]
 mod imp {
@@ -7,15 +8,39 @@ mod imp {
     use madenet_sim::Trial;
     use std::path::Path;
 
-    /// A grid trial being recorded.
+    /// A grid trial being recorded or streamed.
     pub struct Recorder(madenet_ros2::record::Recorder);
 
     impl Recorder {
-        /// Starts the bag at `path` (a new path or an empty folder) with the true map and the
-        /// trial's start.
-        pub fn start(path: &Path, trial: &Trial) -> Result<Self> {
-            let r = madenet_ros2::record::Recorder::start(path, trial).context("--record")?;
-            Ok(Recorder(r))
+        /// Starts the bag at `bag` (a new path or an empty folder) and/or the live view at
+        /// `live` (HOST:PORT), with the true map and the trial's start; `None` when neither is
+        /// asked for.
+        pub fn start(
+            bag: Option<&Path>,
+            live: Option<&str>,
+            trial: &Trial,
+        ) -> Result<Option<Self>> {
+            if bag.is_none() && live.is_none() {
+                return Ok(None);
+            }
+            let bag = match bag {
+                Some(p) => Some(madenet_ros2::bag::Bag::create(p).context("--record")?),
+                None => None,
+            };
+            let live = match live {
+                Some(addr) => Some(madenet_ros2::live::Live::start(addr).context("--foxglove")?),
+                None => None,
+            };
+            let mut r = madenet_ros2::record::Recorder::to(bag, trial).context("--record")?;
+            if let Some(live) = live {
+                // Printed at once (stderr): a viewer connects while the run goes on.
+                eprintln!(
+                    "foxglove   {} (Foxglove: Open connection → Foxglove WebSocket)",
+                    live.url()
+                );
+                r = r.with_live(live, trial);
+            }
+            Ok(Some(Recorder(r)))
         }
 
         /// Records the trial's current timestep.
@@ -23,9 +48,11 @@ mod imp {
             self.0.step(trial).context("--record")
         }
 
-        /// Finishes the bag; the line to print about it.
-        pub fn finish(self) -> Result<String> {
-            let (dir, messages) = self.0.finish().context("--record")?;
+        /// Finishes the bag, if any; the line to print about it.
+        pub fn finish(self) -> Result<Option<String>> {
+            let Some((dir, messages)) = self.0.finish().context("--record")? else {
+                return Ok(None);
+            };
             let bytes: u64 = std::fs::read_dir(&dir)
                 .map(|d| {
                     d.filter_map(|e| e.ok()?.metadata().ok())
@@ -33,11 +60,11 @@ mod imp {
                         .sum()
                 })
                 .unwrap_or(0);
-            Ok(format!(
+            Ok(Some(format!(
                 "wrote      {} (ROS 2 bag, {messages} messages, {:.1} kB)",
                 dir.display(),
                 bytes as f64 / 1e3
-            ))
+            )))
         }
     }
 }
@@ -48,18 +75,26 @@ mod imp {
     use madenet_sim::Trial;
     use std::path::Path;
 
-    /// Without the `ros2` feature there is no bag writer.
+    /// Without the `ros2` feature there is no bag writer and no live view.
     pub struct Recorder;
 
     impl Recorder {
-        pub fn start(_: &Path, _: &Trial) -> Result<Self> {
-            anyhow::bail!("--record: this madenet was built without the `ros2` feature")
+        pub fn start(bag: Option<&Path>, live: Option<&str>, _: &Trial) -> Result<Option<Self>> {
+            match (bag, live) {
+                (None, None) => Ok(None),
+                (Some(_), _) => {
+                    anyhow::bail!("--record: this madenet was built without the `ros2` feature")
+                }
+                (None, Some(_)) => {
+                    anyhow::bail!("--foxglove: this madenet was built without the `ros2` feature")
+                }
+            }
         }
         pub fn step(&mut self, _: &Trial) -> Result<()> {
             Ok(())
         }
-        pub fn finish(self) -> Result<String> {
-            Ok(String::new())
+        pub fn finish(self) -> Result<Option<String>> {
+            Ok(None)
         }
     }
 }

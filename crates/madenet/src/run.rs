@@ -40,6 +40,47 @@ pub struct RunArgs {
     /// this new path (or empty folder), in simulated time — maps, poses, goals, /tf, /clock.
     #[arg(long, value_name = "DIR")]
     record: Option<PathBuf>,
+    /// Stream the trial live to Foxglove over its WebSocket protocol (the bag's topics and
+    /// encodings) at HOST:PORT (default 127.0.0.1:8765; port 0 picks a free one): open it in
+    /// Foxglove with "Open connection" → Foxglove WebSocket. Pace the run to watch it.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    foxglove: Option<String>,
+    /// Wait this many milliseconds after each timestep (to watch a run live; 0–60000).
+    #[arg(long, value_name = "MS", value_parser = pace_arg, conflicts_with = "realtime")]
+    pace_ms: Option<u64>,
+    /// Run at FACTOR × real time (a timestep is one simulated second): 1 = a timestep per
+    /// second, 10 = ten per second (0.001–1000).
+    #[arg(long, value_name = "FACTOR", value_parser = realtime_arg)]
+    realtime: Option<f64>,
+}
+
+/// `--pace-ms`: 0–60 000 ms.
+fn pace_arg(s: &str) -> Result<u64, String> {
+    match s.parse::<u64>() {
+        Ok(ms) if ms <= 60_000 => Ok(ms),
+        _ => Err(format!(
+            "`{s}`: must be a whole number of milliseconds in 0..=60000"
+        )),
+    }
+}
+
+/// `--realtime`: a factor in 0.001–1000.
+fn realtime_arg(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(f) if (0.001..=1000.0).contains(&f) => Ok(f),
+        _ => Err(format!("`{s}`: must be a number in 0.001..=1000")),
+    }
+}
+
+impl RunArgs {
+    /// The wait after each timestep asked for by `--pace-ms` or `--realtime`.
+    fn pace(&self) -> Option<std::time::Duration> {
+        match (self.pace_ms, self.realtime) {
+            (Some(ms), _) => Some(std::time::Duration::from_millis(ms)),
+            (None, Some(f)) => Some(std::time::Duration::from_secs_f64(1.0 / f)),
+            (None, None) => None,
+        }
+    }
 }
 
 /// Pictures of a trial (`run`, `launch` and `world`).
@@ -182,6 +223,9 @@ pub fn run(a: RunArgs) -> Result<()> {
         if a.record.is_some() {
             anyhow::bail!("--record: the continuous world is not recorded yet (grid world only)");
         }
+        if a.foxglove.is_some() {
+            anyhow::bail!("--foxglove: the continuous world is not streamed yet (grid world only)");
+        }
         return run_continuous(a);
     }
     let (spec, registry) = a.scenario.spec()?;
@@ -191,10 +235,9 @@ pub fn run(a: RunArgs) -> Result<()> {
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
     // The bag first: a refused --record leaves no picture behind either.
-    let mut recorder = match &a.record {
-        Some(path) => Some(crate::record::Recorder::start(path, &trial)?),
-        None => None,
-    };
+    let mut recorder =
+        crate::record::Recorder::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
+    let pace = a.pace();
     let mut pictures = None;
     if a.pictures.any() {
         pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
@@ -204,7 +247,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             p.push(&madenet_render::trial_frame(&trial))?;
         }
         if let Some(r) = recorder.as_mut() {
-            r.step(&trial).context("--record")?;
+            r.step(&trial)?;
+        }
+        if let Some(wait) = pace {
+            std::thread::sleep(wait);
         }
     }
     let mut wrote = match pictures {
@@ -212,7 +258,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         None => Vec::new(),
     };
     if let Some(r) = recorder {
-        wrote.push(r.finish()?);
+        wrote.extend(r.finish()?);
     }
     let result = trial.finish();
     if a.json {

@@ -101,3 +101,47 @@ fn a_taken_or_unwritable_place_is_refused_and_nothing_is_left_behind() {
         "nothing half-written"
     );
 }
+
+/// `--foxglove` with an address that is not HOST:PORT, a port already taken, or the continuous
+/// world, and pacing out of range: one `error:` line naming the flag; a refused live view
+/// leaves no bag behind.
+#[test]
+fn bad_live_view_flags_are_refused() {
+    let dir = Scratch::new("record-live");
+    let bag = dir.join("bag");
+    let run_with = |extra: &[&str]| {
+        let mut args = vec!["run", "--map", "paper:2", "--seed", "3"];
+        args.extend_from_slice(extra);
+        madenet(&args)
+    };
+    assert_clean_error(
+        &run_with(&["--foxglove", "localhost"]),
+        &["--foxglove", "HOST:PORT"],
+    );
+    assert_clean_error(
+        &run_with(&["--foxglove", "127.0.0.1:99999"]),
+        &["--foxglove", "port"],
+    );
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let out = run_with(&["--foxglove", &addr, "--record", bag.to_str().unwrap()]);
+    assert_clean_error(&out, &["--foxglove", &addr]);
+    assert_eq!(
+        entries(dir.path()),
+        Vec::<String>::new(),
+        "no bag left behind"
+    );
+    let out = madenet(&[
+        "run",
+        "--world",
+        "continuous",
+        "--generate",
+        "1",
+        "--side",
+        "8",
+        "--foxglove",
+    ]);
+    assert_clean_error(&out, &["--foxglove", "continuous"]);
+    assert_clean_error(&run_with(&["--pace-ms", "60001"]), &["--pace-ms"]);
+    assert_clean_error(&run_with(&["--realtime", "0"]), &["--realtime"]);
+}

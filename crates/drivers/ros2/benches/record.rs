@@ -43,7 +43,7 @@ fn bench(c: &mut Criterion) {
             while trial.step() {
                 bag.step(&trial).expect("recorded");
             }
-            let (at, _) = bag.finish().expect("finished");
+            let (at, _) = bag.finish().expect("finished").expect("a bag");
             std::fs::remove_dir_all(at).expect("removed");
             trial.finish()
         })
@@ -52,7 +52,7 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let trial = Trial::new(spec.clone()).expect("trial");
             let bag = Recorder::start(&dir, &trial).expect("bag");
-            let (at, _) = bag.finish().expect("finished");
+            let (at, _) = bag.finish().expect("finished").expect("a bag");
             std::fs::remove_dir_all(at).expect("removed");
         })
     });

@@ -153,6 +153,17 @@ impl Bag {
         msg: &T,
         t_ns: u64,
     ) -> Result<(), BagError> {
+        self.write_cdr::<T>(topic, &msg.to_cdr(), t_ns)
+    }
+
+    /// [`Bag::write`] for a message of type `T` already CDR-encoded (`cdr`: the bytes of
+    /// [`RosMessage::to_cdr`]), so one encoding serves several outputs.
+    pub fn write_cdr<T: RosMessage>(
+        &mut self,
+        topic: &str,
+        cdr: &[u8],
+        t_ns: u64,
+    ) -> Result<(), BagError> {
         let writer = self.writer.as_mut().expect("open until finished");
         let channel = match self.topics.get(topic) {
             Some(t) => t.channel,
@@ -186,10 +197,9 @@ impl Bag {
         };
         self.first_ns.get_or_insert(t_ns);
         self.last_ns = self.last_ns.max(t_ns);
-        let data = msg.to_cdr();
         let writer = self.writer.as_mut().expect("open");
         writer
-            .write_to_known_channel(&header, &data)
+            .write_to_known_channel(&header, cdr)
             .map_err(|e| self.mcap_error(e))
     }
 

@@ -58,6 +58,8 @@ pub use stand_in::run_stand_in;
 
 pub mod bag;
 pub mod continuous_stand_in;
+#[cfg(feature = "foxglove")]
+pub mod live;
 pub mod msgdefs;
 pub mod msgs;
 mod real;

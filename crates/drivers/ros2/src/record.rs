@@ -1,5 +1,7 @@
-//! A grid trial recorded as a ROS 2 bag ([`crate::bag`]) in simulated time: timestep t is
-//! second t, published on `/clock`. What `madenet run --record DIR` writes.
+//! A grid trial as ROS 2 messages in simulated time (timestep t is second t, published on
+//! `/clock`), into a bag ([`crate::bag`]: `madenet run --record DIR`), a live Foxglove view
+//! (`crate::live`, feature `foxglove`: `madenet run --foxglove`), or both — the same messages,
+//! encoded once.
 //!
 //! | topic | type | when |
 //! | --- | --- | --- |
@@ -37,12 +39,13 @@
 //! while trial.step() {
 //!     bag.step(&trial).unwrap();
 //! }
-//! let (dir, messages) = bag.finish().unwrap();
+//! let (dir, messages) = bag.finish().unwrap().expect("a bag");
 //! assert!(messages > 100 && dir.join("metadata.yaml").is_file());
 //! # std::fs::remove_dir_all(&dir).unwrap();
 //! ```
 
 use crate::bag::{Bag, BagError};
+use crate::msgs::RosMessage;
 use crate::msgs::{
     Clock, ColorRGBA, Float64, Header, Marker, MarkerArray, Path, Point, TFMessage, Time,
     Transform, TransformStamped, Vector3,
@@ -54,7 +57,9 @@ use std::path::PathBuf;
 
 /// A grid trial being recorded ([module docs](self)).
 pub struct Recorder {
-    bag: Bag,
+    bag: Option<Bag>,
+    #[cfg(feature = "foxglove")]
+    live: Option<crate::live::Live>,
     frame: MapFrame,
     maps: Vec<Option<Vec<Occupancy>>>,
     team: Option<Vec<Occupancy>>,
@@ -82,12 +87,18 @@ impl Recorder {
     /// Starts the bag at `path` (a new path or an empty folder) with the true map and the
     /// trial's present.
     pub fn start(path: &std::path::Path, trial: &Trial) -> Result<Self, BagError> {
-        let bag = Bag::create(path)?;
+        Self::to(Some(Bag::create(path)?), trial)
+    }
+
+    /// Starts recording into `bag` (if any) with the true map and the trial's present.
+    pub fn to(bag: Option<Bag>, trial: &Trial) -> Result<Self, BagError> {
         let truth = trial.world().truth();
         let frame = MapFrame::of(truth);
         let n = trial.agents().len();
         let mut r = Recorder {
             bag,
+            #[cfg(feature = "foxglove")]
+            live: None,
             frame,
             maps: vec![None; n],
             team: None,
@@ -96,9 +107,39 @@ impl Recorder {
             decisions: vec![0; n],
         };
         let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
-        r.bag.write("/truth_map", &msg, 0)?;
+        r.put("/truth_map", &msg, 0)?;
         r.step(trial)?;
         Ok(r)
+    }
+
+    /// Also streams to `live` from now on (the true map first).
+    #[cfg(feature = "foxglove")]
+    pub fn with_live(mut self, live: crate::live::Live, trial: &Trial) -> Self {
+        let truth = trial.world().truth();
+        let msg = occupancy_grid(&self.frame, truth.cells(), Time::default());
+        let mut live = live;
+        live.write_cdr::<crate::msgs::OccupancyGrid>("/truth_map", &msg.to_cdr(), 0);
+        self.live = Some(live);
+        self
+    }
+
+    /// The live view, if any.
+    #[cfg(feature = "foxglove")]
+    pub fn live(&self) -> Option<&crate::live::Live> {
+        self.live.as_ref()
+    }
+
+    /// Writes `msg` on `topic` at `ns` to every output, encoded once.
+    fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
+        let cdr = msg.to_cdr();
+        #[cfg(feature = "foxglove")]
+        if let Some(live) = &mut self.live {
+            live.write_cdr::<T>(topic, &cdr, ns);
+        }
+        match &mut self.bag {
+            Some(bag) => bag.write_cdr::<T>(topic, &cdr, ns),
+            None => Ok(()),
+        }
     }
 
     /// A marker in the map frame at `stamp`.
@@ -133,7 +174,7 @@ impl Recorder {
                 nanosec: 0,
             },
         );
-        self.bag.write("/clock", &Clock { clock: stamp }, ns)?;
+        self.put("/clock", &Clock { clock: stamp }, ns)?;
         let positions = world.positions();
         let transforms = positions
             .iter()
@@ -154,7 +195,7 @@ impl Recorder {
                 }
             })
             .collect();
-        self.bag.write("/tf", &TFMessage { transforms }, ns)?;
+        self.put("/tf", &TFMessage { transforms }, ns)?;
         for (i, a) in trial.agents().iter().enumerate() {
             let [map_t, pose_t, goal_t] = crate::topics(i);
             // What the robot knows now: its belief and this timestep's observation, which
@@ -166,14 +207,13 @@ impl Recorder {
             let cells = belief.map();
             if self.maps[i].as_deref() != Some(cells) {
                 let msg = occupancy_grid(&self.frame, cells, stamp);
-                self.bag.write(&map_t, &msg, ns)?;
+                self.put(&map_t, &msg, ns)?;
                 self.maps[i] = Some(cells.to_vec());
             }
             let pose = pose_stamped(&self.frame, positions[i], stamp);
-            self.bag.write(&pose_t, &pose, ns)?;
+            self.put(&pose_t, &pose, ns)?;
             if let Some(g) = a.goal().filter(|&g| Some(g) != self.goals[i]) {
-                self.bag
-                    .write(&goal_t, &pose_stamped(&self.frame, g, stamp), ns)?;
+                self.put(&goal_t, &pose_stamped(&self.frame, g, stamp), ns)?;
             }
             self.goals[i] = a.goal();
             // The plan from where the robot stands (the agent plans before it moves, so its
@@ -195,33 +235,33 @@ impl Recorder {
                     header: pose.header.clone(),
                     poses,
                 };
-                self.bag.write(&format!("/robot{i}/plan"), &msg, ns)?;
+                self.put(&format!("/robot{i}/plan"), &msg, ns)?;
                 self.plans[i] = Some(plan);
             }
             let decided = a.stats().decisions;
             let candidates = &a.candidates().cells;
             if decided != self.decisions[i] && !candidates.is_empty() {
                 let msg = self.candidate_markers(i, candidates, a.action(), stamp);
-                self.bag.write(&format!("/robot{i}/candidates"), &msg, ns)?;
+                self.put(&format!("/robot{i}/candidates"), &msg, ns)?;
             }
             self.decisions[i] = decided;
         }
         let team = world.team_map();
         if self.team.as_deref() != Some(team) {
             let msg = occupancy_grid(&self.frame, team, stamp);
-            self.bag.write("/team_map", &msg, ns)?;
+            self.put("/team_map", &msg, ns)?;
             self.team = Some(team.to_vec());
         }
         let comms = self.comm_markers(world, stamp);
-        self.bag.write("/comms", &comms, ns)?;
+        self.put("/comms", &comms, ns)?;
         let explored = Float64 {
             data: world.explored_fraction(),
         };
-        self.bag.write("/metrics/explored", &explored, ns)?;
+        self.put("/metrics/explored", &explored, ns)?;
         let distance = Float64 {
             data: world.distances().iter().sum(),
         };
-        self.bag.write("/metrics/distance", &distance, ns)?;
+        self.put("/metrics/distance", &distance, ns)?;
         Ok(())
     }
 
@@ -316,14 +356,17 @@ impl Recorder {
         }
     }
 
-    /// Messages written so far.
+    /// Messages written to the bag so far.
     pub fn messages(&self) -> u64 {
-        self.bag.messages()
+        self.bag.as_ref().map_or(0, Bag::messages)
     }
 
-    /// Finishes the bag: where it is, and how many messages it holds.
-    pub fn finish(self) -> Result<(PathBuf, u64), BagError> {
-        let messages = self.bag.messages();
-        Ok((self.bag.finish()?, messages))
+    /// Finishes the bag, if any: where it is, and how many messages it holds.
+    pub fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
+        let Some(bag) = self.bag else {
+            return Ok(None);
+        };
+        let messages = bag.messages();
+        Ok(Some((bag.finish()?, messages)))
     }
 }

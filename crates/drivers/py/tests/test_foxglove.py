@@ -1,0 +1,66 @@
+"""`madenet run --foxglove`: a paced run watched live by a client of Foxglove's WebSocket
+protocol written here from its published spec (the `websockets` package; `foxglove.sdk.v1`
+subprotocol), its CDR payloads decoded by `rosbags`' Jazzy typestore."""
+
+import asyncio
+import json
+import re
+import struct
+import subprocess
+
+from rosbags.typesys import Stores, get_typestore
+import websockets
+
+
+async def watch(url, want):
+    """Subscribes to the topics in `want` and returns their first decoded messages."""
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    got = {}
+    async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"]) as ws:
+        channels, subscribed = {}, {}
+        while len(got) < len(want):
+            frame = await asyncio.wait_for(ws.recv(), timeout=20)
+            if isinstance(frame, str):
+                msg = json.loads(frame)
+                if msg["op"] == "advertise":
+                    for ch in msg["channels"]:
+                        channels[ch["id"]] = ch
+                        if ch["topic"] in want and ch["topic"] not in subscribed.values():
+                            sub = len(subscribed) + 1
+                            subscribed[sub] = ch["topic"]
+                            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": sub, "channelId": ch["id"]}]}))
+                continue
+            # Binary: opcode 1 (message data), subscription id, log time, payload.
+            if frame[0] != 1:
+                continue
+            sub, log_time = struct.unpack_from("<IQ", frame, 1)
+            topic = subscribed[sub]
+            ch = next(c for c in channels.values() if c["topic"] == topic)
+            assert ch["encoding"] == "cdr" and ch["schemaEncoding"] == "ros2msg"
+            got.setdefault(topic, (log_time, typestore.deserialize_cdr(frame[13:], ch["schemaName"])))
+    return got
+
+
+def test_a_paced_run_is_watched_live(cli):
+    proc = subprocess.Popen(
+        [cli, "run", "--map", "paper:4", "--policy", "spread", "--seed", "1",
+         "--foxglove", "127.0.0.1:0", "--pace-ms", "150"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stderr.readline()
+        url = re.search(r"ws://\S+", line)
+        assert url, line
+        want = {"/robot0/pose", "/team_map", "/robot1/plan"}
+        got = asyncio.run(watch(url.group(0), want))
+        assert set(got) == want
+        t, pose = got["/robot0/pose"]
+        assert pose.header.frame_id == "map" and t % 10**9 == 0  # simulated seconds
+        assert 0 <= pose.pose.position.x <= 20 and 0 <= pose.pose.position.y <= 20
+        _, team = got["/team_map"]
+        assert (team.info.width, team.info.height) == (20, 20) and len(team.data) == 400
+        assert {int(v) for v in team.data} <= {-1, 0, 100} and 0 in {int(v) for v in team.data}
+        out, err = proc.communicate(timeout=60)
+        assert proc.returncode == 0, err
+    finally:
+        proc.kill()

@@ -1,0 +1,103 @@
+//! A run streamed live to Foxglove (`--foxglove`): the official `foxglove` crate's WebSocket
+//! server (Foxglove's `foxglove.sdk.v1` protocol) on a loopback address by default, with the
+//! same channels and encodings as a recorded bag ([`crate::record`]): one channel per topic,
+//! `cdr` messages with `ros2msg` schemas, stamped in simulated time. Open it in Foxglove with
+//! "Open connection" → Foxglove WebSocket → the URL printed at the start.
+
+use crate::msgs::RosMessage;
+use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// Why the live view could not start.
+#[derive(Debug, thiserror::Error)]
+#[error("{addr}: {why}")]
+pub struct LiveError {
+    /// The address asked for.
+    pub addr: String,
+    /// What went wrong.
+    pub why: String,
+}
+
+/// A Foxglove WebSocket server and its channels ([module docs](self)).
+pub struct Live {
+    ctx: Arc<Context>,
+    server: Option<foxglove::WebSocketServerHandle>,
+    channels: BTreeMap<String, Arc<RawChannel>>,
+    url: String,
+}
+
+impl Live {
+    /// Serves at `addr` (`HOST:PORT`; port 0 picks a free one).
+    pub fn start(addr: &str) -> Result<Self, LiveError> {
+        let err = |why: String| LiveError {
+            addr: addr.to_string(),
+            why,
+        };
+        let (host, port) = addr
+            .rsplit_once(':')
+            .ok_or_else(|| err("expected HOST:PORT, e.g. 127.0.0.1:8765".into()))?;
+        let port: u16 = port
+            .parse()
+            .map_err(|_| err(format!("`{port}` is not a port (0–65535)")))?;
+        let ctx = Context::new();
+        let server = WebSocketServer::new()
+            .name("madenet")
+            .context(&ctx)
+            .bind(host, port)
+            .start_blocking()
+            .map_err(|e| err(e.to_string()))?;
+        let url = format!("ws://{host}:{}", server.port());
+        Ok(Live {
+            ctx,
+            server: Some(server),
+            channels: BTreeMap::new(),
+            url,
+        })
+    }
+
+    /// The server's URL, `ws://HOST:PORT`.
+    pub fn url(&self) -> &str {
+        &self.url
+    }
+
+    /// Viewers connected now.
+    pub fn clients(&self) -> usize {
+        self.server.as_ref().map_or(0, |s| s.client_count())
+    }
+
+    /// Sends `cdr` (a message of type `T`, CDR-encoded) on `topic`, stamped `t_ns`; the
+    /// topic's channel is advertised on its first message.
+    pub fn write_cdr<T: RosMessage>(&mut self, topic: &str, cdr: &[u8], t_ns: u64) {
+        let channel = match self.channels.get(topic) {
+            Some(c) => c,
+            None => {
+                let schema = Schema::new(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes());
+                let Ok(c) = ChannelBuilder::new(topic)
+                    .message_encoding("cdr")
+                    .schema(schema)
+                    .context(&self.ctx)
+                    .build_raw()
+                else {
+                    // Only a topic advertised twice with another schema fails: ours never do.
+                    return;
+                };
+                self.channels.entry(topic.to_string()).or_insert(c)
+            }
+        };
+        channel.log_with_meta(
+            cdr,
+            PartialMetadata {
+                log_time: Some(t_ns),
+            },
+        );
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        if let Some(server) = self.server.take() {
+            server.stop().wait_blocking();
+        }
+    }
+}
