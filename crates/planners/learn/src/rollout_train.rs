@@ -17,7 +17,9 @@
 //!    very state ([`Trial::fork`]) with the robot taking k and everyone following the base rule
 //!    afterwards — by default once, in the noiseless future (no sensor misses, no slips;
 //!    communication keeps the trial's own draws), or with `futures = "salted"` over `rollouts`
-//!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k).
+//!    other futures of the noise ([`madenet_world::World::reseed_noise`]; the same for every k),
+//!    or with `futures = "redrawn"` over `rollouts` noiseless futures whose unseen cells are
+//!    redrawn from the episode's map distribution (labels the team's knowledge can predict).
 //!    The label of k is the mean number of steps left until the map is explored (`value =
 //!    "mean-discovery"`: the mean over cells of the steps until each is known, capped at
 //!    `horizon`): one step of policy improvement over the base rule. With `expert_iteration`, once a student beats the
@@ -77,6 +79,11 @@ pub enum Futures {
     Noiseless,
     /// `rollouts` continuations, each in another future of the noise.
     Salted,
+    /// `rollouts` noiseless continuations on worlds whose cells the team has not seen are
+    /// redrawn from the episode's own map distribution (its size, density range and floor-plan
+    /// share; [`madenet_sim::Future::Redrawn`]): labels that depend only on what the team
+    /// knows, so a student that sees the team's knowledge can learn them.
+    Redrawn,
 }
 
 /// Which DEP network the teacher trains ([`RolloutTrainConfig::network`]).
@@ -142,7 +149,8 @@ pub struct RolloutTrainConfig {
     /// corridors) instead of clutter ([`ScenarioDraw::floorplan_prob`]).
     pub floorplan_prob: f64,
     /// Which futures the teacher scores a candidate in: `noiseless` (default: one continuation
-    /// without sensor misses and slips — no luck) or `salted` (`rollouts` futures of the noise).
+    /// without sensor misses and slips — no luck), `salted` (`rollouts` futures of the noise)
+    /// or `redrawn` (`rollouts` noiseless futures on redrawn unseen cells: [`Futures::Redrawn`]).
     pub futures: Futures,
     /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
     /// the trial's exploration rate so far, [`madenet_sim::rollout::Value::StepsLeft`]; with
@@ -161,7 +169,7 @@ pub struct RolloutTrainConfig {
     /// of n cells it is `label_prob · 400 / n` (capped at 1), so a large map costs the teacher
     /// about what a small one does.
     pub label_prob: f64,
-    /// Continuations per candidate and decision with `futures = "salted"`.
+    /// Continuations per candidate and decision with `futures = "salted"` or `"redrawn"`.
     pub rollouts: usize,
     /// Probability of a random valid candidate in the behaviour.
     pub behaviour_epsilon: f64,
@@ -501,6 +509,27 @@ impl RolloutTrainConfig {
     }
 }
 
+/// The map distribution of the run's `height` × `width` episodes with `team` robots.
+fn scenario_draw(
+    cfg: &RolloutTrainConfig,
+    height: usize,
+    width: usize,
+    team: usize,
+) -> ScenarioDraw {
+    ScenarioDraw {
+        corner_start_prob: cfg.corner_start_prob,
+        floorplan_prob: cfg.floorplan_prob,
+        starts_stream: "starts",
+        ..ScenarioDraw::new(
+            height,
+            width,
+            (cfg.density_min, cfg.density_max),
+            team,
+            cfg.scenario.movement,
+        )
+    }
+}
+
 /// Episode `index`'s trial spec (policy left empty): its map (square of a side up to `side_max`
 /// with a curriculum), team, starts, CSP and seed.
 fn episode_spec(
@@ -522,19 +551,7 @@ fn episode_spec(
     } else {
         cfg.scenario.num_robots
     };
-    let (map, starts) = ScenarioDraw {
-        corner_start_prob: cfg.corner_start_prob,
-        floorplan_prob: cfg.floorplan_prob,
-        starts_stream: "starts",
-        ..ScenarioDraw::new(
-            height,
-            width,
-            (cfg.density_min, cfg.density_max),
-            team,
-            cfg.scenario.movement,
-        )
-    }
-    .draw(seed)?;
+    let (map, starts) = scenario_draw(cfg, height, width, team).draw(seed)?;
     let mut rng = stream(seed, "csp", 0);
     let u = rng.random::<f64>();
     let csp = if u < cfg.csp_extreme_prob / 2.0 {
@@ -674,19 +691,30 @@ struct Labelling<'a> {
 
 impl Labelling<'_> {
     /// The futures robot `i`'s candidates are scored in at timestep `t`.
-    fn futures(&self, t: u64, i: usize) -> Vec<Future> {
-        match self.cfg.futures {
+    fn futures(&self, trial: &Trial, i: usize) -> Result<Vec<Future>, TrainError> {
+        let t = trial.world().t() as u64;
+        let salt = |s: u64| (t * 64 + i as u64) * 64 + s;
+        Ok(match self.cfg.futures {
             Futures::Noiseless => vec![Future::Noiseless],
             Futures::Salted => (0..self.cfg.rollouts as u64)
-                .map(|s| {
-                    Future::Salted(derive_seed(
-                        self.seed,
-                        "future",
-                        (t * 64 + i as u64) * 64 + s,
-                    ))
-                })
+                .map(|s| Future::Salted(derive_seed(self.seed, "future", salt(s))))
                 .collect(),
-        }
+            Futures::Redrawn => {
+                let truth = trial.world().truth();
+                let draw = scenario_draw(
+                    self.cfg,
+                    truth.height(),
+                    truth.width(),
+                    trial.agents().len(),
+                );
+                (0..self.cfg.rollouts as u64)
+                    .map(|s| {
+                        let (map, _) = draw.draw(derive_seed(self.seed, "redraw", salt(s)))?;
+                        Ok(Future::Redrawn(std::sync::Arc::new(map)))
+                    })
+                    .collect::<Result<_, TrainError>>()?
+            }
+        })
     }
 
     /// Robot `i`'s candidate values, the deciding robots with a decision in `fixed` taking it.
@@ -696,7 +724,7 @@ impl Labelling<'_> {
         i: usize,
         fixed: &[Option<Decision>],
     ) -> Result<Vec<Option<f64>>, TrainError> {
-        let futures = self.futures(trial.world().t() as u64, i);
+        let futures = self.futures(trial, i)?;
         let look = Lookahead {
             horizon: self.horizon,
             value: self.cfg.value,
@@ -799,8 +827,8 @@ impl Recorder for Labelling<'_> {
             }
             // The team's gain, counted once: everyone at the base's choices against everyone at
             // the final ones (the last robot's best, valued beside the others' final choices).
-            // With `futures = "salted"` the two come from different robots' futures, so the
-            // gain carries their luck.
+            // With `futures = "salted"` or `"redrawn"` the two come from different robots'
+            // futures, so the gain carries their luck.
             let last = choosers[choosers.len() - 1];
             let at_final = values[last]
                 .as_deref()

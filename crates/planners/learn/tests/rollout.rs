@@ -5,7 +5,7 @@
 //! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
 //! initialises networks lives in one test.
 
-use madenet_learn::rollout_train::{train, RolloutTrainConfig};
+use madenet_learn::rollout_train::{train, Futures, RolloutTrainConfig};
 use madenet_learn::Model;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_testkit::{read, Scratch};
@@ -185,6 +185,28 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
         |r: &std::collections::HashMap<String, String>| -> usize { r["rollouts"].parse().unwrap() };
     assert!(count(team) > count(solo), "{solo:?} vs {team:?}");
     assert_ne!(solo["loss"], team["loss"]);
+
+    // The redrawn teacher: the same episodes and labelled decisions, each candidate valued over
+    // `rollouts` futures on redrawn unseen cells — twice the noiseless teacher's continuations
+    // at 2, and other labels.
+    let r = root.join("r");
+    train(
+        &r,
+        Some(RolloutTrainConfig {
+            futures: Futures::Redrawn,
+            rollouts: 2,
+            iterations: 1,
+            episodes: 2,
+            ..tiny()
+        }),
+        &mut |_| {},
+    )
+    .unwrap();
+    let redrawn = &table(&r)[0];
+    assert_eq!(solo["decisions"], redrawn["decisions"]);
+    assert_eq!(solo["behaviour_steps"], redrawn["behaviour_steps"]);
+    assert_eq!(count(redrawn), 2 * count(solo), "{solo:?} vs {redrawn:?}");
+    assert_ne!(solo["loss"], redrawn["loss"]);
 
     // Expert iteration over a weak base rule (random candidates): the teacher gains over its
     // base, a student that beats the base becomes the next iteration's base (kept in the
