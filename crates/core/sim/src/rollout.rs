@@ -129,9 +129,10 @@ pub fn continuation_by(
         w.explorable_count().saturating_sub(w.known_count()) as f64
     };
     // Σ over the continuation's timesteps of the cells still unknown before each: a cell first
-    // known after step d counts d, one still unknown at the horizon counts the horizon.
-    let mut area = unknown(trial);
+    // known after step d counts d, one still unknown at the horizon counts the horizon
+    // (counted in the fork's world: a redrawn one has other explorable cells).
     let mut fork = trial.fork(base, registry, future)?;
+    let mut area = unknown(&fork);
     fork.decide_with(fixed);
     fork.finish_step();
     let limit = look.horizon.unwrap_or(usize::MAX).max(1);
@@ -253,7 +254,7 @@ pub fn run_oracle(
     run_oracle_by(spec, registry, kind, futures, Lookahead::default())
 }
 
-/// [`run_oracle`] with the scoring oracles' (replay, averaged, noiseless) continuations cut
+/// [`run_oracle`] with the scoring oracles' (replay, averaged, noiseless, redrawn) continuations cut
 /// and valued by `look`.
 pub fn run_oracle_by(
     spec: TrialSpec,
@@ -342,7 +343,8 @@ pub fn run_oracle_by(
 
 /// `count` belief-consistent futures for decision number `decision` of the trial of `seed`
 /// ([`Future::Redrawn`]): maps drawn by the default map generator at the trial's size (as
-/// `madenet map generate`) under its movement rule, seeds from the stream `oracle/redraw`.
+/// `madenet map generate`: [`GeneratorConfig::for_size`](madenet_map::generate::GeneratorConfig::for_size))
+/// under its movement rule, seeds from the stream `oracle/redraw`.
 pub fn redrawn_futures(
     trial: &Trial,
     seed: u64,
@@ -350,11 +352,7 @@ pub fn redrawn_futures(
     count: usize,
 ) -> Result<Vec<Future>, SimError> {
     let truth = trial.world().truth();
-    let cfg = madenet_map::generate::GeneratorConfig {
-        height: truth.height(),
-        width: truth.width(),
-        ..Default::default()
-    };
+    let cfg = madenet_map::generate::GeneratorConfig::for_size(truth.height(), truth.width());
     (0..count.max(1) as u64)
         .map(|k| {
             let s = madenet_world::rng::derive_seed(seed, "oracle/redraw", decision * 4096 + k);

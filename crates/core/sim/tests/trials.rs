@@ -643,4 +643,21 @@ fn a_redrawn_future_agrees_with_what_the_team_knows() {
         assert_eq!(a.metrics, b.metrics, "test_{map}: same seed, same trial");
     }
     assert!(values_differ, "another map values some candidate otherwise");
+    // The draws take the trial's size: a 12 × 15 map redraws as one.
+    let map = madenet_map::generate::generate(
+        &madenet_map::generate::GeneratorConfig::for_size(12, 15),
+        5,
+    )
+    .unwrap();
+    let starts = Corner::BottomLeft.start_cells(12, 15).to_vec();
+    let small = TrialSpec {
+        map,
+        map_name: "small".into(),
+        starts,
+        config: ScenarioConfig::default(),
+        policy: "spread".into(),
+        seed: 2,
+    };
+    let r = run_oracle(small, &registry, OracleKind::Redrawn, 1).unwrap();
+    assert!(r.metrics.completed);
 }

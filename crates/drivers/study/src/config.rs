@@ -36,9 +36,9 @@ pub struct StudyConfig {
     /// The base rule the oracles' continuations follow (a policy choosing among goal
     /// candidates); its own trials run too, listed among the methods or not.
     pub oracle_base: String,
-    /// Futures per decision of the `placebo` and `averaged` oracles (1–64).
+    /// Futures per decision of the `placebo`, `averaged` and `redrawn` oracles (1–64).
     pub oracle_futures: usize,
-    /// How the scoring oracles (replay, averaged, noiseless) cut and value their continuations
+    /// How the scoring oracles (replay, averaged, noiseless, redrawn) cut and value their continuations
     /// (`horizon`: steps, none by default; `value`: `steps-left` by default or
     /// `mean-discovery`; [`madenet_sim::rollout::Value`]).
     pub oracle_lookahead: Lookahead,
