@@ -5,8 +5,50 @@
 #[cfg(feature = "ros2")]
 mod imp {
     use anyhow::{Context, Result};
+    use madenet_ros2::bag::Bag;
+    use madenet_ros2::live::Live;
+    use madenet_sim::continuous::ContinuousTrial;
     use madenet_sim::Trial;
-    use std::path::Path;
+    use std::path::{Path, PathBuf};
+
+    /// The bag and the live view asked for (the bag's place checked first, so a refused
+    /// `--foxglove` leaves no bag behind: an unfinished bag removes itself).
+    fn open(bag: Option<&Path>, live: Option<&str>) -> Result<(Option<Bag>, Option<Live>)> {
+        let bag = match bag {
+            Some(p) => Some(Bag::create(p).context("--record")?),
+            None => None,
+        };
+        let live = match live {
+            Some(addr) => {
+                let live = Live::start(addr).context("--foxglove")?;
+                // Printed at once (stderr): a viewer connects while the run goes on.
+                eprintln!(
+                    "foxglove   {} (Foxglove: Open connection → Foxglove WebSocket)",
+                    live.url()
+                );
+                Some(live)
+            }
+            None => None,
+        };
+        Ok((bag, live))
+    }
+
+    /// The line printed about a finished bag.
+    fn wrote(done: Option<(PathBuf, u64)>) -> Option<String> {
+        let (dir, messages) = done?;
+        let bytes: u64 = std::fs::read_dir(&dir)
+            .map(|d| {
+                d.filter_map(|e| e.ok()?.metadata().ok())
+                    .map(|m| m.len())
+                    .sum()
+            })
+            .unwrap_or(0);
+        Some(format!(
+            "wrote      {} (ROS 2 bag, {messages} messages, {:.1} kB)",
+            dir.display(),
+            bytes as f64 / 1e3
+        ))
+    }
 
     /// A grid trial being recorded or streamed.
     pub struct Recorder(madenet_ros2::record::Recorder);
@@ -23,24 +65,11 @@ mod imp {
             if bag.is_none() && live.is_none() {
                 return Ok(None);
             }
-            let bag = match bag {
-                Some(p) => Some(madenet_ros2::bag::Bag::create(p).context("--record")?),
-                None => None,
+            let r = match open(bag, live)? {
+                (bag, Some(live)) => madenet_ros2::record::Recorder::to_live(bag, live, trial),
+                (bag, None) => madenet_ros2::record::Recorder::to(bag, trial),
             };
-            let live = match live {
-                Some(addr) => Some(madenet_ros2::live::Live::start(addr).context("--foxglove")?),
-                None => None,
-            };
-            let mut r = madenet_ros2::record::Recorder::to(bag, trial).context("--record")?;
-            if let Some(live) = live {
-                // Printed at once (stderr): a viewer connects while the run goes on.
-                eprintln!(
-                    "foxglove   {} (Foxglove: Open connection → Foxglove WebSocket)",
-                    live.url()
-                );
-                r = r.with_live(live, trial);
-            }
-            Ok(Some(Recorder(r)))
+            Ok(Some(Recorder(r.context("--record")?)))
         }
 
         /// Records the trial's current timestep.
@@ -50,21 +79,39 @@ mod imp {
 
         /// Finishes the bag, if any; the line to print about it.
         pub fn finish(self) -> Result<Option<String>> {
-            let Some((dir, messages)) = self.0.finish().context("--record")? else {
+            Ok(wrote(self.0.finish().context("--record")?))
+        }
+    }
+
+    /// A continuous trial being recorded or streamed.
+    pub struct ContinuousRecorder(madenet_ros2::record::ContinuousRecorder);
+
+    impl ContinuousRecorder {
+        /// [`Recorder::start`] for a continuous trial.
+        pub fn start(
+            bag: Option<&Path>,
+            live: Option<&str>,
+            trial: &ContinuousTrial,
+        ) -> Result<Option<Self>> {
+            if bag.is_none() && live.is_none() {
                 return Ok(None);
+            }
+            use madenet_ros2::record::ContinuousRecorder as R;
+            let r = match open(bag, live)? {
+                (bag, Some(live)) => R::to_live(bag, live, trial),
+                (bag, None) => R::to(bag, trial),
             };
-            let bytes: u64 = std::fs::read_dir(&dir)
-                .map(|d| {
-                    d.filter_map(|e| e.ok()?.metadata().ok())
-                        .map(|m| m.len())
-                        .sum()
-                })
-                .unwrap_or(0);
-            Ok(Some(format!(
-                "wrote      {} (ROS 2 bag, {messages} messages, {:.1} kB)",
-                dir.display(),
-                bytes as f64 / 1e3
-            )))
+            Ok(Some(ContinuousRecorder(r.context("--record")?)))
+        }
+
+        /// Records the control period the trial just finished.
+        pub fn step(&mut self, trial: &ContinuousTrial) -> Result<()> {
+            self.0.step(trial).context("--record")
+        }
+
+        /// Finishes the bag, if any; the line to print about it.
+        pub fn finish(self) -> Result<Option<String>> {
+            Ok(wrote(self.0.finish().context("--record")?))
         }
     }
 }
@@ -72,23 +119,29 @@ mod imp {
 #[cfg(not(feature = "ros2"))]
 mod imp {
     use anyhow::Result;
+    use madenet_sim::continuous::ContinuousTrial;
     use madenet_sim::Trial;
     use std::path::Path;
+
+    /// Refuses what needs the `ros2` feature.
+    fn refuse(bag: Option<&Path>, live: Option<&str>) -> Result<()> {
+        match (bag, live) {
+            (None, None) => Ok(()),
+            (Some(_), _) => {
+                anyhow::bail!("--record: this madenet was built without the `ros2` feature")
+            }
+            (None, Some(_)) => {
+                anyhow::bail!("--foxglove: this madenet was built without the `ros2` feature")
+            }
+        }
+    }
 
     /// Without the `ros2` feature there is no bag writer and no live view.
     pub struct Recorder;
 
     impl Recorder {
         pub fn start(bag: Option<&Path>, live: Option<&str>, _: &Trial) -> Result<Option<Self>> {
-            match (bag, live) {
-                (None, None) => Ok(None),
-                (Some(_), _) => {
-                    anyhow::bail!("--record: this madenet was built without the `ros2` feature")
-                }
-                (None, Some(_)) => {
-                    anyhow::bail!("--foxglove: this madenet was built without the `ros2` feature")
-                }
-            }
+            refuse(bag, live).map(|()| None)
         }
         pub fn step(&mut self, _: &Trial) -> Result<()> {
             Ok(())
@@ -97,6 +150,25 @@ mod imp {
             Ok(None)
         }
     }
+
+    /// Without the `ros2` feature there is no bag writer and no live view.
+    pub struct ContinuousRecorder;
+
+    impl ContinuousRecorder {
+        pub fn start(
+            bag: Option<&Path>,
+            live: Option<&str>,
+            _: &ContinuousTrial,
+        ) -> Result<Option<Self>> {
+            refuse(bag, live).map(|()| None)
+        }
+        pub fn step(&mut self, _: &ContinuousTrial) -> Result<()> {
+            Ok(())
+        }
+        pub fn finish(self) -> Result<Option<String>> {
+            Ok(None)
+        }
+    }
 }
 
-pub use imp::Recorder;
+pub use imp::{ContinuousRecorder, Recorder};

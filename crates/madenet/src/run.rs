@@ -37,7 +37,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 1.0)]
     frame_s: f64,
     /// Record the trial as a ROS 2 bag: a rosbag2 folder (metadata.yaml and one MCAP file) at
-    /// this new path (or empty folder), in simulated time — maps, poses, goals, /tf, /clock.
+    /// this new path (or empty folder), in simulated time — maps, poses, goals, plans, /tf,
+    /// /clock (the continuous world: scans and fine maps too).
     #[arg(long, value_name = "DIR")]
     record: Option<PathBuf>,
     /// Stream the trial live to Foxglove over its WebSocket protocol (the bag's topics and
@@ -45,11 +46,12 @@ pub struct RunArgs {
     /// Foxglove with "Open connection" → Foxglove WebSocket. Pace the run to watch it.
     #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
     foxglove: Option<String>,
-    /// Wait this many milliseconds after each timestep (to watch a run live; 0–60000).
+    /// Wait this many milliseconds after each timestep (a control period in the continuous
+    /// world) to watch a run live; 0–60000.
     #[arg(long, value_name = "MS", value_parser = pace_arg, conflicts_with = "realtime")]
     pace_ms: Option<u64>,
-    /// Run at FACTOR × real time (a timestep is one simulated second): 1 = a timestep per
-    /// second, 10 = ten per second (0.001–1000).
+    /// Run at about FACTOR × real time (a grid timestep is one simulated second; the
+    /// continuous world's control period its own length): 0.02–1000.
     #[arg(long, value_name = "FACTOR", value_parser = realtime_arg)]
     realtime: Option<f64>,
 }
@@ -64,11 +66,11 @@ fn pace_arg(s: &str) -> Result<u64, String> {
     }
 }
 
-/// `--realtime`: a factor in 0.001–1000.
+/// `--realtime`: a factor in 0.02–1000 (at most 50 s a grid timestep, as `--pace-ms`'s 60 s).
 fn realtime_arg(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(f) if (0.001..=1000.0).contains(&f) => Ok(f),
-        _ => Err(format!("`{s}`: must be a number in 0.001..=1000")),
+        Ok(f) if (0.02..=1000.0).contains(&f) => Ok(f),
+        _ => Err(format!("`{s}`: must be a number in 0.02..=1000")),
     }
 }
 
@@ -220,12 +222,6 @@ pub fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -
 
 pub fn run(a: RunArgs) -> Result<()> {
     if a.world == "continuous" {
-        if a.record.is_some() {
-            anyhow::bail!("--record: the continuous world is not recorded yet (grid world only)");
-        }
-        if a.foxglove.is_some() {
-            anyhow::bail!("--foxglove: the continuous world is not streamed yet (grid world only)");
-        }
         return run_continuous(a);
     }
     let (spec, registry) = a.scenario.spec()?;
@@ -321,6 +317,19 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         (a.pictures.cell_px * 25).clamp(100, 600),
     );
     let mut trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
+    // The bag first: a refused --record leaves no picture behind either.
+    let mut recorder = crate::record::ContinuousRecorder::start(
+        a.record.as_deref(),
+        a.foxglove.as_deref(),
+        &trial,
+    )?;
+    // Pacing per control period: --pace-ms as given, --realtime from the period's length.
+    let period = trial.world().config().control_period;
+    let pace = match (a.pace_ms, a.realtime) {
+        (Some(ms), _) => Some(std::time::Duration::from_millis(ms)),
+        (None, Some(f)) => Some(std::time::Duration::from_secs_f64(period / f)),
+        (None, None) => None,
+    };
     let mut gif = match &a.pictures.render {
         Some(p) => {
             let mut g =
@@ -342,6 +351,12 @@ fn run_continuous(a: RunArgs) -> Result<()> {
                 ))?;
             }
         }
+        if let Some(r) = recorder.as_mut() {
+            r.step(&trial)?;
+        }
+        if let Some(wait) = pace {
+            std::thread::sleep(wait);
+        }
     }
     let mut wrote = Vec::new();
     if let (Some(g), Some(p)) = (gif, &a.pictures.render) {
@@ -350,6 +365,9 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     if let Some(p) = &a.pictures.snapshot {
         madenet_render::continuous::save_continuous_png(&trial, scale, p)?;
         wrote.push(format!("wrote      {}", p.display()));
+    }
+    if let Some(r) = recorder {
+        wrote.extend(r.finish()?);
     }
     let r = trial.finish();
     if a.json {

@@ -83,18 +83,6 @@ fn a_taken_or_unwritable_place_is_refused_and_nothing_is_left_behind() {
     assert_eq!(entries(&full), ["keep.txt"]);
     // Under a file: no folder can be made there.
     assert_clean_error(&record(&file.join("bag")), &["--record"]);
-    let out = madenet(&[
-        "run",
-        "--world",
-        "continuous",
-        "--generate",
-        "1",
-        "--side",
-        "8",
-        "--record",
-        dir.join("c").to_str().unwrap(),
-    ]);
-    assert_clean_error(&out, &["--record", "continuous"]);
     assert_eq!(
         entries(dir.path()),
         ["file", "full"],
@@ -102,9 +90,8 @@ fn a_taken_or_unwritable_place_is_refused_and_nothing_is_left_behind() {
     );
 }
 
-/// `--foxglove` with an address that is not HOST:PORT, a port already taken, or the continuous
-/// world, and pacing out of range: one `error:` line naming the flag; a refused live view
-/// leaves no bag behind.
+/// `--foxglove` with an address that is not HOST:PORT or a port already taken, and pacing out
+/// of range: one `error:` line naming the flag; a refused live view leaves no bag behind.
 #[test]
 fn bad_live_view_flags_are_refused() {
     let dir = Scratch::new("record-live");
@@ -131,17 +118,68 @@ fn bad_live_view_flags_are_refused() {
         Vec::<String>::new(),
         "no bag left behind"
     );
-    let out = madenet(&[
-        "run",
-        "--world",
-        "continuous",
-        "--generate",
-        "1",
-        "--side",
-        "8",
-        "--foxglove",
-    ]);
-    assert_clean_error(&out, &["--foxglove", "continuous"]);
     assert_clean_error(&run_with(&["--pace-ms", "60001"]), &["--pace-ms"]);
     assert_clean_error(&run_with(&["--realtime", "0"]), &["--realtime"]);
+}
+
+/// A run streamed live and recorded writes the bag it writes unstreamed; the continuous world
+/// records too (scans and fine maps beside the grid's topics), the same bytes for the same seed.
+#[test]
+fn live_and_continuous_runs_are_recorded() {
+    let dir = Scratch::new("record-both");
+    let at = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let grid = |extra: &[&str]| {
+        let mut args = vec![
+            "run", "--map", "paper:2", "--policy", "spread", "--seed", "3",
+        ];
+        args.extend_from_slice(extra);
+        let out = madenet(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    grid(&["--record", &at("plain")]);
+    grid(&["--record", &at("live"), "--foxglove", "127.0.0.1:0"]);
+    assert_eq!(
+        std::fs::read(dir.join("plain/plain_0.mcap")).unwrap(),
+        std::fs::read(dir.join("live/live_0.mcap")).unwrap()
+    );
+    let continuous = |name: &str| {
+        let out = madenet(&[
+            "run",
+            "--world",
+            "continuous",
+            "--generate",
+            "2",
+            "--side",
+            "10",
+            "--seed",
+            "4",
+            "--record",
+            &at(name),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    continuous("c1");
+    continuous("c2");
+    assert_eq!(
+        std::fs::read(dir.join("c1/c1_0.mcap")).unwrap(),
+        std::fs::read(dir.join("c2/c2_0.mcap")).unwrap()
+    );
+    let meta = std::fs::read_to_string(dir.join("c1/metadata.yaml")).unwrap();
+    for needle in [
+        "name: \"/robot0/scan\"",
+        "type: \"sensor_msgs/msg/LaserScan\"",
+        "name: \"/robot2/map\"",
+        "name: \"/metrics/explored\"",
+        "name: \"/tf\"",
+    ] {
+        assert!(meta.contains(needle), "{needle}: {meta}");
+    }
 }

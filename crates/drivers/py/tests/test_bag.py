@@ -155,3 +155,27 @@ def test_plans_candidates_comms_and_metrics(cli, tmp_path):
         assert explored == sorted(explored) and explored[-1] == 1.0
         distance = topics["/metrics/distance"][-1][1].data
         assert abs(distance - result["metrics"]["ttd"]) < 1e-9
+
+
+def test_a_continuous_run_is_recorded(cli, tmp_path):
+    """The continuous world's bag: every message decodes (rosbags, Jazzy); scans of 360 beams
+    at the lidar's 5 Hz per robot, poses at 10 Hz with the robot's heading, fine maps at most
+    once a second, and the last explored share is the run's."""
+    bag = tmp_path / "c"
+    out = subprocess.run([cli, "run", "--world", "continuous", "--generate", "3", "--side", "12",
+                          "--seed", "2", "--json", "--record", str(bag)],
+                         check=True, capture_output=True, text=True)
+    result = json.loads(out.stdout)
+    topics = decoded(bag)
+    poses = topics["/robot0/pose"]
+    span = (poses[-1][0] - poses[0][0]) / 1e9
+    assert abs(len(poses) - (10 * span + 1)) <= 1
+    scans = topics["/robot0/scan"]
+    assert all(len(m.ranges) == 360 for _, m in scans)
+    assert abs(len(scans) - 5 * span) <= 2
+    # The first fine map with the first scan, then at most one a second.
+    times = [t for t, _ in topics["/robot0/map"]][1:]
+    assert len(times) > 10 and all(b - a >= 10**9 - 10**6 for a, b in zip(times, times[1:]))
+    headings = {round(m.pose.orientation.z, 3) for _, m in poses}
+    assert len(headings) > 10, "the robot turns"
+    assert abs(topics["/metrics/explored"][-1][1].data - result["explored"][-1]) < 0.02

@@ -51,7 +51,8 @@ def test_a_paced_run_is_watched_live(cli):
         line = proc.stderr.readline()
         url = re.search(r"ws://\S+", line)
         assert url, line
-        want = {"/robot0/pose", "/team_map", "/robot1/plan"}
+        # /truth_map is published once, before anyone can subscribe: latched, it comes again.
+        want = {"/robot0/pose", "/team_map", "/robot1/plan", "/truth_map"}
         got = asyncio.run(watch(url.group(0), want))
         assert set(got) == want
         t, pose = got["/robot0/pose"]
@@ -60,7 +61,31 @@ def test_a_paced_run_is_watched_live(cli):
         _, team = got["/team_map"]
         assert (team.info.width, team.info.height) == (20, 20) and len(team.data) == 400
         assert {int(v) for v in team.data} <= {-1, 0, 100} and 0 in {int(v) for v in team.data}
+        _, truth = got["/truth_map"]
+        assert (truth.info.width, truth.info.height) == (20, 20) and -1 not in set(truth.data)
         out, err = proc.communicate(timeout=60)
         assert proc.returncode == 0, err
+    finally:
+        proc.kill()
+
+
+def test_a_continuous_run_is_watched_live(cli):
+    """The continuous world live: a robot's laser scan (360 beams in its own frame) and its
+    fine map (0.1 m pixels, occupancy in percent)."""
+    proc = subprocess.Popen(
+        [cli, "run", "--world", "continuous", "--generate", "2", "--side", "12", "--seed", "1",
+         "--foxglove", "127.0.0.1:0", "--realtime", "5"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = re.search(r"ws://\S+", proc.stderr.readline())
+        assert url
+        got = asyncio.run(watch(url.group(0), {"/robot0/scan", "/robot1/map", "/truth_map"}))
+        _, scan = got["/robot0/scan"]
+        assert len(scan.ranges) == 360 and scan.header.frame_id == "robot0/base_link"
+        _, fine = got["/robot1/map"]
+        assert abs(fine.info.resolution - 0.1) < 1e-6 and fine.info.width == 120
+        assert set(int(v) for v in fine.data) - {-1} and max(fine.data) <= 100
+        _, truth = got["/truth_map"]
+        assert (truth.info.width, truth.info.height) == (12, 12)
     finally:
         proc.kill()

@@ -4,6 +4,7 @@
 //!
 //! * `paper_trial/plain`
 //! * `paper_trial/recorded`
+//! * `paper_trial/empty_bag` (the fixed cost: the true map and the first timestep only)
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_map::paper::{paper_map, Corner};

@@ -180,13 +180,13 @@ pub fn run_continuous_stand_in(
 }
 
 /// A world point (x right, y down from the top-left corner, metres) in the `map` frame.
-fn map_point(frame: &MapFrame, x: f64, y: f64) -> (f64, f64) {
+pub(crate) fn map_point(frame: &MapFrame, x: f64, y: f64) -> (f64, f64) {
     frame.point(x, frame.height as f64 * frame.resolution - y)
 }
 
 /// A world pose in the `map` frame: position by [`map_point`], heading mirrored (y down → y
 /// up) and turned by the origin's yaw.
-fn pose_stamped(p: Pose, frame: &MapFrame, t: Time) -> PoseStamped {
+pub(crate) fn pose_stamped(p: Pose, frame: &MapFrame, t: Time) -> PoseStamped {
     let (x, y) = map_point(frame, p.x, p.y);
     PoseStamped {
         header: header(t),
@@ -196,7 +196,7 @@ fn pose_stamped(p: Pose, frame: &MapFrame, t: Time) -> PoseStamped {
 
 /// Robot `i`'s last scan as a `LaserScan` in its own frame: beam k of the world's sensor
 /// (clockwise in ROS's y-up frame) is range `N − 1 − k`, so ranges run counter-clockwise.
-fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
+pub(crate) fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
     let lidar = world.config().lidar;
     let n = lidar.beams;
     let fov = lidar.fov_deg.to_radians();
@@ -245,7 +245,12 @@ fn laser_scan(world: &ContinuousWorld, i: usize, t: Time) -> LaserScan {
 
 /// Robot `i`'s fine map as an `OccupancyGrid`: occupancy probability in percent, −1 where
 /// unobserved; ROS row 0 is the world's bottom pixel row, the origin where its corner lies.
-fn fine_grid(world: &ContinuousWorld, i: usize, frame: &MapFrame, t: Time) -> OccupancyGrid {
+pub(crate) fn fine_grid(
+    world: &ContinuousWorld,
+    i: usize,
+    frame: &MapFrame,
+    t: Time,
+) -> OccupancyGrid {
     let map = world.map(i);
     let (h, w, res) = (map.height(), map.width(), map.resolution());
     let probs = map.probabilities();

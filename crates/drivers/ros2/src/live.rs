@@ -3,6 +3,10 @@
 //! same channels and encodings as a recorded bag ([`crate::record`]): one channel per topic,
 //! `cdr` messages with `ros2msg` schemas, stamped in simulated time. Open it in Foxglove with
 //! "Open connection" → Foxglove WebSocket → the URL printed at the start.
+//!
+//! The maps (topics ending in `map`: published once or on change) are latched, as
+//! transient-local QoS would keep them: the last of each is sent again every second of wall
+//! time, so a viewer that joins late sees the true map and every robot's map within a second.
 
 use crate::msgs::RosMessage;
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
@@ -25,7 +29,15 @@ pub struct Live {
     server: Option<foxglove::WebSocketServerHandle>,
     channels: BTreeMap<String, Arc<RawChannel>>,
     url: String,
+    /// The last message of each latched topic (its CDR), sent again by [`Live::resend`].
+    latched: BTreeMap<String, Vec<u8>>,
+    /// The latest stamp sent, and when the latched topics were last sent again.
+    now_ns: u64,
+    resent: std::time::Instant,
 }
+
+/// How often the latched maps are sent again (wall time).
+const RESEND: std::time::Duration = std::time::Duration::from_secs(1);
 
 impl Live {
     /// Serves at `addr` (`HOST:PORT`; port 0 picks a free one).
@@ -47,12 +59,21 @@ impl Live {
             .bind(host, port)
             .start_blocking()
             .map_err(|e| err(e.to_string()))?;
-        let url = format!("ws://{host}:{}", server.port());
+        // A wildcard bind is reached through loopback on this machine.
+        let shown = match host {
+            "0.0.0.0" => "127.0.0.1",
+            "::" | "[::]" => "[::1]",
+            h => h,
+        };
+        let url = format!("ws://{shown}:{}", server.port());
         Ok(Live {
             ctx,
             server: Some(server),
             channels: BTreeMap::new(),
             url,
+            latched: BTreeMap::new(),
+            now_ns: 0,
+            resent: std::time::Instant::now(),
         })
     }
 
@@ -67,30 +88,48 @@ impl Live {
     }
 
     /// Sends `cdr` (a message of type `T`, CDR-encoded) on `topic`, stamped `t_ns`; the
-    /// topic's channel is advertised on its first message.
+    /// topic's channel is advertised on its first message. Maps are latched ([module
+    /// docs](self)).
     pub fn write_cdr<T: RosMessage>(&mut self, topic: &str, cdr: &[u8], t_ns: u64) {
-        let channel = match self.channels.get(topic) {
-            Some(c) => c,
-            None => {
-                let schema = Schema::new(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes());
-                let Ok(c) = ChannelBuilder::new(topic)
-                    .message_encoding("cdr")
-                    .schema(schema)
-                    .context(&self.ctx)
-                    .build_raw()
-                else {
-                    // Only a topic advertised twice with another schema fails: ours never do.
-                    return;
-                };
-                self.channels.entry(topic.to_string()).or_insert(c)
-            }
-        };
-        channel.log_with_meta(
+        if !self.channels.contains_key(topic) {
+            let schema = Schema::new(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes());
+            let Ok(c) = ChannelBuilder::new(topic)
+                .message_encoding("cdr")
+                .schema(schema)
+                .context(&self.ctx)
+                .build_raw()
+            else {
+                // Only a topic advertised twice with another schema fails: ours never do.
+                return;
+            };
+            self.channels.insert(topic.to_string(), c);
+        }
+        self.channels[topic].log_with_meta(
             cdr,
             PartialMetadata {
                 log_time: Some(t_ns),
             },
         );
+        if topic.ends_with("map") {
+            self.latched.insert(topic.to_string(), cdr.to_vec());
+        }
+        self.now_ns = self.now_ns.max(t_ns);
+        if self.resent.elapsed() >= RESEND {
+            self.resend();
+        }
+    }
+
+    /// Sends the latched maps again, stamped with the latest time sent.
+    pub fn resend(&mut self) {
+        self.resent = std::time::Instant::now();
+        for (topic, cdr) in &self.latched {
+            self.channels[topic].log_with_meta(
+                cdr,
+                PartialMetadata {
+                    log_time: Some(self.now_ns),
+                },
+            );
+        }
     }
 }
 

@@ -11,7 +11,7 @@
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
 //! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's planned path changes: from its cell to its goal |
-//! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i chose among goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot) and the chosen one (the robot's colour) |
+//! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot) and the chosen one (the robot's colour) |
 //! | `/comms` | `visualization_msgs/msg/MarkerArray` | every timestep: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
 //! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
 //! | `/metrics/distance` | `std_msgs/msg/Float64` | every timestep: metres driven by the team so far (TTD) |
@@ -55,11 +55,43 @@ use madenet_map::{Occupancy, Pos};
 use madenet_sim::Trial;
 use std::path::PathBuf;
 
-/// A grid trial being recorded ([module docs](self)).
-pub struct Recorder {
+/// Where the messages go: a bag, a live view, or both (each message encoded once).
+struct Outputs {
     bag: Option<Bag>,
     #[cfg(feature = "foxglove")]
     live: Option<crate::live::Live>,
+}
+
+impl Outputs {
+    /// Writes `msg` on `topic` at `ns` to every output, encoded once.
+    fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
+        let cdr = msg.to_cdr();
+        #[cfg(feature = "foxglove")]
+        if let Some(live) = &mut self.live {
+            live.write_cdr::<T>(topic, &cdr, ns);
+        }
+        match &mut self.bag {
+            Some(bag) => bag.write_cdr::<T>(topic, &cdr, ns),
+            None => Ok(()),
+        }
+    }
+
+    fn messages(&self) -> u64 {
+        self.bag.as_ref().map_or(0, Bag::messages)
+    }
+
+    fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
+        let Some(bag) = self.bag else {
+            return Ok(None);
+        };
+        let messages = bag.messages();
+        Ok(Some((bag.finish()?, messages)))
+    }
+}
+
+/// A grid trial being recorded ([module docs](self)).
+pub struct Recorder {
+    out: Outputs,
     frame: MapFrame,
     maps: Vec<Option<Vec<Occupancy>>>,
     team: Option<Vec<Occupancy>>,
@@ -92,13 +124,39 @@ impl Recorder {
 
     /// Starts recording into `bag` (if any) with the true map and the trial's present.
     pub fn to(bag: Option<Bag>, trial: &Trial) -> Result<Self, BagError> {
+        Self::begin(
+            Outputs {
+                bag,
+                #[cfg(feature = "foxglove")]
+                live: None,
+            },
+            trial,
+        )
+    }
+
+    /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
+    /// trial's present.
+    #[cfg(feature = "foxglove")]
+    pub fn to_live(
+        bag: Option<Bag>,
+        live: crate::live::Live,
+        trial: &Trial,
+    ) -> Result<Self, BagError> {
+        Self::begin(
+            Outputs {
+                bag,
+                live: Some(live),
+            },
+            trial,
+        )
+    }
+
+    fn begin(out: Outputs, trial: &Trial) -> Result<Self, BagError> {
         let truth = trial.world().truth();
         let frame = MapFrame::of(truth);
         let n = trial.agents().len();
         let mut r = Recorder {
-            bag,
-            #[cfg(feature = "foxglove")]
-            live: None,
+            out,
             frame,
             maps: vec![None; n],
             team: None,
@@ -112,34 +170,9 @@ impl Recorder {
         Ok(r)
     }
 
-    /// Also streams to `live` from now on (the true map first).
-    #[cfg(feature = "foxglove")]
-    pub fn with_live(mut self, live: crate::live::Live, trial: &Trial) -> Self {
-        let truth = trial.world().truth();
-        let msg = occupancy_grid(&self.frame, truth.cells(), Time::default());
-        let mut live = live;
-        live.write_cdr::<crate::msgs::OccupancyGrid>("/truth_map", &msg.to_cdr(), 0);
-        self.live = Some(live);
-        self
-    }
-
-    /// The live view, if any.
-    #[cfg(feature = "foxglove")]
-    pub fn live(&self) -> Option<&crate::live::Live> {
-        self.live.as_ref()
-    }
-
-    /// Writes `msg` on `topic` at `ns` to every output, encoded once.
+    /// Writes `msg` on `topic` at `ns` to every output.
     fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
-        let cdr = msg.to_cdr();
-        #[cfg(feature = "foxglove")]
-        if let Some(live) = &mut self.live {
-            live.write_cdr::<T>(topic, &cdr, ns);
-        }
-        match &mut self.bag {
-            Some(bag) => bag.write_cdr::<T>(topic, &cdr, ns),
-            None => Ok(()),
-        }
+        self.out.put(topic, msg, ns)
     }
 
     /// A marker in the map frame at `stamp`.
@@ -358,15 +391,203 @@ impl Recorder {
 
     /// Messages written to the bag so far.
     pub fn messages(&self) -> u64 {
-        self.bag.as_ref().map_or(0, Bag::messages)
+        self.out.messages()
     }
 
     /// Finishes the bag, if any: where it is, and how many messages it holds.
     pub fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
-        let Some(bag) = self.bag else {
-            return Ok(None);
+        self.out.finish()
+    }
+}
+
+/// Control periods between fine maps of one robot in a continuous recording (at most one a
+/// second at the default 0.05 s period: a 20 m world's fine map is 40 kB a message).
+const FINE_MAP_EVERY_S: f64 = 1.0;
+
+/// A continuous trial ([`madenet_sim::continuous::ContinuousTrial`]) being recorded or
+/// streamed, in simulated time: the topics of the ROS 2 stand-in
+/// ([`crate::continuous_stand_in`]) and more —
+///
+/// | topic | type | when |
+/// | --- | --- | --- |
+/// | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the true map in 1 m cells |
+/// | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | each of robot i's scans (staggered), in `robot<i>/base_link` |
+/// | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | robot i's fine map (occupancy %), when it changed, at most once a second |
+/// | `/robot<i>/pose`, `/tf`, `/clock` | as the grid's | 10 Hz, with the robots' headings |
+/// | `/robot<i>/goal_pose`, `/robot<i>/plan` | as the grid's | when they change (the agent's cells) |
+/// | `/metrics/explored`, `/metrics/distance` | `std_msgs/msg/Float64` | once a second |
+pub struct ContinuousRecorder {
+    out: Outputs,
+    frame: MapFrame,
+    /// Control periods recorded (the world's ticks).
+    ticks: u64,
+    scan_every: u64,
+    pose_every: u64,
+    map_every: u64,
+    metrics_every: u64,
+    maps: Vec<Option<Vec<i8>>>,
+    goals: Vec<Option<Pos>>,
+    plans: Vec<Option<Vec<Pos>>>,
+}
+
+impl ContinuousRecorder {
+    /// Starts recording `trial` into `bag` (if any) with the true map and the present.
+    pub fn to(
+        bag: Option<Bag>,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+    ) -> Result<Self, BagError> {
+        Self::begin(
+            Outputs {
+                bag,
+                #[cfg(feature = "foxglove")]
+                live: None,
+            },
+            trial,
+        )
+    }
+
+    /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
+    /// present.
+    #[cfg(feature = "foxglove")]
+    pub fn to_live(
+        bag: Option<Bag>,
+        live: crate::live::Live,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+    ) -> Result<Self, BagError> {
+        Self::begin(
+            Outputs {
+                bag,
+                live: Some(live),
+            },
+            trial,
+        )
+    }
+
+    fn begin(
+        out: Outputs,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+    ) -> Result<Self, BagError> {
+        let world = trial.world();
+        let cfg = world.config();
+        let period = cfg.control_period;
+        let every = |s: f64| (s / period).round().max(1.0) as u64;
+        let n = world.robots();
+        let mut r = ContinuousRecorder {
+            out,
+            frame: MapFrame::of(world.coarse_truth()),
+            ticks: 0,
+            scan_every: every(1.0 / cfg.lidar.rate_hz),
+            pose_every: every(0.1),
+            map_every: every(FINE_MAP_EVERY_S),
+            metrics_every: every(1.0),
+            maps: vec![None; n],
+            goals: vec![None; n],
+            plans: vec![None; n],
         };
-        let messages = bag.messages();
-        Ok(Some((bag.finish()?, messages)))
+        let truth = occupancy_grid(&r.frame, world.coarse_truth().cells(), Time::default());
+        r.out.put("/truth_map", &truth, 0)?;
+        r.record(trial)?;
+        Ok(r)
+    }
+
+    /// Records the control period the trial just finished.
+    pub fn step(
+        &mut self,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+    ) -> Result<(), BagError> {
+        self.ticks += 1;
+        self.record(trial)
+    }
+
+    fn record(&mut self, trial: &madenet_sim::continuous::ContinuousTrial) -> Result<(), BagError> {
+        use crate::continuous_stand_in::{fine_grid, laser_scan, pose_stamped, scan_topic};
+        let world = trial.world();
+        let secs = world.time();
+        let ns = (secs * 1e9).round() as u64;
+        let stamp = Time {
+            sec: secs.floor() as i32,
+            nanosec: (ns % 1_000_000_000) as u32,
+        };
+        let k = self.ticks;
+        let n = world.robots();
+        if k.is_multiple_of(self.pose_every) {
+            self.out.put("/clock", &Clock { clock: stamp }, ns)?;
+            let mut transforms = Vec::with_capacity(n);
+            for i in 0..n {
+                let pose = pose_stamped(world.pose(i), &self.frame, stamp);
+                let p = pose.pose;
+                transforms.push(TransformStamped {
+                    header: pose.header.clone(),
+                    child_frame_id: format!("robot{i}/base_link"),
+                    transform: Transform {
+                        translation: Vector3 {
+                            x: p.position.x,
+                            y: p.position.y,
+                            z: 0.0,
+                        },
+                        rotation: p.orientation,
+                    },
+                });
+                self.out.put(&format!("/robot{i}/pose"), &pose, ns)?;
+            }
+            self.out.put("/tf", &TFMessage { transforms }, ns)?;
+        }
+        for (i, agent) in trial.agents().iter().enumerate() {
+            // The world scans robot i at the end of the periods where (ticks + i) is a
+            // multiple of the scan period (the stand-in's rule).
+            if k > 0 && (k + i as u64).is_multiple_of(self.scan_every) {
+                self.out
+                    .put(&scan_topic(i), &laser_scan(world, i, stamp), ns)?;
+                let due =
+                    self.maps[i].is_none() || (k + i as u64) % self.map_every < self.scan_every;
+                if due {
+                    let grid = fine_grid(world, i, &self.frame, stamp);
+                    if self.maps[i].as_ref() != Some(&grid.data) {
+                        self.out.put(&format!("/robot{i}/map"), &grid, ns)?;
+                        self.maps[i] = Some(grid.data);
+                    }
+                }
+            }
+            if let Some(g) = agent.goal().filter(|&g| Some(g) != self.goals[i]) {
+                let msg = crate::pose_stamped(&self.frame, g, stamp);
+                self.out.put(&format!("/robot{i}/goal_pose"), &msg, ns)?;
+            }
+            self.goals[i] = agent.goal();
+            let plan = agent.path().to_vec();
+            if self.plans[i].as_ref() != Some(&plan) {
+                let poses = std::iter::once(world.cell_of(i))
+                    .chain(plan.iter().copied())
+                    .map(|p| crate::pose_stamped(&self.frame, p, stamp))
+                    .collect();
+                let header = Header {
+                    stamp,
+                    frame_id: FRAME_ID.into(),
+                };
+                self.out
+                    .put(&format!("/robot{i}/plan"), &Path { header, poses }, ns)?;
+                self.plans[i] = Some(plan);
+            }
+        }
+        if k.is_multiple_of(self.metrics_every) {
+            let explored = Float64 {
+                data: world.explored_fraction(),
+            };
+            self.out.put("/metrics/explored", &explored, ns)?;
+            let distance = Float64 {
+                data: (0..n).map(|i| world.distance(i)).sum(),
+            };
+            self.out.put("/metrics/distance", &distance, ns)?;
+        }
+        Ok(())
+    }
+
+    /// Messages written to the bag so far.
+    pub fn messages(&self) -> u64 {
+        self.out.messages()
+    }
+
+    /// Finishes the bag, if any: where it is, and how many messages it holds.
+    pub fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
+        self.out.finish()
     }
 }
