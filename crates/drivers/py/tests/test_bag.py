@@ -2,6 +2,7 @@
 `mcap-ros2-support`, and `rosbags` with its ROS 2 Jazzy typestore."""
 
 import json
+import re
 import subprocess
 from pathlib import Path
 
@@ -179,3 +180,26 @@ def test_a_continuous_run_is_recorded(cli, tmp_path):
     headings = {round(m.pose.orientation.z, 3) for _, m in poses}
     assert len(headings) > 10, "the robot turns"
     assert abs(topics["/metrics/explored"][-1][1].data - result["explored"][-1]) < 0.02
+
+
+def test_the_foxglove_layout_names_recorded_topics(cli, tmp_path):
+    """docs/foxglove-layout.json: every panel it places exists, and every topic it shows (of
+    robots 0–2) is one a recorded grid or continuous run carries."""
+    layout = json.loads((Path(__file__).parents[4] / "docs" / "foxglove-layout.json").read_text())
+    panels = layout["configById"]
+
+    def placed(node):
+        return [node] if isinstance(node, str) else placed(node["first"]) + placed(node["second"])
+
+    assert sorted(placed(layout["layout"])) == sorted(panels)
+    shown = set(panels["3D!madenet"]["topics"])
+    shown |= {p["value"].split(".")[0] for k, c in panels.items() if k.startswith("Plot!")
+              for p in c["paths"]}
+    recorded = set()
+    for world, name in [(["--map", "paper:2", "--policy", "spread"], "g"),
+                        (["--world", "continuous", "--generate", "2", "--side", "10"], "c")]:
+        subprocess.run([cli, "run", *world, "--record", str(tmp_path / name)], check=True,
+                       capture_output=True)
+        recorded |= set(decoded(tmp_path / name))
+    wanted = {t for t in shown if not re.match(r"/robot[3-9]/", t)}
+    assert wanted - recorded == set(), wanted - recorded
