@@ -114,6 +114,40 @@ pub struct WorldArgs {
     real: RealRobotArgs,
     #[command(flatten)]
     pictures: crate::run::PictureArgs,
+    #[command(flatten)]
+    watch: WatchArgs,
+}
+
+/// A world node's run as ROS 2 messages (cargo feature `ros2`): a bag, a live view.
+#[derive(Args, Debug, Clone, Default)]
+pub struct WatchArgs {
+    /// Record the run as a ROS 2 bag at this new path (or empty folder), as `run --record`
+    /// does, without the robots' own maps (they live in the robots' processes).
+    #[arg(long, value_name = "DIR")]
+    record: Option<PathBuf>,
+    /// Stream the run live to Foxglove at HOST:PORT (default 127.0.0.1:8765), as `run
+    /// --foxglove` does; pace it (--pace-ms) to watch.
+    #[arg(long, value_name = "HOST:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    foxglove: Option<String>,
+}
+
+impl WatchArgs {
+    /// Whether a bag or a live view is asked for.
+    fn any(&self) -> bool {
+        self.record.is_some() || self.foxglove.is_some()
+    }
+
+    /// The flags as given, for the world node `launch` starts.
+    fn to_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(p) = &self.record {
+            v.extend(["--record".into(), p.display().to_string()]);
+        }
+        if let Some(addr) = &self.foxglove {
+            v.push(format!("--foxglove={addr}"));
+        }
+        v
+    }
 }
 
 /// Real robots in place of the simulated world (cargo feature `ros2`).
@@ -228,6 +262,11 @@ pub fn world(a: WorldArgs) -> Result<()> {
         if a.pictures.any() {
             anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
         }
+        if a.watch.any() {
+            anyhow::bail!(
+                "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
+            );
+        }
         return real_world(&a, &spec, endpoint);
     }
     let mut world = madenet_world::World::new(
@@ -238,10 +277,24 @@ pub fn world(a: WorldArgs) -> Result<()> {
     )
     .with_context(|| a.scenario.label())?;
     world.detach_radio();
+    // The bag and the live view first: a refused --record leaves no picture behind either.
+    let mut recorder = crate::record::Recorder::start_world(
+        a.watch.record.as_deref(),
+        a.watch.foxglove.as_deref(),
+        &world,
+    )?;
     // Pictures as `run` draws them: the world's side, what each robot shows, the radio's links.
     let mut pictures: Option<crate::run::Pictures> = None;
     let (mut last, mut failed) = (None, None);
     let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
+        if let Some(r) = recorder.as_mut() {
+            if let Err(e) = r.step_world(w, shown, links) {
+                failed.get_or_insert(e);
+            }
+        }
+        if !a.pictures.any() {
+            return;
+        }
         let f = madenet_render::world_frame(
             w,
             |i| {
@@ -261,7 +314,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
         last = Some(f);
     };
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
-        a.pictures.any().then_some(&mut draw);
+        (a.pictures.any() || a.watch.any()).then_some(&mut draw);
     let scenario = Some(scenario_of(&spec));
     serve_world(&a, &spec, |bus, timeouts, on_step| {
         madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w, waiting| {
@@ -271,12 +324,17 @@ pub fn world(a: WorldArgs) -> Result<()> {
     if let Some(e) = failed {
         return Err(e);
     }
-    if let (Some(p), Some(last)) = (pictures, last) {
-        for line in p.finish(&last)? {
-            // Launched (`--progress`), launch names the files itself.
-            if !a.node.progress {
-                eprintln!("{line}");
-            }
+    let mut wrote = match (pictures, last) {
+        (Some(p), Some(last)) => p.finish(&last)?,
+        _ => Vec::new(),
+    };
+    if let Some(r) = recorder {
+        wrote.extend(r.finish()?);
+    }
+    for line in wrote {
+        // Launched (`--progress`), launch names the files itself.
+        if !a.node.progress {
+            eprintln!("{line}");
         }
     }
     Ok(())
@@ -433,6 +491,11 @@ pub struct LaunchArgs {
     real: RealRobotArgs,
     #[command(flatten)]
     pictures: crate::run::PictureArgs,
+    #[command(flatten)]
+    watch: WatchArgs,
+    /// Take at least this long per timestep, milliseconds (to watch a run live; 0–60000).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000), value_name = "MS")]
+    pace_ms: u64,
 }
 
 pub fn launch(a: LaunchArgs) -> Result<()> {
@@ -443,6 +506,11 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     a.pictures.check(spec.map.width(), spec.map.height())?;
     if a.real.ros2_robots.is_some() && a.pictures.any() {
         anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
+    }
+    if a.real.ros2_robots.is_some() && a.watch.any() {
+        anyhow::bail!(
+            "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
+        );
     }
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
     if a.port != 0 {
@@ -511,6 +579,10 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
                     }
                     if a.trajectory {
                         args.push("--trajectory".into());
+                    }
+                    args.extend(a.watch.to_args());
+                    if a.pace_ms > 0 {
+                        args.extend(["--pace-ms".into(), a.pace_ms.to_string()]);
                     }
                 }
                 Node::Radio => {
@@ -586,6 +658,9 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
         )?;
         for p in a.pictures.render.iter().chain(&a.pictures.snapshot) {
             out!("wrote      {}", p.display())?;
+        }
+        if let Some(p) = &a.watch.record {
+            out!("wrote      {} (ROS 2 bag)", p.display())?;
         }
     }
     Ok(())

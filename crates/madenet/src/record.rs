@@ -72,9 +72,38 @@ mod imp {
             Ok(Some(Recorder(r.context("--record")?)))
         }
 
+        /// [`Recorder::start`] for a world node (`madenet world`), before its first timestep.
+        pub fn start_world(
+            bag: Option<&Path>,
+            live: Option<&str>,
+            world: &madenet_world::World,
+        ) -> Result<Option<Self>> {
+            if bag.is_none() && live.is_none() {
+                return Ok(None);
+            }
+            use madenet_ros2::record::Recorder as R;
+            let r = match open(bag, live)? {
+                (bag, Some(live)) => R::for_world_live(bag, live, world),
+                (bag, None) => R::for_world(bag, world),
+            };
+            Ok(Some(Recorder(r.context("--record")?)))
+        }
+
         /// Records the trial's current timestep.
         pub fn step(&mut self, trial: &Trial) -> Result<()> {
             self.0.step(trial).context("--record")
+        }
+
+        /// Records a world node's timestep: the world, what the robots show, the exchanges.
+        pub fn step_world(
+            &mut self,
+            world: &madenet_world::World,
+            shown: &[madenet_runtime::wire::Shown],
+            exchanges: &[(usize, usize)],
+        ) -> Result<()> {
+            self.0
+                .step_world(world, shown, exchanges)
+                .context("--record")
         }
 
         /// Finishes the bag, if any; the line to print about it.
@@ -143,7 +172,22 @@ mod imp {
         pub fn start(bag: Option<&Path>, live: Option<&str>, _: &Trial) -> Result<Option<Self>> {
             refuse(bag, live).map(|()| None)
         }
+        pub fn start_world(
+            bag: Option<&Path>,
+            live: Option<&str>,
+            _: &madenet_world::World,
+        ) -> Result<Option<Self>> {
+            refuse(bag, live).map(|()| None)
+        }
         pub fn step(&mut self, _: &Trial) -> Result<()> {
+            Ok(())
+        }
+        pub fn step_world(
+            &mut self,
+            _: &madenet_world::World,
+            _: &[madenet_runtime::wire::Shown],
+            _: &[(usize, usize)],
+        ) -> Result<()> {
             Ok(())
         }
         pub fn finish(self) -> Result<Option<String>> {

@@ -203,3 +203,22 @@ def test_the_foxglove_layout_names_recorded_topics(cli, tmp_path):
         recorded |= set(decoded(tmp_path / name))
     wanted = {t for t in shown if not re.match(r"/robot[3-9]/", t)}
     assert wanted - recorded == set(), wanted - recorded
+
+
+def test_a_launched_run_records_what_the_in_process_run_records(cli, tmp_path):
+    """`launch --record` (the world node records; the robots are processes over Zenoh): poses,
+    goals, plans, the team map and the radio's lines are the in-process run's message for
+    message; the robots' own maps stay in their processes (not recorded)."""
+    args = ["--map", "paper:3", "--policy", "spread", "--seed", "2", "--csp", "0.5"]
+    subprocess.run([cli, "launch", *args, "--record", str(tmp_path / "l")], check=True,
+                   capture_output=True)
+    subprocess.run([cli, "run", *args, "--record", str(tmp_path / "r")], check=True,
+                   capture_output=True)
+    launched, inproc = decoded(tmp_path / "l"), decoded(tmp_path / "r")
+    assert not any(re.match(r"/robot\d/map$", t) for t in launched)
+    same = ["/team_map", "/comms", "/tf", "/clock", "/truth_map", "/metrics/explored"]
+    same += [f"/robot{i}/{k}" for i in range(3) for k in ["pose", "goal_pose", "plan"]]
+    for topic in same:
+        a, b = launched[topic], inproc[topic]
+        assert [t for t, _ in a] == [t for t, _ in b], topic
+        assert [repr(m) for _, m in a] == [repr(m) for _, m in b], topic

@@ -97,8 +97,25 @@ pub struct Recorder {
     team: Option<Vec<Occupancy>>,
     goals: Vec<Option<Pos>>,
     plans: Vec<Option<Vec<Pos>>>,
-    /// Decisions each robot had taken when last recorded.
-    decisions: Vec<usize>,
+    /// Each robot's decision count (a world node's: its count of new candidates or goals)
+    /// when last recorded.
+    decisions: Vec<u64>,
+    /// A world node's robots: what each showed last, and how often that changed.
+    shown: Vec<Option<(Vec<Pos>, Option<Pos>)>>,
+    shown_decisions: Vec<u64>,
+}
+
+/// What the recorder reads of one robot at a timestep.
+struct RobotView<'a> {
+    /// Its map (None: not known here).
+    belief: Option<&'a [Occupancy]>,
+    goal: Option<Pos>,
+    path: &'a [Pos],
+    candidates: &'a [Pos],
+    /// The slot of its goal among `candidates`.
+    chosen: Option<usize>,
+    /// Changes when it decides.
+    decision: u64,
 }
 
 /// Robot i's colour: the palette of madenet's pictures, cycled.
@@ -152,9 +169,45 @@ impl Recorder {
     }
 
     fn begin(out: Outputs, trial: &Trial) -> Result<Self, BagError> {
-        let truth = trial.world().truth();
+        let mut r = Self::empty(out, trial.world())?;
+        r.step(trial)?;
+        Ok(r)
+    }
+
+    /// Starts recording a world node's timesteps ([`Recorder::step_world`], the first before
+    /// the first timestep) into `bag` (if any), with the true map.
+    pub fn for_world(bag: Option<Bag>, world: &madenet_world::World) -> Result<Self, BagError> {
+        Self::empty(
+            Outputs {
+                bag,
+                #[cfg(feature = "foxglove")]
+                live: None,
+            },
+            world,
+        )
+    }
+
+    /// [`Recorder::for_world`], streaming to `live` too.
+    #[cfg(feature = "foxglove")]
+    pub fn for_world_live(
+        bag: Option<Bag>,
+        live: crate::live::Live,
+        world: &madenet_world::World,
+    ) -> Result<Self, BagError> {
+        Self::empty(
+            Outputs {
+                bag,
+                live: Some(live),
+            },
+            world,
+        )
+    }
+
+    /// A recorder of `world`'s robots that has written the true map only.
+    fn empty(out: Outputs, world: &madenet_world::World) -> Result<Self, BagError> {
+        let truth = world.truth();
         let frame = MapFrame::of(truth);
-        let n = trial.agents().len();
+        let n = world.positions().len();
         let mut r = Recorder {
             out,
             frame,
@@ -163,10 +216,11 @@ impl Recorder {
             goals: vec![None; n],
             plans: vec![None; n],
             decisions: vec![0; n],
+            shown: vec![None; n],
+            shown_decisions: vec![0; n],
         };
         let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
         r.put("/truth_map", &msg, 0)?;
-        r.step(trial)?;
         Ok(r)
     }
 
@@ -199,6 +253,76 @@ impl Recorder {
     /// Records the trial's current timestep.
     pub fn step(&mut self, trial: &Trial) -> Result<(), BagError> {
         let world = trial.world();
+        let beliefs: Vec<Vec<Occupancy>> = trial
+            .agents()
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                // What the robot knows now: its belief and this timestep's observation, which
+                // its agent takes in at the start of the next timestep (or never, at the end).
+                let mut belief = a.belief().clone();
+                for &(p, occ) in &world.observation(i).seen {
+                    belief.observe(p, occ);
+                }
+                belief.map().to_vec()
+            })
+            .collect();
+        let robots: Vec<RobotView<'_>> = trial
+            .agents()
+            .iter()
+            .zip(&beliefs)
+            .map(|(a, b)| RobotView {
+                belief: Some(b),
+                goal: a.goal(),
+                path: a.path(),
+                candidates: &a.candidates().cells,
+                chosen: a.action(),
+                decision: a.stats().decisions as u64,
+            })
+            .collect();
+        self.record(world, &robots, world.exchanges())
+    }
+
+    /// Records a world node's timestep (`madenet world`, which `launch` starts): the world,
+    /// what each robot shows (goal, path, candidates; [`madenet_runtime::wire::Shown`]) and the
+    /// radio's exchanges. The robots' beliefs live in their own processes: no `/robot<i>/map`.
+    pub fn step_world(
+        &mut self,
+        world: &madenet_world::World,
+        shown: &[madenet_runtime::wire::Shown],
+        exchanges: &[(usize, usize)],
+    ) -> Result<(), BagError> {
+        let none = madenet_runtime::wire::Shown::default();
+        let robots: Vec<RobotView<'_>> = (0..world.positions().len())
+            .map(|i| {
+                let s = shown.get(i).unwrap_or(&none);
+                // A new decision shows other candidates or another goal.
+                let key = (s.candidates.clone(), s.goal);
+                if self.shown[i].as_ref() != Some(&key) {
+                    self.shown_decisions[i] += 1;
+                    self.shown[i] = Some(key);
+                }
+                RobotView {
+                    belief: None,
+                    goal: s.goal,
+                    path: &s.path,
+                    candidates: &s.candidates,
+                    chosen: s
+                        .goal
+                        .and_then(|g| s.candidates.iter().position(|&c| c == g)),
+                    decision: self.shown_decisions[i],
+                }
+            })
+            .collect();
+        self.record(world, &robots, exchanges)
+    }
+
+    fn record(
+        &mut self,
+        world: &madenet_world::World,
+        robots: &[RobotView<'_>],
+        exchanges: &[(usize, usize)],
+    ) -> Result<(), BagError> {
         let t = world.t() as u64;
         let (ns, stamp) = (
             t * 1_000_000_000,
@@ -229,35 +353,28 @@ impl Recorder {
             })
             .collect();
         self.put("/tf", &TFMessage { transforms }, ns)?;
-        for (i, a) in trial.agents().iter().enumerate() {
+        for (i, r) in robots.iter().enumerate() {
             let [map_t, pose_t, goal_t] = crate::topics(i);
-            // What the robot knows now: its belief and this timestep's observation, which
-            // its agent takes in at the start of the next timestep (or never, at the end).
-            let mut belief = a.belief().clone();
-            for &(p, occ) in &world.observation(i).seen {
-                belief.observe(p, occ);
-            }
-            let cells = belief.map();
-            if self.maps[i].as_deref() != Some(cells) {
+            if let Some(cells) = r.belief.filter(|&c| self.maps[i].as_deref() != Some(c)) {
                 let msg = occupancy_grid(&self.frame, cells, stamp);
                 self.put(&map_t, &msg, ns)?;
                 self.maps[i] = Some(cells.to_vec());
             }
             let pose = pose_stamped(&self.frame, positions[i], stamp);
             self.put(&pose_t, &pose, ns)?;
-            if let Some(g) = a.goal().filter(|&g| Some(g) != self.goals[i]) {
+            if let Some(g) = r.goal.filter(|&g| Some(g) != self.goals[i]) {
                 self.put(&goal_t, &pose_stamped(&self.frame, g, stamp), ns)?;
             }
-            self.goals[i] = a.goal();
+            self.goals[i] = r.goal;
             // The plan from where the robot stands (the agent plans before it moves, so its
             // path may still begin with the cell it just left).
-            let path = a.path();
-            let from = path
+            let from = r
+                .path
                 .iter()
                 .position(|&p| p == positions[i])
                 .map_or(0, |k| k + 1);
             let plan: Vec<Pos> = std::iter::once(positions[i])
-                .chain(path[from..].iter().copied())
+                .chain(r.path[from..].iter().copied())
                 .collect();
             if self.plans[i].as_ref() != Some(&plan) {
                 let poses = plan
@@ -271,13 +388,11 @@ impl Recorder {
                 self.put(&format!("/robot{i}/plan"), &msg, ns)?;
                 self.plans[i] = Some(plan);
             }
-            let decided = a.stats().decisions;
-            let candidates = &a.candidates().cells;
-            if decided != self.decisions[i] && !candidates.is_empty() {
-                let msg = self.candidate_markers(i, candidates, a.action(), stamp);
+            if r.decision != self.decisions[i] && !r.candidates.is_empty() {
+                let msg = self.candidate_markers(i, r.candidates, r.chosen, stamp);
                 self.put(&format!("/robot{i}/candidates"), &msg, ns)?;
             }
-            self.decisions[i] = decided;
+            self.decisions[i] = r.decision;
         }
         let team = world.team_map();
         if self.team.as_deref() != Some(team) {
@@ -285,7 +400,7 @@ impl Recorder {
             self.put("/team_map", &msg, ns)?;
             self.team = Some(team.to_vec());
         }
-        let comms = self.comm_markers(world, stamp);
+        let comms = self.comm_markers(world, exchanges, stamp);
         self.put("/comms", &comms, ns)?;
         let explored = Float64 {
             data: world.explored_fraction(),
@@ -353,9 +468,13 @@ impl Recorder {
 
     /// This timestep's radio: a line per pair in contact, green where β was exchanged, red
     /// where the exchange dropped out.
-    fn comm_markers(&self, world: &madenet_world::World, stamp: Time) -> MarkerArray {
+    fn comm_markers(
+        &self,
+        world: &madenet_world::World,
+        exchanged: &[(usize, usize)],
+        stamp: Time,
+    ) -> MarkerArray {
         let positions = world.positions();
-        let exchanged = world.exchanges();
         let lines = |id: i32, pairs: Vec<(usize, usize)>, color: ColorRGBA| {
             let mut m = Self::marker(stamp, "comms", id, Marker::LINE_LIST);
             m.scale.x = 0.08;
