@@ -43,10 +43,17 @@ pub trait RosMessage: Serialize + for<'de> Deserialize<'de> {
 
     /// The message as CDR bytes: the little-endian encapsulation header, then the fields.
     fn to_cdr(&self) -> Vec<u8> {
-        let mut out = CDR_LE.to_vec();
-        cdr_encoding::to_writer::<_, byteorder::LittleEndian, _>(&mut out, self)
-            .expect("every madenet message is CDR-serializable (no maps, no unsized sequences)");
+        let mut out = Vec::new();
+        self.write_cdr(&mut out);
         out
+    }
+
+    /// [`RosMessage::to_cdr`] into `out` (cleared first), reusing its allocation.
+    fn write_cdr(&self, out: &mut Vec<u8>) {
+        out.clear();
+        out.extend_from_slice(&CDR_LE);
+        cdr_encoding::to_writer::<_, byteorder::LittleEndian, _>(&mut *out, self)
+            .expect("every madenet message is CDR-serializable (no maps, no unsized sequences)");
     }
 
     /// Reads a message from CDR bytes (little or big endian, per the header). Trailing bytes

@@ -60,18 +60,29 @@ struct Outputs {
     bag: Option<Bag>,
     #[cfg(feature = "foxglove")]
     live: Option<crate::live::Live>,
+    /// The encoding buffer, reused message after message.
+    cdr: Vec<u8>,
 }
 
 impl Outputs {
+    fn new(bag: Option<Bag>) -> Self {
+        Outputs {
+            bag,
+            #[cfg(feature = "foxglove")]
+            live: None,
+            cdr: Vec::new(),
+        }
+    }
+
     /// Writes `msg` on `topic` at `ns` to every output, encoded once.
     fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
-        let cdr = msg.to_cdr();
+        msg.write_cdr(&mut self.cdr);
         #[cfg(feature = "foxglove")]
         if let Some(live) = &mut self.live {
-            live.write_cdr::<T>(topic, &cdr, ns);
+            live.write_cdr::<T>(topic, &self.cdr, ns);
         }
         match &mut self.bag {
-            Some(bag) => bag.write_cdr::<T>(topic, &cdr, ns),
+            Some(bag) => bag.write_cdr::<T>(topic, &self.cdr, ns),
             None => Ok(()),
         }
     }
@@ -141,14 +152,7 @@ impl Recorder {
 
     /// Starts recording into `bag` (if any) with the true map and the trial's present.
     pub fn to(bag: Option<Bag>, trial: &Trial) -> Result<Self, BagError> {
-        Self::begin(
-            Outputs {
-                bag,
-                #[cfg(feature = "foxglove")]
-                live: None,
-            },
-            trial,
-        )
+        Self::begin(Outputs::new(bag), trial)
     }
 
     /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
@@ -161,8 +165,8 @@ impl Recorder {
     ) -> Result<Self, BagError> {
         Self::begin(
             Outputs {
-                bag,
                 live: Some(live),
+                ..Outputs::new(bag)
             },
             trial,
         )
@@ -177,14 +181,7 @@ impl Recorder {
     /// Starts recording a world node's timesteps ([`Recorder::step_world`], the first before
     /// the first timestep) into `bag` (if any), with the true map.
     pub fn for_world(bag: Option<Bag>, world: &madenet_world::World) -> Result<Self, BagError> {
-        Self::empty(
-            Outputs {
-                bag,
-                #[cfg(feature = "foxglove")]
-                live: None,
-            },
-            world,
-        )
+        Self::empty(Outputs::new(bag), world)
     }
 
     /// [`Recorder::for_world`], streaming to `live` too.
@@ -196,8 +193,8 @@ impl Recorder {
     ) -> Result<Self, BagError> {
         Self::empty(
             Outputs {
-                bag,
                 live: Some(live),
+                ..Outputs::new(bag)
             },
             world,
         )
@@ -253,18 +250,27 @@ impl Recorder {
     /// Records the trial's current timestep.
     pub fn step(&mut self, trial: &Trial) -> Result<(), BagError> {
         let world = trial.world();
+        let width = world.truth().width();
         let beliefs: Vec<Vec<Occupancy>> = trial
             .agents()
             .iter()
             .enumerate()
             .map(|(i, a)| {
                 // What the robot knows now: its belief and this timestep's observation, which
-                // its agent takes in at the start of the next timestep (or never, at the end).
-                let mut belief = a.belief().clone();
+                // its agent takes in at the start of the next timestep (or never, at the end),
+                // as `Belief::observe` takes it in: unknown cells learn, free ones may turn out
+                // obstacles.
+                let mut cells = a.belief().map().to_vec();
                 for &(p, occ) in &world.observation(i).seen {
-                    belief.observe(p, occ);
+                    let c = &mut cells[p.row as usize * width + p.col as usize];
+                    match (*c, occ) {
+                        (_, Occupancy::Unknown) => {}
+                        (Occupancy::Unknown, o) => *c = o,
+                        (Occupancy::Free, Occupancy::Obstacle) => *c = Occupancy::Obstacle,
+                        _ => {}
+                    }
                 }
-                belief.map().to_vec()
+                cells
             })
             .collect();
         let robots: Vec<RobotView<'_>> = trial
@@ -555,14 +561,7 @@ impl ContinuousRecorder {
         bag: Option<Bag>,
         trial: &madenet_sim::continuous::ContinuousTrial,
     ) -> Result<Self, BagError> {
-        Self::begin(
-            Outputs {
-                bag,
-                #[cfg(feature = "foxglove")]
-                live: None,
-            },
-            trial,
-        )
+        Self::begin(Outputs::new(bag), trial)
     }
 
     /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
@@ -575,8 +574,8 @@ impl ContinuousRecorder {
     ) -> Result<Self, BagError> {
         Self::begin(
             Outputs {
-                bag,
                 live: Some(live),
+                ..Outputs::new(bag)
             },
             trial,
         )
