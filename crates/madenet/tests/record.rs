@@ -118,6 +118,15 @@ fn bad_live_view_flags_are_refused() {
         Vec::<String>::new(),
         "no bag left behind"
     );
+    let out = madenet(&[
+        "launch",
+        "--map",
+        "paper:2",
+        "--ros2-robots",
+        "--record",
+        bag.to_str().unwrap(),
+    ]);
+    assert_clean_error(&out, &["--record/--foxglove", "--ros2-robots"]);
     assert_clean_error(&run_with(&["--pace-ms", "60001"]), &["--pace-ms"]);
     assert_clean_error(&run_with(&["--realtime", "0"]), &["--realtime"]);
 }
