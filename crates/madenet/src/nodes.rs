@@ -137,6 +137,26 @@ impl WatchArgs {
         self.record.is_some() || self.foxglove.is_some()
     }
 
+    /// Refuses, before any node starts, a bag place that is taken and a live-view address that
+    /// cannot be bound (the world node would fail only once every node runs).
+    fn check(&self) -> Result<()> {
+        if let Some(p) = &self.record {
+            let taken = p.exists()
+                && !(p.is_dir() && std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none()));
+            if taken {
+                anyhow::bail!(
+                    "--record: {}: already exists (a file, or a folder that is not empty): choose a new name",
+                    p.display()
+                );
+            }
+        }
+        if let Some(addr) = self.foxglove.as_deref().filter(|a| !a.ends_with(":0")) {
+            std::net::TcpListener::bind(addr)
+                .map_err(|e| anyhow::anyhow!("--foxglove: {addr}: {e}"))?;
+        }
+        Ok(())
+    }
+
     /// The flags as given, for the world node `launch` starts.
     fn to_args(&self) -> Vec<String> {
         let mut v = Vec::new();
@@ -512,6 +532,7 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
         );
     }
+    a.watch.check()?;
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
     if a.port != 0 {
         loopback_endpoints(a.port, n, Node::Robot(n - 1))

@@ -138,9 +138,10 @@ mod imp {
             self.0.step(trial).context("--record")
         }
 
-        /// Finishes the bag, if any; the line to print about it.
-        pub fn finish(self) -> Result<Option<String>> {
-            Ok(wrote(self.0.finish().context("--record")?))
+        /// Records the trial's final state and finishes the bag, if any; the line to print
+        /// about it.
+        pub fn finish(self, trial: &ContinuousTrial) -> Result<Option<String>> {
+            Ok(wrote(self.0.finish(trial).context("--record")?))
         }
     }
 }
@@ -209,7 +210,7 @@ mod imp {
         pub fn step(&mut self, _: &ContinuousTrial) -> Result<()> {
             Ok(())
         }
-        pub fn finish(self) -> Result<Option<String>> {
+        pub fn finish(self, _: &ContinuousTrial) -> Result<Option<String>> {
             Ok(None)
         }
     }

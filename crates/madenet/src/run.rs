@@ -367,7 +367,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         wrote.push(format!("wrote      {}", p.display()));
     }
     if let Some(r) = recorder {
-        wrote.extend(r.finish()?);
+        wrote.extend(r.finish(&trial)?);
     }
     let r = trial.finish();
     if a.json {

@@ -127,6 +127,20 @@ fn bad_live_view_flags_are_refused() {
         bag.to_str().unwrap(),
     ]);
     assert_clean_error(&out, &["--record/--foxglove", "--ros2-robots"]);
+    // Launch refuses a taken bag place and a taken live-view port before any node starts.
+    std::fs::write(&bag, "mine").unwrap();
+    let launch = |extra: &[&str]| {
+        let mut args = vec!["launch", "--map", "paper:2"];
+        args.extend_from_slice(extra);
+        madenet(&args)
+    };
+    assert_clean_error(
+        &launch(&["--record", bag.to_str().unwrap()]),
+        &["--record", "already exists"],
+    );
+    assert_eq!(std::fs::read_to_string(&bag).unwrap(), "mine");
+    std::fs::remove_file(&bag).unwrap();
+    assert_clean_error(&launch(&["--foxglove", &addr]), &["--foxglove", &addr]);
     assert_clean_error(&run_with(&["--pace-ms", "60001"]), &["--pace-ms"]);
     assert_clean_error(&run_with(&["--realtime", "0"]), &["--realtime"]);
 }

@@ -536,11 +536,11 @@ const FINE_MAP_EVERY_S: f64 = 1.0;
 /// | topic | type | when |
 /// | --- | --- | --- |
 /// | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the true map in 1 m cells |
-/// | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | each of robot i's scans (staggered), in `robot<i>/base_link` |
+/// | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | each of robot i's scans (all at the start, then staggered), in `robot<i>/base_link` |
 /// | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | robot i's fine map (occupancy %), when it changed, at most once a second |
-/// | `/robot<i>/pose`, `/tf`, `/clock` | as the grid's | 10 Hz, with the robots' headings |
+/// | `/robot<i>/pose`, `/tf`, `/clock` | as the grid's | 10 Hz and at the end, with the robots' headings |
 /// | `/robot<i>/goal_pose`, `/robot<i>/plan` | as the grid's | when they change (the agent's cells) |
-/// | `/metrics/explored`, `/metrics/distance` | `std_msgs/msg/Float64` | once a second |
+/// | `/metrics/explored`, `/metrics/distance` | `std_msgs/msg/Float64` | once a second and at the end |
 pub struct ContinuousRecorder {
     out: Outputs,
     frame: MapFrame,
@@ -551,6 +551,8 @@ pub struct ContinuousRecorder {
     map_every: u64,
     metrics_every: u64,
     maps: Vec<Option<Vec<i8>>>,
+    /// The tick of each robot's last fine map.
+    map_ticks: Vec<u64>,
     goals: Vec<Option<Pos>>,
     plans: Vec<Option<Vec<Pos>>>,
 }
@@ -599,12 +601,13 @@ impl ContinuousRecorder {
             map_every: every(FINE_MAP_EVERY_S),
             metrics_every: every(1.0),
             maps: vec![None; n],
+            map_ticks: vec![0; n],
             goals: vec![None; n],
             plans: vec![None; n],
         };
         let truth = occupancy_grid(&r.frame, world.coarse_truth().cells(), Time::default());
         r.out.put("/truth_map", &truth, 0)?;
-        r.record(trial)?;
+        r.record(trial, false)?;
         Ok(r)
     }
 
@@ -614,10 +617,16 @@ impl ContinuousRecorder {
         trial: &madenet_sim::continuous::ContinuousTrial,
     ) -> Result<(), BagError> {
         self.ticks += 1;
-        self.record(trial)
+        self.record(trial, false)
     }
 
-    fn record(&mut self, trial: &madenet_sim::continuous::ContinuousTrial) -> Result<(), BagError> {
+    /// `last`: the trial's final state (poses, `/tf`, `/clock` and metrics written whatever
+    /// their rate).
+    fn record(
+        &mut self,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+        last: bool,
+    ) -> Result<(), BagError> {
         use crate::continuous_stand_in::{fine_grid, laser_scan, pose_stamped, scan_topic};
         let world = trial.world();
         let secs = world.time();
@@ -628,7 +637,7 @@ impl ContinuousRecorder {
         };
         let k = self.ticks;
         let n = world.robots();
-        if k.is_multiple_of(self.pose_every) {
+        if last || k.is_multiple_of(self.pose_every) {
             self.out.put("/clock", &Clock { clock: stamp }, ns)?;
             let mut transforms = Vec::with_capacity(n);
             for i in 0..n {
@@ -651,18 +660,17 @@ impl ContinuousRecorder {
             self.out.put("/tf", &TFMessage { transforms }, ns)?;
         }
         for (i, agent) in trial.agents().iter().enumerate() {
-            // The world scans robot i at the end of the periods where (ticks + i) is a
-            // multiple of the scan period (the stand-in's rule).
-            if k > 0 && (k + i as u64).is_multiple_of(self.scan_every) {
+            // The world scans every robot at the start and robot i at the end of the periods
+            // where (ticks + i) is a multiple of the scan period (the stand-in's rule).
+            if !last && (k == 0 || (k + i as u64).is_multiple_of(self.scan_every)) {
                 self.out
                     .put(&scan_topic(i), &laser_scan(world, i, stamp), ns)?;
-                let due =
-                    self.maps[i].is_none() || (k + i as u64) % self.map_every < self.scan_every;
-                if due {
+                if self.maps[i].is_none() || k - self.map_ticks[i] >= self.map_every {
                     let grid = fine_grid(world, i, &self.frame, stamp);
                     if self.maps[i].as_ref() != Some(&grid.data) {
                         self.out.put(&format!("/robot{i}/map"), &grid, ns)?;
                         self.maps[i] = Some(grid.data);
+                        self.map_ticks[i] = k;
                     }
                 }
             }
@@ -686,7 +694,7 @@ impl ContinuousRecorder {
                 self.plans[i] = Some(plan);
             }
         }
-        if k.is_multiple_of(self.metrics_every) {
+        if last || k.is_multiple_of(self.metrics_every) {
             let explored = Float64 {
                 data: world.explored_fraction(),
             };
@@ -704,8 +712,17 @@ impl ContinuousRecorder {
         self.out.messages()
     }
 
-    /// Finishes the bag, if any: where it is, and how many messages it holds.
-    pub fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
+    /// Records `trial`'s final state (poses and metrics at its last tick, whatever their
+    /// rate), then finishes the bag, if any: where it is, and how many messages it holds.
+    pub fn finish(
+        mut self,
+        trial: &madenet_sim::continuous::ContinuousTrial,
+    ) -> Result<Option<(PathBuf, u64)>, BagError> {
+        if !(self.ticks.is_multiple_of(self.pose_every)
+            && self.ticks.is_multiple_of(self.metrics_every))
+        {
+            self.record(trial, true)?;
+        }
         self.out.finish()
     }
 }
