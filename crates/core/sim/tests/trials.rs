@@ -23,6 +23,27 @@ fn spec(map: usize, corner: Corner, policy: &str, csp: f64, seed: u64) -> TrialS
     }
 }
 
+/// Walks `trial` to the `n`th step at which robot 0 decides with a choice (its candidates
+/// extracted, the step begun, no decision taken); how many such steps it saw (`n` unless the
+/// trial ended first).
+fn walk_to_choice(trial: &mut Trial, n: usize) -> usize {
+    let mut seen = 0;
+    while trial.begin_step() {
+        if trial.deciding()[0] {
+            trial.agent_mut(0).view(true); // extracts the candidates
+            if trial.agents()[0].candidates().cells.len() >= 2 {
+                seen += 1;
+                if seen == n {
+                    break;
+                }
+            }
+        }
+        trial.decide_with(&[]);
+        trial.finish_step();
+    }
+    seen
+}
+
 fn run(spec: TrialSpec) -> TrialResult {
     Trial::new(spec).unwrap().record_trajectory(true).run()
 }
@@ -442,21 +463,7 @@ fn rollouts_from_a_fork_are_the_trial_itself() {
     ] {
         let s = spec(map, corner, "spread", csp, 4);
         let mut trial = Trial::new(s.clone()).unwrap();
-        // Walk to the third step at which robot 0 decides with a choice.
-        let mut seen = 0;
-        while trial.begin_step() {
-            if trial.deciding()[0] {
-                trial.agent_mut(0).view(true); // extracts the candidates
-                if trial.agents()[0].candidates().cells.len() >= 2 {
-                    seen += 1;
-                    if seen == 3 {
-                        break;
-                    }
-                }
-            }
-            trial.decide_with(&[]);
-            trial.finish_step();
-        }
+        let seen = walk_to_choice(&mut trial, 3);
         assert_eq!(
             seen, 3,
             "test_{map}: robot 0 decided with a choice three times"
@@ -579,21 +586,7 @@ fn a_redrawn_future_agrees_with_what_the_team_knows() {
     for (map, corner) in [(2, Corner::TopLeft), (6, Corner::BottomRight)] {
         let s = spec(map, corner, "spread", 1.0, 3);
         let mut trial = Trial::new(s.clone()).unwrap();
-        // Walk to the second step at which robot 0 decides with a choice.
-        let mut seen = 0;
-        while trial.begin_step() {
-            if trial.deciding()[0] {
-                trial.agent_mut(0).view(true); // extracts the candidates
-                if trial.agents()[0].candidates().cells.len() >= 2 {
-                    seen += 1;
-                    if seen == 2 {
-                        break;
-                    }
-                }
-            }
-            trial.decide_with(&[]);
-            trial.finish_step();
-        }
+        let seen = walk_to_choice(&mut trial, 2);
         assert_eq!(seen, 2, "test_{map}");
         let w = trial.world();
         let truth = Arc::new(w.truth().clone());
