@@ -75,11 +75,13 @@ fn realtime_arg(s: &str) -> Result<f64, String> {
 }
 
 impl RunArgs {
-    /// The wait after each timestep asked for by `--pace-ms` or `--realtime`.
-    fn pace(&self) -> Option<std::time::Duration> {
+    /// The wait after each step asked for by `--pace-ms` or `--realtime`; `step_s`: the
+    /// simulated seconds of one step (a grid timestep: 1; the continuous world:
+    /// its control period).
+    fn pace(&self, step_s: f64) -> Option<std::time::Duration> {
         match (self.pace_ms, self.realtime) {
             (Some(ms), _) => Some(std::time::Duration::from_millis(ms)),
-            (None, Some(f)) => Some(std::time::Duration::from_secs_f64(1.0 / f)),
+            (None, Some(f)) => Some(std::time::Duration::from_secs_f64(step_s / f)),
             (None, None) => None,
         }
     }
@@ -233,7 +235,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     // The bag first: a refused --record leaves no picture behind either.
     let mut recorder =
         crate::record::Recorder::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
-    let pace = a.pace();
+    let pace = a.pace(1.0);
     let mut pictures = None;
     if a.pictures.any() {
         pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
@@ -324,12 +326,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         &trial,
     )?;
     // Pacing per control period: --pace-ms as given, --realtime from the period's length.
-    let period = trial.world().config().control_period;
-    let pace = match (a.pace_ms, a.realtime) {
-        (Some(ms), _) => Some(std::time::Duration::from_millis(ms)),
-        (None, Some(f)) => Some(std::time::Duration::from_secs_f64(period / f)),
-        (None, None) => None,
-    };
+    let pace = a.pace(trial.world().config().control_period);
     let mut gif = match &a.pictures.render {
         Some(p) => {
             let mut g =
