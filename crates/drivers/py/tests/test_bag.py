@@ -104,9 +104,9 @@ def xy(p):
 
 def test_plans_candidates_comms_and_metrics(cli, tmp_path):
     """A spread trial (robots choose among goal candidates): each /robot<i>/candidates marks
-    the goal the robot then heads for, each plan runs from the robot's pose to its goal, the
-    radio's lines are green where β was exchanged (CSP 1) and red where it dropped (CSP 0), and
-    the metrics end at the trial's own."""
+    the goal the robot then heads for, each plan runs from the robot's pose to its goal (sent
+    when the route changes), the radio's lines (sent when they change) are green where β was
+    exchanged (CSP 1) and red where it dropped (CSP 0), and the metrics end at the trial's own."""
     args = ["run", "--map", "paper:5", "--start", "bottom-left", "--policy", "spread",
             "--seed", "4", "--json"]
     for csp in ["1", "0"]:
@@ -145,7 +145,12 @@ def test_plans_candidates_comms_and_metrics(cli, tmp_path):
                     # re-plans from where it landed at its next timestep).
                     steps = [max(abs(a[0] - b[0]), abs(a[1] - b[1])) for a, b in zip(cells[1:], cells[2:])]
                     assert all(s == 1.0 for s in steps), "one cell per step"
+            plans = [[xy(p.pose.position) for p in m.poses] for _, m in topics[f"/robot{i}/plan"]]
+            assert all(b != a[len(a) - len(b):] for a, b in zip(plans, plans[1:])), \
+                "a plan is published when the route changes, not as the robot advances along it"
         comms = [m for _, m in topics["/comms"]]
+        lines = [[[xy(p) for p in k.points] for k in m.markers] for m in comms]
+        assert all(a != b for a, b in zip(lines, lines[1:])), "/comms when the lines change"
         green = sum(len(m.markers[0].points) for m in comms)
         red = sum(len(m.markers[1].points) for m in comms)
         if csp == "1":

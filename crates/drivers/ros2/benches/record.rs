@@ -1,15 +1,19 @@
 //! `cargo bench -p madenet-ros2 --bench record`: what `--record` costs a paper trial (issue 30
 //! asks ≤ 25 % of the trial's own time) — the same trial (test_3, top-right, `spread`, seed 1)
-//! run alone and run recorded into a bag (written, finished, then removed).
+//! run alone and run recorded into a bag (written and finished; the benchmark's removal of the
+//! bag afterwards is not timed).
 //!
 //! * `paper_trial/plain`
 //! * `paper_trial/recorded`
+//! * `paper_trial/encoded_only` (every message built and CDR-encoded, no bag: the per-message
+//!   cost without the file)
 //! * `paper_trial/empty_bag` (the fixed cost: the true map and the first timestep only)
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_map::paper::{paper_map, Corner};
 use madenet_ros2::record::Recorder;
 use madenet_sim::{Trial, TrialSpec};
+use std::time::{Duration, Instant};
 
 fn spec() -> TrialSpec {
     let map = paper_map(3).expect("paper map 3");
@@ -26,6 +30,23 @@ fn spec() -> TrialSpec {
     }
 }
 
+/// Times `record` (which writes a bag at the path it is given and returns it) `iters` times;
+/// the benchmark's own removal of each bag is not timed.
+fn timed_bags(
+    iters: u64,
+    dir: &std::path::Path,
+    mut record: impl FnMut(&std::path::Path) -> std::path::PathBuf,
+) -> Duration {
+    let mut total = Duration::ZERO;
+    for _ in 0..iters {
+        let start = Instant::now();
+        let at = record(dir);
+        total += start.elapsed();
+        std::fs::remove_dir_all(at).expect("removed");
+    }
+    total
+}
+
 fn bench(c: &mut Criterion) {
     let spec = spec();
     let dir = std::env::temp_dir().join(format!("madenet-bench-record-{}", std::process::id()));
@@ -38,23 +59,37 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.bench_function("recorded", |b| {
+        b.iter_custom(|iters| {
+            timed_bags(iters, &dir, |dir| {
+                let mut trial = Trial::new(spec.clone()).expect("trial");
+                let mut bag = Recorder::start(dir, &trial).expect("bag");
+                while trial.step() {
+                    bag.step(&trial).expect("recorded");
+                }
+                let (at, _) = bag.finish().expect("finished").expect("a bag");
+                std::hint::black_box(trial.finish());
+                at
+            })
+        })
+    });
+    g.bench_function("encoded_only", |b| {
         b.iter(|| {
             let mut trial = Trial::new(spec.clone()).expect("trial");
-            let mut bag = Recorder::start(&dir, &trial).expect("bag");
+            let mut rec = Recorder::to(None, &trial).expect("recorder");
             while trial.step() {
-                bag.step(&trial).expect("recorded");
+                rec.step(&trial).expect("encoded");
             }
-            let (at, _) = bag.finish().expect("finished").expect("a bag");
-            std::fs::remove_dir_all(at).expect("removed");
+            rec.finish().expect("finished");
             trial.finish()
         })
     });
     g.bench_function("empty_bag", |b| {
-        b.iter(|| {
-            let trial = Trial::new(spec.clone()).expect("trial");
-            let bag = Recorder::start(&dir, &trial).expect("bag");
-            let (at, _) = bag.finish().expect("finished").expect("a bag");
-            std::fs::remove_dir_all(at).expect("removed");
+        b.iter_custom(|iters| {
+            timed_bags(iters, &dir, |dir| {
+                let trial = Trial::new(spec.clone()).expect("trial");
+                let bag = Recorder::start(dir, &trial).expect("bag");
+                bag.finish().expect("finished").expect("a bag").0
+            })
         })
     });
     g.finish();

@@ -130,7 +130,9 @@ impl Bag {
         let opts = mcap::WriteOptions::new()
             .profile("ros2")
             .library("madenet")
-            .compression(Some(mcap::Compression::Lz4));
+            .compression(Some(mcap::Compression::Lz4))
+            // The LZ4 frame checks the chunk's content itself (XXH32): no CRC32 over it twice.
+            .calculate_chunk_crcs(false);
         bag.writer = Some(
             opts.create(BufWriter::new(out))
                 .map_err(|e| bag.mcap_error(e))?,

@@ -10,9 +10,9 @@
 //! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: robot i's belief with the timestep's own observation |
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
-//! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's planned path changes: from its cell to its goal |
+//! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route changes (not when it only advances along the last one): from its cell to its goal |
 //! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot) and the chosen one (the robot's colour) |
-//! | `/comms` | `visualization_msgs/msg/MarkerArray` | every timestep: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
+//! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
 //! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
 //! | `/metrics/distance` | `std_msgs/msg/Float64` | every timestep: metres driven by the team so far (TTD) |
 //! | `/tf` | `tf2_msgs/msg/TFMessage` | every timestep: `map` → `robot<i>/base_link` |
@@ -114,6 +114,34 @@ pub struct Recorder {
     /// A world node's robots: what each showed last, and how often that changed.
     shown: Vec<Option<(Vec<Pos>, Option<Pos>)>>,
     shown_decisions: Vec<u64>,
+    /// Each robot's topic names and `/tf` child frame, made once.
+    names: Vec<RobotTopics>,
+    /// The radio's lines last published (pairs exchanged, pairs dropped, as cells).
+    comms: Option<(Vec<Pos>, Vec<Pos>)>,
+}
+
+/// Robot i's topic names and `/tf` child frame, made once per recording.
+struct RobotTopics {
+    map: String,
+    pose: String,
+    goal: String,
+    plan: String,
+    candidates: String,
+    base_link: String,
+}
+
+impl RobotTopics {
+    fn of(i: usize) -> Self {
+        let [map, pose, goal] = crate::topics(i);
+        RobotTopics {
+            map,
+            pose,
+            goal,
+            plan: format!("/robot{i}/plan"),
+            candidates: format!("/robot{i}/candidates"),
+            base_link: format!("robot{i}/base_link"),
+        }
+    }
 }
 
 /// What the recorder reads of one robot at a timestep.
@@ -215,6 +243,8 @@ impl Recorder {
             decisions: vec![0; n],
             shown: vec![None; n],
             shown_decisions: vec![0; n],
+            names: (0..n).map(RobotTopics::of).collect(),
+            comms: None,
         };
         let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
         r.put("/truth_map", &msg, 0)?;
@@ -350,7 +380,7 @@ impl Recorder {
                         stamp,
                         frame_id: FRAME_ID.into(),
                     },
-                    child_frame_id: format!("robot{i}/base_link"),
+                    child_frame_id: self.names[i].base_link.clone(),
                     transform: Transform {
                         translation: Vector3 { x, y, z: 0.0 },
                         rotation: q,
@@ -360,20 +390,24 @@ impl Recorder {
             .collect();
         self.put("/tf", &TFMessage { transforms }, ns)?;
         for (i, r) in robots.iter().enumerate() {
-            let [map_t, pose_t, goal_t] = crate::topics(i);
             if let Some(cells) = r.belief.filter(|&c| self.maps[i].as_deref() != Some(c)) {
                 let msg = occupancy_grid(&self.frame, cells, stamp);
-                self.put(&map_t, &msg, ns)?;
-                self.maps[i] = Some(cells.to_vec());
+                self.out.put(&self.names[i].map, &msg, ns)?;
+                match &mut self.maps[i] {
+                    Some(m) => m.copy_from_slice(cells),
+                    m => *m = Some(cells.to_vec()),
+                }
             }
             let pose = pose_stamped(&self.frame, positions[i], stamp);
-            self.put(&pose_t, &pose, ns)?;
+            self.out.put(&self.names[i].pose, &pose, ns)?;
             if let Some(g) = r.goal.filter(|&g| Some(g) != self.goals[i]) {
-                self.put(&goal_t, &pose_stamped(&self.frame, g, stamp), ns)?;
+                let msg = pose_stamped(&self.frame, g, stamp);
+                self.out.put(&self.names[i].goal, &msg, ns)?;
             }
             self.goals[i] = r.goal;
             // The plan from where the robot stands (the agent plans before it moves, so its
-            // path may still begin with the cell it just left).
+            // path may still begin with the cell it just left); published when the route
+            // changes, not when the robot only advances along the last one published.
             let from = r
                 .path
                 .iter()
@@ -382,7 +416,10 @@ impl Recorder {
             let plan: Vec<Pos> = std::iter::once(positions[i])
                 .chain(r.path[from..].iter().copied())
                 .collect();
-            if self.plans[i].as_ref() != Some(&plan) {
+            let advanced = self.plans[i]
+                .as_ref()
+                .is_some_and(|last| last.ends_with(&plan));
+            if !advanced {
                 let poses = plan
                     .iter()
                     .map(|&p| pose_stamped(&self.frame, p, stamp))
@@ -391,12 +428,12 @@ impl Recorder {
                     header: pose.header.clone(),
                     poses,
                 };
-                self.put(&format!("/robot{i}/plan"), &msg, ns)?;
+                self.out.put(&self.names[i].plan, &msg, ns)?;
                 self.plans[i] = Some(plan);
             }
             if r.decision != self.decisions[i] && !r.candidates.is_empty() {
                 let msg = self.candidate_markers(i, r.candidates, r.chosen, stamp);
-                self.put(&format!("/robot{i}/candidates"), &msg, ns)?;
+                self.out.put(&self.names[i].candidates, &msg, ns)?;
             }
             self.decisions[i] = r.decision;
         }
@@ -404,10 +441,29 @@ impl Recorder {
         if self.team.as_deref() != Some(team) {
             let msg = occupancy_grid(&self.frame, team, stamp);
             self.put("/team_map", &msg, ns)?;
-            self.team = Some(team.to_vec());
+            match &mut self.team {
+                Some(m) => m.copy_from_slice(team),
+                m => *m = Some(team.to_vec()),
+            }
         }
-        let comms = self.comm_markers(world, exchanges, stamp);
-        self.put("/comms", &comms, ns)?;
+        // The radio's lines when they change (markers stay until replaced).
+        let (ok, dropped): (Vec<_>, Vec<_>) = world
+            .contacts()
+            .iter()
+            .copied()
+            .partition(|pair| exchanges.contains(pair));
+        let ends = |pairs: &[(usize, usize)]| -> Vec<Pos> {
+            pairs
+                .iter()
+                .flat_map(|&(a, b)| [positions[a], positions[b]])
+                .collect()
+        };
+        let lines = (ends(&ok), ends(&dropped));
+        if self.comms.as_ref() != Some(&lines) {
+            let comms = self.comm_markers(&lines.0, &lines.1, stamp);
+            self.put("/comms", &comms, ns)?;
+            self.comms = Some(lines);
+        }
         let explored = Float64 {
             data: world.explored_fraction(),
         };
@@ -472,31 +528,16 @@ impl Recorder {
         MarkerArray { markers }
     }
 
-    /// This timestep's radio: a line per pair in contact, green where β was exchanged, red
-    /// where the exchange dropped out.
-    fn comm_markers(
-        &self,
-        world: &madenet_world::World,
-        exchanged: &[(usize, usize)],
-        stamp: Time,
-    ) -> MarkerArray {
-        let positions = world.positions();
-        let lines = |id: i32, pairs: Vec<(usize, usize)>, color: ColorRGBA| {
+    /// The radio's lines: one per pair in contact (`ok`, `dropped`: their end cells, two a
+    /// pair), green where β was exchanged, red where the exchange dropped out.
+    fn comm_markers(&self, ok: &[Pos], dropped: &[Pos], stamp: Time) -> MarkerArray {
+        let lines = |id: i32, ends: &[Pos], color: ColorRGBA| {
             let mut m = Self::marker(stamp, "comms", id, Marker::LINE_LIST);
             m.scale.x = 0.08;
             m.color = color;
-            m.points = pairs
-                .iter()
-                .flat_map(|&(a, b)| [positions[a], positions[b]])
-                .map(|p| self.point(p, 0.1))
-                .collect();
+            m.points = ends.iter().map(|&p| self.point(p, 0.1)).collect();
             m
         };
-        let (ok, dropped): (Vec<_>, Vec<_>) = world
-            .contacts()
-            .iter()
-            .copied()
-            .partition(|pair| exchanged.contains(pair));
         let green = ColorRGBA {
             r: 0.1,
             g: 0.8,
