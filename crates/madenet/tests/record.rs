@@ -4,7 +4,7 @@
 //! `mcap`, `mcap-ros2-support`, `rosbags` — check the bag's content in the Python tests.)
 #![cfg(feature = "ros2")]
 
-use madenet_testkit::{assert_clean_error, run, Scratch};
+use madenet_testkit::{assert_clean_error, assert_clean_error_in, run, Scratch};
 use std::path::Path;
 
 fn madenet(args: &[&str]) -> std::process::Output {
@@ -204,5 +204,49 @@ fn live_and_continuous_runs_are_recorded() {
         "name: \"/tf\"",
     ] {
         assert!(meta.contains(needle), "{needle}: {meta}");
+    }
+}
+
+/// A write that fails part-way — here the file-size limit (`RLIMIT_FSIZE`, its signal
+/// ignored), which fails the bag's `write` as a full disk does (`EFBIG` for `ENOSPC`) without
+/// needing a full disk — in either world: one `error:` line naming `--record`, the bag's place
+/// and the cause, exit 2, and nothing left behind (the hidden partial folder removed).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_write_that_fails_part_way_leaves_nothing_behind() {
+    use std::os::unix::process::CommandExt;
+    let dir = Scratch::new("record-fsize");
+    let worlds: [&[&str]; 2] = [
+        &["--map", "paper:3", "--policy", "spread", "--seed", "2"],
+        &["--world", "continuous", "--generate", "3", "--side", "12"],
+    ];
+    for (k, world) in worlds.into_iter().enumerate() {
+        let bag = dir.join(&format!("bag{k}"));
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"));
+        cmd.arg("run")
+            .args(world)
+            .args(["--record", bag.to_str().unwrap()]);
+        // SAFETY: only async-signal-safe calls (setrlimit, signal) between fork and exec.
+        unsafe {
+            cmd.pre_exec(|| {
+                let limit = libc::rlimit {
+                    rlim_cur: 16 * 1024,
+                    rlim_max: 16 * 1024,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &limit) != 0
+                    || libc::signal(libc::SIGXFSZ, libc::SIG_IGN) == libc::SIG_ERR
+                {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+        let out = cmd.output().unwrap();
+        assert_clean_error_in(
+            &format!("world {k}"),
+            &out,
+            &["--record", bag.to_str().unwrap(), "File too large"],
+        );
+        assert_eq!(entries(dir.path()), Vec::<String>::new(), "world {k}");
     }
 }

@@ -126,7 +126,7 @@ impl Bag {
             last_ns: 0,
             finished: false,
         };
-        let out = File::create(&path).map_err(io(&path))?;
+        let out = File::create(&path).map_err(io(dir))?;
         let opts = mcap::WriteOptions::new()
             .profile("ros2")
             .library("madenet")
@@ -140,10 +140,18 @@ impl Bag {
         Ok(bag)
     }
 
+    /// The MCAP writer's error, named by the bag's place (the hidden folder goes with the
+    /// error), with its cause (e.g. "No space left on device").
     fn mcap_error(&self, e: mcap::McapError) -> BagError {
+        let mut why = e.to_string();
+        let mut cause = std::error::Error::source(&e);
+        while let Some(c) = cause {
+            why = format!("{why}: {c}");
+            cause = c.source();
+        }
         BagError::Mcap {
-            path: self.tmp.join(&self.file),
-            why: e.to_string(),
+            path: self.dir.clone(),
+            why,
         }
     }
 
@@ -218,17 +226,17 @@ impl Bag {
         let out = writer.into_inner();
         out.into_inner()
             .map_err(|e| BagError::Io {
-                path: self.tmp.join(&self.file),
+                path: self.dir.clone(),
                 source: e.into_error(),
             })?
             .sync_all()
             .map_err(|source| BagError::Io {
-                path: self.tmp.join(&self.file),
+                path: self.dir.clone(),
                 source,
             })?;
         let meta = self.tmp.join("metadata.yaml");
         std::fs::write(&meta, self.metadata()).map_err(|source| BagError::Io {
-            path: meta.clone(),
+            path: self.dir.clone(),
             source,
         })?;
         if self.dir.is_dir() {
