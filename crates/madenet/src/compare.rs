@@ -32,6 +32,13 @@ pub struct CompareArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = crate::threads_arg)]
     threads: Option<usize>,
+    /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
+    /// study, re-run with their seeds: the same trials): `field=value` over method, map,
+    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either; e.g.
+    /// `--record-trials method=spread seed=1`. A bag already there is kept (with --fresh:
+    /// made anew).
+    #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
+    record_trials: Option<Vec<String>>,
 }
 
 fn parse_oracle(s: &str) -> Result<Option<OracleKind>, String> {
@@ -99,6 +106,16 @@ pub fn run(a: CompareArgs) -> Result<()> {
     if let Some(s) = a.seeds {
         cfg.seeds = s;
     }
+    // The trials to record, checked before the study runs.
+    let recorded = match &a.record_trials {
+        Some(items) => {
+            let (registry, _, planned) =
+                madenet_study::study_plan(&cfg).map_err(|e| name_source(e, &a))?;
+            crate::record::chosen_trials(items, &planned)?;
+            Some((items, registry, planned))
+        }
+        None => None,
+    };
     let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     let (report, outcomes) = pool
         .install(|| {
@@ -110,5 +127,16 @@ pub fn run(a: CompareArgs) -> Result<()> {
         .map_err(|e| name_source(e, &a))?;
     bar.finish_and_clear();
     out!("{} trials → {}", outcomes.len(), report.display())?;
+    if let Some((items, registry, planned)) = recorded {
+        let chosen = crate::record::chosen_trials(items, &planned)?;
+        let bags = a.out.join("bags");
+        let n =
+            pool.install(|| crate::record::record_trials(&chosen, &registry, &bags, a.fresh))?;
+        out!(
+            "{} trials recorded → {} ({n} written now)",
+            chosen.len(),
+            bags.display()
+        )?;
+    }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `--record PATH` and `--foxglove [ADDR]`: a grid trial as ROS 2 messages
 //! ([`madenet_ros2::record`]: its topics, in simulated time) into a bag and/or a live Foxglove
-//! view, with the CLI's error context and the line it prints.
+//! view, with the CLI's error context and the line it prints; `--record-trials` (`compare`,
+//! `scale`): chosen trials of a study as bags.
 
 #[cfg(feature = "ros2")]
 mod imp {
@@ -112,6 +113,60 @@ mod imp {
         }
     }
 
+    /// Records each of `chosen` (trials of a study, re-run: the same seed gives the same
+    /// trial) as a bag in `dir`/[`folder_name`](madenet_study::select::folder_name), in
+    /// parallel on the current pool; a bag already there is kept unless `fresh`. Returns how
+    /// many were written.
+    pub fn record_trials(
+        chosen: &[&madenet_study::runner::Planned],
+        registry: &madenet_sim::PolicyRegistry,
+        dir: &Path,
+        fresh: bool,
+    ) -> Result<usize> {
+        use rayon::prelude::*;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("--record-trials: {}", dir.display()))?;
+        let written = chosen
+            .par_iter()
+            .map(|p| -> Result<bool> {
+                let at = dir.join(madenet_study::select::folder_name(&p.key));
+                if at.join("metadata.yaml").is_file() {
+                    if !fresh {
+                        return Ok(false);
+                    }
+                    std::fs::remove_dir_all(&at)
+                        .with_context(|| format!("--record-trials: {}", at.display()))?;
+                }
+                let failed = |e: madenet_sim::SimError| anyhow::anyhow!("{}: {e}", p.key);
+                let bag = Some(Bag::create(&at).context("--record-trials")?);
+                let done = match p.continuous_trial(registry) {
+                    Some(trial) => {
+                        let mut trial = trial.map_err(failed)?;
+                        let mut r = madenet_ros2::record::ContinuousRecorder::to(bag, &trial)
+                            .context("--record-trials")?;
+                        while trial.step() {
+                            r.step(&trial).context("--record-trials")?;
+                        }
+                        r.finish(&trial)
+                    }
+                    None => {
+                        let mut trial =
+                            Trial::with_registry(p.spec.clone(), registry).map_err(failed)?;
+                        let mut r = madenet_ros2::record::Recorder::to(bag, &trial)
+                            .context("--record-trials")?;
+                        while trial.step() {
+                            r.step(&trial).context("--record-trials")?;
+                        }
+                        r.finish()
+                    }
+                };
+                done.context("--record-trials")?;
+                Ok(true)
+            })
+            .collect::<Result<Vec<bool>>>()?;
+        Ok(written.into_iter().filter(|&w| w).count())
+    }
+
     /// A continuous trial being recorded or streamed.
     pub struct ContinuousRecorder(madenet_ros2::record::ContinuousRecorder);
 
@@ -196,6 +251,16 @@ mod imp {
         }
     }
 
+    /// Without the `ros2` feature there is no bag writer.
+    pub fn record_trials(
+        _: &[&madenet_study::runner::Planned],
+        _: &madenet_sim::PolicyRegistry,
+        _: &Path,
+        _: bool,
+    ) -> Result<usize> {
+        anyhow::bail!("--record-trials: this madenet was built without the `ros2` feature")
+    }
+
     /// Without the `ros2` feature there is no bag writer and no live view.
     pub struct ContinuousRecorder;
 
@@ -216,4 +281,51 @@ mod imp {
     }
 }
 
-pub use imp::{ContinuousRecorder, Recorder};
+pub use imp::{record_trials, ContinuousRecorder, Recorder};
+
+/// At most this many trials of a study are recorded (a filter choosing more is refused).
+const MAX_RECORDED_TRIALS: usize = 1000;
+
+/// The trials of `planned` that `--record-trials` conditions `items` choose: some, at most
+/// [`MAX_RECORDED_TRIALS`], none an oracle's; every refusal names the flag. Checked before a
+/// study runs.
+pub fn chosen_trials<'a>(
+    items: &[String],
+    planned: &'a [madenet_study::runner::Planned],
+) -> anyhow::Result<Vec<&'a madenet_study::runner::Planned>> {
+    let filter = madenet_study::select::TrialFilter::parse(items)
+        .map_err(|e| anyhow::anyhow!("--record-trials: {e}"))?;
+    if !cfg!(feature = "ros2") {
+        anyhow::bail!("--record-trials: this madenet was built without the `ros2` feature");
+    }
+    let chosen: Vec<_> = planned.iter().filter(|p| filter.matches(&p.key)).collect();
+    if chosen.is_empty() {
+        anyhow::bail!(
+            "--record-trials: chooses none of the study's {} trials (fields: method, map, start, csp, seed, as trials.csv writes them)",
+            planned.len()
+        );
+    }
+    if chosen.len() > MAX_RECORDED_TRIALS {
+        anyhow::bail!(
+            "--record-trials: chooses {} trials, more than the {MAX_RECORDED_TRIALS} bags a study records: narrow it (e.g. seed=1)",
+            chosen.len()
+        );
+    }
+    if let Some(p) = chosen.iter().find(|p| p.oracle.is_some()) {
+        anyhow::bail!(
+            "--record-trials: chooses an oracle's trial ({}), which is not recorded: add a method=… condition",
+            p.key
+        );
+    }
+    let mut names = std::collections::HashSet::new();
+    if let Some(p) = chosen
+        .iter()
+        .find(|p| !names.insert(madenet_study::select::folder_name(&p.key)))
+    {
+        anyhow::bail!(
+            "--record-trials: two chosen trials share the folder name {} (starts that differ only in punctuation): narrow it",
+            madenet_study::select::folder_name(&p.key)
+        );
+    }
+    Ok(chosen)
+}

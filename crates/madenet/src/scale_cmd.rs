@@ -43,6 +43,13 @@ pub struct ScaleArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = crate::threads_arg)]
     threads: Option<usize>,
+    /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
+    /// study, re-run with their seeds: the same trials): `field=value` over method, map,
+    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either; e.g.
+    /// `--record-trials method=spread seed=1`. A bag already there is kept (with --fresh:
+    /// made anew).
+    #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
+    record_trials: Option<Vec<String>>,
 }
 
 /// Names where a bad field came from: the flag that set it, else the config file.
@@ -84,6 +91,21 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     }
     // The config's own `[baselines]` parameters (ub, pb), as `madenet compare` uses its own.
     let registry = crate::registry_with(&cfg.baselines, a.model.as_deref())?;
+    // The trials to record, checked before the study runs.
+    let planned = match &a.record_trials {
+        Some(items) => {
+            cfg.validate(&registry).map_err(|e| name_source(e, &a))?;
+            let planned: Vec<_> = cfg
+                .plan()
+                .map_err(|e| name_source(e, &a))?
+                .into_iter()
+                .map(|p| p.planned)
+                .collect();
+            crate::record::chosen_trials(items, &planned)?;
+            Some((items, planned))
+        }
+        None => None,
+    };
     let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     let result = pool
         .install(|| {
@@ -95,5 +117,16 @@ pub fn run(a: ScaleArgs) -> Result<()> {
         .map_err(|e| name_source(e, &a))?;
     bar.finish_and_clear();
     out!("{} trials → {}", result.trials, result.report.display())?;
+    if let Some((items, planned)) = planned {
+        let chosen = crate::record::chosen_trials(items, &planned)?;
+        let bags = a.out.join("bags");
+        let n =
+            pool.install(|| crate::record::record_trials(&chosen, &registry, &bags, a.fresh))?;
+        out!(
+            "{} trials recorded → {} ({n} written now)",
+            chosen.len(),
+            bags.display()
+        )?;
+    }
     Ok(())
 }

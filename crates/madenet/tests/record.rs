@@ -221,7 +221,7 @@ fn a_write_that_fails_part_way_leaves_nothing_behind() {
         &["--world", "continuous", "--generate", "3", "--side", "12"],
     ];
     for (k, world) in worlds.into_iter().enumerate() {
-        let bag = dir.join(&format!("bag{k}"));
+        let bag = dir.join(format!("bag{k}"));
         let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"));
         cmd.arg("run")
             .args(world)
@@ -249,4 +249,112 @@ fn a_write_that_fails_part_way_leaves_nothing_behind() {
         );
         assert_eq!(entries(dir.path()), Vec::<String>::new(), "world {k}");
     }
+}
+
+/// `compare --record-trials`: exactly the chosen trials as bags in OUT/bags/, each the bag
+/// `run --record` writes for the same trial (byte for byte); a second run keeps them; bad
+/// conditions, a choice of nothing or of an oracle are refused before the study runs (no
+/// output folder).
+#[test]
+fn a_study_records_the_trials_it_is_told_to() {
+    let dir = Scratch::new("record-trials");
+    let out = dir.join("study");
+    let compare = |conditions: &[&str]| {
+        let mut args = vec![
+            "compare",
+            "--methods",
+            "nf,spread",
+            "--oracles",
+            "none",
+            "--seeds",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+            "--record-trials",
+        ];
+        args.extend_from_slice(conditions);
+        madenet(&args)
+    };
+    for (bad, needle) in [
+        (&["team=3"][..], "unknown field `team`"),
+        (&["method=nf", "seed=x"][..], "whole number"),
+        (
+            &["method=made-net"][..],
+            "chooses none of the study's 640 trials",
+        ),
+    ] {
+        assert_clean_error_in(
+            &format!("{bad:?}"),
+            &compare(bad),
+            &["--record-trials", needle],
+        );
+        assert!(!out.exists(), "{bad:?}: refused before the study ran");
+    }
+    let with_oracle = madenet(&[
+        "compare",
+        "--methods",
+        "nf",
+        "--oracles",
+        "placebo",
+        "--seeds",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--record-trials",
+        "map=test_2",
+    ]);
+    assert_clean_error(&with_oracle, &["--record-trials", "oracle-placebo"]);
+    assert!(!out.exists());
+
+    let chosen = [
+        "method=spread",
+        "map=test_3|test_5",
+        "start=top-right",
+        "csp=0.5",
+        "seed=2",
+    ];
+    let first = compare(&chosen);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    assert!(String::from_utf8_lossy(&first.stdout).contains("2 trials recorded"));
+    let bags = out.join("bags");
+    let names = [
+        "spread_test_3_top-right_csp0.5_seed2",
+        "spread_test_5_top-right_csp0.5_seed2",
+    ];
+    assert_eq!(entries(&bags), names);
+    let alone = dir.join("alone");
+    let run = madenet(&[
+        "run",
+        "--map",
+        "paper:5",
+        "--start",
+        "top-right",
+        "--policy",
+        "spread",
+        "--seed",
+        "2",
+        "--csp",
+        "0.5",
+        "--record",
+        alone.to_str().unwrap(),
+    ]);
+    assert!(run.status.success());
+    let bag = |at: &Path| {
+        let name = at.file_name().unwrap().to_string_lossy().into_owned();
+        std::fs::read(at.join(format!("{name}_0.mcap"))).unwrap()
+    };
+    assert_eq!(
+        bag(&bags.join(names[1])),
+        bag(&alone),
+        "the study's trial, recorded"
+    );
+    let before = bag(&bags.join(names[0]));
+    let again = compare(&chosen);
+    assert!(again.status.success());
+    assert!(String::from_utf8_lossy(&again.stdout).contains("(0 written now)"));
+    assert_eq!(bag(&bags.join(names[0])), before);
 }

@@ -233,3 +233,39 @@ def test_a_launched_run_records_what_the_in_process_run_records(cli, tmp_path):
         a, b = launched[topic], inproc[topic]
         assert [t for t, _ in a] == [t for t, _ in b], topic
         assert [repr(m) for _, m in a] == [repr(m) for _, m in b], topic
+
+
+def test_a_study_records_its_chosen_trials_as_they_ran(cli, tmp_path):
+    """`compare`/`scale --record-trials`: each bag in OUT/bags/ is its trials.csv row's trial —
+    the last /metrics/distance is the row's TTD, the last /metrics/explored its explored share,
+    and the last /clock its TNS (grid) or ET (continuous) — decoded with rosbags (Jazzy)."""
+    import csv
+
+    runs = [
+        ("grid", ["compare", "--methods", "nf,spread", "--oracles", "none", "--seeds", "1",
+                  "--record-trials", "method=spread", "map=test_4|test_7", "csp=0|1"]),
+        ("continuous", ["scale", "--world", "continuous", "--sides", "12", "--teams", "2",
+                        "--seeds", "1", "--methods", "spread", "--record-trials", "seed=1"]),
+    ]
+    for world, args in runs:
+        out = tmp_path / world
+        subprocess.run([cli, *args[:1], "--out", str(out), *args[1:]], check=True,
+                       capture_output=True)
+        with open(out / "trials.csv") as f:
+            rows = list(csv.DictReader(f))
+        bags = sorted((out / "bags").iterdir())
+        assert len(bags) == (16 if world == "grid" else 3)
+        # The folder name of a row's trial (madenet_study::select::folder_name).
+        by_name = {re.sub(r"[^A-Za-z0-9._-]", "-", "{method}_{map}_{start}_csp{csp}_seed{seed}"
+                          .format(**r)): r for r in rows}
+        for bag in bags:
+            row = by_name[bag.name]
+            topics = decoded(bag)
+            assert abs(topics["/metrics/distance"][-1][1].data - float(row["ttd_m"])) < 1e-9
+            assert abs(topics["/metrics/explored"][-1][1].data - float(row["explored"])) < 1e-12
+            end = topics["/clock"][-1][1].clock
+            seconds = end.sec + end.nanosec / 1e9
+            if world == "grid":
+                assert seconds == int(row["tns"]), bag.name
+            else:
+                assert abs(seconds - float(row["et_s"])) < 1e-6, bag.name

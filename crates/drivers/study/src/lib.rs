@@ -21,6 +21,7 @@ pub mod config;
 pub mod report;
 pub mod runner;
 pub mod scale;
+pub mod select;
 
 pub use config::{StudyConfig, StudyError};
 pub use runner::{TrialKey, TrialOutcome};
@@ -37,8 +38,7 @@ pub fn run_study(
     fresh: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(PathBuf, Vec<TrialOutcome>), StudyError> {
-    let registry = cfg.registry()?;
-    let (maps, starts) = cfg.validate(&registry)?;
+    let (registry, maps, planned) = study_plan(cfg)?;
     let io = |e: std::io::Error| StudyError::File {
         path: out.display().to_string(),
         message: e.to_string(),
@@ -46,17 +46,33 @@ pub fn run_study(
     std::fs::create_dir_all(out).map_err(io)?;
     let _lock = prepare_out(out, "study.toml", cfg, "", fresh)?;
     let started = std::time::Instant::now();
-    let outcomes = runner::run(cfg, &registry, &maps, &starts, out, progress)?;
+    let outcomes = runner::run_planned(&planned, &registry, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
     let paper_maps: Vec<String> = maps
         .iter()
         .filter(|m| m.paper)
         .map(|m| m.name.clone())
         .collect();
-    let bounds = lower_bounds(runner::plan(cfg, &maps, &starts).iter())?;
+    let bounds = lower_bounds(planned.iter())?;
     let report = report::write_all(cfg, &outcomes, &paper_maps, &bounds, out, wall)?;
     Ok((report, outcomes))
 }
+
+/// The study's policies, its maps and every trial it runs, in output order
+/// ([`runner::plan`]), after checking the config.
+pub fn study_plan(cfg: &StudyConfig) -> Result<StudyPlan, StudyError> {
+    let registry = cfg.registry()?;
+    let (maps, starts) = cfg.validate(&registry)?;
+    let planned = runner::plan(cfg, &maps, &starts);
+    Ok((registry, maps, planned))
+}
+
+/// What [`study_plan`] returns: the policies, the maps, the trials.
+pub type StudyPlan = (
+    madenet_sim::PolicyRegistry,
+    Vec<config::StudyMap>,
+    Vec<runner::Planned>,
+);
 
 /// The lower bound ([`madenet_sim::reference::lower_bound`]) of every trial of `planned` the
 /// known-map reference runs, by map, start and seed (in parallel; none if it does not run).

@@ -336,8 +336,8 @@ pub struct PlannedContinuous {
 }
 
 impl Planned {
-    /// The continuous trial this plans, if it is one.
-    fn continuous_trial(
+    /// The continuous trial this plans, if it is one (a grid trial: `None`).
+    pub fn continuous_trial(
         &self,
         registry: &PolicyRegistry,
     ) -> Option<Result<ContinuousTrial, madenet_sim::SimError>> {
