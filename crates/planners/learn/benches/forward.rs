@@ -8,7 +8,8 @@
 //! * `agnostic_decide/{20,60}` — one decision of the size- and team-agnostic DEP
 //!   (`made-net-any`) mid-trial on a generated 20 × 20 map with 3 robots and a 60 × 60 map with
 //!   5 (|G| = 4 and 8): inputs, forward pass and choice; `agnostic_inputs/*` and
-//!   `agnostic_scores/*` are its two parts.
+//!   `agnostic_scores/*` (the decision-time `AgnosticScorer`) are its two parts;
+//!   `agnostic_scores_burn/*` is the same forward pass through burn (the anchor).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_learn::{cpu, NetConfig, Tensor};
@@ -89,15 +90,16 @@ fn mid_trial(side: usize, team: usize) -> madenet_sim::Trial {
 
 fn agnostic(c: &mut Criterion) {
     use madenet_agent::Policy;
-    use madenet_learn::agnostic::{inputs, AgnosticConfig, AgnosticPolicy};
+    use madenet_learn::agnostic::{inputs, AgnosticConfig, AgnosticPolicy, AgnosticScorer};
     let device = cpu();
     device.seed(1);
     let cfg = AgnosticConfig::new();
-    let net = std::sync::Arc::new(cfg.init(&device).expect("agnostic DEP"));
+    let net = cfg.init(&device).expect("agnostic DEP");
+    let scorer = std::sync::Arc::new(AgnosticScorer::new(&net));
     let ds = madenet_world::ScenarioConfig::default().sensing_range;
     for (side, team) in [(20, 3), (60, 5)] {
         let mut trial = mid_trial(side, team);
-        let mut policy = AgnosticPolicy::new("any", net.clone(), cfg.crop_radius, ds);
+        let mut policy = AgnosticPolicy::new("any", scorer.clone(), cfg.crop_radius, ds);
         c.bench_function(&format!("agnostic_decide/{side}"), |b| {
             b.iter(|| black_box(policy.decide(&mut trial.agent_mut(0).view(true))))
         });
@@ -112,6 +114,9 @@ fn agnostic(c: &mut Criterion) {
         });
         let input = inputs(&mut trial.agent_mut(0).view(true), ds, cfg.crop_radius);
         c.bench_function(&format!("agnostic_scores/{side}"), |b| {
+            b.iter(|| black_box(scorer.scores(&input)))
+        });
+        c.bench_function(&format!("agnostic_scores_burn/{side}"), |b| {
             b.iter(|| black_box(net.scores(&input)))
         });
     }

@@ -34,6 +34,9 @@ use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
 use madenet_map::Pos;
 use std::sync::Arc;
 
+pub mod scorer;
+pub use scorer::AgnosticScorer;
+
 /// Values of the per-robot context vector (see [`inputs`]).
 pub const CONTEXT_FEATURES: usize = 8;
 /// Values per candidate: [`AgentView::CANDIDATE_FEATURES`] and 3 size-free ones (see [`inputs`]).
@@ -403,15 +406,20 @@ impl Batch {
 /// (the `spread` rule's candidate unless the DEP values another more by the margin).
 pub struct AgnosticPolicy {
     name: String,
-    net: Arc<AgnosticNet>,
+    net: Arc<AgnosticScorer>,
     crop_radius: usize,
     sensing_range: i32,
     spread_margin: Option<f32>,
 }
 
 impl AgnosticPolicy {
-    /// Policy `name` running `net` (crops of `crop_radius`, d_s = `sensing_range`).
-    pub fn new(name: &str, net: Arc<AgnosticNet>, crop_radius: usize, sensing_range: i32) -> Self {
+    /// Policy `name` deciding with `net` (crops of `crop_radius`, d_s = `sensing_range`).
+    pub fn new(
+        name: &str,
+        net: Arc<AgnosticScorer>,
+        crop_radius: usize,
+        sensing_range: i32,
+    ) -> Self {
         AgnosticPolicy {
             name: name.into(),
             net,

@@ -2,7 +2,7 @@
 //! trained it, the network's sizes, provenance, how to act) and its weights, loaded into the
 //! DEP nets a policy acts with ([`Model`]). Loading never goes through a trainer.
 
-use crate::agnostic::{AgnosticConfig, AgnosticNet, AgnosticPolicy};
+use crate::agnostic::{AgnosticConfig, AgnosticNet, AgnosticPolicy, AgnosticScorer};
 use crate::error::{io_err, TrainError};
 use crate::obs::Observation;
 use crate::policy::DepPolicy;
@@ -108,9 +108,22 @@ pub struct Model {
     pub deps: Vec<Arc<QNet>>,
     /// The agnostic DEP, shared by every robot.
     pub agnostic: Option<Arc<AgnosticNet>>,
+    /// The agnostic DEP's weights as its robots decide with them ([`Model::with_agnostic`]).
+    pub scorer: Option<Arc<AgnosticScorer>>,
 }
 
 impl Model {
+    /// An agnostic model: `net` and its scorer.
+    pub fn with_agnostic(info: ModelInfo, net: AgnosticNet) -> Self {
+        let scorer = Arc::new(AgnosticScorer::new(&net));
+        Model {
+            info,
+            deps: Vec::new(),
+            agnostic: Some(Arc::new(net)),
+            scorer: Some(scorer),
+        }
+    }
+
     /// Loads `dir/model.toml` and its weight files.
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
         let path = dir.join("model.toml");
@@ -234,6 +247,7 @@ impl Model {
                     info,
                     deps,
                     agnostic: None,
+                    scorer: None,
                 })
             }
             (None, Some(a)) => {
@@ -249,11 +263,7 @@ impl Model {
                 let net = a.init(&cpu()).map_err(config_err)?.try_load_record(rec);
                 let net =
                     crate::integrity::checked_weights(net, &name, label, "the table `agnostic`")?;
-                Ok(Model {
-                    info,
-                    deps: Vec::new(),
-                    agnostic: Some(Arc::new(net)),
-                })
+                Ok(Model::with_agnostic(info, net))
             }
             _ => Err(config_err(
                 "exactly one of the tables `dep` (grid network) and `agnostic` is needed".into(),
@@ -303,9 +313,9 @@ impl Model {
     /// shared one), or the agnostic DEP.
     pub fn policy(&self, name: &str, robot: usize, sensing_range: i32) -> Box<dyn Policy> {
         let margin = self.info.spread_margin;
-        if let (Some(net), Some(a)) = (&self.agnostic, &self.info.agnostic) {
+        if let (Some(scorer), Some(a)) = (&self.scorer, &self.info.agnostic) {
             return Box::new(
-                AgnosticPolicy::new(name, Arc::clone(net), a.crop_radius, sensing_range)
+                AgnosticPolicy::new(name, Arc::clone(scorer), a.crop_radius, sensing_range)
                     .with_spread_margin(margin),
             );
         }

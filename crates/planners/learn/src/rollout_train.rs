@@ -993,7 +993,7 @@ impl Student {
         let Student::Agnostic(net) = self else {
             return None;
         };
-        let net = net.valid();
+        let net = crate::agnostic::AgnosticScorer::new(&net.valid());
         let (mut n, mut agree) = (0usize, 0usize);
         for l in labelled.filter(|l| l.train_mask.iter().any(|&m| m)) {
             let input = AgnosticInput {
@@ -1030,12 +1030,9 @@ impl Student {
                 info,
                 deps: vec![Arc::new(net.valid())],
                 agnostic: None,
+                scorer: None,
             },
-            Student::Agnostic(net) => Model {
-                info,
-                deps: Vec::new(),
-                agnostic: Some(Arc::new(net.valid())),
-            },
+            Student::Agnostic(net) => Model::with_agnostic(info, net.valid()),
         }
     }
 

@@ -788,6 +788,7 @@ fn train_loop(
                     .map(|(o, _, _)| Arc::new(target_of(o)))
                     .collect(),
                 agnostic: None,
+                scorer: None,
             };
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");

@@ -68,6 +68,7 @@ fn permuted(x: &AgnosticInput, order: &[usize]) -> AgnosticInput {
 #[test]
 fn agnostic_network_and_its_training() {
     one_network_scores_any_map_team_and_candidate_count_by_candidate_not_slot();
+    the_decision_scorer_scores_as_the_network();
     tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_deterministically();
 }
 
@@ -119,6 +120,45 @@ fn one_network_scores_any_map_team_and_candidate_count_by_candidate_not_slot() {
                 both[k],
                 alone[k]
             );
+        }
+    }
+}
+
+/// `AgnosticScorer` (the decision-time forward pass) gives burn's scores to 1e-4 for every
+/// valid slot, and −∞ for the others, with fresh weights and with the shipped model's.
+fn the_decision_scorer_scores_as_the_network() {
+    let fresh = AgnosticConfig::new().init(&madenet_learn::cpu()).unwrap();
+    let shipped = madenet_learn::shipped::model("made-net-any").unwrap();
+    let shipped = shipped.agnostic.as_deref().unwrap();
+    let mut decisions = vec![decision_from(20, 3, 4), decision_from(45, 6, 5)];
+    for seed in 6..12 {
+        decisions.push(decision_from(
+            20 + 4 * seed as usize,
+            2 + seed as usize % 5,
+            seed,
+        ));
+    }
+    // A decision with a slot masked out.
+    let mut masked = decision_from(30, 4, 3);
+    let k = masked.mask.iter().position(|&m| m).unwrap();
+    masked.mask[k] = false;
+    decisions.push(masked);
+    for net in [&fresh, shipped] {
+        let scorer = madenet_learn::agnostic::AgnosticScorer::new(net);
+        for (i, x) in decisions.iter().enumerate() {
+            let (want, got) = (net.scores(x), scorer.scores(x));
+            assert_eq!(want.len(), got.len());
+            for k in 0..x.mask.len() {
+                if x.mask[k] {
+                    let tol = 1e-4 * want[k].abs().max(1.0);
+                    assert!(
+                        (want[k] - got[k]).abs() < tol,
+                        "decision {i} slot {k}: {want:?} vs {got:?}"
+                    );
+                } else {
+                    assert_eq!(got[k], f32::NEG_INFINITY, "decision {i} slot {k}");
+                }
+            }
         }
     }
 }
