@@ -11,6 +11,7 @@ from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
+from ruamel.yaml import YAML
 
 ARGS = ["run", "--map", "paper:3", "--start", "top-right", "--policy", "nf", "--seed", "2"]
 
@@ -54,6 +55,20 @@ def test_the_bag_decodes_with_mcap_and_rosbags_and_is_the_trial(cli, tmp_path):
             reader.deserialize(raw, conn.msgtype)
             count += 1
     assert count == total
+    # The offered QoS, as rosbag2 writes it: in metadata.yaml (rosbags reads it there) and in
+    # each MCAP channel's metadata. Maps latched (transient local, keep last 1), the rest volatile.
+    with AnyReader([bag], default_typestore=typestore) as reader:
+        qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
+    with open(bag / "trial_0.mcap", "rb") as f:
+        channels = make_reader(f).get_summary().channels.values()
+        in_mcap = {c.topic: YAML(typ="safe").load(c.metadata["offered_qos_profiles"]) for c in channels}
+    assert set(qos) == set(in_mcap) == set(by_topic)
+    for topic, (profile,) in qos.items():
+        (listed,) = in_mcap[topic]
+        latched = topic.endswith("map")
+        assert profile.durability.name == ("TRANSIENT_LOCAL" if latched else "VOLATILE"), topic
+        assert profile.reliability.name == "RELIABLE" and profile.depth == (1 if latched else 10)
+        assert listed["durability"] == profile.durability.name.lower() and listed["depth"] == profile.depth
     # Poses: one per timestep, the start and the end included, equal to the trajectory.
     steps = result["trajectory"]
     positions = [result["starts"]] + [s["positions"] for s in steps]

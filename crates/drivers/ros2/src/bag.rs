@@ -7,9 +7,10 @@
 //! The bag is written into a hidden sibling directory and renamed into place by
 //! [`Bag::finish`]; a bag dropped unfinished (an error, a full disk) removes it, so nothing
 //! half-written is left behind as a bag (a process killed outright leaves the hidden folder).
-//! Topics are recorded with rosbag2's default QoS (`offered_qos_profiles: []`): `ros2 bag
-//! play` republishes them volatile, so a subscriber that asks for transient local (RViz's map
-//! display) needs `--qos-profile-overrides-path`. Times are the caller's (madenet records simulated
+//! Each topic carries the QoS it is offered with ([`crate::recorded_qos`]: maps reliable,
+//! transient local, keep last 1; the rest reliable, volatile, keep last 10) in `metadata.yaml`
+//! and in its MCAP channel, as rosbag2 writes them, so `ros2 bag play` republishes the maps
+//! latched (RViz's map display, transient local, gets them without QoS overrides). Times are the caller's (madenet records simulated
 //! time), so the same run gives the same bytes.
 //!
 //! ```
@@ -54,12 +55,34 @@ pub enum BagError {
     },
 }
 
-/// One topic of a bag: its MCAP channel, ROS type, type hash and message count.
+/// One topic of a bag: its MCAP channel, ROS type, type hash, offered QoS and message count.
 struct Topic {
     channel: u16,
     type_name: &'static str,
     type_hash: &'static str,
+    qos: crate::QosProfile,
     count: u64,
+}
+
+/// `qos` as rosbag2 (Jazzy, metadata version 9) writes an offered QoS profile list of one: a
+/// YAML sequence, each line indented by `indent` spaces; deadline, lifespan and liveliness
+/// lease unset (`RMW_DURATION_INFINITE`), liveliness automatic.
+fn qos_yaml(qos: &crate::QosProfile, indent: usize) -> String {
+    const INFINITE: &str = "\n    sec: 9223372036\n    nsec: 854775807";
+    let text = format!(
+        "- history: keep_last\n  depth: {}\n  reliability: {}\n  durability: {}\n  deadline:{INFINITE}\n  lifespan:{INFINITE}\n  liveliness: automatic\n  liveliness_lease_duration:{INFINITE}\n  avoid_ros_namespace_conventions: false",
+        qos.depth,
+        match qos.reliability {
+            crate::Reliability::Reliable => "reliable",
+            crate::Reliability::BestEffort => "best_effort",
+        },
+        match qos.durability {
+            crate::Durability::Volatile => "volatile",
+            crate::Durability::TransientLocal => "transient_local",
+        },
+    );
+    let pad = " ".repeat(indent);
+    text.lines().map(|l| format!("{pad}{l}\n")).collect()
 }
 
 /// A rosbag2 directory being written ([module docs](self)).
@@ -182,8 +205,14 @@ impl Bag {
                     .add_schema(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes())
                     .map_err(|e| self.mcap_error(e))?;
                 let writer = self.writer.as_mut().expect("open");
+                // rosbag2's MCAP channel metadata: the offered QoS and the type hash.
+                let qos = crate::recorded_qos(topic);
+                let meta = BTreeMap::from([
+                    ("offered_qos_profiles".to_string(), qos_yaml(&qos, 0)),
+                    ("topic_type_hash".to_string(), T::TYPE_HASH.to_string()),
+                ]);
                 let channel = writer
-                    .add_channel(schema, topic, "cdr", &BTreeMap::new())
+                    .add_channel(schema, topic, "cdr", &meta)
                     .map_err(|e| self.mcap_error(e))?;
                 self.topics.insert(
                     topic.to_string(),
@@ -191,6 +220,7 @@ impl Bag {
                         channel,
                         type_name: T::TYPE_NAME,
                         type_hash: T::TYPE_HASH,
+                        qos,
                         count: 0,
                     },
                 );
@@ -276,7 +306,8 @@ impl Bag {
             y.push_str(&format!("        name: {}\n", q(name)));
             y.push_str(&format!("        type: {}\n", q(t.type_name)));
             y.push_str("        serialization_format: cdr\n");
-            y.push_str("        offered_qos_profiles: []\n");
+            y.push_str("        offered_qos_profiles:\n");
+            y.push_str(&qos_yaml(&t.qos, 10));
             y.push_str(&format!(
                 "        type_description_hash: {}\n",
                 q(t.type_hash)

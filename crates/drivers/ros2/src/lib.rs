@@ -449,6 +449,17 @@ pub fn topics(i: usize) -> [String; 3] {
     ["map", "pose", "goal_pose"].map(|t| format!("/robot{i}/{t}"))
 }
 
+/// The QoS a recorded or streamed topic is offered with: the maps (topics ending in `map`:
+/// `/truth_map`, `/team_map`, `/robot<i>/map`) latched as [`map_qos`], everything else
+/// [`QosProfile::default`] (reliable, volatile, keep last 10).
+pub fn recorded_qos(topic: &str) -> QosProfile {
+    if topic.ends_with("map") {
+        map_qos()
+    } else {
+        QosProfile::default()
+    }
+}
+
 /// QoS of `/robot<i>/map`: reliable, transient local, keep last 1 — like map_server, so RViz
 /// and nav2 that start late still get the newest map.
 pub fn map_qos() -> QosProfile {

@@ -110,7 +110,7 @@ impl Live {
                 log_time: Some(t_ns),
             },
         );
-        if topic.ends_with("map") {
+        if crate::recorded_qos(topic).durability == crate::rmw::Durability::TransientLocal {
             self.latched.insert(topic.to_string(), cdr.to_vec());
         }
         self.now_ns = self.now_ns.max(t_ns);
