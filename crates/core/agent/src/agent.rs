@@ -350,6 +350,11 @@ impl Agent {
     pub fn policy_name(&self) -> &str {
         self.policy.name()
     }
+    /// The values its policy weighed at its last decision, per candidate slot
+    /// ([`Policy::last_scores`]; learned policies only).
+    pub fn policy_scores(&self) -> Option<&[f32]> {
+        self.policy.last_scores()
+    }
     /// When this robot's policy decides.
     pub fn policy_mode(&self) -> DecisionMode {
         self.policy.mode()

@@ -38,6 +38,12 @@ pub trait Policy: Send {
     /// The robot's decision from its own view z_i: at each macro termination, or every
     /// timestep under [`DecisionMode::EveryStep`].
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision;
+    /// The values the last decision weighed, one per goal-candidate slot (a learned policy's
+    /// scores or Q-values, higher preferred; −∞ for a slot it could not take), if this policy
+    /// has any and its last decision used them. Reading them changes nothing.
+    fn last_scores(&self) -> Option<&[f32]> {
+        None
+    }
 }
 
 /// A centralized policy choosing for the whole team from the joint observation (the CEP of

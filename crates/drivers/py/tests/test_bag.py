@@ -284,3 +284,31 @@ def test_a_study_records_its_chosen_trials_as_they_ran(cli, tmp_path):
                 assert seconds == int(row["tns"]), bag.name
             else:
                 assert abs(seconds - float(row["et_s"])) < 1e-6, bag.name
+
+
+def test_a_learned_policy_labels_its_candidates_with_its_scores(cli, tmp_path):
+    """`made-net-any` (conservative acting, spread margin 0.2 in its model.toml): each
+    candidate's label carries the score the policy gave it at that decision (`k: 0.42`), and
+    the chosen candidate scored at most the margin below the best — the acting rule, so the
+    scores are the ones the decision weighed."""
+    bag = tmp_path / "any"
+    subprocess.run([cli, "run", "--map", "paper:3", "--policy", "made-net-any", "--seed", "1",
+                    "--record", str(bag)], check=True, capture_output=True)
+    topics = decoded(bag)
+    decisions = 0
+    for i in range(3):
+        for _, msg in topics[f"/robot{i}/candidates"]:
+            points = [xy(p) for p in msg.markers[1].points]
+            labels = [m.text for m in msg.markers if m.type == 9]
+            if len(points) == 1:
+                assert labels == ["0"], "a decision without a choice weighs nothing"
+                continue
+            assert [t.split(": ")[0] for t in labels] == [str(k) for k in range(len(points))]
+            scores = [float(t.split(": ")[1]) for t in labels]
+            pick = [m for m in msg.markers if m.type == 2]
+            assert len(pick) == 1
+            chosen = points.index(xy(pick[0].pose.position))
+            # Labels round to 0.01: allow that beside the margin.
+            assert scores[chosen] >= max(scores) - 0.2 - 0.011, (labels, chosen)
+            decisions += 1
+    assert decisions >= 10

@@ -11,7 +11,7 @@
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
 //! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route changes (not when it only advances along the last one): from its cell to its goal |
-//! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot) and the chosen one (the robot's colour) |
+//! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot, with the learned policy's score: `2: 0.41`) and the chosen one (the robot's colour) |
 //! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
 //! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
 //! | `/metrics/distance` | `std_msgs/msg/Float64` | every timestep: metres driven by the team so far (TTD) |
@@ -153,6 +153,8 @@ struct RobotView<'a> {
     candidates: &'a [Pos],
     /// The slot of its goal among `candidates`.
     chosen: Option<usize>,
+    /// What its policy weighed per slot at the decision (learned policies).
+    scores: Option<&'a [f32]>,
     /// Changes when it decides.
     decision: u64,
 }
@@ -313,6 +315,7 @@ impl Recorder {
                 path: a.path(),
                 candidates: &a.candidates().cells,
                 chosen: a.action(),
+                scores: a.policy_scores(),
                 decision: a.stats().decisions as u64,
             })
             .collect();
@@ -346,6 +349,7 @@ impl Recorder {
                     chosen: s
                         .goal
                         .and_then(|g| s.candidates.iter().position(|&c| c == g)),
+                    scores: None,
                     decision: self.shown_decisions[i],
                 }
             })
@@ -432,7 +436,7 @@ impl Recorder {
                 self.plans[i] = Some(plan);
             }
             if r.decision != self.decisions[i] && !r.candidates.is_empty() {
-                let msg = self.candidate_markers(i, r.candidates, r.chosen, stamp);
+                let msg = self.candidate_markers(i, r, stamp);
                 self.out.put(&self.names[i].candidates, &msg, ns)?;
             }
             self.decisions[i] = r.decision;
@@ -475,15 +479,11 @@ impl Recorder {
         Ok(())
     }
 
-    /// Robot `i`'s goal candidates as markers: every one a grey sphere with its slot number,
-    /// the chosen one (slot `chosen`) larger and in the robot's colour.
-    fn candidate_markers(
-        &self,
-        i: usize,
-        cells: &[Pos],
-        chosen: Option<usize>,
-        stamp: Time,
-    ) -> MarkerArray {
+    /// Robot `i`'s goal candidates as markers: every one a grey sphere labelled with its slot
+    /// number (and, when a learned policy decided, its score: `k: 0.42`), the chosen one
+    /// larger and in the robot's colour.
+    fn candidate_markers(&self, i: usize, r: &RobotView<'_>, stamp: Time) -> MarkerArray {
+        let (cells, chosen) = (r.candidates, r.chosen);
         let ns = format!("robot{i}/candidates");
         let mut all = Self::marker(stamp, &ns, 0, Marker::SPHERE_LIST);
         all.scale = Vector3 {
@@ -511,7 +511,10 @@ impl Recorder {
                 b: 1.0,
                 a: 1.0,
             };
-            label.text = k.to_string();
+            label.text = match r.scores.and_then(|q| q.get(k)).filter(|v| v.is_finite()) {
+                Some(v) => format!("{k}: {v:.2}"),
+                None => k.to_string(),
+            };
             markers.push(label);
         }
         if let Some(&p) = chosen.and_then(|k| cells.get(k)) {

@@ -410,6 +410,8 @@ pub struct AgnosticPolicy {
     crop_radius: usize,
     sensing_range: i32,
     spread_margin: Option<f32>,
+    /// The scores of the last decision (empty: it had no choice to weigh).
+    last: Vec<f32>,
 }
 
 impl AgnosticPolicy {
@@ -426,6 +428,7 @@ impl AgnosticPolicy {
             crop_radius,
             sensing_range,
             spread_margin: None,
+            last: Vec::new(),
         }
     }
 
@@ -443,7 +446,11 @@ impl Policy for AgnosticPolicy {
     fn mode(&self) -> DecisionMode {
         DecisionMode::OnTermination
     }
+    fn last_scores(&self) -> Option<&[f32]> {
+        (!self.last.is_empty()).then_some(&self.last[..])
+    }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        self.last.clear();
         if view.candidates().cells.is_empty() {
             return Decision::Idle;
         }
@@ -452,6 +459,7 @@ impl Policy for AgnosticPolicy {
         }
         let input = inputs(view, self.sensing_range, self.crop_radius);
         let q = self.net.scores(&input);
+        self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
         // `spread`'s choice is candidate input 8, already computed for the features.
         let anchor =

@@ -17,6 +17,8 @@ pub struct DepPolicy {
     sensing_range: i32,
     recurrent: bool,
     spread_margin: Option<f32>,
+    /// The Q-values of the last decision (empty: none).
+    last: Vec<f32>,
 }
 
 impl DepPolicy {
@@ -26,6 +28,7 @@ impl DepPolicy {
             name: name.to_string(),
             net,
             state: None,
+            last: Vec::new(),
             device: crate::cpu(),
             observation: Observation::Paper,
             sensing_range: 4,
@@ -63,6 +66,9 @@ impl Policy for DepPolicy {
     fn mode(&self) -> DecisionMode {
         DecisionMode::OnTermination
     }
+    fn last_scores(&self) -> Option<&[f32]> {
+        (!self.last.is_empty()).then_some(&self.last[..])
+    }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let (h, w) = (view.belief.height(), view.belief.width());
         let m: Vec<f32> = view.map_image().into_iter().map(f32::from).collect();
@@ -80,8 +86,10 @@ impl Policy for DepPolicy {
         // The state advances at every decision, as in training; with no valid candidate the
         // mask offers slot 0 alone, which leaves the robot without a goal (it stays).
         if !view.candidates().valid_mask().contains(&true) {
+            self.last.clear();
             return Decision::Idle;
         }
+        self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
         let anchor = self
             .spread_margin
