@@ -45,7 +45,7 @@ pub struct ScaleArgs {
     threads: Option<usize>,
     /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
     /// study, re-run with their seeds: the same trials): `field=value` over method, map,
-    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either; e.g.
+    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either (quoted); e.g.
     /// `--record-trials method=spread seed=1`. A bag already there is kept (with --fresh:
     /// made anew).
     #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
