@@ -283,6 +283,27 @@ mod imp {
 
 pub use imp::{record_trials, ContinuousRecorder, Recorder};
 
+/// After a study: records the trials of `planned` that `--record-trials` conditions `items`
+/// choose into `out`/bags ([`record_trials`], on `pool`) and prints where.
+pub fn record_study_trials(
+    items: &[String],
+    planned: &[madenet_study::runner::Planned],
+    registry: &madenet_sim::PolicyRegistry,
+    out: &std::path::Path,
+    fresh: bool,
+    pool: &rayon::ThreadPool,
+) -> anyhow::Result<()> {
+    let chosen = chosen_trials(items, planned)?;
+    let bags = out.join("bags");
+    let n = pool.install(|| record_trials(&chosen, registry, &bags, fresh))?;
+    out!(
+        "{} trials recorded → {} ({n} written now)",
+        chosen.len(),
+        bags.display()
+    )?;
+    Ok(())
+}
+
 /// At most this many trials of a study are recorded (a filter choosing more is refused).
 const MAX_RECORDED_TRIALS: usize = 1000;
 

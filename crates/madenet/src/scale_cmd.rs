@@ -118,15 +118,7 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     bar.finish_and_clear();
     out!("{} trials → {}", result.trials, result.report.display())?;
     if let Some((items, planned)) = planned {
-        let chosen = crate::record::chosen_trials(items, &planned)?;
-        let bags = a.out.join("bags");
-        let n =
-            pool.install(|| crate::record::record_trials(&chosen, &registry, &bags, a.fresh))?;
-        out!(
-            "{} trials recorded → {} ({n} written now)",
-            chosen.len(),
-            bags.display()
-        )?;
+        crate::record::record_study_trials(items, &planned, &registry, &a.out, a.fresh, &pool)?;
     }
     Ok(())
 }
