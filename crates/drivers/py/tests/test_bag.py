@@ -160,9 +160,10 @@ def test_plans_candidates_comms_and_metrics(cli, tmp_path):
                     # re-plans from where it landed at its next timestep).
                     steps = [max(abs(a[0] - b[0]), abs(a[1] - b[1])) for a, b in zip(cells[1:], cells[2:])]
                     assert all(s == 1.0 for s in steps), "one cell per step"
-            plans = [[xy(p.pose.position) for p in m.poses] for _, m in topics[f"/robot{i}/plan"]]
-            assert all(b != a[len(a) - len(b):] for a, b in zip(plans, plans[1:])), \
-                "a plan is published when the route changes, not as the robot advances along it"
+            plans = [(t, [xy(p.pose.position) for p in m.poses]) for t, m in topics[f"/robot{i}/plan"]]
+            assert all(b != a[len(a) - len(b):] or t in goals for (_, a), (t, b) in zip(plans, plans[1:])), \
+                "a plan is published when the route or the goal changes, not as the robot advances along it"
+            assert set(goals) <= {t for t, _ in plans}, "a new goal comes with its plan, reachable or not"
         comms = [m for _, m in topics["/comms"]]
         lines = [[[xy(p) for p in k.points] for k in m.markers] for m in comms]
         assert all(a != b for a, b in zip(lines, lines[1:])), "/comms when the lines change"

@@ -89,3 +89,52 @@ def test_a_continuous_run_is_watched_live(cli):
         assert (truth.info.width, truth.info.height) == (12, 12)
     finally:
         proc.kill()
+
+
+async def watch_after(url, topic, after_ns):
+    """Subscribes to `topic` and returns the log time and raw CDR of its first message stamped
+    after `after_ns`."""
+    async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"]) as ws:
+        sub = None
+        while True:
+            frame = await asyncio.wait_for(ws.recv(), timeout=20)
+            if isinstance(frame, str):
+                msg = json.loads(frame)
+                if msg["op"] == "advertise" and sub is None:
+                    for ch in msg["channels"]:
+                        if ch["topic"] == topic:
+                            sub = 1
+                            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": sub, "channelId": ch["id"]}]}))
+                continue
+            if frame[0] == 1:
+                _, log_time = struct.unpack_from("<IQ", frame, 1)
+                if log_time > after_ns:
+                    return log_time, bytes(frame[13:])
+
+
+def test_a_late_viewer_gets_the_last_message_of_a_topic_sent_on_change(cli, tmp_path):
+    """/comms is sent when the radio's lines change; on paper:8 at CSP 0 (seed 1) they last
+    change at step 75 of 97 (the bag of the same trial says so). Live, its last message is sent
+    again after that — stamped later, the same bytes — so a viewer joining in the last 22 steps
+    still sees the radio's lines (before, only the maps were sent again)."""
+    args = ["run", "--map", "paper:8", "--policy", "spread", "--seed", "1", "--csp", "0"]
+    subprocess.run([cli, *args, "--record", str(tmp_path / "bag")], check=True, capture_output=True)
+    from rosbags.highlevel import AnyReader
+    with AnyReader([tmp_path / "bag"]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/comms"]
+        last_t, last = [(t, bytes(raw)) for _, t, raw in reader.messages(connections=conns)][-1]
+        clock = [c for c in reader.connections if c.topic == "/clock"]
+        end = max(t for _, t, _ in reader.messages(connections=clock))
+    assert end - last_t >= 15 * 10**9, "the lines must stay unchanged for a while"
+    proc = subprocess.Popen([cli, *args, "--foxglove", "127.0.0.1:0", "--pace-ms", "100"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = re.search(r"ws://\S+", proc.stderr.readline())
+        assert url
+        t, cdr = asyncio.run(watch_after(url.group(0), "/comms", last_t))
+        assert last_t < t <= end and cdr == last
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == 0, err
+    finally:
+        proc.kill()

@@ -4,9 +4,12 @@
 //! `cdr` messages with `ros2msg` schemas, stamped in simulated time. Open it in Foxglove with
 //! "Open connection" → Foxglove WebSocket → the URL printed at the start.
 //!
-//! The maps (topics ending in `map`: published once or on change) are latched, as
-//! transient-local QoS would keep them: the last of each is sent again every second of wall
-//! time, so a viewer that joins late sees the true map and every robot's map within a second.
+//! Topics published once or on change (the maps, goals, plans, candidates, `/comms`) are
+//! latched: every second of wall time, the last message of each topic not sent in the latest
+//! timestep is sent again (stamped with the latest time), so a viewer that joins late sees the
+//! true map, every robot's map, goal and plan and the radio's lines within a second — as
+//! transient-local QoS keeps the maps for a late ROS subscriber. Topics sent every timestep
+//! (poses, `/tf`, `/clock`, metrics) arrive with the next one.
 
 use crate::msgs::RosMessage;
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
@@ -29,8 +32,9 @@ pub struct Live {
     server: Option<foxglove::WebSocketServerHandle>,
     channels: BTreeMap<String, Arc<RawChannel>>,
     url: String,
-    /// The last message of each latched topic (its CDR), sent again by [`Live::resend`].
-    latched: BTreeMap<String, Vec<u8>>,
+    /// The last message of each topic (its CDR) and its stamp; [`Live::resend`] sends again
+    /// those older than the latest stamp.
+    latched: BTreeMap<String, (Vec<u8>, u64)>,
     /// The latest stamp sent, and when the latched topics were last sent again.
     now_ns: u64,
     resent: std::time::Instant,
@@ -88,8 +92,8 @@ impl Live {
     }
 
     /// Sends `cdr` (a message of type `T`, CDR-encoded) on `topic`, stamped `t_ns`; the
-    /// topic's channel is advertised on its first message. Maps are latched ([module
-    /// docs](self)).
+    /// topic's channel is advertised on its first message. Topics sent on change are
+    /// latched ([module docs](self)).
     pub fn write_cdr<T: RosMessage>(&mut self, topic: &str, cdr: &[u8], t_ns: u64) {
         if !self.channels.contains_key(topic) {
             let schema = Schema::new(T::TYPE_NAME, "ros2msg", T::DEFINITION.as_bytes());
@@ -110,8 +114,15 @@ impl Live {
                 log_time: Some(t_ns),
             },
         );
-        if crate::recorded_qos(topic).durability == crate::rmw::Durability::TransientLocal {
-            self.latched.insert(topic.to_string(), cdr.to_vec());
+        match self.latched.get_mut(topic) {
+            Some((last, at)) => {
+                last.clear();
+                last.extend_from_slice(cdr);
+                *at = t_ns;
+            }
+            None => {
+                self.latched.insert(topic.to_string(), (cdr.to_vec(), t_ns));
+            }
         }
         self.now_ns = self.now_ns.max(t_ns);
         if self.resent.elapsed() >= RESEND {
@@ -119,10 +130,11 @@ impl Live {
         }
     }
 
-    /// Sends the latched maps again, stamped with the latest time sent.
+    /// Sends the last message of every topic not sent at the latest time again, stamped with
+    /// that time.
     pub fn resend(&mut self) {
         self.resent = std::time::Instant::now();
-        for (topic, cdr) in &self.latched {
+        for (topic, (cdr, _)) in self.latched.iter().filter(|(_, (_, at))| *at < self.now_ns) {
             self.channels[topic].log_with_meta(
                 cdr,
                 PartialMetadata {

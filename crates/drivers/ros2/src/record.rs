@@ -10,7 +10,7 @@
 //! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: robot i's belief with the timestep's own observation |
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
-//! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route changes (not when it only advances along the last one): from its cell to its goal |
+//! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route or goal changes (not when it only advances along the last route): from its cell to its goal |
 //! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot, with the learned policy's score: `2: 0.41`) and the chosen one (the robot's colour) |
 //! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
 //! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
@@ -404,14 +404,16 @@ impl Recorder {
             }
             let pose = pose_stamped(&self.frame, positions[i], stamp);
             self.out.put(&self.names[i].pose, &pose, ns)?;
-            if let Some(g) = r.goal.filter(|&g| Some(g) != self.goals[i]) {
+            let goal_changed = r.goal != self.goals[i];
+            if let Some(g) = r.goal.filter(|_| goal_changed) {
                 let msg = pose_stamped(&self.frame, g, stamp);
                 self.out.put(&self.names[i].goal, &msg, ns)?;
             }
             self.goals[i] = r.goal;
             // The plan from where the robot stands (the agent plans before it moves, so its
             // path may still begin with the cell it just left); published when the route
-            // changes, not when the robot only advances along the last one published.
+            // changes or the goal does (a new goal with no route yet is the plan `[here]`),
+            // not when the robot only advances along the last one published.
             let from = r
                 .path
                 .iter()
@@ -420,9 +422,10 @@ impl Recorder {
             let plan: Vec<Pos> = std::iter::once(positions[i])
                 .chain(r.path[from..].iter().copied())
                 .collect();
-            let advanced = self.plans[i]
-                .as_ref()
-                .is_some_and(|last| last.ends_with(&plan));
+            let advanced = !goal_changed
+                && self.plans[i]
+                    .as_ref()
+                    .is_some_and(|last| last.ends_with(&plan));
             if !advanced {
                 let poses = plan
                     .iter()

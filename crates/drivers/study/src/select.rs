@@ -110,7 +110,7 @@ impl TrialFilter {
 }
 
 /// A folder name for trial `key`'s recording: `method_map_start_csp<C>_seed<S>`, every
-/// character other than ASCII letters, digits, `.` and `-` written as `-`.
+/// character other than ASCII letters, digits, `.`, `-` and `_` written as `-`.
 pub fn folder_name(key: &TrialKey) -> String {
     format!(
         "{}_{}_{}_csp{}_seed{}",

@@ -108,11 +108,22 @@ pub struct Model {
     pub deps: Vec<Arc<QNet>>,
     /// The agnostic DEP, shared by every robot.
     pub agnostic: Option<Arc<AgnosticNet>>,
-    /// The agnostic DEP's weights as its robots decide with them ([`Model::with_agnostic`]).
-    pub scorer: Option<Arc<AgnosticScorer>>,
+    /// The agnostic DEP's weights as its robots decide with them, made from `agnostic` by
+    /// [`Model::with_agnostic`] (private, so no model has one without the other).
+    scorer: Option<Arc<AgnosticScorer>>,
 }
 
 impl Model {
+    /// A grid model: one DEP per robot group (one when shared).
+    pub fn with_grid(info: ModelInfo, deps: Vec<Arc<QNet>>) -> Self {
+        Model {
+            info,
+            deps,
+            agnostic: None,
+            scorer: None,
+        }
+    }
+
     /// An agnostic model: `net` and its scorer.
     pub fn with_agnostic(info: ModelInfo, net: AgnosticNet) -> Self {
         let scorer = Arc::new(AgnosticScorer::new(&net));
@@ -243,12 +254,7 @@ impl Model {
                         net, &name, label, &sizes,
                     )?));
                 }
-                Ok(Model {
-                    info,
-                    deps,
-                    agnostic: None,
-                    scorer: None,
-                })
+                Ok(Model::with_grid(info, deps))
             }
             (None, Some(a)) => {
                 a.validate()

@@ -1026,12 +1026,7 @@ impl Student {
     /// The student on the plain CPU device as a model acting with `info`'s margin.
     fn model(&self, info: ModelInfo) -> Model {
         match self {
-            Student::Grid(net) => Model {
-                info,
-                deps: vec![Arc::new(net.valid())],
-                agnostic: None,
-                scorer: None,
-            },
+            Student::Grid(net) => Model::with_grid(info, vec![Arc::new(net.valid())]),
             Student::Agnostic(net) => Model::with_agnostic(info, net.valid()),
         }
     }

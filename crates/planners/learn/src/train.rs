@@ -780,16 +780,13 @@ fn train_loop(
             }
         }
         if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
-            let model = Model {
-                info: model_info(cfg, &state, None),
-                deps: nets
-                    .deps
+            let model = Model::with_grid(
+                model_info(cfg, &state, None),
+                nets.deps
                     .iter()
                     .map(|(o, _, _)| Arc::new(target_of(o)))
                     .collect(),
-                agnostic: None,
-                scorer: None,
-            };
+            );
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
             if validation_maps.is_none() {
