@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use madenet_sim::rollout::OracleKind;
-use madenet_study::{run_study, StudyConfig, StudyError};
+use madenet_study::{run_study_held, StudyConfig, StudyError};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -35,8 +35,9 @@ pub struct CompareArgs {
     /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
     /// study, re-run with their seeds: the same trials): `field=value` over method, map,
     /// start, csp, seed as trials.csv writes them, all met; `a|b` for either (quoted); e.g.
-    /// `--record-trials method=spread seed=1`. A bag already there is kept (with --fresh:
-    /// made anew).
+    /// `--record-trials method=spread seed=1`. A bag already there is kept, as the study
+    /// keeps its rows (with --fresh: OUT/bags is made anew, replacing the old once every
+    /// chosen trial is recorded).
     #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
     record_trials: Option<Vec<String>>,
 }
@@ -117,9 +118,10 @@ pub fn run(a: CompareArgs) -> Result<()> {
         None => None,
     };
     let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
-    let (report, outcomes) = pool
+    // The folder stays this run's until the chosen trials are recorded too.
+    let (report, outcomes, _lock) = pool
         .install(|| {
-            run_study(&cfg, &a.out, a.fresh, &|done, total| {
+            run_study_held(&cfg, &a.out, a.fresh, &|done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
             })

@@ -115,13 +115,12 @@ mod imp {
 
     /// Records each of `chosen` (trials of a study, re-run: the same seed gives the same
     /// trial) as a bag in `dir`/[`folder_name`](madenet_study::select::folder_name), in
-    /// parallel on the current pool; a bag already there is kept unless `fresh`. Returns how
-    /// many were written.
+    /// parallel on the current pool; a bag already there is kept. Returns how many were
+    /// written.
     pub fn record_trials(
         chosen: &[&madenet_study::runner::Planned],
         registry: &madenet_sim::PolicyRegistry,
         dir: &Path,
-        fresh: bool,
     ) -> Result<usize> {
         use rayon::prelude::*;
         std::fs::create_dir_all(dir)
@@ -131,11 +130,7 @@ mod imp {
             .map(|p| -> Result<bool> {
                 let at = dir.join(madenet_study::select::folder_name(&p.key));
                 if at.join("metadata.yaml").is_file() {
-                    if !fresh {
-                        return Ok(false);
-                    }
-                    std::fs::remove_dir_all(&at)
-                        .with_context(|| format!("--record-trials: {}", at.display()))?;
+                    return Ok(false);
                 }
                 let failed = |e: madenet_sim::SimError| anyhow::anyhow!("{}: {e}", p.key);
                 let bag = Some(Bag::create(&at).context("--record-trials")?);
@@ -256,7 +251,6 @@ mod imp {
         _: &[&madenet_study::runner::Planned],
         _: &madenet_sim::PolicyRegistry,
         _: &Path,
-        _: bool,
     ) -> Result<usize> {
         anyhow::bail!("--record-trials: this madenet was built without the `ros2` feature")
     }
@@ -283,8 +277,11 @@ mod imp {
 
 pub use imp::{record_trials, ContinuousRecorder, Recorder};
 
-/// After a study: records the trials of `planned` that `--record-trials` conditions `items`
-/// choose into `out`/bags ([`record_trials`], on `pool`) and prints where.
+/// After a study, while its folder `out` is still locked: records the trials of `planned`
+/// that `--record-trials` conditions `items` choose into `out`/bags ([`record_trials`], on
+/// `pool`) and prints where. Bags there are kept, as the study keeps its rows; with `fresh`
+/// (the study started afresh) the bags are recorded into a hidden folder that replaces
+/// `out`/bags only once all are written, so a failed re-recording leaves the old bags.
 pub fn record_study_trials(
     items: &[String],
     planned: &[madenet_study::runner::Planned],
@@ -293,9 +290,31 @@ pub fn record_study_trials(
     fresh: bool,
     pool: &rayon::ThreadPool,
 ) -> anyhow::Result<()> {
+    use anyhow::Context;
     let chosen = chosen_trials(items, planned)?;
     let bags = out.join("bags");
-    let n = pool.install(|| record_trials(&chosen, registry, &bags, fresh))?;
+    // An interrupted fresh recording's folders (the caller holds `out`'s lock).
+    let (new, old) = (out.join(".madenet-bags-new"), out.join(".madenet-bags-old"));
+    let clear = |d: &std::path::Path| -> anyhow::Result<()> {
+        if d.exists() {
+            std::fs::remove_dir_all(d)
+                .with_context(|| format!("--record-trials: {}", d.display()))?;
+        }
+        Ok(())
+    };
+    clear(&new)?;
+    clear(&old)?;
+    let n = pool.install(|| record_trials(&chosen, registry, if fresh { &new } else { &bags }))?;
+    if fresh {
+        let swap = || -> std::io::Result<()> {
+            if bags.exists() {
+                std::fs::rename(&bags, &old)?;
+            }
+            std::fs::rename(&new, &bags)
+        };
+        swap().with_context(|| format!("--record-trials: {}", bags.display()))?;
+        clear(&old)?;
+    }
     out!(
         "{} trials recorded → {} ({n} written now)",
         chosen.len(),

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use madenet_study::{run_scale, ScaleConfig, ScaleWorld, StudyError};
+use madenet_study::{run_scale_held, ScaleConfig, ScaleWorld, StudyError};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -46,8 +46,9 @@ pub struct ScaleArgs {
     /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
     /// study, re-run with their seeds: the same trials): `field=value` over method, map,
     /// start, csp, seed as trials.csv writes them, all met; `a|b` for either (quoted); e.g.
-    /// `--record-trials method=spread seed=1`. A bag already there is kept (with --fresh:
-    /// made anew).
+    /// `--record-trials method=spread seed=1`. A bag already there is kept, as the study
+    /// keeps its rows (with --fresh: OUT/bags is made anew, replacing the old once every
+    /// chosen trial is recorded).
     #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
     record_trials: Option<Vec<String>>,
 }
@@ -107,9 +108,10 @@ pub fn run(a: ScaleArgs) -> Result<()> {
         None => None,
     };
     let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
-    let result = pool
+    // The folder stays this run's until the chosen trials are recorded too.
+    let (result, _lock) = pool
         .install(|| {
-            run_scale(&cfg, &registry, &a.out, a.fresh, &|done, total| {
+            run_scale_held(&cfg, &registry, &a.out, a.fresh, &|done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
             })

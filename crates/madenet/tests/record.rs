@@ -252,7 +252,8 @@ fn a_write_that_fails_part_way_leaves_nothing_behind() {
 }
 
 /// `compare --record-trials`: exactly the chosen trials as bags in OUT/bags/, each the bag
-/// `run --record` writes for the same trial (byte for byte); a second run keeps them; bad
+/// `run --record` writes for the same trial (byte for byte); a second run keeps them, one with
+/// `--fresh` replaces them with its own choice; bad
 /// conditions, a choice of nothing or of an oracle are refused before the study runs (no
 /// output folder).
 #[test]
@@ -357,4 +358,18 @@ fn a_study_records_the_trials_it_is_told_to() {
     assert!(again.status.success());
     assert!(String::from_utf8_lossy(&again.stdout).contains("(0 written now)"));
     assert_eq!(bag(&bags.join(names[0])), before);
+    // Afresh: the bags of the new choice replace the folder once they are all written.
+    let mut one = chosen.to_vec();
+    one[1] = "map=test_3";
+    one.push("--fresh");
+    let fresh = compare(&one);
+    assert!(fresh.status.success());
+    assert!(String::from_utf8_lossy(&fresh.stdout).contains("1 trials recorded"));
+    assert_eq!(entries(&bags), &names[..1]);
+    assert_eq!(bag(&bags.join(names[0])), before);
+    assert!(
+        entries(&out).iter().all(|e| !e.contains("bags-")),
+        "{:?}",
+        entries(&out)
+    );
 }

@@ -25,7 +25,7 @@ pub mod select;
 
 pub use config::{StudyConfig, StudyError};
 pub use runner::{TrialKey, TrialOutcome};
-pub use scale::{run_scale, ScaleConfig, ScaleWorld};
+pub use scale::{run_scale, run_scale_held, ScaleConfig, ScaleWorld};
 
 use std::path::{Path, PathBuf};
 
@@ -38,13 +38,24 @@ pub fn run_study(
     fresh: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<(PathBuf, Vec<TrialOutcome>), StudyError> {
+    run_study_held(cfg, out, fresh, progress).map(|(report, outcomes, _)| (report, outcomes))
+}
+
+/// [`run_study`], returning the lock on `out` too: the folder stays this run's for whatever
+/// the caller writes there after the study (`madenet compare --record-trials`: its bags).
+pub fn run_study_held(
+    cfg: &StudyConfig,
+    out: &Path,
+    fresh: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(PathBuf, Vec<TrialOutcome>, madenet_files::FolderLock), StudyError> {
     let (registry, maps, planned) = study_plan(cfg)?;
     let io = |e: std::io::Error| StudyError::File {
         path: out.display().to_string(),
         message: e.to_string(),
     };
     std::fs::create_dir_all(out).map_err(io)?;
-    let _lock = prepare_out(out, "study.toml", cfg, "", fresh)?;
+    let lock = prepare_out(out, "study.toml", cfg, "", fresh)?;
     let started = std::time::Instant::now();
     let outcomes = runner::run_planned(&planned, &registry, out, progress)?;
     let wall = started.elapsed().as_secs_f64();
@@ -55,7 +66,7 @@ pub fn run_study(
         .collect();
     let bounds = lower_bounds(planned.iter())?;
     let report = report::write_all(cfg, &outcomes, &paper_maps, &bounds, out, wall)?;
-    Ok((report, outcomes))
+    Ok((report, outcomes, lock))
 }
 
 /// The study's policies, its maps and every trial it runs, in output order

@@ -52,6 +52,18 @@ pub fn run_scale(
     fresh: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ScaleResult, StudyError> {
+    run_scale_held(cfg, registry, out, fresh, progress).map(|(result, _)| result)
+}
+
+/// [`run_scale`], returning the lock on `out` too: the folder stays this run's for whatever
+/// the caller writes there after the study (`madenet scale --record-trials`: its bags).
+pub fn run_scale_held(
+    cfg: &ScaleConfig,
+    registry: &madenet_sim::PolicyRegistry,
+    out: &Path,
+    fresh: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(ScaleResult, madenet_files::FolderLock), StudyError> {
     cfg.validate(registry)?;
     let planned = cfg.plan()?;
     let io = |e: std::io::Error| StudyError::File {
@@ -59,7 +71,7 @@ pub fn run_scale(
         message: e.to_string(),
     };
     std::fs::create_dir_all(out).map_err(io)?;
-    let _lock = crate::prepare_out(out, "scale.toml", cfg, "", fresh)?;
+    let lock = crate::prepare_out(out, "scale.toml", cfg, "", fresh)?;
     let started = std::time::Instant::now();
     // A continuous study runs its grid twin first (`grid/`; fast), in one progress count.
     let twin = match cfg.world {
@@ -120,9 +132,12 @@ pub fn run_scale(
         ));
     }
     write_atomic(&report, text.as_bytes())?;
-    Ok(ScaleResult {
-        report,
-        cells,
-        trials: outcomes.len(),
-    })
+    Ok((
+        ScaleResult {
+            report,
+            cells,
+            trials: outcomes.len(),
+        },
+        lock,
+    ))
 }
