@@ -11,6 +11,7 @@ macro_rules! out {
 
 mod batch;
 mod compare;
+mod interrupt;
 mod map_cmd;
 mod nodes;
 mod oracle;
@@ -117,6 +118,10 @@ fn main() -> ExitCode {
                 .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe) =>
         {
             ExitCode::SUCCESS
+        }
+        Err(e) if e.downcast_ref::<interrupt::Interrupted>().is_some() => {
+            eprintln!("{e}");
+            ExitCode::from(130)
         }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));

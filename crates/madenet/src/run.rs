@@ -232,14 +232,19 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
+    let pace = a.pace(1.0);
+    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
+    let stop = crate::interrupt::Stop::watch(
+        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
+    )?;
     // The bag first: a refused --record leaves no picture behind either.
     let mut recorder =
         crate::record::Recorder::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
-    let pace = a.pace(1.0);
     let mut pictures = None;
     if a.pictures.any() {
         pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
     }
+    let mut interrupted = None;
     while trial.step() {
         if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
             p.push(&madenet_render::trial_frame(&trial))?;
@@ -250,6 +255,10 @@ pub fn run(a: RunArgs) -> Result<()> {
         if let Some(wait) = pace {
             std::thread::sleep(wait);
         }
+        if stop.requested() {
+            interrupted = Some(format!("timestep {}", trial.world().t()));
+            break;
+        }
     }
     let mut wrote = match pictures {
         Some(p) => p.finish(&madenet_render::trial_frame(&trial))?,
@@ -257,6 +266,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     };
     if let Some(r) = recorder {
         wrote.extend(r.finish()?);
+    }
+    if let Some(at) = interrupted {
+        for line in wrote {
+            out!("{line}")?;
+        }
+        return Err(crate::interrupt::Interrupted { at }.into());
     }
     let result = trial.finish();
     if a.json {
@@ -319,14 +334,18 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         (a.pictures.cell_px * 25).clamp(100, 600),
     );
     let mut trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
+    // Pacing per control period: --pace-ms as given, --realtime from the period's length.
+    let pace = a.pace(trial.world().config().control_period);
+    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
+    let stop = crate::interrupt::Stop::watch(
+        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
+    )?;
     // The bag first: a refused --record leaves no picture behind either.
     let mut recorder = crate::record::ContinuousRecorder::start(
         a.record.as_deref(),
         a.foxglove.as_deref(),
         &trial,
     )?;
-    // Pacing per control period: --pace-ms as given, --realtime from the period's length.
-    let pace = a.pace(trial.world().config().control_period);
     let mut gif = match &a.pictures.render {
         Some(p) => {
             let mut g =
@@ -339,6 +358,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         None => None,
     };
     let mut next_frame = a.frame_s;
+    let mut interrupted = None;
     while trial.step() {
         if let Some(g) = gif.as_mut() {
             if trial.world().time() + 1e-9 >= next_frame {
@@ -354,6 +374,10 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         if let Some(wait) = pace {
             std::thread::sleep(wait);
         }
+        if stop.requested() {
+            interrupted = Some(format!("{:.1} s", trial.world().time()));
+            break;
+        }
     }
     let mut wrote = Vec::new();
     if let (Some(g), Some(p)) = (gif, &a.pictures.render) {
@@ -365,6 +389,12 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     }
     if let Some(r) = recorder {
         wrote.extend(r.finish(&trial)?);
+    }
+    if let Some(at) = interrupted {
+        for line in wrote {
+            out!("{line}")?;
+        }
+        return Err(crate::interrupt::Interrupted { at }.into());
     }
     let r = trial.finish();
     if a.json {

@@ -373,3 +373,66 @@ fn a_study_records_the_trials_it_is_told_to() {
         entries(&out)
     );
 }
+
+/// Ctrl-C during a paced, recorded and streamed run: the run stops after its timestep, the bag
+/// is finished (a bag, not a hidden partial folder), and madenet exits with 130 — in both
+/// worlds.
+#[test]
+fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
+    use std::io::BufRead;
+    let dir = Scratch::new("record-ctrl-c");
+    for (k, world) in [
+        &["--map", "paper:8"][..],
+        &["--world", "continuous", "--generate", "2", "--side", "12"][..],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let bag = dir.join(format!("bag{k}"));
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .arg("run")
+            .args(world)
+            .args([
+                "--policy",
+                "spread",
+                "--pace-ms",
+                "50",
+                "--foxglove",
+                "127.0.0.1:0",
+            ])
+            .arg("--record")
+            .arg(&bag)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // The live view's address is printed once the signal is watched.
+        let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        stderr.read_line(&mut line).unwrap();
+        assert!(line.contains("ws://"), "world {k}: {line}");
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        let kill = std::process::Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let out = child.wait_with_output().unwrap();
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+        assert_eq!(out.status.code(), Some(130), "world {k}: {rest}");
+        assert!(rest.contains("interrupted at"), "world {k}: {rest}");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains("wrote") && stdout.contains("ROS 2 bag"),
+            "{stdout}"
+        );
+        let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+        assert!(metadata.contains("message_count"), "{metadata}");
+        assert!(
+            entries(dir.path()).iter().all(|e| !e.starts_with('.')),
+            "{:?}",
+            entries(dir.path())
+        );
+    }
+}
