@@ -2,13 +2,14 @@
 //! [`madenet_env`] (environments, one or N at a time), the shipped policies
 //! ([`madenet_catalogue::shipped`]) and the study runner; the Python package
 //! (`python/madenet`) builds the PettingZoo and Gymnasium environments, `run_trial`, `compare`
-//! and `madenet.ray` on it. Every error becomes a `ValueError` naming the field; long calls
+//! and `madenet.ray` (studies, and the rollout learner's episodes) on it. Every error becomes a `ValueError` naming the field; long calls
 //! release the GIL.
 
 #![deny(missing_docs)]
 
 mod continuous;
 mod study;
+mod train;
 mod vector;
 
 use madenet_agent::Decision;
@@ -424,6 +425,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<study::CoreScale>()?;
     m.add_function(wrap_pyfunction!(policies, m)?)?;
     m.add_function(wrap_pyfunction!(run_trial, m)?)?;
+    m.add_function(wrap_pyfunction!(train::train_rollout, m)?)?;
+    m.add_function(wrap_pyfunction!(train::collect_rollout, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

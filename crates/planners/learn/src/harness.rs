@@ -340,6 +340,19 @@ pub fn train<L: Learner>(
     cfg: Option<L::Config>,
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
+    train_with::<L>(run_dir, cfg, |dir, cfg, resuming| {
+        L::train_loop(dir, cfg, resuming, progress)
+    })
+}
+
+/// [`train`] with the learner's loop given by the caller (`body(run_dir, config, resuming)`,
+/// run on the config's thread pool): a learner's loop with arguments beyond the config, e.g.
+/// the rollout learner's episode collector ([`crate::rollout_train::train_with`]).
+pub fn train_with<L: Learner>(
+    run_dir: &Path,
+    cfg: Option<L::Config>,
+    body: impl FnOnce(&Path, &L::Config, bool) -> Result<(), TrainError> + Send,
+) -> Result<(), TrainError> {
     let (cfg, resuming) = prepare_run(
         run_dir,
         cfg,
@@ -353,7 +366,7 @@ pub fn train<L: Learner>(
         .num_threads(L::run_fields(&cfg).threads)
         .build()
         .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
-    pool.install(|| L::train_loop(run_dir, &cfg, resuming, progress))
+    pool.install(|| body(run_dir, &cfg, resuming))
 }
 
 /// Replaces directory `dir` with one written by `fill` (into `dir.tmp`), never leaving a

@@ -43,6 +43,12 @@
 //! Checkpoints are written after every iteration (dataset, net, optimizer, counters, the
 //! teacher's base student), so a killed run resumes at its last iteration boundary and ends as
 //! an uninterrupted one would.
+//!
+//! Steps 1–3 of an iteration are one [`CollectRequest`] — plain data: episode indices, the
+//! curriculum's side, the behaviour's and the teacher's base students as model files' bytes
+//! (the behaviour's written to `RUN/.behaviour/`) — collected here or by a [`Collector`]
+//! elsewhere ([`train_with`]; the Python package's `madenet.ray.train` hands batches to Ray
+//! tasks that run [`collect_bytes`]), with the same episodes either way.
 
 use crate::agnostic::{AgnosticInput, AgnosticNet, Batch, CONTEXT_FEATURES};
 use crate::episode::{self, Recorder};
@@ -947,6 +953,172 @@ fn collect_episode(
     })
 }
 
+/// A model as plain data: its `model.toml` text and its one weight file's bytes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModelBytes {
+    /// The `model.toml` text.
+    pub model_toml: String,
+    /// The weight file (`dep0.bpk`).
+    pub weights: Vec<u8>,
+}
+
+impl ModelBytes {
+    /// Reads the model folder `dir` (written by [`write_model`]: `model.toml`, `dep0.bpk`).
+    fn read(dir: &Path) -> Result<Self, TrainError> {
+        let read = |f: &str| {
+            let p = dir.join(f);
+            std::fs::read(&p).map_err(|e| TrainError::Io {
+                path: p.display().to_string(),
+                message: e.to_string(),
+            })
+        };
+        let model_toml = String::from_utf8(read("model.toml")?)
+            .map_err(|e| TrainError::Other(format!("{}: {e}", dir.display())))?;
+        Ok(ModelBytes {
+            model_toml,
+            weights: read("dep0.bpk")?,
+        })
+    }
+
+    fn model(&self, label: &str) -> Result<Model, TrainError> {
+        Model::from_bytes(&self.model_toml, &[&self.weights], label)
+    }
+}
+
+/// Episodes of one iteration to collect, as plain data (postcard): given the run's config, a
+/// worker anywhere collects from it exactly the episodes a local run does ([`collect`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CollectRequest {
+    /// The episodes' indices (each episode's scenario and seeds follow from its index).
+    pub episodes: Vec<u64>,
+    /// The curriculum's largest map side this iteration.
+    pub side_max: usize,
+    /// The behaviour's student (greedy, ε-random); none while the behaviour is the base rule.
+    pub student: Option<ModelBytes>,
+    /// The teacher's base student (expert iteration); none while it is the base rule.
+    pub base: Option<ModelBytes>,
+}
+
+/// Collects the episodes of `req`, in its order, in parallel on the current thread pool; `None`
+/// when `stop` said so before an episode started.
+pub fn collect(
+    cfg: &RolloutTrainConfig,
+    req: &CollectRequest,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<Option<Vec<Collected>>, TrainError> {
+    let student = match &req.student {
+        Some(m) => Some(m.model("the behaviour's student")?),
+        None => None,
+    };
+    let behaviour = behaviour_registry(cfg, student);
+    let teacher = match &req.base {
+        Some(m) => TeacherBase::student(&m.model("the teacher's base")?),
+        None => TeacherBase::rule(cfg),
+    };
+    let collected: Vec<Option<Collected>> = req
+        .episodes
+        .par_iter()
+        .map(|&e| match stop() {
+            true => Ok(None),
+            false => collect_episode(cfg, e, req.side_max, &behaviour, &teacher).map(Some),
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(collected.into_iter().collect())
+}
+
+/// [`collect`] for a worker in another process (the Python package's Ray tasks): the run's
+/// config as TOML text and a postcard [`CollectRequest`] in, the postcard `Vec<Collected>` out,
+/// on `threads` threads.
+pub fn collect_bytes(
+    config_toml: &str,
+    request: &[u8],
+    threads: usize,
+) -> Result<Vec<u8>, TrainError> {
+    let cfg = RolloutTrainConfig::from_toml_text(Path::new("the run's config"), config_toml)?;
+    cfg.validate()
+        .map_err(|m| TrainError::Other(format!("the run's config: {m}")))?;
+    let req: CollectRequest = postcard::from_bytes(request)
+        .map_err(|e| TrainError::Other(format!("a collect request: {e}")))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .map_err(|e| TrainError::Other(format!("thread pool: {e}")))?;
+    let collected = pool
+        .install(|| collect(&cfg, &req, &|| false))?
+        .expect("never stopped");
+    postcard::to_allocvec(&collected).map_err(|e| TrainError::Other(e.to_string()))
+}
+
+/// A function collecting batches: the run's config as TOML and each batch's postcard
+/// [`CollectRequest`] in, each batch's [`collect_bytes`] output out, in order.
+pub type BatchCollector<'a> =
+    dyn FnMut(&str, Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, TrainError> + Send + 'a;
+
+/// Where an iteration's episodes are collected.
+pub enum Collector<'a> {
+    /// Here, on the run's thread pool ([`collect`]); an episode not started within the time
+    /// budget cuts the iteration.
+    Local,
+    /// By the caller: the iteration's request split into batches of `batch` episodes, each a
+    /// postcard [`CollectRequest`], handed to `run` with the run's config as TOML; `run`
+    /// returns each batch's [`collect_bytes`] output, in order (e.g. Ray tasks: `madenet.ray.train`).
+    Batches {
+        /// Episodes per batch (≥ 1).
+        batch: usize,
+        /// Collects the batches.
+        run: &'a mut BatchCollector<'a>,
+    },
+}
+
+impl Collector<'_> {
+    /// The episodes of `req` ([`None`]: the time budget ran out first).
+    fn collect(
+        &mut self,
+        cfg: &RolloutTrainConfig,
+        req: &CollectRequest,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<Vec<Collected>>, TrainError> {
+        let (batch, run) = match self {
+            Collector::Local => return collect(cfg, req, stop),
+            Collector::Batches { batch, run } => (*batch, run),
+        };
+        let text = toml::to_string(cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        let batches = req
+            .episodes
+            .chunks(batch.max(1))
+            .map(|episodes| {
+                postcard::to_allocvec(&CollectRequest {
+                    episodes: episodes.to_vec(),
+                    ..req.clone()
+                })
+                .map_err(|e| TrainError::Other(e.to_string()))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let n = batches.len();
+        let results = run(&text, batches)?;
+        if results.len() != n {
+            return Err(TrainError::Other(format!(
+                "the collector returned {} batches for {n}",
+                results.len()
+            )));
+        }
+        let mut all = Vec::with_capacity(req.episodes.len());
+        for r in results {
+            let part: Vec<Collected> = postcard::from_bytes(&r)
+                .map_err(|e| TrainError::Other(format!("a collected batch: {e}")))?;
+            all.extend(part);
+        }
+        if all.len() != req.episodes.len() {
+            return Err(TrainError::Other(format!(
+                "the collector returned {} episodes for {}",
+                all.len(),
+                req.episodes.len()
+            )));
+        }
+        Ok(Some(all))
+    }
+}
+
 /// A registry whose policy "behaviour" is the base rule (no student yet) or the student DEP
 /// (greedy), each with ε-random candidates from a stream of the episode's seed and robot.
 fn behaviour_registry(cfg: &RolloutTrainConfig, student: Option<Model>) -> PolicyRegistry {
@@ -1363,7 +1535,7 @@ impl Learner for RolloutLearner {
         resuming: bool,
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError> {
-        train_loop(run_dir, cfg, resuming, progress)
+        train_loop(run_dir, cfg, resuming, progress, &mut Collector::Local)
     }
 }
 
@@ -1376,11 +1548,25 @@ pub fn train(
     harness::train::<RolloutLearner>(run_dir, cfg, progress)
 }
 
+/// [`train`] with the episodes collected by `collector`: the same run, episode for episode,
+/// wherever they are collected.
+pub fn train_with(
+    run_dir: &Path,
+    cfg: Option<RolloutTrainConfig>,
+    progress: &mut (dyn FnMut(&Progress) + Send),
+    collector: &mut Collector<'_>,
+) -> Result<(), TrainError> {
+    harness::train_with::<RolloutLearner>(run_dir, cfg, |dir, cfg, resuming| {
+        train_loop(dir, cfg, resuming, progress, collector)
+    })
+}
+
 fn train_loop(
     run_dir: &Path,
     cfg: &RolloutTrainConfig,
     resuming: bool,
     progress: &mut (dyn FnMut(&Progress) + Send),
+    collector: &mut Collector<'_>,
 ) -> Result<(), TrainError> {
     let ckpt = run_dir.join("checkpoint");
     let device = cpu_autodiff();
@@ -1430,20 +1616,23 @@ fn train_loop(
         &cfg.base_policy,
     )?
     .mean_steps;
-    // The teacher's base: the base rule, or (expert iteration) the best student so far.
-    let mut base_model = match state.teacher_base {
-        Some(_) => Some(Model::load(&ckpt.join("base"))?),
-        None => None,
-    };
     let clock = Clock::start(state.wall_s);
     let first_iteration = state.iteration;
     while state.iteration < cfg.iterations && !out_of_patience(cfg, &state) {
-        // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then student).
-        let student = (state.iteration > 0).then(|| net.model(model_info(cfg, &state, None, None)));
-        let behaviour = behaviour_registry(cfg, student);
-        let teacher = match &base_model {
-            Some(m) => TeacherBase::student(m),
-            None => TeacherBase::rule(cfg),
+        // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then the
+        // student; the teacher's base: the base rule, or with expert iteration the best student
+        // so far), the models passed as files' bytes so a worker elsewhere acts the same.
+        let student = match state.iteration {
+            0 => None,
+            _ => {
+                let dir = run_dir.join(".behaviour");
+                save_model(&dir, &net, &model_info(cfg, &state, None, None))?;
+                Some(ModelBytes::read(&dir)?)
+            }
+        };
+        let base = match state.teacher_base {
+            Some(_) => Some(ModelBytes::read(&ckpt.join("base"))?),
+            None => None,
         };
         let teacher_base = match state.teacher_base {
             Some(k) => format!("student@{k}"),
@@ -1455,14 +1644,15 @@ fn train_loop(
         // The time budget holds inside an iteration too: an episode not started in time is
         // skipped, and an iteration cut short is dropped whole (the checkpoint is at its start,
         // so `--resume` repeats it exactly).
-        let collected: Vec<Option<Collected>> = (first..first + per)
-            .into_par_iter()
-            .map(|e| match clock.out_of_time(cfg.max_minutes) {
-                true => Ok(None),
-                false => collect_episode(cfg, e, side_max, &behaviour, &teacher).map(Some),
-            })
-            .collect::<Result<_, _>>()?;
-        let Some(collected) = collected.into_iter().collect::<Option<Vec<Collected>>>() else {
+        let request = CollectRequest {
+            episodes: (first..first + per).collect(),
+            side_max,
+            student,
+            base,
+        };
+        let Some(collected) =
+            collector.collect(cfg, &request, &|| clock.out_of_time(cfg.max_minutes))?
+        else {
             return time_ran_out(cfg, state.iteration, first_iteration);
         };
         let decisions: usize = collected
@@ -1619,9 +1809,6 @@ fn train_loop(
             &net,
             &model_info(cfg, &state, Some(steps), margin),
         )?;
-        if base_changed {
-            base_model = Some(net.model(best_info));
-        }
         progress(&Progress {
             done: state.iteration,
             total: cfg.iterations,

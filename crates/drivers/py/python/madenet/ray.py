@@ -1,4 +1,5 @@
-"""The comparison and scalability studies fanned out as Ray tasks (``pip install 'madenet[ray]'``)."""
+"""The comparison and scalability studies, and the rollout learner's episodes, fanned out as Ray
+tasks (``pip install 'madenet[ray]'``)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from madenet._config import study_overrides
 from madenet.study import table
 
 _remote = None
+_remote_collect = None
 
 
 def _run_batch(kind: str, config_toml: str, indices: list) -> list:
@@ -66,3 +68,37 @@ def scale(config=None, address: str | None = None, batch_size: int | None = None
     study = CoreScale(path, extra)
     rows = _fan_out("CoreScale", study, address, batch_size)
     return table(rows, as_dataframe, study.columns())
+
+
+def _collect_batch(config_toml: str, request: bytes) -> bytes:
+    # Runs inside a Ray worker: one batch of a training iteration's episodes, labelled by the
+    # teacher (its continuations are what training spends its time on), on one thread.
+    from madenet import _core
+    return _core.collect_rollout(config_toml, request, 1)
+
+
+def train(out, config=None, address: str | None = None, batch_size: int = 8):
+    """``madenet train --config CONFIG --out OUT`` for a rollout-teacher config (``method =
+    "made-net-rollout"``) with each iteration's episodes collected as Ray tasks of
+    ``batch_size`` episodes (their teacher's continuations are the cost of training); the
+    updates and validation run here. The run — its ``iterations.csv`` (wall time aside), data,
+    checkpoints and models — is the one ``madenet train`` makes with the same config: every
+    episode follows from its index. Resumes a run in ``out`` as ``madenet train`` does."""
+    import ray
+
+    global _remote_collect
+    if not isinstance(batch_size, int) or batch_size < 1:
+        raise ValueError(f"batch_size: {batch_size!r} is not a positive int")
+    if not ray.is_initialized():
+        ray.init(address=address)
+    elif address is not None:
+        raise ValueError("address: Ray is already initialized here; call ray.shutdown() first or pass address=None")
+    if _remote_collect is None:
+        _remote_collect = ray.remote(_collect_batch)
+
+    def collect(config_toml, batches):
+        text = ray.put(config_toml)
+        return ray.get([_remote_collect.remote(text, b) for b in batches])
+
+    from madenet import _core
+    _core.train_rollout(str(out), None if config is None else str(config), collect, batch_size)

@@ -1,0 +1,66 @@
+//! The rollout-teacher learner from Python: `train_rollout` runs `madenet train` for a
+//! `made-net-rollout` config with the episodes collected by a Python function (the Ray
+//! fan-out of `madenet.ray.train`), `collect_rollout` is what each worker runs.
+
+use crate::value_error;
+use madenet_learn::rollout_train::{collect_bytes, train_with, Collector, RolloutTrainConfig};
+use madenet_learn::TrainError;
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+/// Trains the rollout-teacher learner into `out` as `madenet train --config CONFIG --out OUT`
+/// does (resuming a run there). With `collect`, each iteration's episodes are collected by
+/// `collect(config_toml, batches)` — a list of request bytes, each for `batch_size` episodes —
+/// which returns `collect_rollout`'s bytes per batch, in order; the run is the same either way.
+#[pyfunction]
+#[pyo3(signature = (out, config = None, collect = None, batch_size = 8))]
+pub fn train_rollout(
+    py: Python<'_>,
+    out: std::path::PathBuf,
+    config: Option<std::path::PathBuf>,
+    collect: Option<Py<PyAny>>,
+    batch_size: usize,
+) -> PyResult<()> {
+    if batch_size == 0 {
+        return Err(value_error("batch_size: must be at least 1"));
+    }
+    let cfg = match &config {
+        Some(p) => Some(RolloutTrainConfig::from_toml_file(p).map_err(value_error)?),
+        None => None,
+    };
+    let mut run = |toml: &str, batches: Vec<Vec<u8>>| -> Result<Vec<Vec<u8>>, TrainError> {
+        let f = collect.as_ref().expect("only with a collect function");
+        Python::attach(|py| {
+            let batches: Vec<Bound<'_, PyBytes>> =
+                batches.iter().map(|b| PyBytes::new(py, b)).collect();
+            f.call1(py, (toml, batches))
+                .and_then(|r| r.extract::<Vec<Vec<u8>>>(py))
+        })
+        .map_err(|e| TrainError::Other(format!("collect: {e}")))
+    };
+    let mut collector = match collect {
+        Some(_) => Collector::Batches {
+            batch: batch_size,
+            run: &mut run,
+        },
+        None => Collector::Local,
+    };
+    py.detach(|| train_with(&out, cfg, &mut |_| {}, &mut collector))
+        .map_err(|e| value_error(format!("{}: {e}", out.display())))
+}
+
+/// Collects one batch of a rollout-teacher iteration's episodes (a request from
+/// `train_rollout`'s `collect`) on `threads` threads; returns the episodes as bytes.
+#[pyfunction]
+#[pyo3(signature = (config_toml, request, threads = 1))]
+pub fn collect_rollout<'py>(
+    py: Python<'py>,
+    config_toml: &str,
+    request: &[u8],
+    threads: usize,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let bytes = py
+        .detach(|| collect_bytes(config_toml, request, threads))
+        .map_err(value_error)?;
+    Ok(PyBytes::new(py, &bytes))
+}
