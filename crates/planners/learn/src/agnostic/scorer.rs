@@ -6,6 +6,10 @@
 //! convolves plane by plane and splits the work over threads, which costs more than the work
 //! (≈ 150 µs on 20 × 20 against issue 29's 100 µs for a whole decision). Training keeps burn's
 //! forward and its gradients; a test holds the two forward passes equal to 1e-4.
+//!
+//! Same seed ⇒ same run holds on one machine; across machines `sgemm`'s run-time choice of
+//! kernel (AVX/FMA or not) may change a score's last bits, and so a choice between two
+//! candidates scored equal to within them (burn's backend dispatched the same way).
 
 use super::{AgnosticInput, AgnosticNet, CANDIDATE_INPUTS, CONTEXT_FEATURES, CROP_CHANNELS};
 use burn::nn::conv::Conv2d;
