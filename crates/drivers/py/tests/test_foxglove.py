@@ -91,33 +91,41 @@ def test_a_continuous_run_is_watched_live(cli):
         proc.kill()
 
 
-async def watch_after(url, topic, after_ns):
-    """Subscribes to `topic` and returns the log time and raw CDR of its first message stamped
-    after `after_ns`."""
+async def watch_all(url, topics, seconds):
+    """Subscribes to `topics` and returns every (topic, log time, raw CDR) received within
+    `seconds`, or until the server closes."""
+    got = []
+    loop = asyncio.get_running_loop()
+    end = loop.time() + seconds
     async with websockets.connect(url, subprotocols=["foxglove.sdk.v1"]) as ws:
-        sub = None
-        while True:
-            frame = await asyncio.wait_for(ws.recv(), timeout=20)
+        subscribed = {}
+        while loop.time() < end:
+            try:
+                frame = await asyncio.wait_for(ws.recv(), timeout=max(0.01, end - loop.time()))
+            except (asyncio.TimeoutError, websockets.ConnectionClosed):
+                break
             if isinstance(frame, str):
                 msg = json.loads(frame)
-                if msg["op"] == "advertise" and sub is None:
+                if msg["op"] == "advertise":
                     for ch in msg["channels"]:
-                        if ch["topic"] == topic:
-                            sub = 1
+                        if ch["topic"] in topics and ch["topic"] not in subscribed.values():
+                            sub = len(subscribed) + 1
+                            subscribed[sub] = ch["topic"]
                             await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
                                 {"id": sub, "channelId": ch["id"]}]}))
                 continue
             if frame[0] == 1:
-                _, log_time = struct.unpack_from("<IQ", frame, 1)
-                if log_time > after_ns:
-                    return log_time, bytes(frame[13:])
+                sub, log_time = struct.unpack_from("<IQ", frame, 1)
+                got.append((subscribed[sub], log_time, bytes(frame[13:])))
+    return got
 
 
 def test_a_late_viewer_gets_the_last_message_of_a_topic_sent_on_change(cli, tmp_path):
     """/comms is sent when the radio's lines change; on paper:8 at CSP 0 (seed 1) they last
     change at step 75 of 97 (the bag of the same trial says so). Live, its last message is sent
     again after that — stamped later, the same bytes — so a viewer joining in the last 22 steps
-    still sees the radio's lines (before, only the maps were sent again)."""
+    still sees the radio's lines (before, only the maps were sent again). A pose, sent every
+    timestep, is never sent again: each arrives stamped with its own timestep."""
     args = ["run", "--map", "paper:8", "--policy", "spread", "--seed", "1", "--csp", "0"]
     subprocess.run([cli, *args, "--record", str(tmp_path / "bag")], check=True, capture_output=True)
     from rosbags.highlevel import AnyReader
@@ -132,9 +140,16 @@ def test_a_late_viewer_gets_the_last_message_of_a_topic_sent_on_change(cli, tmp_
     try:
         url = re.search(r"ws://\S+", proc.stderr.readline())
         assert url
-        t, cdr = asyncio.run(watch_after(url.group(0), "/comms", last_t))
-        assert last_t < t <= end and cdr == last
+        got = asyncio.run(watch_all(url.group(0), {"/comms", "/robot0/pose"}, 30))
         _, err = proc.communicate(timeout=60)
         assert proc.returncode == 0, err
     finally:
         proc.kill()
+    again = [(t, cdr) for topic, t, cdr in got if topic == "/comms" and t > last_t]
+    assert again and all(last_t < t <= end and cdr == last for t, cdr in again)
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    poses = [(t, typestore.deserialize_cdr(cdr, "geometry_msgs/msg/PoseStamped"))
+             for topic, t, cdr in got if topic == "/robot0/pose"]
+    assert len(poses) > 20
+    for t, pose in poses:
+        assert pose.header.stamp.sec * 10**9 + pose.header.stamp.nanosec == t, "a pose sent again"

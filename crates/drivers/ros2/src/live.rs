@@ -4,12 +4,14 @@
 //! `cdr` messages with `ros2msg` schemas, stamped in simulated time. Open it in Foxglove with
 //! "Open connection" → Foxglove WebSocket → the URL printed at the start.
 //!
-//! Topics published once or on change (the maps, goals, plans, candidates, `/comms`) are
-//! latched: every second of wall time, the last message of each topic not sent in the latest
-//! timestep is sent again (stamped with the latest time), so a viewer that joins late sees the
-//! true map, every robot's map, goal and plan and the radio's lines within a second — as
-//! transient-local QoS keeps the maps for a late ROS subscriber. Topics sent every timestep
-//! (poses, `/tf`, `/clock`, metrics) arrive with the next one.
+//! Topics published once or on change — the maps, `/comms`, each robot's `goal_pose`, `plan`
+//! and `candidates` ([`latched`]) — are latched: when the first message of a new timestep
+//! arrives and a second of wall time has passed since the last time, the last message of each
+//! latched topic not sent in the timestep just completed is sent again, stamped with that
+//! timestep, so a viewer that joins late sees the true map, every robot's map, goal and plan and
+//! the radio's lines within a second — as transient-local QoS keeps the maps for a late ROS
+//! subscriber. Topics sent every timestep (poses, `/tf`, `/clock`, metrics, scans) are never
+//! sent again: they arrive with the next timestep.
 
 use crate::msgs::RosMessage;
 use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer};
@@ -32,8 +34,8 @@ pub struct Live {
     server: Option<foxglove::WebSocketServerHandle>,
     channels: BTreeMap<String, Arc<RawChannel>>,
     url: String,
-    /// The last message of each topic (its CDR) and its stamp; [`Live::resend`] sends again
-    /// those older than the latest stamp.
+    /// The last message of each [`latched`] topic (its CDR) and its stamp; [`Live::resend`]
+    /// sends again those older than the latest stamp.
     latched: BTreeMap<String, (Vec<u8>, u64)>,
     /// The latest stamp sent, and when the latched topics were last sent again.
     now_ns: u64,
@@ -108,30 +110,33 @@ impl Live {
             };
             self.channels.insert(topic.to_string(), c);
         }
+        // A new timestep begins: the one before is complete, so what it did not send is old.
+        if t_ns > self.now_ns && self.resent.elapsed() >= RESEND {
+            self.resend();
+        }
         self.channels[topic].log_with_meta(
             cdr,
             PartialMetadata {
                 log_time: Some(t_ns),
             },
         );
-        match self.latched.get_mut(topic) {
-            Some((last, at)) => {
-                last.clear();
-                last.extend_from_slice(cdr);
-                *at = t_ns;
-            }
-            None => {
-                self.latched.insert(topic.to_string(), (cdr.to_vec(), t_ns));
+        if latched(topic) {
+            match self.latched.get_mut(topic) {
+                Some((last, at)) => {
+                    last.clear();
+                    last.extend_from_slice(cdr);
+                    *at = t_ns;
+                }
+                None => {
+                    self.latched.insert(topic.to_string(), (cdr.to_vec(), t_ns));
+                }
             }
         }
         self.now_ns = self.now_ns.max(t_ns);
-        if self.resent.elapsed() >= RESEND {
-            self.resend();
-        }
     }
 
-    /// Sends the last message of every topic not sent at the latest time again, stamped with
-    /// that time.
+    /// Sends the last message of every latched topic not sent at the latest time again,
+    /// stamped with that time.
     pub fn resend(&mut self) {
         self.resent = std::time::Instant::now();
         for (topic, (cdr, _)) in self.latched.iter().filter(|(_, (_, at))| *at < self.now_ns) {
@@ -143,6 +148,17 @@ impl Live {
             );
         }
     }
+}
+
+/// Whether the live view keeps `topic`'s last message for late viewers: the topics sent once or
+/// on change (the maps — transient local in a bag —, `/comms`, a robot's goal, plan and
+/// candidates), not those sent every timestep.
+pub fn latched(topic: &str) -> bool {
+    crate::recorded_qos(topic).durability == crate::rmw::Durability::TransientLocal
+        || topic == "/comms"
+        || ["/goal_pose", "/plan", "/candidates"]
+            .iter()
+            .any(|t| topic.starts_with("/robot") && topic.ends_with(t))
 }
 
 impl Drop for Live {
