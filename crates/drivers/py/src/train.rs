@@ -11,7 +11,11 @@ use pyo3::types::PyBytes;
 /// Trains the rollout-teacher learner into `out` as `madenet train --config CONFIG --out OUT`
 /// does (resuming a run there). With `collect`, each iteration's episodes are collected by
 /// `collect(config_toml, batches)` — a list of request bytes, each for `batch_size` episodes —
-/// which returns `collect_rollout`'s bytes per batch, in order; the run is the same either way.
+/// which returns `collect_rollout`'s bytes per batch, in order; the run is the same either way
+/// (on one machine: the decision scorer's matrix kernels are picked per CPU). An exception of
+/// `collect` ends training at the iteration's start (its checkpoint) and is raised as it was.
+/// The time budget (`max_minutes`) is checked between iterations only. A new run needs
+/// `config`.
 #[pyfunction]
 #[pyo3(signature = (out, config = None, collect = None, batch_size = 8))]
 pub fn train_rollout(
@@ -24,10 +28,26 @@ pub fn train_rollout(
     if batch_size == 0 {
         return Err(value_error("batch_size: must be at least 1"));
     }
+    if let Some(f) = &collect {
+        if !f.bind(py).is_callable() {
+            return Err(value_error(
+                "collect: must be callable (config_toml, batches) -> list of bytes",
+            ));
+        }
+    }
     let cfg = match &config {
         Some(p) => Some(RolloutTrainConfig::from_toml_file(p).map_err(value_error)?),
+        // As `madenet train`: without a config, only a run already in `out` (resumed).
+        None if !out.join("config.toml").is_file() => {
+            return Err(value_error(format!(
+                "config: needed for a new run ({} holds none to resume)",
+                out.display()
+            )))
+        }
         None => None,
     };
+    // The collect function's own exception, raised again as it was once training stopped.
+    let raised = std::sync::Mutex::new(None::<PyErr>);
     let mut run = |toml: &str, batches: Vec<Vec<u8>>| -> Result<Vec<Vec<u8>>, TrainError> {
         let f = collect.as_ref().expect("only with a collect function");
         Python::attach(|py| {
@@ -36,7 +56,11 @@ pub fn train_rollout(
             f.call1(py, (toml, batches))
                 .and_then(|r| r.extract::<Vec<Vec<u8>>>(py))
         })
-        .map_err(|e| TrainError::Other(format!("collect: {e}")))
+        .map_err(|e| {
+            let why = format!("collect: {e}");
+            *raised.lock().expect("not poisoned") = Some(e);
+            TrainError::Other(why)
+        })
     };
     let mut collector = match collect {
         Some(_) => Collector::Batches {
@@ -45,8 +69,11 @@ pub fn train_rollout(
         },
         None => Collector::Local,
     };
-    py.detach(|| train_with(&out, cfg, &mut |_| {}, &mut collector))
-        .map_err(|e| value_error(format!("{}: {e}", out.display())))
+    let result = py.detach(|| train_with(&out, cfg, &mut |_| {}, &mut collector));
+    if let Some(e) = raised.lock().expect("not poisoned").take() {
+        return Err(e);
+    }
+    result.map_err(|e| value_error(format!("{}: {e}", out.display())))
 }
 
 /// Collects one batch of a rollout-teacher iteration's episodes (a request from

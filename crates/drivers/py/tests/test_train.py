@@ -75,7 +75,7 @@ def test_episodes_collected_by_a_python_function_give_the_cli_run(local):
     assert (rows, data, state) == want
 
 
-def test_a_collector_that_drops_a_batch_is_an_error(local):
+def test_a_collector_that_fails_is_an_error(local):
     root, _ = local
 
     def short(config_toml, batches):
@@ -83,8 +83,23 @@ def test_a_collector_that_drops_a_batch_is_an_error(local):
 
     with pytest.raises(ValueError, match="collector returned 1 batches for 2"):
         _core.train_rollout(str(root / "short"), str(root / "tiny.toml"), short, 3)
+    def boom(config_toml, batches):
+        raise RuntimeError("boom")
+
+    with pytest.raises(RuntimeError, match="boom"):
+        _core.train_rollout(str(root / "boom"), str(root / "tiny.toml"), boom, 3)
+
+    def swapped(config_toml, batches):
+        return [_core.collect_rollout(config_toml, b, 1) for b in reversed(batches)]
+
+    with pytest.raises(ValueError, match=r"batch 0: episodes \[2, 3\], asked for \[0, 1\]"):
+        _core.train_rollout(str(root / "swapped"), str(root / "tiny.toml"), swapped, 2)
     with pytest.raises(ValueError, match="a collect request"):
         _core.collect_rollout(TINY, b"\xff\xff", 1)
+    with pytest.raises(ValueError, match="config: needed for a new run"):
+        _core.train_rollout(str(root / "none"), None, None, 3)
+    with pytest.raises(ValueError, match="collect: must be callable"):
+        _core.train_rollout(str(root / "nc"), str(root / "tiny.toml"), 3, 3)
     with pytest.raises(ValueError, match="batch_size"):
         _core.train_rollout(str(root / "zero"), str(root / "tiny.toml"), short, 0)
 

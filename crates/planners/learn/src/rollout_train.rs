@@ -624,6 +624,9 @@ pub struct Labelled {
 /// What one collected episode adds: each robot's decision sequence, and how it went.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Collected {
+    /// The episode's index.
+    #[serde(default)]
+    pub episode: u64,
     /// Each robot's decisions in time order (grid network: every decision, labelled or not;
     /// agnostic network: the labelled ones only).
     pub robots: Vec<Vec<Labelled>>,
@@ -944,6 +947,7 @@ fn collect_episode(
     };
     let end = episode::run(&mut trial, &mut teacher)?;
     Ok(Collected {
+        episode: index,
         robots: teacher.robots,
         steps: end.steps,
         rollouts: teacher.rollouts,
@@ -989,6 +993,8 @@ impl ModelBytes {
 /// worker anywhere collects from it exactly the episodes a local run does ([`collect`]).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CollectRequest {
+    /// The madenet version that made the request: a worker of another version refuses it.
+    pub version: String,
     /// The episodes' indices (each episode's scenario and seeds follow from its index).
     pub episodes: Vec<u64>,
     /// The curriculum's largest map side this iteration.
@@ -1039,6 +1045,13 @@ pub fn collect_bytes(
         .map_err(|m| TrainError::Other(format!("the run's config: {m}")))?;
     let req: CollectRequest = postcard::from_bytes(request)
         .map_err(|e| TrainError::Other(format!("a collect request: {e}")))?;
+    if req.version != env!("CARGO_PKG_VERSION") {
+        return Err(TrainError::Other(format!(
+            "a collect request of madenet {}: this worker is madenet {} (run the same version everywhere)",
+            req.version,
+            env!("CARGO_PKG_VERSION")
+        )));
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
@@ -1103,17 +1116,22 @@ impl Collector<'_> {
             )));
         }
         let mut all = Vec::with_capacity(req.episodes.len());
-        for r in results {
-            let part: Vec<Collected> = postcard::from_bytes(&r)
-                .map_err(|e| TrainError::Other(format!("a collected batch: {e}")))?;
+        for (k, (r, want)) in results
+            .iter()
+            .zip(req.episodes.chunks(batch.max(1)))
+            .enumerate()
+        {
+            let bad = |why: String| TrainError::Other(format!("the collector's batch {k}: {why}"));
+            let (part, rest): (Vec<Collected>, _) =
+                postcard::take_from_bytes(r).map_err(|e| bad(e.to_string()))?;
+            if !rest.is_empty() {
+                return Err(bad(format!("{} bytes after the episodes", rest.len())));
+            }
+            let got: Vec<u64> = part.iter().map(|c| c.episode).collect();
+            if got != want {
+                return Err(bad(format!("episodes {got:?}, asked for {want:?}")));
+            }
             all.extend(part);
-        }
-        if all.len() != req.episodes.len() {
-            return Err(TrainError::Other(format!(
-                "the collector returned {} episodes for {}",
-                all.len(),
-                req.episodes.len()
-            )));
         }
         Ok(Some(all))
     }
@@ -1645,6 +1663,7 @@ fn train_loop(
         // skipped, and an iteration cut short is dropped whole (the checkpoint is at its start,
         // so `--resume` repeats it exactly).
         let request = CollectRequest {
+            version: env!("CARGO_PKG_VERSION").into(),
             episodes: (first..first + per).collect(),
             side_max,
             student,

@@ -83,7 +83,10 @@ def train(out, config=None, address: str | None = None, batch_size: int = 8):
     ``batch_size`` episodes (their teacher's continuations are the cost of training); the
     updates and validation run here. The run — its ``iterations.csv`` (wall time aside), data,
     checkpoints and models — is the one ``madenet train`` makes with the same config: every
-    episode follows from its index. Resumes a run in ``out`` as ``madenet train`` does."""
+    episode follows from its index (on a cluster of one kind of CPU: the decision scorer's
+    matrix kernels are picked per CPU, so a score's last bits may differ between kinds).
+    ``max_minutes`` is checked between iterations (a local run also stops inside one).
+    Resumes a run in ``out`` as ``madenet train`` does; a new run needs ``config``."""
     import ray
 
     global _remote_collect
