@@ -131,6 +131,8 @@ pub fn run(a: CompareArgs) -> Result<()> {
     out!("{} trials → {}", outcomes.len(), report.display())?;
     if let Some((items, registry, planned)) = recorded {
         crate::record::record_study_trials(items, &planned, &registry, &a.out, a.fresh, &pool)?;
+    } else if a.fresh {
+        crate::record::discard_bags(&a.out)?;
     }
     Ok(())
 }

@@ -121,7 +121,10 @@ fn main() -> ExitCode {
         }
         Err(e) if e.downcast_ref::<interrupt::Interrupted>().is_some() => {
             eprintln!("{e}");
-            ExitCode::from(130)
+            let signal = e
+                .downcast_ref::<interrupt::Interrupted>()
+                .map_or(2, |i| i.signal);
+            ExitCode::from(128 + signal.clamp(0, 127) as u8)
         }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));

@@ -302,6 +302,11 @@ pub fn record_study_trials(
         }
         Ok(())
     };
+    // A swap cut between its two renames: the old bags are whole, put them back first.
+    if !bags.exists() && old.is_dir() {
+        std::fs::rename(&old, &bags)
+            .with_context(|| format!("--record-trials: {}", bags.display()))?;
+    }
     clear(&new)?;
     clear(&old)?;
     let n = pool.install(|| record_trials(&chosen, registry, if fresh { &new } else { &bags }))?;
@@ -320,6 +325,19 @@ pub fn record_study_trials(
         chosen.len(),
         bags.display()
     )?;
+    Ok(())
+}
+
+/// After a study run afresh without `--record-trials`, while its folder `out` is still
+/// locked: the bags of the earlier study go with its rows.
+pub fn discard_bags(out: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context;
+    for d in ["bags", ".madenet-bags-new", ".madenet-bags-old"] {
+        let d = out.join(d);
+        if d.exists() {
+            std::fs::remove_dir_all(&d).with_context(|| format!("--fresh: {}", d.display()))?;
+        }
+    }
     Ok(())
 }
 

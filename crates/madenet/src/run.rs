@@ -255,8 +255,8 @@ pub fn run(a: RunArgs) -> Result<()> {
         if let Some(wait) = pace {
             std::thread::sleep(wait);
         }
-        if stop.requested() {
-            interrupted = Some(format!("timestep {}", trial.world().t()));
+        if let Some(signal) = stop.requested() {
+            interrupted = Some((format!("timestep {}", trial.world().t()), signal));
             break;
         }
     }
@@ -267,11 +267,11 @@ pub fn run(a: RunArgs) -> Result<()> {
     if let Some(r) = recorder {
         wrote.extend(r.finish()?);
     }
-    if let Some(at) = interrupted {
+    if let Some((at, signal)) = interrupted {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted { at }.into());
+        return Err(crate::interrupt::Interrupted { at, signal }.into());
     }
     let result = trial.finish();
     if a.json {
@@ -374,8 +374,8 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         if let Some(wait) = pace {
             std::thread::sleep(wait);
         }
-        if stop.requested() {
-            interrupted = Some(format!("{:.1} s", trial.world().time()));
+        if let Some(signal) = stop.requested() {
+            interrupted = Some((format!("{:.1} s", trial.world().time()), signal));
             break;
         }
     }
@@ -390,11 +390,11 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     if let Some(r) = recorder {
         wrote.extend(r.finish(&trial)?);
     }
-    if let Some(at) = interrupted {
+    if let Some((at, signal)) = interrupted {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted { at }.into());
+        return Err(crate::interrupt::Interrupted { at, signal }.into());
     }
     let r = trial.finish();
     if a.json {

@@ -121,6 +121,8 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     out!("{} trials → {}", result.trials, result.report.display())?;
     if let Some((items, planned)) = planned {
         crate::record::record_study_trials(items, &planned, &registry, &a.out, a.fresh, &pool)?;
+    } else if a.fresh {
+        crate::record::discard_bags(&a.out)?;
     }
     Ok(())
 }

@@ -253,7 +253,7 @@ fn a_write_that_fails_part_way_leaves_nothing_behind() {
 
 /// `compare --record-trials`: exactly the chosen trials as bags in OUT/bags/, each the bag
 /// `run --record` writes for the same trial (byte for byte); a second run keeps them, one with
-/// `--fresh` replaces them with its own choice; bad
+/// `--fresh` replaces them with its own choice, one without `--record-trials` removes them; bad
 /// conditions, a choice of nothing or of an oracle are refused before the study runs (no
 /// output folder).
 #[test]
@@ -372,11 +372,26 @@ fn a_study_records_the_trials_it_is_told_to() {
         "{:?}",
         entries(&out)
     );
+    // Afresh without recording: the earlier study's bags go with its rows.
+    let bare = madenet(&[
+        "compare",
+        "--methods",
+        "nf,spread",
+        "--oracles",
+        "none",
+        "--seeds",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+        "--fresh",
+    ]);
+    assert!(bare.status.success());
+    assert!(!bags.exists());
 }
 
 /// Ctrl-C during a paced, recorded and streamed run: the run stops after its timestep, the bag
-/// is finished (a bag, not a hidden partial folder), and madenet exits with 130 — in both
-/// worlds.
+/// is finished (a bag, not a hidden partial folder), and madenet exits with 130 (SIGTERM: 143)
+/// — in both worlds.
 #[test]
 fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
     use std::io::BufRead;
@@ -412,15 +427,17 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
         stderr.read_line(&mut line).unwrap();
         assert!(line.contains("ws://"), "world {k}: {line}");
         std::thread::sleep(std::time::Duration::from_millis(500));
+        // Ctrl-C in the grid world, SIGTERM in the continuous one.
+        let (signal, code) = [("-INT", 130), ("-TERM", 143)][k];
         let kill = std::process::Command::new("kill")
-            .args(["-INT", &child.id().to_string()])
+            .args([signal, &child.id().to_string()])
             .status()
             .unwrap();
         assert!(kill.success());
         let out = child.wait_with_output().unwrap();
         let mut rest = String::new();
         std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
-        assert_eq!(out.status.code(), Some(130), "world {k}: {rest}");
+        assert_eq!(out.status.code(), Some(code), "world {k}: {rest}");
         assert!(rest.contains("interrupted at"), "world {k}: {rest}");
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(

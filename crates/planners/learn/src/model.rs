@@ -106,22 +106,33 @@ pub struct Model {
     pub info: ModelInfo,
     /// The grid DEPs (empty for an agnostic model).
     pub deps: Vec<Arc<QNet>>,
-    /// The agnostic DEP, shared by every robot.
-    pub agnostic: Option<Arc<AgnosticNet>>,
+    /// The agnostic DEP, shared by every robot ([`Model::agnostic`]; private with `scorer`, so
+    /// no model has one without the other or one that is not the other's weights).
+    agnostic: Option<Arc<AgnosticNet>>,
     /// The agnostic DEP's weights as its robots decide with them, made from `agnostic` by
-    /// [`Model::with_agnostic`] (private, so no model has one without the other).
+    /// [`Model::with_agnostic`].
     scorer: Option<Arc<AgnosticScorer>>,
 }
 
 impl Model {
-    /// A grid model: one DEP per robot group (one when shared).
-    pub fn with_grid(info: ModelInfo, deps: Vec<Arc<QNet>>) -> Self {
-        Model {
+    /// A grid model: one DEP per robot group (one when shared; at least one).
+    pub fn with_grid(info: ModelInfo, deps: Vec<Arc<QNet>>) -> Result<Self, TrainError> {
+        if deps.is_empty() {
+            return Err(TrainError::Other(
+                "a grid model needs at least one DEP".into(),
+            ));
+        }
+        Ok(Model {
             info,
             deps,
             agnostic: None,
             scorer: None,
-        }
+        })
+    }
+
+    /// The agnostic DEP (none for a grid model).
+    pub fn agnostic(&self) -> Option<&Arc<AgnosticNet>> {
+        self.agnostic.as_ref()
     }
 
     /// An agnostic model: `net` and its scorer.
@@ -254,7 +265,7 @@ impl Model {
                         net, &name, label, &sizes,
                     )?));
                 }
-                Ok(Model::with_grid(info, deps))
+                Model::with_grid(info, deps)
             }
             (None, Some(a)) => {
                 a.validate()

@@ -1216,7 +1216,9 @@ impl Student {
     /// The student on the plain CPU device as a model acting with `info`'s margin.
     fn model(&self, info: ModelInfo) -> Model {
         match self {
-            Student::Grid(net) => Model::with_grid(info, vec![Arc::new(net.valid())]),
+            Student::Grid(net) => {
+                Model::with_grid(info, vec![Arc::new(net.valid())]).expect("one DEP")
+            }
             Student::Agnostic(net) => Model::with_agnostic(info, net.valid()),
         }
     }

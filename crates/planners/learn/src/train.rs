@@ -786,7 +786,8 @@ fn train_loop(
                     .iter()
                     .map(|(o, _, _)| Arc::new(target_of(o)))
                     .collect(),
-            );
+            )
+            .expect("one DEP per group");
             let mut registry = PolicyRegistry::default();
             model.register(&mut registry, "candidate", "the DEPs being trained");
             if validation_maps.is_none() {

@@ -129,7 +129,7 @@ fn one_network_scores_any_map_team_and_candidate_count_by_candidate_not_slot() {
 fn the_decision_scorer_scores_as_the_network() {
     let fresh = AgnosticConfig::new().init(&madenet_learn::cpu()).unwrap();
     let shipped = madenet_learn::shipped::model("made-net-any").unwrap();
-    let shipped = shipped.agnostic.as_deref().unwrap();
+    let shipped = shipped.agnostic().map(|a| &**a).unwrap();
     let mut decisions = vec![decision_from(20, 3, 4), decision_from(45, 6, 5)];
     for seed in 6..12 {
         decisions.push(decision_from(
@@ -208,7 +208,7 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         "{toml}"
     );
     let model = Model::load(&a.join("last")).unwrap();
-    assert!(model.agnostic.is_some() && model.deps.is_empty());
+    assert!(model.agnostic().is_some() && model.deps.is_empty());
     let mut registry = PolicyRegistry::builtin();
     model.register(&mut registry, "any", "the tiny run's model");
     // A map side and team outside the curriculum, through the registry's check.
@@ -240,6 +240,6 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     // Same seed, same scores.
     train(&b, Some(tiny()), &mut |_| {}).unwrap();
     let again = Model::load(&b.join("last")).unwrap();
-    let (m1, m2) = (model.agnostic.unwrap(), again.agnostic.unwrap());
+    let (m1, m2) = (model.agnostic().unwrap(), again.agnostic().unwrap());
     assert_eq!(m1.scores(&x), m2.scores(&x));
 }

@@ -39,7 +39,7 @@ fn shipped_models_play_and_refuse_other_sizes() {
         };
         let agnostic = madenet_learn::shipped::model(name)
             .unwrap()
-            .agnostic
+            .agnostic()
             .is_some();
         let four = if agnostic {
             // Four free cells next to each other (the corner block above holds an obstacle).
