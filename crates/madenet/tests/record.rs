@@ -260,7 +260,7 @@ fn a_write_that_fails_part_way_leaves_nothing_behind() {
 fn a_study_records_the_trials_it_is_told_to() {
     let dir = Scratch::new("record-trials");
     let out = dir.join("study");
-    let compare = |conditions: &[&str]| {
+    let study = |extra: &[&str]| {
         let mut args = vec![
             "compare",
             "--methods",
@@ -271,10 +271,14 @@ fn a_study_records_the_trials_it_is_told_to() {
             "2",
             "--out",
             out.to_str().unwrap(),
-            "--record-trials",
         ];
-        args.extend_from_slice(conditions);
+        args.extend_from_slice(extra);
         madenet(&args)
+    };
+    let compare = |conditions: &[&str]| {
+        let mut extra = vec!["--record-trials"];
+        extra.extend_from_slice(conditions);
+        study(&extra)
     };
     for (bad, needle) in [
         (&["team=3"][..], "unknown field `team`"),
@@ -373,18 +377,7 @@ fn a_study_records_the_trials_it_is_told_to() {
         entries(&out)
     );
     // Afresh without recording: the earlier study's bags go with its rows.
-    let bare = madenet(&[
-        "compare",
-        "--methods",
-        "nf,spread",
-        "--oracles",
-        "none",
-        "--seeds",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-        "--fresh",
-    ]);
+    let bare = study(&["--fresh"]);
     assert!(bare.status.success());
     assert!(!bags.exists());
 }

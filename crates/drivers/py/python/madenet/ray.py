@@ -12,6 +12,16 @@ _remote = None
 _remote_collect = None
 
 
+def _connect(address: str | None) -> None:
+    """Ray at ``address`` (``None``: the running instance, or a new local one)."""
+    import ray
+
+    if not ray.is_initialized():
+        ray.init(address=address)
+    elif address is not None:
+        raise ValueError("address: Ray is already initialized here; call ray.shutdown() first or pass address=None")
+
+
 def _run_batch(kind: str, config_toml: str, indices: list) -> list:
     # Runs inside a Ray worker: the study is rebuilt from its TOML text there, so no Rust
     # object is ever pickled; one thread per task, Ray spreads the tasks.
@@ -29,10 +39,7 @@ def _fan_out(kind: str, study, address: str | None, batch_size: int | None) -> l
     n = len(study)
     if batch_size is not None and (not isinstance(batch_size, int) or batch_size < 1):
         raise ValueError(f"batch_size: {batch_size!r} is not a positive int")
-    if not ray.is_initialized():
-        ray.init(address=address)
-    elif address is not None:
-        raise ValueError("address: Ray is already initialized here; call ray.shutdown() first or pass address=None")
+    _connect(address)
     if batch_size is None:
         cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
         batch_size = max(1, math.ceil(n / (4 * cpus)))
@@ -92,10 +99,7 @@ def train(out, config=None, address: str | None = None, batch_size: int = 8):
     global _remote_collect
     if not isinstance(batch_size, int) or batch_size < 1:
         raise ValueError(f"batch_size: {batch_size!r} is not a positive int")
-    if not ray.is_initialized():
-        ray.init(address=address)
-    elif address is not None:
-        raise ValueError("address: Ray is already initialized here; call ray.shutdown() first or pass address=None")
+    _connect(address)
     if _remote_collect is None:
         _remote_collect = ray.remote(_collect_batch)
 
