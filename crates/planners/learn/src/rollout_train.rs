@@ -33,8 +33,10 @@
 //!    the labelled decisions on large maps.
 //! 4. **Student**: the paper's DEP (MFE, F3, LSTM, F6; `observation` may add per-candidate
 //!    features), or the size- and team-agnostic DEP ([`crate::agnostic`]), regresses the
-//!    labels' *advantages* (label minus its mean over the valid candidates) with Adam — by default on single decisions from zero LSTM state
-//!    (`recurrent = false`), else on windows of each robot's decision sequence.
+//!    labels' *advantages* (label minus its mean over the valid candidates) with Adam, or
+//!    (`loss = "listwise"`) matches softmax(scores / τ) to softmax(advantages / τ) — by default
+//!    on single decisions from zero LSTM state (`recurrent = false`), else on windows of each
+//!    robot's decision sequence.
 //! 5. **Validation** after every iteration on generated trials of their own seeds (210 by
 //!    default), the DEP acting greedily and with each `spread_margins` margin (the `spread` rule's
 //!    candidate unless the DEP values another more by the margin); the best (iteration, margin)
@@ -101,6 +103,20 @@ pub enum Network {
     Grid,
     /// The size- and team-agnostic DEP ([`crate::agnostic`]): any map, team and |G|.
     Agnostic,
+}
+
+/// What the student fits to the teacher's labels ([`RolloutTrainConfig::loss`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Loss {
+    /// Masked squared error between the scores centred over the valid candidates and the
+    /// teacher's advantages: every candidate's value matters as much as the best one's.
+    #[default]
+    Advantage,
+    /// Cross-entropy between softmax(scores / τ) and softmax(advantages / τ) over the valid
+    /// candidates (τ = `listwise_temperature`): a ranking loss that spends the network on which
+    /// candidate is best rather than on how bad the others are; scores stay in label units.
+    Listwise,
 }
 
 /// Every knob of a rollout-teacher run, with its default (`configs/train-rollout.toml`).
@@ -203,6 +219,10 @@ pub struct RolloutTrainConfig {
     pub grad_clip_norm: f32,
     /// Labels (steps) are multiplied by this (0.1: advantages of a few units).
     pub label_scale: f32,
+    /// The student's loss: `advantage` (regression) or `listwise` (ranking; [`Loss`]).
+    pub loss: Loss,
+    /// τ of the `listwise` loss, in label units (0.1 with `label_scale = 0.1`: one step).
+    pub listwise_temperature: f32,
     /// Margins of conservative acting tried at each validation (the DEP's choice replaces the
     /// `spread` rule's only when valued higher by this much, in label units; [`Model`]'s
     /// `spread_margin`); the greedy DEP is always tried too, and the best on validation is kept.
@@ -254,6 +274,8 @@ impl Default for RolloutTrainConfig {
             learning_rate: 1e-3,
             grad_clip_norm: 10.0,
             label_scale: 0.1,
+            loss: Loss::Advantage,
+            listwise_temperature: 0.1,
             spread_margins: vec![0.05, 0.1, 0.2, 0.4],
             validation_maps: 70,
             validation_csp: vec![1.0, 0.5, 0.0],
@@ -280,7 +302,7 @@ impl RolloutTrainConfig {
             .map_err(|e| format!("scenario: {e}"))?;
         let unit = |x: f64| (0.0..=1.0).contains(&x);
         let curriculum = self.map_side_max > 0 || self.team_max > 0;
-        let checks: [(bool, &str, &str); 17] = [
+        let checks: [(bool, &str, &str); 18] = [
             (
                 !curriculum || self.network == Network::Agnostic,
                 "map_side_max/team_max",
@@ -367,6 +389,11 @@ impl RolloutTrainConfig {
             (
                 self.grad_clip_norm > 0.0 && self.label_scale > 0.0 && self.label_scale.is_finite(),
                 "grad_clip_norm/label_scale",
+                "must be positive",
+            ),
+            (
+                self.listwise_temperature > 0.0 && self.listwise_temperature.is_finite(),
+                "listwise_temperature",
                 "must be positive",
             ),
             (
@@ -1264,6 +1291,33 @@ impl Student {
     }
 }
 
+/// The student's loss on scores `q` against the teacher's advantages `y` (`[rows, slots]`; `m`
+/// is 1 on trained slots): [`Loss`].
+fn student_loss(cfg: &RolloutTrainConfig, q: Tensor<2>, y: Tensor<2>, m: Tensor<2>) -> Tensor<1> {
+    match cfg.loss {
+        Loss::Advantage => advantage_loss(q, y, m),
+        Loss::Listwise => listwise_loss(q, y, m, cfg.listwise_temperature),
+    }
+}
+
+/// Σ over rows with a trained slot of −Σ_k softmax(y/τ)_k · log softmax(q/τ)_k over the trained
+/// slots, divided by those rows' count (untrained slots pushed to −10⁴ before both softmaxes).
+fn listwise_loss(q: Tensor<2>, y: Tensor<2>, m: Tensor<2>, tau: f32) -> Tensor<1> {
+    use burn::tensor::activation::{log_softmax, softmax};
+    let off = m.clone().neg().add_scalar(1.0).mul_scalar(1e4);
+    let p = softmax(y.div_scalar(tau).sub(off.clone()), 1).mul(m.clone());
+    let log_q = log_softmax(q.div_scalar(tau).sub(off), 1);
+    let rows = m.clone().sum_dim(1).clamp_max(1.0);
+    let count = rows.clone().sum().clamp_min(1.0);
+    p.mul(log_q)
+        .mul(m)
+        .sum_dim(1)
+        .mul(rows)
+        .sum()
+        .neg()
+        .div(count)
+}
+
 /// The masked mean squared error between scores `q` centred over each row's trained slots and
 /// the teacher's advantages `y` (`[rows, slots]`; `m` is 1 on trained slots).
 fn advantage_loss(q: Tensor<2>, y: Tensor<2>, m: Tensor<2>) -> Tensor<1> {
@@ -1313,7 +1367,7 @@ fn update(
     let y = Tensor::<2>::from_data(TensorData::new(target, [b * t, g]), &device);
     let m = Tensor::<2>::from_data(TensorData::new(mask, [b * t, g]), &device);
     let (q, _) = net.forward(maps, obs, None);
-    let loss = advantage_loss(q.reshape([b * t, g]), y, m);
+    let loss = student_loss(cfg, q.reshape([b * t, g]), y, m);
     adam_step(net, optim, cfg.learning_rate, loss)
 }
 
@@ -1350,7 +1404,7 @@ fn update_agnostic(
         batch.context,
         batch.mask.clone(),
     );
-    let loss = advantage_loss(q, y, batch.mask);
+    let loss = student_loss(cfg, q, y, batch.mask);
     adam_step(net, optim, cfg.learning_rate, loss)
 }
 
@@ -1865,5 +1919,39 @@ mod tests {
         assert_eq!(best_candidate(&v, Some(c(3))), Some(c(3)));
         assert_eq!(best_candidate(&v, None), Some(c(2)));
         assert_eq!(best_candidate(&[None, None], Some(c(1))), None);
+    }
+
+    fn rows(v: &[f32], rows: usize) -> Tensor<2> {
+        let cols = v.len() / rows;
+        Tensor::<2>::from_data(TensorData::new(v.to_vec(), [rows, cols]), &crate::cpu())
+    }
+
+    fn value(t: Tensor<1>) -> f32 {
+        t.into_data().try_to_vec::<f32>().unwrap()[0]
+    }
+
+    /// The listwise loss is lowest where the scores are the labels (up to a shift per row),
+    /// ignores untrained slots and rows without any, and equals the cross-entropy by hand.
+    #[test]
+    fn listwise_loss_ranks_over_trained_slots_only() {
+        let tau = 0.5;
+        let y = [
+            1.0, 0.0, -1.0, 0.0, /* row 2: */ 0.0, 0.5, 0.0, 0.0, /* row 3: */ 0.0, 0.0,
+            0.0, 0.0,
+        ];
+        let m = [1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let loss = |q: &[f32]| value(listwise_loss(rows(q, 3), rows(&y, 3), rows(&m, 3), tau));
+        let exact = loss(&[1.0, 0.0, -1.0, 7.0, 3.0, 2.5, 2.0, -9.0, 5.0, 1.0, 2.0, 3.0]);
+        // Row 1: softmax of (2, 0, −2); row 2: of (1, 0) over its two trained slots.
+        let ce = |z: &[f32]| {
+            let s: f32 = z.iter().map(|x| x.exp()).sum();
+            -z.iter().map(|x| (x.exp() / s) * (x - s.ln())).sum::<f32>()
+        };
+        let by_hand = (ce(&[2.0, 0.0, -2.0]) + ce(&[1.0, 0.0])) / 2.0;
+        assert!((exact - by_hand).abs() < 1e-4, "{exact} vs {by_hand}");
+        let wrong = loss(&[-1.0, 0.0, 1.0, 7.0, 3.0, 2.0, 2.5, -9.0, 5.0, 1.0, 2.0, 3.0]);
+        assert!(wrong > exact + 0.5, "{wrong} vs {exact}");
+        let flat = loss(&[0.0; 12]);
+        assert!(flat > exact, "{flat} vs {exact}");
     }
 }
