@@ -2,7 +2,8 @@
 //! after the timestep it is in and finishes what it writes — the bag then holds the run up to
 //! there, a valid bag, instead of a hidden partial folder — and `madenet` exits with 130
 //! (128 + SIGINT; 143 for SIGTERM). A second signal ends the process at once, with the same
-//! codes.
+//! codes. `world` does the same; `launch` catches both ([`Stop::catch`]) and hands them to
+//! its launcher (the first to the world node, a second stops every node).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -34,6 +35,26 @@ impl Stop {
         Ok(Stop(flags.into()))
     }
 
+    /// Catches SIGINT and SIGTERM without ever ending the process: each signal is taken once
+    /// by [`Self::take`] (a supervisor that must stop its children first).
+    pub fn catch() -> anyhow::Result<Self> {
+        let flags = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM]
+            .map(|s| (s, Arc::new(AtomicBool::new(false))));
+        for (signal, flag) in &flags {
+            signal_hook::flag::register(*signal, Arc::clone(flag))?;
+        }
+        Ok(Stop(flags.into()))
+    }
+
+    /// A signal that came since the last call, if one did (taken: the next call reports only a
+    /// later one).
+    pub fn take(&self) -> Option<i32> {
+        self.0
+            .iter()
+            .find(|(_, f)| f.swap(false, Ordering::Relaxed))
+            .map(|(s, _)| *s)
+    }
+
     /// The signal that came, if one did.
     pub fn requested(&self) -> Option<i32> {
         self.0
@@ -43,13 +64,36 @@ impl Stop {
     }
 }
 
-/// A run ended by a signal after its outputs were finished; `madenet` exits with 128 + the
-/// signal (130 for Ctrl-C, 143 for SIGTERM).
-#[derive(Debug, thiserror::Error)]
-#[error("interrupted at {at}; everything asked for (bag, pictures) is finished and ends there")]
+/// A run ended by a signal; `madenet` exits with 128 + the signal (130 for Ctrl-C, 143 for
+/// SIGTERM).
+#[derive(Debug)]
 pub struct Interrupted {
     /// Where the run stopped: `timestep 37`, `12.4 s`.
     pub at: String,
     /// The signal.
     pub signal: i32,
+    /// Whether what the run writes (bag, pictures) was finished; not after `launch`'s second
+    /// signal, which stops the nodes at once.
+    pub finished: bool,
 }
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.finished {
+            write!(
+                f,
+                "interrupted at {}; everything asked for (bag, pictures) is finished and ends there",
+                self.at
+            )
+        } else {
+            write!(
+                f,
+                "interrupted at {} by a second signal: the nodes were stopped at once (a bag they \
+                 were writing stays unfinished in its hidden folder beside --record's path)",
+                self.at
+            )
+        }
+    }
+}
+
+impl std::error::Error for Interrupted {}

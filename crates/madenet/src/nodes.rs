@@ -11,6 +11,7 @@ use madenet_runtime::launch::{run_nodes, LaunchError, LaunchEvent};
 use madenet_runtime::wire::{Node, Shown};
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
 use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, WorldOutput, ZenohBus};
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -297,6 +298,9 @@ pub fn world(a: WorldArgs) -> Result<()> {
     )
     .with_context(|| a.scenario.label())?;
     world.detach_radio();
+    // Before the live view prints its address: a Ctrl-C from then on ends the run gracefully
+    // (launched, always: `launch` passes its first signal on to this node).
+    let stop = crate::interrupt::Stop::watch(a.watch.any() || a.pace_ms > 0 || a.node.progress)?;
     // The bag and the live view first: a refused --record leaves no picture behind either.
     let mut recorder = crate::record::Recorder::start_world(
         a.watch.record.as_deref(),
@@ -336,7 +340,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
         (a.pictures.any() || a.watch.any()).then_some(&mut draw);
     let scenario = Some(scenario_of(&spec));
-    serve_world(&a, &spec, |bus, timeouts, on_step| {
+    let interrupted = serve_world(&a, &spec, &stop, |bus, timeouts, on_step| {
         madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w, waiting| {
             on_step(w, waiting)
         })
@@ -357,7 +361,15 @@ pub fn world(a: WorldArgs) -> Result<()> {
             eprintln!("{line}");
         }
     }
-    Ok(())
+    match interrupted {
+        Some((at, signal)) => Err(crate::interrupt::Interrupted {
+            at,
+            signal,
+            finished: true,
+        }
+        .into()),
+        None => Ok(()),
+    }
 }
 
 /// The digest every node's hello is checked by: map, starts and scenario config.
@@ -384,11 +396,20 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
     )
     .context("--ros2-robots")?;
     let scenario = Some(scenario_of(spec));
-    serve_world(a, spec, |bus, timeouts, on_step| {
+    let stop = crate::interrupt::Stop::watch(a.pace_ms > 0)?;
+    match serve_world(a, spec, &stop, |bus, timeouts, on_step| {
         madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g, waiting| {
             on_step(g, waiting)
         })
-    })
+    })? {
+        Some((at, signal)) => Err(crate::interrupt::Interrupted {
+            at,
+            signal,
+            finished: true,
+        }
+        .into()),
+        None => Ok(()),
+    }
 }
 
 #[cfg(not(feature = "ros2"))]
@@ -397,20 +418,23 @@ fn real_world(_: &WorldArgs, _: &madenet_sim::TrialSpec, _: &str) -> Result<()> 
 }
 
 /// Runs a world node (`run` gets the bus, the timeouts and the progress callback) and writes
-/// its result.
+/// its result; a signal `stop` watches ends the run after its timestep, writes no result and
+/// returns where it stopped and the signal.
 fn serve_world(
     a: &WorldArgs,
     spec: &madenet_sim::TrialSpec,
+    stop: &crate::interrupt::Stop,
     run: impl FnOnce(
         &ZenohBus,
         Timeouts,
-        &mut dyn FnMut(&dyn madenet_runtime::Ground, &mut dyn FnMut()),
+        &mut dyn FnMut(&dyn madenet_runtime::Ground, &mut dyn FnMut()) -> ControlFlow<()>,
     ) -> Result<LockstepResult, madenet_runtime::RuntimeError>,
-) -> Result<()> {
+) -> Result<Option<(String, i32)>> {
     let bus = a.node.bus(Node::World, spec.starts.len())?;
     let progress = a.node.progress;
     let pace = Duration::from_millis(a.pace_ms);
     let mut last = std::time::Instant::now();
+    let mut interrupted = None;
     let r = run(&bus, a.node.timeouts(), &mut |w, waiting| {
         if progress {
             let explored = w.explored_fraction();
@@ -428,8 +452,18 @@ fn serve_world(
             waiting();
         }
         last = std::time::Instant::now();
+        match stop.requested() {
+            Some(signal) => {
+                interrupted = Some((format!("timestep {}", w.t()), signal));
+                ControlFlow::Break(())
+            }
+            None => ControlFlow::Continue(()),
+        }
     })?;
     bus.close();
+    if interrupted.is_some() {
+        return Ok(interrupted);
+    }
     let out = WorldOutput::new(spec, &a.scenario.policy, r, a.trajectory);
     let json = serde_json::to_string_pretty(&out)?;
     match &a.out {
@@ -437,7 +471,7 @@ fn serve_world(
             .with_context(|| format!("--out {}", p.display()))?,
         None => out!("{json}")?,
     }
-    Ok(())
+    Ok(None)
 }
 
 pub fn radio(a: RadioArgs) -> Result<()> {
@@ -641,21 +675,59 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
         })
         .collect();
     let bar = |node: Node| &bar_of[nodes.iter().position(|n| n.0 == node).expect("a node")];
-    let outcome = run_nodes(&exe, &nodes, port, &mut |event| match event {
-        LaunchEvent::Progress(node, p) => bar(node).set_message(p.to_string()),
-        LaunchEvent::Said(node, line) if !line.starts_with("error") => {
-            if bars.is_hidden() {
-                eprintln!("{node}: {line}");
+    // Caught here, passed on to the world node (which finishes the run); the nodes are in a
+    // process group of their own, so a terminal's Ctrl-C does not reach them directly.
+    let signals = crate::interrupt::Stop::catch()?;
+    let mut world_at: Option<String> = None;
+    let outcome = run_nodes(
+        &exe,
+        &nodes,
+        port,
+        &mut |event| match event {
+            LaunchEvent::Progress(node, p) => {
+                if node == Node::World {
+                    // `step=12 explored=0.41`: where an interrupted run stopped.
+                    world_at = p.split_whitespace().next().map(|s| s.replace('=', " "));
+                }
+                bar(node).set_message(p.to_string())
+            }
+            LaunchEvent::Said(node, line) if !line.starts_with("error") => {
+                if bars.is_hidden() {
+                    eprintln!("{node}: {line}");
+                } else {
+                    bars.println(format!("{node}: {line}")).ok();
+                }
+            }
+            LaunchEvent::Said(..) => {}
+            LaunchEvent::Finished(node, ok) => {
+                bar(node).finish_with_message(if ok { "done" } else { "failed" })
+            }
+        },
+        &mut || signals.take(),
+    );
+    bars.clear().ok();
+    if let Err(LaunchError::Interrupted { signal }) = outcome {
+        // The world node ended the run after its timestep and finished what it writes, unless
+        // a second signal stopped it first: what exists is what was finished.
+        let outputs: Vec<(&PathBuf, &str)> = (a.pictures.render.iter().chain(&a.pictures.snapshot))
+            .map(|p| (p, ""))
+            .chain(a.watch.record.iter().map(|p| (p, " (ROS 2 bag)")))
+            .collect();
+        let mut finished = true;
+        for (p, what) in outputs {
+            if p.exists() {
+                out!("wrote      {}{what}", p.display())?;
             } else {
-                bars.println(format!("{node}: {line}")).ok();
+                finished = false;
             }
         }
-        LaunchEvent::Said(..) => {}
-        LaunchEvent::Finished(node, ok) => {
-            bar(node).finish_with_message(if ok { "done" } else { "failed" })
+        return Err(crate::interrupt::Interrupted {
+            at: world_at.unwrap_or_else(|| "the start".into()),
+            signal,
+            finished,
         }
-    });
-    bars.clear().ok();
+        .into());
+    }
     outcome?;
     let json = std::fs::read_to_string(&result_path).context("the world's result")?;
     if a.json {

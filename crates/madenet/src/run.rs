@@ -271,7 +271,12 @@ pub fn run(a: RunArgs) -> Result<()> {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted { at, signal }.into());
+        return Err(crate::interrupt::Interrupted {
+            at,
+            signal,
+            finished: true,
+        }
+        .into());
     }
     let result = trial.finish();
     if a.json {
@@ -394,7 +399,12 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted { at, signal }.into());
+        return Err(crate::interrupt::Interrupted {
+            at,
+            signal,
+            finished: true,
+        }
+        .into());
     }
     let r = trial.finish();
     if a.json {

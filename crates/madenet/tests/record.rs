@@ -446,3 +446,65 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
         );
     }
 }
+
+/// Ctrl-C to `launch` (its nodes in a process group of their own): the world node ends the run
+/// after its timestep and finishes the bag, the robots and the radio stop, `launch` names the
+/// bag and exits with 130; nothing hidden is left beside it.
+#[test]
+fn ctrl_c_to_launch_finishes_the_world_nodes_bag() {
+    let dir = Scratch::new("record-launch-ctrl-c");
+    let bag = dir.join("bag");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args([
+            "launch",
+            "--map",
+            "paper:8",
+            "--policy",
+            "spread",
+            "--pace-ms",
+            "100",
+        ])
+        .arg("--record")
+        .arg(&bag)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The nodes start and connect well within this; the paced run takes ≈ 10 s.
+    std::thread::sleep(std::time::Duration::from_millis(3000));
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted at step"), "{stderr}");
+    assert!(
+        stdout.contains("wrote") && stdout.contains("(ROS 2 bag)"),
+        "{stdout}"
+    );
+    // Ended early: before the trial's last timestep (the same trial in one process).
+    let at: usize = stderr
+        .split("interrupted at step ")
+        .nth(1)
+        .and_then(|r| r.split(';').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{stderr}"));
+    let whole = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(["run", "--map", "paper:8", "--policy", "spread", "--json"])
+        .output()
+        .unwrap();
+    let whole: serde_json::Value = serde_json::from_slice(&whole.stdout).unwrap();
+    let tns = whole["metrics"]["tns"].as_u64().unwrap() as usize;
+    assert!(at > 0 && at < tns, "stopped at {at} of {tns}");
+    let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+    assert!(metadata.contains("message_count"), "{metadata}");
+    assert!(
+        entries(dir.path()).iter().all(|e| !e.starts_with('.')),
+        "{:?}",
+        entries(dir.path())
+    );
+}

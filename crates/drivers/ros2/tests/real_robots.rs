@@ -55,7 +55,9 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
             Duration::from_secs(20),
         )
         .unwrap();
-        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {});
+        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {
+            std::ops::ControlFlow::Continue(())
+        });
         stop.store(true, Ordering::Relaxed);
         let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
         (result, paths)
@@ -146,7 +148,9 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
             Duration::from_secs(20),
         )
         .unwrap();
-        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {});
+        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {
+            std::ops::ControlFlow::Continue(())
+        });
         stop.store(true, Ordering::Relaxed);
         (result, team.join().unwrap())
     });

@@ -5,6 +5,11 @@
 //! any other line as something it said (a warning as it happens, an error before it exits).
 //! When one node fails the others are stopped (they would only wait for it to time out), and
 //! the error names every failed node with its last error line.
+//!
+//! The nodes run in a process group of their own, so a terminal's Ctrl-C reaches the launcher
+//! only; the launcher's `signals` passes the first one on to the world node (which ends the run
+//! after its timestep and finishes what it writes, and tells the others to stop) and a second
+//! stops every node at once.
 
 use crate::wire::Node;
 use std::io::{BufRead, BufReader};
@@ -49,7 +54,17 @@ pub enum LaunchError {
     /// The processes could not be waited for.
     #[error("waiting for the node processes: {0}")]
     Wait(std::io::Error),
+    /// The launcher was asked to stop (`signal`: SIGINT, SIGTERM); the nodes have ended.
+    #[error("interrupted by signal {signal}")]
+    Interrupted {
+        /// The first signal.
+        signal: i32,
+    },
 }
+
+/// After passing a signal on to the world node: how long the others get to stop on their own
+/// once it has ended.
+const GRACE: Duration = Duration::from_secs(3);
 
 /// The node processes of a launch; dropping it kills any still running.
 struct Children(Vec<(Node, Child)>);
@@ -69,18 +84,23 @@ const LAST_WORDS: usize = 5;
 /// Runs `exe` once per node with its arguments (`nodes`: the run's nodes in order) until all
 /// have exited, or one has failed (then the others are stopped). `port` is the run's first
 /// loopback port, named when a node finds its port taken. `on_event` hears every line and exit
-/// as it happens.
+/// as it happens. `signals` is polled about every 100 ms for a signal the launcher caught (and
+/// takes it): the first is sent on to the world node, a second stops every node; either way
+/// the launch ends with [`LaunchError::Interrupted`] once the nodes have.
 pub fn run_nodes(
     exe: &Path,
     nodes: &[(Node, Vec<String>)],
     port: u16,
     on_event: &mut dyn FnMut(LaunchEvent<'_>),
+    signals: &mut dyn FnMut() -> Option<i32>,
 ) -> Result<(), LaunchError> {
+    use std::os::unix::process::CommandExt;
     let mut children = Children(Vec::new());
     let (tx, rx) = std::sync::mpsc::channel::<(usize, String)>();
     for (k, (node, args)) in nodes.iter().enumerate() {
         let mut child = Command::new(exe)
             .args(args)
+            .process_group(0)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -112,6 +132,8 @@ pub fn run_nodes(
     let mut finished = vec![false; nodes.len()];
     let mut failures: Vec<String> = Vec::new();
     let mut running = nodes.len();
+    // The first signal, and when the world node ended after it.
+    let (mut interrupted, mut world_ended) = (None::<i32>, None::<std::time::Instant>);
     let mut hear = |k: usize, line: String, on_event: &mut dyn FnMut(LaunchEvent<'_>)| {
         let node = nodes[k].0;
         match line.strip_prefix("progress ") {
@@ -140,6 +162,34 @@ pub fn run_nodes(
                 Some(_) => {}
             }
         }
+        if let Some(signal) = signals() {
+            if interrupted.is_some() {
+                break; // a second signal: stop every node now
+            }
+            interrupted = Some(signal);
+            if let Some((_, world)) = children.0.iter().find(|(n, _)| *n == Node::World) {
+                // The world ends the run after its timestep (or dies, if it does not watch).
+                let pid = world.id() as libc::pid_t;
+                // SAFETY: kill(2) with a child's pid (not yet reaped: `try_wait` found it
+                // running or we hold its status) and a valid signal number.
+                unsafe { libc::kill(pid, signal) };
+            }
+        }
+        if interrupted.is_some() {
+            // Ended by the user: a node's exit code is not a failure, and once the world has
+            // ended the others get `GRACE` to stop on their own.
+            let world_done = nodes
+                .iter()
+                .position(|(n, _)| *n == Node::World)
+                .is_none_or(|k| finished[k]);
+            if world_done {
+                let since = *world_ended.get_or_insert_with(std::time::Instant::now);
+                if since.elapsed() > GRACE {
+                    break;
+                }
+            }
+            continue;
+        }
         if !failures.is_empty() {
             // One node failed: the others would only time out; stop them now.
             break;
@@ -154,6 +204,9 @@ pub fn run_nodes(
             Ok((k, line)) => hear(k, line, on_event),
             Err(_) => break, // every reader done, or the 2 s are up
         }
+    }
+    if let Some(signal) = interrupted {
+        return Err(LaunchError::Interrupted { signal });
     }
     if failures.is_empty() {
         return Ok(());
@@ -195,7 +248,14 @@ mod tests {
             (Node::Radio, script("exit 0")),
         ];
         let mut events = Vec::new();
-        run_nodes(sh, &nodes, 7000, &mut |e| events.push(format!("{e:?}"))).unwrap();
+        run_nodes(
+            sh,
+            &nodes,
+            7000,
+            &mut |e| events.push(format!("{e:?}")),
+            &mut || None,
+        )
+        .unwrap();
         assert!(events.contains(&format!("{:?}", LaunchEvent::Progress(Node::World, "t=1"))));
         assert!(events.contains(&format!(
             "{:?}",
@@ -208,7 +268,7 @@ mod tests {
             (Node::World, script("sleep 30")),
             (Node::Robot(0), script("echo 'error: no map' >&2; exit 2")),
         ];
-        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}).unwrap_err();
+        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}, &mut || None).unwrap_err();
         assert!(
             t0.elapsed() < Duration::from_secs(20),
             "the sleeper was stopped"
@@ -221,10 +281,67 @@ mod tests {
             Node::Radio,
             script("echo 'error: listen: Address already in use' >&2; exit 2"),
         )];
-        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}).unwrap_err();
+        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}, &mut || None).unwrap_err();
         assert!(
             matches!(e, LaunchError::PortsTaken { port: 7000, .. }),
             "{e}"
+        );
+    }
+
+    /// A signal the launcher caught goes to the world node alone (it finishes and says so; the
+    /// radio, which would wait for it, is stopped after the grace); a second stops every node.
+    #[test]
+    fn signals_go_to_the_world_then_stop_everything() {
+        let sh = Path::new("/bin/sh");
+        let script = |s: &str| vec!["-c".to_string(), s.to_string()];
+        let nodes = vec![
+            (
+                Node::World,
+                script("trap 'echo finished >&2; exit 130' INT; echo 'progress up' >&2; sleep 30 & wait"),
+            ),
+            (Node::Radio, script("trap 'exit 7' INT; sleep 30 & wait")),
+        ];
+        let t0 = std::time::Instant::now();
+        let mut events = Vec::new();
+        let mut polls = 0;
+        let e = run_nodes(
+            sh,
+            &nodes,
+            7000,
+            &mut |e| events.push(format!("{e:?}")),
+            &mut || {
+                polls += 1;
+                // The signal comes once the world has said it is up (its trap is set).
+                (polls == 10).then_some(libc::SIGINT)
+            },
+        )
+        .unwrap_err();
+        assert!(matches!(e, LaunchError::Interrupted { signal: 2 }), "{e}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "the radio was stopped"
+        );
+        assert!(events.contains(&format!("{:?}", LaunchEvent::Said(Node::World, "finished"))));
+        assert!(events.contains(&format!("{:?}", LaunchEvent::Finished(Node::World, false))));
+        // The radio got no signal of its own (it would have exited with 7): it was stopped.
+        assert!(
+            !events.iter().any(|e| e.contains("Finished(Radio")),
+            "{events:?}"
+        );
+
+        // A world that does not stop on the first signal is stopped by the second.
+        let nodes = vec![(Node::World, script("trap '' INT TERM; sleep 30 & wait"))];
+        let t0 = std::time::Instant::now();
+        let mut polls = 0;
+        let e = run_nodes(sh, &nodes, 7000, &mut |_| {}, &mut || {
+            polls += 1;
+            (polls == 5 || polls == 15).then_some(libc::SIGTERM)
+        })
+        .unwrap_err();
+        assert!(matches!(e, LaunchError::Interrupted { signal: 15 }), "{e}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "stopped by the second"
         );
     }
 }

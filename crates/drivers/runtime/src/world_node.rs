@@ -14,6 +14,7 @@ use crate::{Latency, LockstepResult, RuntimeError, Timeouts};
 use madenet_map::Pos;
 use madenet_metrics::{MetricsRecorder, Timing};
 use madenet_world::{Move, Observation, World};
+use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
 /// The ground truth a world node stands on: madenet's simulated [`World`], or real robots
@@ -98,7 +99,10 @@ pub fn run_world_with<T: Transport>(
     mut on_step: impl FnMut(&World),
 ) -> Result<LockstepResult, RuntimeError> {
     world.detach_radio();
-    run_ground_with(world, transport, timeouts, None, None, |w, _| on_step(w))
+    run_ground_with(world, transport, timeouts, None, None, |w, _| {
+        on_step(w);
+        ControlFlow::Continue(())
+    })
 }
 
 /// Refuses a robot whose hello carries another scenario digest than this world's (both known).
@@ -192,7 +196,8 @@ fn with_beats<T: Transport, R>(
 pub type ShowFn<'a, G> = &'a mut dyn FnMut(&G, &[Shown], &[(usize, usize)]);
 
 /// The world node on any [`Ground`] (real robots, say), calling `on_step(ground)` after each
-/// timestep. With `show`, the robots send what they show after each move ([`Shown`]: goal,
+/// timestep; `on_step` returning `Break` ends the run there (Ctrl-C: the robots and the radio
+/// get the last outcome and stop as after the last timestep, the result holds the run so far). With `show`, the robots send what they show after each move ([`Shown`]: goal,
 /// path, candidates) and the radio the pairs exchanging each timestep, and `show(ground,
 /// shown, exchanges)` is called once before the first timestep and once after each — the
 /// state `madenet run` draws: the ground after the step, the robots' choices in it, and the
@@ -203,7 +208,7 @@ pub fn run_ground_with<G: Ground, T: Transport>(
     timeouts: Timeouts,
     scenario: Option<u64>,
     mut show: Option<ShowFn<'_, G>>,
-    mut on_step: impl FnMut(&G, &mut dyn FnMut()),
+    mut on_step: impl FnMut(&G, &mut dyn FnMut()) -> ControlFlow<()>,
 ) -> Result<LockstepResult, RuntimeError> {
     let n = world.robots();
     let me = Node::World;
@@ -375,9 +380,12 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         world.record(&mut recorder);
         positions.push(world.positions());
         // The caller may take its time here (a pace): the robots hear the world meanwhile.
-        with_beats(&mut heartbeat, &mut mb, step, |waiting| {
+        let next = with_beats(&mut heartbeat, &mut mb, step, |waiting| {
             on_step(&world, waiting)
         })?;
+        if next.is_break() {
+            break;
+        }
     }
     let step = world.t() as u64;
     if let Some(show) = show.as_mut() {
