@@ -167,6 +167,9 @@ def test_plans_candidates_comms_and_metrics(cli, tmp_path):
         comms = [m for _, m in topics["/comms"]]
         lines = [[[xy(p) for p in k.points] for k in m.markers] for m in comms]
         assert all(a != b for a, b in zip(lines, lines[1:])), "/comms when the lines change"
+        # A colour without lines is removed (DELETE), never a LINE_LIST without points, which
+        # Foxglove and Lichtblick flag as an error.
+        assert all((k.action == 2) == (not k.points) for m in comms for k in m.markers)
         green = sum(len(m.markers[0].points) for m in comms)
         red = sum(len(m.markers[1].points) for m in comms)
         if csp == "1":
@@ -177,6 +180,26 @@ def test_plans_candidates_comms_and_metrics(cli, tmp_path):
         assert explored == sorted(explored) and explored[-1] == 1.0
         distance = topics["/metrics/distance"][-1][1].data
         assert abs(distance - result["metrics"]["ttd"]) < 1e-9
+
+
+def test_a_goal_that_ends_shows_the_robots_own_cell(cli, tmp_path):
+    """When a robot's goal becomes none (nothing left to reach), its /robot<i>/goal_pose moves
+    to the cell it stands on, so the last goal does not stay shown (paper:10, spread, CSP 0:
+    robot 2 loses its goal at timesteps 5 and 9)."""
+    bag = tmp_path / "bag"
+    out = subprocess.run([cli, "run", "--map", "paper:10", "--policy", "spread", "--csp", "0",
+                          "--json", "--trajectory", "--record", str(bag)],
+                         check=True, capture_output=True, text=True)
+    steps = json.loads(out.stdout)["trajectory"]
+    topics = decoded(bag)
+    ended = [(b["t"], i) for a, b in zip(steps, steps[1:]) for i in range(len(b["goals"]))
+             if a["goals"][i] is not None and b["goals"][i] is None]
+    assert len(ended) >= 2, ended
+    for t, i in ended:
+        # Log times in nanoseconds of simulated time: timestep t is second t.
+        goals = {s // 10**9: xy(m.pose.position) for s, m in topics[f"/robot{i}/goal_pose"]}
+        poses = {s // 10**9: xy(m.pose.position) for s, m in topics[f"/robot{i}/pose"]}
+        assert goals.get(t) == poses[t], f"robot {i} at timestep {t}"
 
 
 def test_a_continuous_run_is_recorded(cli, tmp_path):

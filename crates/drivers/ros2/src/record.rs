@@ -9,7 +9,7 @@
 //! | `/team_map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the team's merged map 𝓜 (everything any robot observed) |
 //! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: robot i's belief with the timestep's own observation |
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
-//! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes |
+//! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes (to none: its own cell) |
 //! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route or goal changes (not when it only advances along the last route): from its cell to its goal |
 //! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot, with the learned policy's score: `2: 0.41`) and the chosen one (the robot's colour) |
 //! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
@@ -405,8 +405,10 @@ impl Recorder {
             let pose = pose_stamped(&self.frame, positions[i], stamp);
             self.out.put(&self.names[i].pose, &pose, ns)?;
             let goal_changed = r.goal != self.goals[i];
-            if let Some(g) = r.goal.filter(|_| goal_changed) {
-                let msg = pose_stamped(&self.frame, g, stamp);
+            if goal_changed {
+                // No goal any more (nothing left to reach): its own cell, so the last goal
+                // does not stay shown (PoseStamped has no "none").
+                let msg = pose_stamped(&self.frame, r.goal.unwrap_or(positions[i]), stamp);
                 self.out.put(&self.names[i].goal, &msg, ns)?;
             }
             self.goals[i] = r.goal;
@@ -542,6 +544,11 @@ impl Recorder {
             m.scale.x = 0.08;
             m.color = color;
             m.points = ends.iter().map(|&p| self.point(p, 0.1)).collect();
+            if m.points.is_empty() {
+                // No lines of this colour: remove the last ones (a LINE_LIST without points is
+                // an error to Foxglove / Lichtblick).
+                m.action = Marker::DELETE;
+            }
             m
         };
         let green = ColorRGBA {
@@ -721,8 +728,10 @@ impl ContinuousRecorder {
                     }
                 }
             }
-            if let Some(g) = agent.goal().filter(|&g| Some(g) != self.goals[i]) {
-                let msg = crate::pose_stamped(&self.frame, g, stamp);
+            if agent.goal() != self.goals[i] {
+                // No goal any more: its own cell (as the grid's).
+                let at = agent.goal().unwrap_or_else(|| world.cell_of(i));
+                let msg = crate::pose_stamped(&self.frame, at, stamp);
                 self.out.put(&format!("/robot{i}/goal_pose"), &msg, ns)?;
             }
             self.goals[i] = agent.goal();
