@@ -274,6 +274,22 @@ def test_a_launched_run_records_what_the_in_process_run_records(cli, tmp_path):
         assert [repr(m) for _, m in a] == [repr(m) for _, m in b], topic
 
 
+def test_a_launched_learned_policy_shows_its_scores(cli, tmp_path):
+    """With a learned policy, the launched run's candidate labels carry the scores the robots'
+    processes weighed (sent in `Shown`): the same labels as the in-process run's."""
+    args = ["--map", "paper:3", "--policy", "made-net", "--seed", "2", "--csp", "1"]
+    subprocess.run([cli, "launch", *args, "--record", str(tmp_path / "l")], check=True,
+                   capture_output=True)
+    subprocess.run([cli, "run", *args, "--record", str(tmp_path / "r")], check=True,
+                   capture_output=True)
+    launched, inproc = decoded(tmp_path / "l"), decoded(tmp_path / "r")
+    for i in range(3):
+        labels = [[[k.text for k in m.markers if k.type == 9] for _, m in run[f"/robot{i}/candidates"]]
+                  for run in (launched, inproc)]
+        assert labels[0] == labels[1], f"robot {i}"
+        assert any(":" in text for texts in labels[0] for text in texts), "labels carry scores"
+
+
 def test_a_study_records_its_chosen_trials_as_they_ran(cli, tmp_path):
     """`compare`/`scale --record-trials`: each bag in OUT/bags/ is its trials.csv row's trial —
     the last /metrics/distance is the row's TTD, the last /metrics/explored its explored share,

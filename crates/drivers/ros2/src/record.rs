@@ -108,12 +108,8 @@ pub struct Recorder {
     team: Option<Vec<Occupancy>>,
     goals: Vec<Option<Pos>>,
     plans: Vec<Option<Vec<Pos>>>,
-    /// Each robot's decision count (a world node's: its count of new candidates or goals)
-    /// when last recorded.
+    /// Each robot's decision count (a world node's: as its robot shows it) when last recorded.
     decisions: Vec<u64>,
-    /// A world node's robots: what each showed last, and how often that changed.
-    shown: Vec<Option<(Vec<Pos>, Option<Pos>)>>,
-    shown_decisions: Vec<u64>,
     /// Each robot's topic names and `/tf` child frame, made once.
     names: Vec<RobotTopics>,
     /// The radio's lines last published (pairs exchanged, pairs dropped, as cells).
@@ -243,8 +239,6 @@ impl Recorder {
             goals: vec![None; n],
             plans: vec![None; n],
             decisions: vec![0; n],
-            shown: vec![None; n],
-            shown_decisions: vec![0; n],
             names: (0..n).map(RobotTopics::of).collect(),
             comms: None,
         };
@@ -323,7 +317,8 @@ impl Recorder {
     }
 
     /// Records a world node's timestep (`madenet world`, which `launch` starts): the world,
-    /// what each robot shows (goal, path, candidates; [`madenet_runtime::wire::Shown`]) and the
+    /// what each robot shows (goal, path, candidates, a learned policy's scores;
+    /// [`madenet_runtime::wire::Shown`]) and the
     /// radio's exchanges. The robots' beliefs live in their own processes: no `/robot<i>/map`.
     pub fn step_world(
         &mut self,
@@ -335,12 +330,6 @@ impl Recorder {
         let robots: Vec<RobotView<'_>> = (0..world.positions().len())
             .map(|i| {
                 let s = shown.get(i).unwrap_or(&none);
-                // A new decision shows other candidates or another goal.
-                let key = (s.candidates.clone(), s.goal);
-                if self.shown[i].as_ref() != Some(&key) {
-                    self.shown_decisions[i] += 1;
-                    self.shown[i] = Some(key);
-                }
                 RobotView {
                     belief: None,
                     goal: s.goal,
@@ -349,8 +338,8 @@ impl Recorder {
                     chosen: s
                         .goal
                         .and_then(|g| s.candidates.iter().position(|&c| c == g)),
-                    scores: None,
-                    decision: self.shown_decisions[i],
+                    scores: (!s.scores.is_empty()).then_some(&s.scores[..]),
+                    decision: s.decisions,
                 }
             })
             .collect();

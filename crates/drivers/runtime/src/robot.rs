@@ -340,6 +340,8 @@ pub fn run_robot_with<T: Transport>(
                 path: agent.path().to_vec(),
                 candidates: agent.candidates().cells.clone(),
                 exchanged_with: agent.exchanged_with().to_vec(),
+                scores: agent.policy_scores().map_or_else(Vec::new, <[f32]>::to_vec),
+                decisions: agent.stats().decisions as u64,
             });
             mb.send(&Envelope::new(step, me, Node::World, shown))?;
         }

@@ -14,7 +14,7 @@ use madenet_world::{Move, Observation};
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; bumped on any change to [`Envelope`] or [`Body`].
-pub const PROTOCOL_VERSION: u16 = 7;
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Who sends or receives: the world (ground truth, motion, sensing), the radio (the paper's
 /// communication model) or a robot.
@@ -130,6 +130,11 @@ pub struct Shown {
     pub candidates: Vec<Pos>,
     /// The teammates it exchanged β with this timestep.
     pub exchanged_with: Vec<usize>,
+    /// The values its policy weighed at its last decision, per candidate slot (a learned
+    /// policy's; empty for a rule).
+    pub scores: Vec<f32>,
+    /// Its decisions so far (one more: a new decision, its candidates and scores to show).
+    pub decisions: u64,
 }
 
 /// A message that could not be read.
