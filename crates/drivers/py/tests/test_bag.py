@@ -229,6 +229,14 @@ def test_a_continuous_run_is_recorded(cli, tmp_path):
     assert topics["/metrics/explored"][-1][1].data == 1.0 and result["complete"]
     # Every robot's first scan (the world scans all at the start) is in the bag.
     assert all(topics[f"/robot{i}/scan"][0][0] == 0 for i in range(3))
+    # The true map twice, once: in 1 m cells and in the robots' fine pixels, covering the same
+    # 12 m; the fine one has free and occupied pixels, no unknown.
+    (_, coarse), = topics["/truth_map"]
+    (_, fine), = topics["/fine_truth_map"]
+    assert coarse.info.resolution == 1.0 and coarse.info.width == 12
+    res = topics["/robot0/map"][0][1].info.resolution
+    assert abs(fine.info.resolution - res) < 1e-6 and round(fine.info.width * res) == 12
+    assert set(np.unique(fine.data)) == {0, 100}
 
 
 def test_the_foxglove_layout_names_recorded_topics(cli, tmp_path):

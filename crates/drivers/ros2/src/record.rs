@@ -579,6 +579,7 @@ const FINE_MAP_EVERY_S: f64 = 1.0;
 /// | topic | type | when |
 /// | --- | --- | --- |
 /// | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the true map in 1 m cells |
+/// | `/fine_truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the scene at its fine resolution (0.1 m pixels by default) |
 /// | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | each of robot i's scans (all at the start, then staggered), in `robot<i>/base_link` |
 /// | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | robot i's fine map (occupancy %), when it changed, at most once a second |
 /// | `/robot<i>/pose`, `/tf`, `/clock` | as the grid's | 10 Hz and at the end, with the robots' headings |
@@ -650,6 +651,11 @@ impl ContinuousRecorder {
         };
         let truth = occupancy_grid(&r.frame, world.coarse_truth().cells(), Time::default());
         r.out.put("/truth_map", &truth, 0)?;
+        // The scene itself at its fine resolution (what the lidar hits), beside the robots'
+        // fine maps.
+        let fine = &world.scene().fine;
+        let truth = occupancy_grid(&MapFrame::of(fine), fine.cells(), Time::default());
+        r.out.put("/fine_truth_map", &truth, 0)?;
         r.record(trial, false)?;
         Ok(r)
     }
