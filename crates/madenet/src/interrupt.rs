@@ -73,7 +73,7 @@ pub struct Interrupted {
     /// The signal.
     pub signal: i32,
     /// Whether what the run writes (bag, pictures) was finished; not after `launch`'s second
-    /// signal, which stops the nodes at once.
+    /// signal, which stops the nodes at once, nor when its world node failed or was killed.
     pub finished: bool,
 }
 
@@ -88,8 +88,9 @@ impl std::fmt::Display for Interrupted {
         } else {
             write!(
                 f,
-                "interrupted at {} by a second signal: the nodes were stopped at once (a bag they \
-                 were writing stays unfinished in its hidden folder beside --record's path)",
+                "interrupted at {}; the run was stopped before it finished what it writes (a \
+                 second signal, or an error: a bag being written stays unfinished in its hidden \
+                 folder beside --record's path)",
                 self.at
             )
         }

@@ -396,7 +396,7 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
     )
     .context("--ros2-robots")?;
     let scenario = Some(scenario_of(spec));
-    let stop = crate::interrupt::Stop::watch(a.pace_ms > 0)?;
+    let stop = crate::interrupt::Stop::watch(a.pace_ms > 0 || a.node.progress)?;
     match serve_world(a, spec, &stop, |bus, timeouts, on_step| {
         madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g, waiting| {
             on_step(g, waiting)
@@ -568,18 +568,21 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     }
     a.watch.check()?;
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
+    // Caught from here on, passed on to the world node (which finishes the run); the nodes
+    // lead process groups of their own, so a terminal's Ctrl-C does not reach them directly.
+    let signals = crate::interrupt::Stop::catch()?;
     if a.port != 0 {
         loopback_endpoints(a.port, n, Node::Robot(n - 1))
             .map_err(anyhow::Error::msg)
             .context("--port")?;
-        return launch_on(&a, n, a.port);
+        return launch_on(&a, n, a.port, &signals);
     }
     // Free ports are found by binding and releasing them; another program may take one before
     // the node binds it. Then the node fails to listen, and the run is tried on new ports.
     let mut attempt = 1;
     loop {
         let port = free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?;
-        match launch_on(&a, n, port) {
+        match launch_on(&a, n, port, &signals) {
             Err(e)
                 if attempt < PORT_ATTEMPTS
                     && matches!(
@@ -589,6 +592,15 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             {
                 tracing::warn!("{e}: trying again on other ports");
                 attempt += 1;
+                if let Some(signal) = signals.take() {
+                    // Asked to stop between two attempts: nothing written.
+                    return Err(crate::interrupt::Interrupted {
+                        at: "the start".into(),
+                        signal,
+                        finished: false,
+                    }
+                    .into());
+                }
             }
             r => return r,
         }
@@ -599,7 +611,7 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
 const PORT_ATTEMPTS: usize = 3;
 
 /// One launch on the loopback ports from `port` on.
-fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
+fn launch_on(a: &LaunchArgs, n: usize, port: u16, signals: &crate::interrupt::Stop) -> Result<()> {
     let run = format!("launch-{}-{port}", std::process::id());
     let dir = tempfile::tempdir().context("a folder for the world's result")?;
     let result_path = dir.path().join("result.json");
@@ -675,9 +687,6 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
         })
         .collect();
     let bar = |node: Node| &bar_of[nodes.iter().position(|n| n.0 == node).expect("a node")];
-    // Caught here, passed on to the world node (which finishes the run); the nodes are in a
-    // process group of their own, so a terminal's Ctrl-C does not reach them directly.
-    let signals = crate::interrupt::Stop::catch()?;
     let mut world_at: Option<String> = None;
     let outcome = run_nodes(
         &exe,
@@ -691,6 +700,8 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
                 }
                 bar(node).set_message(p.to_string())
             }
+            // The world's own "interrupted at …" is said once more by launch, below.
+            LaunchEvent::Said(Node::World, line) if line.starts_with("interrupted") => {}
             LaunchEvent::Said(node, line) if !line.starts_with("error") => {
                 if bars.is_hidden() {
                     eprintln!("{node}: {line}");
@@ -706,25 +717,30 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16) -> Result<()> {
         &mut || signals.take(),
     );
     bars.clear().ok();
-    if let Err(LaunchError::Interrupted { signal }) = outcome {
-        // The world node ended the run after its timestep and finished what it writes, unless
-        // a second signal stopped it first: what exists is what was finished.
-        let outputs: Vec<(&PathBuf, &str)> = (a.pictures.render.iter().chain(&a.pictures.snapshot))
-            .map(|p| (p, ""))
-            .chain(a.watch.record.iter().map(|p| (p, " (ROS 2 bag)")))
-            .collect();
-        let mut finished = true;
-        for (p, what) in outputs {
-            if p.exists() {
-                out!("wrote      {}{what}", p.display())?;
-            } else {
-                finished = false;
+    if let Err(LaunchError::Interrupted {
+        signal,
+        world_finished,
+        world_error,
+    }) = outcome
+    {
+        if let Some(line) = world_error {
+            eprintln!("world: {line}");
+        }
+        // The world node ended the run after its timestep and finished everything it writes
+        // (it exits with 128 + the signal only then); otherwise nothing asked for is finished.
+        if world_finished {
+            let pictures = a.pictures.render.iter().chain(&a.pictures.snapshot);
+            for p in pictures {
+                out!("wrote      {}", p.display())?;
+            }
+            if let Some(p) = &a.watch.record {
+                out!("wrote      {} (ROS 2 bag)", p.display())?;
             }
         }
         return Err(crate::interrupt::Interrupted {
             at: world_at.unwrap_or_else(|| "the start".into()),
             signal,
-            finished,
+            finished: world_finished,
         }
         .into());
     }

@@ -470,8 +470,17 @@ fn ctrl_c_to_launch_finishes_the_world_nodes_bag() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    // The nodes start and connect well within this; the paced run takes ≈ 10 s.
-    std::thread::sleep(std::time::Duration::from_millis(3000));
+    // The world node watches signals before it starts its bag (a hidden folder beside it):
+    // once that is there, a second more puts the paced run (≈ 6 s) in its middle.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !entries(dir.path())
+        .iter()
+        .any(|e| e.starts_with(".bag.partial"))
+    {
+        assert!(std::time::Instant::now() < deadline, "no bag started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(1000));
     let kill = std::process::Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()

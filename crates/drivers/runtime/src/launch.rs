@@ -59,6 +59,12 @@ pub enum LaunchError {
     Interrupted {
         /// The first signal.
         signal: i32,
+        /// Whether the world node ended the run itself (it exited with 128 + `signal`, having
+        /// finished what it writes); not when a second signal, an error or the signal's default
+        /// action ended it.
+        world_finished: bool,
+        /// The world node's last error line, if it printed one.
+        world_error: Option<String>,
     },
 }
 
@@ -66,12 +72,18 @@ pub enum LaunchError {
 /// once it has ended.
 const GRACE: Duration = Duration::from_secs(3);
 
-/// The node processes of a launch; dropping it kills any still running.
+/// The node processes of a launch, each leading a process group of its own; dropping it kills
+/// the groups of those still running (a node and anything it started).
 struct Children(Vec<(Node, Child)>);
 
 impl Drop for Children {
     fn drop(&mut self) {
         for (_, c) in &mut self.0 {
+            if let Ok(None) = c.try_wait() {
+                // SAFETY: kill(2) of the process group a child leads (`process_group(0)`); the
+                // child is not reaped yet, so its pid (= the group's id) is still its own.
+                unsafe { libc::kill(-(c.id() as libc::pid_t), libc::SIGKILL) };
+            }
             let _ = c.kill();
             let _ = c.wait();
         }
@@ -98,9 +110,18 @@ pub fn run_nodes(
     let mut children = Children(Vec::new());
     let (tx, rx) = std::sync::mpsc::channel::<(usize, String)>();
     for (k, (node, args)) in nodes.iter().enumerate() {
-        let mut child = Command::new(exe)
-            .args(args)
-            .process_group(0)
+        let mut command = Command::new(exe);
+        command.args(args).process_group(0);
+        #[cfg(target_os = "linux")]
+        // SAFETY: prctl(2) is async-signal-safe, as a pre_exec hook must be. A launcher that
+        // dies (SIGKILL, a closed terminal) sends its nodes SIGTERM, so none is left running.
+        unsafe {
+            command.pre_exec(|| {
+                libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM);
+                Ok(())
+            });
+        }
+        let mut child = command
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
@@ -130,6 +151,8 @@ pub fn run_nodes(
         }
     };
     let mut finished = vec![false; nodes.len()];
+    // Each node's exit code once it has exited by itself (None: not yet, or by a signal).
+    let mut exit_codes: Vec<Option<i32>> = vec![None; nodes.len()];
     let mut failures: Vec<String> = Vec::new();
     let mut running = nodes.len();
     // The first signal, and when the world node ended after it.
@@ -154,6 +177,7 @@ pub fn run_nodes(
                 None => running += 1,
                 Some(status) if !finished[k] => {
                     finished[k] = true;
+                    exit_codes[k] = status.code();
                     on_event(LaunchEvent::Finished(*node, status.success()));
                     if !status.success() {
                         failures.push(format!("{node} exited with {status}"));
@@ -167,12 +191,20 @@ pub fn run_nodes(
                 break; // a second signal: stop every node now
             }
             interrupted = Some(signal);
-            if let Some((_, world)) = children.0.iter().find(|(n, _)| *n == Node::World) {
-                // The world ends the run after its timestep (or dies, if it does not watch).
-                let pid = world.id() as libc::pid_t;
-                // SAFETY: kill(2) with a child's pid (not yet reaped: `try_wait` found it
-                // running or we hold its status) and a valid signal number.
-                unsafe { libc::kill(pid, signal) };
+            let world = children
+                .0
+                .iter()
+                .enumerate()
+                .find(|(_, (n, _))| *n == Node::World);
+            match world {
+                Some((k, (_, world))) if !finished[k] => {
+                    // The world ends the run after its timestep (or dies, if it does not
+                    // watch). SAFETY: kill(2) of a child `try_wait` just found running (not
+                    // reaped, so the pid is still its own) with a valid signal number.
+                    unsafe { libc::kill(world.id() as libc::pid_t, signal) };
+                }
+                // No world running (it ended, or there is none): nothing to finish, stop now.
+                _ => break,
             }
         }
         if interrupted.is_some() {
@@ -206,7 +238,18 @@ pub fn run_nodes(
         }
     }
     if let Some(signal) = interrupted {
-        return Err(LaunchError::Interrupted { signal });
+        let k = nodes.iter().position(|(n, _)| *n == Node::World);
+        return Err(LaunchError::Interrupted {
+            signal,
+            world_finished: k.is_some_and(|k| exit_codes[k] == Some(128 + signal)),
+            world_error: k.and_then(|k| {
+                said[k]
+                    .iter()
+                    .rev()
+                    .find(|l| l.starts_with("error"))
+                    .cloned()
+            }),
+        });
     }
     if failures.is_empty() {
         return Ok(());
@@ -294,29 +337,47 @@ mod tests {
     fn signals_go_to_the_world_then_stop_everything() {
         let sh = Path::new("/bin/sh");
         let script = |s: &str| vec!["-c".to_string(), s.to_string()];
+        let dir = std::env::temp_dir().join(format!("madenet-launch-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let up = dir.join("up");
         let nodes = vec![
             (
                 Node::World,
-                script("trap 'echo finished >&2; exit 130' INT; echo 'progress up' >&2; sleep 30 & wait"),
+                script(&format!(
+                    "trap 'echo finished >&2; exit 130' INT; touch {}; sleep 30 & wait",
+                    up.display()
+                )),
             ),
             (Node::Radio, script("trap 'exit 7' INT; sleep 30 & wait")),
         ];
         let t0 = std::time::Instant::now();
         let mut events = Vec::new();
-        let mut polls = 0;
+        let mut sent = false;
         let e = run_nodes(
             sh,
             &nodes,
             7000,
             &mut |e| events.push(format!("{e:?}")),
             &mut || {
-                polls += 1;
-                // The signal comes once the world has said it is up (its trap is set).
-                (polls == 10).then_some(libc::SIGINT)
+                // The signal comes once the world has set its trap (and said so with a file).
+                let now = !sent && up.exists();
+                sent |= now;
+                now.then_some(libc::SIGINT)
             },
         )
         .unwrap_err();
-        assert!(matches!(e, LaunchError::Interrupted { signal: 2 }), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+        assert!(
+            matches!(
+                e,
+                LaunchError::Interrupted {
+                    signal: 2,
+                    world_finished: true,
+                    world_error: None
+                }
+            ),
+            "{e:?}"
+        );
         assert!(
             t0.elapsed() < Duration::from_secs(20),
             "the radio was stopped"
@@ -338,7 +399,17 @@ mod tests {
             (polls == 5 || polls == 15).then_some(libc::SIGTERM)
         })
         .unwrap_err();
-        assert!(matches!(e, LaunchError::Interrupted { signal: 15 }), "{e}");
+        assert!(
+            matches!(
+                e,
+                LaunchError::Interrupted {
+                    signal: 15,
+                    world_finished: false,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
         assert!(
             t0.elapsed() < Duration::from_secs(20),
             "stopped by the second"

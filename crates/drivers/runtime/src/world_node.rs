@@ -201,7 +201,8 @@ pub type ShowFn<'a, G> = &'a mut dyn FnMut(&G, &[Shown], &[(usize, usize)]);
 /// path, candidates) and the radio the pairs exchanging each timestep, and `show(ground,
 /// shown, exchanges)` is called once before the first timestep and once after each — the
 /// state `madenet run` draws: the ground after the step, the robots' choices in it, and the
-/// exchanges of the next timestep (a robot that sent nothing in time shows nothing).
+/// exchanges of the next timestep (a robot that sent nothing in time shows what it showed
+/// last; an absent robot, nothing).
 pub fn run_ground_with<G: Ground, T: Transport>(
     mut world: G,
     transport: T,
@@ -361,16 +362,17 @@ pub fn run_ground_with<G: Ground, T: Transport>(
         }
         absent_steps += present.iter().filter(|&&p| !p).count();
         if showing {
-            shown.clear();
             for (i, &here) in present.iter().enumerate() {
                 let wait = if here { timeouts.peer } else { Duration::ZERO };
                 let e = heartbeat.try_take(&mut mb, step, wait, |e| {
                     e.step == step && e.from == Node::Robot(i) && matches!(e.body, Body::Shown(_))
                 })?;
-                shown.push(match e.map(|e| e.body) {
-                    Some(Body::Shown(s)) => s,
-                    _ => Shown::default(),
-                });
+                match e.map(|e| e.body) {
+                    Some(Body::Shown(s)) => shown[i] = s,
+                    // Late: what it showed last stays; absent: nothing.
+                    _ if here => {}
+                    _ => shown[i] = Shown::default(),
+                }
             }
         }
         with_beats(&mut heartbeat, &mut mb, step, |waiting| {

@@ -392,9 +392,9 @@ impl RolloutTrainConfig {
                 "must be positive",
             ),
             (
-                self.listwise_temperature > 0.0 && self.listwise_temperature.is_finite(),
+                self.listwise_temperature >= 1e-3 && self.listwise_temperature <= 1e3,
                 "listwise_temperature",
-                "must be positive",
+                "must be in [0.001, 1000]",
             ),
             (
                 self.validation_csp.iter().all(|&p| unit(p))
@@ -1301,10 +1301,11 @@ fn student_loss(cfg: &RolloutTrainConfig, q: Tensor<2>, y: Tensor<2>, m: Tensor<
 }
 
 /// Σ over rows with a trained slot of −Σ_k softmax(y/τ)_k · log softmax(q/τ)_k over the trained
-/// slots, divided by those rows' count (untrained slots pushed to −10⁴ before both softmaxes).
+/// slots, divided by those rows' count (untrained slots pushed to −10⁹ before both softmaxes,
+/// after the division by τ).
 fn listwise_loss(q: Tensor<2>, y: Tensor<2>, m: Tensor<2>, tau: f32) -> Tensor<1> {
     use burn::tensor::activation::{log_softmax, softmax};
-    let off = m.clone().neg().add_scalar(1.0).mul_scalar(1e4);
+    let off = m.clone().neg().add_scalar(1.0).mul_scalar(1e9);
     let p = softmax(y.div_scalar(tau).sub(off.clone()), 1).mul(m.clone());
     let log_q = log_softmax(q.div_scalar(tau).sub(off), 1);
     let rows = m.clone().sum_dim(1).clamp_max(1.0);
