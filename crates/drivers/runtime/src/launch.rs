@@ -344,11 +344,11 @@ mod tests {
             (
                 Node::World,
                 script(&format!(
-                    "trap 'echo finished >&2; exit 130' INT; touch {}; sleep 30 & wait",
+                    "trap 'echo finished >&2; exit 143' TERM; touch {}; sleep 30 & wait",
                     up.display()
                 )),
             ),
-            (Node::Radio, script("trap 'exit 7' INT; sleep 30 & wait")),
+            (Node::Radio, script("trap 'exit 7' TERM; sleep 30 & wait")),
         ];
         let t0 = std::time::Instant::now();
         let mut events = Vec::new();
@@ -362,7 +362,8 @@ mod tests {
                 // The signal comes once the world has set its trap (and said so with a file).
                 let now = !sent && up.exists();
                 sent |= now;
-                now.then_some(libc::SIGINT)
+                // SIGTERM: a shell started in the background ignores SIGINT, and cannot trap it.
+                now.then_some(libc::SIGTERM)
             },
         )
         .unwrap_err();
@@ -371,7 +372,7 @@ mod tests {
             matches!(
                 e,
                 LaunchError::Interrupted {
-                    signal: 2,
+                    signal: 15,
                     world_finished: true,
                     world_error: None
                 }
