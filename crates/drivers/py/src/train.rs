@@ -15,7 +15,9 @@ use pyo3::types::PyBytes;
 /// (on one machine: the decision scorer's matrix kernels are picked per CPU). An exception of
 /// `collect` ends training at the iteration's start (its checkpoint) and is raised as it was.
 /// The time budget (`max_minutes`) is checked between iterations only. A new run needs
-/// `config`.
+/// `config`. Ctrl-C (SIGINT) stops it at its next check — between episodes and updates of a
+/// local collection, or when a `collect` call returns — dropping the iteration it is in, and
+/// raises `KeyboardInterrupt`; the run resumes from its last checkpoint.
 #[pyfunction]
 #[pyo3(signature = (out, config = None, collect = None, batch_size = 8))]
 pub fn train_rollout(
@@ -69,9 +71,25 @@ pub fn train_rollout(
         },
         None => Collector::Local,
     };
+    // Ctrl-C while Rust trains: Python's own handler only runs once this call returns, so a
+    // flag the training checks is set too (signal-hook keeps Python's handler and calls it).
+    let stop = madenet_learn::harness::stop_flag();
+    stop.store(false, std::sync::atomic::Ordering::Relaxed);
+    let watch = signal_hook::flag::register(signal_hook::consts::SIGINT, stop.clone())
+        .map_err(|e| value_error(format!("watching Ctrl-C: {e}")))?;
     let result = py.detach(|| train_with(&out, cfg, &mut |_| {}, &mut collector));
+    signal_hook::low_level::unregister(watch);
+    let stopped = stop.swap(false, std::sync::atomic::Ordering::Relaxed);
     if let Some(e) = raised.lock().expect("not poisoned").take() {
         return Err(e);
+    }
+    if stopped {
+        // Python's handler saw it too: its KeyboardInterrupt; if not, one of ours.
+        py.check_signals()?;
+        return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(format!(
+            "training stopped; {} resumes from its last checkpoint",
+            out.display()
+        )));
     }
     result.map_err(|e| value_error(format!("{}: {e}", out.display())))
 }

@@ -36,6 +36,10 @@ pub enum TrainError {
     /// Anything else (thread pool, encoding, generated maps, unknown shipped model, …).
     #[error("{0}")]
     Other(String),
+    /// Stopped on request ([`crate::harness::stop_flag`]) inside its first iteration: nothing
+    /// trained in this call; the run resumes from its last checkpoint.
+    #[error("stopped before the first iteration of this call finished; the run resumes from its last checkpoint")]
+    Stopped,
 }
 
 /// An I/O error naming `path`.

@@ -481,6 +481,21 @@ pub fn new_best(best: &mut Option<f64>, steps: f64) -> bool {
     better
 }
 
+/// Set to ask a running training to stop at its next check, as when its time budget runs out
+/// (its last checkpoint stays; `--resume` continues): for callers that catch Ctrl-C themselves,
+/// as the Python package does (`signal_hook::flag::register(SIGINT, stop_flag())`). Process-wide
+/// because signals are; clear it before the next run.
+pub fn stop_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    static STOP: std::sync::LazyLock<std::sync::Arc<std::sync::atomic::AtomicBool>> =
+        std::sync::LazyLock::new(Default::default);
+    std::sync::Arc::clone(&STOP)
+}
+
+/// Whether [`stop_flag`] is set.
+pub fn stop_requested() -> bool {
+    stop_flag().load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// A run's clock: wall time carried across resumes, its `max_minutes` budget and its
 /// `checkpoint_minutes` cadence (both measured in this process only).
 #[derive(Clone, Debug)]
@@ -506,9 +521,11 @@ impl Clock {
         self.wall0 + self.started.elapsed().as_secs_f64()
     }
 
-    /// Whether this process has used up `max_minutes` (0: no limit).
+    /// Whether this process has used up `max_minutes` (0: no limit), or was asked to stop
+    /// ([`stop_flag`]): either way the run ends at its next check as the budget ends it.
     pub fn out_of_time(&self, max_minutes: f64) -> bool {
-        max_minutes > 0.0 && self.started.elapsed().as_secs_f64() > max_minutes * 60.0
+        stop_requested()
+            || (max_minutes > 0.0 && self.started.elapsed().as_secs_f64() > max_minutes * 60.0)
     }
 
     /// Whether `minutes` have passed since the last checkpoint (0: never by time).

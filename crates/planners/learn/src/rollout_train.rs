@@ -1522,6 +1522,9 @@ fn time_ran_out(
     iteration: u64,
     first_iteration: u64,
 ) -> Result<(), TrainError> {
+    if iteration == first_iteration && harness::stop_requested() {
+        return Err(TrainError::Stopped);
+    }
     if iteration == first_iteration {
         return Err(TrainError::Config {
             path: "--max-minutes".into(),
@@ -1532,8 +1535,13 @@ fn time_ran_out(
             ),
         });
     }
+    let why = if harness::stop_requested() {
+        "stopped on request"
+    } else {
+        "max_minutes ran out"
+    };
     tracing::warn!(
-        "max_minutes ran out inside iteration {}: its work is dropped; --resume repeats it from the last checkpoint",
+        "{why} inside iteration {}: its work is dropped; --resume repeats it from the last checkpoint",
         iteration + 1
     );
     Ok(())
