@@ -6,7 +6,7 @@
 //! When one node fails the others are stopped (they would only wait for it to time out), and
 //! the error names every failed node with its last error line.
 //!
-//! The nodes run in a process group of their own, so a terminal's Ctrl-C reaches the launcher
+//! Each node leads a process group of its own, so a terminal's Ctrl-C reaches the launcher
 //! only; the launcher's `signals` passes the first one on to the world node (which ends the run
 //! after its timestep and finishes what it writes, and tells the others to stop) and a second
 //! stops every node at once.
