@@ -77,6 +77,22 @@ pub struct Interrupted {
     pub finished: bool,
 }
 
+impl Interrupted {
+    /// A run that a signal ended after it finished what it writes: `Err` of that, or `Ok` when
+    /// no signal came (`stopped`: where it stopped and the signal).
+    pub fn result(stopped: Option<(String, i32)>) -> anyhow::Result<()> {
+        match stopped {
+            Some((at, signal)) => Err(Interrupted {
+                at,
+                signal,
+                finished: true,
+            }
+            .into()),
+            None => Ok(()),
+        }
+    }
+}
+
 impl std::fmt::Display for Interrupted {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         if self.finished {

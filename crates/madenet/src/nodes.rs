@@ -361,15 +361,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
             eprintln!("{line}");
         }
     }
-    match interrupted {
-        Some((at, signal)) => Err(crate::interrupt::Interrupted {
-            at,
-            signal,
-            finished: true,
-        }
-        .into()),
-        None => Ok(()),
-    }
+    crate::interrupt::Interrupted::result(interrupted)
 }
 
 /// The digest every node's hello is checked by: map, starts and scenario config.
@@ -397,19 +389,12 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
     .context("--ros2-robots")?;
     let scenario = Some(scenario_of(spec));
     let stop = crate::interrupt::Stop::watch(a.pace_ms > 0 || a.node.progress)?;
-    match serve_world(a, spec, &stop, |bus, timeouts, on_step| {
+    let stopped = serve_world(a, spec, &stop, |bus, timeouts, on_step| {
         madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g, waiting| {
             on_step(g, waiting)
         })
-    })? {
-        Some((at, signal)) => Err(crate::interrupt::Interrupted {
-            at,
-            signal,
-            finished: true,
-        }
-        .into()),
-        None => Ok(()),
-    }
+    })?;
+    crate::interrupt::Interrupted::result(stopped)
 }
 
 #[cfg(not(feature = "ros2"))]

@@ -271,12 +271,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted {
-            at,
-            signal,
-            finished: true,
-        }
-        .into());
+        return crate::interrupt::Interrupted::result(Some((at, signal)));
     }
     let result = trial.finish();
     if a.json {
@@ -399,12 +394,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         for line in wrote {
             out!("{line}")?;
         }
-        return Err(crate::interrupt::Interrupted {
-            at,
-            signal,
-            finished: true,
-        }
-        .into());
+        return crate::interrupt::Interrupted::result(Some((at, signal)));
     }
     let r = trial.finish();
     if a.json {

@@ -262,16 +262,20 @@ def test_the_foxglove_layout_names_recorded_topics(cli, tmp_path):
     assert wanted - recorded == set(), wanted - recorded
 
 
+def launched_and_in_process(cli, tmp_path, args):
+    """The decoded bags of one trial recorded by `launch` and by `run`."""
+    for cmd, name in [("launch", "l"), ("run", "r")]:
+        subprocess.run([cli, cmd, *args, "--record", str(tmp_path / name)], check=True,
+                       capture_output=True)
+    return decoded(tmp_path / "l"), decoded(tmp_path / "r")
+
+
 def test_a_launched_run_records_what_the_in_process_run_records(cli, tmp_path):
     """`launch --record` (the world node records; the robots are processes over Zenoh): poses,
     goals, plans, the team map and the radio's lines are the in-process run's message for
     message; the robots' own maps stay in their processes (not recorded)."""
-    args = ["--map", "paper:3", "--policy", "spread", "--seed", "2", "--csp", "0.5"]
-    subprocess.run([cli, "launch", *args, "--record", str(tmp_path / "l")], check=True,
-                   capture_output=True)
-    subprocess.run([cli, "run", *args, "--record", str(tmp_path / "r")], check=True,
-                   capture_output=True)
-    launched, inproc = decoded(tmp_path / "l"), decoded(tmp_path / "r")
+    launched, inproc = launched_and_in_process(
+        cli, tmp_path, ["--map", "paper:3", "--policy", "spread", "--seed", "2", "--csp", "0.5"])
     assert not any(re.match(r"/robot\d/map$", t) for t in launched)
     same = ["/team_map", "/comms", "/tf", "/clock", "/truth_map", "/metrics/explored",
             "/metrics/distance"]
@@ -285,12 +289,8 @@ def test_a_launched_run_records_what_the_in_process_run_records(cli, tmp_path):
 def test_a_launched_learned_policy_shows_its_scores(cli, tmp_path):
     """With a learned policy, the launched run's candidate labels carry the scores the robots'
     processes weighed (sent in `Shown`): the same labels as the in-process run's."""
-    args = ["--map", "paper:3", "--policy", "made-net", "--seed", "2", "--csp", "1"]
-    subprocess.run([cli, "launch", *args, "--record", str(tmp_path / "l")], check=True,
-                   capture_output=True)
-    subprocess.run([cli, "run", *args, "--record", str(tmp_path / "r")], check=True,
-                   capture_output=True)
-    launched, inproc = decoded(tmp_path / "l"), decoded(tmp_path / "r")
+    launched, inproc = launched_and_in_process(
+        cli, tmp_path, ["--map", "paper:3", "--policy", "made-net", "--seed", "2", "--csp", "1"])
     for i in range(3):
         labels = [[[k.text for k in m.markers if k.type == 9] for _, m in run[f"/robot{i}/candidates"]]
                   for run in (launched, inproc)]
