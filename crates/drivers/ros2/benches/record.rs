@@ -8,6 +8,10 @@
 //! * `paper_trial/encoded_only` (every message built and CDR-encoded, no bag: the per-message
 //!   cost without the file)
 //! * `paper_trial/empty_bag` (the fixed cost: the true map and the first timestep only)
+//! * `paper_trial/fs_floor` (no madenet code: the file operations that put this trial's finished
+//!   bag on disk — a hidden folder, its `.mcap` written from ready bytes and synced, its
+//!   `metadata.yaml`, the rename — what any recorder writing the same bag pays) and
+//!   `paper_trial/fs_floor_unsynced` (the same without the `fsync`)
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use madenet_map::paper::{paper_map, Corner};
@@ -92,7 +96,52 @@ fn bench(c: &mut Criterion) {
             })
         })
     });
+    // The trial's finished bag, read back once: the bytes the floor writes.
+    let made = {
+        let mut trial = Trial::new(spec.clone()).expect("trial");
+        let mut bag = Recorder::start(&dir, &trial).expect("bag");
+        while trial.step() {
+            bag.step(&trial).expect("recorded");
+        }
+        bag.finish().expect("finished").expect("a bag").0
+    };
+    let mut files: Vec<(std::ffi::OsString, Vec<u8>)> = std::fs::read_dir(&made)
+        .expect("bag folder")
+        .map(|e| {
+            let e = e.expect("entry");
+            (e.file_name(), std::fs::read(e.path()).expect("bag file"))
+        })
+        .collect();
+    std::fs::remove_dir_all(&made).expect("removed");
+    // The `.mcap` first, as the recorder writes it (metadata.yaml after the sync).
+    files.sort_by_key(|(name, _)| name.to_string_lossy() == "metadata.yaml");
+    for (name, synced) in [("fs_floor", true), ("fs_floor_unsynced", false)] {
+        g.bench_function(name, |b| {
+            b.iter_custom(|iters| timed_bags(iters, &dir, |dir| write_floor(dir, &files, synced)))
+        });
+    }
     g.finish();
+}
+
+/// A bag's file operations alone: `files` (name, bytes) into a hidden folder beside `dir`, the
+/// first synced when `synced`, then the folder renamed to `dir`.
+fn write_floor(
+    dir: &std::path::Path,
+    files: &[(std::ffi::OsString, Vec<u8>)],
+    synced: bool,
+) -> std::path::PathBuf {
+    use std::io::Write;
+    let tmp = dir.with_file_name(".floor-tmp");
+    std::fs::create_dir(&tmp).expect("hidden folder");
+    for (k, (name, bytes)) in files.iter().enumerate() {
+        let mut f = std::fs::File::create(tmp.join(name)).expect("file");
+        f.write_all(bytes).expect("written");
+        if synced && k == 0 {
+            f.sync_all().expect("synced");
+        }
+    }
+    std::fs::rename(&tmp, dir).expect("renamed");
+    dir.to_path_buf()
 }
 
 criterion_group!(benches, bench);

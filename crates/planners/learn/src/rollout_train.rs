@@ -193,6 +193,12 @@ pub struct RolloutTrainConfig {
     pub label_prob: f64,
     /// Continuations per candidate and decision with `futures = "salted"` or `"redrawn"`.
     pub rollouts: usize,
+    /// A diagnostic of the labels' noise: the share of labelled decisions valued alone that the
+    /// teacher values a second time, over `rollouts` futures of their own (other seeds), never
+    /// trained on; each iteration logs how often the two valuations' best candidates agree
+    /// (`teacher_self_agreement`) and the correlation of their advantages (`label_reliability`).
+    /// 0 (default): no second valuation.
+    pub teacher_check: f64,
     /// Probability of a random valid candidate in the behaviour.
     pub behaviour_epsilon: f64,
     /// The DEP network: `grid` (the paper's, one scenario size) or `agnostic` (any map and team).
@@ -263,6 +269,7 @@ impl Default for RolloutTrainConfig {
             team_rounds: 0,
             label_prob: 1.0,
             rollouts: 4,
+            teacher_check: 0.0,
             behaviour_epsilon: 0.1,
             network: Network::Grid,
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
@@ -364,8 +371,9 @@ impl RolloutTrainConfig {
                     && unit(self.csp_extreme_prob)
                     && unit(self.behaviour_epsilon)
                     && unit(self.label_prob)
+                    && unit(self.teacher_check)
                     && self.label_prob > 0.0,
-                "corner_start_prob/floorplan_prob/csp_extreme_prob/behaviour_epsilon/label_prob",
+                "corner_start_prob/floorplan_prob/csp_extreme_prob/behaviour_epsilon/label_prob/teacher_check",
                 "must be in [0, 1] (label_prob above 0)",
             ),
             (
@@ -673,6 +681,79 @@ pub struct Collected {
     /// base's own choice is among the teacher's best candidates.
     #[serde(default)]
     pub base_agreement: (usize, usize),
+    /// The labels' reproducibility (`teacher_check`): the decisions valued twice.
+    #[serde(default)]
+    pub check: LabelCheck,
+}
+
+/// Labelled decisions valued a second time over futures of their own (`teacher_check`): how
+/// often the two valuations' best candidates agree, and the pooled sums of their advantages'
+/// correlation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LabelCheck {
+    /// Decisions valued twice.
+    pub decisions: usize,
+    /// Of them, those at which the first valuation's best candidate is among the second's best.
+    pub agree: usize,
+    /// Σ over the decisions' valid candidates of 1, a, b, a², b², a·b (a, b: the candidate's
+    /// advantage in the first and the second valuation, steps).
+    pub sums: [f64; 6],
+}
+
+impl LabelCheck {
+    /// Adds one decision's two valuations (the same candidates valid in both).
+    fn add(&mut self, first: &[Option<f64>], second: &[Option<f64>]) {
+        let (Some(a_best), Some(Decision::Candidate(k))) =
+            (min_value(second), best_candidate(first, None))
+        else {
+            return;
+        };
+        self.decisions += 1;
+        self.agree += (second.get(k).copied().flatten() == Some(a_best)) as usize;
+        let (ma, mb) = (mean_value(first), mean_value(second));
+        for (a, b) in first.iter().zip(second) {
+            if let (Some(a), Some(b)) = (a, b) {
+                let (a, b) = (ma - a, mb - b);
+                for (sum, x) in self.sums.iter_mut().zip([1.0, a, b, a * a, b * b, a * b]) {
+                    *sum += x;
+                }
+            }
+        }
+    }
+
+    /// Adds another episode's check.
+    fn merge(&mut self, other: &LabelCheck) {
+        self.decisions += other.decisions;
+        self.agree += other.agree;
+        for (s, o) in self.sums.iter_mut().zip(other.sums) {
+            *s += o;
+        }
+    }
+
+    /// Share of the decisions valued twice whose best candidates agree.
+    pub fn self_agreement(&self) -> Option<f64> {
+        (self.decisions > 0).then(|| self.agree as f64 / self.decisions as f64)
+    }
+
+    /// Pearson correlation of the two valuations' advantages over every valued candidate: the
+    /// share of a label's variance that is signal rather than the futures' luck.
+    pub fn reliability(&self) -> Option<f64> {
+        let [n, a, b, aa, bb, ab] = self.sums;
+        let cov = ab - a * b / n;
+        let (va, vb) = (aa - a * a / n, bb - b * b / n);
+        (n >= 2.0 && va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+    }
+}
+
+/// The lowest of `values` (the best: fewest steps left).
+fn min_value(values: &[Option<f64>]) -> Option<f64> {
+    values.iter().flatten().copied().reduce(f64::min)
+}
+
+/// The mean of `values`' valued candidates.
+fn mean_value(values: &[Option<f64>]) -> f64 {
+    let known: Vec<f64> = values.iter().flatten().copied().collect();
+    known.iter().sum::<f64>() / known.len().max(1) as f64
 }
 
 /// The rule the teacher's continuations follow: policy `name` of `registry` (the base rule, or
@@ -723,17 +804,32 @@ struct Labelling<'a> {
     teacher_gain: f64,
     labelled: usize,
     base_agreement: (usize, usize),
+    /// Which labelled decisions are valued twice (`teacher_check`), a stream of its own.
+    check_rng: Rng,
+    check: LabelCheck,
+}
+
+/// Which set of futures a valuation uses: the labels' own, or the check's (other seeds).
+#[derive(Clone, Copy, PartialEq)]
+enum FutureSet {
+    Label,
+    Check,
 }
 
 impl Labelling<'_> {
-    /// The futures robot `i`'s candidates are scored in at timestep `t`.
-    fn futures(&self, trial: &Trial, i: usize) -> Result<Vec<Future>, TrainError> {
+    /// The futures robot `i`'s candidates are scored in at timestep `t` (`set`: the labels' or
+    /// the check's seeds).
+    fn futures(&self, trial: &Trial, i: usize, set: FutureSet) -> Result<Vec<Future>, TrainError> {
         let t = trial.world().t() as u64;
         let salt = |s: u64| (t * 64 + i as u64) * 64 + s;
+        let (future, redraw) = match set {
+            FutureSet::Label => ("future", "redraw"),
+            FutureSet::Check => ("future-check", "redraw-check"),
+        };
         Ok(match self.cfg.futures {
             Futures::Noiseless => vec![Future::Noiseless],
             Futures::Salted => (0..self.cfg.rollouts as u64)
-                .map(|s| Future::Salted(derive_seed(self.seed, "future", salt(s))))
+                .map(|s| Future::Salted(derive_seed(self.seed, future, salt(s))))
                 .collect(),
             Futures::Redrawn => {
                 let truth = trial.world().truth();
@@ -745,7 +841,7 @@ impl Labelling<'_> {
                 );
                 (0..self.cfg.rollouts as u64)
                     .map(|s| {
-                        let (map, _) = draw.draw(derive_seed(self.seed, "redraw", salt(s)))?;
+                        let (map, _) = draw.draw(derive_seed(self.seed, redraw, salt(s)))?;
                         Ok(Future::Redrawn(std::sync::Arc::new(map)))
                     })
                     .collect::<Result<_, TrainError>>()?
@@ -760,7 +856,19 @@ impl Labelling<'_> {
         i: usize,
         fixed: &[Option<Decision>],
     ) -> Result<Vec<Option<f64>>, TrainError> {
-        let futures = self.futures(trial, i)?;
+        self.values_in(trial, i, fixed, FutureSet::Label)
+    }
+
+    /// [`Labelling::values`] over the futures of `set`; the check's continuations are not
+    /// counted in `rollouts` (what the labels cost).
+    fn values_in(
+        &mut self,
+        trial: &Trial,
+        i: usize,
+        fixed: &[Option<Decision>],
+        set: FutureSet,
+    ) -> Result<Vec<Option<f64>>, TrainError> {
+        let futures = self.futures(trial, i, set)?;
         let look = Lookahead {
             horizon: self.horizon,
             value: self.cfg.value,
@@ -768,7 +876,9 @@ impl Labelling<'_> {
         let (name, registry) = (&self.base.name, &self.base.registry);
         let values = candidate_values_by(trial, i, fixed, name, registry, &futures, look)
             .map_err(|e| TrainError::Other(e.to_string()))?;
-        self.rollouts += values.iter().flatten().count() * futures.len();
+        if set == FutureSet::Label {
+            self.rollouts += values.iter().flatten().count() * futures.len();
+        }
         Ok(values)
     }
 
@@ -891,6 +1001,13 @@ impl Recorder for Labelling<'_> {
                         self.base_agreement.1 += (own == best) as usize;
                     }
                 }
+                // The diagnostic: the same decision valued again over futures of its own.
+                if self.cfg.teacher_check > 0.0
+                    && self.check_rng.random::<f64>() < self.cfg.teacher_check
+                {
+                    let again = self.values_in(trial, i, &[], FutureSet::Check)?;
+                    self.check.add(&v, &again);
+                }
                 values[i] = Some(v);
             }
         }
@@ -971,6 +1088,8 @@ fn collect_episode(
         teacher_gain: 0.0,
         labelled: 0,
         base_agreement: (0, 0),
+        check_rng: stream(seed, "teacher-check", 0),
+        check: LabelCheck::default(),
     };
     let end = episode::run(&mut trial, &mut teacher)?;
     Ok(Collected {
@@ -981,6 +1100,7 @@ fn collect_episode(
         teacher_gain: teacher.teacher_gain,
         labelled: teacher.labelled,
         base_agreement: teacher.base_agreement,
+        check: teacher.check,
     })
 }
 
@@ -1468,6 +1588,14 @@ struct IterationRow {
     /// decision (team-valued ones too; agnostic network only).
     #[serde(default)]
     student_agreement: Option<f64>,
+    /// With `teacher_check`: the share of decisions valued twice whose two valuations' best
+    /// candidates agree ([`LabelCheck::self_agreement`]).
+    #[serde(default)]
+    teacher_self_agreement: Option<f64>,
+    /// With `teacher_check`: the correlation of the two valuations' advantages
+    /// ([`LabelCheck::reliability`]).
+    #[serde(default)]
+    label_reliability: Option<f64>,
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
@@ -1757,6 +1885,10 @@ fn train_loop(
         let base_agreement = (valued > 0).then(|| agree as f64 / valued as f64);
         let student_agreement =
             net.agreement(collected.iter().flat_map(|c| c.robots.iter().flatten()));
+        let check = collected.iter().fold(LabelCheck::default(), |mut all, c| {
+            all.merge(&c.check);
+            all
+        });
         data.extend(
             collected
                 .into_iter()
@@ -1844,6 +1976,8 @@ fn train_loop(
             student_gain_pct: 100.0 * (base_steps - steps) / base_steps.max(1e-9),
             base_agreement,
             student_agreement,
+            teacher_self_agreement: check.self_agreement(),
+            label_reliability: check.reliability(),
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,
@@ -1917,6 +2051,28 @@ fn train_loop(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The labels' check by hand: advantages (1, 0, −1) and (1, −1, 0) correlate 0.5; the
+    /// first valuation's best (slot 0) is the second's best too; a decision without a valued
+    /// candidate is not counted.
+    #[test]
+    fn label_check_agreement_and_reliability_by_hand() {
+        let mut c = LabelCheck::default();
+        c.add(
+            &[Some(1.0), Some(2.0), Some(3.0), None],
+            &[Some(1.0), Some(3.0), Some(2.0), None],
+        );
+        assert_eq!((c.decisions, c.agree), (1, 1));
+        assert!((c.reliability().unwrap() - 0.5).abs() < 1e-12, "{c:?}");
+        // A second decision whose best moves: agreement 1 of 2.
+        let mut d = LabelCheck::default();
+        d.add(&[Some(1.0), Some(2.0)], &[Some(2.0), Some(1.0)]);
+        d.add(&[None, None], &[None, None]);
+        assert_eq!((d.decisions, d.agree), (1, 0));
+        c.merge(&d);
+        assert_eq!(c.self_agreement(), Some(0.5));
+        assert_eq!(LabelCheck::default().reliability(), None);
+    }
 
     /// The team teacher's step: the lowest value wins; a tie keeps the robot's current choice,
     /// else goes to the lower slot; no valid candidate, no choice.

@@ -208,6 +208,56 @@ fn tiny_run_logs_plays_is_deterministic_and_resumes_exactly() {
     assert_eq!(count(redrawn), 2 * count(solo), "{solo:?} vs {redrawn:?}");
     assert_ne!(solo["loss"], redrawn["loss"]);
 
+    // The labels' noise, measured (`teacher_check`): every labelled decision valued again over
+    // futures of its own changes nothing learned or counted; the noiseless teacher agrees with
+    // itself exactly, the redrawn one does not.
+    assert_eq!(redrawn["teacher_self_agreement"], "");
+    assert_eq!(redrawn["label_reliability"], "");
+    let checked = |futures, dir: &Path| {
+        train(
+            dir,
+            Some(RolloutTrainConfig {
+                futures,
+                rollouts: 2,
+                teacher_check: 1.0,
+                iterations: 1,
+                episodes: 2,
+                ..tiny()
+            }),
+            &mut |_| {},
+        )
+        .unwrap();
+        table(dir).remove(0)
+    };
+    let (rc, nc) = (
+        checked(Futures::Redrawn, &root.join("rc")),
+        checked(Futures::Noiseless, &root.join("nc")),
+    );
+    for (with, without) in [(&rc, redrawn), (&nc, solo)] {
+        for k in [
+            "decisions",
+            "rollouts",
+            "loss",
+            "teacher_gain",
+            "base_agreement",
+        ] {
+            assert_eq!(with[k], without[k], "{k}");
+        }
+    }
+    let share =
+        |r: &std::collections::HashMap<String, String>, k: &str| -> f64 { r[k].parse().unwrap() };
+    assert_eq!(share(&nc, "teacher_self_agreement"), 1.0);
+    assert!(
+        (share(&nc, "label_reliability") - 1.0).abs() < 1e-9,
+        "{nc:?}"
+    );
+    let (agree, rel) = (
+        share(&rc, "teacher_self_agreement"),
+        share(&rc, "label_reliability"),
+    );
+    assert!(0.0 < agree && agree < 1.0, "{rc:?}");
+    assert!(-1.0 < rel && rel < 1.0 - 1e-6, "{rc:?}");
+
     // Expert iteration over a weak base rule (random candidates): the teacher gains over its
     // base, a student that beats the base becomes the next iteration's base (kept in the
     // checkpoint: a killed and resumed run equals an uninterrupted one), and the run stops by
