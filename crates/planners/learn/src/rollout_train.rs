@@ -695,9 +695,36 @@ pub struct LabelCheck {
     pub decisions: usize,
     /// Of them, those at which the first valuation's best candidate is among the second's best.
     pub agree: usize,
-    /// Σ over the decisions' valid candidates of 1, a, b, a², b², a·b (a, b: the candidate's
-    /// advantage in the first and the second valuation, steps).
-    pub sums: [f64; 6],
+    /// The candidates' advantages in the first valuation against the second's (steps).
+    pub advantages: Correlation,
+}
+
+/// Pooled sums of a Pearson correlation: Σ 1, a, b, a², b², a·b over the pairs (a, b) added.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Correlation {
+    sums: [f64; 6],
+}
+
+impl Correlation {
+    fn add(&mut self, a: f64, b: f64) {
+        for (sum, x) in self.sums.iter_mut().zip([1.0, a, b, a * a, b * b, a * b]) {
+            *sum += x;
+        }
+    }
+
+    fn merge(&mut self, other: &Correlation) {
+        for (s, o) in self.sums.iter_mut().zip(other.sums) {
+            *s += o;
+        }
+    }
+
+    /// The correlation of the pairs added; `None` below two pairs or without variance.
+    pub fn value(&self) -> Option<f64> {
+        let [n, a, b, aa, bb, ab] = self.sums;
+        let cov = ab - a * b / n;
+        let (va, vb) = (aa - a * a / n, bb - b * b / n);
+        (n >= 2.0 && va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+    }
 }
 
 impl LabelCheck {
@@ -713,10 +740,7 @@ impl LabelCheck {
         let (ma, mb) = (mean_value(first), mean_value(second));
         for (a, b) in first.iter().zip(second) {
             if let (Some(a), Some(b)) = (a, b) {
-                let (a, b) = (ma - a, mb - b);
-                for (sum, x) in self.sums.iter_mut().zip([1.0, a, b, a * a, b * b, a * b]) {
-                    *sum += x;
-                }
+                self.advantages.add(ma - a, mb - b);
             }
         }
     }
@@ -725,9 +749,7 @@ impl LabelCheck {
     fn merge(&mut self, other: &LabelCheck) {
         self.decisions += other.decisions;
         self.agree += other.agree;
-        for (s, o) in self.sums.iter_mut().zip(other.sums) {
-            *s += o;
-        }
+        self.advantages.merge(&other.advantages);
     }
 
     /// Share of the decisions valued twice whose best candidates agree.
@@ -738,10 +760,7 @@ impl LabelCheck {
     /// Pearson correlation of the two valuations' advantages over every valued candidate: the
     /// share of a label's variance that is signal rather than the futures' luck.
     pub fn reliability(&self) -> Option<f64> {
-        let [n, a, b, aa, bb, ab] = self.sums;
-        let cov = ab - a * b / n;
-        let (va, vb) = (aa - a * a / n, bb - b * b / n);
-        (n >= 2.0 && va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+        self.advantages.value()
     }
 }
 
@@ -1325,13 +1344,19 @@ impl Student {
     }
 
     /// Share of `labelled` decisions (those with targets) at which the greedy student's choice
-    /// is among the teacher's best candidates; `None` for the grid network or no decision.
-    fn agreement<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> Option<f64> {
+    /// is among the teacher's best candidates, and the correlation of its scores (less their
+    /// mean over the valid candidates) with the labels' advantages; `None` for the grid network
+    /// or no decision.
+    fn imitation<'a>(
+        &self,
+        labelled: impl Iterator<Item = &'a Labelled>,
+    ) -> (Option<f64>, Option<f64>) {
         let Student::Agnostic(net) = self else {
-            return None;
+            return (None, None);
         };
         let net = crate::agnostic::AgnosticScorer::new(&net.valid());
         let (mut n, mut agree) = (0usize, 0usize);
+        let mut corr = Correlation::default();
         for l in labelled.filter(|l| l.train_mask.iter().any(|&m| m)) {
             let input = AgnosticInput {
                 context: l.vec[..CONTEXT_FEATURES].to_vec(),
@@ -1340,6 +1365,11 @@ impl Student {
                 mask: l.train_mask.clone(),
             };
             let q = net.scores(&input);
+            let valid = || (0..q.len()).filter(|&k| l.train_mask[k]);
+            let mean = valid().map(|k| q[k] as f64).sum::<f64>() / valid().count() as f64;
+            for k in valid() {
+                corr.add(q[k] as f64 - mean, l.target[k] as f64);
+            }
             let masked = |v: &[f32], k: usize| {
                 if l.train_mask[k] {
                     v[k]
@@ -1357,7 +1387,7 @@ impl Student {
             n += 1;
             agree += (l.target[pick] == best) as usize;
         }
-        (n > 0).then(|| agree as f64 / n as f64)
+        ((n > 0).then(|| agree as f64 / n as f64), corr.value())
     }
 
     /// The student on the plain CPU device as a model acting with `info`'s margin.
@@ -1588,6 +1618,11 @@ struct IterationRow {
     /// decision (team-valued ones too; agnostic network only).
     #[serde(default)]
     student_agreement: Option<f64>,
+    /// The correlation of that student's scores with the fresh labels' advantages (agnostic
+    /// network): at most √`label_reliability` for a student that knew each candidate's
+    /// expected value.
+    #[serde(default)]
+    student_label_corr: Option<f64>,
     /// With `teacher_check`: the share of decisions valued twice whose two valuations' best
     /// candidates agree ([`LabelCheck::self_agreement`]).
     #[serde(default)]
@@ -1883,8 +1918,8 @@ fn train_loop(
             (n + c.base_agreement.0, a + c.base_agreement.1)
         });
         let base_agreement = (valued > 0).then(|| agree as f64 / valued as f64);
-        let student_agreement =
-            net.agreement(collected.iter().flat_map(|c| c.robots.iter().flatten()));
+        let (student_agreement, student_label_corr) =
+            net.imitation(collected.iter().flat_map(|c| c.robots.iter().flatten()));
         let check = collected.iter().fold(LabelCheck::default(), |mut all, c| {
             all.merge(&c.check);
             all
@@ -1976,6 +2011,7 @@ fn train_loop(
             student_gain_pct: 100.0 * (base_steps - steps) / base_steps.max(1e-9),
             base_agreement,
             student_agreement,
+            student_label_corr,
             teacher_self_agreement: check.self_agreement(),
             label_reliability: check.reliability(),
             validation_completed: completed,

@@ -201,6 +201,9 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
             let share: f64 = row[c].parse().unwrap();
             assert!((0.0..=1.0).contains(&share), "{row:?}");
         }
+        // The student's scores against the fresh labels: a correlation.
+        let corr: f64 = row[col("student_label_corr")].parse().unwrap();
+        assert!((-1.0..=1.0).contains(&corr), "{row:?}");
     }
     let toml = std::fs::read_to_string(a.join("last/model.toml")).unwrap();
     assert!(
