@@ -377,22 +377,25 @@ pub fn replace_dir(
 ) -> Result<(), TrainError> {
     let tmp = dir.with_extension("tmp");
     let old = dir.with_extension("old");
-    if tmp.exists() {
-        std::fs::remove_dir_all(&tmp).map_err(io_err(&tmp))?;
-    }
+    remove_any(&tmp)?;
     std::fs::create_dir_all(&tmp).map_err(io_err(&tmp))?;
     fill(&tmp)?;
-    if dir.exists() {
-        if old.exists() {
-            std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
-        }
+    if dir.symlink_metadata().is_ok() {
+        remove_any(&old)?;
         std::fs::rename(dir, &old).map_err(io_err(dir))?;
     }
     std::fs::rename(&tmp, dir).map_err(io_err(dir))?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old).map_err(io_err(&old))?;
+    remove_any(&old)
+}
+
+/// Removes `path` whatever it is (a folder with its content, a file, a link); nothing there is
+/// fine.
+fn remove_any(path: &Path) -> Result<(), TrainError> {
+    match path.symlink_metadata() {
+        Err(_) => Ok(()),
+        Ok(m) if m.is_dir() => std::fs::remove_dir_all(path).map_err(io_err(path)),
+        Ok(_) => std::fs::remove_file(path).map_err(io_err(path)),
     }
-    Ok(())
 }
 
 fn decode_err(path: &Path) -> impl FnOnce(String) -> TrainError + '_ {
@@ -675,6 +678,45 @@ mod tests {
         assert!(!new_best(&mut best, 60.0));
         assert!(new_best(&mut best, 40.0));
         assert_eq!(best, Some(40.0));
+    }
+
+    /// A run's folders (`checkpoint`, `best`, `.behaviour` …) are replaced whole even where a
+    /// file, or a folder left by a crash, stands in the way; nothing but the new folder is left.
+    #[test]
+    fn replace_dir_replaces_files_and_leftovers() {
+        let root = std::env::temp_dir().join(format!("madenet-replace-{}", std::process::id()));
+        std::fs::create_dir_all(&root).unwrap();
+        let dir = root.join(".behaviour");
+        for (name, folder) in [
+            (".behaviour", false),
+            (".behaviour.tmp", false),
+            (".behaviour.old", true),
+        ] {
+            let p = root.join(name);
+            if folder {
+                std::fs::create_dir_all(p.join("inner")).unwrap();
+            } else {
+                std::fs::write(&p, b"in the way").unwrap();
+            }
+        }
+        for round in 0..2 {
+            replace_dir(&dir, |tmp| {
+                std::fs::write(tmp.join("model.toml"), format!("round {round}"))
+                    .map_err(io_err(tmp))
+            })
+            .unwrap();
+            assert_eq!(
+                std::fs::read_to_string(dir.join("model.toml")).unwrap(),
+                format!("round {round}")
+            );
+            let mut left: Vec<_> = std::fs::read_dir(&root)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect();
+            left.sort();
+            assert_eq!(left, [".behaviour"]);
+        }
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]
