@@ -699,6 +699,15 @@ pub struct LabelCheck {
     pub advantages: Correlation,
 }
 
+/// How the student (and the `spread` rule's score) compare with fresh labels
+/// ([`Student::imitation`]).
+#[derive(Default)]
+struct Imitation {
+    agreement: Option<f64>,
+    label_corr: Option<f64>,
+    spread_label_corr: Option<f64>,
+}
+
 /// Pooled sums of a Pearson correlation: Σ 1, a, b, a², b², a·b over the pairs (a, b) added.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Correlation {
@@ -1345,18 +1354,16 @@ impl Student {
 
     /// Share of `labelled` decisions (those with targets) at which the greedy student's choice
     /// is among the teacher's best candidates, and the correlation of its scores (less their
-    /// mean over the valid candidates) with the labels' advantages; `None` for the grid network
-    /// or no decision.
-    fn imitation<'a>(
-        &self,
-        labelled: impl Iterator<Item = &'a Labelled>,
-    ) -> (Option<f64>, Option<f64>) {
+    /// mean over the valid candidates) with the labels' advantages, and the same for the
+    /// `spread` rule's score (negated: lower is better there; read from the candidate inputs);
+    /// `None` for the grid network or no decision.
+    fn imitation<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> Imitation {
         let Student::Agnostic(net) = self else {
-            return (None, None);
+            return Imitation::default();
         };
         let net = crate::agnostic::AgnosticScorer::new(&net.valid());
         let (mut n, mut agree) = (0usize, 0usize);
-        let mut corr = Correlation::default();
+        let (mut corr, mut spread_corr) = (Correlation::default(), Correlation::default());
         for l in labelled.filter(|l| l.train_mask.iter().any(|&m| m)) {
             let input = AgnosticInput {
                 context: l.vec[..CONTEXT_FEATURES].to_vec(),
@@ -1369,6 +1376,14 @@ impl Student {
             let mean = valid().map(|k| q[k] as f64).sum::<f64>() / valid().count() as f64;
             for k in valid() {
                 corr.add(q[k] as f64 - mean, l.target[k] as f64);
+            }
+            // `spread`'s score of k / (height + width): feature 7 of the candidate's inputs.
+            let spread = |k: usize| {
+                -l.vec[CONTEXT_FEATURES + k * crate::agnostic::CANDIDATE_INPUTS + 7] as f64
+            };
+            let spread_mean = valid().map(spread).sum::<f64>() / valid().count() as f64;
+            for k in valid() {
+                spread_corr.add(spread(k) - spread_mean, l.target[k] as f64);
             }
             let masked = |v: &[f32], k: usize| {
                 if l.train_mask[k] {
@@ -1387,7 +1402,11 @@ impl Student {
             n += 1;
             agree += (l.target[pick] == best) as usize;
         }
-        ((n > 0).then(|| agree as f64 / n as f64), corr.value())
+        Imitation {
+            agreement: (n > 0).then(|| agree as f64 / n as f64),
+            label_corr: corr.value(),
+            spread_label_corr: spread_corr.value(),
+        }
     }
 
     /// The student on the plain CPU device as a model acting with `info`'s margin.
@@ -1623,6 +1642,10 @@ struct IterationRow {
     /// expected value.
     #[serde(default)]
     student_label_corr: Option<f64>,
+    /// The same for the `spread` rule's score (agnostic network): what a student that only
+    /// copied `spread`'s ranking would reach.
+    #[serde(default)]
+    spread_label_corr: Option<f64>,
     /// With `teacher_check`: the share of decisions valued twice whose two valuations' best
     /// candidates agree ([`LabelCheck::self_agreement`]).
     #[serde(default)]
@@ -1918,8 +1941,7 @@ fn train_loop(
             (n + c.base_agreement.0, a + c.base_agreement.1)
         });
         let base_agreement = (valued > 0).then(|| agree as f64 / valued as f64);
-        let (student_agreement, student_label_corr) =
-            net.imitation(collected.iter().flat_map(|c| c.robots.iter().flatten()));
+        let imitation = net.imitation(collected.iter().flat_map(|c| c.robots.iter().flatten()));
         let check = collected.iter().fold(LabelCheck::default(), |mut all, c| {
             all.merge(&c.check);
             all
@@ -2010,8 +2032,9 @@ fn train_loop(
             teacher_gain,
             student_gain_pct: 100.0 * (base_steps - steps) / base_steps.max(1e-9),
             base_agreement,
-            student_agreement,
-            student_label_corr,
+            student_agreement: imitation.agreement,
+            student_label_corr: imitation.label_corr,
+            spread_label_corr: imitation.spread_label_corr,
             teacher_self_agreement: check.self_agreement(),
             label_reliability: check.reliability(),
             validation_completed: completed,

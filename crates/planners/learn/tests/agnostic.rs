@@ -204,6 +204,10 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         // The student's scores against the fresh labels: a correlation.
         let corr: f64 = row[col("student_label_corr")].parse().unwrap();
         assert!((-1.0..=1.0).contains(&corr), "{row:?}");
+        // `spread`'s score ranks candidates as the teacher's labels do, more than by chance
+        // (its choice is the teacher's best more often than a random candidate's).
+        let spread: f64 = row[col("spread_label_corr")].parse().unwrap();
+        assert!(0.0 < spread && spread <= 1.0, "{row:?}");
     }
     let toml = std::fs::read_to_string(a.join("last/model.toml")).unwrap();
     assert!(
