@@ -1064,8 +1064,7 @@ impl Recorder for Labelling<'_> {
             let mut target = vec![0.0; mask.len()];
             let mut train_mask = vec![false; mask.len()];
             if let (true, Some(values)) = (is_labelled, &values[i]) {
-                let known: Vec<f64> = values.iter().flatten().copied().collect();
-                let mean = known.iter().sum::<f64>() / known.len() as f64;
+                let mean = mean_value(values);
                 for (k, v) in values.iter().enumerate() {
                     if let Some(v) = v {
                         // Fewer steps left is better: the advantage is mean − value.
