@@ -699,13 +699,18 @@ pub struct LabelCheck {
     pub advantages: Correlation,
 }
 
-/// How the student (and the `spread` rule's score) compare with fresh labels
-/// ([`Student::imitation`]).
-#[derive(Default)]
-struct Imitation {
-    agreement: Option<f64>,
-    label_corr: Option<f64>,
-    spread_label_corr: Option<f64>,
+/// How a student (and the `spread` rule's score) compare with labels it was not trained on:
+/// the per-iteration diagnostics of `iterations.csv`, and [`refit`]'s curve.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LabelFit {
+    /// Share of the labelled decisions at which the greedy student's choice is among the
+    /// teacher's best candidates.
+    pub agreement: Option<f64>,
+    /// Pooled Pearson correlation of the student's scores (less their mean over the valid
+    /// candidates) with the labels' advantages.
+    pub label_corr: Option<f64>,
+    /// The same for the `spread` rule's score (negated: lower is better there).
+    pub spread_label_corr: Option<f64>,
 }
 
 /// Pooled sums of a Pearson correlation: Σ 1, a, b, a², b², a·b over the pairs (a, b) added.
@@ -1356,9 +1361,9 @@ impl Student {
     /// mean over the valid candidates) with the labels' advantages, and the same for the
     /// `spread` rule's score (negated: lower is better there; read from the candidate inputs);
     /// `None` for the grid network or no decision.
-    fn imitation<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> Imitation {
+    fn imitation<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> LabelFit {
         let Student::Agnostic(net) = self else {
-            return Imitation::default();
+            return LabelFit::default();
         };
         let net = crate::agnostic::AgnosticScorer::new(&net.valid());
         let (mut n, mut agree) = (0usize, 0usize);
@@ -1401,7 +1406,7 @@ impl Student {
             n += 1;
             agree += (l.target[pick] == best) as usize;
         }
-        Imitation {
+        LabelFit {
             agreement: (n > 0).then(|| agree as f64 / n as f64),
             label_corr: corr.value(),
             spread_label_corr: spread_corr.value(),
@@ -1575,6 +1580,122 @@ fn update_agnostic(
     );
     let loss = student_loss(cfg, q, y, batch.mask);
     adam_step(net, optim, cfg.learning_rate, loss)
+}
+
+/// Adam steps `updates` (their indices name each batch's `sample` stream, so a run resumed at
+/// an iteration boundary draws what an uninterrupted one draws) on batches of windows of the
+/// robots' decision sequences `data`; the trained student and the sum of the steps' losses, or
+/// `None` as soon as `stop` says so.
+fn fit(
+    mut net: Student,
+    optim: &mut ModuleOptimizer,
+    cfg: &RolloutTrainConfig,
+    data: &[Vec<Labelled>],
+    updates: std::ops::Range<u64>,
+    stop: &dyn Fn() -> bool,
+) -> Option<(Student, f64)> {
+    let mut loss_sum = 0.0;
+    let trace_len = if cfg.recurrent { cfg.trace_len } else { 1 };
+    for u in updates {
+        if stop() {
+            return None;
+        }
+        let mut rng = stream(cfg.seed, "sample", u);
+        let windows: Vec<&[Labelled]> = (0..cfg.batch_size)
+            .map(|_| {
+                let seq = &data[rng.random_range(0..data.len())];
+                let start = if seq.len() > trace_len {
+                    rng.random_range(0..=seq.len() - trace_len)
+                } else {
+                    0
+                };
+                &seq[start..(start + trace_len).min(seq.len())]
+            })
+            .collect();
+        let (next, loss) = net.update(optim, cfg, &windows);
+        net = next;
+        loss_sum += loss as f64;
+    }
+    Some((net, loss_sum))
+}
+
+/// A run's stored labels (`RUN/checkpoint/data.bin`: every robot's labelled decisions in
+/// episode order) cut at its iterations' boundaries (`RUN/iterations.csv`'s `decisions`): entry
+/// `i` holds the decision sequences iteration `i` collected.
+pub fn stored_labels(run_dir: &Path) -> Result<Vec<Vec<Vec<Labelled>>>, TrainError> {
+    let data: Vec<Vec<Labelled>> =
+        harness::read_postcard(&run_dir.join("checkpoint").join("data.bin"))?;
+    let log = run_dir.join("iterations.csv");
+    let io = |e: csv::Error| TrainError::Io {
+        path: log.display().to_string(),
+        message: e.to_string(),
+    };
+    let rows: Vec<IterationRow> = csv::Reader::from_path(&log)
+        .map_err(io)?
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .map_err(io)?;
+    let mut data = data.into_iter();
+    let mut out = Vec::new();
+    for row in &rows {
+        let (mut seqs, mut n) = (Vec::new(), 0);
+        while n < row.decisions {
+            let Some(seq) = data.next() else { break };
+            n += seq.len();
+            seqs.push(seq);
+        }
+        if n != row.decisions {
+            return Err(TrainError::Other(format!(
+                "{}: iteration {} logs {} decisions but `checkpoint/data.bin` holds {n} there (a checkpoint and log of different runs?)",
+                log.display(),
+                row.iteration,
+                row.decisions
+            )));
+        }
+        out.push(seqs);
+    }
+    Ok(out)
+}
+
+/// The supervised half of a run alone: a fresh agnostic student of `sizes` (seeded, drawing its
+/// batches and stepping as a run with `cfg` does) fitted to `train` for `updates` Adam steps,
+/// measured against `test`'s labels after every `every` steps and at the end — does a larger or
+/// differently trained student fit labels it never saw better? With `cfg`'s sizes and `train` =
+/// a run's iteration 0, the last row is that run's `student_label_corr` of iteration 1 when
+/// `test` is its iteration 1. Rows: (updates so far, mean loss since the last row, the fit).
+pub fn refit(
+    cfg: &RolloutTrainConfig,
+    sizes: &crate::agnostic::AgnosticConfig,
+    train: &[Vec<Labelled>],
+    test: &[Labelled],
+    updates: u64,
+    every: u64,
+) -> Result<Vec<(u64, f64, LabelFit)>, TrainError> {
+    if train.is_empty() {
+        return Err(TrainError::Other("refit: no training labels".into()));
+    }
+    if sizes.crop_radius != cfg.crop_radius {
+        return Err(TrainError::Other(format!(
+            "refit: field `crop_radius`: the labels' crops are of radius {}, not {}",
+            cfg.crop_radius, sizes.crop_radius
+        )));
+    }
+    let device = cpu_autodiff();
+    device.seed(cfg.seed);
+    let mut net = Student::Agnostic(sizes.init(&device).map_err(TrainError::Other)?);
+    let mut optim: ModuleOptimizer = AdamConfig::new()
+        .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
+        .init();
+    let (mut done, mut rows) = (0, Vec::new());
+    while done < updates {
+        let to = (done + every.max(1)).min(updates);
+        let (next, loss) =
+            fit(net, &mut optim, cfg, train, done..to, &|| false).expect("never stopped");
+        net = next;
+        rows.push((to, loss / (to - done) as f64, net.imitation(test.iter())));
+        done = to;
+    }
+    Ok(rows)
 }
 
 /// The validation set: maps and seeds of their own (`validation` stream), drawn as training
@@ -1956,28 +2077,17 @@ fn train_loop(
         }
         state.episodes += per;
         // 4. Regress the advantages on windows of the robots' decision sequences.
-        let mut loss_sum = 0.0;
-        let trace_len = if cfg.recurrent { cfg.trace_len } else { 1 };
-        for u in 0..cfg.updates_per_iteration {
-            if clock.out_of_time(cfg.max_minutes) {
-                return time_ran_out(cfg, state.iteration, first_iteration);
-            }
-            let mut rng = stream(cfg.seed, "sample", state.updates + u);
-            let windows: Vec<&[Labelled]> = (0..cfg.batch_size)
-                .map(|_| {
-                    let seq = &data[rng.random_range(0..data.len())];
-                    let start = if seq.len() > trace_len {
-                        rng.random_range(0..=seq.len() - trace_len)
-                    } else {
-                        0
-                    };
-                    &seq[start..(start + trace_len).min(seq.len())]
-                })
-                .collect();
-            let (next, loss) = net.update(&mut optim, cfg, &windows);
-            net = next;
-            loss_sum += loss as f64;
-        }
+        let Some((next, loss_sum)) = fit(
+            net,
+            &mut optim,
+            cfg,
+            &data,
+            state.updates..state.updates + cfg.updates_per_iteration,
+            &|| clock.out_of_time(cfg.max_minutes),
+        ) else {
+            return time_ran_out(cfg, state.iteration, first_iteration);
+        };
+        net = next;
         state.updates += cfg.updates_per_iteration;
         state.iteration += 1;
         // 5. Validate the greedy DEP and each conservative margin; keep the best.

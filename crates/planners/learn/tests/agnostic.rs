@@ -9,7 +9,7 @@
 use madenet_learn::agnostic::{
     inputs, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
 };
-use madenet_learn::rollout_train::{train, Network, RolloutTrainConfig};
+use madenet_learn::rollout_train::{refit, stored_labels, train, Network, RolloutTrainConfig};
 use madenet_learn::Model;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -209,6 +209,31 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         let spread: f64 = row[col("spread_label_corr")].parse().unwrap();
         assert!(0.0 < spread && spread <= 1.0, "{row:?}");
     }
+    // The supervised half alone: a fresh student fitted to the stored labels of iteration 0
+    // (as the run fitted it) scores iteration 1's labels exactly as the run's log says.
+    let stored = stored_labels(&a).unwrap();
+    assert_eq!(stored.len(), 2);
+    let cfg = tiny();
+    let test: Vec<_> = stored[1].iter().flatten().cloned().collect();
+    let curve = refit(&cfg, &cfg.agnostic(), &stored[0], &test, 3, 2).unwrap();
+    assert_eq!(
+        curve.iter().map(|r| r.0).collect::<Vec<_>>(),
+        vec![2, 3],
+        "rows after 2 updates and at the end"
+    );
+    let mut log = csv::Reader::from_path(a.join("iterations.csv")).unwrap();
+    let logged: f64 = log.records().nth(1).unwrap().unwrap()[col("student_label_corr")]
+        .parse()
+        .unwrap();
+    let refitted = curve[1].2.label_corr.unwrap();
+    assert!(
+        (refitted - logged).abs() < 1e-12,
+        "refit {refitted} vs the run's {logged}"
+    );
+    // A wider student is another student.
+    let wide = cfg.agnostic().with_hidden_width(96);
+    let other = refit(&cfg, &wide, &stored[0], &test, 3, 3).unwrap();
+    assert_ne!(other[0].2.label_corr, curve[1].2.label_corr);
     let toml = std::fs::read_to_string(a.join("last/model.toml")).unwrap();
     assert!(
         toml.contains("[agnostic]") && !toml.contains("[dep]"),
