@@ -35,6 +35,10 @@ pub struct AgentView<'a> {
 impl<'a> AgentView<'a> {
     /// Values per candidate in [`AgentView::write_candidate_features`].
     pub const CANDIDATE_FEATURES: usize = 9;
+    /// Index of the [`crate::Spread`] score among a candidate's features (lower is better).
+    pub const SPREAD_SCORE_FEATURE: usize = 7;
+    /// Index of "[`crate::Spread`] would take this candidate" among a candidate's features.
+    pub const SPREAD_CHOICE_FEATURE: usize = 8;
 
     /// 𝒢_i, the goal candidates (empty if the policy declared it does not need them).
     pub fn candidates(&self) -> &GoalCandidates {
@@ -280,8 +284,8 @@ impl<'a> AgentView<'a> {
             .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
         for (k, s) in scores.iter().enumerate().take(slots) {
             let f = &mut out[k * Self::CANDIDATE_FEATURES..(k + 1) * Self::CANDIDATE_FEATURES];
-            f[7] = s.map_or(1.0, |s| (s / scale) as f32);
-            f[8] = (best.map(|b| b.0) == Some(k)) as u8 as f32;
+            f[Self::SPREAD_SCORE_FEATURE] = s.map_or(1.0, |s| (s / scale) as f32);
+            f[Self::SPREAD_CHOICE_FEATURE] = (best.map(|b| b.0) == Some(k)) as u8 as f32;
         }
     }
 

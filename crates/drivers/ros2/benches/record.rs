@@ -131,7 +131,7 @@ fn write_floor(
     synced: bool,
 ) -> std::path::PathBuf {
     use std::io::Write;
-    let tmp = dir.with_file_name(".floor-tmp");
+    let tmp = dir.with_file_name(format!(".floor-tmp-{}", std::process::id()));
     std::fs::create_dir(&tmp).expect("hidden folder");
     for (k, (name, bytes)) in files.iter().enumerate() {
         let mut f = std::fs::File::create(tmp.join(name)).expect("file");

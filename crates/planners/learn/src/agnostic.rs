@@ -270,7 +270,7 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
         if let Some(c) = view.candidates().get(k) {
             let capped = |x: f32| (x / reach).min(4.0) / 4.0;
             f[9] = capped(src[0] * scale);
-            f[10] = capped(src[7] * scale);
+            f[10] = capped(src[AgentView::SPREAD_SCORE_FEATURE] * scale);
             f[11] = (view.pos.chebyshev(c) as f32 / reach).min(1.0);
         }
     }
@@ -461,9 +461,10 @@ impl Policy for AgnosticPolicy {
         let q = self.net.scores(&input);
         self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
-        // `spread`'s choice is candidate input 8, already computed for the features.
-        let anchor =
-            (0..input.mask.len()).find(|&k| input.features[k * CANDIDATE_INPUTS + 8] == 1.0);
+        // `spread`'s choice is among the candidate inputs, already computed for the features.
+        let anchor = (0..input.mask.len()).find(|&k| {
+            input.features[k * CANDIDATE_INPUTS + AgentView::SPREAD_CHOICE_FEATURE] == 1.0
+        });
         Decision::Candidate(crate::policy::conservative(
             &q,
             greedy,

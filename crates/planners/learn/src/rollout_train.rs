@@ -197,7 +197,10 @@ pub struct RolloutTrainConfig {
     /// teacher values a second time, over `rollouts` futures of their own (other seeds), never
     /// trained on; each iteration logs how often the two valuations' best candidates agree
     /// (`teacher_self_agreement`) and the correlation of their advantages (`label_reliability`).
-    /// 0 (default): no second valuation.
+    /// 0 (default): no second valuation. Decisions the team teacher values (`team_rounds`) are
+    /// not checked; with `futures = "noiseless"` the second valuation repeats the first exactly
+    /// (agreement 1), and under `max_minutes` its continuations count against the budget
+    /// without being counted in `rollouts`.
     pub teacher_check: f64,
     /// Probability of a random valid candidate in the behaviour.
     pub behaviour_epsilon: f64,
@@ -737,7 +740,8 @@ impl Correlation {
         let [n, a, b, aa, bb, ab] = self.sums;
         let cov = ab - a * b / n;
         let (va, vb) = (aa - a * a / n, bb - b * b / n);
-        (n >= 2.0 && va > 0.0 && vb > 0.0).then(|| cov / (va * vb).sqrt())
+        // Clamped: rounding in the pooled sums can step just outside [−1, 1].
+        (n >= 2.0 && va > 0.0 && vb > 0.0).then(|| (cov / (va * vb).sqrt()).clamp(-1.0, 1.0))
     }
 }
 
@@ -936,11 +940,7 @@ impl Labelling<'_> {
 
 /// The best candidate of `values` (lowest value; ties keep `current`, then the lower slot).
 fn best_candidate(values: &[Option<f64>], current: Option<Decision>) -> Option<Decision> {
-    let min = values
-        .iter()
-        .flatten()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
+    let min = min_value(values)?;
     if let Some(Decision::Candidate(k)) = current {
         if values.get(k).copied().flatten() == Some(min) {
             return current;
@@ -1009,14 +1009,8 @@ impl Recorder for Labelling<'_> {
             // With `futures = "salted"` or `"redrawn"` the two come from different robots'
             // futures, so the gain carries their luck.
             let last = choosers[choosers.len() - 1];
-            let at_final = values[last]
-                .as_deref()
-                .unwrap_or(&[])
-                .iter()
-                .flatten()
-                .copied()
-                .fold(f64::INFINITY, f64::min);
-            if let Some(at_base) = at_base.filter(|_| at_final.is_finite()) {
+            let at_final = min_value(values[last].as_deref().unwrap_or(&[]));
+            if let (Some(at_base), Some(at_final)) = (at_base, at_final) {
                 self.teacher_gain += at_base - at_final;
                 self.labelled += 1;
             }
@@ -1025,9 +1019,9 @@ impl Recorder for Labelling<'_> {
                 let v = self.values(trial, i, &[])?;
                 // The teacher's gain over its base here: what the base's own choice leaves
                 // minus what the best candidate leaves.
-                let best = v.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+                let best = min_value(&v);
                 if let Decision::Candidate(k) = self.base_choice(trial, i)? {
-                    if let Some(own) = v.get(k).copied().flatten() {
+                    if let (Some(own), Some(best)) = (v.get(k).copied().flatten(), best) {
                         self.teacher_gain += own - best;
                         self.labelled += 1;
                         self.base_agreement.0 += 1;
@@ -1381,9 +1375,11 @@ impl Student {
             for k in valid() {
                 corr.add(q[k] as f64 - mean, l.target[k] as f64);
             }
-            // `spread`'s score of k / (height + width): feature 7 of the candidate's inputs.
+            // `spread`'s score of k / (height + width), from the candidate's inputs.
             let spread = |k: usize| {
-                -l.vec[CONTEXT_FEATURES + k * crate::agnostic::CANDIDATE_INPUTS + 7] as f64
+                -l.vec[CONTEXT_FEATURES
+                    + k * crate::agnostic::CANDIDATE_INPUTS
+                    + AgentView::SPREAD_SCORE_FEATURE] as f64
             };
             let spread_mean = valid().map(spread).sum::<f64>() / valid().count() as f64;
             for k in valid() {
@@ -2219,6 +2215,37 @@ fn train_loop(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `spread_label_corr` reads `spread`'s score (and negates it: lower is better there): spread
+    /// scores 0.1, 0.2, 0.3 against advantages 1, 0, −1 correlate exactly 1, while `spread`'s
+    /// choice flag (1, 0, 0 here) would correlate only 0.87; the empty slot 3 is not counted.
+    #[test]
+    fn spread_label_corr_reads_the_spread_score_negated() {
+        let cfg = RolloutTrainConfig {
+            network: Network::Agnostic,
+            ..RolloutTrainConfig::default()
+        };
+        let net = Student::init(&cfg, &crate::cpu_autodiff()).unwrap();
+        let (slots, s) = (4, cfg.agnostic().crop_side());
+        let mut vec = vec![0.0f32; CONTEXT_FEATURES + slots * crate::agnostic::CANDIDATE_INPUTS];
+        for (k, score) in [0.1f32, 0.2, 0.3].into_iter().enumerate() {
+            let f = &mut vec[CONTEXT_FEATURES + k * crate::agnostic::CANDIDATE_INPUTS..];
+            f[AgentView::SPREAD_SCORE_FEATURE] = score;
+            f[AgentView::SPREAD_CHOICE_FEATURE] = (k == 0) as u8 as f32;
+        }
+        let l = Labelled {
+            map: vec![0; (slots * crate::agnostic::CROP_CHANNELS * s * s).div_ceil(64)],
+            vec,
+            train_mask: vec![true, true, true, false],
+            target: vec![1.0, 0.0, -1.0, 0.0],
+        };
+        let fit = net.imitation(std::iter::once(&l));
+        assert!(
+            (fit.spread_label_corr.unwrap() - 1.0).abs() < 1e-9,
+            "{fit:?}"
+        );
+        assert!(fit.label_corr.is_some_and(|c| (-1.0..=1.0).contains(&c)));
+    }
 
     /// The labels' check by hand: advantages (1, 0, −1) and (1, −1, 0) correlate 0.5; the
     /// first valuation's best (slot 0) is the second's best too; a decision without a valued
