@@ -210,8 +210,20 @@ pub struct RolloutTrainConfig {
     pub crop_radius: usize,
     /// The DEP's observation vector (ours: `candidate-features`; the paper: `paper`).
     pub observation: Observation,
-    /// Adam steps after each iteration's collection.
+    /// Adam steps after each iteration's collection (at most, with `fit_holdout`).
     pub updates_per_iteration: u64,
+    /// The fit's stopping rule (agnostic network): this share of each iteration's new robot
+    /// sequences (the last collected: other maps) is held out of that iteration's fit, the
+    /// student is scored against their labels every `fit_check_every` updates
+    /// ([`LabelFit::label_corr`]), and the fit stops after `fit_patience` checks without a
+    /// better score, keeping the best-scoring student (Adam's moments as they are); the held-out
+    /// sequences join the training data from the next iteration on. 0 (default): every update
+    /// of `updates_per_iteration`, no check.
+    pub fit_holdout: f64,
+    /// Updates between two checks of the stopping rule (`fit_holdout`).
+    pub fit_check_every: u64,
+    /// Checks in a row without a better held-out score that end the fit (`fit_holdout`).
+    pub fit_patience: u64,
     /// Robot sequences per batch (the paper: 16).
     pub batch_size: usize,
     /// Decisions per sampled window, unrolled from zero LSTM state.
@@ -278,6 +290,9 @@ impl Default for RolloutTrainConfig {
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
+            fit_holdout: 0.0,
+            fit_check_every: 250,
+            fit_patience: 2,
             batch_size: 128,
             trace_len: 24,
             recurrent: false,
@@ -445,8 +460,16 @@ impl RolloutTrainConfig {
             ),
             ("horizon", self.horizon as u64, 0, 100_000),
             ("patience", self.patience, 0, 1000),
+            ("fit_check_every", self.fit_check_every, 1, 1_000_000),
+            ("fit_patience", self.fit_patience, 1, 1000),
             ("team_rounds", self.team_rounds as u64, 0, 8),
         ])?;
+        if !(0.0..=0.5).contains(&self.fit_holdout) {
+            return Err("field `fit_holdout`: must be in [0, 0.5]".into());
+        }
+        if self.fit_holdout > 0.0 && self.network != Network::Agnostic {
+            return Err("field `fit_holdout`: the stopping rule scores the agnostic network only; set network = \"agnostic\" or fit_holdout = 0".into());
+        }
         if self.network == Network::Agnostic && self.recurrent {
             return Err(
                 "field `recurrent`: the agnostic network scores single decisions; set false".into(),
@@ -1615,6 +1638,60 @@ fn fit(
     Some((net, loss_sum))
 }
 
+/// What [`fit_checked`] ends with.
+struct Fitted {
+    net: Student,
+    /// Σ of the losses of the updates made.
+    loss_sum: f64,
+    updates: u64,
+    /// The kept student's correlation with the held-out labels (`fit_holdout`).
+    holdout_corr: Option<f64>,
+}
+
+/// An iteration's fit: [`fit`] on `train` for `updates_per_iteration` updates numbered from
+/// `first`, or with held-out sequences (`fit_holdout`) in rounds of `fit_check_every`, scoring
+/// the student against their labels after each round and ending after `fit_patience` rounds
+/// without a better score, with the best-scoring student. `None` when `stop` said so.
+fn fit_checked(
+    net: Student,
+    optim: &mut ModuleOptimizer,
+    cfg: &RolloutTrainConfig,
+    (train, held_out): (&[Vec<Labelled>], &[Vec<Labelled>]),
+    first: u64,
+    stop: &dyn Fn() -> bool,
+) -> Option<Fitted> {
+    let all = cfg.updates_per_iteration;
+    if held_out.is_empty() {
+        let (net, loss_sum) = fit(net, optim, cfg, train, first..first + all, stop)?;
+        return Some(Fitted {
+            net,
+            loss_sum,
+            updates: all,
+            holdout_corr: None,
+        });
+    }
+    let (mut net, mut done, mut loss_sum, mut since_best) = (net, 0, 0.0, 0);
+    let mut best: Option<(f64, Student)> = None;
+    while done < all && since_best < cfg.fit_patience {
+        let to = (done + cfg.fit_check_every).min(all);
+        let (next, loss) = fit(net, optim, cfg, train, first + done..first + to, stop)?;
+        (net, done, loss_sum) = (next, to, loss_sum + loss);
+        let corr = net.imitation(held_out.iter().flatten()).label_corr;
+        match (corr, &best) {
+            (Some(c), Some((b, _))) if c <= *b => since_best += 1,
+            (Some(c), _) => (best, since_best) = (Some((c, net.clone())), 0),
+            (None, _) => since_best += 1,
+        }
+    }
+    let holdout_corr = best.as_ref().map(|b| b.0);
+    Some(Fitted {
+        net: best.map_or(net, |b| b.1),
+        loss_sum,
+        updates: done,
+        holdout_corr,
+    })
+}
+
 /// A run's stored labels (`RUN/checkpoint/data.bin`: every robot's labelled decisions in
 /// episode order) cut at its iterations' boundaries (`RUN/iterations.csv`'s `decisions`): entry
 /// `i` holds the decision sequences iteration `i` collected.
@@ -1770,6 +1847,13 @@ struct IterationRow {
     /// ([`LabelCheck::reliability`]).
     #[serde(default)]
     label_reliability: Option<f64>,
+    /// The updates this iteration's fit made (fewer than `updates_per_iteration` when the
+    /// `fit_holdout` stopping rule ended it).
+    #[serde(default)]
+    fit_updates: Option<u64>,
+    /// With `fit_holdout`: the kept student's correlation with the held-out labels.
+    #[serde(default)]
+    holdout_label_corr: Option<f64>,
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
@@ -2062,29 +2146,32 @@ fn train_loop(
             all.merge(&c.check);
             all
         });
+        let before = data.len();
         data.extend(
             collected
                 .into_iter()
                 .flat_map(|c| c.robots)
                 .filter(|s| !s.is_empty()),
         );
+        // The stopping rule's held-out sequences: the last `fit_holdout` of the new ones.
+        let fitted = data.len() - ((data.len() - before) as f64 * cfg.fit_holdout) as usize;
         if data.is_empty() {
             return Err(TrainError::Other("no robot decided in any training episode so far (are the maps seen whole from the start?)".into()));
         }
         state.episodes += per;
         // 4. Regress the advantages on windows of the robots' decision sequences.
-        let Some((next, loss_sum)) = fit(
+        let Some(done) = fit_checked(
             net,
             &mut optim,
             cfg,
-            &data,
-            state.updates..state.updates + cfg.updates_per_iteration,
+            (&data[..fitted], &data[fitted..]),
+            state.updates,
             &|| clock.out_of_time(cfg.max_minutes),
         ) else {
             return time_ran_out(cfg, state.iteration, first_iteration);
         };
-        net = next;
-        state.updates += cfg.updates_per_iteration;
+        net = done.net;
+        state.updates += done.updates;
         state.iteration += 1;
         // 5. Validate the greedy DEP and each conservative margin; keep the best.
         let mut tried = Vec::new();
@@ -2128,7 +2215,7 @@ fn train_loop(
             rollouts,
             behaviour_steps,
             updates: state.updates,
-            loss: loss_sum / cfg.updates_per_iteration.max(1) as f64,
+            loss: done.loss_sum / done.updates.max(1) as f64,
             validation_steps: steps,
             greedy_steps,
             spread_margin: margin,
@@ -2142,6 +2229,8 @@ fn train_loop(
             spread_label_corr: imitation.spread_label_corr,
             teacher_self_agreement: check.self_agreement(),
             label_reliability: check.reliability(),
+            fit_updates: Some(done.updates),
+            holdout_label_corr: done.holdout_corr,
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,
@@ -2245,6 +2334,84 @@ mod tests {
             "{fit:?}"
         );
         assert!(fit.label_corr.is_some_and(|c| (-1.0..=1.0).contains(&c)));
+    }
+
+    /// Decisions whose advantages are a learnable function of one candidate input (its spread
+    /// score, centred), drawn from `seed`.
+    fn learnable(cfg: &RolloutTrainConfig, n: usize, seed: u64) -> Vec<Vec<Labelled>> {
+        let mut rng = stream(seed, "test-labels", 0);
+        let (slots, side) = (3, cfg.agnostic().crop_side());
+        let width = crate::agnostic::CANDIDATE_INPUTS;
+        (0..n)
+            .map(|_| {
+                let mut vec = vec![0.0f32; CONTEXT_FEATURES + slots * width];
+                let x: Vec<f32> = (0..slots).map(|_| rng.random::<f32>()).collect();
+                for (k, &v) in x.iter().enumerate() {
+                    vec[CONTEXT_FEATURES + k * width + AgentView::SPREAD_SCORE_FEATURE] = v;
+                }
+                let mean = x.iter().sum::<f32>() / slots as f32;
+                vec![Labelled {
+                    map: vec![
+                        0;
+                        (slots * crate::agnostic::CROP_CHANNELS * side * side).div_ceil(64)
+                    ],
+                    vec,
+                    train_mask: vec![true; slots],
+                    target: x.iter().map(|v| mean - v).collect(),
+                }]
+            })
+            .collect()
+    }
+
+    /// The stopping rule keeps the student it scored best on the held-out labels (its score is
+    /// the one reported), makes whole rounds (or every update), and without held-out labels
+    /// fits exactly as many updates as configured.
+    #[test]
+    fn the_fit_stopping_rule_keeps_the_best_held_out_student() {
+        let cfg = RolloutTrainConfig {
+            network: Network::Agnostic,
+            updates_per_iteration: 40,
+            fit_check_every: 4,
+            fit_patience: 1,
+            batch_size: 8,
+            ..RolloutTrainConfig::default()
+        };
+        let (train, held_out) = (learnable(&cfg, 60, 1), learnable(&cfg, 30, 2));
+        let device = crate::cpu_autodiff();
+        let start = Student::init(&cfg, &device).unwrap();
+        let fresh = || start.clone();
+        let adam = || -> ModuleOptimizer { AdamConfig::new().init() };
+        let done = fit_checked(fresh(), &mut adam(), &cfg, (&train, &held_out), 0, &|| {
+            false
+        })
+        .unwrap();
+        assert!(
+            done.updates <= 40 && done.updates.is_multiple_of(4),
+            "{}",
+            done.updates
+        );
+        let kept = done.net.imitation(held_out.iter().flatten()).label_corr;
+        assert_eq!(kept, done.holdout_corr);
+        // Learnable labels: the kept student ranks held-out candidates as the labels do.
+        assert!(kept.unwrap() > 0.0, "{kept:?}");
+        // The rule's rounds replayed: the kept score is the best of the rounds made, and the
+        // fit ended `fit_patience` rounds after it (or at the end).
+        let (mut net, mut optim, mut scores) = (fresh(), adam(), Vec::new());
+        for r in 0..done.updates / 4 {
+            net = fit(net, &mut optim, &cfg, &train, r * 4..r * 4 + 4, &|| false)
+                .unwrap()
+                .0;
+            scores.push(net.imitation(held_out.iter().flatten()).label_corr.unwrap());
+        }
+        let best = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(Some(best), done.holdout_corr);
+        let at = scores.iter().position(|&s| s == best).unwrap();
+        assert!(
+            at + 1 == scores.len() - 1 || done.updates == 40,
+            "{scores:?}"
+        );
+        let plain = fit_checked(fresh(), &mut adam(), &cfg, (&train, &[]), 0, &|| false).unwrap();
+        assert_eq!((plain.updates, plain.holdout_corr), (40, None));
     }
 
     /// The labels' check by hand: advantages (1, 0, −1) and (1, −1, 0) correlate 0.5; the

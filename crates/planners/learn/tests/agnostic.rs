@@ -230,6 +230,32 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         (refitted - logged).abs() < 1e-12,
         "refit {refitted} vs the run's {logged}"
     );
+    // The fit's stopping rule: half of each iteration's new sequences held out, a check after
+    // every update; each iteration logs the updates it made and the kept student's held-out
+    // score, and the model counts exactly those updates.
+    let es = root.join("es");
+    let mut stopped = tiny();
+    (stopped.fit_holdout, stopped.fit_check_every, stopped.fit_patience) = (0.5, 1, 1);
+    stopped.updates_per_iteration = 6;
+    train(&es, Some(stopped), &mut |_| {}).unwrap();
+    let mut log = csv::Reader::from_path(es.join("iterations.csv")).unwrap();
+    let head = log.headers().unwrap().clone();
+    let at = |name: &str| head.iter().position(|h| h == name).unwrap();
+    let (mut total, mut rows) = (0u64, 0);
+    for row in log.records() {
+        let row = row.unwrap();
+        let made: u64 = row[at("fit_updates")].parse().unwrap();
+        assert!((1..=6).contains(&made), "{row:?}");
+        let corr: f64 = row[at("holdout_label_corr")].parse().unwrap();
+        assert!((-1.0..=1.0).contains(&corr), "{row:?}");
+        total += made;
+        rows += 1;
+        let logged: u64 = row[at("updates")].parse().unwrap();
+        assert_eq!(logged, total, "{row:?}");
+    }
+    assert_eq!(rows, 2);
+    let info = Model::load(&es.join("last")).unwrap().info;
+    assert_eq!(info.updates, total);
     // A wider student is another student.
     let wide = cfg.agnostic().with_hidden_width(96);
     let other = refit(&cfg, &wide, &stored[0], &test, 3, 3).unwrap();
