@@ -173,6 +173,34 @@ impl<'a> AgentView<'a> {
         Self::CANDIDATE_FEATURES * goals
     }
 
+    /// Each teammate's announced goal heard within [`crate::Spread::GOAL_MEMORY`] steps and
+    /// last known position from within [`crate::Spread::POSITION_MEMORY`] (what the
+    /// candidate features and [`crate::Spread`] weigh), in teammate order.
+    pub fn recent_teammates(&self) -> Vec<(Option<Pos>, Option<Pos>)> {
+        let recent = |at: Option<usize>, memory: usize| {
+            at.is_some_and(|a| self.t.saturating_sub(a) <= memory)
+        };
+        self.teammates
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != self.id)
+            .map(|(_, r)| {
+                let goal = r
+                    .goal
+                    .filter(|_| recent(r.heard_at, crate::Spread::GOAL_MEMORY));
+                let at = match (r.seen_at, r.heard_at) {
+                    (Some(s), Some(h)) => Some(s.max(h)),
+                    (s, h) => s.or(h),
+                };
+                (
+                    goal,
+                    r.last_pos()
+                        .filter(|_| recent(at, crate::Spread::POSITION_MEMORY)),
+                )
+            })
+            .collect()
+    }
+
     /// Per-candidate inputs of the learned policy beyond the paper's (the `candidate-features`
     /// observation; zeros for an empty slot), `sensing_range` = d_s:
     ///
@@ -200,29 +228,7 @@ impl<'a> AgentView<'a> {
         let b = self.belief;
         let ds = sensing_range.max(1);
         let window = ((2 * ds + 1) * (2 * ds + 1)) as f32;
-        let recent = |at: Option<usize>, memory: usize| {
-            at.is_some_and(|a| self.t.saturating_sub(a) <= memory)
-        };
-        let mates: Vec<(Option<Pos>, Option<Pos>)> = self
-            .teammates
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| j != self.id)
-            .map(|(_, r)| {
-                let goal = r
-                    .goal
-                    .filter(|_| recent(r.heard_at, crate::Spread::GOAL_MEMORY));
-                let at = match (r.seen_at, r.heard_at) {
-                    (Some(s), Some(h)) => Some(s.max(h)),
-                    (s, h) => s.or(h),
-                };
-                (
-                    goal,
-                    r.last_pos()
-                        .filter(|_| recent(at, crate::Spread::POSITION_MEMORY)),
-                )
-            })
-            .collect();
+        let mates = self.recent_teammates();
         let cells = self.candidates.cells.clone();
         let costs: Vec<f64> = cells
             .iter()

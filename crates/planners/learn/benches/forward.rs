@@ -99,7 +99,7 @@ fn agnostic(c: &mut Criterion) {
     let ds = madenet_world::ScenarioConfig::default().sensing_range;
     for (side, team) in [(20, 3), (60, 5)] {
         let mut trial = mid_trial(side, team);
-        let mut policy = AgnosticPolicy::new("any", scorer.clone(), cfg.crop_radius, ds);
+        let mut policy = AgnosticPolicy::new("any", scorer.clone(), &cfg, ds);
         c.bench_function(&format!("agnostic_decide/{side}"), |b| {
             b.iter(|| black_box(policy.decide(&mut trial.agent_mut(0).view(true))))
         });

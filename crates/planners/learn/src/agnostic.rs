@@ -43,6 +43,8 @@ pub const CONTEXT_FEATURES: usize = 8;
 pub const CANDIDATE_INPUTS: usize = AgentView::CANDIDATE_FEATURES + 3;
 /// Channels of a crop (the paper's map image channels).
 pub const CROP_CHANNELS: usize = 4;
+/// Values per candidate added by [`AgnosticConfig::wide_inputs`] (see [`inputs_for`]).
+pub const WIDE_INPUTS: usize = 4;
 
 /// Sizes of the agnostic DEP, with their defaults.
 #[derive(Config, Debug, PartialEq)]
@@ -69,6 +71,10 @@ pub struct AgnosticConfig {
     /// Negative slope of the leaky ReLUs.
     #[config(default = 0.01)]
     pub leaky_slope: f64,
+    /// `Some(true)`: [`WIDE_INPUTS`] more values per candidate, about what lies beyond its crop
+    /// ([`inputs_for`]). An option so that the `model.toml` of models made before them (no such
+    /// field) still loads.
+    pub wide_inputs: Option<bool>,
 }
 
 /// The agnostic DEP's layers (see the module docs).
@@ -111,6 +117,16 @@ impl AgnosticConfig {
     /// Crop side S = 2 · `crop_radius` + 1.
     pub fn crop_side(&self) -> usize {
         2 * self.crop_radius + 1
+    }
+
+    /// Whether candidates get the [`WIDE_INPUTS`] (`wide_inputs`).
+    pub fn wide(&self) -> bool {
+        self.wide_inputs == Some(true)
+    }
+
+    /// Values per candidate: [`CANDIDATE_INPUTS`], and [`WIDE_INPUTS`] with `wide_inputs`.
+    pub fn candidate_inputs(&self) -> usize {
+        CANDIDATE_INPUTS + if self.wide() { WIDE_INPUTS } else { 0 }
     }
 
     /// Side of K3's output, or why the sizes don't work.
@@ -165,7 +181,7 @@ impl AgnosticConfig {
             k2: conv(ch, K2),
             k3: conv(ch, K2),
             kf: linear(ch * side * side, self.crop_width),
-            embed: linear(self.crop_width + CANDIDATE_INPUTS, self.embed_width),
+            embed: linear(self.crop_width + self.candidate_inputs(), self.embed_width),
             context: linear(self.embed_width + CONTEXT_FEATURES, self.context_width),
             hidden: linear(self.embed_width + self.context_width, self.hidden_width),
             out: linear(self.hidden_width, 1),
@@ -344,6 +360,98 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
     }
 }
 
+/// The inputs of `view` for a network of `sizes`: [`inputs`], and with `wide_inputs` after each
+/// candidate's [`CANDIDATE_INPUTS`] [`WIDE_INPUTS`] more, about what lies beyond its crop (d_s =
+/// `sensing_range`; cells outside the map count as known):
+///
+/// 0. unknown cells within 2 d_s (Chebyshev) of the candidate / (4 d_s + 1)²;
+/// 1. the same within 4 d_s / (8 d_s + 1)²;
+/// 2. unknown cells within 4 d_s of the candidate nearer (Chebyshev) to it than to every
+///    teammate's announced goal and last known position (as [`AgentView::write_candidate_features`]
+///    keeps them) / (8 d_s + 1)²: what is left there for this robot;
+/// 3. unknown cells of the whole map on the candidate's side of the robot (Σ over cells whose
+///    offset from the robot has a positive dot product with the candidate's) / all cells.
+pub fn inputs_for(
+    view: &mut AgentView<'_>,
+    sensing_range: i32,
+    sizes: &AgnosticConfig,
+) -> AgnosticInput {
+    let mut x = inputs(view, sensing_range, sizes.crop_radius);
+    if !sizes.wide() {
+        return x;
+    }
+    let slots = x.mask.len();
+    let b = view.belief;
+    let (h, w) = (b.height() as i32, b.width() as i32);
+    // Summed-area table of unknown cells: O(1) per window (hand-written: two loops).
+    let mut sat = vec![0u32; ((h + 1) * (w + 1)) as usize];
+    let at = |r: i32, c: i32| (r * (w + 1) + c) as usize;
+    for r in 0..h {
+        for c in 0..w {
+            let unknown = (b.get(Pos::new(r, c)) == madenet_map::Occupancy::Unknown) as u32;
+            sat[at(r + 1, c + 1)] = unknown + sat[at(r, c + 1)] + sat[at(r + 1, c)] - sat[at(r, c)];
+        }
+    }
+    let window = |p: Pos, rad: i32| {
+        let (r0, r1) = ((p.row - rad).max(0), (p.row + rad + 1).min(h));
+        let (c0, c1) = ((p.col - rad).max(0), (p.col + rad + 1).min(w));
+        if r0 >= r1 || c0 >= c1 {
+            return 0;
+        }
+        sat[at(r1, c1)] + sat[at(r0, c0)] - sat[at(r0, c1)] - sat[at(r1, c0)]
+    };
+    let ds = sensing_range.max(1);
+    let area = |rad: i32| ((2 * rad + 1) * (2 * rad + 1)) as f32;
+    let others: Vec<Pos> = view
+        .recent_teammates()
+        .into_iter()
+        .flat_map(|(goal, at)| goal.into_iter().chain(at))
+        .collect();
+    let me = view.pos;
+    let cells = (h * w).max(1) as f32;
+    let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
+    for k in 0..slots {
+        features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
+        let Some(c) = view.candidates().get(k) else {
+            features.extend_from_slice(&[0.0; WIDE_INPUTS]);
+            continue;
+        };
+        let far = 4 * ds;
+        let mut left = 0u32;
+        for r in (c.row - far).max(0)..(c.row + far + 1).min(h) {
+            for col in (c.col - far).max(0)..(c.col + far + 1).min(w) {
+                let q = Pos::new(r, col);
+                if b.get(q) == madenet_map::Occupancy::Unknown {
+                    let d = q.chebyshev(c);
+                    left += others.iter().all(|m| m.chebyshev(q) > d) as u32;
+                }
+            }
+        }
+        let (dr, dc) = (c.row - me.row, c.col - me.col);
+        let mut ahead = 0u32;
+        if dr != 0 || dc != 0 {
+            for r in 0..h {
+                for col in 0..w {
+                    let q = Pos::new(r, col);
+                    if (q.row - me.row) * dr + (q.col - me.col) * dc > 0
+                        && b.get(q) == madenet_map::Occupancy::Unknown
+                    {
+                        ahead += 1;
+                    }
+                }
+            }
+        }
+        features.extend_from_slice(&[
+            window(c, 2 * ds) as f32 / area(2 * ds),
+            window(c, far) as f32 / area(far),
+            left as f32 / area(far),
+            ahead as f32 / cells,
+        ]);
+    }
+    x.features = features;
+    x
+}
+
 /// A batch of decisions as tensors, slots padded to the widest decision.
 pub struct Batch {
     /// `[b·g, 4, S, S]`.
@@ -369,8 +477,13 @@ impl Batch {
             .unwrap_or(1)
             .max(1);
         let crop_len = CROP_CHANNELS * side * side;
+        // Values per candidate: CANDIDATE_INPUTS, or more with `wide_inputs`.
+        let width = inputs
+            .iter()
+            .find(|x| !x.mask.is_empty())
+            .map_or(CANDIDATE_INPUTS, |x| x.features.len() / x.mask.len());
         let mut crops = vec![0.0f32; b * g * crop_len];
-        let mut features = vec![0.0f32; b * g * CANDIDATE_INPUTS];
+        let mut features = vec![0.0f32; b * g * width];
         let mut context = vec![0.0f32; b * CONTEXT_FEATURES];
         let mut mask = vec![0.0f32; b * g];
         for (i, x) in inputs.iter().enumerate() {
@@ -379,8 +492,7 @@ impl Batch {
                 &x.crops,
                 &mut crops[i * g * crop_len..(i * g + slots) * crop_len],
             );
-            features[i * g * CANDIDATE_INPUTS..(i * g + slots) * CANDIDATE_INPUTS]
-                .copy_from_slice(&x.features);
+            features[i * g * width..(i * g + slots) * width].copy_from_slice(&x.features);
             context[i * CONTEXT_FEATURES..(i + 1) * CONTEXT_FEATURES].copy_from_slice(&x.context);
             for (k, &m) in x.mask.iter().enumerate() {
                 mask[i * g + k] = m as u8 as f32;
@@ -391,10 +503,7 @@ impl Batch {
                 TensorData::new(crops, [b * g, CROP_CHANNELS, side, side]),
                 device,
             ),
-            features: Tensor::from_data(
-                TensorData::new(features, [b * g, CANDIDATE_INPUTS]),
-                device,
-            ),
+            features: Tensor::from_data(TensorData::new(features, [b * g, width]), device),
             context: Tensor::from_data(TensorData::new(context, [b, CONTEXT_FEATURES]), device),
             mask: Tensor::from_data(TensorData::new(mask, [b, g]), device),
             slots: g,
@@ -407,7 +516,7 @@ impl Batch {
 pub struct AgnosticPolicy {
     name: String,
     net: Arc<AgnosticScorer>,
-    crop_radius: usize,
+    sizes: AgnosticConfig,
     sensing_range: i32,
     spread_margin: Option<f32>,
     /// The scores of the last decision (empty: it had no choice to weigh).
@@ -415,17 +524,18 @@ pub struct AgnosticPolicy {
 }
 
 impl AgnosticPolicy {
-    /// Policy `name` deciding with `net` (crops of `crop_radius`, d_s = `sensing_range`).
+    /// Policy `name` deciding with `net` of `sizes` (its crops and inputs), d_s =
+    /// `sensing_range`.
     pub fn new(
         name: &str,
         net: Arc<AgnosticScorer>,
-        crop_radius: usize,
+        sizes: &AgnosticConfig,
         sensing_range: i32,
     ) -> Self {
         AgnosticPolicy {
             name: name.into(),
             net,
-            crop_radius,
+            sizes: sizes.clone(),
             sensing_range,
             spread_margin: None,
             last: Vec::new(),
@@ -457,13 +567,14 @@ impl Policy for AgnosticPolicy {
         if view.candidates().cells.len() == 1 {
             return Decision::Candidate(0);
         }
-        let input = inputs(view, self.sensing_range, self.crop_radius);
+        let input = inputs_for(view, self.sensing_range, &self.sizes);
         let q = self.net.scores(&input);
         self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
         // `spread`'s choice is among the candidate inputs, already computed for the features.
         let anchor = (0..input.mask.len()).find(|&k| {
-            input.features[k * CANDIDATE_INPUTS + AgentView::SPREAD_CHOICE_FEATURE] == 1.0
+            input.features[k * self.sizes.candidate_inputs() + AgentView::SPREAD_CHOICE_FEATURE]
+                == 1.0
         });
         Decision::Candidate(crate::policy::conservative(
             &q,

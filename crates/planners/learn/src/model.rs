@@ -332,7 +332,7 @@ impl Model {
         let margin = self.info.spread_margin;
         if let (Some(scorer), Some(a)) = (&self.scorer, &self.info.agnostic) {
             return Box::new(
-                AgnosticPolicy::new(name, Arc::clone(scorer), a.crop_radius, sensing_range)
+                AgnosticPolicy::new(name, Arc::clone(scorer), a, sensing_range)
                     .with_spread_margin(margin),
             );
         }

@@ -208,6 +208,9 @@ pub struct RolloutTrainConfig {
     pub network: Network,
     /// With the agnostic network: cells from a candidate to its crop's edge.
     pub crop_radius: usize,
+    /// With the agnostic network: four more inputs per candidate about what lies beyond its
+    /// crop ([`crate::agnostic::inputs_for`]).
+    pub wide_inputs: bool,
     /// The DEP's observation vector (ours: `candidate-features`; the paper: `paper`).
     pub observation: Observation,
     /// Adam steps after each iteration's collection (at most, with `fit_holdout`).
@@ -288,6 +291,7 @@ impl Default for RolloutTrainConfig {
             behaviour_epsilon: 0.1,
             network: Network::Grid,
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
+            wide_inputs: false,
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
             fit_holdout: 0.0,
@@ -544,7 +548,9 @@ impl RolloutTrainConfig {
 
     /// The agnostic network's sizes.
     pub fn agnostic(&self) -> crate::agnostic::AgnosticConfig {
-        crate::agnostic::AgnosticConfig::new().with_crop_radius(self.crop_radius)
+        crate::agnostic::AgnosticConfig::new()
+            .with_crop_radius(self.crop_radius)
+            .with_wide_inputs(self.wide_inputs.then_some(true))
     }
 
     /// The largest map side of iteration `iteration`'s curriculum (growing linearly from
@@ -1076,7 +1082,7 @@ impl Recorder for Labelling<'_> {
                         action_mask(&view),
                     ),
                     Network::Agnostic => {
-                        let x = crate::agnostic::inputs(&mut view, ds, cfg.crop_radius);
+                        let x = crate::agnostic::inputs_for(&mut view, ds, &cfg.agnostic());
                         let mut vec = x.context;
                         vec.extend(x.features);
                         (x.crops, vec, x.mask)
@@ -1399,10 +1405,9 @@ impl Student {
                 corr.add(q[k] as f64 - mean, l.target[k] as f64);
             }
             // `spread`'s score of k / (height + width), from the candidate's inputs.
+            let width = (l.vec.len() - CONTEXT_FEATURES) / l.train_mask.len().max(1);
             let spread = |k: usize| {
-                -l.vec[CONTEXT_FEATURES
-                    + k * crate::agnostic::CANDIDATE_INPUTS
-                    + AgentView::SPREAD_SCORE_FEATURE] as f64
+                -l.vec[CONTEXT_FEATURES + k * width + AgentView::SPREAD_SCORE_FEATURE] as f64
             };
             let spread_mean = valid().map(spread).sum::<f64>() / valid().count() as f64;
             for k in valid() {

@@ -7,7 +7,8 @@
 //! same-seed determinism lives in one test with everything else that initialises networks.
 
 use madenet_learn::agnostic::{
-    inputs, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
+    inputs_for, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
+    WIDE_INPUTS,
 };
 use madenet_learn::rollout_train::{refit, stored_labels, train, Network, RolloutTrainConfig};
 use madenet_learn::Model;
@@ -18,6 +19,11 @@ use madenet_world::ScenarioConfig;
 
 /// A decision's inputs taken from the first decision of a spread trial on a generated map.
 fn decision_from(side: usize, team: usize, seed: u64) -> AgnosticInput {
+    decision_for(side, team, seed, &AgnosticConfig::new())
+}
+
+/// [`decision_from`] for a network of `sizes`.
+fn decision_for(side: usize, team: usize, seed: u64, sizes: &AgnosticConfig) -> AgnosticInput {
     let gen = GeneratorConfig {
         keep_free: vec![],
         ..GeneratorConfig::for_size(side, side)
@@ -39,7 +45,50 @@ fn decision_from(side: usize, team: usize, seed: u64) -> AgnosticInput {
     let mut trial = Trial::new(spec).unwrap();
     assert!(trial.begin_step());
     let mut view = trial.agent_mut(0).view(true);
-    inputs(&mut view, 4, 6)
+    inputs_for(&mut view, 4, sizes)
+}
+
+/// `wide_inputs` appends WIDE_INPUTS shares to each candidate's usual inputs (those unchanged):
+/// each in [0, 1], the unknown cells left to this robot within 4 d_s at most those within 4 d_s,
+/// some unknown space around some candidate at the start; a wide network's decision scorer gives
+/// burn's scores.
+fn wide_inputs_extend_each_candidate_and_score_alike() {
+    let wide = AgnosticConfig::new().with_wide_inputs(Some(true));
+    assert_eq!(wide.candidate_inputs(), CANDIDATE_INPUTS + WIDE_INPUTS);
+    for (side, team, seed) in [(20, 3, 4), (37, 5, 8)] {
+        let (x, plain) = (
+            decision_for(side, team, seed, &wide),
+            decision_from(side, team, seed),
+        );
+        let slots = x.mask.len();
+        assert_eq!(x.features.len(), slots * wide.candidate_inputs());
+        assert_eq!(
+            (&x.context, &x.crops, &x.mask),
+            (&plain.context, &plain.crops, &plain.mask)
+        );
+        let mut unknown_near = 0.0f32;
+        for k in 0..slots {
+            let f = &x.features[k * wide.candidate_inputs()..(k + 1) * wide.candidate_inputs()];
+            assert_eq!(
+                &f[..CANDIDATE_INPUTS],
+                &plain.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]
+            );
+            let w = &f[CANDIDATE_INPUTS..];
+            assert!(w.iter().all(|v| (0.0..=1.0).contains(v)), "{w:?}");
+            assert!(w[2] <= w[1], "{w:?}");
+            unknown_near += w[1];
+        }
+        assert!(unknown_near > 0.0, "{x:?}");
+        let net = wide.init(&madenet_learn::cpu()).unwrap();
+        let scorer = madenet_learn::agnostic::AgnosticScorer::new(&net);
+        let (want, got) = (net.scores(&x), scorer.scores(&x));
+        for k in (0..slots).filter(|&k| x.mask[k]) {
+            assert!(
+                (want[k] - got[k]).abs() < 1e-4 * want[k].abs().max(1.0),
+                "{want:?} {got:?}"
+            );
+        }
+    }
 }
 
 fn permuted(x: &AgnosticInput, order: &[usize]) -> AgnosticInput {
@@ -69,6 +118,7 @@ fn permuted(x: &AgnosticInput, order: &[usize]) -> AgnosticInput {
 fn agnostic_network_and_its_training() {
     one_network_scores_any_map_team_and_candidate_count_by_candidate_not_slot();
     the_decision_scorer_scores_as_the_network();
+    wide_inputs_extend_each_candidate_and_score_alike();
     tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_deterministically();
 }
 
@@ -235,7 +285,11 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     // score, and the model counts exactly those updates.
     let es = root.join("es");
     let mut stopped = tiny();
-    (stopped.fit_holdout, stopped.fit_check_every, stopped.fit_patience) = (0.5, 1, 1);
+    (
+        stopped.fit_holdout,
+        stopped.fit_check_every,
+        stopped.fit_patience,
+    ) = (0.5, 1, 1);
     stopped.updates_per_iteration = 6;
     train(&es, Some(stopped), &mut |_| {}).unwrap();
     let mut log = csv::Reader::from_path(es.join("iterations.csv")).unwrap();

@@ -272,10 +272,12 @@ impl AgnosticScorer {
         self.kf.apply(&a, n, &mut b, Some(self.slope));
         // E on [crop feature ‖ candidate inputs].
         let fw = self.kf.outputs;
-        let mut x = Vec::with_capacity(n * (fw + CANDIDATE_INPUTS));
+        let width = input.features.len() / slots; // CANDIDATE_INPUTS, or more (`wide_inputs`)
+        debug_assert!(width >= CANDIDATE_INPUTS);
+        let mut x = Vec::with_capacity(n * (fw + width));
         for (row, &k) in valid.iter().enumerate() {
             x.extend_from_slice(&b[row * fw..(row + 1) * fw]);
-            x.extend_from_slice(&input.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
+            x.extend_from_slice(&input.features[k * width..(k + 1) * width]);
         }
         let mut e = Vec::new();
         self.embed.apply(&x, n, &mut e, Some(self.slope));
