@@ -7,7 +7,7 @@
 //! cargo run --release -p madenet-learn --example refit -- RUN_DIR [UPDATES [EVERY [WIDTH [TRAIN_ITERATIONS [LOSS [SHARE]]]]]]
 //! ```
 //!
-//! `WIDTH` multiplies every width of the network (conv channels, crop feature, embedding,
+//! `UPDATES` defaults to the run's `updates_per_iteration`; `WIDTH` multiplies every width of the network (conv channels, crop feature, embedding,
 //! context, hidden; default 1); `TRAIN_ITERATIONS` (default 1) iterations are fitted and the
 //! next one is the test, or with 0 the last quarter of iteration 0's robot sequences is the test
 //! and the rest the training set (to compare runs that differ only in what their labels store,
@@ -28,10 +28,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map_err(|_| format!("argument {i} `{a}`: not a whole number ({usage})"))
         })
     };
-    let (updates, every) = (num(1, 3000)?, num(2, 500)?);
+    let mut cfg = RolloutTrainConfig::from_toml_file(&run.join("config.toml"))?;
+    let (updates, every) = (num(1, cfg.updates_per_iteration)?, num(2, 500)?);
     let width: f64 = args.get(3).map_or(Ok(1.0), |a| a.parse())?;
     let train_iterations = num(4, 1)? as usize;
-    let mut cfg = RolloutTrainConfig::from_toml_file(&run.join("config.toml"))?;
     match args.get(5).map(String::as_str) {
         None | Some("run") => {}
         Some("advantage") => cfg.loss = Loss::Advantage,
@@ -74,6 +74,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .flatten()
         .cloned()
         .collect();
+    if test.is_empty() {
+        return Err(format!("{}: no labels to test on", run.display()).into());
+    }
     println!("updates,loss,student_label_corr,student_agreement,spread_label_corr");
     for (u, loss, fit) in refit(&cfg, &sizes, &train, &test, updates, every)? {
         let f = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.4}"));

@@ -195,7 +195,8 @@ impl AgnosticConfig {
 
 impl AgnosticNet {
     /// Scores of `b` decisions with `g` candidate slots each:
-    /// * `crops` `[b·g, 4, S, S]`, `features` `[b·g, CANDIDATE_INPUTS]` (slot-major per decision);
+    /// * `crops` `[b·g, 4, S, S]`, `features` `[b·g, candidate_inputs()]` (slot-major per
+    ///   decision);
     /// * `context` `[b, CONTEXT_FEATURES]`;
     /// * `mask` `[b, g]`: 1 for a valid candidate (pooled into the context), else 0.
     ///
@@ -248,7 +249,7 @@ impl AgnosticNet {
 pub struct AgnosticInput {
     /// [`CONTEXT_FEATURES`] values.
     pub context: Vec<f32>,
-    /// [`CANDIDATE_INPUTS`] values per slot (zeros for an empty slot).
+    /// [`AgnosticConfig::candidate_inputs`] values per slot (zeros for an empty slot).
     pub features: Vec<f32>,
     /// Crops of every slot (4 × S × S each, zeros for an empty slot), bit-packed.
     pub crops: Vec<u64>,
@@ -456,7 +457,7 @@ pub fn inputs_for(
 pub struct Batch {
     /// `[b·g, 4, S, S]`.
     pub crops: Tensor<4>,
-    /// `[b·g, CANDIDATE_INPUTS]`.
+    /// `[b·g, candidate_inputs()]`.
     pub features: Tensor<2>,
     /// `[b, CONTEXT_FEATURES]`.
     pub context: Tensor<2>,

@@ -216,12 +216,14 @@ pub struct RolloutTrainConfig {
     /// Adam steps after each iteration's collection (at most, with `fit_holdout`).
     pub updates_per_iteration: u64,
     /// The fit's stopping rule (agnostic network): this share of each iteration's new robot
-    /// sequences (the last collected: other maps) is held out of that iteration's fit, the
+    /// sequences (the last collected: other maps but at the cut) is held out of that iteration's fit, the
     /// student is scored against their labels every `fit_check_every` updates
     /// ([`LabelFit::label_corr`]), and the fit stops after `fit_patience` checks without a
     /// better score, keeping the best-scoring student (Adam's moments as they are); the held-out
-    /// sequences join the training data from the next iteration on. 0 (default): every update
-    /// of `updates_per_iteration`, no check.
+    /// sequences join the training data from the next iteration on. The share is counted in
+    /// robot sequences, rounded down (an iteration with none held out fits every update), so the
+    /// episode at the cut may have robots on both sides. 0 (default): every update of
+    /// `updates_per_iteration`, no check.
     pub fit_holdout: f64,
     /// Updates between two checks of the stopping rule (`fit_holdout`).
     pub fit_check_every: u64,
@@ -470,6 +472,9 @@ impl RolloutTrainConfig {
         ])?;
         if !(0.0..=0.5).contains(&self.fit_holdout) {
             return Err("field `fit_holdout`: must be in [0, 0.5]".into());
+        }
+        if self.wide_inputs && self.network != Network::Agnostic {
+            return Err("field `wide_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or wide_inputs = false".into());
         }
         if self.fit_holdout > 0.0 && self.network != Network::Agnostic {
             return Err("field `fit_holdout`: the stopping rule scores the agnostic network only; set network = \"agnostic\" or fit_holdout = 0".into());
@@ -1738,9 +1743,11 @@ pub fn stored_labels(run_dir: &Path) -> Result<Vec<Vec<Vec<Labelled>>>, TrainErr
 /// The supervised half of a run alone: a fresh agnostic student of `sizes` (seeded, drawing its
 /// batches and stepping as a run with `cfg` does) fitted to `train` for `updates` Adam steps,
 /// measured against `test`'s labels after every `every` steps and at the end — does a larger or
-/// differently trained student fit labels it never saw better? With `cfg`'s sizes and `train` =
-/// a run's iteration 0, the last row is that run's `student_label_corr` of iteration 1 when
-/// `test` is its iteration 1. Rows: (updates so far, mean loss since the last row, the fit).
+/// differently trained student fit labels it never saw better? With `cfg`'s sizes and
+/// `updates_per_iteration` as `updates`, `train` = a run's iteration 0 and `test` its iteration
+/// 1, the last row is that run's `student_label_corr` of iteration 1 (for a run without
+/// `fit_holdout`, whose iteration 0 fitted every label for every update). Rows: (updates so far,
+/// mean loss since the last row, the fit).
 pub fn refit(
     cfg: &RolloutTrainConfig,
     sizes: &crate::agnostic::AgnosticConfig,
@@ -1757,6 +1764,11 @@ pub fn refit(
             "refit: field `crop_radius`: the labels' crops are of radius {}, not {}",
             cfg.crop_radius, sizes.crop_radius
         )));
+    }
+    if cfg.network != Network::Agnostic || sizes.wide() != cfg.wide_inputs {
+        return Err(TrainError::Other(
+            "refit: fields `network`/`wide_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
+        ));
     }
     let device = cpu_autodiff();
     device.seed(cfg.seed);

@@ -378,6 +378,13 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
         ("iterations = 0\n", "iterations"),
         ("threads = 100000\n", "threads"),
         ("nonsense = 1\n", "nonsense"),
+        ("wide_inputs = true\n", "wide_inputs"),
+        ("fit_holdout = 0.2\n", "fit_holdout"),
+        ("network = \"agnostic\"\nfit_holdout = 0.9\n", "fit_holdout"),
+        (
+            "network = \"agnostic\"\nfit_holdout = 0.2\nfit_check_every = 0\n",
+            "fit_check_every",
+        ),
     ] {
         let p = dir.write("bad.toml", text);
         let e = RolloutTrainConfig::from_toml_file(&p)

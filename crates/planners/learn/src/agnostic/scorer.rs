@@ -11,7 +11,7 @@
 //! kernel (AVX/FMA or not) may change a score's last bits, and so a choice between two
 //! candidates scored equal to within them (burn's backend dispatched the same way).
 
-use super::{AgnosticInput, AgnosticNet, CANDIDATE_INPUTS, CONTEXT_FEATURES, CROP_CHANNELS};
+use super::{AgnosticInput, AgnosticNet, CONTEXT_FEATURES, CROP_CHANNELS};
 use burn::nn::conv::Conv2d;
 use burn::nn::{Linear, PaddingConfig2d};
 
@@ -273,7 +273,11 @@ impl AgnosticScorer {
         // E on [crop feature ‖ candidate inputs].
         let fw = self.kf.outputs;
         let width = input.features.len() / slots; // CANDIDATE_INPUTS, or more (`wide_inputs`)
-        debug_assert!(width >= CANDIDATE_INPUTS);
+        assert_eq!(
+            fw + width,
+            self.embed.inputs,
+            "candidate inputs of another width than the network's (wide_inputs?)"
+        );
         let mut x = Vec::with_capacity(n * (fw + width));
         for (row, &k) in valid.iter().enumerate() {
             x.extend_from_slice(&b[row * fw..(row + 1) * fw]);
