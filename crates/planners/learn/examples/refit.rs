@@ -13,7 +13,10 @@
 //! and the rest the training set (to compare runs that differ only in what their labels store,
 //! e.g. `crop_radius`, on the same decisions); `LOSS` is `advantage` or `listwise` (`run`: the run's, the default);
 //! `SHARE` in (0, 1] fits only that first share of the training sequences (default 1). The run's
-//! `config.toml` gives the seed, batch size, learning rate and the rest. Output: CSV on stdout.
+//! `config.toml` gives the seed, batch size, learning rate, `spread_margins` and the rest.
+//! Output: CSV on stdout; beside the correlations, `teacher_gain` (what the teacher's choice
+//! gains on the test labels over `spread`'s, per decision) and `gain_*` (what the student's
+//! choice gains, greedy and with each of the run's margins): the policy's side of the fit.
 
 use madenet_learn::rollout_train::{refit, stored_labels, Loss, RolloutTrainConfig};
 use std::path::Path;
@@ -77,14 +80,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if test.is_empty() {
         return Err(format!("{}: no labels to test on", run.display()).into());
     }
-    println!("updates,loss,student_label_corr,student_agreement,spread_label_corr");
+    let gains: String = std::iter::once("gain_greedy".to_string())
+        .chain(
+            cfg.spread_margins
+                .iter()
+                .map(|m| format!(",gain_margin_{m}")),
+        )
+        .collect();
+    println!(
+        "updates,loss,student_label_corr,student_agreement,spread_label_corr,teacher_gain,{gains}"
+    );
     for (u, loss, fit) in refit(&cfg, &sizes, &train, &test, updates, every)? {
         let f = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.4}"));
+        let gains: Vec<String> = fit.student_gains.iter().map(|g| f(Some(g.1))).collect();
         println!(
-            "{u},{loss:.5},{},{},{}",
+            "{u},{loss:.5},{},{},{},{},{}",
             f(fit.label_corr),
             f(fit.agreement),
-            f(fit.spread_label_corr)
+            f(fit.spread_label_corr),
+            f(fit.teacher_gain),
+            gains.join(",")
         );
     }
     Ok(())

@@ -386,11 +386,18 @@ pub fn inputs_for(
     let (h, w) = (b.height() as i32, b.width() as i32);
     // Summed-area table of unknown cells: O(1) per window (hand-written: two loops).
     let mut sat = vec![0u32; ((h + 1) * (w + 1)) as usize];
-    let at = |r: i32, c: i32| (r * (w + 1) + c) as usize;
+    let cell = |r: i32, c: i32| (r * (w + 1) + c) as usize;
+    let me = view.pos;
+    // Every unknown cell's offset from the robot, for the "ahead" share (one pass over the map).
+    let mut unknown_offsets = Vec::new();
     for r in 0..h {
         for c in 0..w {
-            let unknown = (b.get(Pos::new(r, c)) == madenet_map::Occupancy::Unknown) as u32;
-            sat[at(r + 1, c + 1)] = unknown + sat[at(r, c + 1)] + sat[at(r + 1, c)] - sat[at(r, c)];
+            let unknown = b.get(Pos::new(r, c)) == madenet_map::Occupancy::Unknown;
+            if unknown {
+                unknown_offsets.push((r - me.row, c - me.col));
+            }
+            sat[cell(r + 1, c + 1)] =
+                unknown as u32 + sat[cell(r, c + 1)] + sat[cell(r + 1, c)] - sat[cell(r, c)];
         }
     }
     let window = |p: Pos, rad: i32| {
@@ -399,7 +406,7 @@ pub fn inputs_for(
         if r0 >= r1 || c0 >= c1 {
             return 0;
         }
-        sat[at(r1, c1)] + sat[at(r0, c0)] - sat[at(r0, c1)] - sat[at(r1, c0)]
+        sat[cell(r1, c1)] + sat[cell(r0, c0)] - sat[cell(r0, c1)] - sat[cell(r1, c0)]
     };
     let ds = sensing_range.max(1);
     let area = |rad: i32| ((2 * rad + 1) * (2 * rad + 1)) as f32;
@@ -408,7 +415,6 @@ pub fn inputs_for(
         .into_iter()
         .flat_map(|(goal, at)| goal.into_iter().chain(at))
         .collect();
-    let me = view.pos;
     let cells = (h * w).max(1) as f32;
     let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
     for k in 0..slots {
@@ -429,19 +435,10 @@ pub fn inputs_for(
             }
         }
         let (dr, dc) = (c.row - me.row, c.col - me.col);
-        let mut ahead = 0u32;
-        if dr != 0 || dc != 0 {
-            for r in 0..h {
-                for col in 0..w {
-                    let q = Pos::new(r, col);
-                    if (q.row - me.row) * dr + (q.col - me.col) * dc > 0
-                        && b.get(q) == madenet_map::Occupancy::Unknown
-                    {
-                        ahead += 1;
-                    }
-                }
-            }
-        }
+        let ahead = unknown_offsets
+            .iter()
+            .filter(|&&(r, col)| r * dr + col * dc > 0)
+            .count();
         features.extend_from_slice(&[
             window(c, 2 * ds) as f32 / area(2 * ds),
             window(c, far) as f32 / area(far),

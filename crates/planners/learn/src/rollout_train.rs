@@ -738,7 +738,7 @@ pub struct LabelCheck {
 
 /// How a student (and the `spread` rule's score) compare with labels it was not trained on:
 /// the per-iteration diagnostics of `iterations.csv`, and [`refit`]'s curve.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct LabelFit {
     /// Share of the labelled decisions at which the greedy student's choice is among the
     /// teacher's best candidates.
@@ -748,6 +748,25 @@ pub struct LabelFit {
     pub label_corr: Option<f64>,
     /// The same for the `spread` rule's score (negated: lower is better there).
     pub spread_label_corr: Option<f64>,
+    /// What the teacher's own choice gains on the labels over `spread`'s: the mean over the
+    /// labelled decisions of the best candidate's advantage less that of `spread`'s choice
+    /// (label units; the ceiling of the gains below).
+    pub teacher_gain: Option<f64>,
+    /// What the student gains on the labels over `spread`'s choice as it acts, per margin
+    /// (`None`: greedy; then the margins given, in their order): the mean over the labelled
+    /// decisions of the advantage of the choice it makes ([`crate::policy::conservative`]) less
+    /// that of `spread`'s. The offline counterpart of the validation's gain over `spread`.
+    pub student_gains: Vec<(Option<f32>, f64)>,
+}
+
+impl LabelFit {
+    /// The margin whose [`LabelFit::student_gains`] is largest, and that gain.
+    pub fn best_gain(&self) -> Option<(Option<f32>, f64)> {
+        self.student_gains
+            .iter()
+            .copied()
+            .reduce(|a, b| if b.1 > a.1 { b } else { a })
+    }
 }
 
 /// Pooled sums of a Pearson correlation: Σ 1, a, b, a², b², a·b over the pairs (a, b) added.
@@ -1387,15 +1406,27 @@ impl Student {
     /// Share of `labelled` decisions (those with targets) at which the greedy student's choice
     /// is among the teacher's best candidates, and the correlation of its scores (less their
     /// mean over the valid candidates) with the labels' advantages, and the same for the
-    /// `spread` rule's score (negated: lower is better there; read from the candidate inputs);
-    /// `None` for the grid network or no decision.
-    fn imitation<'a>(&self, labelled: impl Iterator<Item = &'a Labelled>) -> LabelFit {
+    /// `spread` rule's score (negated: lower is better there; read from the candidate inputs),
+    /// and what the teacher's and the student's choices (greedy and with each of `margins`)
+    /// gain on the labels over `spread`'s; `None` for the grid network or no decision.
+    fn imitation<'a>(
+        &self,
+        labelled: impl Iterator<Item = &'a Labelled>,
+        margins: &[f32],
+    ) -> LabelFit {
         let Student::Agnostic(net) = self else {
             return LabelFit::default();
         };
         let net = crate::agnostic::AgnosticScorer::new(&net.valid());
         let (mut n, mut agree) = (0usize, 0usize);
         let (mut corr, mut spread_corr) = (Correlation::default(), Correlation::default());
+        let acting: Vec<Option<f32>> = std::iter::once(None)
+            .chain(margins.iter().map(|&m| Some(m)))
+            .collect();
+        // Over the decisions where `spread`'s choice is known: their count, Σ of the teacher's
+        // gain, Σ of the student's per margin of `acting`.
+        let (mut anchored, mut teacher_sum) = (0usize, 0.0);
+        let mut student_sums = vec![0.0; acting.len()];
         for l in labelled.filter(|l| l.train_mask.iter().any(|&m| m)) {
             let input = AgnosticInput {
                 context: l.vec[..CONTEXT_FEATURES].to_vec(),
@@ -1434,11 +1465,28 @@ impl Student {
                 .fold(f32::NEG_INFINITY, f32::max);
             n += 1;
             agree += (l.target[pick] == best) as usize;
+            if let Some((teacher, students)) = label_gains(l, &q, &acting) {
+                anchored += 1;
+                teacher_sum += teacher;
+                for (sum, gain) in student_sums.iter_mut().zip(students) {
+                    *sum += gain;
+                }
+            }
         }
+        let mean = |sum: f64| sum / anchored as f64;
         LabelFit {
             agreement: (n > 0).then(|| agree as f64 / n as f64),
             label_corr: corr.value(),
             spread_label_corr: spread_corr.value(),
+            teacher_gain: (anchored > 0).then(|| mean(teacher_sum)),
+            student_gains: if anchored > 0 {
+                acting
+                    .into_iter()
+                    .zip(student_sums.into_iter().map(mean))
+                    .collect()
+            } else {
+                Vec::new()
+            },
         }
     }
 
@@ -1686,7 +1734,7 @@ fn fit_checked(
         let to = (done + cfg.fit_check_every).min(all);
         let (next, loss) = fit(net, optim, cfg, train, first + done..first + to, stop)?;
         (net, done, loss_sum) = (next, to, loss_sum + loss);
-        let corr = net.imitation(held_out.iter().flatten()).label_corr;
+        let corr = net.imitation(held_out.iter().flatten(), &[]).label_corr;
         match (corr, &best) {
             (Some(c), Some((b, _))) if c <= *b => since_best += 1,
             (Some(c), _) => (best, since_best) = (Some((c, net.clone())), 0),
@@ -1709,15 +1757,7 @@ pub fn stored_labels(run_dir: &Path) -> Result<Vec<Vec<Vec<Labelled>>>, TrainErr
     let data: Vec<Vec<Labelled>> =
         harness::read_postcard(&run_dir.join("checkpoint").join("data.bin"))?;
     let log = run_dir.join("iterations.csv");
-    let io = |e: csv::Error| TrainError::Io {
-        path: log.display().to_string(),
-        message: e.to_string(),
-    };
-    let rows: Vec<IterationRow> = csv::Reader::from_path(&log)
-        .map_err(io)?
-        .deserialize()
-        .collect::<Result<_, _>>()
-        .map_err(io)?;
+    let rows = read_rows(&log)?;
     let mut data = data.into_iter();
     let mut out = Vec::new();
     for row in &rows {
@@ -1770,19 +1810,18 @@ pub fn refit(
             "refit: fields `network`/`wide_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
         ));
     }
-    let device = cpu_autodiff();
-    device.seed(cfg.seed);
-    let mut net = Student::Agnostic(sizes.init(&device).map_err(TrainError::Other)?);
-    let mut optim: ModuleOptimizer = AdamConfig::new()
-        .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
-        .init();
+    let (mut net, mut optim) = fresh_student(cfg, Some(sizes))?;
     let (mut done, mut rows) = (0, Vec::new());
     while done < updates {
         let to = (done + every.max(1)).min(updates);
         let (next, loss) =
             fit(net, &mut optim, cfg, train, done..to, &|| false).expect("never stopped");
         net = next;
-        rows.push((to, loss / (to - done) as f64, net.imitation(test.iter())));
+        rows.push((
+            to,
+            loss / (to - done) as f64,
+            net.imitation(test.iter(), &cfg.spread_margins),
+        ));
         done = to;
     }
     Ok(rows)
@@ -1811,6 +1850,60 @@ struct State {
     /// follow (kept in `checkpoint/base/`); `None`: the base rule.
     #[serde(default)]
     teacher_base: Option<u64>,
+}
+
+/// What choosing by the labels, and by the scores `q` acting with each of `acting`'s margins
+/// (`None`: greedy), gains at one labelled decision (agnostic inputs) over `spread`'s choice, in
+/// label units; `None` when `spread`'s choice is not among the decision's trained candidates.
+fn label_gains(l: &Labelled, q: &[f32], acting: &[Option<f32>]) -> Option<(f64, Vec<f64>)> {
+    let slots = l.train_mask.len();
+    let width = (l.vec.len() - CONTEXT_FEATURES) / slots.max(1);
+    let anchor = (0..slots).find(|&k| {
+        l.train_mask[k]
+            && l.vec[CONTEXT_FEATURES + k * width + AgentView::SPREAD_CHOICE_FEATURE] == 1.0
+    })?;
+    let valid = || (0..slots).filter(|&k| l.train_mask[k]);
+    let best = valid()
+        .map(|k| l.target[k])
+        .fold(f32::NEG_INFINITY, f32::max);
+    let greedy = crate::actions::masked_argmax_slice(q, &l.train_mask)?;
+    let over = |k: usize| (l.target[k] - l.target[anchor]) as f64;
+    let students = acting
+        .iter()
+        .map(|&margin| over(crate::policy::conservative(q, greedy, margin, Some(anchor))))
+        .collect();
+    Some(((best - l.target[anchor]) as f64, students))
+}
+
+/// A fresh student on the seeded training device and its Adam optimizer, as every fit starts:
+/// of `cfg`'s network, or agnostic of `sizes`.
+fn fresh_student(
+    cfg: &RolloutTrainConfig,
+    sizes: Option<&crate::agnostic::AgnosticConfig>,
+) -> Result<(Student, ModuleOptimizer), TrainError> {
+    let device = cpu_autodiff();
+    device.seed(cfg.seed);
+    let net = match sizes {
+        Some(sizes) => Student::Agnostic(sizes.init(&device).map_err(TrainError::Other)?),
+        None => Student::init(cfg, &device)?,
+    };
+    let optim = AdamConfig::new()
+        .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
+        .init();
+    Ok((net, optim))
+}
+
+/// The rows of a run's `iterations.csv` at `log`; an unreadable row is an error naming the file.
+fn read_rows(log: &Path) -> Result<Vec<IterationRow>, TrainError> {
+    let io = |e: csv::Error| TrainError::Io {
+        path: log.display().to_string(),
+        message: e.to_string(),
+    };
+    csv::Reader::from_path(log)
+        .map_err(io)?
+        .deserialize()
+        .collect::<Result<_, _>>()
+        .map_err(io)
 }
 
 /// One row of `iterations.csv`.
@@ -1871,6 +1964,17 @@ struct IterationRow {
     /// With `fit_holdout`: the kept student's correlation with the held-out labels.
     #[serde(default)]
     holdout_label_corr: Option<f64>,
+    /// On this iteration's fresh labels, what the teacher's choice gains over `spread`'s per
+    /// labelled decision ([`LabelFit::teacher_gain`], label units; agnostic network).
+    #[serde(default)]
+    teacher_label_gain: Option<f64>,
+    /// The same for the student as it entered the iteration, acting with the margin of
+    /// `spread_margins` (or greedy) that gains most there ([`LabelFit::best_gain`]).
+    #[serde(default)]
+    student_label_gain: Option<f64>,
+    /// That margin (0: greedy, which margin 0 equals).
+    #[serde(default)]
+    student_gain_margin: Option<f32>,
     validation_completed: usize,
     validation_trials: usize,
     wall_s: f64,
@@ -2055,12 +2159,7 @@ fn train_loop(
     collector: &mut Collector<'_>,
 ) -> Result<(), TrainError> {
     let ckpt = run_dir.join("checkpoint");
-    let device = cpu_autodiff();
-    device.seed(cfg.seed);
-    let mut net = Student::init(cfg, &device)?;
-    let mut optim: ModuleOptimizer = AdamConfig::new()
-        .with_grad_clipping(Some(GradientClippingConfig::Norm(cfg.grad_clip_norm)))
-        .init();
+    let (mut net, mut optim) = fresh_student(cfg, None)?;
     let (mut state, mut data): (State, Vec<Vec<Labelled>>) = if resuming {
         let state = harness::read_json(&ckpt.join("state.json"))?;
         let data = harness::read_postcard(&ckpt.join("data.bin"))?;
@@ -2077,15 +2176,9 @@ fn train_loop(
     // The log keeps what the checkpoint has seen.
     let log_path = run_dir.join("iterations.csv");
     let mut rows: Vec<IterationRow> = if resuming && log_path.exists() {
-        csv::Reader::from_path(&log_path)
-            .map_err(|e| TrainError::Io {
-                path: log_path.display().to_string(),
-                message: e.to_string(),
-            })?
-            .deserialize()
-            .filter_map(Result::ok)
-            .filter(|r: &IterationRow| r.iteration < state.iteration)
-            .collect()
+        let mut rows = read_rows(&log_path)?;
+        rows.retain(|r| r.iteration < state.iteration);
+        rows
     } else {
         Vec::new()
     };
@@ -2158,7 +2251,10 @@ fn train_loop(
             (n + c.base_agreement.0, a + c.base_agreement.1)
         });
         let base_agreement = (valued > 0).then(|| agree as f64 / valued as f64);
-        let imitation = net.imitation(collected.iter().flat_map(|c| c.robots.iter().flatten()));
+        let imitation = net.imitation(
+            collected.iter().flat_map(|c| c.robots.iter().flatten()),
+            &cfg.spread_margins,
+        );
         let check = collected.iter().fold(LabelCheck::default(), |mut all, c| {
             all.merge(&c.check);
             all
@@ -2248,6 +2344,9 @@ fn train_loop(
             label_reliability: check.reliability(),
             fit_updates: Some(done.updates),
             holdout_label_corr: done.holdout_corr,
+            teacher_label_gain: imitation.teacher_gain,
+            student_label_gain: imitation.best_gain().map(|g| g.1),
+            student_gain_margin: imitation.best_gain().map(|g| g.0.unwrap_or(0.0)),
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,
@@ -2345,12 +2444,42 @@ mod tests {
             train_mask: vec![true, true, true, false],
             target: vec![1.0, 0.0, -1.0, 0.0],
         };
-        let fit = net.imitation(std::iter::once(&l));
+        let fit = net.imitation(std::iter::once(&l), &[0.5]);
         assert!(
             (fit.spread_label_corr.unwrap() - 1.0).abs() < 1e-9,
             "{fit:?}"
         );
         assert!(fit.label_corr.is_some_and(|c| (-1.0..=1.0).contains(&c)));
+        // `spread` chose the best candidate here: nothing to gain, whatever the student does.
+        assert_eq!(fit.teacher_gain, Some(0.0));
+        assert_eq!(fit.student_gains.len(), 2);
+        assert!(fit.student_gains.iter().all(|g| g.1 <= 0.0), "{fit:?}");
+    }
+
+    /// The label gains by hand: `spread` chose slot 0, the labels prefer slot 1, the scores
+    /// slot 2; the student's choice follows its margin.
+    #[test]
+    fn label_gains_follow_the_margin_by_hand() {
+        let slots = 4;
+        let width = crate::agnostic::CANDIDATE_INPUTS;
+        let mut vec = vec![0.0f32; CONTEXT_FEATURES + slots * width];
+        vec[CONTEXT_FEATURES + AgentView::SPREAD_CHOICE_FEATURE] = 1.0;
+        let l = Labelled {
+            map: Vec::new(),
+            vec,
+            train_mask: vec![true, true, true, false],
+            target: vec![0.0, 1.0, -0.5, 0.0],
+        };
+        // Slot 3 scores highest but is not a candidate.
+        let q = [0.0, 0.3, 1.0, 9.0];
+        let (teacher, students) = label_gains(&l, &q, &[None, Some(0.5), Some(2.0)]).unwrap();
+        assert_eq!(teacher, 1.0);
+        // Greedy and margin 0.5 take slot 2 (−0.5 against spread's 0); margin 2 keeps spread's.
+        assert_eq!(students, vec![-0.5, -0.5, 0.0]);
+        // Without `spread`'s choice among the candidates there is nothing to compare with.
+        let mut alone = l.clone();
+        alone.train_mask[0] = false;
+        assert!(label_gains(&alone, &q, &[None]).is_none());
     }
 
     /// Decisions whose advantages are a learnable function of one candidate input (its spread
@@ -2394,8 +2523,7 @@ mod tests {
             ..RolloutTrainConfig::default()
         };
         let (train, held_out) = (learnable(&cfg, 60, 1), learnable(&cfg, 30, 2));
-        let device = crate::cpu_autodiff();
-        let start = Student::init(&cfg, &device).unwrap();
+        let (start, _) = fresh_student(&cfg, None).unwrap();
         let fresh = || start.clone();
         let adam = || -> ModuleOptimizer { AdamConfig::new().init() };
         let done = fit_checked(fresh(), &mut adam(), &cfg, (&train, &held_out), 0, &|| {
@@ -2407,7 +2535,10 @@ mod tests {
             "{}",
             done.updates
         );
-        let kept = done.net.imitation(held_out.iter().flatten()).label_corr;
+        let kept = done
+            .net
+            .imitation(held_out.iter().flatten(), &[])
+            .label_corr;
         assert_eq!(kept, done.holdout_corr);
         // Learnable labels: the kept student ranks held-out candidates as the labels do.
         assert!(kept.unwrap() > 0.0, "{kept:?}");
@@ -2418,7 +2549,11 @@ mod tests {
             net = fit(net, &mut optim, &cfg, &train, r * 4..r * 4 + 4, &|| false)
                 .unwrap()
                 .0;
-            scores.push(net.imitation(held_out.iter().flatten()).label_corr.unwrap());
+            scores.push(
+                net.imitation(held_out.iter().flatten(), &[])
+                    .label_corr
+                    .unwrap(),
+            );
         }
         let best = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         assert_eq!(Some(best), done.holdout_corr);
