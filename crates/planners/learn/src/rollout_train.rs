@@ -164,6 +164,15 @@ pub struct RolloutTrainConfig {
     /// student beats `base_policy` on validation — so the teacher's one step of improvement
     /// lands on the student's level, not on the base rule's.
     pub expert_iteration: bool,
+    /// Approximate policy iteration: from iteration 1 on, the teacher's continuations follow the
+    /// student the iteration behaves by (greedy, as of the iteration's start), whether or not it
+    /// beats `base_policy` — so a label values a candidate with the teammates and the robot's
+    /// later decisions acting as the current student does, not as the base rule would (a
+    /// one-step label over `spread` assumes teammates keep to `spread`'s nearest frontiers;
+    /// robots that all deviate alike herd); each fit then uses only its iteration's labels
+    /// (earlier ones value earlier students). Excludes `expert_iteration`.
+    #[serde(default)]
+    pub policy_iteration: bool,
     /// Stop rule: the run ends after this many iterations in a row without a new best on
     /// validation; 0: run all `iterations`.
     pub patience: u64,
@@ -281,6 +290,7 @@ impl Default for RolloutTrainConfig {
             csp_extreme_prob: 0.5,
             base_policy: "spread".into(),
             expert_iteration: false,
+            policy_iteration: false,
             patience: 0,
             floorplan_prob: 0.0,
             futures: Futures::Noiseless,
@@ -333,7 +343,7 @@ impl RolloutTrainConfig {
             .map_err(|e| format!("scenario: {e}"))?;
         let unit = |x: f64| (0.0..=1.0).contains(&x);
         let curriculum = self.map_side_max > 0 || self.team_max > 0;
-        let checks: [(bool, &str, &str); 18] = [
+        let checks: [(bool, &str, &str); 19] = [
             (
                 !curriculum || self.network == Network::Agnostic,
                 "map_side_max/team_max",
@@ -399,6 +409,11 @@ impl RolloutTrainConfig {
                     && self.label_prob > 0.0,
                 "corner_start_prob/floorplan_prob/csp_extreme_prob/behaviour_epsilon/label_prob/teacher_check",
                 "must be in [0, 1] (label_prob above 0)",
+            ),
+            (
+                !(self.policy_iteration && self.expert_iteration),
+                "policy_iteration/expert_iteration",
+                "choose one: both set the teacher's base",
             ),
             (
                 self.rollouts >= 1 && self.rollouts <= 64,
@@ -2209,13 +2224,16 @@ fn train_loop(
                 Some(ModelBytes::read(&dir)?)
             }
         };
-        let base = match state.teacher_base {
-            Some(_) => Some(ModelBytes::read(&ckpt.join("base"))?),
-            None => None,
-        };
-        let teacher_base = match state.teacher_base {
-            Some(k) => format!("student@{k}"),
-            None => cfg.base_policy.clone(),
+        let (base, teacher_base) = match (state.teacher_base, &student) {
+            (_, Some(current)) if cfg.policy_iteration => (
+                Some(current.clone()),
+                format!("greedy student@{}", state.iteration - 1),
+            ),
+            (Some(k), _) => (
+                Some(ModelBytes::read(&ckpt.join("base"))?),
+                format!("student@{k}"),
+            ),
+            (None, _) => (None, cfg.base_policy.clone()),
         };
         let per = cfg.episodes_per_iteration();
         let first = state.iteration * per;
@@ -2266,9 +2284,11 @@ fn train_loop(
                 .flat_map(|c| c.robots)
                 .filter(|s| !s.is_empty()),
         );
+        // With policy iteration only this iteration's labels are fitted.
+        let fresh = if cfg.policy_iteration { before } else { 0 };
         // The stopping rule's held-out sequences: the last `fit_holdout` of the new ones.
         let fitted = data.len() - ((data.len() - before) as f64 * cfg.fit_holdout) as usize;
-        if data.is_empty() {
+        if data[fresh..].is_empty() {
             return Err(TrainError::Other("no robot decided in any training episode so far (are the maps seen whole from the start?)".into()));
         }
         state.episodes += per;
@@ -2277,7 +2297,7 @@ fn train_loop(
             net,
             &mut optim,
             cfg,
-            (&data[..fitted], &data[fitted..]),
+            (&data[fresh..fitted], &data[fitted..]),
             state.updates,
             &|| clock.out_of_time(cfg.max_minutes),
         ) else {

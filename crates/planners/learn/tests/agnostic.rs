@@ -258,6 +258,14 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         // (its choice is the teacher's best more often than a random candidate's).
         let spread: f64 = row[col("spread_label_corr")].parse().unwrap();
         assert!(0.0 < spread && spread <= 1.0, "{row:?}");
+        // The label gains over `spread`'s choice: the teacher's is the ceiling (its choice is
+        // the best label, `spread`'s one of the candidates), the student's at most that, at a
+        // margin of the run's (0: greedy).
+        let teacher: f64 = row[col("teacher_label_gain")].parse().unwrap();
+        let student: f64 = row[col("student_label_gain")].parse().unwrap();
+        let margin: f32 = row[col("student_gain_margin")].parse().unwrap();
+        assert!(teacher >= 0.0 && student <= teacher, "{row:?}");
+        assert!(margin == 0.0 || margin == 0.1, "{row:?}");
     }
     // The supervised half alone: a fresh student fitted to the stored labels of iteration 0
     // (as the run fitted it) scores iteration 1's labels exactly as the run's log says.
@@ -280,6 +288,38 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         (refitted - logged).abs() < 1e-12,
         "refit {refitted} vs the run's {logged}"
     );
+    let mut log = csv::Reader::from_path(a.join("iterations.csv")).unwrap();
+    let row = log.records().nth(1).unwrap().unwrap();
+    let logged: f64 = row[col("student_label_gain")].parse().unwrap();
+    let refitted = curve[1].2.best_gain().unwrap().1;
+    assert!(
+        (refitted - logged).abs() < 1e-12,
+        "refit's label gain {refitted} vs the run's {logged}"
+    );
+    // Policy iteration: iteration 1's continuations follow the greedy student of iteration 0
+    // (other labels, so another teacher gain); with expert iteration too, a named error.
+    let pi = root.join("pi");
+    let iterating = RolloutTrainConfig {
+        policy_iteration: true,
+        ..tiny()
+    };
+    train(&pi, Some(iterating.clone()), &mut |_| {}).unwrap();
+    let mut log = csv::Reader::from_path(pi.join("iterations.csv")).unwrap();
+    let rows: Vec<_> = log.records().map(Result::unwrap).collect();
+    assert_eq!(&rows[0][col("teacher_base")], "spread");
+    assert_eq!(&rows[1][col("teacher_base")], "greedy student@0");
+    let mut plain = csv::Reader::from_path(a.join("iterations.csv")).unwrap();
+    let plain: Vec<_> = plain.records().map(Result::unwrap).collect();
+    assert_eq!(rows[0][col("teacher_gain")], plain[0][col("teacher_gain")]);
+    assert_ne!(rows[1][col("teacher_gain")], plain[1][col("teacher_gain")]);
+    let both = RolloutTrainConfig {
+        expert_iteration: true,
+        ..iterating
+    };
+    let err = train(&root.join("both"), Some(both), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("policy_iteration/expert_iteration"), "{err}");
     // The fit's stopping rule: half of each iteration's new sequences held out, a check after
     // every update; each iteration logs the updates it made and the kept student's held-out
     // score, and the model counts exactly those updates.
