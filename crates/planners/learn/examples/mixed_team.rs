@@ -2,8 +2,8 @@
 //! team play as well as `spread` when it is one robot of the team and its teammates keep to
 //! `spread`, as the rollout teacher's labels assume? Mean steps per CSP of `spread`, of robot 0
 //! playing the model beside `spread` teammates (`one`) and of the whole team playing it (`all`),
-//! on MAPS maps drawn as a run's validation maps are but from seed 777 (neither its training,
-//! validation nor the held-out maps).
+//! on MAPS maps drawn as a run's validation maps are but from the run's seed + 777 (neither its
+//! training nor its validation maps; the held-out set is other generated maps).
 //!
 //! ```text
 //! cargo run --release -p madenet-learn --example mixed_team -- RUN_DIR MODEL_DIR [MAPS [CSP,…]]
@@ -36,7 +36,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect::<Result<_, String>>()
     })?;
     let mut cfg = RolloutTrainConfig::from_toml_file(&Path::new(run).join("config.toml"))?;
-    (cfg.validation_maps, cfg.seed) = (maps, 777);
+    if maps == 0 {
+        return Err(format!("MAPS 0: at least one map ({usage})").into());
+    }
+    (cfg.validation_maps, cfg.seed) = (maps, cfg.seed.wrapping_add(777));
     let maps = validation_maps(&cfg)?;
     let mut registry = PolicyRegistry::builtin();
     let m = Arc::clone(&model);

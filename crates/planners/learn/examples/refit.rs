@@ -14,7 +14,7 @@
 //! e.g. `crop_radius`, on the same decisions); `LOSS` is `advantage` or `listwise` (`run`: the run's, the default);
 //! `SHARE` in (0, 1] fits only that first share of the training sequences (default 1). The run's
 //! `config.toml` gives the seed, batch size, learning rate, `spread_margins` and the rest.
-//! Output: CSV on stdout; beside the correlations, `teacher_gain` (what the teacher's choice
+//! Output: CSV on stdout; beside the correlations, `teacher_label_gain` (what the teacher's choice
 //! gains on the test labels over `spread`'s, per decision) and `gain_*` (what the student's
 //! choice gains, greedy and with each of the run's margins): the policy's side of the fit.
 
@@ -80,7 +80,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if test.is_empty() {
         return Err(format!("{}: no labels to test on", run.display()).into());
     }
-    let gains: String = std::iter::once("gain_greedy".to_string())
+    let header: String = std::iter::once("gain_greedy".to_string())
         .chain(
             cfg.spread_margins
                 .iter()
@@ -88,17 +88,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
         .collect();
     println!(
-        "updates,loss,student_label_corr,student_agreement,spread_label_corr,teacher_gain,{gains}"
+        "updates,loss,student_label_corr,student_agreement,spread_label_corr,teacher_label_gain,{header}"
     );
     for (u, loss, fit) in refit(&cfg, &sizes, &train, &test, updates, every)? {
         let f = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.4}"));
-        let gains: Vec<String> = fit.student_gains.iter().map(|g| f(Some(g.1))).collect();
+        // One cell per margin column, empty without a decision where `spread`'s choice is known.
+        let gains: Vec<String> = (0..=cfg.spread_margins.len())
+            .map(|i| f(fit.student_gains.get(i).map(|g| g.1)))
+            .collect();
         println!(
             "{u},{loss:.5},{},{},{},{},{}",
             f(fit.label_corr),
             f(fit.agreement),
             f(fit.spread_label_corr),
-            f(fit.teacher_gain),
+            f(fit.teacher_label_gain),
             gains.join(",")
         );
     }

@@ -766,7 +766,7 @@ pub struct LabelFit {
     /// What the teacher's own choice gains on the labels over `spread`'s: the mean over the
     /// labelled decisions of the best candidate's advantage less that of `spread`'s choice
     /// (label units; the ceiling of the gains below).
-    pub teacher_gain: Option<f64>,
+    pub teacher_label_gain: Option<f64>,
     /// What the student gains on the labels over `spread`'s choice as it acts, per margin
     /// (`None`: greedy; then the margins given, in their order): the mean over the labelled
     /// decisions of the advantage of the choice it makes ([`crate::policy::conservative`]) less
@@ -862,7 +862,7 @@ fn mean_value(values: &[Option<f64>]) -> f64 {
 }
 
 /// The rule the teacher's continuations follow: policy `name` of `registry` (the base rule, or
-/// with expert iteration the best student so far).
+/// with expert iteration the best student so far, with policy iteration the current greedy one).
 pub struct TeacherBase {
     /// Holds `name`.
     pub registry: PolicyRegistry,
@@ -882,11 +882,7 @@ impl TeacherBase {
     /// A student (with its margin) as the base: registered as `student`.
     pub fn student(model: &Model) -> Self {
         let mut registry = PolicyRegistry::default();
-        model.register(
-            &mut registry,
-            "student",
-            "the teacher's base: the best student so far",
-        );
+        model.register(&mut registry, "student", "the teacher's base: a student");
         TeacherBase {
             registry,
             name: "student".into(),
@@ -1242,7 +1238,7 @@ pub struct CollectRequest {
     pub side_max: usize,
     /// The behaviour's student (greedy, ε-random); none while the behaviour is the base rule.
     pub student: Option<ModelBytes>,
-    /// The teacher's base student (expert iteration); none while it is the base rule.
+    /// The teacher's base student (expert or policy iteration); none while it is the base rule.
     pub base: Option<ModelBytes>,
 }
 
@@ -1493,7 +1489,7 @@ impl Student {
             agreement: (n > 0).then(|| agree as f64 / n as f64),
             label_corr: corr.value(),
             spread_label_corr: spread_corr.value(),
-            teacher_gain: (anchored > 0).then(|| mean(teacher_sum)),
+            teacher_label_gain: (anchored > 0).then(|| mean(teacher_sum)),
             student_gains: if anchored > 0 {
                 acting
                     .into_iter()
@@ -1980,14 +1976,15 @@ struct IterationRow {
     #[serde(default)]
     holdout_label_corr: Option<f64>,
     /// On this iteration's fresh labels, what the teacher's choice gains over `spread`'s per
-    /// labelled decision ([`LabelFit::teacher_gain`], label units; agnostic network).
+    /// labelled decision ([`LabelFit::teacher_label_gain`], label units; agnostic network).
     #[serde(default)]
     teacher_label_gain: Option<f64>,
     /// The same for the student as it entered the iteration, acting with the margin of
     /// `spread_margins` (or greedy) that gains most there ([`LabelFit::best_gain`]).
     #[serde(default)]
     student_label_gain: Option<f64>,
-    /// That margin (0: greedy, which margin 0 equals).
+    /// That margin (0: greedy, which margin 0 equals). Chosen on the labels it is reported on,
+    /// so a little optimistic; the student's choice is among the candidates the teacher valued.
     #[serde(default)]
     student_gain_margin: Option<f32>,
     validation_completed: usize,
@@ -2214,8 +2211,9 @@ fn train_loop(
     let first_iteration = state.iteration;
     while state.iteration < cfg.iterations && !out_of_patience(cfg, &state) {
         // 1–3. Collect and label this iteration's episodes (behaviour: base rule, then the
-        // student; the teacher's base: the base rule, or with expert iteration the best student
-        // so far), the models passed as files' bytes so a worker elsewhere acts the same.
+        // student; the teacher's base: the base rule, with expert iteration the best student so
+        // far, with policy iteration the greedy student that behaves), the models passed as
+        // files' bytes so a worker elsewhere acts the same.
         let student = match state.iteration {
             0 => None,
             _ => {
@@ -2289,7 +2287,14 @@ fn train_loop(
         // The stopping rule's held-out sequences: the last `fit_holdout` of the new ones.
         let fitted = data.len() - ((data.len() - before) as f64 * cfg.fit_holdout) as usize;
         if data[fresh..].is_empty() {
-            return Err(TrainError::Other("no robot decided in any training episode so far (are the maps seen whole from the start?)".into()));
+            let when = if cfg.policy_iteration {
+                "in this iteration's episodes (policy_iteration fits only them)"
+            } else {
+                "in any training episode so far"
+            };
+            return Err(TrainError::Other(format!(
+                "no robot decided {when} (are the maps seen whole from the start?)"
+            )));
         }
         state.episodes += per;
         // 4. Regress the advantages on windows of the robots' decision sequences.
@@ -2364,7 +2369,7 @@ fn train_loop(
             label_reliability: check.reliability(),
             fit_updates: Some(done.updates),
             holdout_label_corr: done.holdout_corr,
-            teacher_label_gain: imitation.teacher_gain,
+            teacher_label_gain: imitation.teacher_label_gain,
             student_label_gain: imitation.best_gain().map(|g| g.1),
             student_gain_margin: imitation.best_gain().map(|g| g.0.unwrap_or(0.0)),
             validation_completed: completed,
@@ -2471,7 +2476,7 @@ mod tests {
         );
         assert!(fit.label_corr.is_some_and(|c| (-1.0..=1.0).contains(&c)));
         // `spread` chose the best candidate here: nothing to gain, whatever the student does.
-        assert_eq!(fit.teacher_gain, Some(0.0));
+        assert_eq!(fit.teacher_label_gain, Some(0.0));
         assert_eq!(fit.student_gains.len(), 2);
         assert!(fit.student_gains.iter().all(|g| g.1 <= 0.0), "{fit:?}");
     }

@@ -312,6 +312,25 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     let plain: Vec<_> = plain.records().map(Result::unwrap).collect();
     assert_eq!(rows[0][col("teacher_gain")], plain[0][col("teacher_gain")]);
     assert_ne!(rows[1][col("teacher_gain")], plain[1][col("teacher_gain")]);
+    // Killed after iteration 0's checkpoint and resumed: the uninterrupted run's log (the fit
+    // of iteration 1 starts at the checkpoint's labels, as it did without the kill).
+    let without_time = |dir: &std::path::Path| -> Vec<String> {
+        std::fs::read_to_string(dir.join("iterations.csv"))
+            .unwrap()
+            .lines()
+            .map(|l| l.rsplit_once(',').unwrap().0.to_string())
+            .collect()
+    };
+    let killed_dir = root.join("pi-killed");
+    let killed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        train(&killed_dir, Some(iterating.clone()), &mut |p| {
+            assert!(p.done < 1, "killed after iteration 0");
+        })
+    }));
+    assert!(killed.is_err());
+    assert_eq!(without_time(&killed_dir).len(), 2, "header and iteration 0");
+    train(&killed_dir, Some(iterating.clone()), &mut |_| {}).unwrap();
+    assert_eq!(without_time(&killed_dir), without_time(&pi));
     let both = RolloutTrainConfig {
         expert_iteration: true,
         ..iterating
