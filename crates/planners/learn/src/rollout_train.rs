@@ -2271,6 +2271,7 @@ fn train_loop(
             collected.iter().flat_map(|c| c.robots.iter().flatten()),
             &cfg.spread_margins,
         );
+        let best_gain = imitation.best_gain();
         let check = collected.iter().fold(LabelCheck::default(), |mut all, c| {
             all.merge(&c.check);
             all
@@ -2370,8 +2371,8 @@ fn train_loop(
             fit_updates: Some(done.updates),
             holdout_label_corr: done.holdout_corr,
             teacher_label_gain: imitation.teacher_label_gain,
-            student_label_gain: imitation.best_gain().map(|g| g.1),
-            student_gain_margin: imitation.best_gain().map(|g| g.0.unwrap_or(0.0)),
+            student_label_gain: best_gain.map(|g| g.1),
+            student_gain_margin: best_gain.map(|g| g.0.unwrap_or(0.0)),
             validation_completed: completed,
             validation_trials: trials,
             wall_s: state.wall_s,
