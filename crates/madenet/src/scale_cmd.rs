@@ -37,6 +37,10 @@ pub struct ScaleArgs {
     /// Seeds per trial, overriding the config.
     #[arg(long)]
     seeds: Option<u64>,
+    /// Communication success probability of every trial, overriding the config (one value: a
+    /// study per CSP, each in its own --out folder).
+    #[arg(long)]
+    csp: Option<f64>,
     /// A trained model directory, usable as method `model`.
     #[arg(long)]
     model: Option<PathBuf>,
@@ -63,6 +67,7 @@ fn name_source(e: StudyError, a: &ScaleArgs) -> anyhow::Error {
             ("sides", "--sides", a.sides.is_some()),
             ("teams", "--teams", a.teams.is_some()),
             ("seeds", "--seeds", a.seeds.is_some()),
+            ("csp", "--csp", a.csp.is_some()),
         ],
     )
 }
@@ -89,6 +94,9 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     }
     if let Some(s) = a.seeds {
         cfg.seeds = s;
+    }
+    if let Some(c) = a.csp {
+        cfg.csp = c;
     }
     // The config's own `[baselines]` parameters (ub, pb), as `madenet compare` uses its own.
     let registry = crate::registry_with(&cfg.baselines, a.model.as_deref())?;

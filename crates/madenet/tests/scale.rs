@@ -24,6 +24,8 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
         "2,4",
         "--seeds",
         "1",
+        "--csp",
+        "0.5",
         "--methods",
         "made-net-any,nf",
         "--threads",
@@ -45,12 +47,20 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
     assert_eq!(trials.lines().count(), 145);
     assert!(trials
         .lines()
-        .any(|l| l.starts_with("made-net-any,side24-map3,middle:4,")));
+        .any(|l| l.starts_with("made-net-any,side24-map3,middle:4,0.5,")));
+    assert!(trials
+        .lines()
+        .skip(1)
+        .all(|l| l.split(',').nth(3) == Some("0.5")));
     assert!(out.join("fig7_scalability.png").exists() && out.join("cells.csv").exists());
 
     assert_clean_error(
         &madenet(&["scale", "--out", o, "--teams", "0"]),
         &["--teams"],
+    );
+    assert_clean_error(
+        &madenet(&["scale", "--out", o, "--csp", "1.5"]),
+        &["--csp", "1.5"],
     );
     assert_clean_error(
         &madenet(&["scale", "--out", o, "--methods", "teleport"]),
@@ -93,6 +103,8 @@ fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
     );
     let report = std::fs::read_to_string(out.join("scale.md")).unwrap();
     assert!(report.contains("(continuous world)"), "{report}");
+    // No known-map reference in the continuous world, so no headroom figure.
+    assert!(out.join("fig7_scalability.png").exists() && !out.join("fig_headroom.png").exists());
     // The grid twin's folder says what it holds (its config is the study's).
     let twin = std::fs::read_to_string(out.join("grid").join("scale.toml")).unwrap();
     assert!(

@@ -12,6 +12,8 @@
 //!   `<start>:<team>`;
 //! * `cells.csv` — mean TNS, TTD, NOLI and completions per (side, team, method);
 //! * `fig7_scalability.{png,svg}` — mean TNS against team size, one panel per map side;
+//! * `fig_headroom.{png,svg}` — with the known-map reference (`known_map`, grid only): every
+//!   method's mean TNS as % above the reference's, against team size, one panel per side;
 //! * `scale.md` — the tables; per map side and method a Friedman test across team sizes and
 //!   Wilcoxon signed-rank tests between consecutive team sizes (paired by map, start and seed),
 //!   where exploration time stops falling; the first method against every other: the share of
@@ -29,7 +31,7 @@ pub use plan::ScalePlanned;
 use crate::config::StudyError;
 use crate::runner::{run_planned, write_atomic, Planned};
 use cells::ContinuousCellRow;
-use report::{figure, headroom_text, report_text, twin_text};
+use report::{figure, headroom_figure, headroom_text, report_text, twin_text};
 use std::path::{Path, PathBuf};
 
 /// What [`run_scale`] produced.
@@ -120,6 +122,7 @@ pub fn run_scale_held(
             .map_err(|e| StudyError::Other(e.to_string()))?,
     )?;
     figure(cfg, &cells, out)?;
+    headroom_figure(cfg, &planned, &outcomes, out)?;
     let report = out.join("scale.md");
     let mut text = report_text(cfg, &planned, &outcomes, &cells, wall);
     let bounds = crate::lower_bounds(planned.iter().map(|p| &p.planned))?;

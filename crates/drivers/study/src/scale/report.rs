@@ -343,6 +343,56 @@ pub(super) fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result
     Ok(())
 }
 
+/// `fig_headroom.{png,svg}`: every method's mean TNS as % above the known-map reference's,
+/// against team size, one panel per map side — the headroom table of [`headroom_text`] as a
+/// picture. Nothing is drawn without the reference's trials.
+pub(super) fn headroom_figure(
+    cfg: &ScaleConfig,
+    planned: &[ScalePlanned],
+    outcomes: &[TrialOutcome],
+    out: &Path,
+) -> Result<(), StudyError> {
+    use madenet_plots::{line_panels, LinePanel, LineSeries};
+    let reference = crate::config::oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let mean_tns = |m: &str, side: usize, team: usize| {
+        let v = paired(planned, outcomes, m, Some(side), Some(team), tns);
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let panels: Vec<LinePanel> = cfg
+        .sides
+        .iter()
+        .map(|&side| LinePanel {
+            title: format!("{side} × {side} cells"),
+            x_label: "Robots".into(),
+            y_label: "Mean TNS above the known-map reference (%)".into(),
+            series: cfg
+                .methods
+                .iter()
+                .map(|m| LineSeries {
+                    name: m.clone(),
+                    points: cfg
+                        .teams
+                        .iter()
+                        .filter_map(|&t| {
+                            let r = mean_tns(&reference, side, t)?;
+                            Some((t as f64, 100.0 * (mean_tns(m, side, t)? / r.max(1.0) - 1.0)))
+                        })
+                        .collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    if panels
+        .iter()
+        .any(|p| p.series.iter().any(|s| s.points.is_empty()))
+    {
+        return Ok(());
+    }
+    line_panels(&out.join("fig_headroom"), &panels, panels.len().min(2))
+        .map_err(|e| StudyError::Other(e.to_string()))?;
+    Ok(())
+}
+
 /// The headroom: per map side and team, the mean lower bound, the known-map reference's mean
 /// TNS, and every method's mean TNS above both; the first method's share of each other
 /// method's gap to the reference that it closes, pooled per side. Empty without the reference.
