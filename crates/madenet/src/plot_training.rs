@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use madenet_plots::{line_panels, LinePanel, LineSeries};
+use madenet_plots::{styled_line_panels, LinePanel, LineSeries, LineStyle};
 use madenet_trainlog::{plot_training, DEFAULT_FIGURE};
 use std::path::{Path, PathBuf};
 
@@ -31,7 +31,7 @@ pub fn run(a: PlotTrainingArgs) -> Result<()> {
 }
 
 /// A rollout-teacher run's curves: validation mean steps per iteration (the DEP as it acts, the
-/// greedy DEP, the base rule), the training loss per iteration in the title.
+/// greedy DEP, the base rule) and the training loss per iteration, one panel each.
 fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
     let mut rd =
         csv::Reader::from_path(csv_path).with_context(|| csv_path.display().to_string())?;
@@ -85,22 +85,43 @@ fn plot_iterations(csv_path: &Path, out: &Path) -> Result<PathBuf> {
             points: g,
         });
     }
-    let losses = l
-        .iter()
-        .map(|(x, y)| format!("{x:.0}: {y:.3}"))
-        .collect::<Vec<_>>()
-        .join(", ");
-    let panels = [LinePanel {
-        title: format!("Validation mean steps (loss by iteration: {losses})"),
-        x_label: "DAgger iteration".into(),
-        y_label: "mean TNS over the validation trials".into(),
-        series: steps,
-    }];
-    let stem = out.with_extension("");
-    let written = line_panels(&stem, &panels, 1)?;
-    let want = out.extension().and_then(|e| e.to_str()).unwrap_or("png");
-    Ok(written
-        .into_iter()
-        .find(|p| p.extension().and_then(|e| e.to_str()) == Some(want))
-        .unwrap_or_else(|| out.to_path_buf()))
+    // Two panels side by side: the loss in its own axes (in the title it ran off the figure
+    // after five iterations).
+    let panels = [
+        LinePanel {
+            title: "Validation mean steps".into(),
+            x_label: "DAgger iteration".into(),
+            y_label: "mean TNS over the validation trials".into(),
+            series: steps,
+        },
+        LinePanel {
+            title: "Training loss".into(),
+            x_label: "DAgger iteration".into(),
+            y_label: "mean loss of the iteration's fit".into(),
+            series: vec![LineSeries {
+                name: "loss".into(),
+                points: l,
+            }],
+        },
+    ];
+    let styles = [
+        "DEP as it acts (validation)",
+        "base rule",
+        "greedy DEP",
+        "loss",
+    ]
+    .iter()
+    .enumerate()
+    .filter(|(_, name)| {
+        panels
+            .iter()
+            .any(|p| p.series.iter().any(|s| s.name == **name))
+    })
+    .map(|(colour, name)| LineStyle {
+        name: (*name).into(),
+        colour,
+        faint: false,
+    })
+    .collect::<Vec<_>>();
+    Ok(styled_line_panels(out, &panels, 2, &styles)?)
 }

@@ -101,3 +101,44 @@ fn plot_training_bad_input_is_one_line_naming_the_file() {
     assert_clean_error(&out, &["fig.jpg", ".png or .svg"]);
     assert!(!dir.join("fig2_training.png").exists());
 }
+
+#[test]
+fn a_rollout_runs_iterations_become_a_steps_and_a_loss_panel() {
+    let s = Scratch::new("rollout");
+    let dir = s.path().join("run");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut csv = String::from(
+        "iteration,episodes,decisions,rollouts,behaviour_steps,updates,loss,validation_steps,greedy_steps,spread_margin,base_steps,validation_completed,validation_trials,wall_s\n",
+    );
+    for i in 0..6 {
+        csv += &format!(
+            "{i},{},20000,100000,120.5,3000,0.{},{},{},0.4,336.9,116,120,{}\n",
+            400 * (i + 1),
+            107 + i,
+            337.0 - i as f64,
+            399.9 - 5.0 * i as f64,
+            600 * (i + 1)
+        );
+    }
+    std::fs::write(dir.join("iterations.csv"), csv).unwrap();
+    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = dir.join("fig2_training.png");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        png.display().to_string()
+    );
+    assert_eq!(
+        png_size(&png),
+        (1600, 564),
+        "steps and loss side by side under the legend"
+    );
+    // Only the figure asked for is written; a format it cannot write is refused.
+    assert!(!dir.join("fig2_training.svg").exists());
+    let out = madenet(&["plot-training", dir.to_str().unwrap(), "--out", "fig.jpg"]);
+    assert_clean_error(&out, &["fig.jpg", ".png or .svg"]);
+}
