@@ -24,6 +24,10 @@ enum Kind {
     /// Each candidate scored over --futures noiseless futures whose unseen cells are redrawn by
     /// the map generator (knows what the team knows, not the map).
     Redrawn,
+    /// Over --futures redrawn maps, the known-map reference plans the whole team's routes from
+    /// where it stands; the robot takes the candidate nearest its first viewpoint (a team-wide,
+    /// multi-step teacher).
+    PlanRedrawn,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -101,6 +105,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Noiseless => OracleKind::Noiseless,
         Kind::KnownMap => OracleKind::KnownMap,
         Kind::Redrawn => OracleKind::Redrawn,
+        Kind::PlanRedrawn => OracleKind::PlanRedrawn,
     };
     let mut cfg = crate::batch::trial_set(
         &a.maps,
@@ -133,7 +138,9 @@ pub fn run(a: OracleArgs) -> Result<()> {
             .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
-        Kind::Averaged | Kind::Placebo | Kind::Redrawn => format!(" ({} futures)", a.futures),
+        Kind::Averaged | Kind::Placebo | Kind::Redrawn | Kind::PlanRedrawn => {
+            format!(" ({} futures)", a.futures)
+        }
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
     };
     let look = match (a.horizon, a.value) {

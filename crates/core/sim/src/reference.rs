@@ -343,6 +343,26 @@ fn plan_of(known: &Known, starts: &[Pos]) -> ReferencePlan {
     }
 }
 
+/// The reference's team plan over `world` as it stands — its truth, its team's knowledge, its
+/// robots' cells (a fork whose unseen cells were redrawn, for the plan-redrawn oracle): for each
+/// robot, the moves from every cell to its first viewpoint (`u32::MAX` where unreachable), or
+/// `None` when the plan gives it none.
+pub(crate) fn first_viewpoint_moves(world: &mut World) -> Vec<Option<Vec<u32>>> {
+    let known = Known::new(world);
+    let covered: Vec<bool> = known.target.iter().map(|&t| !t).collect();
+    let (routes, _) = plan_routes(&known, world.positions(), &covered);
+    routes
+        .iter()
+        .map(|r| {
+            r.first().map(|&v| {
+                let mut d = Vec::new();
+                known.distances(v, &mut d);
+                d
+            })
+        })
+        .collect()
+}
+
 /// The viewpoints covering what `covered` leaves ([`cover`]), routed from `starts`
 /// ([`route`]): each robot's viewpoints in order and its route's moves.
 fn plan_routes(known: &Known, starts: &[Pos], covered: &[bool]) -> (Vec<Vec<Pos>>, Vec<u32>) {
@@ -534,6 +554,42 @@ mod tests {
             config: cfg,
             policy: "reference".into(),
             seed,
+        }
+    }
+
+    #[test]
+    fn first_viewpoints_split_a_corridor_between_its_ends() {
+        // A 1 × 24 corridor with a robot at each end, d_s = 2: the min–max plan sends each
+        // robot to its own half, so each one's first viewpoint lies nearer itself than the other.
+        let map = madenet_map::io::parse_text(
+            &format!("{}\n", ".".repeat(24)),
+            std::path::Path::new("c"),
+        )
+        .unwrap();
+        let cfg = ScenarioConfig {
+            num_robots: 2,
+            sensing_range: 2,
+            sensor_miss_prob: 0.0,
+            motion_success_prob: 1.0,
+            ..ScenarioConfig::default()
+        };
+        let starts = [Pos::new(0, 0), Pos::new(0, 23)];
+        let mut world = World::new(map, &starts, cfg, 1).unwrap();
+        let moves = first_viewpoint_moves(&mut world);
+        assert_eq!(moves.len(), 2);
+        for (i, m) in moves.iter().enumerate() {
+            let m = m.as_ref().expect("each robot has a viewpoint");
+            let (own, other) = (starts[i], starts[1 - i]);
+            assert!(
+                m[own.col as usize] < m[other.col as usize],
+                "robot {i}: {m:?}"
+            );
+            // A viewpoint sees something unknown: at least 3 cells from the robot's own end.
+            assert!(
+                m[own.col as usize] >= 1 && m[own.col as usize] <= 9,
+                "robot {i}: {m:?}"
+            );
+            assert!(m.contains(&0));
         }
     }
 

@@ -188,17 +188,24 @@ pub enum OracleKind {
     /// decision): it knows what the team knows and the kind of map, not this map — the
     /// teacher a student that sees only the team's knowledge can learn from.
     Redrawn,
+    /// A team-wide, multi-step teacher: over `futures` redrawn maps (as [`OracleKind::Redrawn`])
+    /// the known-map reference plans routes for the whole team from where it stands, and the
+    /// deciding robot takes the candidate with the fewest moves, summed over the draws, to its
+    /// first planned viewpoint (the base rule's choice when no draw gives it one). It knows what
+    /// the team knows and where every robot is — what a student could learn to imitate.
+    PlanRedrawn,
 }
 
 impl OracleKind {
-    /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn.
-    pub const ALL: [OracleKind; 6] = [
+    /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn.
+    pub const ALL: [OracleKind; 7] = [
         OracleKind::Replay,
         OracleKind::Averaged,
         OracleKind::Noiseless,
         OracleKind::Placebo,
         OracleKind::KnownMap,
         OracleKind::Redrawn,
+        OracleKind::PlanRedrawn,
     ];
 
     /// The name in configs and on the command line.
@@ -210,15 +217,19 @@ impl OracleKind {
             OracleKind::Placebo => "placebo",
             OracleKind::KnownMap => "known-map",
             OracleKind::Redrawn => "redrawn",
+            OracleKind::PlanRedrawn => "plan-redrawn",
         }
     }
 
-    /// Whether `futures` matters (the placebo, averaged and redrawn oracles draw that many
-    /// futures).
+    /// Whether `futures` matters (the placebo, averaged, redrawn and plan-redrawn oracles draw
+    /// that many futures).
     pub fn uses_futures(self) -> bool {
         matches!(
             self,
-            OracleKind::Averaged | OracleKind::Placebo | OracleKind::Redrawn
+            OracleKind::Averaged
+                | OracleKind::Placebo
+                | OracleKind::Redrawn
+                | OracleKind::PlanRedrawn
         )
     }
 }
@@ -332,6 +343,15 @@ pub fn run_oracle_by(
                         trial.reseed_noise(salt);
                     }
                 }
+                OracleKind::PlanRedrawn => {
+                    let draws = redrawn_futures(&trial, seed, decision, futures)?;
+                    let best = plan_values(&trial, i, &draws)
+                        .into_iter()
+                        .enumerate()
+                        .filter_map(|(k, v)| v.map(|v| (k, v)))
+                        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+                    fixed[i] = best.map(|(k, _)| Decision::Candidate(k));
+                }
                 OracleKind::KnownMap => {} // played by `crate::reference` above
             }
         }
@@ -339,6 +359,45 @@ pub fn run_oracle_by(
         trial.finish_step();
     }
     Ok(trial.finish())
+}
+
+/// Robot `i`'s candidates valued by the team plan (the plan-redrawn teacher): over each
+/// [`Future::Redrawn`] in `futures` (others are skipped), the known-map reference plans the
+/// whole team's routes on the redrawn world from where it stands, and a candidate's value is
+/// the mean, over the draws that give robot `i` a viewpoint, of its moves to that robot's first
+/// viewpoint (lower is better; an unreachable one counts twice the map's height + width). All
+/// `None` when no draw gives the robot a viewpoint; `None` for invalid slots.
+pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
+    let agent = &trial.agents()[i];
+    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
+    let mut sum = vec![0.0; cells.len()];
+    let mut planned = 0usize;
+    for future in futures {
+        let Future::Redrawn(map) = future else {
+            continue;
+        };
+        let mut world = trial.world().clone();
+        world.set_noiseless();
+        world.redraw_unseen(map);
+        let Some(Some(to_first)) = crate::reference::first_viewpoint_moves(&mut world)
+            .into_iter()
+            .nth(i)
+        else {
+            continue;
+        };
+        planned += 1;
+        let far = 2 * (map.height() + map.width()) as u32;
+        for (v, &c) in sum.iter_mut().zip(cells) {
+            *v += f64::from(to_first[map.index(c)].min(far));
+        }
+    }
+    let mut values = vec![None; slots];
+    if planned > 0 {
+        for (v, s) in values.iter_mut().zip(sum) {
+            *v = Some(s / planned as f64);
+        }
+    }
+    values
 }
 
 /// `count` belief-consistent futures for decision number `decision` of the trial of `seed`

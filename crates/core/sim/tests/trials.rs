@@ -654,3 +654,30 @@ fn a_redrawn_future_agrees_with_what_the_team_knows() {
     let r = run_oracle(small, &registry, OracleKind::Redrawn, 1).unwrap();
     assert!(r.metrics.completed);
 }
+
+/// The plan-redrawn oracle (the known-map reference's team plan on redrawn maps) completes,
+/// repeats itself for a seed, and chooses otherwise than its base rule somewhere.
+#[test]
+fn the_plan_redrawn_oracle_completes_repeats_and_departs_from_its_base() {
+    use madenet_sim::rollout::{run_oracle, OracleKind};
+    use madenet_sim::PolicyRegistry;
+    let registry = PolicyRegistry::builtin();
+    let mut departs = false;
+    for (map, corner) in [
+        (2, Corner::TopLeft),
+        (6, Corner::BottomRight),
+        (9, Corner::TopRight),
+    ] {
+        let s = spec(map, corner, "spread", 1.0, 3);
+        let base = Trial::new(s.clone()).unwrap().run();
+        let a = run_oracle(s.clone(), &registry, OracleKind::PlanRedrawn, 2).unwrap();
+        assert!(a.metrics.completed, "test_{map}");
+        let b = run_oracle(s, &registry, OracleKind::PlanRedrawn, 2).unwrap();
+        assert_eq!(a.metrics, b.metrics, "test_{map}: same seed, same trial");
+        departs |= a.metrics.tns != base.metrics.tns || a.metrics.ttd != base.metrics.ttd;
+    }
+    assert!(
+        departs,
+        "the plan chooses otherwise than spread on some trial"
+    );
+}

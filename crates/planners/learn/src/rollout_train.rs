@@ -66,7 +66,7 @@ use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use burn::tensor::{Tensor, TensorData};
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
-use madenet_sim::rollout::{candidate_values_by, Lookahead, Value};
+use madenet_sim::rollout::{candidate_values_by, plan_values, Lookahead, Value};
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
 use madenet_world::ScenarioConfig;
@@ -92,6 +92,21 @@ pub enum Futures {
     /// share; [`madenet_sim::Future::Redrawn`]): labels that depend only on what the team
     /// knows, so a student that sees the team's knowledge can learn them.
     Redrawn,
+}
+
+/// What the teacher values a candidate by ([`RolloutTrainConfig::teacher`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Teacher {
+    /// Continuations under the base rule, over `futures`, cut and valued by `horizon` and
+    /// `value`: one step of policy improvement over the base.
+    #[default]
+    Rollout,
+    /// The team plan ([`madenet_sim::rollout::plan_values`]): over `rollouts` redrawn futures
+    /// (`futures = "redrawn"`), the known-map reference plans the whole team's routes from where
+    /// it stands, and a candidate is valued by its moves to the robot's first viewpoint — a
+    /// team-wide, multi-step teacher; no base rule enters the values.
+    Plan,
 }
 
 /// Which DEP network the teacher trains ([`RolloutTrainConfig::network`]).
@@ -183,6 +198,10 @@ pub struct RolloutTrainConfig {
     /// without sensor misses and slips — no luck), `salted` (`rollouts` futures of the noise)
     /// or `redrawn` (`rollouts` noiseless futures on redrawn unseen cells: [`Futures::Redrawn`]).
     pub futures: Futures,
+    /// What the teacher values a candidate by: `rollout` (default: continuations under the
+    /// base rule) or `plan` (the team plan on redrawn maps, [`Teacher::Plan`]; needs
+    /// `futures = "redrawn"`, excludes `expert_iteration` and `policy_iteration`).
+    pub teacher: Teacher,
     /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
     /// the trial's exploration rate so far, [`madenet_sim::rollout::Value::StepsLeft`]; with
     /// `mean-discovery` the cells still unknown count the horizon); 0: run to the end.
@@ -294,6 +313,7 @@ impl Default for RolloutTrainConfig {
             patience: 0,
             floorplan_prob: 0.0,
             futures: Futures::Noiseless,
+            teacher: Teacher::Rollout,
             horizon: 0,
             value: Value::StepsLeft,
             team_rounds: 0,
@@ -343,7 +363,7 @@ impl RolloutTrainConfig {
             .map_err(|e| format!("scenario: {e}"))?;
         let unit = |x: f64| (0.0..=1.0).contains(&x);
         let curriculum = self.map_side_max > 0 || self.team_max > 0;
-        let checks: [(bool, &str, &str); 19] = [
+        let checks: [(bool, &str, &str); 20] = [
             (
                 !curriculum || self.network == Network::Agnostic,
                 "map_side_max/team_max",
@@ -414,6 +434,14 @@ impl RolloutTrainConfig {
                 !(self.policy_iteration && self.expert_iteration),
                 "policy_iteration/expert_iteration",
                 "choose one: both set the teacher's base",
+            ),
+            (
+                self.teacher == Teacher::Rollout
+                    || (self.futures == Futures::Redrawn
+                        && !self.expert_iteration
+                        && !self.policy_iteration),
+                "teacher",
+                "`plan` needs futures = \"redrawn\" and no expert_iteration or policy_iteration (its values have no base rule)",
             ),
             (
                 self.rollouts >= 1 && self.rollouts <= 64,
@@ -975,10 +1003,18 @@ impl Labelling<'_> {
             value: self.cfg.value,
         };
         let (name, registry) = (&self.base.name, &self.base.registry);
-        let values = candidate_values_by(trial, i, fixed, name, registry, &futures, look)
-            .map_err(|e| TrainError::Other(e.to_string()))?;
+        let (values, runs) = match self.cfg.teacher {
+            Teacher::Rollout => {
+                let values = candidate_values_by(trial, i, fixed, name, registry, &futures, look)
+                    .map_err(|e| TrainError::Other(e.to_string()))?;
+                let runs = values.iter().flatten().count() * futures.len();
+                (values, runs)
+            }
+            // One team plan per future, whatever the candidates.
+            Teacher::Plan => (plan_values(trial, i, &futures), futures.len()),
+        };
         if set == FutureSet::Label {
-            self.rollouts += values.iter().flatten().count() * futures.len();
+            self.rollouts += runs;
         }
         Ok(values)
     }

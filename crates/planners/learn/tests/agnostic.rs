@@ -10,7 +10,9 @@ use madenet_learn::agnostic::{
     inputs_for, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
     WIDE_INPUTS,
 };
-use madenet_learn::rollout_train::{refit, stored_labels, train, Network, RolloutTrainConfig};
+use madenet_learn::rollout_train::{
+    refit, stored_labels, train, Futures, Network, RolloutTrainConfig, Teacher,
+};
 use madenet_learn::Model;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
@@ -339,6 +341,33 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         .unwrap_err()
         .to_string();
     assert!(err.contains("policy_iteration/expert_iteration"), "{err}");
+    // The team-plan teacher: one plan per redrawn future and labelled decision, other labels
+    // than the rollout teacher's; without redrawn futures, a named error.
+    let plan = RolloutTrainConfig {
+        teacher: Teacher::Plan,
+        futures: Futures::Redrawn,
+        rollouts: 2,
+        iterations: 1,
+        ..tiny()
+    };
+    train(&root.join("plan"), Some(plan.clone()), &mut |_| {}).unwrap();
+    let mut log = csv::Reader::from_path(root.join("plan").join("iterations.csv")).unwrap();
+    let row = log.records().next().unwrap().unwrap();
+    let decisions: usize = row[col("decisions")].parse().unwrap();
+    let plans: usize = row[col("rollouts")].parse().unwrap();
+    assert!(decisions > 0 && plans == 2 * decisions, "{row:?}");
+    assert_ne!(row[col("teacher_gain")], plain[0][col("teacher_gain")]);
+    let err = train(
+        &root.join("plan-noiseless"),
+        Some(RolloutTrainConfig {
+            futures: Futures::Noiseless,
+            ..plan
+        }),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("teacher") && err.contains("redrawn"), "{err}");
     // The fit's stopping rule: half of each iteration's new sequences held out, a check after
     // every update; each iteration logs the updates it made and the kept student's held-out
     // score, and the model counts exactly those updates.
