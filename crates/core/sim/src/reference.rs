@@ -584,7 +584,8 @@ mod tests {
                 m[own.col as usize] < m[other.col as usize],
                 "robot {i}: {m:?}"
             );
-            // A viewpoint sees something unknown: at least 3 cells from the robot's own end.
+            // Its first viewpoint sees an unknown cell (column 3 onwards, d_s = 2: one move at
+            // least) and lies in its own half's first stretch.
             assert!(
                 m[own.col as usize] >= 1 && m[own.col as usize] <= 9,
                 "robot {i}: {m:?}"
