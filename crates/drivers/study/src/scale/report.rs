@@ -302,23 +302,23 @@ The grid twin (`grid/`) runs every trial of this study in the grid world: the sc
     s
 }
 
-pub(super) fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result<(), StudyError> {
+/// One panel per map side of `value(method, side, team)` against team size, a series per
+/// method (teams without a value left out), drawn as `stem.{png,svg}` in rows of two.
+fn team_panels(
+    cfg: &ScaleConfig,
+    stem: &Path,
+    title: impl Fn(usize) -> String,
+    y_label: &str,
+    value: impl Fn(&str, usize, usize) -> Option<f64>,
+) -> Result<(), StudyError> {
     use madenet_plots::{line_panels, LinePanel, LineSeries};
     let panels: Vec<LinePanel> = cfg
         .sides
         .iter()
         .map(|&side| LinePanel {
-            title: match cfg.world {
-                ScaleWorld::Grid => format!("{side} × {side} cells"),
-                ScaleWorld::Continuous => {
-                    format!("{0} × {0} m", side as f64 * cfg.scenario.cell_size)
-                }
-            },
+            title: title(side),
             x_label: "Robots".into(),
-            y_label: match cfg.world {
-                ScaleWorld::Grid => "Mean TNS (steps)".into(),
-                ScaleWorld::Continuous => "Mean ET (s)".into(),
-            },
+            y_label: y_label.into(),
             series: cfg
                 .methods
                 .iter()
@@ -327,20 +327,38 @@ pub(super) fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result
                     points: cfg
                         .teams
                         .iter()
-                        .filter_map(|&t| {
-                            cells
-                                .iter()
-                                .find(|c| c.side == side && c.team == t && &c.method == m)
-                                .map(|c| (t as f64, c.tns))
-                        })
+                        .filter_map(|&t| Some((t as f64, value(m, side, t)?)))
                         .collect(),
                 })
                 .collect(),
         })
         .collect();
-    line_panels(&out.join("fig7_scalability"), &panels, panels.len().min(2))
+    line_panels(stem, &panels, panels.len().min(2))
         .map_err(|e| StudyError::Other(e.to_string()))?;
     Ok(())
+}
+
+pub(super) fn figure(cfg: &ScaleConfig, cells: &[CellRow], out: &Path) -> Result<(), StudyError> {
+    let title = |side: usize| match cfg.world {
+        ScaleWorld::Grid => format!("{side} × {side} cells"),
+        ScaleWorld::Continuous => format!("{0} × {0} m", side as f64 * cfg.scenario.cell_size),
+    };
+    let y_label = match cfg.world {
+        ScaleWorld::Grid => "Mean TNS (steps)",
+        ScaleWorld::Continuous => "Mean ET (s)",
+    };
+    team_panels(
+        cfg,
+        &out.join("fig7_scalability"),
+        title,
+        y_label,
+        |m, side, t| {
+            cells
+                .iter()
+                .find(|c| c.side == side && c.team == t && c.method == m)
+                .map(|c| c.tns)
+        },
+    )
 }
 
 /// `fig_headroom.{png,svg}`: every method's mean TNS as % above the known-map reference's,
@@ -352,45 +370,31 @@ pub(super) fn headroom_figure(
     outcomes: &[TrialOutcome],
     out: &Path,
 ) -> Result<(), StudyError> {
-    use madenet_plots::{line_panels, LinePanel, LineSeries};
     let reference = crate::config::oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
     let mean_tns = |m: &str, side: usize, team: usize| {
         let v = paired(planned, outcomes, m, Some(side), Some(team), tns);
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
-    let panels: Vec<LinePanel> = cfg
-        .sides
-        .iter()
-        .map(|&side| LinePanel {
-            title: format!("{side} × {side} cells"),
-            x_label: "Robots".into(),
-            y_label: "Mean TNS above the known-map reference (%)".into(),
-            series: cfg
-                .methods
+    // A panel with a method that has no point would be refused by the plot: draw nothing.
+    let complete = cfg.sides.iter().all(|&side| {
+        cfg.methods.iter().all(|m| {
+            cfg.teams
                 .iter()
-                .map(|m| LineSeries {
-                    name: m.clone(),
-                    points: cfg
-                        .teams
-                        .iter()
-                        .filter_map(|&t| {
-                            let r = mean_tns(&reference, side, t)?;
-                            Some((t as f64, 100.0 * (mean_tns(m, side, t)? / r.max(1.0) - 1.0)))
-                        })
-                        .collect(),
-                })
-                .collect(),
+                .any(|&t| mean_tns(&reference, side, t).is_some() && mean_tns(m, side, t).is_some())
         })
-        .collect();
-    if panels
-        .iter()
-        .any(|p| p.series.iter().any(|s| s.points.is_empty()))
-    {
+    });
+    if !complete {
         return Ok(());
     }
-    line_panels(&out.join("fig_headroom"), &panels, panels.len().min(2))
-        .map_err(|e| StudyError::Other(e.to_string()))?;
-    Ok(())
+    team_panels(
+        cfg,
+        &out.join("fig_headroom"),
+        |side| format!("{side} × {side} cells"),
+        "Mean TNS above the known-map reference (%)",
+        |m, side, t| {
+            Some(100.0 * (mean_tns(m, side, t)? / mean_tns(&reference, side, t)?.max(1.0) - 1.0))
+        },
+    )
 }
 
 /// The headroom: per map side and team, the mean lower bound, the known-map reference's mean
