@@ -405,7 +405,7 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
     );
     let model = dir.join("model");
     std::fs::create_dir_all(&model).unwrap();
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net-paper");
     for e in std::fs::read_dir(&shipped).unwrap() {
         let p = e.unwrap().path();
         if p.is_file() {
@@ -494,7 +494,7 @@ fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
 #[test]
 fn a_model_with_impossible_sizes_names_the_field() {
     let dir = Scratch::new("hard-sizes");
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net-paper");
     for (field, bad) in [
         ("goal_count", "0"),
         ("team_size", "100000"),
@@ -581,7 +581,7 @@ fn a_model_folder_is_checked_against_its_weights() {
     };
     // Sizes that are possible but are not the weights' (a 20 × 20, 3-robot model).
     for (field, value) in [("map_height", "30"), ("team_size", "5")] {
-        let m = model_copy(&dir.join(field), "made-net", set(field, value));
+        let m = model_copy(&dir.join(field), "made-net-paper", set(field, value));
         let out = run_model(&m);
         assert_clean_error_in(
             field,
@@ -590,7 +590,7 @@ fn a_model_folder_is_checked_against_its_weights() {
         );
     }
     // 1 000 flipped bytes: the digest refuses them.
-    let m = model_copy(&dir.join("flipped"), "made-net", |t| t.to_string());
+    let m = model_copy(&dir.join("flipped"), "made-net-paper", |t| t.to_string());
     let mut w = std::fs::read(m.join("dep0.bpk")).unwrap();
     let n = w.len();
     for i in 0..1000 {
@@ -599,7 +599,7 @@ fn a_model_folder_is_checked_against_its_weights() {
     std::fs::write(m.join("dep0.bpk"), &w).unwrap();
     assert_clean_error_in("flipped", &run_model(&m), &["dep0.bpk", "digest"]);
     // NaN weights under a matching digest: refused by parameter.
-    let m = model_copy(&dir.join("nan"), "made-net", |t| t.to_string());
+    let m = model_copy(&dir.join("nan"), "made-net-paper", |t| t.to_string());
     let mut w = std::fs::read(m.join("dep0.bpk")).unwrap();
     let n = w.len();
     // 4-byte aligned NaNs over a stretch of the tensor data (the file's second half).
@@ -626,7 +626,7 @@ fn a_model_folder_is_checked_against_its_weights() {
             .collect::<String>()
     };
     // Without digests, intact weights still play (with a warning that nothing was checked).
-    let m = model_copy(&dir.join("old"), "made-net", no_digests);
+    let m = model_copy(&dir.join("old"), "made-net-paper", no_digests);
     let out = run_model(&m);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
@@ -728,7 +728,7 @@ fn devices_and_fifos_as_inputs_are_bounded() {
     fifo(&map);
     let out = madenet(&["run".into(), "--map".into(), map.display().to_string()]);
     assert_clean_error_in("map fifo", &out, &["fifo.pgm"]);
-    let model = model_copy(&dir.join("model"), "made-net", |t| t.to_string());
+    let model = model_copy(&dir.join("model"), "made-net-paper", |t| t.to_string());
     std::fs::remove_file(model.join("dep0.bpk")).unwrap();
     fifo(&model.join("dep0.bpk"));
     assert_clean_error_in("weights fifo", &run_model(&model), &["dep0.bpk"]);

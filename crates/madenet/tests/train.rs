@@ -159,13 +159,16 @@ fn bad_training_input_is_one_line() {
         "--map",
         "paper:1",
         "--policy",
-        "made-net",
+        "made-net-paper",
         "--start",
         "0,0;0,1;1,0;1,1",
         "--config",
         four.to_str().unwrap(),
     ]));
-    assert!(e.contains("made-net") && e.contains("3 robots"), "{e}");
+    assert!(
+        e.contains("made-net-paper") && e.contains("3 robots"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -10,7 +10,7 @@ use madenet_sim::PolicyRegistry;
 const SHIPPED: [(&str, &str, &str, &[u8]); 4] = [
     (
         "made-net",
-        "MADE-Net (shipped model): DEP trained from a centralized rollout teacher, decentralized execution",
+        "MADE-Net (shipped model): the size- and team-agnostic DEP trained on 20 x 20 maps with 3 robots from the team-plan teacher (the known-map reference planning on redrawn maps), decentralized execution",
         include_str!("../../../../models/made-net/model.toml"),
         include_bytes!("../../../../models/made-net/dep0.bpk"),
     ),

@@ -396,3 +396,17 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
         );
     }
 }
+
+/// configs/train-plan.toml reproduces the shipped `made-net`: it reads as the config its run
+/// wrote beside the model (models/made-net/training/config.toml).
+#[test]
+fn plan_config_is_the_shipped_made_nets() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../");
+    let documented =
+        RolloutTrainConfig::from_toml_file(&root.join("configs/train-plan.toml")).unwrap();
+    let shipped =
+        RolloutTrainConfig::from_toml_file(&root.join("models/made-net/training/config.toml"))
+            .unwrap();
+    assert_eq!(documented, shipped);
+    assert_ne!(documented, RolloutTrainConfig::default());
+}
