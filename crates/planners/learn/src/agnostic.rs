@@ -45,6 +45,8 @@ pub const CANDIDATE_INPUTS: usize = AgentView::CANDIDATE_FEATURES + 3;
 pub const CROP_CHANNELS: usize = 4;
 /// Values per candidate added by [`AgnosticConfig::wide_inputs`] (see [`inputs_for`]).
 pub const WIDE_INPUTS: usize = 4;
+/// Values per candidate added by [`AgnosticConfig::territory_inputs`] (see [`inputs_for`]).
+pub const TERRITORY_INPUTS: usize = 3;
 
 /// Sizes of the agnostic DEP, with their defaults.
 #[derive(Config, Debug, PartialEq)]
@@ -75,6 +77,10 @@ pub struct AgnosticConfig {
     /// ([`inputs_for`]). An option so that the `model.toml` of models made before them (no such
     /// field) still loads.
     pub wide_inputs: Option<bool>,
+    /// `Some(true)`: [`TERRITORY_INPUTS`] more values per candidate (after the wide ones), about
+    /// the robot's share of the whole map's unknown space, split among the team by geodesic
+    /// distance ([`inputs_for`]). An option for the same reason as `wide_inputs`.
+    pub territory_inputs: Option<bool>,
 }
 
 /// The agnostic DEP's layers (see the module docs).
@@ -124,9 +130,21 @@ impl AgnosticConfig {
         self.wide_inputs == Some(true)
     }
 
-    /// Values per candidate: [`CANDIDATE_INPUTS`], and [`WIDE_INPUTS`] with `wide_inputs`.
+    /// Whether the candidates carry the [`TERRITORY_INPUTS`] (`territory_inputs`).
+    pub fn territory(&self) -> bool {
+        self.territory_inputs == Some(true)
+    }
+
+    /// Values per candidate: [`CANDIDATE_INPUTS`], [`WIDE_INPUTS`] with `wide_inputs` and
+    /// [`TERRITORY_INPUTS`] with `territory_inputs`.
     pub fn candidate_inputs(&self) -> usize {
-        CANDIDATE_INPUTS + if self.wide() { WIDE_INPUTS } else { 0 }
+        CANDIDATE_INPUTS
+            + if self.wide() { WIDE_INPUTS } else { 0 }
+            + if self.territory() {
+                TERRITORY_INPUTS
+            } else {
+                0
+            }
     }
 
     /// Side of K3's output, or why the sizes don't work.
@@ -361,9 +379,12 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
     }
 }
 
-/// The inputs of `view` for a network of `sizes`: [`inputs`], and with `wide_inputs` after each
-/// candidate's [`CANDIDATE_INPUTS`] [`WIDE_INPUTS`] more, about what lies beyond its crop (d_s =
-/// `sensing_range`; cells outside the map count as known):
+/// The inputs of `view` for a network of `sizes`: [`inputs`], then after each candidate's
+/// [`CANDIDATE_INPUTS`] the [`WIDE_INPUTS`] (with `wide_inputs`) and the [`TERRITORY_INPUTS`]
+/// (with `territory_inputs`), in that order.
+///
+/// **Wide inputs**, about what lies beyond the candidate's crop (d_s = `sensing_range`; cells
+/// outside the map count as known):
 ///
 /// 0. unknown cells within 2 d_s (Chebyshev) of the candidate / (4 d_s + 1)²;
 /// 1. the same within 4 d_s / (8 d_s + 1)²;
@@ -372,16 +393,50 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
 ///    keeps them) / (8 d_s + 1)²: what is left there for this robot;
 /// 3. unknown cells of the whole map on the candidate's side of the robot (Σ over cells whose
 ///    offset from the robot has a positive dot product with the candidate's) / all cells.
+///
+/// **Territory inputs**, about the whole map's unknown space as the team would split it: the
+/// robot's *territory* T is the unknown cells it reaches in fewer moves than every teammate's
+/// announced goal and last known position (geodesic: 8-neighbour moves over cells not known to be
+/// obstacles — what a team plan on the belief would hand it);
+///
+/// 0. the share of T nearer (geodesic) to the candidate than to the robot: how much of its own
+///    part of the map the candidate heads into;
+/// 1. the mean over T of (moves from the robot − moves from the candidate) / moves from the robot
+///    to the candidate, in [−1, 1]: how directly it heads there;
+/// 2. unknown cells of the whole map nearer to the candidate than to every teammate / unknown
+///    cells: what is left for the robot around it, map-wide (wide input 2 looks within 4 d_s).
+///
+/// All three are 0 for an empty slot, and 0 when T (or the unknown space) is empty.
 pub fn inputs_for(
     view: &mut AgentView<'_>,
     sensing_range: i32,
     sizes: &AgnosticConfig,
 ) -> AgnosticInput {
     let mut x = inputs(view, sensing_range, sizes.crop_radius);
-    if !sizes.wide() {
+    if !sizes.wide() && !sizes.territory() {
         return x;
     }
     let slots = x.mask.len();
+    let wide = sizes
+        .wide()
+        .then(|| wide_inputs(view, sensing_range, slots));
+    let territory = sizes.territory().then(|| territory_inputs(view, slots));
+    let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
+    for k in 0..slots {
+        features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
+        if let Some(w) = &wide {
+            features.extend_from_slice(&w[k]);
+        }
+        if let Some(t) = &territory {
+            features.extend_from_slice(&t[k]);
+        }
+    }
+    x.features = features;
+    x
+}
+
+/// The [`WIDE_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
+fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f32; WIDE_INPUTS]> {
     let b = view.belief;
     let (h, w) = (b.height() as i32, b.width() as i32);
     // Summed-area table of unknown cells: O(1) per window (hand-written: two loops).
@@ -416,11 +471,9 @@ pub fn inputs_for(
         .flat_map(|(goal, at)| goal.into_iter().chain(at))
         .collect();
     let cells = (h * w).max(1) as f32;
-    let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
-    for k in 0..slots {
-        features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
+    let mut out = vec![[0.0; WIDE_INPUTS]; slots];
+    for (k, o) in out.iter_mut().enumerate() {
         let Some(c) = view.candidates().get(k) else {
-            features.extend_from_slice(&[0.0; WIDE_INPUTS]);
             continue;
         };
         let far = 4 * ds;
@@ -439,15 +492,125 @@ pub fn inputs_for(
             .iter()
             .filter(|&&(r, col)| r * dr + col * dc > 0)
             .count();
-        features.extend_from_slice(&[
+        *o = [
             window(c, 2 * ds) as f32 / area(2 * ds),
             window(c, far) as f32 / area(far),
             left as f32 / area(far),
             ahead as f32 / cells,
-        ]);
+        ];
     }
-    x.features = features;
-    x
+    out
+}
+
+/// The [`TERRITORY_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
+fn territory_inputs(view: &AgentView<'_>, slots: usize) -> Vec<[f32; TERRITORY_INPUTS]> {
+    let teammates: Vec<Pos> = view
+        .recent_teammates()
+        .into_iter()
+        .flat_map(|(goal, at)| goal.into_iter().chain(at))
+        .collect();
+    let candidates: Vec<Option<Pos>> = (0..slots).map(|k| view.candidates().get(k)).collect();
+    territory(view.belief, view.pos, &teammates, &candidates)
+}
+
+/// The [`TERRITORY_INPUTS`] of each of `candidates` (`None`: an empty slot, zeros) for a robot at
+/// `robot` whose teammates are last known at (or bound for) `teammates` (see [`inputs_for`]).
+///
+/// ```
+/// use madenet_agent::Belief;
+/// use madenet_map::Pos;
+/// // A corridor known around the robot (column 3), unknown on both sides, no teammate known:
+/// // the candidate at column 4 heads into the 3 unknown cells on the right (of 5 in all).
+/// let b = Belief::from_rows(&["??...???"], Default::default());
+/// let t = madenet_learn::agnostic::territory(&b, Pos::new(0, 3), &[], &[Some(Pos::new(0, 4))]);
+/// assert_eq!(t[0][0], 3.0 / 5.0);
+/// ```
+pub fn territory(
+    b: &madenet_agent::Belief,
+    robot: Pos,
+    teammates: &[Pos],
+    candidates: &[Option<Pos>],
+) -> Vec<[f32; TERRITORY_INPUTS]> {
+    let mut from_mates = Vec::new();
+    let mut from_me = Vec::new();
+    let mut from_candidate = Vec::new();
+    moves_from(b, teammates, &mut from_mates);
+    moves_from(b, &[robot], &mut from_me);
+    let (h, w) = (b.height() as i32, b.width() as i32);
+    let unknown: Vec<usize> = (0..h)
+        .flat_map(|r| (0..w).map(move |c| Pos::new(r, c)))
+        .filter(|&p| b.get(p) == madenet_map::Occupancy::Unknown)
+        .map(|p| b.index(p))
+        .collect();
+    let territory: Vec<usize> = unknown
+        .iter()
+        .copied()
+        .filter(|&i| from_me[i] < from_mates[i])
+        .collect();
+    let mut out = vec![[0.0; TERRITORY_INPUTS]; candidates.len()];
+    for (o, c) in out.iter_mut().zip(candidates) {
+        // A candidate the robot cannot reach (none should be) keeps zeros.
+        let Some(c) = c.filter(|&c| b.in_bounds(c) && from_me[b.index(c)] != u32::MAX) else {
+            continue;
+        };
+        moves_from(b, &[c], &mut from_candidate);
+        // Every cell of T is reachable from the robot, so from the candidate too.
+        let towards = from_me[b.index(c)].max(1) as f32;
+        let (mut nearer, mut progress) = (0usize, 0.0f32);
+        for &i in &territory {
+            nearer += (from_candidate[i] < from_me[i]) as usize;
+            let gain = from_me[i] as f32 - from_candidate[i] as f32;
+            progress += (gain / towards).clamp(-1.0, 1.0);
+        }
+        let left = unknown
+            .iter()
+            .filter(|&&i| from_candidate[i] < from_mates[i])
+            .count();
+        let share = |n: usize, of: usize| if of == 0 { 0.0 } else { n as f32 / of as f32 };
+        *o = [
+            share(nearer, territory.len()),
+            if territory.is_empty() {
+                0.0
+            } else {
+                progress / territory.len() as f32
+            },
+            share(left, unknown.len()),
+        ];
+    }
+    out
+}
+
+/// Fewest 8-neighbour moves from the nearest of `seeds` to each cell over cells not known to be
+/// obstacles (`u32::MAX`: unreachable). Hand-written: a multi-source BFS into a flat field, which
+/// the pathfinding crate's searches (one path, or a `HashMap` of all) do not give.
+fn moves_from(b: &madenet_agent::Belief, seeds: &[Pos], out: &mut Vec<u32>) {
+    let (h, w) = (b.height() as i32, b.width() as i32);
+    out.clear();
+    out.resize((h * w) as usize, u32::MAX);
+    let mut queue = std::collections::VecDeque::new();
+    for &p in seeds.iter().filter(|&&p| b.in_bounds(p)) {
+        let i = b.index(p);
+        if out[i] != 0 {
+            out[i] = 0;
+            queue.push_back(p);
+        }
+    }
+    while let Some(p) = queue.pop_front() {
+        let d = out[b.index(p)] + 1;
+        for dr in -1..=1 {
+            for dc in -1..=1 {
+                let q = Pos::new(p.row + dr, p.col + dc);
+                if (dr, dc) == (0, 0) || !b.in_bounds(q) {
+                    continue;
+                }
+                let i = b.index(q);
+                if out[i] == u32::MAX && b.get(q) != madenet_map::Occupancy::Obstacle {
+                    out[i] = d;
+                    queue.push_back(q);
+                }
+            }
+        }
+    }
 }
 
 /// A batch of decisions as tensors, slots padded to the widest decision.

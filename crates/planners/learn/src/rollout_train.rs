@@ -239,6 +239,10 @@ pub struct RolloutTrainConfig {
     /// With the agnostic network: four more inputs per candidate about what lies beyond its
     /// crop ([`crate::agnostic::inputs_for`]).
     pub wide_inputs: bool,
+    /// With the agnostic network: three more inputs per candidate about the robot's share of the
+    /// whole map's unknown space, split among the team by geodesic distance
+    /// ([`crate::agnostic::inputs_for`]): what a team plan hands each robot.
+    pub territory_inputs: bool,
     /// The DEP's observation vector (ours: `candidate-features`; the paper: `paper`).
     pub observation: Observation,
     /// Adam steps after each iteration's collection (at most, with `fit_holdout`).
@@ -324,6 +328,7 @@ impl Default for RolloutTrainConfig {
             network: Network::Grid,
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
             wide_inputs: false,
+            territory_inputs: false,
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
             fit_holdout: 0.0,
@@ -519,6 +524,9 @@ impl RolloutTrainConfig {
         if self.wide_inputs && self.network != Network::Agnostic {
             return Err("field `wide_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or wide_inputs = false".into());
         }
+        if self.territory_inputs && self.network != Network::Agnostic {
+            return Err("field `territory_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or territory_inputs = false".into());
+        }
         if self.fit_holdout > 0.0 && self.network != Network::Agnostic {
             return Err("field `fit_holdout`: the stopping rule scores the agnostic network only; set network = \"agnostic\" or fit_holdout = 0".into());
         }
@@ -599,6 +607,7 @@ impl RolloutTrainConfig {
         crate::agnostic::AgnosticConfig::new()
             .with_crop_radius(self.crop_radius)
             .with_wide_inputs(self.wide_inputs.then_some(true))
+            .with_territory_inputs(self.territory_inputs.then_some(true))
     }
 
     /// The largest map side of iteration `iteration`'s curriculum (growing linearly from
@@ -1852,9 +1861,12 @@ pub fn refit(
             cfg.crop_radius, sizes.crop_radius
         )));
     }
-    if cfg.network != Network::Agnostic || sizes.wide() != cfg.wide_inputs {
+    if cfg.network != Network::Agnostic
+        || sizes.wide() != cfg.wide_inputs
+        || sizes.territory() != cfg.territory_inputs
+    {
         return Err(TrainError::Other(
-            "refit: fields `network`/`wide_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
+            "refit: fields `network`/`wide_inputs`/`territory_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
         ));
     }
     let (mut net, mut optim) = fresh_student(cfg, Some(sizes))?;

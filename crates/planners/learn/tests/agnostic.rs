@@ -8,13 +8,14 @@
 
 use madenet_learn::agnostic::{
     inputs_for, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
-    WIDE_INPUTS,
+    TERRITORY_INPUTS, WIDE_INPUTS,
 };
 use madenet_learn::rollout_train::{
     refit, stored_labels, train, Futures, Network, RolloutTrainConfig, Teacher,
 };
 use madenet_learn::Model;
 use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
+use madenet_map::Pos;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_testkit::Scratch;
 use madenet_world::ScenarioConfig;
@@ -93,6 +94,76 @@ fn wide_inputs_extend_each_candidate_and_score_alike() {
     }
 }
 
+/// `territory_inputs` appends TERRITORY_INPUTS values after the wide ones (both unchanged by
+/// it), and splits a corridor's unknown cells as worked out by hand.
+fn territory_inputs_follow_the_wide_ones_and_split_a_corridor_by_hand() {
+    let both = AgnosticConfig::new()
+        .with_wide_inputs(Some(true))
+        .with_territory_inputs(Some(true));
+    let wide = AgnosticConfig::new().with_wide_inputs(Some(true));
+    assert_eq!(
+        both.candidate_inputs(),
+        CANDIDATE_INPUTS + WIDE_INPUTS + TERRITORY_INPUTS
+    );
+    let (x, w) = (decision_for(30, 4, 3, &both), decision_for(30, 4, 3, &wide));
+    let slots = x.mask.len();
+    for k in 0..slots {
+        let f = &x.features[k * both.candidate_inputs()..(k + 1) * both.candidate_inputs()];
+        let g = &w.features[k * wide.candidate_inputs()..(k + 1) * wide.candidate_inputs()];
+        assert_eq!(&f[..wide.candidate_inputs()], g);
+        let t = &f[wide.candidate_inputs()..];
+        assert!(
+            (0.0..=1.0).contains(&t[0]) && (-1.0..=1.0).contains(&t[1]),
+            "{t:?}"
+        );
+        assert!((0.0..=1.0).contains(&t[2]), "{t:?}");
+        if !x.mask[k] {
+            assert_eq!(t, &[0.0; TERRITORY_INPUTS]);
+        }
+    }
+    // A 1 × 40 corridor, the robot at column 15 knowing 13..=17 (its candidates: 13 and 17).
+    let corridor = |right_end: &str| {
+        let row = format!("{}{}{}", "?".repeat(13), ".".repeat(5), right_end);
+        madenet_agent::Belief::from_rows(&[row.as_str()], Default::default())
+    };
+    let (robot, candidates) = (
+        Pos::new(0, 15),
+        [Some(Pos::new(0, 13)), Some(Pos::new(0, 17)), None],
+    );
+    let close = |got: [f32; 3], want: [f32; 3]| {
+        assert!(
+            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-6),
+            "{got:?} != {want:?}"
+        );
+    };
+    // No teammate known: T is all 35 unknown cells (0..=12, 18..=39). The left candidate is
+    // nearer than the robot to 0..=12 (13 cells), the right one to 18..=39 (22); each is 2 moves
+    // away and gains 2 moves on its side's cells, loses 2 on the other's: progress (13 − 22) / 35
+    // and (22 − 13) / 35; with no teammate, every unknown cell is left to it.
+    let t = madenet_learn::agnostic::territory(&corridor(&"?".repeat(22)), robot, &[], &candidates);
+    close(t[0], [13.0 / 35.0, -9.0 / 35.0, 1.0]);
+    close(t[1], [22.0 / 35.0, 9.0 / 35.0, 1.0]);
+    assert_eq!(t[2], [0.0; TERRITORY_INPUTS]);
+    // A teammate at column 39 (known free): 34 unknown cells (0..=12, 18..=38). T: those the robot
+    // reaches first, |c − 15| < 39 − c: 0..=12 and 18..=26 (22). The left candidate is nearer to
+    // 13 of them, the right one to 9: progress ±(13 − 9) / 22. Map-wide, nearer to 13 than to 39
+    // are 0..=12 and 18..=25 (21 of 34); nearer to 17, 0..=12 and 18..=27 (23).
+    let b = corridor(&format!("{}.", "?".repeat(21)));
+    let t = madenet_learn::agnostic::territory(&b, robot, &[Pos::new(0, 39)], &candidates);
+    close(t[0], [13.0 / 22.0, 4.0 / 22.0, 21.0 / 34.0]);
+    close(t[1], [9.0 / 22.0, -4.0 / 22.0, 23.0 / 34.0]);
+    // An obstacle at column 20 cuts the right side off: T is 0..=12 and 18..=19 (15), the right
+    // candidate nearer to 2 of them and progressing on them by 2 / 2, losing 2 / 2 on the 13;
+    // map-wide, 15 of the 33 unknown cells are nearer to it than to the teammate (who alone
+    // reaches 21..=38).
+    let b = madenet_agent::Belief::from_rows(
+        &[format!("{}.....??#{}.", "?".repeat(13), "?".repeat(18)).as_str()],
+        Default::default(),
+    );
+    let t = madenet_learn::agnostic::territory(&b, robot, &[Pos::new(0, 39)], &candidates);
+    close(t[1], [2.0 / 15.0, -11.0 / 15.0, 15.0 / 33.0]);
+}
+
 fn permuted(x: &AgnosticInput, order: &[usize]) -> AgnosticInput {
     let crop_bits = 4 * 13 * 13;
     let mut crops = vec![0u8; x.mask.len() * crop_bits];
@@ -121,6 +192,7 @@ fn agnostic_network_and_its_training() {
     one_network_scores_any_map_team_and_candidate_count_by_candidate_not_slot();
     the_decision_scorer_scores_as_the_network();
     wide_inputs_extend_each_candidate_and_score_alike();
+    territory_inputs_follow_the_wide_ones_and_split_a_corridor_by_hand();
     tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_deterministically();
 }
 
