@@ -613,6 +613,13 @@ fn moves_from(b: &madenet_agent::Belief, seeds: &[Pos], out: &mut Vec<u32>) {
     }
 }
 
+/// The slot of `spread`'s choice among candidates whose inputs, `width` values each, are
+/// `features` ([`AgentView::SPREAD_CHOICE_FEATURE`]), if it is one of the `valid` slots.
+pub(crate) fn spread_slot(features: &[f32], width: usize, valid: &[bool]) -> Option<usize> {
+    (0..valid.len())
+        .find(|&k| valid[k] && features[k * width + AgentView::SPREAD_CHOICE_FEATURE] == 1.0)
+}
+
 /// A batch of decisions as tensors, slots padded to the widest decision.
 pub struct Batch {
     /// `[b·g, 4, S, S]`.
@@ -733,10 +740,7 @@ impl Policy for AgnosticPolicy {
         self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");
         // `spread`'s choice is among the candidate inputs, already computed for the features.
-        let anchor = (0..input.mask.len()).find(|&k| {
-            input.features[k * self.sizes.candidate_inputs() + AgentView::SPREAD_CHOICE_FEATURE]
-                == 1.0
-        });
+        let anchor = spread_slot(&input.features, self.sizes.candidate_inputs(), &input.mask);
         Decision::Candidate(crate::policy::conservative(
             &q,
             greedy,

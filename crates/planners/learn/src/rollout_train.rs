@@ -200,7 +200,7 @@ pub struct RolloutTrainConfig {
     pub futures: Futures,
     /// What the teacher values a candidate by: `rollout` (default: continuations under the
     /// base rule) or `plan` (the team plan on redrawn maps, [`Teacher::Plan`]; needs
-    /// `futures = "redrawn"`, excludes `expert_iteration` and `policy_iteration`).
+    /// `futures = "redrawn"`, excludes `expert_iteration`, `policy_iteration` and `team_rounds`).
     pub teacher: Teacher,
     /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
     /// the trial's exploration rate so far, [`madenet_sim::rollout::Value::StepsLeft`]; with
@@ -444,9 +444,10 @@ impl RolloutTrainConfig {
                 self.teacher == Teacher::Rollout
                     || (self.futures == Futures::Redrawn
                         && !self.expert_iteration
-                        && !self.policy_iteration),
+                        && !self.policy_iteration
+                        && self.team_rounds == 0),
                 "teacher",
-                "`plan` needs futures = \"redrawn\" and no expert_iteration or policy_iteration (its values have no base rule)",
+                "`plan` needs futures = \"redrawn\" and no expert_iteration, policy_iteration (its values have no base rule) or team_rounds (its plan is the team's already and would ignore the teammates' choices)",
             ),
             (
                 self.rollouts >= 1 && self.rollouts <= 64,
@@ -1917,10 +1918,7 @@ struct State {
 fn label_gains(l: &Labelled, q: &[f32], acting: &[Option<f32>]) -> Option<(f64, Vec<f64>)> {
     let slots = l.train_mask.len();
     let width = (l.vec.len() - CONTEXT_FEATURES) / slots.max(1);
-    let anchor = (0..slots).find(|&k| {
-        l.train_mask[k]
-            && l.vec[CONTEXT_FEATURES + k * width + AgentView::SPREAD_CHOICE_FEATURE] == 1.0
-    })?;
+    let anchor = crate::agnostic::spread_slot(&l.vec[CONTEXT_FEATURES..], width, &l.train_mask)?;
     let valid = || (0..slots).filter(|&k| l.train_mask[k]);
     let best = valid()
         .map(|k| l.target[k])

@@ -413,13 +413,16 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
         .unwrap_err()
         .to_string();
     assert!(err.contains("policy_iteration/expert_iteration"), "{err}");
-    // The team-plan teacher: one plan per redrawn future and labelled decision, other labels
-    // than the rollout teacher's; without redrawn futures, a named error.
+    // The team-plan teacher: one plan per redrawn future and labelled decision (the check's
+    // second valuation, of half the decisions, not counted), other labels than the rollout
+    // teacher's, and the check's agreement and reliability logged; without redrawn futures, or
+    // with a team teacher, a named error.
     let plan = RolloutTrainConfig {
         teacher: Teacher::Plan,
         futures: Futures::Redrawn,
         rollouts: 2,
         iterations: 1,
+        teacher_check: 0.5,
         ..tiny()
     };
     train(&root.join("plan"), Some(plan.clone()), &mut |_| {}).unwrap();
@@ -429,6 +432,24 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     let plans: usize = row[col("rollouts")].parse().unwrap();
     assert!(decisions > 0 && plans == 2 * decisions, "{row:?}");
     assert_ne!(row[col("teacher_gain")], plain[0][col("teacher_gain")]);
+    let agreement: f64 = row[col("teacher_self_agreement")].parse().unwrap();
+    let reliability: f64 = row[col("label_reliability")].parse().unwrap();
+    assert!((0.0..=1.0).contains(&agreement), "{row:?}");
+    assert!((-1.0..=1.0).contains(&reliability), "{row:?}");
+    let err = train(
+        &root.join("plan-team"),
+        Some(RolloutTrainConfig {
+            team_rounds: 2,
+            ..plan.clone()
+        }),
+        &mut |_| {},
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("teacher") && err.contains("team_rounds"),
+        "{err}"
+    );
     let err = train(
         &root.join("plan-noiseless"),
         Some(RolloutTrainConfig {
