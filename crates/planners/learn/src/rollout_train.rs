@@ -243,6 +243,11 @@ pub struct RolloutTrainConfig {
     /// whole map's unknown space, split among the team by geodesic distance
     /// ([`crate::agnostic::inputs_for`]): what a team plan hands each robot.
     pub territory_inputs: bool,
+    /// With the agnostic network: a model folder whose weights a fresh run's student starts from
+    /// (a warm start; an agnostic model of this run's sizes, its digests checked; a path relative
+    /// to the working directory). Empty (default): fresh weights. A resumed run reads its own
+    /// checkpoint instead.
+    pub init_model: String,
     /// The DEP's observation vector (ours: `candidate-features`; the paper: `paper`).
     pub observation: Observation,
     /// Adam steps after each iteration's collection (at most, with `fit_holdout`).
@@ -329,6 +334,7 @@ impl Default for RolloutTrainConfig {
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
             wide_inputs: false,
             territory_inputs: false,
+            init_model: String::new(),
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
             fit_holdout: 0.0,
@@ -1932,6 +1938,28 @@ fn label_gains(l: &Labelled, q: &[f32], acting: &[Option<f32>]) -> Option<(f64, 
     Some(((best - l.target[anchor]) as f64, students))
 }
 
+/// `net` with the weights of `cfg.init_model`, which [`crate::Model::load`] checks (digests, sizes,
+/// NaN) and which must be an agnostic model of the run's sizes.
+fn warm_start(cfg: &RolloutTrainConfig, net: Student) -> Result<Student, TrainError> {
+    let dir = Path::new(&cfg.init_model);
+    let bad = |why: String| TrainError::Config {
+        path: dir.display().to_string(),
+        message: format!("field `init_model`: {why}"),
+    };
+    let model = crate::Model::load(dir).map_err(|e| bad(e.to_string()))?;
+    if cfg.network != Network::Agnostic || model.info.agnostic.as_ref() != Some(&cfg.agnostic()) {
+        return Err(bad(
+            "not an agnostic model of this run's sizes (network, crop_radius, wide_inputs, territory_inputs)".into(),
+        ));
+    }
+    let weights = model
+        .info
+        .deps
+        .first()
+        .ok_or_else(|| bad("no weight file".into()))?;
+    net.load(&dir.join(weights))
+}
+
 /// A fresh student on the seeded training device and its Adam optimizer, as every fit starts:
 /// of `cfg`'s network, or agnostic of `sizes`.
 fn fresh_student(
@@ -2218,6 +2246,9 @@ fn train_loop(
 ) -> Result<(), TrainError> {
     let ckpt = run_dir.join("checkpoint");
     let (mut net, mut optim) = fresh_student(cfg, None)?;
+    if !resuming && !cfg.init_model.is_empty() {
+        net = warm_start(cfg, net)?;
+    }
     let (mut state, mut data): (State, Vec<Vec<Labelled>>) = if resuming {
         let state = harness::read_json(&ckpt.join("state.json"))?;
         let data = harness::read_postcard(&ckpt.join("data.bin"))?;

@@ -461,6 +461,53 @@ fn tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_determin
     .unwrap_err()
     .to_string();
     assert!(err.contains("teacher") && err.contains("redrawn"), "{err}");
+    // A warm start: with a learning rate too small to move a weight, a run started from the
+    // shipped made-net scores a decision as made-net does, and a fresh run does not; a missing
+    // folder or a grid model is a named error.
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../models");
+    let still = RolloutTrainConfig {
+        learning_rate: 1e-12,
+        iterations: 1,
+        ..tiny()
+    };
+    let warm = RolloutTrainConfig {
+        init_model: models.join("made-net").display().to_string(),
+        ..still.clone()
+    };
+    train(&root.join("warm"), Some(warm.clone()), &mut |_| {}).unwrap();
+    train(&root.join("still"), Some(still), &mut |_| {}).unwrap();
+    let x = decision_from(20, 3, 4);
+    let scores = |dir: &str| {
+        let m = Model::load(&root.join(dir).join("last")).unwrap();
+        m.agnostic().unwrap().scores(&x)
+    };
+    let shipped = madenet_learn::shipped::model("made-net").unwrap();
+    let want = shipped.agnostic().unwrap().scores(&x);
+    let (warm_q, fresh_q) = (scores("warm"), scores("still"));
+    let valid: Vec<usize> = (0..x.mask.len()).filter(|&k| x.mask[k]).collect();
+    for &k in &valid {
+        assert!((warm_q[k] - want[k]).abs() < 1e-4, "{warm_q:?} {want:?}");
+    }
+    assert!(
+        valid.iter().any(|&k| (fresh_q[k] - want[k]).abs() > 1e-3),
+        "{fresh_q:?} {want:?}"
+    );
+    for (dir, needle) in [
+        ("nowhere", "init_model"),
+        ("made-net-paper", "agnostic model"),
+    ] {
+        let err = train(
+            &root.join(format!("warm-{dir}")),
+            Some(RolloutTrainConfig {
+                init_model: models.join(dir).display().to_string(),
+                ..warm.clone()
+            }),
+            &mut |_| {},
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("init_model") && err.contains(needle), "{err}");
+    }
     // The fit's stopping rule: half of each iteration's new sequences held out, a check after
     // every update; each iteration logs the updates it made and the kept student's held-out
     // score, and the model counts exactly those updates.
