@@ -134,6 +134,20 @@ pub enum Loss {
     Listwise,
 }
 
+/// How a decision's advantages are scaled before the fit ([`RolloutTrainConfig::label_norm`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LabelNorm {
+    /// × `label_scale` alone: on a curriculum a 60-m map's advantages (moves, which grow with
+    /// the side) are about three times a 20-m map's and weigh nine times as much in the
+    /// squared loss.
+    #[default]
+    None,
+    /// × `label_scale` × `map_height` / the episode map's larger side: every map size weighs
+    /// alike, and the student's scores (and so the acting margin) are in 20-m-map steps.
+    Side,
+}
+
 /// Every knob of a rollout-teacher run, with its default (`configs/train-rollout.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -282,6 +296,8 @@ pub struct RolloutTrainConfig {
     pub grad_clip_norm: f32,
     /// Labels (steps) are multiplied by this (0.1: advantages of a few units).
     pub label_scale: f32,
+    /// How advantages are scaled per episode: `none` or `side` ([`LabelNorm`]).
+    pub label_norm: LabelNorm,
     /// The student's loss: `advantage` (regression) or `listwise` (ranking; [`Loss`]).
     pub loss: Loss,
     /// τ of the `listwise` loss, in label units (0.1 with `label_scale = 0.1`: one step).
@@ -346,6 +362,7 @@ impl Default for RolloutTrainConfig {
             learning_rate: 1e-3,
             grad_clip_norm: 10.0,
             label_scale: 0.1,
+            label_norm: LabelNorm::None,
             loss: Loss::Advantage,
             listwise_temperature: 0.1,
             spread_margins: vec![0.05, 0.1, 0.2, 0.4],
@@ -1180,10 +1197,11 @@ impl Recorder for Labelling<'_> {
             let mut train_mask = vec![false; mask.len()];
             if let (true, Some(values)) = (is_labelled, &values[i]) {
                 let mean = mean_value(values);
+                let scale = cfg.label_scale * label_norm_factor(cfg, trial);
                 for (k, v) in values.iter().enumerate() {
                     if let Some(v) = v {
                         // Fewer steps left is better: the advantage is mean − value.
-                        target[k] = ((mean - v) as f32) * cfg.label_scale;
+                        target[k] = ((mean - v) as f32) * scale;
                         train_mask[k] = true;
                     }
                 }
@@ -1197,6 +1215,17 @@ impl Recorder for Labelling<'_> {
         }
         trial.decide_with(&vec![None; n]);
         Ok(())
+    }
+}
+
+/// The factor [`RolloutTrainConfig::label_norm`] puts on `trial`'s labels (beside `label_scale`).
+fn label_norm_factor(cfg: &RolloutTrainConfig, trial: &Trial) -> f32 {
+    match cfg.label_norm {
+        LabelNorm::None => 1.0,
+        LabelNorm::Side => {
+            let truth = trial.world().truth();
+            cfg.map_height as f32 / truth.height().max(truth.width()) as f32
+        }
     }
 }
 
@@ -2557,6 +2586,48 @@ mod tests {
         assert_eq!(fit.teacher_label_gain, Some(0.0));
         assert_eq!(fit.student_gains.len(), 2);
         assert!(fit.student_gains.iter().all(|g| g.1 <= 0.0), "{fit:?}");
+    }
+
+    /// `label_norm = "side"` scales an episode's advantages by `map_height` / its side and
+    /// changes nothing else: the same decisions, valid slots and (scaled) values.
+    #[test]
+    fn side_label_norm_scales_a_larger_maps_labels_by_its_side() {
+        let plain = RolloutTrainConfig {
+            network: Network::Agnostic,
+            map_side_max: 30,
+            label_prob: 0.3,
+            ..RolloutTrainConfig::default()
+        };
+        let side = |e: u64| episode_spec(&plain, "train", e, 30).unwrap().map.height();
+        let e = (0..50).find(|&e| side(e) >= 26).unwrap();
+        let req = CollectRequest {
+            version: env!("CARGO_PKG_VERSION").into(),
+            episodes: vec![e],
+            side_max: 30,
+            student: None,
+            base: None,
+        };
+        let normed = RolloutTrainConfig {
+            label_norm: LabelNorm::Side,
+            ..plain.clone()
+        };
+        let run = |cfg: &RolloutTrainConfig| collect(cfg, &req, &|| false).unwrap().unwrap();
+        let (a, b) = (run(&plain), run(&normed));
+        let factor = 20.0 / side(e) as f32;
+        let (mut nonzero, mut decisions) = (0, 0);
+        for (ra, rb) in a[0].robots.iter().zip(&b[0].robots) {
+            assert_eq!(ra.len(), rb.len());
+            for (la, lb) in ra.iter().zip(rb) {
+                assert_eq!((&la.vec, &la.train_mask), (&lb.vec, &lb.train_mask));
+                for (ta, tb) in la.target.iter().zip(&lb.target) {
+                    // One rounding apart: `label_scale` and the factor are multiplied first.
+                    assert!((*tb - *ta * factor).abs() <= 1e-6 * ta.abs(), "{ta} {tb}");
+                    nonzero += (*ta != 0.0) as usize;
+                }
+                decisions += 1;
+            }
+        }
+        assert!(decisions > 0 && nonzero > 0, "{decisions} {nonzero}");
     }
 
     /// The label gains by hand: `spread` chose slot 0, the labels prefer slot 1, the scores
