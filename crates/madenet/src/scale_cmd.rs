@@ -7,14 +7,14 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct ScaleArgs {
-    /// Scalability config (TOML, see configs/scale.toml); defaults: made-net-any, nf, ub, pb,
+    /// Scalability config (TOML, see configs/scale.toml); defaults: made-net, made-net-any, nf, ub, pb,
     /// spread × sides 20, 30, 40, 60 × 4 maps × starts bottom-left, top-right, middle × teams
     /// 2–6 × 3 seeds at CSP 1.
     #[arg(long)]
     config: Option<PathBuf>,
     /// The world the trials run in: `grid`, or `continuous` (the paper's own protocol:
     /// differential-drive robots, lidar maps, a local planner, ET in seconds; without
-    /// --config its defaults are `ScaleConfig::continuous_default`: made-net-any, nf, ub,
+    /// --config its defaults are `ScaleConfig::continuous_default`: made-net, made-net-any, nf, ub,
     /// spread on one generated cluttered scene per side). Overrides the config's `world`.
     #[arg(long, value_parser = ["grid", "continuous"])]
     world: Option<String>,

@@ -103,7 +103,7 @@ pub struct ScaleConfig {
 impl Default for ScaleConfig {
     fn default() -> Self {
         ScaleConfig {
-            methods: ["made-net-any", "nf", "ub", "pb", "spread"]
+            methods: ["made-net", "made-net-any", "nf", "ub", "pb", "spread"]
                 .map(String::from)
                 .to_vec(),
             sides: vec![20, 30, 40, 60],
@@ -133,12 +133,12 @@ impl Default for ScaleConfig {
 impl ScaleConfig {
     /// The continuous world's study as `madenet scale --world continuous` runs it: the paper's
     /// Fig. 7 grid (sides 20, 30, 40, 60 m; teams 2–6; starts BL, TR, M) on one generated
-    /// scene per side, 3 seeds, methods made-net-any, nf, ub, spread (PB's cost grows with the
+    /// scene per side, 3 seeds, methods made-net, made-net-any, nf, ub, spread (PB's cost grows with the
     /// team and its grid results trail UB's).
     pub fn continuous_default() -> Self {
         ScaleConfig {
             world: ScaleWorld::Continuous,
-            methods: ["made-net-any", "nf", "ub", "spread"]
+            methods: ["made-net", "made-net-any", "nf", "ub", "spread"]
                 .map(String::from)
                 .to_vec(),
             maps_per_side: 1,
