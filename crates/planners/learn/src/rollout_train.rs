@@ -551,6 +551,9 @@ impl RolloutTrainConfig {
         if self.territory_inputs && self.network != Network::Agnostic {
             return Err("field `territory_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or territory_inputs = false".into());
         }
+        if !self.init_model.is_empty() && self.network != Network::Agnostic {
+            return Err("field `init_model`: warm starts of the agnostic network only; set network = \"agnostic\" or init_model = \"\"".into());
+        }
         if self.fit_holdout > 0.0 && self.network != Network::Agnostic {
             return Err("field `fit_holdout`: the stopping rule scores the agnostic network only; set network = \"agnostic\" or fit_holdout = 0".into());
         }
@@ -958,6 +961,8 @@ struct Labelling<'a> {
     cfg: &'a RolloutTrainConfig,
     seed: u64,
     label_prob: f64,
+    /// The factor on this episode's advantages: `label_scale` and `label_norm`'s.
+    label_scale: f32,
     label_rng: Rng,
     horizon: Option<usize>,
     base: &'a TeacherBase,
@@ -1197,11 +1202,10 @@ impl Recorder for Labelling<'_> {
             let mut train_mask = vec![false; mask.len()];
             if let (true, Some(values)) = (is_labelled, &values[i]) {
                 let mean = mean_value(values);
-                let scale = cfg.label_scale * label_norm_factor(cfg, trial);
                 for (k, v) in values.iter().enumerate() {
                     if let Some(v) = v {
                         // Fewer steps left is better: the advantage is mean − value.
-                        target[k] = ((mean - v) as f32) * scale;
+                        target[k] = ((mean - v) as f32) * self.label_scale;
                         train_mask[k] = true;
                     }
                 }
@@ -1218,14 +1222,12 @@ impl Recorder for Labelling<'_> {
     }
 }
 
-/// The factor [`RolloutTrainConfig::label_norm`] puts on `trial`'s labels (beside `label_scale`).
-fn label_norm_factor(cfg: &RolloutTrainConfig, trial: &Trial) -> f32 {
+/// The factor on the advantages of an episode on a `height × width` map: `label_scale`, and
+/// [`RolloutTrainConfig::label_norm`]'s.
+fn label_scale(cfg: &RolloutTrainConfig, height: usize, width: usize) -> f32 {
     match cfg.label_norm {
-        LabelNorm::None => 1.0,
-        LabelNorm::Side => {
-            let truth = trial.world().truth();
-            cfg.map_height as f32 / truth.height().max(truth.width()) as f32
-        }
+        LabelNorm::None => cfg.label_scale,
+        LabelNorm::Side => cfg.label_scale * cfg.map_height as f32 / height.max(width) as f32,
     }
 }
 
@@ -1243,7 +1245,8 @@ fn collect_episode(
         ..episode_spec(cfg, "train", index, side_max)?
     };
     let seed = spec.seed;
-    let cells = spec.map.height() * spec.map.width();
+    let (height, width) = (spec.map.height(), spec.map.width());
+    let cells = height * width;
     let mut trial = Trial::with_registry(spec, behaviour)
         .map_err(|e| TrainError::Other(e.to_string()))?
         .timed(false);
@@ -1251,6 +1254,7 @@ fn collect_episode(
         cfg,
         seed,
         label_prob: (cfg.label_prob * 400.0 / cells as f64).min(1.0),
+        label_scale: label_scale(cfg, height, width),
         label_rng: stream(seed, "label", 0),
         horizon: (cfg.horizon > 0).then_some(cfg.horizon),
         base,
@@ -1976,9 +1980,9 @@ fn warm_start(cfg: &RolloutTrainConfig, net: Student) -> Result<Student, TrainEr
         message: format!("field `init_model`: {why}"),
     };
     let model = crate::Model::load(dir).map_err(|e| bad(e.to_string()))?;
-    if cfg.network != Network::Agnostic || model.info.agnostic.as_ref() != Some(&cfg.agnostic()) {
+    if model.info.agnostic.as_ref() != Some(&cfg.agnostic()) {
         return Err(bad(
-            "not an agnostic model of this run's sizes (network, crop_radius, wide_inputs, territory_inputs)".into(),
+            "not an agnostic model of this run's sizes (crop_radius, wide_inputs, territory_inputs)".into(),
         ));
     }
     let weights = model
