@@ -363,6 +363,114 @@ pub(crate) fn first_viewpoint_moves(world: &mut World) -> Vec<Option<Vec<u32>>> 
         .collect()
 }
 
+/// The reference's team plan on what one robot knows — the decentralized counterpart of
+/// [`first_viewpoint_moves`], which knows the team's cells and every robot's position. The
+/// world it plans on is `belief` (the robot's map m_i) with its unknown cells taken from `fill`
+/// (a map the generator drew, its unknown cells obstacles: one belief-consistent future, as the
+/// plan-redrawn teacher's) or, without one, as free (optimistic: nothing unseen blocks a route
+/// or a ray); the cells it knows are known to the team, `team[0]` is the robot itself and the
+/// rest the teammates at their last known cells (kept free; duplicates, and cells the belief
+/// holds blocked, are dropped). Returns the moves on that world from every cell to the robot's
+/// first viewpoint (`u32::MAX` where unreachable), or `None` when the plan gives it none
+/// (nothing left to see, or every viewpoint is a teammate's); `sensing_range` is d_s, the
+/// belief's movement rule the world's.
+///
+/// # Panics
+/// If `fill` is not the belief's size.
+pub fn belief_first_viewpoint_moves(
+    belief: &OccGrid,
+    fill: Option<&OccGrid>,
+    team: &[Pos],
+    sensing_range: i32,
+    movement: Movement,
+) -> Option<Vec<u32>> {
+    let mut truth = belief.clone();
+    if let Some(f) = fill {
+        assert_eq!((f.height(), f.width()), (belief.height(), belief.width()));
+    }
+    for (i, c) in truth.cells_mut().iter_mut().enumerate() {
+        if *c == Occupancy::Unknown {
+            *c = match fill.map(|f| f.cells()[i]) {
+                None | Some(Occupancy::Free) => Occupancy::Free,
+                Some(_) => Occupancy::Obstacle,
+            };
+        }
+    }
+    let mut starts: Vec<Pos> = Vec::with_capacity(team.len());
+    for (k, &p) in team.iter().enumerate() {
+        let usable = belief.in_bounds(p) && belief.get(p) != Occupancy::Obstacle;
+        if k == 0 && !(usable && belief.get(p) == Occupancy::Free) {
+            return None;
+        }
+        if usable && !starts.contains(&p) {
+            truth.set(p, Occupancy::Free);
+            starts.push(p);
+        }
+    }
+    let cfg = madenet_world::ScenarioConfig {
+        num_robots: starts.len(),
+        sensing_range,
+        movement,
+        sensor_miss_prob: 0.0,
+        motion_success_prob: 1.0,
+        ..Default::default()
+    };
+    let mut world = World::new(truth, &starts, cfg, 0).ok()?;
+    world.assume_known(belief.cells());
+    first_viewpoint_moves(&mut world)
+        .into_iter()
+        .next()
+        .flatten()
+}
+
+/// [`belief_first_viewpoint_moves`] for the robot of `view`, over each map of `fills` (none:
+/// once, optimistic): the team is the robot and every teammate whose position it knows from the
+/// last [`madenet_agent::Spread::POSITION_MEMORY`] steps
+/// ([`AgentView::recent_teammates`](madenet_agent::AgentView::recent_teammates)); each goal
+/// candidate's moves to the robot's first viewpoint, in slot order, the mean over the plans
+/// that give it one (an unreachable viewpoint counts twice the map's height + width), `None`
+/// when none does. What the `belief-plan` policy decides by and the agnostic DEP's plan inputs
+/// read.
+pub fn candidate_plan_moves(
+    view: &madenet_agent::AgentView<'_>,
+    sensing_range: i32,
+    fills: &[OccGrid],
+) -> Option<Vec<f64>> {
+    let team: Vec<Pos> = std::iter::once(view.pos)
+        .chain(
+            view.teammates
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != view.id)
+                .filter_map(|(_, r)| r.goal.or_else(|| r.last_pos())),
+        )
+        .collect();
+    let grid = view.belief.grid();
+    let far = 2 * (grid.height() + grid.width()) as u32;
+    let cells = &view.candidates().cells;
+    let mut sum = vec![0.0; cells.len()];
+    let mut planned = 0usize;
+    let optimistic = [None];
+    let fills: Vec<Option<&OccGrid>> = if fills.is_empty() {
+        optimistic.to_vec()
+    } else {
+        fills.iter().map(Some).collect()
+    };
+    for fill in fills {
+        let movement = view.belief.movement();
+        let Some(to_first) =
+            belief_first_viewpoint_moves(grid, fill, &team, sensing_range, movement)
+        else {
+            continue;
+        };
+        planned += 1;
+        for (v, &c) in sum.iter_mut().zip(cells) {
+            *v += f64::from(to_first[grid.index(c)].min(far));
+        }
+    }
+    (planned > 0).then(|| sum.into_iter().map(|v| v / planned as f64).collect())
+}
+
 /// The viewpoints covering what `covered` leaves ([`cover`]), routed from `starts`
 /// ([`route`]): each robot's viewpoints in order and its route's moves.
 fn plan_routes(known: &Known, starts: &[Pos], covered: &[bool]) -> (Vec<Vec<Pos>>, Vec<u32>) {
@@ -592,6 +700,43 @@ mod tests {
             );
             assert!(m.contains(&0));
         }
+    }
+
+    /// The belief plan by hand on a 1 × 24 corridor (d_s = 2) whose middle the robot knows:
+    /// alone, it is sent to its nearer unknown end; with a teammate last known at the left end
+    /// it takes the right half (and the plan's moves are on the optimistic map: unknown cells
+    /// are free); cells the belief knows are not observed again (a known left half sends it
+    /// right even when alone); nothing left to see or a robot in a wall gives no plan.
+    #[test]
+    fn belief_plans_split_a_corridor_by_hand() {
+        let m = Movement::default();
+        let first = |rows: &str, team: &[Pos]| {
+            let b = madenet_agent::Belief::from_rows(&[rows], m);
+            belief_first_viewpoint_moves(b.grid(), None, team, 2, m).map(|d| {
+                (0..24)
+                    .min_by_key(|&c| (d[c], c))
+                    .map(|c| (c, d[c]))
+                    .unwrap()
+            })
+        };
+        // Known: columns 8..=14; the robot at 10 sees 8..=12 again. Alone, the left end (0..=7,
+        // 8 cells) is nearer than the right (15..=23, 9 cells), so its first viewpoint is left.
+        let middle = "????????.......?????????";
+        let (v, d) = first(middle, &[Pos::new(0, 10)]).unwrap();
+        assert_eq!(d, 0);
+        assert!(v < 10, "alone, first viewpoint at {v}");
+        // A teammate last known at column 2 (in the unknown left part): the robot goes right.
+        let (v, _) = first(middle, &[Pos::new(0, 10), Pos::new(0, 2)]).unwrap();
+        assert!(
+            v > 10,
+            "with a teammate on the left, first viewpoint at {v}"
+        );
+        // The left half known: alone, it goes right.
+        let (v, _) = first("...............?????????", &[Pos::new(0, 10)]).unwrap();
+        assert!(v > 10, "left half known, first viewpoint at {v}");
+        // Everything known: nothing to plan; the robot in a known wall: no plan.
+        assert_eq!(first(&".".repeat(24), &[Pos::new(0, 10)]), None);
+        assert_eq!(first("????????...#...?????????", &[Pos::new(0, 11)]), None);
     }
 
     #[test]

@@ -267,6 +267,30 @@ impl World {
         self.explorable_count = self.explorable.iter().filter(|&&e| e).count();
     }
 
+    /// Marks every cell `known` does not leave unknown as known to the team, with `known`'s
+    /// occupancy (a planner's world built from one robot's belief starts from what that robot
+    /// knows, not from a blank team map). Cells the world cannot explore stay so.
+    ///
+    /// # Panics
+    /// If `known` is not one value per cell.
+    pub fn assume_known(&mut self, known: &[Occupancy]) {
+        assert_eq!(
+            known.len(),
+            self.team_map.len(),
+            "a known map of another size"
+        );
+        for (m, &k) in self.team_map.iter_mut().zip(known) {
+            if k != Occupancy::Unknown && *m == Occupancy::Unknown {
+                *m = k;
+                self.known += 1;
+            }
+        }
+        for (e, &k) in self.explorable.iter_mut().zip(&self.team_map) {
+            *e |= k != Occupancy::Unknown;
+        }
+        self.explorable_count = self.explorable.iter().filter(|&&e| e).count();
+    }
+
     /// The world of `World::new(truth, starts, cfg, seed)` for the same map, starts and
     /// scenario, reusing this one's allocations and its cache of cast rays (the costly part of
     /// building and sensing): an episode restarts without casting again what earlier episodes

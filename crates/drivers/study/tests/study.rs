@@ -1169,6 +1169,7 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
         "made-net-paper",
         "made-net-dt",
         "dme-drl",
+        "belief-plan",
     ] {
         let mut first = Trial::with_registry(spec(policy, 11), &registry)
             .unwrap()

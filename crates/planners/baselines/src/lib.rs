@@ -12,16 +12,25 @@
 //!   its MDP over grid cells by value iteration, minus the expected value of the cells its
 //!   teammates are likely to reach, their positions predicted from the last contact.
 //!
-//! Every constant is a documented field of [`BaselineParams`] (serde, with the defaults named
-//! after their source). [`register`] adds `ub` and `pb` to a
+//! * [`BeliefPlan`] (**belief-plan**, ours, not the paper's) — the known-map reference's team
+//!   plan (set-cover viewpoints, min–max routes) run on the robot's own belief with its unknown
+//!   cells taken as free and its teammates where it last knew them; it takes the candidate
+//!   nearest its own first viewpoint at each macro termination. A multi-step, team-wide
+//!   planner that is not learned: the other yardstick, besides `spread`, that a learned
+//!   planner must beat.
+//!
+//! Every constant of UB and PB is a documented field of [`BaselineParams`] (serde, with the
+//! defaults named after their source). [`register`] adds `ub`, `pb` and `belief-plan` to a
 //! [`madenet_sim::PolicyRegistry`].
 
 #![deny(missing_docs)]
 
 mod dvf;
+mod plan;
 mod utility;
 
 pub use dvf::{DistributedValueFunctions, PbParams};
+pub use plan::BeliefPlan;
 pub use utility::{UbParams, UtilityBased};
 
 use madenet_sim::PolicyRegistry;
@@ -103,6 +112,23 @@ pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
         "pb",
         "planning-based Dec-MDP with distributed value functions (Matignon et al. 2012), re-decided every timestep",
         move |ctx| Box::new(DistributedValueFunctions::new(pb.clone(), ctx.config, ctx.height, ctx.width)),
+    );
+    registry.register(
+        "belief-plan",
+        "the known-map reference's team plan on the robot's own belief (unknown cells redrawn by the map generator over 4 maps, teammates where last heard); the candidate nearest its first viewpoint",
+        |ctx| Box::new(BeliefPlan::new(ctx.config.sensing_range, 4, ctx.seed, ctx.robot)),
+    );
+    registry.register(
+        "belief-plan-free",
+        "belief-plan with the belief's unknown cells taken as free (optimistic) instead of redrawn",
+        |ctx| {
+            Box::new(BeliefPlan::new(
+                ctx.config.sensing_range,
+                0,
+                ctx.seed,
+                ctx.robot,
+            ))
+        },
     );
 }
 

@@ -47,6 +47,8 @@ pub const CROP_CHANNELS: usize = 4;
 pub const WIDE_INPUTS: usize = 4;
 /// Values per candidate added by [`AgnosticConfig::territory_inputs`] (see [`inputs_for`]).
 pub const TERRITORY_INPUTS: usize = 3;
+/// Values per candidate added by [`AgnosticConfig::plan_inputs`] (see [`inputs_for`]).
+pub const PLAN_INPUTS: usize = 2;
 
 /// Sizes of the agnostic DEP, with their defaults.
 #[derive(Config, Debug, PartialEq)]
@@ -81,6 +83,11 @@ pub struct AgnosticConfig {
     /// the robot's share of the whole map's unknown space, split among the team by geodesic
     /// distance ([`inputs_for`]). An option for the same reason as `wide_inputs`.
     pub territory_inputs: Option<bool>,
+    /// `Some(true)`: [`PLAN_INPUTS`] more values per candidate (after the territory ones), from
+    /// the team plan on the robot's own belief (the `belief-plan` policy's,
+    /// [`madenet_sim::reference::candidate_plan_moves`]; [`inputs_for`]). An option for the same
+    /// reason as `wide_inputs`.
+    pub plan_inputs: Option<bool>,
 }
 
 /// The agnostic DEP's layers (see the module docs).
@@ -135,8 +142,13 @@ impl AgnosticConfig {
         self.territory_inputs == Some(true)
     }
 
-    /// Values per candidate: [`CANDIDATE_INPUTS`], [`WIDE_INPUTS`] with `wide_inputs` and
-    /// [`TERRITORY_INPUTS`] with `territory_inputs`.
+    /// Whether the candidates carry the [`PLAN_INPUTS`] (`plan_inputs`).
+    pub fn plan(&self) -> bool {
+        self.plan_inputs == Some(true)
+    }
+
+    /// Values per candidate: [`CANDIDATE_INPUTS`], [`WIDE_INPUTS`] with `wide_inputs`,
+    /// [`TERRITORY_INPUTS`] with `territory_inputs` and [`PLAN_INPUTS`] with `plan_inputs`.
     pub fn candidate_inputs(&self) -> usize {
         CANDIDATE_INPUTS
             + if self.wide() { WIDE_INPUTS } else { 0 }
@@ -145,6 +157,7 @@ impl AgnosticConfig {
             } else {
                 0
             }
+            + if self.plan() { PLAN_INPUTS } else { 0 }
     }
 
     /// Side of K3's output, or why the sizes don't work.
@@ -380,8 +393,8 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
 }
 
 /// The inputs of `view` for a network of `sizes`: [`inputs`], then after each candidate's
-/// [`CANDIDATE_INPUTS`] the [`WIDE_INPUTS`] (with `wide_inputs`) and the [`TERRITORY_INPUTS`]
-/// (with `territory_inputs`), in that order.
+/// [`CANDIDATE_INPUTS`] the [`WIDE_INPUTS`] (with `wide_inputs`), the [`TERRITORY_INPUTS`]
+/// (with `territory_inputs`) and the [`PLAN_INPUTS`] (with `plan_inputs`), in that order.
 ///
 /// **Wide inputs**, about what lies beyond the candidate's crop (d_s = `sensing_range`; cells
 /// outside the map count as known):
@@ -407,13 +420,23 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
 ///    cells: what is left for the robot around it, map-wide (wide input 2 looks within 4 d_s).
 ///
 /// All three are 0 for an empty slot, and 0 when T (or the unknown space) is empty.
+///
+/// **Plan inputs**, from the team plan on the robot's own belief (unknown cells free, the
+/// teammates it knows of where they were last known: the `belief-plan` policy's,
+/// [`madenet_sim::reference::candidate_plan_moves`]):
+///
+/// 0. the candidate's moves to the robot's first viewpoint / (4 d_s), capped at 4 and divided by
+///    4 (size-free, as inputs 9–10);
+/// 1. 1 for the candidates with the fewest such moves (the plan's choice, ties included), else 0.
+///
+/// Both are 0 for an empty slot and for every slot when the plan gives the robot no viewpoint.
 pub fn inputs_for(
     view: &mut AgentView<'_>,
     sensing_range: i32,
     sizes: &AgnosticConfig,
 ) -> AgnosticInput {
     let mut x = inputs(view, sensing_range, sizes.crop_radius);
-    if !sizes.wide() && !sizes.territory() {
+    if !sizes.wide() && !sizes.territory() && !sizes.plan() {
         return x;
     }
     let slots = x.mask.len();
@@ -421,6 +444,7 @@ pub fn inputs_for(
         .wide()
         .then(|| wide_inputs(view, sensing_range, slots));
     let territory = sizes.territory().then(|| territory_inputs(view, slots));
+    let plan = sizes.plan().then(|| plan_inputs(view, sensing_range, slots));
     let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
     for k in 0..slots {
         features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
@@ -429,6 +453,9 @@ pub fn inputs_for(
         }
         if let Some(t) = &territory {
             features.extend_from_slice(&t[k]);
+        }
+        if let Some(p) = &plan {
+            features.extend_from_slice(&p[k]);
         }
     }
     x.features = features;
@@ -497,6 +524,24 @@ fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f
             window(c, far) as f32 / area(far),
             left as f32 / area(far),
             ahead as f32 / cells,
+        ];
+    }
+    out
+}
+
+/// The [`PLAN_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
+fn plan_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f32; PLAN_INPUTS]> {
+    let mut out = vec![[0.0; PLAN_INPUTS]; slots];
+    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, sensing_range, &[])
+    else {
+        return out;
+    };
+    let reach = f64::from(4 * sensing_range.max(1));
+    let fewest = moves.iter().copied().min_by(f64::total_cmp);
+    for (o, &m) in out.iter_mut().zip(&moves) {
+        *o = [
+            ((m / reach).min(4.0) / 4.0) as f32,
+            f32::from(Some(m) == fewest),
         ];
     }
     out

@@ -257,6 +257,10 @@ pub struct RolloutTrainConfig {
     /// whole map's unknown space, split among the team by geodesic distance
     /// ([`crate::agnostic::inputs_for`]): what a team plan hands each robot.
     pub territory_inputs: bool,
+    /// With the agnostic network: two more inputs per candidate from the team plan on the
+    /// robot's own belief — its moves to the robot's first viewpoint and whether it is the plan's
+    /// choice ([`crate::agnostic::inputs_for`]; the `belief-plan` policy's plan).
+    pub plan_inputs: bool,
     /// With the agnostic network: a model folder whose weights a fresh run's student starts from
     /// (a warm start; an agnostic model of this run's sizes, its digests checked; a path relative
     /// to the working directory). Empty (default): fresh weights. A resumed run reads its own
@@ -350,6 +354,7 @@ impl Default for RolloutTrainConfig {
             crop_radius: crate::agnostic::AgnosticConfig::new().crop_radius,
             wide_inputs: false,
             territory_inputs: false,
+            plan_inputs: false,
             init_model: String::new(),
             observation: Observation::CandidateFeatures,
             updates_per_iteration: 4000,
@@ -551,6 +556,9 @@ impl RolloutTrainConfig {
         if self.territory_inputs && self.network != Network::Agnostic {
             return Err("field `territory_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or territory_inputs = false".into());
         }
+        if self.plan_inputs && self.network != Network::Agnostic {
+            return Err("field `plan_inputs`: inputs of the agnostic network only; set network = \"agnostic\" or plan_inputs = false".into());
+        }
         if !self.init_model.is_empty() && self.network != Network::Agnostic {
             return Err("field `init_model`: warm starts of the agnostic network only; set network = \"agnostic\" or init_model = \"\"".into());
         }
@@ -635,6 +643,7 @@ impl RolloutTrainConfig {
             .with_crop_radius(self.crop_radius)
             .with_wide_inputs(self.wide_inputs.then_some(true))
             .with_territory_inputs(self.territory_inputs.then_some(true))
+            .with_plan_inputs(self.plan_inputs.then_some(true))
     }
 
     /// The largest map side of iteration `iteration`'s curriculum (growing linearly from
@@ -1904,9 +1913,10 @@ pub fn refit(
     if cfg.network != Network::Agnostic
         || sizes.wide() != cfg.wide_inputs
         || sizes.territory() != cfg.territory_inputs
+        || sizes.plan() != cfg.plan_inputs
     {
         return Err(TrainError::Other(
-            "refit: fields `network`/`wide_inputs`/`territory_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
+            "refit: fields `network`/`wide_inputs`/`territory_inputs`/`plan_inputs`: the labels must be an agnostic run's, with the inputs `sizes` expects".into(),
         ));
     }
     let (mut net, mut optim) = fresh_student(cfg, Some(sizes))?;
@@ -1982,7 +1992,7 @@ fn warm_start(cfg: &RolloutTrainConfig, net: Student) -> Result<Student, TrainEr
     let model = crate::Model::load(dir).map_err(|e| bad(e.to_string()))?;
     if model.info.agnostic.as_ref() != Some(&cfg.agnostic()) {
         return Err(bad(
-            "not an agnostic model of this run's sizes (crop_radius, wide_inputs, territory_inputs)".into(),
+            "not an agnostic model of this run's sizes (crop_radius, wide_inputs, territory_inputs, plan_inputs)".into(),
         ));
     }
     let weights = model

@@ -8,7 +8,7 @@
 
 use madenet_learn::agnostic::{
     inputs_for, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
-    TERRITORY_INPUTS, WIDE_INPUTS,
+    PLAN_INPUTS, TERRITORY_INPUTS, WIDE_INPUTS,
 };
 use madenet_learn::rollout_train::{
     refit, stored_labels, train, Futures, Network, RolloutTrainConfig, Teacher,
@@ -164,6 +164,45 @@ fn territory_inputs_follow_the_wide_ones_and_split_a_corridor_by_hand() {
     close(t[1], [2.0 / 15.0, -11.0 / 15.0, 15.0 / 33.0]);
 }
 
+/// `plan_inputs` appends PLAN_INPUTS values after the base ones (unchanged by it): each valid
+/// candidate's moves to the robot's first viewpoint in its belief plan, scaled into [0, 1], and a
+/// flag on the candidates with the fewest — at least one, and only those; zeros in empty slots.
+fn plan_inputs_follow_the_base_ones_and_flag_the_plans_choice() {
+    let plan = AgnosticConfig::new().with_plan_inputs(Some(true));
+    assert_eq!(plan.candidate_inputs(), CANDIDATE_INPUTS + PLAN_INPUTS);
+    let mut flagged_somewhere = false;
+    for (side, team, seed) in [(30, 4, 3), (20, 3, 7), (40, 2, 11)] {
+        let (x, base) = (
+            decision_for(side, team, seed, &plan),
+            decision_for(side, team, seed, &AgnosticConfig::new()),
+        );
+        let width = plan.candidate_inputs();
+        let p: Vec<&[f32]> = (0..x.mask.len())
+            .map(|k| &x.features[k * width + CANDIDATE_INPUTS..(k + 1) * width])
+            .collect();
+        for k in 0..x.mask.len() {
+            assert_eq!(
+                &x.features[k * width..k * width + CANDIDATE_INPUTS],
+                &base.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]
+            );
+            if !x.mask[k] {
+                assert_eq!(p[k], &[0.0; PLAN_INPUTS]);
+            }
+            assert!((0.0..=1.0).contains(&p[k][0]) && [0.0, 1.0].contains(&p[k][1]));
+        }
+        let valid: Vec<usize> = (0..x.mask.len()).filter(|&k| x.mask[k]).collect();
+        let fewest = valid.iter().map(|&k| p[k][0]).fold(f32::INFINITY, f32::min);
+        let flags: Vec<bool> = valid.iter().map(|&k| p[k][1] == 1.0).collect();
+        if flags.iter().any(|&f| f) {
+            flagged_somewhere = true;
+            for (&k, &f) in valid.iter().zip(&flags) {
+                assert_eq!(f, p[k][0] == fewest, "side {side}: {p:?}");
+            }
+        }
+    }
+    assert!(flagged_somewhere, "some first decision has a plan");
+}
+
 fn permuted(x: &AgnosticInput, order: &[usize]) -> AgnosticInput {
     let crop_bits = 4 * 13 * 13;
     let mut crops = vec![0u8; x.mask.len() * crop_bits];
@@ -193,6 +232,7 @@ fn agnostic_network_and_its_training() {
     the_decision_scorer_scores_as_the_network();
     wide_inputs_extend_each_candidate_and_score_alike();
     territory_inputs_follow_the_wide_ones_and_split_a_corridor_by_hand();
+    plan_inputs_follow_the_base_ones_and_flag_the_plans_choice();
     tiny_curriculum_run_trains_a_model_that_plays_unseen_sizes_and_teams_deterministically();
 }
 

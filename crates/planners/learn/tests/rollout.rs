@@ -380,6 +380,7 @@ fn shipped_rollout_config_is_the_default_and_bad_fields_are_named() {
         ("nonsense = 1\n", "nonsense"),
         ("wide_inputs = true\n", "wide_inputs"),
         ("territory_inputs = true\n", "territory_inputs"),
+        ("plan_inputs = true\n", "plan_inputs"),
         ("init_model = \"models/made-net\"\n", "init_model"),
         ("label_norm = \"per-map\"\n", "label_norm"),
         ("fit_holdout = 0.2\n", "fit_holdout"),

@@ -1,0 +1,81 @@
+//! **belief-plan**: the known-map reference's team plan run on what one robot knows
+//! ([`madenet_sim::reference::candidate_plan_moves`]) — a decentralized, multi-step planner
+//! that is not learned, the yardstick a learned planner must beat besides `spread`.
+
+use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
+use madenet_map::OccGrid;
+
+/// At each macro termination the robot plans the whole team's routes on its own belief m_i —
+/// itself and every teammate whose position it heard or saw within [`Spread::POSITION_MEMORY`]
+/// steps, where it last was — with the reference's set-cover viewpoints and min–max routes, and
+/// takes the goal candidate with the fewest moves to its own first viewpoint; ties, and a plan
+/// that leaves it nothing, go to `spread`'s order. The belief's unknown cells are redrawn by the
+/// map generator over [`BeliefPlan::futures`] maps (the moves averaged, as the plan-redrawn
+/// teacher's), or taken as free with none.
+#[derive(Clone, Debug)]
+pub struct BeliefPlan {
+    spread: Spread,
+    futures: usize,
+    seed: u64,
+    robot: usize,
+    decisions: u64,
+}
+
+impl BeliefPlan {
+    /// The planner for sensing range d_s = `sensing_range` cells, redrawing over `futures` maps
+    /// (0: unknown cells free), its draws from the stream `belief-plan/redraw` of the trial's
+    /// `seed` and the robot's index `robot`.
+    pub fn new(sensing_range: i32, futures: usize, seed: u64, robot: usize) -> Self {
+        BeliefPlan {
+            spread: Spread::new(sensing_range),
+            futures,
+            seed,
+            robot,
+            decisions: 0,
+        }
+    }
+
+    /// Maps redrawn for the decision at hand (none with `futures` = 0).
+    fn fills(&mut self, view: &AgentView<'_>) -> Vec<OccGrid> {
+        self.decisions += 1;
+        let (h, w) = (view.belief.height(), view.belief.width());
+        let cfg = madenet_map::generate::GeneratorConfig::for_size(h, w);
+        (0..self.futures as u64)
+            .filter_map(|k| {
+                let index = ((self.robot as u64) << 40) | (self.decisions << 8) | k;
+                let s = madenet_world::rng::derive_seed(self.seed, "belief-plan/redraw", index);
+                madenet_map::generate::generate_with_movement(&cfg, s, view.belief.movement()).ok()
+            })
+            .collect()
+    }
+}
+
+impl Policy for BeliefPlan {
+    fn name(&self) -> &str {
+        "belief-plan"
+    }
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
+    fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
+        let spread = self.spread.scores(view);
+        let fills = self.fills(view);
+        let moves =
+            madenet_sim::reference::candidate_plan_moves(view, self.spread.sensing_range, &fills);
+        let best = spread
+            .iter()
+            .enumerate()
+            .filter_map(|(k, s)| s.map(|s| (k, s)))
+            .min_by(|a, b| {
+                let m = |k: usize| moves.as_ref().map_or(0.0, |m| m[k]);
+                m(a.0)
+                    .total_cmp(&m(b.0))
+                    .then(a.1.total_cmp(&b.1))
+                    .then(a.0.cmp(&b.0))
+            });
+        match best {
+            Some((k, _)) => Decision::Candidate(k),
+            None => Decision::Idle,
+        }
+    }
+}
