@@ -444,7 +444,9 @@ pub fn inputs_for(
         .wide()
         .then(|| wide_inputs(view, sensing_range, slots));
     let territory = sizes.territory().then(|| territory_inputs(view, slots));
-    let plan = sizes.plan().then(|| plan_inputs(view, sensing_range, slots));
+    let plan = sizes
+        .plan()
+        .then(|| plan_inputs(view, sensing_range, slots));
     let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
     for k in 0..slots {
         features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
@@ -532,8 +534,7 @@ fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f
 /// The [`PLAN_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
 fn plan_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f32; PLAN_INPUTS]> {
     let mut out = vec![[0.0; PLAN_INPUTS]; slots];
-    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, sensing_range, &[])
-    else {
+    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, sensing_range, &[]) else {
         return out;
     };
     let reach = f64::from(4 * sensing_range.max(1));

@@ -180,15 +180,15 @@ fn plan_inputs_follow_the_base_ones_and_flag_the_plans_choice() {
         let p: Vec<&[f32]> = (0..x.mask.len())
             .map(|k| &x.features[k * width + CANDIDATE_INPUTS..(k + 1) * width])
             .collect();
-        for k in 0..x.mask.len() {
+        for (k, (pk, &valid)) in p.iter().zip(&x.mask).enumerate() {
             assert_eq!(
                 &x.features[k * width..k * width + CANDIDATE_INPUTS],
                 &base.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]
             );
-            if !x.mask[k] {
-                assert_eq!(p[k], &[0.0; PLAN_INPUTS]);
+            if !valid {
+                assert_eq!(*pk, &[0.0; PLAN_INPUTS]);
             }
-            assert!((0.0..=1.0).contains(&p[k][0]) && [0.0, 1.0].contains(&p[k][1]));
+            assert!((0.0..=1.0).contains(&pk[0]) && [0.0, 1.0].contains(&pk[1]));
         }
         let valid: Vec<usize> = (0..x.mask.len()).filter(|&k| x.mask[k]).collect();
         let fewest = valid.iter().map(|&k| p[k][0]).fold(f32::INFINITY, f32::min);
