@@ -424,9 +424,10 @@ pub fn belief_first_viewpoint_moves(
 }
 
 /// [`belief_first_viewpoint_moves`] for the robot of `view`, over each map of `fills` (none:
-/// once, optimistic): the team is the robot and every teammate whose position it knows from the
-/// last [`madenet_agent::Spread::POSITION_MEMORY`] steps
-/// ([`AgentView::recent_teammates`](madenet_agent::AgentView::recent_teammates)); each goal
+/// once, optimistic): the team is the robot and every teammate it has heard of or seen, placed
+/// at the goal it last announced or else at its last known cell, however old (a teammate is
+/// predicted where it was heading, not forgotten after a few steps: with the 10 steps `spread`
+/// remembers, robots out of touch planned the same regions; models/README, stop 53); each goal
 /// candidate's moves to the robot's first viewpoint, in slot order, the mean over the plans
 /// that give it one (an unreachable viewpoint counts twice the map's height + width), `None`
 /// when none does. What the `belief-plan` policy decides by and the agnostic DEP's plan inputs

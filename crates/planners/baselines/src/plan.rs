@@ -6,11 +6,11 @@ use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
 use madenet_map::OccGrid;
 
 /// At each macro termination the robot plans the whole team's routes on its own belief m_i —
-/// itself and every teammate whose position it heard or saw within [`Spread::POSITION_MEMORY`]
-/// steps, where it last was — with the reference's set-cover viewpoints and min–max routes, and
+/// itself and every teammate it has heard of or seen, at the goal it last announced or else its
+/// last known cell — with the reference's set-cover viewpoints and min–max routes, and
 /// takes the goal candidate with the fewest moves to its own first viewpoint; ties, and a plan
 /// that leaves it nothing, go to `spread`'s order. The belief's unknown cells are redrawn by the
-/// map generator over [`BeliefPlan::futures`] maps (the moves averaged, as the plan-redrawn
+/// map generator over `futures` maps ([`BeliefPlan::new`]; the moves averaged, as the plan-redrawn
 /// teacher's), or taken as free with none.
 #[derive(Clone, Debug)]
 pub struct BeliefPlan {

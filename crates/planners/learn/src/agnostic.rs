@@ -422,7 +422,7 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
 /// All three are 0 for an empty slot, and 0 when T (or the unknown space) is empty.
 ///
 /// **Plan inputs**, from the team plan on the robot's own belief (unknown cells free, the
-/// teammates it knows of where they were last known: the `belief-plan` policy's,
+/// teammates it knows of at their last announced goal or last known cell: `belief-plan-free`'s,
 /// [`madenet_sim::reference::candidate_plan_moves`]):
 ///
 /// 0. the candidate's moves to the robot's first viewpoint / (4 d_s), capped at 4 and divided by
