@@ -13,8 +13,9 @@
 //!   teammates are likely to reach, their positions predicted from the last contact.
 //!
 //! * [`BeliefPlan`] (**belief-plan**, ours, not the paper's) — the known-map reference's team
-//!   plan (set-cover viewpoints, min–max routes) run on the robot's own belief with its unknown
-//!   cells taken as free and its teammates where it last knew them; it takes the candidate
+//!   plan (set-cover viewpoints, min–max routes) run on the robot's own belief, its unknown
+//!   cells redrawn by the map generator over four maps (`belief-plan-free`: taken as free), its
+//!   teammates at their announced goal or else their last known cell; it takes the candidate
 //!   nearest its own first viewpoint at each macro termination. A multi-step, team-wide
 //!   planner that is not learned: the other yardstick, besides `spread`, that a learned
 //!   planner must beat.
@@ -115,7 +116,7 @@ pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
     );
     registry.register(
         "belief-plan",
-        "the known-map reference's team plan on the robot's own belief (unknown cells redrawn by the map generator over 4 maps, teammates where last heard); the candidate nearest its first viewpoint",
+        "the known-map reference's team plan on the robot's own belief (unknown cells redrawn by the map generator over 4 maps, teammates at their announced goal or last known cell); the candidate nearest its first viewpoint",
         |ctx| Box::new(BeliefPlan::new(ctx.config.sensing_range, 4, ctx.seed, ctx.robot)),
     );
     registry.register(
