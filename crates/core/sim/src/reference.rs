@@ -363,27 +363,23 @@ pub(crate) fn first_viewpoint_moves(world: &mut World) -> Vec<Option<Vec<u32>>> 
         .collect()
 }
 
-/// The reference's team plan on what one robot knows — the decentralized counterpart of
-/// [`first_viewpoint_moves`], which knows the team's cells and every robot's position. The
-/// world it plans on is `belief` (the robot's map m_i) with its unknown cells taken from `fill`
-/// (a map the generator drew, its unknown cells obstacles: one belief-consistent future, as the
-/// plan-redrawn teacher's) or, without one, as free (optimistic: nothing unseen blocks a route
-/// or a ray); the cells it knows are known to the team, `team[0]` is the robot itself and the
-/// rest the teammates at their last known cells (kept free; duplicates, and cells the belief
-/// holds blocked, are dropped). Returns the moves on that world from every cell to the robot's
-/// first viewpoint (`u32::MAX` where unreachable), or `None` when the plan gives it none
-/// (nothing left to see, or every viewpoint is a teammate's); `sensing_range` is d_s, the
-/// belief's movement rule the world's.
+/// The world the reference plans on for what one robot knows: `belief` (the robot's map m_i)
+/// with its unknown cells taken from `fill` (a map the generator drew, its unknown cells
+/// obstacles: one belief-consistent future, as the plan-redrawn teacher's) or, without one, as
+/// free (optimistic: nothing unseen blocks a route or a ray), its known cells known to the team,
+/// noiseless, with a robot at each cell of `team` that the belief does not hold blocked (kept
+/// free; duplicates dropped). Also returns, for each member of `team`, its robot's index in that
+/// world (`None`: dropped). `None` when no member is left or the world cannot be built.
 ///
 /// # Panics
 /// If `fill` is not the belief's size.
-pub fn belief_first_viewpoint_moves(
+fn belief_world(
     belief: &OccGrid,
     fill: Option<&OccGrid>,
     team: &[Pos],
     sensing_range: i32,
     movement: Movement,
-) -> Option<Vec<u32>> {
+) -> Option<(World, Vec<Option<usize>>)> {
     let mut truth = belief.clone();
     if let Some(f) = fill {
         assert_eq!((f.height(), f.width()), (belief.height(), belief.width()));
@@ -397,15 +393,19 @@ pub fn belief_first_viewpoint_moves(
         }
     }
     let mut starts: Vec<Pos> = Vec::with_capacity(team.len());
-    for (k, &p) in team.iter().enumerate() {
+    let mut index = Vec::with_capacity(team.len());
+    for &p in team {
         let usable = belief.in_bounds(p) && belief.get(p) != Occupancy::Obstacle;
-        if k == 0 && !(usable && belief.get(p) == Occupancy::Free) {
-            return None;
-        }
-        if usable && !starts.contains(&p) {
+        index.push(if !usable || starts.contains(&p) {
+            None
+        } else {
             truth.set(p, Occupancy::Free);
             starts.push(p);
-        }
+            Some(starts.len() - 1)
+        });
+    }
+    if starts.is_empty() {
+        return None;
     }
     let cfg = madenet_world::ScenarioConfig {
         num_robots: starts.len(),
@@ -417,10 +417,82 @@ pub fn belief_first_viewpoint_moves(
     };
     let mut world = World::new(truth, &starts, cfg, 0).ok()?;
     world.assume_known(belief.cells());
+    Some((world, index))
+}
+
+/// The reference's team plan on what one robot knows — the decentralized counterpart of
+/// [`first_viewpoint_moves`], which knows the team's cells and every robot's position. It plans
+/// on [`belief_world`]'s world: `belief` with its unknown cells from `fill` (or free), `team[0]`
+/// the robot itself and the rest the teammates at their last known cells. Returns the moves on
+/// that world from every cell to the robot's first viewpoint (`u32::MAX` where unreachable), or
+/// `None` when the plan gives it none (nothing left to see, every viewpoint is a teammate's, or
+/// the robot's own cell is not known free); `sensing_range` is d_s, the belief's movement rule
+/// the world's.
+///
+/// # Panics
+/// If `fill` is not the belief's size.
+pub fn belief_first_viewpoint_moves(
+    belief: &OccGrid,
+    fill: Option<&OccGrid>,
+    team: &[Pos],
+    sensing_range: i32,
+    movement: Movement,
+) -> Option<Vec<u32>> {
+    let own = *team.first()?;
+    if !(belief.in_bounds(own) && belief.get(own) == Occupancy::Free) {
+        return None;
+    }
+    let (mut world, _) = belief_world(belief, fill, team, sensing_range, movement)?;
     first_viewpoint_moves(&mut world)
         .into_iter()
         .next()
         .flatten()
+}
+
+/// The reference's team plan on [`belief_world`]'s world (`belief`, its unknown cells from
+/// `fill` or free; a robot at each cell of `team`): each member's viewpoints in visiting order,
+/// empty for a member the plan gives none or that was dropped (its cell blocked, or a teammate's
+/// duplicate). `None` when no member is left. What the `convention` policy splits the map by.
+///
+/// # Panics
+/// If `fill` is not the belief's size.
+pub fn belief_team_routes(
+    belief: &OccGrid,
+    fill: Option<&OccGrid>,
+    team: &[Pos],
+    sensing_range: i32,
+    movement: Movement,
+) -> Option<Vec<Vec<Pos>>> {
+    let (mut world, index) = belief_world(belief, fill, team, sensing_range, movement)?;
+    let known = Known::new(&mut world);
+    let covered: Vec<bool> = known.target.iter().map(|&t| !t).collect();
+    let (routes, _) = plan_routes(&known, world.positions(), &covered);
+    Some(
+        index
+            .iter()
+            .map(|k| k.map_or_else(Vec::new, |k| routes[k].clone()))
+            .collect(),
+    )
+}
+
+/// The mean, per cell of `cells`, of its moves in each field of `fields` (`None`: a plan that
+/// gave the robot no viewpoint, skipped), capped at `far`; `None` when no field is given. How
+/// the plan teachers and `belief-plan` value candidates by their moves to a first viewpoint.
+pub(crate) fn mean_plan_moves(
+    grid: &OccGrid,
+    cells: &[Pos],
+    far: u32,
+    fields: impl IntoIterator<Item = Option<Vec<u32>>>,
+) -> Option<Vec<f64>> {
+    let mut sum = vec![0.0; cells.len()];
+    let mut planned = 0usize;
+    for to_first in fields.into_iter().flatten() {
+        planned += 1;
+        for (v, &c) in sum.iter_mut().zip(cells) {
+            *v += f64::from(to_first[grid.index(c)].min(far));
+        }
+    }
+    (planned > 0).then(|| sum.into_iter().map(|v| v / planned as f64).collect())
 }
 
 /// [`belief_first_viewpoint_moves`] for the robot of `view`, over each map of `fills` (none:
@@ -448,28 +520,16 @@ pub fn candidate_plan_moves(
         .collect();
     let grid = view.belief.grid();
     let far = 2 * (grid.height() + grid.width()) as u32;
-    let cells = &view.candidates().cells;
-    let mut sum = vec![0.0; cells.len()];
-    let mut planned = 0usize;
-    let optimistic = [None];
+    let movement = view.belief.movement();
     let fills: Vec<Option<&OccGrid>> = if fills.is_empty() {
-        optimistic.to_vec()
+        vec![None]
     } else {
         fills.iter().map(Some).collect()
     };
-    for fill in fills {
-        let movement = view.belief.movement();
-        let Some(to_first) =
-            belief_first_viewpoint_moves(grid, fill, &team, sensing_range, movement)
-        else {
-            continue;
-        };
-        planned += 1;
-        for (v, &c) in sum.iter_mut().zip(cells) {
-            *v += f64::from(to_first[grid.index(c)].min(far));
-        }
-    }
-    (planned > 0).then(|| sum.into_iter().map(|v| v / planned as f64).collect())
+    let fields = fills
+        .into_iter()
+        .map(|fill| belief_first_viewpoint_moves(grid, fill, &team, sensing_range, movement));
+    mean_plan_moves(grid, &view.candidates().cells, far, fields)
 }
 
 /// The viewpoints covering what `covered` leaves ([`cover`]), routed from `starts`
@@ -738,6 +798,32 @@ mod tests {
         // Everything known: nothing to plan; the robot in a known wall: no plan.
         assert_eq!(first(&".".repeat(24), &[Pos::new(0, 10)]), None);
         assert_eq!(first("????????...#...?????????", &[Pos::new(0, 11)]), None);
+    }
+
+    #[test]
+    fn team_routes_split_a_corridor_by_hand() {
+        let m = Movement::default();
+        let routes = |rows: &str, team: &[Pos]| {
+            let b = madenet_agent::Belief::from_rows(&[rows], m);
+            belief_team_routes(b.grid(), None, team, 2, m)
+        };
+        // Known: columns 8..=14; robots at 9 and 13: the left one takes the left end, the
+        // right one the right end (min–max: neither crosses the other).
+        let middle = "????????.......?????????";
+        let r = routes(middle, &[Pos::new(0, 9), Pos::new(0, 13)]).unwrap();
+        assert_eq!(r.len(), 2);
+        assert!(!r[0].is_empty() && r[0].iter().all(|v| v.col < 9), "{r:?}");
+        assert!(!r[1].is_empty() && r[1].iter().all(|v| v.col > 13), "{r:?}");
+        // A member on a known wall and a second robot on a cell get no route; the plan is the
+        // one robot's (both ends).
+        let walled = "????????...#...?????????";
+        let r = routes(walled, &[Pos::new(0, 9), Pos::new(0, 11), Pos::new(0, 9)]).unwrap();
+        assert!(r[1].is_empty() && r[2].is_empty(), "{r:?}");
+        assert!(r[0].iter().any(|v| v.col < 8), "{r:?}");
+        // Everything known: nothing to route; nobody usable: no plan.
+        let known = routes(&".".repeat(24), &[Pos::new(0, 3), Pos::new(0, 20)]).unwrap();
+        assert!(known.iter().all(Vec::is_empty), "{known:?}");
+        assert_eq!(routes(walled, &[Pos::new(0, 11)]), None);
     }
 
     #[test]

@@ -370,31 +370,26 @@ pub fn run_oracle_by(
 pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
     let agent = &trial.agents()[i];
     let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
-    let mut sum = vec![0.0; cells.len()];
-    let mut planned = 0usize;
-    for future in futures {
+    let truth = trial.world().truth();
+    let far = 2 * (truth.height() + truth.width()) as u32;
+    let fields = futures.iter().filter_map(|future| {
         let Future::Redrawn(map) = future else {
-            continue;
+            return None;
         };
         let mut world = trial.world().clone();
         world.set_noiseless();
         world.redraw_unseen(map);
-        let Some(Some(to_first)) = crate::reference::first_viewpoint_moves(&mut world)
-            .into_iter()
-            .nth(i)
-        else {
-            continue;
-        };
-        planned += 1;
-        let far = 2 * (map.height() + map.width()) as u32;
-        for (v, &c) in sum.iter_mut().zip(cells) {
-            *v += f64::from(to_first[map.index(c)].min(far));
-        }
-    }
+        Some(
+            crate::reference::first_viewpoint_moves(&mut world)
+                .into_iter()
+                .nth(i)
+                .flatten(),
+        )
+    });
     let mut values = vec![None; slots];
-    if planned > 0 {
-        for (v, s) in values.iter_mut().zip(sum) {
-            *v = Some(s / planned as f64);
+    if let Some(mean) = crate::reference::mean_plan_moves(truth, cells, far, fields) {
+        for (v, m) in values.iter_mut().zip(mean) {
+            *v = Some(m);
         }
     }
     values
@@ -411,13 +406,41 @@ pub fn redrawn_futures(
     count: usize,
 ) -> Result<Vec<Future>, SimError> {
     let truth = trial.world().truth();
-    let cfg = madenet_map::generate::GeneratorConfig::for_size(truth.height(), truth.width());
-    (0..count.max(1) as u64)
-        .map(|k| {
-            let s = madenet_world::rng::derive_seed(seed, "oracle/redraw", decision * 4096 + k);
-            madenet_map::generate::generate_with_movement(&cfg, s, trial.world().config().movement)
-                .map(|m| Future::Redrawn(std::sync::Arc::new(m)))
-                .map_err(SimError::Redraw)
+    let movement = trial.world().config().movement;
+    let indices = (0..count.max(1) as u64).map(|k| decision * 4096 + k);
+    generated_maps(
+        truth.height(),
+        truth.width(),
+        movement,
+        seed,
+        "oracle/redraw",
+        indices,
+    )
+    .map(|maps| {
+        maps.into_iter()
+            .map(|m| Future::Redrawn(std::sync::Arc::new(m)))
+            .collect()
+    })
+    .map_err(SimError::Redraw)
+}
+
+/// Maps of `height` × `width` drawn by the generator (its default for that size, the movement
+/// rule `movement`), one per index, each from the stream `stream` of `seed` at that index: the
+/// belief-consistent futures the plan teachers and planners redraw unseen cells from.
+pub fn generated_maps(
+    height: usize,
+    width: usize,
+    movement: madenet_map::Movement,
+    seed: u64,
+    stream: &str,
+    indices: impl IntoIterator<Item = u64>,
+) -> Result<Vec<madenet_map::OccGrid>, madenet_map::MapError> {
+    let cfg = madenet_map::generate::GeneratorConfig::for_size(height, width);
+    indices
+        .into_iter()
+        .map(|index| {
+            let s = madenet_world::rng::derive_seed(seed, stream, index);
+            madenet_map::generate::generate_with_movement(&cfg, s, movement)
         })
         .collect()
 }

@@ -35,18 +35,20 @@ impl BeliefPlan {
         }
     }
 
-    /// Maps redrawn for the decision at hand (none with `futures` = 0).
+    /// Maps redrawn for the decision at hand (none with `futures` = 0; none either if the
+    /// generator fails, which leaves the decision to `spread`'s order).
     fn fills(&mut self, view: &AgentView<'_>) -> Vec<OccGrid> {
         self.decisions += 1;
-        let (h, w) = (view.belief.height(), view.belief.width());
-        let cfg = madenet_map::generate::GeneratorConfig::for_size(h, w);
-        (0..self.futures as u64)
-            .filter_map(|k| {
-                let index = ((self.robot as u64) << 40) | (self.decisions << 8) | k;
-                let s = madenet_world::rng::derive_seed(self.seed, "belief-plan/redraw", index);
-                madenet_map::generate::generate_with_movement(&cfg, s, view.belief.movement()).ok()
-            })
-            .collect()
+        let base = ((self.robot as u64) << 40) | (self.decisions << 8);
+        madenet_sim::rollout::generated_maps(
+            view.belief.height(),
+            view.belief.width(),
+            view.belief.movement(),
+            self.seed,
+            "belief-plan/redraw",
+            (0..self.futures as u64).map(|k| base | k),
+        )
+        .unwrap_or_default()
     }
 }
 
