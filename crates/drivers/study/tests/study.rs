@@ -1170,6 +1170,7 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
         "made-net-dt",
         "dme-drl",
         "belief-plan",
+        "convention",
     ] {
         let mut first = Trial::with_registry(spec(policy, 11), &registry)
             .unwrap()

@@ -26,10 +26,12 @@
 
 #![deny(missing_docs)]
 
+mod convention;
 mod dvf;
 mod plan;
 mod utility;
 
+pub use convention::Convention;
 pub use dvf::{DistributedValueFunctions, PbParams};
 pub use plan::BeliefPlan;
 pub use utility::{UbParams, UtilityBased};
@@ -128,6 +130,20 @@ pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
                 0,
                 ctx.seed,
                 ctx.robot,
+            ))
+        },
+    );
+    registry.register(
+        "convention",
+        "spread with the teammates' parts of a team plan that every robot of a meeting computes alike (the known-map reference's planner on the merged map, 4 redrawn maps) d_s dearer, until the next meeting",
+        |ctx| {
+            Box::new(Convention::new(
+                ctx.config.sensing_range,
+                4,
+                f64::from(ctx.config.sensing_range),
+                ctx.seed,
+                ctx.height,
+                ctx.width,
             ))
         },
     );
