@@ -28,6 +28,9 @@ enum Kind {
     /// where it stands; the robot takes the candidate nearest its first viewpoint (a team-wide,
     /// multi-step teacher).
     PlanRedrawn,
+    /// plan-redrawn on the deciding robot's own map instead of the team's cells, every robot
+    /// at its true cell (what the positions alone are worth).
+    PlanOwnMap,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -106,6 +109,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::KnownMap => OracleKind::KnownMap,
         Kind::Redrawn => OracleKind::Redrawn,
         Kind::PlanRedrawn => OracleKind::PlanRedrawn,
+        Kind::PlanOwnMap => OracleKind::PlanOwnMap,
     };
     let mut cfg = crate::batch::trial_set(
         &a.maps,
@@ -138,7 +142,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
             .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
-        Kind::Averaged | Kind::Placebo | Kind::Redrawn | Kind::PlanRedrawn => {
+        Kind::Averaged | Kind::Placebo | Kind::Redrawn | Kind::PlanRedrawn | Kind::PlanOwnMap => {
             format!(" ({} futures)", a.futures)
         }
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),

@@ -194,11 +194,17 @@ pub enum OracleKind {
     /// first planned viewpoint (the base rule's choice when no draw gives it one). It knows what
     /// the team knows and where every robot is — what a student could learn to imitate.
     PlanRedrawn,
+    /// [`OracleKind::PlanRedrawn`] on the deciding robot's own map m_i instead of the team's
+    /// cells (its unknown cells redrawn by the same draws), every robot still at its true cell:
+    /// with `plan-redrawn` and the `belief-plan` policy (own map, teammates where it last knew
+    /// them) it splits the teacher's gain into what the map and what the positions are worth.
+    PlanOwnMap,
 }
 
 impl OracleKind {
-    /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn.
-    pub const ALL: [OracleKind; 7] = [
+    /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn,
+    /// plan-own-map.
+    pub const ALL: [OracleKind; 8] = [
         OracleKind::Replay,
         OracleKind::Averaged,
         OracleKind::Noiseless,
@@ -206,6 +212,7 @@ impl OracleKind {
         OracleKind::KnownMap,
         OracleKind::Redrawn,
         OracleKind::PlanRedrawn,
+        OracleKind::PlanOwnMap,
     ];
 
     /// The name in configs and on the command line.
@@ -218,11 +225,12 @@ impl OracleKind {
             OracleKind::KnownMap => "known-map",
             OracleKind::Redrawn => "redrawn",
             OracleKind::PlanRedrawn => "plan-redrawn",
+            OracleKind::PlanOwnMap => "plan-own-map",
         }
     }
 
-    /// Whether `futures` matters (the placebo, averaged, redrawn and plan-redrawn oracles draw
-    /// that many futures).
+    /// Whether `futures` matters (the placebo, averaged, redrawn and both plan oracles draw that
+    /// many futures).
     pub fn uses_futures(self) -> bool {
         matches!(
             self,
@@ -230,6 +238,7 @@ impl OracleKind {
                 | OracleKind::Placebo
                 | OracleKind::Redrawn
                 | OracleKind::PlanRedrawn
+                | OracleKind::PlanOwnMap
         )
     }
 }
@@ -343,9 +352,14 @@ pub fn run_oracle_by(
                         trial.reseed_noise(salt);
                     }
                 }
-                OracleKind::PlanRedrawn => {
+                OracleKind::PlanRedrawn | OracleKind::PlanOwnMap => {
                     let draws = redrawn_futures(&trial, seed, decision, futures)?;
-                    let best = plan_values(&trial, i, &draws)
+                    let values = if kind == OracleKind::PlanRedrawn {
+                        plan_values(&trial, i, &draws)
+                    } else {
+                        own_map_plan_values(&trial, i, &draws)
+                    };
+                    let best = values
                         .into_iter()
                         .enumerate()
                         .filter_map(|(k, v)| v.map(|v| (k, v)))
@@ -388,6 +402,47 @@ pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f6
     });
     let mut values = vec![None; slots];
     if let Some(mean) = crate::reference::mean_plan_moves(truth, cells, far, fields) {
+        for (v, m) in values.iter_mut().zip(mean) {
+            *v = Some(m);
+        }
+    }
+    values
+}
+
+/// [`plan_values`] planned on robot `i`'s own map m_i (its unknown cells from each
+/// [`Future::Redrawn`]'s map), with every robot at its true cell, robot `i` first
+/// ([`crate::reference::belief_first_viewpoint_moves`]): the `plan-own-map` oracle's values.
+pub fn own_map_plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
+    let agent = &trial.agents()[i];
+    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
+    let world = trial.world();
+    let grid = agent.belief().grid();
+    let far = 2 * (grid.height() + grid.width()) as u32;
+    let positions = world.positions();
+    let team: Vec<madenet_map::Pos> = std::iter::once(positions[i])
+        .chain(
+            positions
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, &p)| p),
+        )
+        .collect();
+    let (ds, movement) = (world.config().sensing_range, world.config().movement);
+    let fields = futures.iter().filter_map(|future| {
+        let Future::Redrawn(map) = future else {
+            return None;
+        };
+        Some(crate::reference::belief_first_viewpoint_moves(
+            grid,
+            Some(map),
+            &team,
+            ds,
+            movement,
+        ))
+    });
+    let mut values = vec![None; slots];
+    if let Some(mean) = crate::reference::mean_plan_moves(grid, cells, far, fields) {
         for (v, m) in values.iter_mut().zip(mean) {
             *v = Some(m);
         }

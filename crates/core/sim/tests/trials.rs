@@ -655,29 +655,47 @@ fn a_redrawn_future_agrees_with_what_the_team_knows() {
     assert!(r.metrics.completed);
 }
 
-/// The plan-redrawn oracle (the known-map reference's team plan on redrawn maps) completes,
-/// repeats itself for a seed, and chooses otherwise than its base rule somewhere.
+/// The plan oracles (the known-map reference's team plan on redrawn maps: the team's cells, or
+/// the deciding robot's own map) complete, repeat themselves for a seed, choose otherwise than
+/// their base rule somewhere, and otherwise than each other (at CSP 0 the robot's own map is
+/// not the team's).
 #[test]
-fn the_plan_redrawn_oracle_completes_repeats_and_departs_from_its_base() {
+fn the_plan_oracles_complete_repeat_and_depart_from_their_base() {
     use madenet_sim::rollout::{run_oracle, OracleKind};
     use madenet_sim::PolicyRegistry;
     let registry = PolicyRegistry::builtin();
-    let mut departs = false;
-    for (map, corner) in [
-        (2, Corner::TopLeft),
-        (6, Corner::BottomRight),
-        (9, Corner::TopRight),
+    let mut departs = [false; 2];
+    let mut differ = false;
+    for (map, corner, csp) in [
+        (2, Corner::TopLeft, 1.0),
+        (6, Corner::BottomRight, 1.0),
+        (9, Corner::TopRight, 0.0),
     ] {
-        let s = spec(map, corner, "spread", 1.0, 3);
+        let s = spec(map, corner, "spread", csp, 3);
         let base = Trial::new(s.clone()).unwrap().run();
-        let a = run_oracle(s.clone(), &registry, OracleKind::PlanRedrawn, 2).unwrap();
-        assert!(a.metrics.completed, "test_{map}");
-        let b = run_oracle(s, &registry, OracleKind::PlanRedrawn, 2).unwrap();
-        assert_eq!(a.metrics, b.metrics, "test_{map}: same seed, same trial");
-        departs |= a.metrics.tns != base.metrics.tns || a.metrics.ttd != base.metrics.ttd;
+        let mut runs = Vec::new();
+        for (k, kind) in [OracleKind::PlanRedrawn, OracleKind::PlanOwnMap]
+            .into_iter()
+            .enumerate()
+        {
+            let a = run_oracle(s.clone(), &registry, kind, 2).unwrap();
+            assert!(a.metrics.completed, "test_{map}, {kind:?}");
+            let b = run_oracle(s.clone(), &registry, kind, 2).unwrap();
+            assert_eq!(
+                a.metrics, b.metrics,
+                "test_{map}, {kind:?}: same seed, same trial"
+            );
+            departs[k] |= a.metrics.tns != base.metrics.tns || a.metrics.ttd != base.metrics.ttd;
+            runs.push(a.metrics);
+        }
+        differ |= runs[0] != runs[1];
     }
+    assert_eq!(
+        departs, [true; 2],
+        "each plan chooses otherwise than spread on some trial"
+    );
     assert!(
-        departs,
-        "the plan chooses otherwise than spread on some trial"
+        differ,
+        "the robot's own map plans otherwise than the team's somewhere"
     );
 }

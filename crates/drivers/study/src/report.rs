@@ -158,6 +158,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
             OracleKind::Averaged => format!("scores over {f} other futures: it knows the map, its scores carry the futures' luck"),
             OracleKind::Redrawn => format!("scores over {f} noiseless futures whose unseen cells the map generator redraws: it knows what the team knows and the kind of map, not this map — what a policy that sees only the team's knowledge could learn to choose"),
             OracleKind::PlanRedrawn => format!("plans the whole team's routes with the known-map reference on {f} maps whose unseen cells the map generator redraws, and takes the candidate nearest the robot's first viewpoint: a team-wide, multi-step teacher that knows what the team knows"),
+            OracleKind::PlanOwnMap => format!("plans as plan-redrawn but on the deciding robot's own map (its unseen cells redrawn over {f} maps), every robot at its true cell: what knowing where the teammates are is worth without their maps"),
             OracleKind::KnownMap => "is the known-map reference (`madenet_sim::reference`): a team that knows the map — viewpoints that see every cell left after t = 0 (set cover), routes that keep the longest robot's time short (min–max insertion, 2-opt, relocation), walked on true shortest paths in the trial's own world and re-planned as misses and slips demand; it ignores the base rule and the radio (see Headroom)".to_string(),
         };
         let _ = writeln!(s, "- **{}** {text}.", oracle_method(*kind));
