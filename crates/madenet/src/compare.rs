@@ -23,8 +23,8 @@ pub struct CompareArgs {
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Rollout oracles beside the methods, overriding the config (comma-separated: replay,
-    /// averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map; `none`
-    /// for none).
+    /// averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map,
+    /// plan-team-map; `none` for none).
     #[arg(long, value_delimiter = ',', value_parser = parse_oracle)]
     oracles: Option<Vec<Option<OracleKind>>>,
     /// Seeds per trial, overriding the config.

@@ -31,6 +31,9 @@ enum Kind {
     /// plan-redrawn on the deciding robot's own map instead of the team's cells, every robot
     /// at its true cell (what the positions alone are worth).
     PlanOwnMap,
+    /// plan-redrawn on the team's cells with the teammates where the deciding robot last knew
+    /// them (what the team's map alone is worth).
+    PlanTeamMap,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -110,6 +113,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
         Kind::Redrawn => OracleKind::Redrawn,
         Kind::PlanRedrawn => OracleKind::PlanRedrawn,
         Kind::PlanOwnMap => OracleKind::PlanOwnMap,
+        Kind::PlanTeamMap => OracleKind::PlanTeamMap,
     };
     let mut cfg = crate::batch::trial_set(
         &a.maps,
@@ -142,7 +146,12 @@ pub fn run(a: OracleArgs) -> Result<()> {
             .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
-        Kind::Averaged | Kind::Placebo | Kind::Redrawn | Kind::PlanRedrawn | Kind::PlanOwnMap => {
+        Kind::Averaged
+        | Kind::Placebo
+        | Kind::Redrawn
+        | Kind::PlanRedrawn
+        | Kind::PlanOwnMap
+        | Kind::PlanTeamMap => {
             format!(" ({} futures)", a.futures)
         }
         Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),

@@ -226,7 +226,7 @@ fn bad_study_config_fails_before_any_trial_with_one_line() {
     let flag = madenet(&["compare", "--oracles", "psychic", "--out", o]);
     assert_eq!(flag.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&flag.stderr).contains(
-        "unknown oracle `psychic`; known: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map, none"
+        "unknown oracle `psychic`; known: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map, plan-team-map, none"
     ));
 
     let f = bad("seeds.toml", &SMALL.replace("seeds = 2", "seeds = 0"));

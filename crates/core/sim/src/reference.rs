@@ -495,6 +495,21 @@ pub(crate) fn mean_plan_moves(
     (planned > 0).then(|| sum.into_iter().map(|v| v / planned as f64).collect())
 }
 
+/// The team as robot `id` at `pos` knows it from its records β_i (`teammates`, its own
+/// included): itself first, then every teammate it has heard of or seen, at the goal it last
+/// announced or else at its last known cell, however old.
+pub fn known_team(id: usize, pos: Pos, teammates: &[madenet_agent::TeammateRecord]) -> Vec<Pos> {
+    std::iter::once(pos)
+        .chain(
+            teammates
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != id)
+                .filter_map(|(_, r)| r.goal.or_else(|| r.last_pos())),
+        )
+        .collect()
+}
+
 /// [`belief_first_viewpoint_moves`] for the robot of `view`, over each map of `fills` (none:
 /// once, optimistic): the team is the robot and every teammate it has heard of or seen, placed
 /// at the goal it last announced or else at its last known cell, however old (a teammate is
@@ -509,15 +524,7 @@ pub fn candidate_plan_moves(
     sensing_range: i32,
     fills: &[OccGrid],
 ) -> Option<Vec<f64>> {
-    let team: Vec<Pos> = std::iter::once(view.pos)
-        .chain(
-            view.teammates
-                .iter()
-                .enumerate()
-                .filter(|&(j, _)| j != view.id)
-                .filter_map(|(_, r)| r.goal.or_else(|| r.last_pos())),
-        )
-        .collect();
+    let team = known_team(view.id, view.pos, view.teammates);
     let grid = view.belief.grid();
     let far = 2 * (grid.height() + grid.width()) as u32;
     let movement = view.belief.movement();

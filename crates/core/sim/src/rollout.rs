@@ -199,12 +199,16 @@ pub enum OracleKind {
     /// with `plan-redrawn` and the `belief-plan` policy (own map, teammates where it last knew
     /// them) it splits the teacher's gain into what the map and what the positions are worth.
     PlanOwnMap,
+    /// [`OracleKind::PlanRedrawn`] on the team's cells, but with the teammates where the deciding
+    /// robot last knew them (at the goal each last announced, or else its last known cell) —
+    /// the fourth corner of the split, beside `plan-own-map`.
+    PlanTeamMap,
 }
 
 impl OracleKind {
     /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn,
-    /// plan-own-map.
-    pub const ALL: [OracleKind; 8] = [
+    /// plan-own-map, plan-team-map.
+    pub const ALL: [OracleKind; 9] = [
         OracleKind::Replay,
         OracleKind::Averaged,
         OracleKind::Noiseless,
@@ -213,6 +217,7 @@ impl OracleKind {
         OracleKind::Redrawn,
         OracleKind::PlanRedrawn,
         OracleKind::PlanOwnMap,
+        OracleKind::PlanTeamMap,
     ];
 
     /// The name in configs and on the command line.
@@ -226,10 +231,11 @@ impl OracleKind {
             OracleKind::Redrawn => "redrawn",
             OracleKind::PlanRedrawn => "plan-redrawn",
             OracleKind::PlanOwnMap => "plan-own-map",
+            OracleKind::PlanTeamMap => "plan-team-map",
         }
     }
 
-    /// Whether `futures` matters (the placebo, averaged, redrawn and both plan oracles draw that
+    /// Whether `futures` matters (the placebo, averaged, redrawn and the plan oracles draw that
     /// many futures).
     pub fn uses_futures(self) -> bool {
         matches!(
@@ -239,6 +245,7 @@ impl OracleKind {
                 | OracleKind::Redrawn
                 | OracleKind::PlanRedrawn
                 | OracleKind::PlanOwnMap
+                | OracleKind::PlanTeamMap
         )
     }
 }
@@ -352,12 +359,12 @@ pub fn run_oracle_by(
                         trial.reseed_noise(salt);
                     }
                 }
-                OracleKind::PlanRedrawn | OracleKind::PlanOwnMap => {
+                OracleKind::PlanRedrawn | OracleKind::PlanOwnMap | OracleKind::PlanTeamMap => {
                     let draws = redrawn_futures(&trial, seed, decision, futures)?;
-                    let values = if kind == OracleKind::PlanRedrawn {
-                        plan_values(&trial, i, &draws)
-                    } else {
-                        own_map_plan_values(&trial, i, &draws)
+                    let values = match kind {
+                        OracleKind::PlanOwnMap => own_map_plan_values(&trial, i, &draws),
+                        OracleKind::PlanTeamMap => team_map_plan_values(&trial, i, &draws),
+                        _ => plan_values(&trial, i, &draws),
                     };
                     let best = values
                         .into_iter()
@@ -410,15 +417,10 @@ pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f6
 }
 
 /// [`plan_values`] planned on robot `i`'s own map m_i (its unknown cells from each
-/// [`Future::Redrawn`]'s map), with every robot at its true cell, robot `i` first
-/// ([`crate::reference::belief_first_viewpoint_moves`]): the `plan-own-map` oracle's values.
+/// [`Future::Redrawn`]'s map), with every robot at its true cell, robot `i` first: the
+/// `plan-own-map` oracle's values.
 pub fn own_map_plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
-    let agent = &trial.agents()[i];
-    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
-    let world = trial.world();
-    let grid = agent.belief().grid();
-    let far = 2 * (grid.height() + grid.width()) as u32;
-    let positions = world.positions();
+    let positions = trial.world().positions();
     let team: Vec<madenet_map::Pos> = std::iter::once(positions[i])
         .chain(
             positions
@@ -428,7 +430,36 @@ pub fn own_map_plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<O
                 .map(|(_, &p)| p),
         )
         .collect();
-    let (ds, movement) = (world.config().sensing_range, world.config().movement);
+    plan_values_on(trial, i, futures, trial.agents()[i].belief().grid(), &team)
+}
+
+/// [`plan_values`] planned on the team's cells with the teammates where robot `i` last knew
+/// them ([`crate::reference::known_team`]), robot `i` at its true cell: the `plan-team-map`
+/// oracle's values.
+pub fn team_map_plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
+    let world = trial.world();
+    let truth = world.truth();
+    let team_map =
+        madenet_map::OccGrid::from_cells(truth.height(), truth.width(), world.team_map().to_vec());
+    let agent = &trial.agents()[i];
+    let team = crate::reference::known_team(i, world.positions()[i], agent.teammates());
+    plan_values_on(trial, i, futures, &team_map, &team)
+}
+
+/// Robot `i`'s candidates valued by the team plan on `grid` (its unknown cells from each
+/// [`Future::Redrawn`]'s map) for `team` (robot `i` first;
+/// [`crate::reference::belief_first_viewpoint_moves`]), as [`plan_values`].
+fn plan_values_on(
+    trial: &Trial,
+    i: usize,
+    futures: &[Future],
+    grid: &madenet_map::OccGrid,
+    team: &[madenet_map::Pos],
+) -> Vec<Option<f64>> {
+    let agent = &trial.agents()[i];
+    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
+    let config = trial.world().config();
+    let far = 2 * (grid.height() + grid.width()) as u32;
     let fields = futures.iter().filter_map(|future| {
         let Future::Redrawn(map) = future else {
             return None;
@@ -436,9 +467,9 @@ pub fn own_map_plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<O
         Some(crate::reference::belief_first_viewpoint_moves(
             grid,
             Some(map),
-            &team,
-            ds,
-            movement,
+            team,
+            config.sensing_range,
+            config.movement,
         ))
     });
     let mut values = vec![None; slots];

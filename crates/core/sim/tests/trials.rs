@@ -655,17 +655,17 @@ fn a_redrawn_future_agrees_with_what_the_team_knows() {
     assert!(r.metrics.completed);
 }
 
-/// The plan oracles (the known-map reference's team plan on redrawn maps: the team's cells, or
-/// the deciding robot's own map) complete, repeat themselves for a seed, choose otherwise than
-/// their base rule somewhere, and otherwise than each other (at CSP 0 the robot's own map is
-/// not the team's).
+/// The plan oracles (the known-map reference's team plan on redrawn maps: the team's cells and
+/// true positions, the deciding robot's own map, or the team's cells with the teammates where
+/// the robot last knew them) complete, repeat themselves for a seed, choose otherwise than
+/// their base rule somewhere, and the restricted ones otherwise than the full one somewhere.
 #[test]
 fn the_plan_oracles_complete_repeat_and_depart_from_their_base() {
     use madenet_sim::rollout::{run_oracle, OracleKind};
     use madenet_sim::PolicyRegistry;
     let registry = PolicyRegistry::builtin();
-    let mut departs = [false; 2];
-    let mut differ = false;
+    let mut departs = [false; 3];
+    let mut differ = [false; 2];
     for (map, corner, csp) in [
         (2, Corner::TopLeft, 1.0),
         (6, Corner::BottomRight, 1.0),
@@ -674,9 +674,13 @@ fn the_plan_oracles_complete_repeat_and_depart_from_their_base() {
         let s = spec(map, corner, "spread", csp, 3);
         let base = Trial::new(s.clone()).unwrap().run();
         let mut runs = Vec::new();
-        for (k, kind) in [OracleKind::PlanRedrawn, OracleKind::PlanOwnMap]
-            .into_iter()
-            .enumerate()
+        for (k, kind) in [
+            OracleKind::PlanRedrawn,
+            OracleKind::PlanOwnMap,
+            OracleKind::PlanTeamMap,
+        ]
+        .into_iter()
+        .enumerate()
         {
             let a = run_oracle(s.clone(), &registry, kind, 2).unwrap();
             assert!(a.metrics.completed, "test_{map}, {kind:?}");
@@ -688,14 +692,15 @@ fn the_plan_oracles_complete_repeat_and_depart_from_their_base() {
             departs[k] |= a.metrics.tns != base.metrics.tns || a.metrics.ttd != base.metrics.ttd;
             runs.push(a.metrics);
         }
-        differ |= runs[0] != runs[1];
+        differ[0] |= runs[0] != runs[1];
+        differ[1] |= runs[0] != runs[2];
     }
     assert_eq!(
-        departs, [true; 2],
-        "each plan chooses otherwise than spread on some trial"
+        departs, [true; 3],
+        "each plan chooses otherwise than spread somewhere"
     );
-    assert!(
-        differ,
-        "the robot's own map plans otherwise than the team's somewhere"
+    assert_eq!(
+        differ, [true; 2],
+        "each restricted plan departs from the full one somewhere"
     );
 }
