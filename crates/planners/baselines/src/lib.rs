@@ -19,10 +19,14 @@
 //!   nearest its own first viewpoint at each macro termination. A multi-step, team-wide
 //!   planner that is not learned: the other yardstick, besides `spread`, that a learned
 //!   planner must beat.
+//! * [`Convention`] (**convention**, ours) — the robots of a meeting each compute the same team
+//!   plan on their merged map (redrawn maps seeded by the trial and the timestep only) and keep
+//!   softly to their own part of it until the next meeting: `spread` with a teammate's part
+//!   d_s cells dearer.
 //!
 //! Every constant of UB and PB is a documented field of [`BaselineParams`] (serde, with the
-//! defaults named after their source). [`register`] adds `ub`, `pb` and `belief-plan` to a
-//! [`madenet_sim::PolicyRegistry`].
+//! defaults named after their source). [`register`] adds `ub`, `pb`, `belief-plan`,
+//! `belief-plan-free` and `convention` to a [`madenet_sim::PolicyRegistry`].
 
 #![deny(missing_docs)]
 
@@ -95,7 +99,8 @@ impl BaselineParams {
     }
 }
 
-/// Registers `ub` and `pb` with these parameters.
+/// Registers `ub` and `pb` with these parameters, and `belief-plan`, `belief-plan-free` and
+/// `convention` at their fixed settings.
 pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
     let ub = params.ub.clone();
     registry.register(
