@@ -389,10 +389,6 @@ pub fn run_oracle_by(
 /// viewpoint (lower is better; an unreachable one counts twice the map's height + width). All
 /// `None` when no draw gives the robot a viewpoint; `None` for invalid slots.
 pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f64>> {
-    let agent = &trial.agents()[i];
-    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
-    let truth = trial.world().truth();
-    let far = 2 * (truth.height() + truth.width()) as u32;
     let fields = futures.iter().filter_map(|future| {
         let Future::Redrawn(map) = future else {
             return None;
@@ -407,8 +403,22 @@ pub fn plan_values(trial: &Trial, i: usize, futures: &[Future]) -> Vec<Option<f6
                 .flatten(),
         )
     });
-    let mut values = vec![None; slots];
-    if let Some(mean) = crate::reference::mean_plan_moves(truth, cells, far, fields) {
+    slot_values(trial, i, trial.world().truth(), fields)
+}
+
+/// Robot `i`'s candidates valued, in its slots, by their mean moves over `fields`
+/// ([`crate::reference::mean_plan_moves`], capped at twice `grid`'s height + width): what every
+/// plan oracle decides by.
+fn slot_values(
+    trial: &Trial,
+    i: usize,
+    grid: &madenet_map::OccGrid,
+    fields: impl IntoIterator<Item = Option<Vec<u32>>>,
+) -> Vec<Option<f64>> {
+    let candidates = trial.agents()[i].candidates();
+    let far = 2 * (grid.height() + grid.width()) as u32;
+    let mut values = vec![None; candidates.slots];
+    if let Some(mean) = crate::reference::mean_plan_moves(grid, &candidates.cells, far, fields) {
         for (v, m) in values.iter_mut().zip(mean) {
             *v = Some(m);
         }
@@ -456,10 +466,7 @@ fn plan_values_on(
     grid: &madenet_map::OccGrid,
     team: &[madenet_map::Pos],
 ) -> Vec<Option<f64>> {
-    let agent = &trial.agents()[i];
-    let (slots, cells) = (agent.candidates().slots, &agent.candidates().cells);
     let config = trial.world().config();
-    let far = 2 * (grid.height() + grid.width()) as u32;
     let fields = futures.iter().filter_map(|future| {
         let Future::Redrawn(map) = future else {
             return None;
@@ -472,13 +479,7 @@ fn plan_values_on(
             config.movement,
         ))
     });
-    let mut values = vec![None; slots];
-    if let Some(mean) = crate::reference::mean_plan_moves(grid, cells, far, fields) {
-        for (v, m) in values.iter_mut().zip(mean) {
-            *v = Some(m);
-        }
-    }
-    values
+    slot_values(trial, i, grid, fields)
 }
 
 /// `count` belief-consistent futures for decision number `decision` of the trial of `seed`

@@ -1,28 +1,9 @@
 //! The `belief-plan` policy: a whole trial on generated maps, at full and no communication.
 
-use madenet_map::paper::Corner;
-use madenet_sim::{Trial, TrialSpec};
-use madenet_world::ScenarioConfig;
+use madenet_sim::Trial;
 
-fn spec(seed: u64, side: usize, robots: usize, csp: f64, policy: &str) -> TrialSpec {
-    let map = madenet_map::generate::generate(
-        &madenet_map::generate::GeneratorConfig::for_size(side, side),
-        seed,
-    )
-    .unwrap();
-    TrialSpec {
-        starts: Corner::BottomLeft.start_cells(side, side).to_vec(),
-        map,
-        map_name: format!("generate:{seed}"),
-        config: ScenarioConfig {
-            num_robots: robots,
-            comm_success_prob: csp,
-            ..ScenarioConfig::default()
-        },
-        policy: policy.into(),
-        seed,
-    }
-}
+mod common;
+use common::spec;
 
 /// It completes, repeats itself for a seed (trajectories and metrics), and decides otherwise
 /// than `spread` on some trial: it is its own rule, not `spread` under another name.

@@ -3,30 +3,11 @@
 
 use madenet_agent::{Policy, ViewScratch};
 use madenet_baselines::Convention;
-use madenet_map::paper::Corner;
 use madenet_map::Pos;
 use madenet_sim::{Trial, TrialSpec};
-use madenet_world::ScenarioConfig;
 
-fn spec(seed: u64, side: usize, robots: usize, csp: f64, policy: &str) -> TrialSpec {
-    let map = madenet_map::generate::generate(
-        &madenet_map::generate::GeneratorConfig::for_size(side, side),
-        seed,
-    )
-    .unwrap();
-    TrialSpec {
-        starts: Corner::BottomLeft.start_cells(side, side)[..robots].to_vec(),
-        map,
-        map_name: format!("generate:{seed}"),
-        config: ScenarioConfig {
-            num_robots: robots,
-            comm_success_prob: csp,
-            ..ScenarioConfig::default()
-        },
-        policy: policy.into(),
-        seed,
-    }
-}
+mod common;
+use common::spec;
 
 /// Two robots that exchanged β this timestep, each with its own policy and its own view, compute
 /// the same split of the map, and it gives each of them a part.
