@@ -22,8 +22,9 @@ const NONE: u8 = u8::MAX;
 ///
 /// A group is only the same for all its members when each detects all the others (a chain of
 /// contacts gives different groups), and a pair's merged maps are only equal when neither
-/// merged a third robot's map that timestep; the convention is then a near-agreement. With
-/// no exchange (CSP 0, a dropout) there is no meeting and the robot plays `spread`.
+/// merged a third robot's map that timestep; the convention is then a near-agreement. A
+/// meeting without an exchange (a dropout) makes no new agreement, and at CSP 0 there is none
+/// at all: the robot plays `spread`.
 #[derive(Clone, Debug)]
 pub struct Convention {
     spread: Spread,
