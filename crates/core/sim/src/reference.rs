@@ -495,6 +495,16 @@ pub(crate) fn mean_plan_moves(
     (planned > 0).then(|| sum.into_iter().map(|v| v / planned as f64).collect())
 }
 
+/// The maps a belief plan fills the unknown cells from: each of `fills`, or, with none, the one
+/// optimistic plan (`None`: unknown cells free).
+pub fn plan_fills(fills: &[OccGrid]) -> Vec<Option<&OccGrid>> {
+    if fills.is_empty() {
+        vec![None]
+    } else {
+        fills.iter().map(Some).collect()
+    }
+}
+
 /// The team as robot `id` at `pos` knows it from its records β_i (`teammates`, its own
 /// included): itself first, then every teammate it has heard of or seen, at the goal it last
 /// announced or else at its last known cell, however old.
@@ -528,12 +538,7 @@ pub fn candidate_plan_moves(
     let grid = view.belief.grid();
     let far = 2 * (grid.height() + grid.width()) as u32;
     let movement = view.belief.movement();
-    let fills: Vec<Option<&OccGrid>> = if fills.is_empty() {
-        vec![None]
-    } else {
-        fills.iter().map(Some).collect()
-    };
-    let fields = fills
+    let fields = plan_fills(fills)
         .into_iter()
         .map(|fill| belief_first_viewpoint_moves(grid, fill, &team, sensing_range, movement));
     mean_plan_moves(grid, &view.candidates().cells, far, fields)

@@ -3,7 +3,7 @@
 //! keeps (softly) to its own part of it until the next meeting.
 
 use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
-use madenet_map::{OccGrid, Pos};
+use madenet_map::Pos;
 
 /// No owner: a cell outside every convention so far.
 const NONE: u8 = u8::MAX;
@@ -31,6 +31,8 @@ pub struct Convention {
     futures: usize,
     penalty: f64,
     seed: u64,
+    /// The map's width in cells (the owners are row-major).
+    width: usize,
     /// Per cell, the group member whose part of the last plan it lies in ([`NONE`]: none).
     owner: Vec<u8>,
 }
@@ -52,15 +54,17 @@ impl Convention {
             futures,
             penalty,
             seed,
+            width,
             owner: vec![NONE; height * width],
         }
     }
 
     /// The group member whose part of the last agreed plan cell `p` lies in (`None`: no
     /// meeting yet, or a cell off the map).
-    pub fn part(&self, p: Pos, width: usize) -> Option<usize> {
-        let inside = p.row >= 0 && p.col >= 0 && (p.col as usize) < width;
-        let c = inside.then(|| p.row as usize * width + p.col as usize)?;
+    pub fn part(&self, p: Pos) -> Option<usize> {
+        let w = self.width;
+        let inside = p.row >= 0 && p.col >= 0 && (p.col as usize) < w;
+        let c = inside.then(|| p.row as usize * w + p.col as usize)?;
         self.owner
             .get(c)
             .filter(|&&o| o != NONE)
@@ -88,15 +92,10 @@ impl Convention {
             (0..self.futures as u64).map(|k| ((view.t as u64) << 8) | k),
         )
         .unwrap_or_default();
-        let fills: Vec<Option<&OccGrid>> = if fills.is_empty() {
-            vec![None]
-        } else {
-            fills.iter().map(Some).collect()
-        };
         let team: Vec<Pos> = group.iter().map(|&(_, p)| p).collect();
         let ds = self.spread.sensing_range;
         let mut viewpoints: Vec<(Pos, u8)> = Vec::new();
-        for fill in fills {
+        for fill in madenet_sim::reference::plan_fills(&fills) {
             let Some(routes) =
                 madenet_sim::reference::belief_team_routes(map, fill, &team, ds, movement)
             else {
@@ -142,6 +141,7 @@ impl Policy for Convention {
                 }
             })
             .collect();
+        // Owners are stored as u8: teams beyond 255 robots make no agreements.
         if group.len() > 1 && view.teammates.len() <= NONE as usize {
             self.agree(view, &group);
         }

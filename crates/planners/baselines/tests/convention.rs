@@ -34,7 +34,7 @@ fn both_sides_of_a_meeting_agree_on_the_split() {
                         let mut view = trial.agents()[i].peek_view(true, &mut scratch);
                         c.decide(&mut view);
                         (0..side * side)
-                            .map(|k| c.part(Pos::new((k / side) as i32, (k % side) as i32), side))
+                            .map(|k| c.part(Pos::new((k / side) as i32, (k % side) as i32)))
                             .collect()
                     })
                     .collect();
