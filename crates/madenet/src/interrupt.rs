@@ -5,6 +5,7 @@
 //! codes. `world` does the same; `launch` catches both ([`Stop::catch`]) and hands them to
 //! its launcher (the first to the world node, a second stops every node).
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -61,6 +62,33 @@ impl Stop {
             .iter()
             .find(|(_, f)| f.load(Ordering::Relaxed))
             .map(|(s, _)| *s)
+    }
+}
+
+/// The interrupt as a sink of the run loop: a signal [`Stop`] watches ends the run after the
+/// step it is in; `signal` says which came.
+pub struct OnSignal<'a> {
+    stop: &'a Stop,
+    /// The signal that ended the run, if one did.
+    pub signal: Option<i32>,
+}
+
+impl<'a> OnSignal<'a> {
+    /// Watches `stop`.
+    pub fn new(stop: &'a Stop) -> Self {
+        OnSignal { stop, signal: None }
+    }
+}
+
+impl<S: ?Sized> madenet_sim::stepping::Sink<S> for OnSignal<'_> {
+    fn step(&mut self, _: &S) -> Result<ControlFlow<String>, madenet_sim::stepping::SinkError> {
+        Ok(match self.stop.requested() {
+            Some(signal) => {
+                self.signal = Some(signal);
+                ControlFlow::Break(format!("signal {signal}"))
+            }
+            None => ControlFlow::Continue(()),
+        })
     }
 }
 

@@ -7,10 +7,13 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
+use madenet_render::Pictures;
+use madenet_ros2::record::RecorderSink;
 use madenet_runtime::launch::{run_nodes, LaunchError, LaunchEvent};
 use madenet_runtime::wire::{Node, Shown};
 use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
 use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, WorldOutput, ZenohBus};
+use madenet_sim::stepping::{Sink, WorldView};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -241,10 +244,8 @@ impl Ros2Args {
 }
 
 /// Robot `i`'s ROS 2 publishers, when `--ros2` asked for them.
-#[cfg(feature = "ros2")]
 struct Ros2Out(Option<madenet_ros2::RobotPublisher>);
 
-#[cfg(feature = "ros2")]
 impl Ros2Out {
     fn open(a: &Ros2Args, i: usize, map: &madenet_map::OccGrid) -> Result<Self> {
         a.ros2
@@ -262,19 +263,8 @@ impl Ros2Out {
     }
 }
 
-#[cfg(not(feature = "ros2"))]
-struct Ros2Out;
-
-#[cfg(not(feature = "ros2"))]
-impl Ros2Out {
-    fn open(a: &Ros2Args, _: usize, _: &madenet_map::OccGrid) -> Result<Self> {
-        if a.ros2.is_some() {
-            anyhow::bail!("--ros2: this madenet was built without the `ros2` feature");
-        }
-        Ok(Ros2Out)
-    }
-    fn publish(&mut self, _: &madenet_agent::Agent) {}
-}
+/// A world node's last timestep as shown: the world, what each robot showed, the exchanges.
+type LastShown = (madenet_world::World, Vec<Shown>, Vec<(usize, usize)>);
 
 pub fn world(a: WorldArgs) -> Result<()> {
     let (spec, _) = a.scenario.spec()?;
@@ -301,41 +291,53 @@ pub fn world(a: WorldArgs) -> Result<()> {
     // Before the live view prints its address: a Ctrl-C from then on ends the run gracefully
     // (launched, always: `launch` passes its first signal on to this node).
     let stop = crate::interrupt::Stop::watch(a.watch.any() || a.pace_ms > 0 || a.node.progress)?;
-    // The bag and the live view first: a refused --record leaves no picture behind either.
-    let mut recorder = crate::record::Recorder::start_world(
-        a.watch.record.as_deref(),
-        a.watch.foxglove.as_deref(),
-        &world,
-    )?;
-    // Pictures as `run` draws them: the world's side, what each robot shows, the radio's links.
-    let mut pictures: Option<crate::run::Pictures> = None;
-    let (mut last, mut failed) = (None, None);
+    // The bag, the live view and the pictures: the run loop's sinks, told of each timestep
+    // the world node takes (the first, before the first timestep, starts them). The bag and
+    // the live view first: a refused --record leaves no picture behind either.
+    let mut sinks: Option<(Option<RecorderSink>, Option<Pictures>)> = None;
+    let mut failed: Option<anyhow::Error> = None;
+    // The last timestep shown (its world cloned: the node's world is gone when it returns),
+    // for the sinks' final state.
+    let mut last_view: Option<LastShown> = None;
     let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
-        if let Some(r) = recorder.as_mut() {
-            if let Err(e) = r.step_world(w, shown, links) {
-                failed.get_or_insert(e);
-            }
-        }
-        if !a.pictures.any() {
+        if failed.is_some() {
             return;
         }
-        let f = madenet_render::world_frame(
-            w,
-            |i| {
-                let s = shown.get(i).cloned().unwrap_or_default();
-                (s.goal, s.path, s.candidates)
-            },
-            links,
-        );
-        let r = match pictures.as_mut() {
-            Some(p) if p.every_step() => p.push(&f),
-            Some(_) => Ok(()),
-            None => a.pictures.start(&f).map(|p| pictures = Some(p)),
+        let view = WorldView {
+            world: w,
+            robots: shown.iter().map(Shown::view).collect(),
+            exchanges: links,
         };
-        if failed.is_none() {
-            failed = r.err();
-        }
-        last = Some(f);
+        let r = match sinks.as_mut() {
+            None => crate::record::start(
+                a.watch.record.as_deref(),
+                a.watch.foxglove.as_deref(),
+                &view,
+            )
+            .and_then(|rec| {
+                let mut pics = a.pictures.sink(1.0)?;
+                if let Some(p) = pics.as_mut() {
+                    Sink::begin(p, &view).map_err(anyhow::Error::from_boxed)?;
+                }
+                sinks = Some((rec, pics));
+                Ok(())
+            }),
+            Some((rec, pics)) => {
+                // The recorder and the pictures never stop a run: their flow is always Continue.
+                let mut step = || -> Result<(), madenet_sim::stepping::SinkError> {
+                    if let Some(r) = rec.as_mut() {
+                        let _ = Sink::step(r, &view)?;
+                    }
+                    if let Some(p) = pics.as_mut() {
+                        let _ = Sink::step(p, &view)?;
+                    }
+                    Ok(())
+                };
+                step().map_err(anyhow::Error::from_boxed)
+            }
+        };
+        failed = r.err();
+        last_view = Some((w.clone(), shown.to_vec(), links.to_vec()));
     };
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
         (a.pictures.any() || a.watch.any()).then_some(&mut draw);
@@ -348,12 +350,19 @@ pub fn world(a: WorldArgs) -> Result<()> {
     if let Some(e) = failed {
         return Err(e);
     }
-    let mut wrote = match (pictures, last) {
-        (Some(p), Some(last)) => p.finish(&last)?,
-        _ => Vec::new(),
-    };
-    if let Some(r) = recorder {
-        wrote.extend(r.finish()?);
+    let mut wrote = Vec::new();
+    if let (Some((rec, pics)), Some((w, shown, links))) = (sinks, last_view) {
+        let view = WorldView {
+            world: &w,
+            robots: shown.iter().map(Shown::view).collect(),
+            exchanges: &links,
+        };
+        if let Some(mut p) = pics {
+            wrote.extend(Sink::finish(&mut p, &view).map_err(anyhow::Error::from_boxed)?);
+        }
+        if let Some(mut r) = rec {
+            wrote.extend(Sink::finish(&mut r, &view).map_err(anyhow::Error::from_boxed)?);
+        }
     }
     for line in wrote {
         // Launched (`--progress`), launch names the files itself.
@@ -370,7 +379,6 @@ fn scenario_of(spec: &madenet_sim::TrialSpec) -> u64 {
 }
 
 /// The world node on real robots' maps and poses (`--ros2-robots`).
-#[cfg(feature = "ros2")]
 fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> Result<()> {
     let opts = madenet_ros2::Ros2Options {
         connect: vec![endpoint.to_string()],
@@ -395,11 +403,6 @@ fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> R
         })
     })?;
     crate::interrupt::Interrupted::result(stopped)
-}
-
-#[cfg(not(feature = "ros2"))]
-fn real_world(_: &WorldArgs, _: &madenet_sim::TrialSpec, _: &str) -> Result<()> {
-    anyhow::bail!("--ros2-robots: this madenet was built without the `ros2` feature")
 }
 
 /// Runs a world node (`run` gets the bus, the timeouts and the progress callback) and writes

@@ -4,8 +4,9 @@ use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
 use madenet_continuous::ContinuousConfig;
-use madenet_render::{Frame, GifWriter, RenderOptions};
+use madenet_render::{Drawn, Pictures, RenderOptions};
 use madenet_sim::continuous::ContinuousTrial;
+use madenet_sim::stepping::{Pace, Sink, Stepping};
 use madenet_sim::Trial;
 use std::path::PathBuf;
 
@@ -75,13 +76,11 @@ fn realtime_arg(s: &str) -> Result<f64, String> {
 }
 
 impl RunArgs {
-    /// The wait after each step asked for by `--pace-ms` or `--realtime`; `step_s`: the
-    /// simulated seconds of one step (a grid timestep: 1; the continuous world:
-    /// its control period).
-    fn pace(&self, step_s: f64) -> Option<std::time::Duration> {
+    /// The pace asked for by `--pace-ms` or `--realtime`, if any.
+    fn pace(&self) -> Option<Pace> {
         match (self.pace_ms, self.realtime) {
-            (Some(ms), _) => Some(std::time::Duration::from_millis(ms)),
-            (None, Some(f)) => Some(std::time::Duration::from_secs_f64(step_s / f)),
+            (Some(ms), _) => Some(Pace::Wait(std::time::Duration::from_millis(ms))),
+            (None, Some(f)) => Some(Pace::RealTime(f)),
             (None, None) => None,
         }
     }
@@ -147,62 +146,20 @@ impl PictureArgs {
         }
     }
 
-    /// Starts the pictures: the GIF's first frame is `first`.
-    pub fn start(&self, first: &Frame) -> Result<Pictures<'_>> {
-        let mut gif = match &self.render {
-            Some(p) => Some(GifWriter::new(p, &self.options(), self.delay_ms)?),
-            None => None,
-        };
-        if let Some(g) = gif.as_mut() {
-            g.push(first)?;
+    /// The pictures asked for as a sink of the run loop (`None`: none), a GIF frame every
+    /// `frame_s` simulated seconds.
+    pub fn sink(&self, frame_s: f64) -> Result<Option<Pictures>> {
+        if !self.any() {
+            return Ok(None);
         }
-        Ok(Pictures { args: self, gif })
+        Ok(Some(Pictures::new(
+            self.render.clone(),
+            self.snapshot.clone(),
+            self.cell_px,
+            self.delay_ms,
+            frame_s,
+        )?))
     }
-}
-
-/// Pictures being written: one GIF frame per timestep, the PNG of the last.
-pub struct Pictures<'a> {
-    args: &'a PictureArgs,
-    gif: Option<GifWriter>,
-}
-
-impl Pictures<'_> {
-    /// Whether frames are wanted for every timestep (a GIF).
-    pub fn every_step(&self) -> bool {
-        self.gif.is_some()
-    }
-
-    /// Adds a timestep's frame to the GIF.
-    pub fn push(&mut self, frame: &Frame) -> Result<()> {
-        if let Some(g) = self.gif.as_mut() {
-            g.push(frame)?;
-        }
-        Ok(())
-    }
-
-    /// Writes the PNG of `last` and finishes the GIF; the lines to print about them.
-    pub fn finish(self, last: &Frame) -> Result<Vec<String>> {
-        let mut lines = Vec::new();
-        if let (Some(g), Some(p)) = (self.gif, &self.args.render) {
-            lines.push(finish_gif(g, p)?);
-        }
-        if let Some(p) = &self.args.snapshot {
-            madenet_render::save_png(last, &self.args.options(), p)?;
-            lines.push(format!("wrote      {}", p.display()));
-        }
-        Ok(lines)
-    }
-}
-
-/// Finishes the GIF written to `path`; the line to print about it.
-fn finish_gif(g: GifWriter, path: &std::path::Path) -> Result<String> {
-    let frames = g.frames();
-    let bytes = g.finish()?;
-    Ok(format!(
-        "wrote      {} ({frames} frames, {:.1} kB)",
-        path.display(),
-        bytes as f64 / 1e3
-    ))
 }
 
 /// Refuses an output file whose extension names another picture format than the one written
@@ -229,51 +186,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     let (spec, registry) = a.scenario.spec()?;
     a.scenario.warn_erasure(&spec.config)?;
     a.pictures.check(spec.map.width(), spec.map.height())?;
-    let mut trial = Trial::with_registry(spec, &registry)
+    let trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
-    let pace = a.pace(1.0);
-    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
-    let stop = crate::interrupt::Stop::watch(
-        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
-    )?;
-    // The bag first: a refused --record leaves no picture behind either.
-    let mut recorder =
-        crate::record::Recorder::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
-    let mut pictures = None;
-    if a.pictures.any() {
-        pictures = Some(a.pictures.start(&madenet_render::trial_frame(&trial))?);
-    }
-    let mut interrupted = None;
-    while trial.step() {
-        if let Some(p) = pictures.as_mut().filter(|p| p.every_step()) {
-            p.push(&madenet_render::trial_frame(&trial))?;
-        }
-        if let Some(r) = recorder.as_mut() {
-            r.step(&trial)?;
-        }
-        if let Some(wait) = pace {
-            std::thread::sleep(wait);
-        }
-        if let Some(signal) = stop.requested() {
-            interrupted = Some((format!("timestep {}", trial.world().t()), signal));
-            break;
-        }
-    }
-    let mut wrote = match pictures {
-        Some(p) => p.finish(&madenet_render::trial_frame(&trial))?,
-        None => Vec::new(),
+    let Some((result, wrote)) = drive(&a, trial, 1.0)? else {
+        return Ok(());
     };
-    if let Some(r) = recorder {
-        wrote.extend(r.finish()?);
-    }
-    if let Some((at, signal)) = interrupted {
-        for line in wrote {
-            out!("{line}")?;
-        }
-        return crate::interrupt::Interrupted::result(Some((at, signal)));
-    }
-    let result = trial.finish();
     if a.json {
         out!("{}", serde_json::to_string_pretty(&result)?)?;
     } else {
@@ -283,6 +201,46 @@ pub fn run(a: RunArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Runs `trial` to its end through the run loop with the sinks asked for — pictures (a GIF
+/// frame every `frame_s` simulated seconds), the bag and live view, pacing, Ctrl-C — and
+/// gives its outcome and the lines about what was written; interrupted, it prints those
+/// lines and ends with [`crate::interrupt::Interrupted`].
+fn drive<S: Stepping + Drawn>(
+    a: &RunArgs,
+    mut trial: S,
+    frame_s: f64,
+) -> Result<Option<(S::Outcome, Vec<String>)>> {
+    let mut pace = a.pace();
+    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
+    let stop = crate::interrupt::Stop::watch(
+        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
+    )?;
+    // The bag first: a refused --record leaves no picture behind either.
+    let mut recorder = crate::record::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
+    let mut pictures = a.pictures.sink(frame_s)?;
+    let mut interrupt = crate::interrupt::OnSignal::new(&stop);
+    let mut sinks: Vec<&mut dyn Sink<S>> = Vec::new();
+    if let Some(p) = pictures.as_mut() {
+        sinks.push(p);
+    }
+    if let Some(r) = recorder.as_mut() {
+        sinks.push(r);
+    }
+    if let Some(p) = pace.as_mut() {
+        sinks.push(p);
+    }
+    sinks.push(&mut interrupt);
+    let end =
+        madenet_sim::stepping::run(&mut trial, &mut sinks).map_err(anyhow::Error::from_boxed)?;
+    if let (Some((_, at)), Some(signal)) = (end.stopped, interrupt.signal) {
+        for line in end.wrote {
+            out!("{line}")?;
+        }
+        return crate::interrupt::Interrupted::result(Some((at, signal))).map(|()| None);
+    }
+    Ok(Some((trial.finish(), end.wrote)))
 }
 
 /// The text summary of a trial's result (what `run` prints without `--json`).
@@ -329,74 +287,10 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     check_extension(a.pictures.snapshot.as_deref(), "--snapshot", "png")?;
     let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
     a.scenario.warn_erasure(&spec.config)?;
-    let scale = madenet_render::continuous::px_per_m(
-        spec.scene.width_m().max(spec.scene.height_m()),
-        (a.pictures.cell_px * 25).clamp(100, 600),
-    );
-    let mut trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
-    // Pacing per control period: --pace-ms as given, --realtime from the period's length.
-    let pace = a.pace(trial.world().config().control_period);
-    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
-    let stop = crate::interrupt::Stop::watch(
-        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
-    )?;
-    // The bag first: a refused --record leaves no picture behind either.
-    let mut recorder = crate::record::ContinuousRecorder::start(
-        a.record.as_deref(),
-        a.foxglove.as_deref(),
-        &trial,
-    )?;
-    let mut gif = match &a.pictures.render {
-        Some(p) => {
-            let mut g =
-                madenet_render::GifWriter::new(p, &Default::default(), a.pictures.delay_ms)?;
-            g.push_image(madenet_render::continuous::continuous_picture(
-                &trial, scale,
-            ))?;
-            Some(g)
-        }
-        None => None,
+    let trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
+    let Some((r, wrote)) = drive(&a, trial, a.frame_s)? else {
+        return Ok(());
     };
-    let mut next_frame = a.frame_s;
-    let mut interrupted = None;
-    while trial.step() {
-        if let Some(g) = gif.as_mut() {
-            if trial.world().time() + 1e-9 >= next_frame {
-                next_frame += a.frame_s;
-                g.push_image(madenet_render::continuous::continuous_picture(
-                    &trial, scale,
-                ))?;
-            }
-        }
-        if let Some(r) = recorder.as_mut() {
-            r.step(&trial)?;
-        }
-        if let Some(wait) = pace {
-            std::thread::sleep(wait);
-        }
-        if let Some(signal) = stop.requested() {
-            interrupted = Some((format!("{:.1} s", trial.world().time()), signal));
-            break;
-        }
-    }
-    let mut wrote = Vec::new();
-    if let (Some(g), Some(p)) = (gif, &a.pictures.render) {
-        wrote.push(finish_gif(g, p)?);
-    }
-    if let Some(p) = &a.pictures.snapshot {
-        madenet_render::continuous::save_continuous_png(&trial, scale, p)?;
-        wrote.push(format!("wrote      {}", p.display()));
-    }
-    if let Some(r) = recorder {
-        wrote.extend(r.finish(&trial)?);
-    }
-    if let Some((at, signal)) = interrupted {
-        for line in wrote {
-            out!("{line}")?;
-        }
-        return crate::interrupt::Interrupted::result(Some((at, signal)));
-    }
-    let r = trial.finish();
     if a.json {
         out!("{}", serde_json::to_string_pretty(&r)?)?;
         return Ok(());

@@ -2,7 +2,6 @@
 //! for the same seed; a taken place, an unwritable one or an unrecorded world is one `error:`
 //! line naming the flag, and nothing half-written is left behind. (Readers nobody here wrote —
 //! `mcap`, `mcap-ros2-support`, `rosbags` — check the bag's content in the Python tests.)
-#![cfg(feature = "ros2")]
 
 use madenet_testkit::{assert_clean_error, assert_clean_error_in, run, Scratch};
 use std::path::Path;
@@ -146,7 +145,8 @@ fn bad_live_view_flags_are_refused() {
 }
 
 /// A run streamed live and recorded writes the bag it writes unstreamed; the continuous world
-/// records too (scans and fine maps beside the grid's topics), the same bytes for the same seed.
+/// records every topic the grid's bag carries (scans and fine maps beside them), the same bytes
+/// for the same seed.
 #[test]
 fn live_and_continuous_runs_are_recorded() {
     let dir = Scratch::new("record-both");
@@ -180,6 +180,8 @@ fn live_and_continuous_runs_are_recorded() {
             "10",
             "--seed",
             "4",
+            "--policy",
+            "spread",
             "--record",
             &at(name),
         ]);
@@ -196,6 +198,28 @@ fn live_and_continuous_runs_are_recorded() {
         std::fs::read(dir.join("c2/c2_0.mcap")).unwrap()
     );
     let meta = std::fs::read_to_string(dir.join("c1/metadata.yaml")).unwrap();
+    // Topic parity: the continuous world's bag carries every topic the grid's does (one
+    // recorder reads both worlds), and its own scans and fine maps beside them.
+    let topics = |meta: &str| -> std::collections::BTreeSet<String> {
+        meta.lines()
+            .filter_map(|l| l.trim().strip_prefix("name: \""))
+            .filter_map(|l| l.strip_suffix('"'))
+            .filter(|t| t.starts_with('/'))
+            .map(str::to_string)
+            .collect()
+    };
+    let grid_topics = topics(&std::fs::read_to_string(dir.join("plain/metadata.yaml")).unwrap());
+    let continuous_topics = topics(&meta);
+    for t in [
+        "/team_map",
+        "/comms",
+        "/robot0/candidates",
+        "/metrics/distance",
+    ] {
+        assert!(grid_topics.contains(t), "{t}: {grid_topics:?}");
+    }
+    let missing: Vec<_> = grid_topics.difference(&continuous_topics).collect();
+    assert!(missing.is_empty(), "the continuous bag lacks {missing:?}");
     for needle in [
         "name: \"/robot0/scan\"",
         "type: \"sensor_msgs/msg/LaserScan\"",

@@ -1,7 +1,6 @@
 //! `madenet launch --ros2 ENDPOINT`: every agent process publishes its robot's ROS 2 topics in
 //! the rmw_zenoh format. The subscriber is a plain zenoh router (as `rmw_zenohd`) that knows the
 //! message layouts only: each robot's poses, in order, are the trial's trajectory.
-#![cfg(feature = "ros2")]
 
 use madenet_map::Pos;
 use madenet_ros2::MapFrame;

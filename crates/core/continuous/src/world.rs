@@ -398,6 +398,22 @@ impl ContinuousWorld {
             .zip(&self.team_known)
             .all(|(&e, &k)| !e || k)
     }
+    /// The team's coarse map, every robot's own reading merged (an obstacle to any robot is
+    /// one; else free to any is free; else unknown), row-major in the agents' cells.
+    pub fn team_map(&self) -> Vec<Occupancy> {
+        let (h, w) = self.maps[0].coarse_size();
+        let mut team = vec![Occupancy::Unknown; h * w];
+        for m in &self.maps {
+            for (t, &c) in team.iter_mut().zip(m.coarse()) {
+                match c {
+                    Occupancy::Obstacle => *t = Occupancy::Obstacle,
+                    Occupancy::Free if *t == Occupancy::Unknown => *t = Occupancy::Free,
+                    _ => {}
+                }
+            }
+        }
+        team
+    }
     /// Cells robot `i`'s map has newly read (or turned into obstacles) since the last call.
     pub fn take_observed(&mut self, i: usize, out: &mut Vec<(Pos, Occupancy)>) {
         out.append(&mut self.pending[i]);

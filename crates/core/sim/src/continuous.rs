@@ -19,15 +19,17 @@
 //! 4. **World**: motion, contacts, scans ([`ContinuousWorld::step`]).
 
 use crate::registry::PolicyRegistry;
+use crate::stepping::{Present, RobotShown, Stepping};
 use crate::trial::{build_agent, TrialSpec};
 use crate::SimError;
 use madenet_agent::{Agent, Beta, Decision};
 use madenet_continuous::{
     Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Neighbour, Scene,
 };
-use madenet_map::{Occupancy, Pos};
+use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_world::{Observation, Radio, ScenarioConfig};
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
@@ -232,6 +234,9 @@ pub struct ContinuousTrial {
     /// Since when no robot's agent has had a reachable frontier.
     no_frontier_since: Option<f64>,
     exchanged: Vec<Vec<usize>>,
+    /// The last radio round's pairs in contact, and of those the ones that exchanged β.
+    radio_contacts: Vec<(usize, usize)>,
+    radio_exchanges: Vec<(usize, usize)>,
     radio_every: u64,
     ticks: u64,
     seen: Vec<(Pos, Occupancy)>,
@@ -315,6 +320,8 @@ impl ContinuousTrial {
             stuck: 0,
             no_frontier_since: None,
             exchanged: vec![Vec::new(); n],
+            radio_contacts: Vec::new(),
+            radio_exchanges: Vec::new(),
             radio_every,
             ticks: 0,
             seen: Vec::new(),
@@ -447,10 +454,11 @@ impl ContinuousTrial {
         let now = self.world.time();
         // 1. radio
         if self.ticks.is_multiple_of(self.radio_every) {
-            let contacts = self.world.contacts();
-            self.local_interactions += contacts.len() as u64;
-            let mut exchanges = Vec::new();
-            self.radio.exchange(&contacts, &mut exchanges);
+            self.radio_contacts = self.world.contacts();
+            self.local_interactions += self.radio_contacts.len() as u64;
+            let mut exchanges = std::mem::take(&mut self.radio_exchanges);
+            exchanges.clear();
+            self.radio.exchange(&self.radio_contacts, &mut exchanges);
             for &(i, j) in &exchanges {
                 for k in [i, j] {
                     self.agents[k].beta_into(&mut self.outbox[k]);
@@ -461,6 +469,7 @@ impl ContinuousTrial {
                 self.exchanged[i].push(j);
                 self.exchanged[j].push(i);
             }
+            self.radio_exchanges = exchanges;
         }
         // 2a. cells a robot could not see from the goal it reached: written off (module docs)
         let scan_period = 1.0 / self.world.config().lidar.rate_hz;
@@ -826,6 +835,78 @@ impl ContinuousTrial {
             distance: self.distance,
             wall_s: self.started.elapsed().as_secs_f64(),
         }
+    }
+}
+
+impl Present for ContinuousTrial {
+    fn robots(&self) -> usize {
+        self.agents.len()
+    }
+    fn time_s(&self) -> f64 {
+        self.world.time()
+    }
+    fn step_s(&self) -> f64 {
+        self.world.config().control_period
+    }
+    fn truth(&self) -> &OccGrid {
+        self.world.coarse_truth()
+    }
+    fn pose(&self, i: usize) -> madenet_continuous::Pose {
+        self.world.pose(i)
+    }
+    fn cell(&self, i: usize) -> Pos {
+        self.world.cell_of(i)
+    }
+    fn robot(&self, i: usize) -> RobotShown<'_> {
+        RobotShown::of(&self.agents[i])
+    }
+    /// None: the continuous world shows each robot's fine map ([`Present::continuous`]).
+    fn belief(&self, _: usize) -> Option<Cow<'_, [Occupancy]>> {
+        None
+    }
+    fn team_map(&self) -> Cow<'_, [Occupancy]> {
+        Cow::Owned(self.world.team_map())
+    }
+    fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
+        Cow::Borrowed(&self.radio_contacts)
+    }
+    fn exchanges(&self) -> &[(usize, usize)] {
+        &self.radio_exchanges
+    }
+    fn explored(&self) -> f64 {
+        self.world.explored_fraction()
+    }
+    fn distance(&self) -> f64 {
+        self.team_distance()
+    }
+    fn continuous(&self) -> Option<&ContinuousWorld> {
+        Some(&self.world)
+    }
+}
+
+impl Stepping for ContinuousTrial {
+    type Outcome = ContinuousResult;
+
+    fn step(&mut self) -> bool {
+        ContinuousTrial::step(self)
+    }
+    fn is_done(&self) -> bool {
+        ContinuousTrial::is_done(self)
+    }
+    fn deciding(&self) -> &[bool] {
+        ContinuousTrial::deciding(self)
+    }
+    fn apply_decisions(&mut self, decisions: &[Option<Decision>]) {
+        ContinuousTrial::apply_decisions(self, decisions)
+    }
+    fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+    fn agent_mut(&mut self, i: usize) -> &mut Agent {
+        &mut self.agents[i]
+    }
+    fn finish(self) -> ContinuousResult {
+        ContinuousTrial::finish(self)
     }
 }
 

@@ -46,11 +46,13 @@ mod registry;
 pub mod rewards;
 pub mod rollout;
 pub mod scenario;
+pub mod stepping;
 mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};
 pub use rewards::{RewardConfig, StepRewards};
 pub use scenario::{check_trial_set_size, MapSource, StartSpec, MAX_PLANNED_CELLS, MAX_TRIALS};
+pub use stepping::{Present, Sink, Stepping};
 pub use trial::{
     build, build_agent, record_step, Future, StepRecord, Trial, TrialResult, TrialSpec,
 };

@@ -2,12 +2,14 @@
 
 use crate::registry::{PolicyContext, PolicyRegistry};
 use crate::rewards::{RewardConfig, StepRewards};
+use crate::stepping::{cell_pose, Present, RobotShown, Stepping};
 use crate::SimError;
 use madenet_agent::{Agent, AgentConfig, Beta, Decision, External, JointPolicy, PlanMessage};
-use madenet_map::{OccGrid, Pos};
+use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_metrics::{MetricsRecorder, Timing, TrialMetrics};
 use madenet_world::{Move, ScenarioConfig, World};
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::time::Instant;
 
 /// Everything that defines a trial.
@@ -120,6 +122,12 @@ pub struct Trial {
     outbox: Vec<Beta>,
     composed: Vec<bool>,
     plan_message: PlanMessage,
+    /// Decisions come from outside through [`Stepping`] ([`Trial::with_external_decisions`]).
+    external: bool,
+    /// Robots waiting for an outside decision ([`Stepping::deciding`]).
+    awaiting: Vec<bool>,
+    /// A timestep is half done: begun, its decisions given, its moves still to come.
+    mid_step: bool,
 }
 
 /// The world and the agents of `spec`, each agent with its own policy from `registry` (seeded
@@ -227,6 +235,9 @@ impl Trial {
                 start: Pos::new(0, 0),
                 path: Vec::new(),
             },
+            external: false,
+            awaiting: vec![false; n],
+            mid_step: false,
         })
     }
 
@@ -258,6 +269,8 @@ impl Trial {
         self.decided.fill(false);
         self.moves.fill(Move::Stay);
         self.joint = None;
+        self.awaiting.fill(false);
+        self.mid_step = false;
         self.interaction_steps.fill(0);
         self.rewards = StepRewards {
             robots: vec![0.0; n],
@@ -322,6 +335,9 @@ impl Trial {
             outbox: self.outbox.clone(),
             composed: self.composed.clone(),
             plan_message: self.plan_message.clone(),
+            external: false,
+            awaiting: vec![false; self.awaiting.len()],
+            mid_step: false,
         })
     }
 
@@ -404,6 +420,16 @@ impl Trial {
         if let Some(s) = started {
             self.elapsed += s.elapsed();
         }
+    }
+
+    /// This trial taking its decisions from outside through [`Stepping`]: a timestep whose
+    /// robots decide stops at the decision point ([`Stepping::deciding`]); after
+    /// [`Stepping::apply_decisions`] the next [`Stepping::step`] finishes it — the continuous
+    /// world's protocol. (The grid's own halves, [`Trial::begin_step`] and
+    /// [`Trial::finish_step`], stay for rollouts and learners.)
+    pub fn with_external_decisions(mut self, on: bool) -> Self {
+        self.external = on;
+        self
     }
 
     /// Keep a [`StepRecord`] per timestep in the result.
@@ -652,5 +678,117 @@ impl Trial {
                 },
             },
         }
+    }
+}
+
+impl Present for Trial {
+    fn robots(&self) -> usize {
+        self.agents.len()
+    }
+    fn time_s(&self) -> f64 {
+        self.world.t() as f64
+    }
+    fn step_s(&self) -> f64 {
+        1.0
+    }
+    fn truth(&self) -> &OccGrid {
+        self.world.truth()
+    }
+    fn pose(&self, i: usize) -> madenet_continuous::Pose {
+        cell_pose(self.world.positions()[i], self.world.truth().resolution)
+    }
+    fn cell(&self, i: usize) -> Pos {
+        self.world.positions()[i]
+    }
+    fn robot(&self, i: usize) -> RobotShown<'_> {
+        RobotShown::of(&self.agents[i])
+    }
+    /// What the robot knows now: its belief and this timestep's observation, which its agent
+    /// takes in at the start of the next timestep (or never, at the end), as
+    /// `Belief::observe` takes it in: unknown cells learn, free ones may turn out obstacles.
+    fn belief(&self, i: usize) -> Option<Cow<'_, [Occupancy]>> {
+        let width = self.world.truth().width();
+        let mut cells = self.agents[i].belief().map().to_vec();
+        for &(p, occ) in &self.world.observation(i).seen {
+            let c = &mut cells[p.row as usize * width + p.col as usize];
+            match (*c, occ) {
+                (_, Occupancy::Unknown) => {}
+                (Occupancy::Unknown, o) => *c = o,
+                (Occupancy::Free, Occupancy::Obstacle) => *c = Occupancy::Obstacle,
+                _ => {}
+            }
+        }
+        Some(Cow::Owned(cells))
+    }
+    fn team_map(&self) -> Cow<'_, [Occupancy]> {
+        Cow::Borrowed(self.world.team_map())
+    }
+    fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
+        Cow::Borrowed(self.world.contacts())
+    }
+    fn exchanges(&self) -> &[(usize, usize)] {
+        self.world.exchanges()
+    }
+    fn explored(&self) -> f64 {
+        self.world.explored_fraction()
+    }
+    fn distance(&self) -> f64 {
+        self.world.distances().iter().sum()
+    }
+    fn when(&self) -> String {
+        format!("timestep {}", self.world.t())
+    }
+}
+
+impl Stepping for Trial {
+    type Outcome = TrialResult;
+
+    fn step(&mut self) -> bool {
+        if !self.external {
+            return Trial::step(self);
+        }
+        if self.awaiting.contains(&true) {
+            return true;
+        }
+        if std::mem::take(&mut self.mid_step) {
+            self.finish_step();
+            return true;
+        }
+        if !self.begin_step() {
+            return false;
+        }
+        if self.decided.contains(&true) {
+            self.awaiting.copy_from_slice(&self.decided);
+            self.mid_step = true;
+        } else {
+            self.finish_step();
+        }
+        true
+    }
+    fn is_done(&self) -> bool {
+        Trial::is_done(self)
+    }
+    fn deciding(&self) -> &[bool] {
+        &self.awaiting
+    }
+    fn apply_decisions(&mut self, decisions: &[Option<Decision>]) {
+        for i in 0..self.agents.len() {
+            if !std::mem::take(&mut self.awaiting[i]) {
+                continue;
+            }
+            match decisions.get(i).copied().flatten() {
+                Some(d) => self.agents[i].apply_decision(d),
+                None => self.agents[i].decide(),
+            }
+        }
+    }
+    fn agents(&self) -> &[Agent] {
+        &self.agents
+    }
+    fn agent_mut(&mut self, i: usize) -> &mut Agent {
+        &mut self.agents[i]
+    }
+    fn finish(self) -> TrialResult {
+        Trial::finish(self)
     }
 }

@@ -704,3 +704,37 @@ fn the_plan_oracles_complete_repeat_and_depart_from_their_base() {
         "each restricted plan departs from the full one somewhere"
     );
 }
+
+/// The stepping contract on the grid: a trial taking its decisions from outside, each given by
+/// the robot's own policy (`None`), is the trial that decides for itself — trajectory and
+/// metrics; and outside decisions are obeyed (a robot told to idle has no goal).
+#[test]
+fn the_grid_through_the_stepping_contract_is_the_same_trial() {
+    use madenet_agent::Decision;
+    use madenet_sim::stepping::Stepping;
+    let s = spec(4, Corner::BottomLeft, "spread", 0.5, 9);
+    let own = Trial::new(s.clone()).unwrap().record_trajectory(true).run();
+    let mut outside = Trial::new(s.clone())
+        .unwrap()
+        .record_trajectory(true)
+        .with_external_decisions(true);
+    let mut asked = 0;
+    while Stepping::step(&mut outside) {
+        if Stepping::deciding(&outside).contains(&true) {
+            asked += 1;
+            // A call while decisions are awaited does nothing.
+            assert!(Stepping::step(&mut outside));
+            assert!(Stepping::deciding(&outside).contains(&true));
+            Stepping::apply_decisions(&mut outside, &[]);
+        }
+    }
+    assert!(asked > 3, "{asked} decision points");
+    let outside = Stepping::finish(outside);
+    assert_eq!(outside.trajectory, own.trajectory);
+    assert_eq!(outside.metrics, own.metrics);
+    // Told to idle, robot 0 keeps no goal at its first decision.
+    let mut t = Trial::new(s).unwrap().with_external_decisions(true);
+    while Stepping::step(&mut t) && !Stepping::deciding(&t)[0] {}
+    Stepping::apply_decisions(&mut t, &[Some(Decision::Idle)]);
+    assert_eq!(t.agents()[0].goal(), None);
+}

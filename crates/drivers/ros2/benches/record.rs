@@ -70,7 +70,7 @@ fn bench(c: &mut Criterion) {
                 while trial.step() {
                     bag.step(&trial).expect("recorded");
                 }
-                let (at, _) = bag.finish().expect("finished").expect("a bag");
+                let (at, _) = bag.finish(&trial).expect("finished").expect("a bag");
                 std::hint::black_box(trial.finish());
                 at
             })
@@ -83,7 +83,7 @@ fn bench(c: &mut Criterion) {
             while trial.step() {
                 rec.step(&trial).expect("encoded");
             }
-            rec.finish().expect("finished");
+            rec.finish(&trial).expect("finished");
             trial.finish()
         })
     });
@@ -92,7 +92,7 @@ fn bench(c: &mut Criterion) {
             timed_bags(iters, &dir, |dir| {
                 let trial = Trial::new(spec.clone()).expect("trial");
                 let bag = Recorder::start(dir, &trial).expect("bag");
-                bag.finish().expect("finished").expect("a bag").0
+                bag.finish(&trial).expect("finished").expect("a bag").0
             })
         })
     });
@@ -103,7 +103,7 @@ fn bench(c: &mut Criterion) {
         while trial.step() {
             bag.step(&trial).expect("recorded");
         }
-        bag.finish().expect("finished").expect("a bag").0
+        bag.finish(&trial).expect("finished").expect("a bag").0
     };
     let mut files: Vec<(std::ffi::OsString, Vec<u8>)> = std::fs::read_dir(&made)
         .expect("bag folder")

@@ -60,6 +60,9 @@ pub mod bag;
 pub mod continuous_stand_in;
 #[cfg(feature = "foxglove")]
 pub mod live;
+#[cfg(not(feature = "foxglove"))]
+#[path = "live_off.rs"]
+pub mod live;
 pub mod msgdefs;
 pub mod msgs;
 mod real;
@@ -69,6 +72,16 @@ mod stand_in;
 
 /// The frame every madenet topic is stamped with (REP 105's `map`).
 pub const FRAME_ID: &str = "map";
+
+/// Why the live view ([`live::Live`]) could not start.
+#[derive(Debug, thiserror::Error)]
+#[error("{addr}: {why}")]
+pub struct LiveError {
+    /// The address asked for.
+    pub addr: String,
+    /// What went wrong.
+    pub why: String,
+}
 
 /// What can go wrong talking ROS 2.
 #[derive(Debug, thiserror::Error)]

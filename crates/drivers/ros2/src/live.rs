@@ -18,15 +18,7 @@ use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, Web
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-/// Why the live view could not start.
-#[derive(Debug, thiserror::Error)]
-#[error("{addr}: {why}")]
-pub struct LiveError {
-    /// The address asked for.
-    pub addr: String,
-    /// What went wrong.
-    pub why: String,
-}
+pub use crate::LiveError;
 
 /// A Foxglove WebSocket server and its channels ([module docs](self)).
 pub struct Live {

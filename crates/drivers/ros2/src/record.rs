@@ -1,22 +1,28 @@
-//! A grid trial as ROS 2 messages in simulated time (timestep t is second t, published on
-//! `/clock`), into a bag ([`crate::bag`]: `madenet run --record DIR`), a live Foxglove view
-//! (`crate::live`, feature `foxglove`: `madenet run --foxglove`), or both — the same messages,
-//! encoded once.
+//! A run of any world as ROS 2 messages in simulated time (published on `/clock`), into a bag
+//! ([`crate::bag`]: `madenet run --record DIR`), a live Foxglove view ([`crate::live`]:
+//! `madenet run --foxglove`), or both — the same messages, encoded once. One [`Recorder`] reads
+//! every world through [`madenet_sim::stepping::Present`] (the grid trial, the continuous
+//! trial, a world node), so every world's bag carries the same topics; the continuous world
+//! adds its scans and fine maps. A grid timestep is one simulated second.
 //!
 //! | topic | type | when |
 //! | --- | --- | --- |
-//! | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once, at the start |
-//! | `/team_map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the team's merged map 𝓜 (everything any robot observed) |
-//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: robot i's belief with the timestep's own observation |
-//! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep, the start and the end included |
+//! | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once, at the start: the true map in the agents' cells |
+//! | `/fine_truth_map` | `nav_msgs/msg/OccupancyGrid` | continuous world, once: the scene at its fine resolution (0.1 m pixels by default) |
+//! | `/team_map` | `nav_msgs/msg/OccupancyGrid` | when it changes (at most once a simulated second): the team's merged map 𝓜 (everything any robot read) |
+//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the grid robot's belief with the timestep's own observation; the continuous robot's fine map (occupancy %), after a scan, at most once a second (a world node's robots keep theirs in their own processes) |
+//! | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | continuous world: each of robot i's scans (all at the start, then staggered), in `robot<i>/base_link` |
+//! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep (continuous: 10 Hz), the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes (to none: its own cell) |
 //! | `/robot<i>/plan` | `nav_msgs/msg/Path` | when robot i's route or goal changes (not when it only advances along the last route): from its cell to its goal |
 //! | `/robot<i>/candidates` | `visualization_msgs/msg/MarkerArray` | when robot i decided with goal candidates 𝒢_i: every candidate (grey spheres, numbered by slot, with the learned policy's score: `2: 0.41`) and the chosen one (the robot's colour) |
-//! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact that exchanged β (green lines) and whose exchange dropped out (red) |
-//! | `/metrics/explored` | `std_msgs/msg/Float64` | every timestep: the share of the explorable cells the team knows, 0–1 |
-//! | `/metrics/distance` | `std_msgs/msg/Float64` | every timestep: metres driven by the team so far (TTD) |
-//! | `/tf` | `tf2_msgs/msg/TFMessage` | every timestep: `map` → `robot<i>/base_link` |
-//! | `/clock` | `rosgraph_msgs/msg/Clock` | every timestep |
+//! | `/comms` | `visualization_msgs/msg/MarkerArray` | when it changes: pairs in contact at the last radio round that exchanged β (green lines) and whose exchange dropped out (red) |
+//! | `/metrics/explored` | `std_msgs/msg/Float64` | every simulated second and at the end: the share of the explorable cells the team knows, 0–1 |
+//! | `/metrics/distance` | `std_msgs/msg/Float64` | as `/metrics/explored`: metres driven by the team so far (TTD) |
+//! | `/tf` | `tf2_msgs/msg/TFMessage` | with the poses: `map` → `robot<i>/base_link` |
+//! | `/clock` | `rosgraph_msgs/msg/Clock` | with the poses |
+//!
+//! Every stamp is written once: the final state adds only what its step did not write.
 //!
 //! ```
 //! use madenet_map::paper::{paper_map, Corner};
@@ -39,45 +45,37 @@
 //! while trial.step() {
 //!     bag.step(&trial).unwrap();
 //! }
-//! let (dir, messages) = bag.finish().unwrap().expect("a bag");
+//! let (dir, messages) = bag.finish(&trial).unwrap().expect("a bag");
 //! assert!(messages > 100 && dir.join("metadata.yaml").is_file());
 //! # std::fs::remove_dir_all(&dir).unwrap();
 //! ```
 
 use crate::bag::{Bag, BagError};
+use crate::continuous_stand_in::{fine_grid, laser_scan, pose_stamped, scan_topic};
+use crate::live::Live;
 use crate::msgs::RosMessage;
 use crate::msgs::{
     Clock, ColorRGBA, Float64, Header, Marker, MarkerArray, Path, Point, TFMessage, Time,
     Transform, TransformStamped, Vector3,
 };
-use crate::{occupancy_grid, pose_stamped, MapFrame, FRAME_ID};
+use crate::{occupancy_grid, MapFrame, FRAME_ID};
 use madenet_map::{Occupancy, Pos};
-use madenet_sim::Trial;
+use madenet_sim::stepping::{Present, RobotShown, Sink, SinkError};
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 
 /// Where the messages go: a bag, a live view, or both (each message encoded once).
 struct Outputs {
     bag: Option<Bag>,
-    #[cfg(feature = "foxglove")]
-    live: Option<crate::live::Live>,
+    live: Option<Live>,
     /// The encoding buffer, reused message after message.
     cdr: Vec<u8>,
 }
 
 impl Outputs {
-    fn new(bag: Option<Bag>) -> Self {
-        Outputs {
-            bag,
-            #[cfg(feature = "foxglove")]
-            live: None,
-            cdr: Vec::new(),
-        }
-    }
-
     /// Writes `msg` on `topic` at `ns` to every output, encoded once.
     fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
         msg.write_cdr(&mut self.cdr);
-        #[cfg(feature = "foxglove")]
         if let Some(live) = &mut self.live {
             live.write_cdr::<T>(topic, &self.cdr, ns);
         }
@@ -91,29 +89,13 @@ impl Outputs {
         self.bag.as_ref().map_or(0, Bag::messages)
     }
 
-    fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
-        let Some(bag) = self.bag else {
+    fn finish(&mut self) -> Result<Option<(PathBuf, u64)>, BagError> {
+        let Some(bag) = self.bag.take() else {
             return Ok(None);
         };
         let messages = bag.messages();
         Ok(Some((bag.finish()?, messages)))
     }
-}
-
-/// A grid trial being recorded ([module docs](self)).
-pub struct Recorder {
-    out: Outputs,
-    frame: MapFrame,
-    maps: Vec<Option<Vec<Occupancy>>>,
-    team: Option<Vec<Occupancy>>,
-    goals: Vec<Option<Pos>>,
-    plans: Vec<Option<Vec<Pos>>>,
-    /// Each robot's decision count (a world node's: as its robot shows it) when last recorded.
-    decisions: Vec<u64>,
-    /// Each robot's topic names and `/tf` child frame, made once.
-    names: Vec<RobotTopics>,
-    /// The radio's lines last published (pairs exchanged, pairs dropped, as cells).
-    comms: Option<(Vec<Pos>, Vec<Pos>)>,
 }
 
 /// Robot i's topic names and `/tf` child frame, made once per recording.
@@ -123,6 +105,7 @@ struct RobotTopics {
     goal: String,
     plan: String,
     candidates: String,
+    scan: String,
     base_link: String,
 }
 
@@ -135,24 +118,10 @@ impl RobotTopics {
             goal,
             plan: format!("/robot{i}/plan"),
             candidates: format!("/robot{i}/candidates"),
+            scan: scan_topic(i),
             base_link: format!("robot{i}/base_link"),
         }
     }
-}
-
-/// What the recorder reads of one robot at a timestep.
-struct RobotView<'a> {
-    /// Its map (None: not known here).
-    belief: Option<&'a [Occupancy]>,
-    goal: Option<Pos>,
-    path: &'a [Pos],
-    candidates: &'a [Pos],
-    /// The slot of its goal among `candidates`.
-    chosen: Option<usize>,
-    /// What its policy weighed per slot at the decision (learned policies).
-    scores: Option<&'a [f32]>,
-    /// Changes when it decides.
-    decision: u64,
 }
 
 /// Robot i's colour: the palette of madenet's pictures, cycled.
@@ -169,72 +138,90 @@ fn robot_color(i: usize) -> ColorRGBA {
     ColorRGBA { r, g, b, a: 1.0 }
 }
 
+/// How often, in steps, each group of topics is written (a grid timestep is one second: every
+/// step for all of them).
+#[derive(Clone, Copy, Debug)]
+struct Every {
+    /// Poses, `/tf`, `/clock` and the radio's lines: 10 Hz.
+    pose: u64,
+    /// Metrics: once a second.
+    metrics: u64,
+    /// The team map and the continuous robots' fine maps: at most once a second.
+    map: u64,
+    /// The continuous robots' scans (the lidar's period).
+    scan: u64,
+}
+
+/// A run being recorded or streamed ([module docs](self)).
+pub struct Recorder {
+    out: Outputs,
+    frame: MapFrame,
+    every: Every,
+    /// Steps recorded so far.
+    ticks: u64,
+    /// The tick at which poses and metrics were last written (the final state writes only
+    /// what its step did not).
+    pose_tick: Option<u64>,
+    metrics_tick: Option<u64>,
+    /// Each robot's map last written (the grid's cells, the continuous world's fine map) and
+    /// the tick of the fine map.
+    maps: Vec<Option<Vec<i8>>>,
+    map_ticks: Vec<u64>,
+    team: Option<Vec<Occupancy>>,
+    goals: Vec<Option<Pos>>,
+    plans: Vec<Option<Vec<Pos>>>,
+    /// Each robot's decision count when last recorded.
+    decisions: Vec<u64>,
+    names: Vec<RobotTopics>,
+    /// The radio's lines last published (pairs exchanged, pairs dropped, as cells).
+    comms: Option<(Vec<Pos>, Vec<Pos>)>,
+}
+
 impl Recorder {
     /// Starts the bag at `path` (a new path or an empty folder) with the true map and the
-    /// trial's present.
-    pub fn start(path: &std::path::Path, trial: &Trial) -> Result<Self, BagError> {
-        Self::to(Some(Bag::create(path)?), trial)
+    /// run's present.
+    pub fn start<S: Present + ?Sized>(path: &std::path::Path, sim: &S) -> Result<Self, BagError> {
+        Self::to(Some(Bag::create(path)?), sim)
     }
 
-    /// Starts recording into `bag` (if any) with the true map and the trial's present.
-    pub fn to(bag: Option<Bag>, trial: &Trial) -> Result<Self, BagError> {
-        Self::begin(Outputs::new(bag), trial)
+    /// Starts recording into `bag` (if any) with the true map and the run's present.
+    pub fn to<S: Present + ?Sized>(bag: Option<Bag>, sim: &S) -> Result<Self, BagError> {
+        Self::to_live(bag, None, sim)
     }
 
-    /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
-    /// trial's present.
-    #[cfg(feature = "foxglove")]
-    pub fn to_live(
+    /// Starts recording into `bag` (if any) and streaming to `live` (if any), with the true
+    /// map and the run's present.
+    pub fn to_live<S: Present + ?Sized>(
         bag: Option<Bag>,
-        live: crate::live::Live,
-        trial: &Trial,
+        live: Option<Live>,
+        sim: &S,
     ) -> Result<Self, BagError> {
-        Self::begin(
-            Outputs {
-                live: Some(live),
-                ..Outputs::new(bag)
-            },
-            trial,
-        )
-    }
-
-    fn begin(out: Outputs, trial: &Trial) -> Result<Self, BagError> {
-        let mut r = Self::empty(out, trial.world())?;
-        r.step(trial)?;
-        Ok(r)
-    }
-
-    /// Starts recording a world node's timesteps ([`Recorder::step_world`], the first before
-    /// the first timestep) into `bag` (if any), with the true map.
-    pub fn for_world(bag: Option<Bag>, world: &madenet_world::World) -> Result<Self, BagError> {
-        Self::empty(Outputs::new(bag), world)
-    }
-
-    /// [`Recorder::for_world`], streaming to `live` too.
-    #[cfg(feature = "foxglove")]
-    pub fn for_world_live(
-        bag: Option<Bag>,
-        live: crate::live::Live,
-        world: &madenet_world::World,
-    ) -> Result<Self, BagError> {
-        Self::empty(
-            Outputs {
-                live: Some(live),
-                ..Outputs::new(bag)
-            },
-            world,
-        )
-    }
-
-    /// A recorder of `world`'s robots that has written the true map only.
-    fn empty(out: Outputs, world: &madenet_world::World) -> Result<Self, BagError> {
-        let truth = world.truth();
-        let frame = MapFrame::of(truth);
-        let n = world.positions().len();
+        let out = Outputs {
+            bag,
+            live,
+            cdr: Vec::new(),
+        };
+        let step = sim.step_s();
+        let every = |s: f64| (s / step).round().max(1.0) as u64;
+        let scan = sim
+            .continuous()
+            .map_or(1, |w| every(1.0 / w.config().lidar.rate_hz));
+        let n = sim.robots();
+        let truth = sim.truth();
         let mut r = Recorder {
             out,
-            frame,
+            frame: MapFrame::of(truth),
+            every: Every {
+                pose: every(0.1),
+                metrics: every(1.0),
+                map: every(1.0),
+                scan,
+            },
+            ticks: 0,
+            pose_tick: None,
+            metrics_tick: None,
             maps: vec![None; n],
+            map_ticks: vec![0; n],
             team: None,
             goals: vec![None; n],
             plans: vec![None; n],
@@ -243,13 +230,230 @@ impl Recorder {
             comms: None,
         };
         let msg = occupancy_grid(&r.frame, truth.cells(), Time::default());
-        r.put("/truth_map", &msg, 0)?;
+        r.out.put("/truth_map", &msg, 0)?;
+        if let Some(w) = sim.continuous() {
+            // The scene itself at its fine resolution (what the lidar hits), beside the
+            // robots' fine maps.
+            let fine = &w.scene().fine;
+            let msg = occupancy_grid(&MapFrame::of(fine), fine.cells(), Time::default());
+            r.out.put("/fine_truth_map", &msg, 0)?;
+        }
+        r.record(sim, false)?;
         Ok(r)
     }
 
-    /// Writes `msg` on `topic` at `ns` to every output.
-    fn put<T: RosMessage>(&mut self, topic: &str, msg: &T, ns: u64) -> Result<(), BagError> {
-        self.out.put(topic, msg, ns)
+    /// Records the step the run just took.
+    pub fn step<S: Present + ?Sized>(&mut self, sim: &S) -> Result<(), BagError> {
+        self.ticks += 1;
+        self.record(sim, false)
+    }
+
+    /// Messages written to the bag so far.
+    pub fn messages(&self) -> u64 {
+        self.out.messages()
+    }
+
+    /// Records the run's final state (what its last step did not write), then finishes the
+    /// bag, if any: where it is, and how many messages it holds.
+    pub fn finish<S: Present + ?Sized>(
+        mut self,
+        sim: &S,
+    ) -> Result<Option<(PathBuf, u64)>, BagError> {
+        self.record(sim, true)?;
+        self.out.finish()
+    }
+
+    /// The live view's URL, if streaming.
+    pub fn live_url(&self) -> Option<&str> {
+        self.out.live.as_ref().map(Live::url)
+    }
+
+    /// `last`: the run's final state (poses, `/tf`, `/clock` and metrics written whatever
+    /// their rate, unless this tick has them already; no scans).
+    fn record<S: Present + ?Sized>(&mut self, sim: &S, last: bool) -> Result<(), BagError> {
+        let secs = sim.time_s();
+        let ns = (secs * 1e9).round() as u64;
+        let stamp = Time {
+            sec: secs.floor() as i32,
+            nanosec: (ns % 1_000_000_000) as u32,
+        };
+        let k = self.ticks;
+        let n = sim.robots();
+        let due = |every: u64, done: Option<u64>| {
+            if last {
+                done != Some(k)
+            } else {
+                k.is_multiple_of(every)
+            }
+        };
+        if due(self.every.pose, self.pose_tick) {
+            self.pose_tick = Some(k);
+            self.out.put("/clock", &Clock { clock: stamp }, ns)?;
+            let mut transforms = Vec::with_capacity(n);
+            for i in 0..n {
+                let pose = pose_stamped(sim.pose(i), &self.frame, stamp);
+                let p = &pose.pose;
+                transforms.push(TransformStamped {
+                    header: pose.header.clone(),
+                    child_frame_id: self.names[i].base_link.clone(),
+                    transform: Transform {
+                        translation: Vector3 {
+                            x: p.position.x,
+                            y: p.position.y,
+                            z: 0.0,
+                        },
+                        rotation: p.orientation,
+                    },
+                });
+                self.out.put(&self.names[i].pose, &pose, ns)?;
+            }
+            self.out.put("/tf", &TFMessage { transforms }, ns)?;
+            self.record_comms(sim, stamp, ns)?;
+        }
+        let maps_due = last || k.is_multiple_of(self.every.map);
+        for i in 0..n {
+            self.record_robot_map(sim, i, last, stamp, ns)?;
+            self.record_robot(sim, i, stamp, ns)?;
+        }
+        if maps_due {
+            let team = sim.team_map();
+            if self.team.as_deref() != Some(&team[..]) {
+                let msg = occupancy_grid(&self.frame, &team, stamp);
+                self.out.put("/team_map", &msg, ns)?;
+                self.team = Some(team.into_owned());
+            }
+        }
+        if due(self.every.metrics, self.metrics_tick) {
+            self.metrics_tick = Some(k);
+            let explored = Float64 {
+                data: sim.explored(),
+            };
+            self.out.put("/metrics/explored", &explored, ns)?;
+            let distance = Float64 {
+                data: sim.distance(),
+            };
+            self.out.put("/metrics/distance", &distance, ns)?;
+        }
+        Ok(())
+    }
+
+    /// Robot `i`'s own map when it changed: the grid's belief every step, the continuous
+    /// world's scan and fine map after a scan.
+    fn record_robot_map<S: Present + ?Sized>(
+        &mut self,
+        sim: &S,
+        i: usize,
+        last: bool,
+        stamp: Time,
+        ns: u64,
+    ) -> Result<(), BagError> {
+        let k = self.ticks;
+        if let Some(cells) = sim.belief(i) {
+            let msg = occupancy_grid(&self.frame, &cells, stamp);
+            if self.maps[i].as_ref() != Some(&msg.data) {
+                self.out.put(&self.names[i].map, &msg, ns)?;
+                self.maps[i] = Some(msg.data);
+            }
+            return Ok(());
+        }
+        let Some(world) = sim.continuous() else {
+            return Ok(());
+        };
+        // The world scans every robot at the start and robot i at the end of the periods
+        // where (ticks + i) is a multiple of the scan period (the stand-in's rule).
+        if last || !(k == 0 || (k + i as u64).is_multiple_of(self.every.scan)) {
+            return Ok(());
+        }
+        self.out
+            .put(&self.names[i].scan, &laser_scan(world, i, stamp), ns)?;
+        if self.maps[i].is_none() || k - self.map_ticks[i] >= self.every.map {
+            let grid = fine_grid(world, i, &self.frame, stamp);
+            if self.maps[i].as_ref() != Some(&grid.data) {
+                self.out.put(&self.names[i].map, &grid, ns)?;
+                self.maps[i] = Some(grid.data);
+                self.map_ticks[i] = k;
+            }
+        }
+        Ok(())
+    }
+
+    /// Robot `i`'s goal, plan and goal candidates, when they change.
+    fn record_robot<S: Present + ?Sized>(
+        &mut self,
+        sim: &S,
+        i: usize,
+        stamp: Time,
+        ns: u64,
+    ) -> Result<(), BagError> {
+        let r = sim.robot(i);
+        let here = sim.cell(i);
+        let header = Header {
+            stamp,
+            frame_id: FRAME_ID.into(),
+        };
+        let goal_changed = r.goal != self.goals[i];
+        if goal_changed {
+            // No goal any more (nothing left to reach): its own cell, so the last goal does
+            // not stay shown (PoseStamped has no "none").
+            let msg = crate::pose_stamped(&self.frame, r.goal.unwrap_or(here), stamp);
+            self.out.put(&self.names[i].goal, &msg, ns)?;
+            self.goals[i] = r.goal;
+        }
+        // The route from where the robot stands (the agent plans before it moves, so its
+        // path may still begin with the cell it just left); published when the route changes
+        // or the goal does (a new goal with no route yet is the plan `[here]`), not when the
+        // robot only advances along the last one published.
+        let from = r.path.iter().position(|&p| p == here).map_or(0, |k| k + 1);
+        let plan: Vec<Pos> = std::iter::once(here)
+            .chain(r.path[from..].iter().copied())
+            .collect();
+        let advanced = !goal_changed
+            && self.plans[i]
+                .as_ref()
+                .is_some_and(|last| last.ends_with(&plan));
+        if !advanced {
+            let poses = plan
+                .iter()
+                .map(|&p| crate::pose_stamped(&self.frame, p, stamp))
+                .collect();
+            let msg = Path { header, poses };
+            self.out.put(&self.names[i].plan, &msg, ns)?;
+            self.plans[i] = Some(plan);
+        }
+        if r.decisions != self.decisions[i] && !r.candidates.is_empty() {
+            let msg = self.candidate_markers(i, &r, stamp);
+            self.out.put(&self.names[i].candidates, &msg, ns)?;
+        }
+        self.decisions[i] = r.decisions;
+        Ok(())
+    }
+
+    /// The radio's lines when they change (markers stay until replaced).
+    fn record_comms<S: Present + ?Sized>(
+        &mut self,
+        sim: &S,
+        stamp: Time,
+        ns: u64,
+    ) -> Result<(), BagError> {
+        let exchanges = sim.exchanges();
+        let (ok, dropped): (Vec<_>, Vec<_>) = sim
+            .contacts()
+            .iter()
+            .copied()
+            .partition(|pair| exchanges.contains(pair));
+        let ends = |pairs: &[(usize, usize)]| -> Vec<Pos> {
+            pairs
+                .iter()
+                .flat_map(|&(a, b)| [sim.cell(a), sim.cell(b)])
+                .collect()
+        };
+        let lines = (ends(&ok), ends(&dropped));
+        if self.comms.as_ref() != Some(&lines) {
+            let comms = self.comm_markers(&lines.0, &lines.1, stamp);
+            self.out.put("/comms", &comms, ns)?;
+            self.comms = Some(lines);
+        }
+        Ok(())
     }
 
     /// A marker in the map frame at `stamp`.
@@ -273,210 +477,10 @@ impl Recorder {
         Point { x, y, z }
     }
 
-    /// Records the trial's current timestep.
-    pub fn step(&mut self, trial: &Trial) -> Result<(), BagError> {
-        let world = trial.world();
-        let width = world.truth().width();
-        let beliefs: Vec<Vec<Occupancy>> = trial
-            .agents()
-            .iter()
-            .enumerate()
-            .map(|(i, a)| {
-                // What the robot knows now: its belief and this timestep's observation, which
-                // its agent takes in at the start of the next timestep (or never, at the end),
-                // as `Belief::observe` takes it in: unknown cells learn, free ones may turn out
-                // obstacles.
-                let mut cells = a.belief().map().to_vec();
-                for &(p, occ) in &world.observation(i).seen {
-                    let c = &mut cells[p.row as usize * width + p.col as usize];
-                    match (*c, occ) {
-                        (_, Occupancy::Unknown) => {}
-                        (Occupancy::Unknown, o) => *c = o,
-                        (Occupancy::Free, Occupancy::Obstacle) => *c = Occupancy::Obstacle,
-                        _ => {}
-                    }
-                }
-                cells
-            })
-            .collect();
-        let robots: Vec<RobotView<'_>> = trial
-            .agents()
-            .iter()
-            .zip(&beliefs)
-            .map(|(a, b)| RobotView {
-                belief: Some(b),
-                goal: a.goal(),
-                path: a.path(),
-                candidates: &a.candidates().cells,
-                chosen: a.action(),
-                scores: a.policy_scores(),
-                decision: a.stats().decisions as u64,
-            })
-            .collect();
-        self.record(world, &robots, world.exchanges())
-    }
-
-    /// Records a world node's timestep (`madenet world`, which `launch` starts): the world,
-    /// what each robot shows (goal, path, candidates, a learned policy's scores;
-    /// [`madenet_runtime::wire::Shown`]) and the
-    /// radio's exchanges. The robots' beliefs live in their own processes: no `/robot<i>/map`.
-    pub fn step_world(
-        &mut self,
-        world: &madenet_world::World,
-        shown: &[madenet_runtime::wire::Shown],
-        exchanges: &[(usize, usize)],
-    ) -> Result<(), BagError> {
-        let none = madenet_runtime::wire::Shown::default();
-        let robots: Vec<RobotView<'_>> = (0..world.positions().len())
-            .map(|i| {
-                let s = shown.get(i).unwrap_or(&none);
-                RobotView {
-                    belief: None,
-                    goal: s.goal,
-                    path: &s.path,
-                    candidates: &s.candidates,
-                    chosen: s
-                        .goal
-                        .and_then(|g| s.candidates.iter().position(|&c| c == g)),
-                    scores: (!s.scores.is_empty()).then_some(&s.scores[..]),
-                    decision: s.decisions,
-                }
-            })
-            .collect();
-        self.record(world, &robots, exchanges)
-    }
-
-    fn record(
-        &mut self,
-        world: &madenet_world::World,
-        robots: &[RobotView<'_>],
-        exchanges: &[(usize, usize)],
-    ) -> Result<(), BagError> {
-        let t = world.t() as u64;
-        let (ns, stamp) = (
-            t * 1_000_000_000,
-            Time {
-                sec: t as i32,
-                nanosec: 0,
-            },
-        );
-        self.put("/clock", &Clock { clock: stamp }, ns)?;
-        let positions = world.positions();
-        let transforms = positions
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| {
-                let (x, y) = self.frame.cell_center(p);
-                let q = pose_stamped(&self.frame, p, stamp).pose.orientation;
-                TransformStamped {
-                    header: Header {
-                        stamp,
-                        frame_id: FRAME_ID.into(),
-                    },
-                    child_frame_id: self.names[i].base_link.clone(),
-                    transform: Transform {
-                        translation: Vector3 { x, y, z: 0.0 },
-                        rotation: q,
-                    },
-                }
-            })
-            .collect();
-        self.put("/tf", &TFMessage { transforms }, ns)?;
-        for (i, r) in robots.iter().enumerate() {
-            if let Some(cells) = r.belief.filter(|&c| self.maps[i].as_deref() != Some(c)) {
-                let msg = occupancy_grid(&self.frame, cells, stamp);
-                self.out.put(&self.names[i].map, &msg, ns)?;
-                match &mut self.maps[i] {
-                    Some(m) => m.copy_from_slice(cells),
-                    m => *m = Some(cells.to_vec()),
-                }
-            }
-            let pose = pose_stamped(&self.frame, positions[i], stamp);
-            self.out.put(&self.names[i].pose, &pose, ns)?;
-            let goal_changed = r.goal != self.goals[i];
-            if goal_changed {
-                // No goal any more (nothing left to reach): its own cell, so the last goal
-                // does not stay shown (PoseStamped has no "none").
-                let msg = pose_stamped(&self.frame, r.goal.unwrap_or(positions[i]), stamp);
-                self.out.put(&self.names[i].goal, &msg, ns)?;
-            }
-            self.goals[i] = r.goal;
-            // The plan from where the robot stands (the agent plans before it moves, so its
-            // path may still begin with the cell it just left); published when the route
-            // changes or the goal does (a new goal with no route yet is the plan `[here]`),
-            // not when the robot only advances along the last one published.
-            let from = r
-                .path
-                .iter()
-                .position(|&p| p == positions[i])
-                .map_or(0, |k| k + 1);
-            let plan: Vec<Pos> = std::iter::once(positions[i])
-                .chain(r.path[from..].iter().copied())
-                .collect();
-            let advanced = !goal_changed
-                && self.plans[i]
-                    .as_ref()
-                    .is_some_and(|last| last.ends_with(&plan));
-            if !advanced {
-                let poses = plan
-                    .iter()
-                    .map(|&p| pose_stamped(&self.frame, p, stamp))
-                    .collect();
-                let msg = Path {
-                    header: pose.header.clone(),
-                    poses,
-                };
-                self.out.put(&self.names[i].plan, &msg, ns)?;
-                self.plans[i] = Some(plan);
-            }
-            if r.decision != self.decisions[i] && !r.candidates.is_empty() {
-                let msg = self.candidate_markers(i, r, stamp);
-                self.out.put(&self.names[i].candidates, &msg, ns)?;
-            }
-            self.decisions[i] = r.decision;
-        }
-        let team = world.team_map();
-        if self.team.as_deref() != Some(team) {
-            let msg = occupancy_grid(&self.frame, team, stamp);
-            self.put("/team_map", &msg, ns)?;
-            match &mut self.team {
-                Some(m) => m.copy_from_slice(team),
-                m => *m = Some(team.to_vec()),
-            }
-        }
-        // The radio's lines when they change (markers stay until replaced).
-        let (ok, dropped): (Vec<_>, Vec<_>) = world
-            .contacts()
-            .iter()
-            .copied()
-            .partition(|pair| exchanges.contains(pair));
-        let ends = |pairs: &[(usize, usize)]| -> Vec<Pos> {
-            pairs
-                .iter()
-                .flat_map(|&(a, b)| [positions[a], positions[b]])
-                .collect()
-        };
-        let lines = (ends(&ok), ends(&dropped));
-        if self.comms.as_ref() != Some(&lines) {
-            let comms = self.comm_markers(&lines.0, &lines.1, stamp);
-            self.put("/comms", &comms, ns)?;
-            self.comms = Some(lines);
-        }
-        let explored = Float64 {
-            data: world.explored_fraction(),
-        };
-        self.put("/metrics/explored", &explored, ns)?;
-        let distance = Float64 {
-            data: world.distances().iter().sum(),
-        };
-        self.put("/metrics/distance", &distance, ns)?;
-        Ok(())
-    }
-
     /// Robot `i`'s goal candidates as markers: every one a grey sphere labelled with its slot
     /// number (and, when a learned policy decided, its score: `k: 0.42`), the chosen one
     /// larger and in the robot's colour.
-    fn candidate_markers(&self, i: usize, r: &RobotView<'_>, stamp: Time) -> MarkerArray {
+    fn candidate_markers(&self, i: usize, r: &RobotShown<'_>, stamp: Time) -> MarkerArray {
         let (cells, chosen) = (r.candidates, r.chosen);
         let ns = format!("robot{i}/candidates");
         let mut all = Self::marker(stamp, &ns, 0, Marker::SPHERE_LIST);
@@ -556,224 +560,52 @@ impl Recorder {
             markers: vec![lines(0, ok, green), lines(1, dropped, red)],
         }
     }
+}
 
-    /// Messages written to the bag so far.
-    pub fn messages(&self) -> u64 {
-        self.out.messages()
-    }
+/// The recorder as a sink of the run loop ([`madenet_sim::stepping::run`]): started by its
+/// owner (which makes its outputs, so a refused path fails before the run), told of every
+/// step, and finished with the final state. `finish` gives the line to print about the bag.
+pub struct RecorderSink(Option<Recorder>);
 
-    /// Finishes the bag, if any: where it is, and how many messages it holds.
-    pub fn finish(self) -> Result<Option<(PathBuf, u64)>, BagError> {
-        self.out.finish()
+impl RecorderSink {
+    /// Wraps a started recorder.
+    pub fn new(recorder: Recorder) -> Self {
+        RecorderSink(Some(recorder))
     }
 }
 
-/// Control periods between fine maps of one robot in a continuous recording (at most one a
-/// second at the default 0.05 s period: a 20 m world's fine map is 40 kB a message).
-const FINE_MAP_EVERY_S: f64 = 1.0;
+impl<S: Present + ?Sized> Sink<S> for RecorderSink {
+    fn step(&mut self, sim: &S) -> Result<ControlFlow<String>, SinkError> {
+        if let Some(r) = self.0.as_mut() {
+            r.step(sim).map_err(|e| format!("--record: {e}"))?;
+        }
+        Ok(ControlFlow::Continue(()))
+    }
 
-/// A continuous trial ([`madenet_sim::continuous::ContinuousTrial`]) being recorded or
-/// streamed, in simulated time: the topics of the ROS 2 stand-in
-/// ([`crate::continuous_stand_in`]) and more —
-///
-/// | topic | type | when |
-/// | --- | --- | --- |
-/// | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the true map in 1 m cells |
-/// | `/fine_truth_map` | `nav_msgs/msg/OccupancyGrid` | once: the scene at its fine resolution (0.1 m pixels by default) |
-/// | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | each of robot i's scans (all at the start, then staggered), in `robot<i>/base_link` |
-/// | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | robot i's fine map (occupancy %), when it changed, at most once a second |
-/// | `/robot<i>/pose`, `/tf`, `/clock` | as the grid's | 10 Hz and at the end, with the robots' headings |
-/// | `/robot<i>/goal_pose`, `/robot<i>/plan` | as the grid's | when they change (the agent's cells) |
-/// | `/metrics/explored`, `/metrics/distance` | `std_msgs/msg/Float64` | once a second and at the end |
-pub struct ContinuousRecorder {
-    out: Outputs,
-    frame: MapFrame,
-    /// Control periods recorded (the world's ticks).
-    ticks: u64,
-    scan_every: u64,
-    pose_every: u64,
-    map_every: u64,
-    metrics_every: u64,
-    maps: Vec<Option<Vec<i8>>>,
-    /// The tick of each robot's last fine map.
-    map_ticks: Vec<u64>,
-    goals: Vec<Option<Pos>>,
-    plans: Vec<Option<Vec<Pos>>>,
+    fn finish(&mut self, sim: &S) -> Result<Vec<String>, SinkError> {
+        let Some(r) = self.0.take() else {
+            return Ok(Vec::new());
+        };
+        let done = r.finish(sim).map_err(|e| format!("--record: {e}"))?;
+        Ok(done
+            .map(|(dir, messages)| wrote_line(&dir, messages))
+            .into_iter()
+            .collect())
+    }
 }
 
-impl ContinuousRecorder {
-    /// Starts recording `trial` into `bag` (if any) with the true map and the present.
-    pub fn to(
-        bag: Option<Bag>,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-    ) -> Result<Self, BagError> {
-        Self::begin(Outputs::new(bag), trial)
-    }
-
-    /// Starts recording into `bag` (if any) and streaming to `live`, with the true map and the
-    /// present.
-    #[cfg(feature = "foxglove")]
-    pub fn to_live(
-        bag: Option<Bag>,
-        live: crate::live::Live,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-    ) -> Result<Self, BagError> {
-        Self::begin(
-            Outputs {
-                live: Some(live),
-                ..Outputs::new(bag)
-            },
-            trial,
-        )
-    }
-
-    fn begin(
-        out: Outputs,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-    ) -> Result<Self, BagError> {
-        let world = trial.world();
-        let cfg = world.config();
-        let period = cfg.control_period;
-        let every = |s: f64| (s / period).round().max(1.0) as u64;
-        let n = world.robots();
-        let mut r = ContinuousRecorder {
-            out,
-            frame: MapFrame::of(world.coarse_truth()),
-            ticks: 0,
-            scan_every: every(1.0 / cfg.lidar.rate_hz),
-            pose_every: every(0.1),
-            map_every: every(FINE_MAP_EVERY_S),
-            metrics_every: every(1.0),
-            maps: vec![None; n],
-            map_ticks: vec![0; n],
-            goals: vec![None; n],
-            plans: vec![None; n],
-        };
-        let truth = occupancy_grid(&r.frame, world.coarse_truth().cells(), Time::default());
-        r.out.put("/truth_map", &truth, 0)?;
-        // The scene itself at its fine resolution (what the lidar hits), beside the robots'
-        // fine maps.
-        let fine = &world.scene().fine;
-        let truth = occupancy_grid(&MapFrame::of(fine), fine.cells(), Time::default());
-        r.out.put("/fine_truth_map", &truth, 0)?;
-        r.record(trial, false)?;
-        Ok(r)
-    }
-
-    /// Records the control period the trial just finished.
-    pub fn step(
-        &mut self,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-    ) -> Result<(), BagError> {
-        self.ticks += 1;
-        self.record(trial, false)
-    }
-
-    /// `last`: the trial's final state (poses, `/tf`, `/clock` and metrics written whatever
-    /// their rate).
-    fn record(
-        &mut self,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-        last: bool,
-    ) -> Result<(), BagError> {
-        use crate::continuous_stand_in::{fine_grid, laser_scan, pose_stamped, scan_topic};
-        let world = trial.world();
-        let secs = world.time();
-        let ns = (secs * 1e9).round() as u64;
-        let stamp = Time {
-            sec: secs.floor() as i32,
-            nanosec: (ns % 1_000_000_000) as u32,
-        };
-        let k = self.ticks;
-        let n = world.robots();
-        if last || k.is_multiple_of(self.pose_every) {
-            self.out.put("/clock", &Clock { clock: stamp }, ns)?;
-            let mut transforms = Vec::with_capacity(n);
-            for i in 0..n {
-                let pose = pose_stamped(world.pose(i), &self.frame, stamp);
-                let p = pose.pose;
-                transforms.push(TransformStamped {
-                    header: pose.header.clone(),
-                    child_frame_id: format!("robot{i}/base_link"),
-                    transform: Transform {
-                        translation: Vector3 {
-                            x: p.position.x,
-                            y: p.position.y,
-                            z: 0.0,
-                        },
-                        rotation: p.orientation,
-                    },
-                });
-                self.out.put(&format!("/robot{i}/pose"), &pose, ns)?;
-            }
-            self.out.put("/tf", &TFMessage { transforms }, ns)?;
-        }
-        for (i, agent) in trial.agents().iter().enumerate() {
-            // The world scans every robot at the start and robot i at the end of the periods
-            // where (ticks + i) is a multiple of the scan period (the stand-in's rule).
-            if !last && (k == 0 || (k + i as u64).is_multiple_of(self.scan_every)) {
-                self.out
-                    .put(&scan_topic(i), &laser_scan(world, i, stamp), ns)?;
-                if self.maps[i].is_none() || k - self.map_ticks[i] >= self.map_every {
-                    let grid = fine_grid(world, i, &self.frame, stamp);
-                    if self.maps[i].as_ref() != Some(&grid.data) {
-                        self.out.put(&format!("/robot{i}/map"), &grid, ns)?;
-                        self.maps[i] = Some(grid.data);
-                        self.map_ticks[i] = k;
-                    }
-                }
-            }
-            if agent.goal() != self.goals[i] {
-                // No goal any more: its own cell (as the grid's).
-                let at = agent.goal().unwrap_or_else(|| world.cell_of(i));
-                let msg = crate::pose_stamped(&self.frame, at, stamp);
-                self.out.put(&format!("/robot{i}/goal_pose"), &msg, ns)?;
-            }
-            self.goals[i] = agent.goal();
-            let plan = agent.path().to_vec();
-            if self.plans[i].as_ref() != Some(&plan) {
-                let poses = std::iter::once(world.cell_of(i))
-                    .chain(plan.iter().copied())
-                    .map(|p| crate::pose_stamped(&self.frame, p, stamp))
-                    .collect();
-                let header = Header {
-                    stamp,
-                    frame_id: FRAME_ID.into(),
-                };
-                self.out
-                    .put(&format!("/robot{i}/plan"), &Path { header, poses }, ns)?;
-                self.plans[i] = Some(plan);
-            }
-        }
-        if last || k.is_multiple_of(self.metrics_every) {
-            let explored = Float64 {
-                data: world.explored_fraction(),
-            };
-            self.out.put("/metrics/explored", &explored, ns)?;
-            let distance = Float64 {
-                data: (0..n).map(|i| world.distance(i)).sum(),
-            };
-            self.out.put("/metrics/distance", &distance, ns)?;
-        }
-        Ok(())
-    }
-
-    /// Messages written to the bag so far.
-    pub fn messages(&self) -> u64 {
-        self.out.messages()
-    }
-
-    /// Records `trial`'s final state (poses and metrics at its last tick, whatever their
-    /// rate), then finishes the bag, if any: where it is, and how many messages it holds.
-    pub fn finish(
-        mut self,
-        trial: &madenet_sim::continuous::ContinuousTrial,
-    ) -> Result<Option<(PathBuf, u64)>, BagError> {
-        if !(self.ticks.is_multiple_of(self.pose_every)
-            && self.ticks.is_multiple_of(self.metrics_every))
-        {
-            self.record(trial, true)?;
-        }
-        self.out.finish()
-    }
+/// The line printed about a finished bag at `dir` holding `messages`.
+pub fn wrote_line(dir: &std::path::Path, messages: u64) -> String {
+    let bytes: u64 = std::fs::read_dir(dir)
+        .map(|d| {
+            d.filter_map(|e| e.ok()?.metadata().ok())
+                .map(|m| m.len())
+                .sum()
+        })
+        .unwrap_or(0);
+    format!(
+        "wrote      {} (ROS 2 bag, {messages} messages, {:.1} kB)",
+        dir.display(),
+        bytes as f64 / 1e3
+    )
 }

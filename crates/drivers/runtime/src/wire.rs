@@ -137,6 +137,23 @@ pub struct Shown {
     pub decisions: u64,
 }
 
+impl Shown {
+    /// What the robot shows, as outputs read it ([`madenet_sim::stepping::RobotShown`]; its
+    /// chosen slot is its goal's among its candidates).
+    pub fn view(&self) -> madenet_sim::stepping::RobotShown<'_> {
+        madenet_sim::stepping::RobotShown {
+            goal: self.goal,
+            path: &self.path,
+            candidates: &self.candidates,
+            chosen: self
+                .goal
+                .and_then(|g| self.candidates.iter().position(|&c| c == g)),
+            scores: (!self.scores.is_empty()).then_some(&self.scores[..]),
+            decisions: self.decisions,
+        }
+    }
+}
+
 /// A message that could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum WireError {

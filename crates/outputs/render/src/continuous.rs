@@ -121,17 +121,9 @@ pub fn continuous_picture(trial: &ContinuousTrial, scale: f64) -> RgbaImage {
     // Panel 1: the team's coarse map (every robot's own reading, merged).
     let o = origin(1);
     let (ch, cw) = w.map(0).coarse_size();
+    let team = w.team_map();
     fill_raster(&mut img, o, (pw, ph), cw, ch, |r, c| {
-        let k = r * cw + c;
-        let mut known = Occupancy::Unknown;
-        for i in 0..n {
-            match w.map(i).coarse()[k] {
-                Occupancy::Obstacle => known = Occupancy::Obstacle,
-                Occupancy::Free if known == Occupancy::Unknown => known = Occupancy::Free,
-                _ => {}
-            }
-        }
-        match known {
+        match team[r * cw + c] {
             Occupancy::Unknown => UNKNOWN,
             Occupancy::Free => FREE,
             Occupancy::Obstacle => OBSTACLE,

@@ -37,9 +37,11 @@ mod animation;
 pub mod continuous;
 mod draw;
 mod of_trial;
+pub mod sink;
 
 pub use animation::{save_gif, GifWriter};
 pub use of_trial::{trial_frame, world_frame};
+pub use sink::{Drawn, Pictures};
 
 use draw::{line, mix, rect, rgba, translucent, Rgb};
 use image::{Rgba, RgbaImage};
