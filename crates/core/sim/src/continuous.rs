@@ -781,14 +781,7 @@ impl ContinuousTrial {
     /// Runs to completion or the time cap (robots waiting for outside decisions take their
     /// own policy's).
     pub fn run(mut self) -> ContinuousResult {
-        loop {
-            if self.deciding.contains(&true) {
-                self.apply_decisions(&[]);
-            }
-            if !self.step() {
-                break;
-            }
-        }
+        crate::stepping::run_to_end(&mut self);
         self.finish()
     }
 
@@ -892,6 +885,9 @@ impl Stepping for ContinuousTrial {
     }
     fn is_done(&self) -> bool {
         ContinuousTrial::is_done(self)
+    }
+    fn is_complete(&self) -> bool {
+        self.world.is_complete()
     }
     fn deciding(&self) -> &[bool] {
         ContinuousTrial::deciding(self)

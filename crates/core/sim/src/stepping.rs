@@ -141,6 +141,8 @@ pub trait Stepping: Present {
     fn step(&mut self) -> bool;
     /// Complete, or at the world's cap.
     fn is_done(&self) -> bool;
+    /// Every explorable cell is known.
+    fn is_complete(&self) -> bool;
     /// Which robots wait for a decision from outside (one entry per robot).
     fn deciding(&self) -> &[bool];
     /// Gives each waiting robot its decision: `Some(d)` from outside, `None` from its own policy;
@@ -184,9 +186,25 @@ pub struct RunEnd {
     pub stopped: Option<(String, String)>,
 }
 
+/// One step of a run to its end: robots waiting for a decision from outside take their own
+/// policy's, then `sim` steps. False once done.
+fn step_on_own<S: Stepping + ?Sized>(sim: &mut S) -> bool {
+    if sim.deciding().contains(&true) {
+        sim.apply_decisions(&[]);
+    }
+    sim.step()
+}
+
+/// Drives `sim` to its end with no outputs (robots waiting for outside decisions take their
+/// own policy's): what [`crate::Trial::run`] and the continuous trial's `run` do.
+pub fn run_to_end<S: Stepping + ?Sized>(sim: &mut S) {
+    while step_on_own(sim) {}
+}
+
 /// Drives `sim` to its end (or until a sink stops it), reporting the start, every step and the
-/// end to each of `sinks` in order. The sinks only read: a run with sinks is the run without.
-/// On a sink's error the others are not finished (the caller's outputs clean up when dropped).
+/// end to each of `sinks` in order; robots waiting for outside decisions take their own
+/// policy's. The sinks only read: a run with sinks is the run without. On a sink's error the
+/// others are not finished (the caller's outputs clean up when dropped).
 pub fn run<S: Stepping + ?Sized>(
     sim: &mut S,
     sinks: &mut [&mut dyn Sink<S>],
@@ -195,7 +213,7 @@ pub fn run<S: Stepping + ?Sized>(
         s.begin(sim)?;
     }
     let mut stopped = None;
-    'steps: while sim.step() {
+    'steps: while step_on_own(sim) {
         for s in sinks.iter_mut() {
             if let ControlFlow::Break(why) = s.step(sim)? {
                 stopped = Some((why, sim.when()));

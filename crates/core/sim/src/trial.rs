@@ -648,7 +648,7 @@ impl Trial {
 
     /// Runs to completion or the step cap.
     pub fn run(mut self) -> TrialResult {
-        while self.step() {}
+        crate::stepping::run_to_end(&mut self);
         self.finish()
     }
 
@@ -767,6 +767,9 @@ impl Stepping for Trial {
     }
     fn is_done(&self) -> bool {
         Trial::is_done(self)
+    }
+    fn is_complete(&self) -> bool {
+        self.world.is_complete()
     }
     fn deciding(&self) -> &[bool] {
         &self.awaiting

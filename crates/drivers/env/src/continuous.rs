@@ -12,8 +12,9 @@
 //! explorable cells the team newly knows, per step; the step also says how many simulated
 //! seconds it took (the paper's exploration time is their sum).
 
+use crate::driver::{Driver, Stepped};
 use crate::EnvError;
-use madenet_agent::{AgentView, Decision, ViewScratch};
+use madenet_agent::{AgentView, Decision};
 use madenet_sim::continuous::{ContinuousResult, ContinuousSpec, ContinuousTrial};
 use madenet_sim::PolicyRegistry;
 
@@ -34,14 +35,10 @@ pub struct ContinuousStep {
 pub struct ContinuousEnv {
     spec: ContinuousSpec,
     registry: PolicyRegistry,
-    trial: Option<ContinuousTrial>,
-    scratch: Vec<ViewScratch>,
-    /// `scratch[i]` holds robot i's goal candidates for the current state.
-    scratch_current: Vec<bool>,
+    driver: Driver<ContinuousTrial>,
     goal_count: usize,
     /// Rows and columns of the agents' cells.
     size: (usize, usize),
-    end_reported: bool,
 }
 
 impl ContinuousEnv {
@@ -56,16 +53,13 @@ impl ContinuousEnv {
             size: (h, w),
             spec,
             registry: registry.clone(),
-            trial: None,
-            scratch: (0..n).map(|_| ViewScratch::new(h, w)).collect(),
-            scratch_current: vec![false; n],
-            end_reported: false,
+            driver: Driver::new(n, h, w),
         })
     }
 
     /// Team size |I|.
     pub fn num_robots(&self) -> usize {
-        self.scratch.len()
+        self.driver.scratch.len()
     }
     /// Rows of the agents' cells.
     pub fn height(&self) -> usize {
@@ -96,51 +90,30 @@ impl ContinuousEnv {
             ..self.spec.clone()
         };
         let trial = ContinuousTrial::new(spec, &self.registry)?.with_external_decisions(true);
-        self.trial = Some(trial);
-        self.scratch_current.fill(false);
-        self.end_reported = false;
-        self.advance();
+        self.driver.start(trial);
         Ok(())
-    }
-
-    /// Runs control periods until a robot waits for a decision or the trial is over. A
-    /// period whose first half ended the trial is finished with the robots' own decisions.
-    fn advance(&mut self) {
-        let trial = self.trial.as_mut().expect("an episode is running");
-        loop {
-            if trial.deciding().contains(&true) {
-                if !trial.is_done() {
-                    break;
-                }
-                trial.apply_decisions(&[]);
-            }
-            if !trial.step() {
-                break;
-            }
-        }
     }
 
     /// The trial (its world, agents, planners), for pictures and checks.
     pub fn current(&self) -> Option<&ContinuousTrial> {
-        self.trial.as_ref()
+        self.driver.trial.as_ref()
     }
 
     /// Whether the episode is over (or none was started).
     pub fn is_done(&self) -> bool {
-        self.trial.as_ref().is_none_or(|t| t.is_done())
+        self.driver.is_done()
     }
 
     /// Which robots' actions the next [`ContinuousEnv::step`] uses.
     pub fn needs_action(&self) -> Vec<bool> {
-        match &self.trial {
-            Some(t) if !t.is_done() => t.deciding().to_vec(),
-            _ => vec![false; self.num_robots()],
-        }
+        let mut out = vec![false; self.num_robots()];
+        self.driver.needs_action_into(&mut out);
+        out
     }
 
     /// Simulated seconds since the episode started.
     pub fn time(&self) -> f64 {
-        self.trial.as_ref().map_or(0.0, |t| t.world().time())
+        self.driver.trial.as_ref().map_or(0.0, |t| t.world().time())
     }
 
     /// Robot `robot`'s observation written into `map` (4·H·W, 0/1), `vector`
@@ -156,12 +129,7 @@ impl ContinuousEnv {
     ) -> Result<(), EnvError> {
         let lengths = (self.map_len(), self.vector_len(), self.action_count());
         crate::check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
-        let trial = self
-            .trial
-            .as_ref()
-            .ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
-        let view = trial.agents()[robot].peek_view(true, &mut self.scratch[robot]);
-        self.scratch_current[robot] = true;
+        let view = self.driver.view(robot, true)?;
         view.write_map_image(map);
         view.write_macro_observation(vector);
         crate::write_action_mask(&view, mask);
@@ -197,11 +165,7 @@ impl ContinuousEnv {
                 decisions.len()
             )));
         }
-        let trial = self
-            .trial
-            .as_mut()
-            .ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
-        let (h, w) = trial.world().map(0).coarse_size();
+        let (h, w) = self.size;
         if let Some(Some(Decision::Goal(p))) = decisions.iter().find(|d| {
             matches!(d, Some(Decision::Goal(p)) if p.row < 0 || p.col < 0 || p.row as usize >= h || p.col as usize >= w)
         }) {
@@ -210,52 +174,34 @@ impl ContinuousEnv {
                 p.row, p.col
             )));
         }
-        if trial.is_done() {
-            if self.end_reported {
-                return Err(EnvError::Usage(
-                    "the episode has ended; call reset()".into(),
-                ));
-            }
-            self.end_reported = true;
-            let terminated = trial.world().is_complete();
-            return Ok(ContinuousStep {
-                terminated,
-                truncated: !terminated,
-                ..Default::default()
-            });
-        }
         let known = |t: &ContinuousTrial| {
             t.world().explored_fraction() * t.world().explorable_count() as f64
         };
+        let trial = self.driver.trial("step()")?;
         let (known_before, time_before) = (known(trial), trial.world().time());
-        for (i, d) in decisions.iter().enumerate() {
-            if trial.deciding()[i] && matches!(d, Some(Decision::Candidate(_))) {
-                // The candidates the caller saw, if it observed this state; else extracted.
-                if self.scratch_current[i] {
-                    trial.agent_mut(i).adopt_candidates(&mut self.scratch[i]);
-                } else {
-                    let _ = trial.agent_mut(i).view(true);
-                }
+        match self.driver.step(decisions, &mut |_| {})? {
+            Stepped::Ended { terminated } => Ok(ContinuousStep {
+                terminated,
+                truncated: !terminated,
+                ..Default::default()
+            }),
+            Stepped::Advanced {
+                terminated,
+                truncated,
+            } => {
+                let trial = self.driver.trial("step()")?;
+                Ok(ContinuousStep {
+                    team_reward: (known(trial) - known_before).round(),
+                    seconds: trial.world().time() - time_before,
+                    terminated,
+                    truncated,
+                })
             }
         }
-        self.scratch_current.fill(false);
-        trial.apply_decisions(decisions);
-        trial.step();
-        self.advance();
-        let trial = self.trial.as_ref().expect("running");
-        let terminated = trial.is_done() && trial.world().is_complete();
-        let truncated = trial.is_done() && !terminated;
-        self.end_reported = terminated || truncated;
-        Ok(ContinuousStep {
-            team_reward: (known(trial) - known_before).round(),
-            seconds: trial.world().time() - time_before,
-            terminated,
-            truncated,
-        })
     }
 
     /// The episode's result (ET, TTD, collisions, …); ends the episode.
     pub fn finish(&mut self) -> Option<ContinuousResult> {
-        self.trial.take().map(ContinuousTrial::finish)
+        self.driver.trial.take().map(ContinuousTrial::finish)
     }
 }

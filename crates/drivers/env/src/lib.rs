@@ -36,6 +36,7 @@
 #![deny(missing_docs)]
 
 pub mod continuous;
+mod driver;
 pub mod vector;
 
 pub use continuous::{ContinuousEnv, ContinuousStep};
@@ -43,9 +44,9 @@ pub use vector::{VecBuffers, VecEnv};
 
 pub use madenet_agent::Decision;
 
+use driver::{Driver, Stepped};
 use madenet_agent::{
     action_mask, write_joint_map_image, AgentView, Belief, DecisionMode, Policy, TeammateRecord,
-    ViewScratch,
 };
 use madenet_map::{OccGrid, Pos};
 use madenet_render::Frame;
@@ -159,14 +160,11 @@ pub struct ExplorationEnv {
     rewards: RewardConfig,
     record: bool,
     observe_candidates: bool,
-    trial: Option<Trial>,
+    /// The episode's trial, driven through the stepping contract.
+    driver: Driver<Trial>,
     seed: u64,
-    /// One scratch per robot: the joint observation holds every robot's view at once.
-    scratch: Vec<ViewScratch>,
-    /// `scratch[i]` holds robot i's goal candidates (and their search) for the current state:
-    /// a step hands them to the robot instead of extracting them again.
-    scratch_current: Vec<bool>,
-    decisions: Vec<Decision>,
+    /// The decisions of a step (reused, no allocation per step).
+    decisions: Vec<Option<Decision>>,
     /// Shipped policies acting in this episode ([`ExplorationEnv::policy_decisions`]), one
     /// instance per robot, built with the episode's seed.
     policies: Vec<(String, Vec<Box<dyn Policy>>)>,
@@ -176,8 +174,6 @@ pub struct ExplorationEnv {
     goal_count: usize,
     /// Eq. (7) per robot summed over the last step's timesteps (reused, no allocation per step).
     step_rewards: Vec<f64>,
-    /// A step has reported the end of the current episode.
-    end_reported: bool,
 }
 
 /// What [`ExplorationEnv::advance`] reports besides the per-robot rewards.
@@ -216,20 +212,16 @@ impl ExplorationEnv {
             rewards: RewardConfig::default(),
             record: false,
             observe_candidates: mode == ActionMode::Macro,
-            trial: None,
+            driver: Driver::new(starts_len, h, w),
             seed: 0,
-            scratch: (0..starts_len).map(|_| ViewScratch::new(h, w)).collect(),
-            scratch_current: vec![false; starts_len],
             decisions: Vec::new(),
             policies: Vec::new(),
             visibility: None,
             goal_count: 0,
             step_rewards: vec![0.0; starts_len],
-            end_reported: false,
         };
         env.goal_count = env.scenario.goal_count_for(h * w);
         env.build(0)?;
-        env.trial = None;
         Ok(env)
     }
 
@@ -261,7 +253,7 @@ impl ExplorationEnv {
     /// for a whole batch of environments.
     pub fn share_visibility(&mut self, v: std::sync::Arc<madenet_world::Visibility>) {
         self.visibility = Some(v);
-        self.trial = None;
+        self.driver.trial = None;
     }
 
     /// Whether observations carry the goal candidates (map channel 3, the vector's candidate
@@ -313,7 +305,8 @@ impl ExplorationEnv {
         Ok(Trial::with_registry(spec, &registry)?
             .reward_config(self.rewards.clone())
             .record_trajectory(self.record)
-            .timed(false))
+            .timed(false)
+            .with_external_decisions(true))
     }
 
     /// Team size |I|.
@@ -355,7 +348,7 @@ impl ExplorationEnv {
     /// Starts an episode with `seed` (world noise, dropouts) and runs to the first decision point.
     pub fn reset(&mut self, seed: u64) -> Result<(), EnvError> {
         // The next episode reuses the last one's world (its cast rays): same result as new.
-        let mut trial = match self.trial.take() {
+        let trial = match self.driver.trial.take() {
             Some(old) => old.restart(seed, &self.registry())?,
             None => {
                 let mut t = self.build(seed)?;
@@ -365,11 +358,8 @@ impl ExplorationEnv {
                 t
             }
         };
-        trial.begin_step();
-        self.trial = Some(trial);
+        self.driver.start(trial);
         self.seed = seed;
-        self.end_reported = false;
-        self.scratch_current.fill(false);
         self.policies.clear();
         Ok(())
     }
@@ -380,36 +370,30 @@ impl ExplorationEnv {
     }
 
     fn trial(&self) -> Result<&Trial, EnvError> {
-        self.trial
-            .as_ref()
-            .ok_or_else(|| EnvError::Usage("call reset() before step()".into()))
+        self.driver.trial("step()")
     }
 
     /// The episode has ended (explored or at the cap). Right after a reset this can already be
     /// true (a map seen whole from the start cells): the next step then reports the end.
     pub fn is_done(&self) -> bool {
-        self.trial.as_ref().is_none_or(|t| t.is_done())
+        self.driver.is_done()
     }
 
     /// Which robots' actions the next [`ExplorationEnv::step`] uses.
     pub fn needs_action(&self) -> Vec<bool> {
-        match &self.trial {
-            Some(t) if !t.is_done() => t.deciding().to_vec(),
-            _ => vec![false; self.num_robots()],
-        }
+        let mut out = vec![false; self.num_robots()];
+        self.driver.needs_action_into(&mut out);
+        out
     }
 
     /// [`ExplorationEnv::needs_action`] written into `out` (one per robot).
     pub(crate) fn needs_action_into(&self, out: &mut [bool]) {
-        match &self.trial {
-            Some(t) if !t.is_done() => out.copy_from_slice(t.deciding()),
-            _ => out.fill(false),
-        }
+        self.driver.needs_action_into(out)
     }
 
     /// The current timestep.
     pub fn t(&self) -> usize {
-        self.trial.as_ref().map_or(0, |t| t.world().t())
+        self.driver.trial.as_ref().map_or(0, |t| t.world().t())
     }
 
     /// Robot `robot`'s observation written into `map` (4·H·W, 0/1), `vector`
@@ -425,13 +409,7 @@ impl ExplorationEnv {
         let lengths = (self.map_len(), self.vector_len(), self.action_count());
         check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
         let mode = self.mode;
-        let trial = self
-            .trial
-            .as_ref()
-            .ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
-        let view =
-            trial.agents()[robot].peek_view(self.observe_candidates, &mut self.scratch[robot]);
-        self.scratch_current[robot] = self.observe_candidates;
+        let view = self.driver.view(robot, self.observe_candidates)?;
         view.write_map_image(map);
         view.write_macro_observation(vector);
         match mode {
@@ -486,7 +464,8 @@ impl ExplorationEnv {
                 "joint observation buffers of the wrong length".into(),
             ));
         }
-        let trial = self
+        let driver = &mut self.driver;
+        let trial = driver
             .trial
             .as_ref()
             .ok_or_else(|| EnvError::Usage("call reset() before observing".into()))?;
@@ -498,10 +477,10 @@ impl ExplorationEnv {
         let views: Vec<AgentView<'_>> = trial
             .agents()
             .iter()
-            .zip(self.scratch.iter_mut())
+            .zip(driver.scratch.iter_mut())
             .map(|(a, s)| a.peek_view(true, s))
             .collect();
-        self.scratch_current.fill(true);
+        driver.scratch_current.fill(true);
         write_joint_map_image(&views, trial.world().team_map(), map);
         let mut masks = Vec::with_capacity(views.len());
         for (i, v) in views.iter().enumerate() {
@@ -556,10 +535,11 @@ impl ExplorationEnv {
         registry: &PolicyRegistry,
     ) -> Result<Vec<Decision>, EnvError> {
         let trial = self
+            .driver
             .trial
             .as_mut()
             .ok_or_else(|| EnvError::Usage("call reset() before asking a policy".into()))?;
-        if trial.is_done() && self.end_reported {
+        if trial.is_done() && self.driver.end_reported {
             return Err(EnvError::Usage(
                 "the episode has ended; call reset()".into(),
             ));
@@ -639,7 +619,7 @@ impl ExplorationEnv {
     fn decide_actions(
         &self,
         actions: &[usize],
-        decisions: &mut Vec<Decision>,
+        decisions: &mut Vec<Option<Decision>>,
     ) -> Result<(), EnvError> {
         let count = self.action_count();
         if let Some(a) = actions.iter().find(|&&a| a >= count) {
@@ -650,7 +630,7 @@ impl ExplorationEnv {
         let trial = self.trial()?;
         decisions.clear();
         for (i, &a) in actions.iter().enumerate() {
-            decisions.push(match self.mode {
+            decisions.push(Some(match self.mode {
                 ActionMode::Macro => Decision::Candidate(a),
                 ActionMode::Primitive => {
                     let agent = &trial.agents()[i];
@@ -668,7 +648,7 @@ impl ExplorationEnv {
                         _ => Decision::Idle,
                     }
                 }
-            });
+            }));
         }
         Ok(())
     }
@@ -711,12 +691,16 @@ impl ExplorationEnv {
     /// idling; then advances to the next decision point or the episode's end (an episode over
     /// at its start ends here, as in [`ExplorationEnv::step`]).
     pub fn step_decisions(&mut self, decisions: &[Decision]) -> Result<StepResult, EnvError> {
-        let a = self.advance(decisions)?;
-        Ok(self.step_result(a))
+        let mut buffer = std::mem::take(&mut self.decisions);
+        buffer.clear();
+        buffer.extend(decisions.iter().map(|&d| Some(d)));
+        let a = self.advance(&buffer);
+        self.decisions = buffer;
+        Ok(self.step_result(a?))
     }
 
     /// [`ExplorationEnv::step_decisions`], the rewards left in `step_rewards`.
-    fn advance(&mut self, decisions: &[Decision]) -> Result<Advanced, EnvError> {
+    fn advance(&mut self, decisions: &[Option<Decision>]) -> Result<Advanced, EnvError> {
         let n = self.num_robots();
         if decisions.len() != n {
             return Err(EnvError::Usage(format!(
@@ -725,71 +709,39 @@ impl ExplorationEnv {
             )));
         }
         let (h, w) = (self.map.height() as i32, self.map.width() as i32);
-        if let Some(Decision::Goal(p)) = decisions.iter().find(|d| matches!(d, Decision::Goal(p) if p.row < 0 || p.col < 0 || p.row >= h || p.col >= w)) {
+        if let Some(Some(Decision::Goal(p))) = decisions.iter().find(|d| matches!(d, Some(Decision::Goal(p)) if p.row < 0 || p.col < 0 || p.row >= h || p.col >= w)) {
             return Err(EnvError::Usage(format!("goal ({}, {}) lies outside the {h} × {w} map", p.row, p.col)));
         }
-        let trial = self
-            .trial
-            .as_mut()
-            .ok_or_else(|| EnvError::Usage("call reset() before step()".into()))?;
-        if trial.is_done() {
-            if self.end_reported {
-                return Err(EnvError::Usage(
-                    "the episode has ended; call reset()".into(),
-                ));
-            }
-            // Over at its start (a map seen whole from the start cells): this step reports the
-            // end, advancing nothing, so callers (and a VecEnv's autoreset) see it end.
-            self.end_reported = true;
-            self.step_rewards.fill(0.0);
-            let terminated = trial.world().is_complete();
-            return Ok(Advanced {
-                team_reward: 0.0,
-                steps: 0,
-                terminated,
-                truncated: !terminated,
-            });
-        }
-        for (i, d) in decisions.iter().enumerate() {
-            if trial.deciding()[i] && matches!(d, Decision::Candidate(_)) {
-                // The robot's own candidates, as its own policy would see them: those of its
-                // last observation if it is of this state, else extracted now.
-                if self.scratch_current[i] {
-                    trial.agent_mut(i).adopt_candidates(&mut self.scratch[i]);
-                } else {
-                    let _ = trial.agent_mut(i).view(true);
-                }
-            }
-        }
-        self.scratch_current.fill(false);
-        trial.apply_decisions(decisions);
         self.step_rewards.fill(0.0);
-        let mut out = Advanced {
-            team_reward: 0.0,
-            steps: 0,
-            terminated: false,
-            truncated: false,
-        };
-        loop {
-            trial.finish_step();
-            out.steps += 1;
-            for (o, r) in self.step_rewards.iter_mut().zip(&trial.rewards().robots) {
+        let (mut team_reward, mut steps) = (0.0, 0);
+        let rewards = &mut self.step_rewards;
+        let stepped = self.driver.step(decisions, &mut |trial| {
+            steps += 1;
+            for (o, r) in rewards.iter_mut().zip(&trial.rewards().robots) {
                 *o += r;
             }
-            out.team_reward += trial.rewards().team;
-            if !trial.begin_step() || trial.deciding().contains(&true) {
-                break;
-            }
-        }
-        out.terminated = trial.world().is_complete();
-        out.truncated = trial.is_done() && !out.terminated;
-        self.end_reported = out.terminated || out.truncated;
-        Ok(out)
+            team_reward += trial.rewards().team;
+        })?;
+        let (terminated, truncated) = match stepped {
+            // Over at its start (a map seen whole from the start cells): this step reports
+            // the end, advancing nothing, so callers (and a VecEnv's autoreset) see it end.
+            Stepped::Ended { terminated } => (terminated, !terminated),
+            Stepped::Advanced {
+                terminated,
+                truncated,
+            } => (terminated, truncated),
+        };
+        Ok(Advanced {
+            team_reward,
+            steps,
+            terminated,
+            truncated,
+        })
     }
 
     /// The trial so far (metrics, and the trajectory if recording). Steps are not timed in an
     /// environment (the caller's decisions are part of its loop): `timing.trial_s` is 0.
     pub fn finish(&mut self) -> Option<TrialResult> {
-        self.trial.take().map(Trial::finish)
+        self.driver.trial.take().map(Trial::finish)
     }
 }
