@@ -8,7 +8,7 @@
 
 use libfuzzer_sys::fuzz_target;
 use madenet_dme::train::DmeTrainConfig;
-use madenet_learn::rollout_train::RolloutTrainConfig;
+use madenet_learn::dagger::RolloutTrainConfig;
 use madenet_learn::TrainConfig;
 use std::path::PathBuf;
 use std::sync::LazyLock;

@@ -7,8 +7,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use madenet_catalogue::LearnerKind;
 use madenet_dme::train::DmeLearner;
+use madenet_learn::dagger::RolloutLearner;
 use madenet_learn::harness::RunFields;
-use madenet_learn::rollout_train::RolloutLearner;
 use madenet_learn::{Learner, MadeNetLearner, Progress};
 use std::path::{Path, PathBuf};
 

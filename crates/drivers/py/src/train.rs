@@ -3,7 +3,7 @@
 //! fan-out of `madenet.ray.train`), `collect_rollout` is what each worker runs.
 
 use crate::value_error;
-use madenet_learn::rollout_train::{collect_bytes, train_with, Collector, RolloutTrainConfig};
+use madenet_learn::dagger::{collect_bytes, train_with, Collector, RolloutTrainConfig};
 use madenet_learn::TrainError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;

@@ -55,7 +55,7 @@ pub fn shipped() -> Result<PolicyRegistry, CatalogueError> {
 pub enum LearnerKind {
     /// MADE-Net and MADE-Net-DT ([`madenet_learn::MadeNetLearner`]).
     MadeNet,
-    /// MADE-Net's DEP from the rollout teacher ([`madenet_learn::rollout_train::RolloutLearner`]).
+    /// MADE-Net's DEP from the rollout teacher ([`madenet_learn::dagger::RolloutLearner`]).
     Rollout,
     /// The DME-DRL baseline ([`madenet_dme::train::DmeLearner`]).
     DmeDrl,
@@ -74,7 +74,7 @@ impl LearnerKind {
         use madenet_learn::Learner;
         match self {
             LearnerKind::MadeNet => madenet_learn::MadeNetLearner::METHODS,
-            LearnerKind::Rollout => madenet_learn::rollout_train::RolloutLearner::METHODS,
+            LearnerKind::Rollout => madenet_learn::dagger::RolloutLearner::METHODS,
             LearnerKind::DmeDrl => madenet_dme::train::DmeLearner::METHODS,
         }
     }
@@ -127,7 +127,7 @@ pub fn register_model(
             madenet_learn::MadeNetLearner::register_model(dir, registry, name, about)
         }
         LearnerKind::Rollout => {
-            madenet_learn::rollout_train::RolloutLearner::register_model(dir, registry, name, about)
+            madenet_learn::dagger::RolloutLearner::register_model(dir, registry, name, about)
         }
         LearnerKind::DmeDrl => {
             madenet_dme::train::DmeLearner::register_model(dir, registry, name, about)

@@ -12,7 +12,7 @@
 //! `MODEL_DIR` acts as its `model.toml` says (delete its `spread_margin` line for the greedy
 //! DEP); `MAPS` defaults to 200, the CSPs to `1,0`.
 
-use madenet_learn::rollout_train::{validation_maps, RolloutTrainConfig};
+use madenet_learn::dagger::{validation_maps, RolloutTrainConfig};
 use madenet_learn::scenario::validate;
 use madenet_learn::Model;
 use madenet_sim::PolicyRegistry;

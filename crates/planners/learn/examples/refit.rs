@@ -18,7 +18,7 @@
 //! gains on the test labels over `spread`'s, per decision) and `gain_*` (what the student's
 //! choice gains, greedy and with each of the run's margins): the policy's side of the fit.
 
-use madenet_learn::rollout_train::{refit, stored_labels, Loss, RolloutTrainConfig};
+use madenet_learn::dagger::{refit, stored_labels, Loss, RolloutTrainConfig};
 use std::path::Path;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

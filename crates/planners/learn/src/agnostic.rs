@@ -19,7 +19,7 @@
 //!
 //! Teammates enter only through per-candidate features pooled over teammates (distance to the
 //! nearest teammate goal and position, crowding count) and the context's shares, so any |I|
-//! works. Training is the rollout teacher's ([`crate::rollout_train`]): its centralized critic
+//! works. Training is the rollout teacher's ([`crate::dagger`]): its centralized critic
 //! scores one robot's candidates one at a time by continuing the trial (never the |G|^|I| joint
 //! actions), and the scores regress its advantages.
 

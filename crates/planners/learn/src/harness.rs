@@ -347,7 +347,7 @@ pub fn train<L: Learner>(
 
 /// [`train`] with the learner's loop given by the caller (`body(run_dir, config, resuming)`,
 /// run on the config's thread pool): a learner's loop with arguments beyond the config, e.g.
-/// the rollout learner's episode collector ([`crate::rollout_train::train_with`]).
+/// the rollout learner's episode collector ([`crate::dagger::train_with`]).
 pub fn train_with<L: Learner>(
     run_dir: &Path,
     cfg: Option<L::Config>,

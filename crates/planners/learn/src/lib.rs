@@ -14,7 +14,7 @@
 //! * [`learner`] — the updates of Eq. (5) and (6) (and MADE-Net-DT's double DRQN) on sampled
 //!   windows;
 //! * [`train`](mod@train) — the paper's training loop ([`MadeNetLearner`]) and its [`TrainConfig`];
-//!   [`rollout_train`] the rollout teacher's;
+//!   [`dagger`] the rollout teacher's;
 //! * [`harness`] — what every learner does around its algorithm: the [`Learner`] contract, run
 //!   directories and resume, [`Progress`], logs, checkpoints; [`scenario`] — the generated
 //!   training and validation scenarios and the one validator; [`error`] — [`TrainError`];
@@ -75,6 +75,7 @@
 mod actions;
 pub mod agnostic;
 mod config;
+pub mod dagger;
 pub mod env;
 pub mod episode;
 pub mod error;
@@ -86,7 +87,6 @@ mod net;
 pub mod obs;
 pub mod policy;
 pub mod replay;
-pub mod rollout_train;
 pub mod scenario;
 pub mod shipped;
 pub mod train;

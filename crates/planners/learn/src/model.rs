@@ -25,7 +25,7 @@ pub enum Method {
     /// The paper's ablation: the DEPs alone on decentralized experience (double DRQN).
     MadeNetDt,
     /// The DEP regressed on a centralized rollout teacher's candidate values, DAgger-style
-    /// ([`crate::rollout_train`]; a departure from the paper).
+    /// ([`crate::dagger`]; a departure from the paper).
     MadeNetRollout,
 }
 

@@ -10,7 +10,7 @@ use madenet_learn::agnostic::{
     inputs_for, AgnosticConfig, AgnosticInput, Batch, CANDIDATE_INPUTS, CONTEXT_FEATURES,
     PLAN_INPUTS, TERRITORY_INPUTS, WIDE_INPUTS,
 };
-use madenet_learn::rollout_train::{
+use madenet_learn::dagger::{
     refit, stored_labels, train, Futures, Network, RolloutTrainConfig, Teacher,
 };
 use madenet_learn::Model;

@@ -5,7 +5,7 @@
 //! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
 //! initialises networks lives in one test.
 
-use madenet_learn::rollout_train::{train, Futures, RolloutTrainConfig};
+use madenet_learn::dagger::{train, Futures, RolloutTrainConfig};
 use madenet_learn::Model;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_testkit::{read, Scratch};
