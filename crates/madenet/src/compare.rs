@@ -113,7 +113,7 @@ pub fn run(a: CompareArgs) -> Result<()> {
         Some(items) => {
             let (registry, _, planned) =
                 madenet_study::study_plan(&cfg).map_err(|e| name_source(e, &a))?;
-            crate::record::chosen_trials(items, &planned)?;
+            madenet_ros2::study_bags::chosen_trials(items, &planned)?;
             Some((items, registry, planned))
         }
         None => None,
@@ -131,9 +131,10 @@ pub fn run(a: CompareArgs) -> Result<()> {
     bar.finish_and_clear();
     out!("{} trials → {}", outcomes.len(), report.display())?;
     if let Some((items, registry, planned)) = recorded {
-        crate::record::record_study_trials(items, &planned, &registry, &a.out, a.fresh, &pool)?;
+        let chosen = madenet_ros2::study_bags::chosen_trials(items, &planned)?;
+        crate::record::record_study_trials(&chosen, &registry, &a.out, a.fresh, &pool)?;
     } else if a.fresh {
-        crate::record::discard_bags(&a.out)?;
+        madenet_ros2::study_bags::discard_bags(&a.out)?;
     }
     Ok(())
 }

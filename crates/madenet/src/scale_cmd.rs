@@ -110,7 +110,7 @@ pub fn run(a: ScaleArgs) -> Result<()> {
                 .into_iter()
                 .map(|p| p.planned)
                 .collect();
-            crate::record::chosen_trials(items, &planned)?;
+            madenet_ros2::study_bags::chosen_trials(items, &planned)?;
             Some((items, planned))
         }
         None => None,
@@ -128,9 +128,10 @@ pub fn run(a: ScaleArgs) -> Result<()> {
     bar.finish_and_clear();
     out!("{} trials → {}", result.trials, result.report.display())?;
     if let Some((items, planned)) = planned {
-        crate::record::record_study_trials(items, &planned, &registry, &a.out, a.fresh, &pool)?;
+        let chosen = madenet_ros2::study_bags::chosen_trials(items, &planned)?;
+        crate::record::record_study_trials(&chosen, &registry, &a.out, a.fresh, &pool)?;
     } else if a.fresh {
-        crate::record::discard_bags(&a.out)?;
+        madenet_ros2::study_bags::discard_bags(&a.out)?;
     }
     Ok(())
 }

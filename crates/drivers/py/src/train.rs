@@ -10,8 +10,10 @@ use pyo3::types::PyBytes;
 
 /// Trains the rollout-teacher learner into `out` as `madenet train --config CONFIG --out OUT`
 /// does (resuming a run there). With `collect`, each iteration's episodes are collected by
-/// `collect(config_toml, batches)` — a list of request bytes, each for `batch_size` episodes —
-/// which returns `collect_rollout`'s bytes per batch, in order; the run is the same either way
+/// `collect(config_toml, iteration, batches)` — the iteration's request (its students' weights,
+/// the same for every batch: put it in Ray's object store once) and a list of batches' episode
+/// bytes, each of `batch_size` episodes — which returns `collect_rollout`'s bytes per batch, in
+/// order; the run is the same either way
 /// (on one machine: the decision scorer's matrix kernels are picked per CPU). An exception of
 /// `collect` ends training at the iteration's start (its checkpoint) and is raised as it was.
 /// The time budget (`max_minutes`) is checked between iterations only. A new run needs
@@ -33,7 +35,7 @@ pub fn train_rollout(
     if let Some(f) = &collect {
         if !f.bind(py).is_callable() {
             return Err(value_error(
-                "collect: must be callable (config_toml, batches) -> list of bytes",
+                "collect: must be callable (config_toml, iteration, batches) -> list of bytes",
             ));
         }
     }
@@ -50,12 +52,16 @@ pub fn train_rollout(
     };
     // The collect function's own exception, raised again as it was once training stopped.
     let raised = std::sync::Mutex::new(None::<PyErr>);
-    let mut run = |toml: &str, batches: Vec<Vec<u8>>| -> Result<Vec<Vec<u8>>, TrainError> {
+    let mut run = |toml: &str,
+                   iteration: Vec<u8>,
+                   batches: Vec<Vec<u8>>|
+     -> Result<Vec<Vec<u8>>, TrainError> {
         let f = collect.as_ref().expect("only with a collect function");
         Python::attach(|py| {
+            let iteration = PyBytes::new(py, &iteration);
             let batches: Vec<Bound<'_, PyBytes>> =
                 batches.iter().map(|b| PyBytes::new(py, b)).collect();
-            f.call1(py, (toml, batches))
+            f.call1(py, (toml, iteration, batches))
                 .and_then(|r| r.extract::<Vec<Vec<u8>>>(py))
         })
         .map_err(|e| {
@@ -94,18 +100,19 @@ pub fn train_rollout(
     result.map_err(|e| value_error(format!("{}: {e}", out.display())))
 }
 
-/// Collects one batch of a rollout-teacher iteration's episodes (a request from
-/// `train_rollout`'s `collect`) on `threads` threads; returns the episodes as bytes.
+/// Collects one batch of a rollout-teacher iteration's episodes (the iteration's request and a
+/// batch from `train_rollout`'s `collect`) on `threads` threads; returns the episodes as bytes.
 #[pyfunction]
-#[pyo3(signature = (config_toml, request, threads = 1))]
+#[pyo3(signature = (config_toml, iteration, batch, threads = 1))]
 pub fn collect_rollout<'py>(
     py: Python<'py>,
     config_toml: &str,
-    request: &[u8],
+    iteration: &[u8],
+    batch: &[u8],
     threads: usize,
 ) -> PyResult<Bound<'py, PyBytes>> {
     let bytes = py
-        .detach(|| collect_bytes(config_toml, request, threads))
+        .detach(|| collect_bytes(config_toml, iteration, batch, threads))
         .map_err(value_error)?;
     Ok(PyBytes::new(py, &bytes))
 }

@@ -63,12 +63,19 @@ def test_episodes_collected_by_a_python_function_give_the_cli_run(local):
     root, want = local
     calls = []
 
-    def collect(config_toml, batches):
+    sizes = []
+
+    def collect(config_toml, iteration, batches):
         calls.append(len(batches))
-        return [_core.collect_rollout(config_toml, b, 1) for b in batches]
+        sizes.append((len(iteration), max(len(b) for b in batches)))
+        return [_core.collect_rollout(config_toml, iteration, b, 1) for b in batches]
 
     _core.train_rollout(str(root / "py"), str(root / "tiny.toml"), collect, 3)
     assert calls == [2, 2, 2, 2], "4 episodes an iteration in batches of 3"
+    # The students' weights travel once an iteration, beside the batches: a batch is its
+    # episode indices only; from the second iteration on the iteration carries a student.
+    assert all(batch < 32 for _, batch in sizes), sizes
+    assert sizes[0][0] < 64 and all(it > 1000 for it, _ in sizes[1:]), sizes
     rows, data, state = run_summary(root / "py")
     assert len(rows) == 5 and state["iteration"] == 4
     assert "student@" in rows[-1], "expert iteration: the teacher's base became a student"
@@ -78,24 +85,24 @@ def test_episodes_collected_by_a_python_function_give_the_cli_run(local):
 def test_a_collector_that_fails_is_an_error(local):
     root, _ = local
 
-    def short(config_toml, batches):
-        return [_core.collect_rollout(config_toml, b, 1) for b in batches[1:]]
+    def short(config_toml, iteration, batches):
+        return [_core.collect_rollout(config_toml, iteration, b, 1) for b in batches[1:]]
 
     with pytest.raises(ValueError, match="collector returned 1 batches for 2"):
         _core.train_rollout(str(root / "short"), str(root / "tiny.toml"), short, 3)
-    def boom(config_toml, batches):
+    def boom(config_toml, iteration, batches):
         raise RuntimeError("boom")
 
     with pytest.raises(RuntimeError, match="boom"):
         _core.train_rollout(str(root / "boom"), str(root / "tiny.toml"), boom, 3)
 
-    def swapped(config_toml, batches):
-        return [_core.collect_rollout(config_toml, b, 1) for b in reversed(batches)]
+    def swapped(config_toml, iteration, batches):
+        return [_core.collect_rollout(config_toml, iteration, b, 1) for b in reversed(batches)]
 
     with pytest.raises(ValueError, match=r"batch 0: episodes \[2, 3\], asked for \[0, 1\]"):
         _core.train_rollout(str(root / "swapped"), str(root / "tiny.toml"), swapped, 2)
     with pytest.raises(ValueError, match="a collect request"):
-        _core.collect_rollout(TINY, b"\xff\xff", 1)
+        _core.collect_rollout(TINY, b"\xff\xff", b"", 1)
     with pytest.raises(ValueError, match="config: needed for a new run"):
         _core.train_rollout(str(root / "none"), None, None, 3)
     with pytest.raises(ValueError, match="collect: must be callable"):

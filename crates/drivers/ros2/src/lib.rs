@@ -69,6 +69,7 @@ mod real;
 pub mod record;
 pub mod rmw;
 mod stand_in;
+pub mod study_bags;
 
 /// The frame every madenet topic is stamped with (REP 105's `map`).
 pub const FRAME_ID: &str = "map";

@@ -7,8 +7,9 @@
 
 use burn::tensor::Device;
 use madenet_dme::maddpg::Maddpg;
+use madenet_dme::model::Model;
 use madenet_dme::policy::DmePolicy;
-use madenet_dme::train::{validate, DmeTrainConfig, Model};
+use madenet_dme::train::{validate, DmeTrainConfig};
 use madenet_learn::scenario;
 use madenet_sim::PolicyRegistry;
 use std::sync::{Arc, RwLock};

@@ -21,6 +21,7 @@
 #![deny(missing_docs)]
 
 pub mod maddpg;
+pub mod model;
 pub mod nets;
 pub mod obs;
 pub mod policy;

@@ -2,7 +2,7 @@
 //! `madenet run --policy dme-drl` and `madenet compare` work from any directory. How it was
 //! trained (config, command, wall time, validation) is in `models/README.md`.
 
-use crate::train::Model;
+use crate::model::Model;
 use madenet_learn::TrainError;
 use madenet_sim::PolicyRegistry;
 

@@ -6,8 +6,9 @@
 //! burn's `flex` device draws initial weights from one process-wide RNG, so everything that
 //! initialises networks lives in this one test.
 
+use madenet_dme::model::Model;
 use madenet_dme::policy::{DecisionSlots, DmePolicy};
-use madenet_dme::train::{train, DmeTrainConfig, Model};
+use madenet_dme::train::{train, DmeTrainConfig};
 use madenet_dme::{sector_goals, SECTORS};
 use madenet_nav::Dijkstra;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};

@@ -77,11 +77,11 @@ def scale(config=None, address: str | None = None, batch_size: int | None = None
     return table(rows, as_dataframe, study.columns())
 
 
-def _collect_batch(config_toml: str, request: bytes) -> bytes:
+def _collect_batch(config_toml: str, iteration: bytes, batch: bytes) -> bytes:
     # Runs inside a Ray worker: one batch of a training iteration's episodes, labelled by the
     # teacher (its continuations are what training spends its time on), on one thread.
     from madenet import _core
-    return _core.collect_rollout(config_toml, request, 1)
+    return _core.collect_rollout(config_toml, iteration, batch, 1)
 
 
 def train(out, config=None, address: str | None = None, batch_size: int = 8):
@@ -103,9 +103,11 @@ def train(out, config=None, address: str | None = None, batch_size: int = 8):
     if _remote_collect is None:
         _remote_collect = ray.remote(_collect_batch)
 
-    def collect(config_toml, batches):
-        text = ray.put(config_toml)
-        return ray.get([_remote_collect.remote(text, b) for b in batches])
+    def collect(config_toml, iteration, batches):
+        # The config and the iteration's students' weights go to the object store once; each
+        # task gets references to them and its own episode indices.
+        text, models = ray.put(config_toml), ray.put(iteration)
+        return ray.get([_remote_collect.remote(text, models, b) for b in batches])
 
     from madenet import _core
     _core.train_rollout(str(out), None if config is None else str(config), collect, batch_size)

@@ -89,17 +89,19 @@ pub fn collect(
 }
 
 /// [`collect`] for a worker in another process (the Python package's Ray tasks): the run's
-/// config as TOML text and a postcard [`CollectRequest`] in, the postcard `Vec<Collected>` out,
-/// on `threads` threads.
+/// config as TOML text, the iteration's postcard [`CollectRequest`] without its episodes (its
+/// students' weights: the same for every batch, so sent once an iteration) and the batch's
+/// postcard episode indices in; the postcard `Vec<Collected>` out, on `threads` threads.
 pub fn collect_bytes(
     config_toml: &str,
-    request: &[u8],
+    iteration: &[u8],
+    batch: &[u8],
     threads: usize,
 ) -> Result<Vec<u8>, TrainError> {
     let cfg = RolloutTrainConfig::from_toml_text(Path::new("the run's config"), config_toml)?;
     cfg.validate()
         .map_err(|m| TrainError::Other(format!("the run's config: {m}")))?;
-    let req: CollectRequest = postcard::from_bytes(request)
+    let mut req: CollectRequest = postcard::from_bytes(iteration)
         .map_err(|e| TrainError::Other(format!("a collect request: {e}")))?;
     if req.version != env!("CARGO_PKG_VERSION") {
         return Err(TrainError::Other(format!(
@@ -108,6 +110,8 @@ pub fn collect_bytes(
             env!("CARGO_PKG_VERSION")
         )));
     }
+    req.episodes = postcard::from_bytes(batch)
+        .map_err(|e| TrainError::Other(format!("a collect request's episodes: {e}")))?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
@@ -118,19 +122,20 @@ pub fn collect_bytes(
     postcard::to_allocvec(&collected).map_err(|e| TrainError::Other(e.to_string()))
 }
 
-/// A function collecting batches: the run's config as TOML and each batch's postcard
-/// [`CollectRequest`] in, each batch's [`collect_bytes`] output out, in order.
+/// A function collecting batches: the run's config as TOML, the iteration's request without
+/// episodes (postcard [`CollectRequest`]: its students, sent once) and each batch's postcard
+/// episode indices in; each batch's [`collect_bytes`] output out, in order.
 pub type BatchCollector<'a> =
-    dyn FnMut(&str, Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, TrainError> + Send + 'a;
+    dyn FnMut(&str, Vec<u8>, Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>, TrainError> + Send + 'a;
 
 /// Where an iteration's episodes are collected.
 pub enum Collector<'a> {
     /// Here, on the run's thread pool ([`collect`]); an episode not started within the time
     /// budget cuts the iteration.
     Local,
-    /// By the caller: the iteration's request split into batches of `batch` episodes, each a
-    /// postcard [`CollectRequest`], handed to `run` with the run's config as TOML; `run`
-    /// returns each batch's [`collect_bytes`] output, in order (e.g. Ray tasks: `madenet.ray.train`).
+    /// By the caller: the iteration's request (its students, once) and its episodes split into
+    /// batches of `batch`, handed to `run` with the run's config as TOML; `run` returns each
+    /// batch's [`collect_bytes`] output, in order (e.g. Ray tasks: `madenet.ray.train`).
     Batches {
         /// Episodes per batch (≥ 1).
         batch: usize,
@@ -152,19 +157,19 @@ impl Collector<'_> {
             Collector::Batches { batch, run } => (*batch, run),
         };
         let text = toml::to_string(cfg).map_err(|e| TrainError::Other(e.to_string()))?;
+        let encode = |e: postcard::Error| TrainError::Other(e.to_string());
+        let iteration = postcard::to_allocvec(&CollectRequest {
+            episodes: Vec::new(),
+            ..req.clone()
+        })
+        .map_err(encode)?;
         let batches = req
             .episodes
             .chunks(batch.max(1))
-            .map(|episodes| {
-                postcard::to_allocvec(&CollectRequest {
-                    episodes: episodes.to_vec(),
-                    ..req.clone()
-                })
-                .map_err(|e| TrainError::Other(e.to_string()))
-            })
+            .map(|episodes| postcard::to_allocvec(episodes).map_err(encode))
             .collect::<Result<Vec<_>, _>>()?;
         let n = batches.len();
-        let results = run(&text, batches)?;
+        let results = run(&text, iteration, batches)?;
         if results.len() != n {
             return Err(TrainError::Other(format!(
                 "the collector returned {} batches for {n}",
