@@ -18,5 +18,5 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else { return };
     let _ = madenet_learn::Model::from_bytes(text, &[GRID], "fuzz/model.toml");
     let _ = madenet_learn::Model::from_bytes(text, &[ANY], "fuzz/model.toml");
-    let _ = madenet_dme::train::Model::from_bytes(text, &DME, "fuzz/model.toml");
+    let _ = madenet_dme::model::Model::from_bytes(text, &DME, "fuzz/model.toml");
 });

@@ -33,7 +33,7 @@ fuzz_target!(|data: &[u8]| {
     match which % 3 {
         0 => drop(madenet_learn::Model::from_bytes(&GRID, &[weights], "fuzz/model.toml")),
         1 => drop(madenet_learn::Model::from_bytes(&ANY, &[weights], "fuzz/model.toml")),
-        _ => drop(madenet_dme::train::Model::from_bytes(
+        _ => drop(madenet_dme::model::Model::from_bytes(
             &DME,
             &[weights, ACTORS[0], ACTORS[1]],
             "fuzz/model.toml",

@@ -34,6 +34,8 @@ pub struct AgentConfig {
     pub movement: madenet_map::Movement,
     /// How 𝒢 is chosen ([`madenet_world::CandidateRule`]).
     pub candidate_rule: madenet_world::CandidateRule,
+    /// d_s, the sensing range in cells (Sec. V.A.1): the policies read it from the view.
+    pub sensing_range: i32,
 }
 
 impl AgentConfig {
@@ -50,6 +52,7 @@ impl AgentConfig {
             plan_horizon: cfg.plan_horizon,
             movement: cfg.movement,
             candidate_rule: cfg.candidate_rule,
+            sensing_range: cfg.sensing_range,
         }
     }
 }
@@ -597,6 +600,7 @@ impl Agent {
             teammates: &self.teammates,
             goal: self.goal,
             prev_goal: self.prev_goal,
+            sensing_range: self.cfg.sensing_range,
             candidates: &self.candidates,
             dijkstra: &mut self.dijkstra,
             dijkstra_fresh: &mut self.dijkstra_fresh,
@@ -652,6 +656,7 @@ impl Agent {
             teammates: &self.teammates,
             goal: self.goal,
             prev_goal: self.prev_goal,
+            sensing_range: self.cfg.sensing_range,
             candidates,
             dijkstra,
             dijkstra_fresh: fresh,

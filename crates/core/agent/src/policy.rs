@@ -144,11 +144,8 @@ impl Policy for RandomCandidate {
 /// [`Spread::POSITION_MEMORY`] steps) lies within d_s (Chebyshev) of the candidate: go to the
 /// nearest frontier nobody else is heading for or standing at. Ties go to the lower slot. The
 /// constants were chosen once, not tuned.
-#[derive(Clone, Debug)]
-pub struct Spread {
-    /// d_s, the sensing range in cells (the radius a teammate covers).
-    pub sensing_range: i32,
-}
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spread;
 
 impl Spread {
     /// Announced goals older than this many steps are ignored.
@@ -156,18 +153,13 @@ impl Spread {
     /// Positions older than this many steps are ignored.
     pub const POSITION_MEMORY: usize = 10;
 
-    /// The rule for sensing range d_s = `sensing_range` cells.
-    pub fn new(sensing_range: i32) -> Self {
-        Spread { sensing_range }
-    }
-
     /// The spread score of every candidate (lower is better; path cost in cells plus the
     /// crowding penalty), `None` for a candidate the robot cannot reach.
     pub fn scores(&self, view: &mut AgentView<'_>) -> Vec<Option<f64>> {
         let cells = view.candidates().cells.clone();
         let costs: Vec<Option<f64>> = cells.iter().map(|&c| view.path_cost(c)).collect();
         let view = &*view;
-        let ds = self.sensing_range;
+        let ds = view.sensing_range;
         let recent = |at: Option<usize>, memory: usize| {
             at.is_some_and(|a| view.t.saturating_sub(a) <= memory)
         };

@@ -27,6 +27,8 @@ pub struct AgentView<'a> {
     pub goal: Option<Pos>,
     /// g_i^{t-1}: the goal the robot had before the current one (None: none).
     pub prev_goal: Option<Pos>,
+    /// d_s, the sensing range in cells (Sec. V.A.1): one source for every policy.
+    pub sensing_range: i32,
     pub(crate) candidates: &'a GoalCandidates,
     pub(crate) dijkstra: &'a mut Dijkstra,
     pub(crate) dijkstra_fresh: &'a mut bool,
@@ -202,7 +204,7 @@ impl<'a> AgentView<'a> {
     }
 
     /// Per-candidate inputs of the learned policy beyond the paper's (the `candidate-features`
-    /// observation; zeros for an empty slot), `sensing_range` = d_s:
+    /// observation; zeros for an empty slot), with the view's d_s:
     ///
     /// 0. path cost from the robot (cells) / (height + width);
     /// 1. unknown cells within d_s (Chebyshev) of the candidate / (2 d_s + 1)², the information
@@ -217,7 +219,7 @@ impl<'a> AgentView<'a> {
     /// 8. 1 for the candidate [`crate::Spread`] would take, else 0.
     ///
     /// Costs are [`AgentView::path_cost`]s (the goal extraction's search when it is at hand).
-    pub fn write_candidate_features(&mut self, sensing_range: i32, out: &mut [f32]) {
+    pub fn write_candidate_features(&mut self, out: &mut [f32]) {
         let slots = self.candidates.slots;
         assert_eq!(
             out.len(),
@@ -226,7 +228,7 @@ impl<'a> AgentView<'a> {
         );
         out.fill(0.0);
         let b = self.belief;
-        let ds = sensing_range.max(1);
+        let ds = self.sensing_range.max(1);
         let window = ((2 * ds + 1) * (2 * ds + 1)) as f32;
         let mates = self.recent_teammates();
         let cells = self.candidates.cells.clone();
@@ -281,8 +283,7 @@ impl<'a> AgentView<'a> {
                 .count();
             f[6] = rank as f32 / slots.max(1) as f32;
         }
-        let spread = crate::Spread::new(sensing_range);
-        let scores = spread.scores(self);
+        let scores = crate::Spread.scores(self);
         let best = scores
             .iter()
             .enumerate()
@@ -472,6 +473,7 @@ mod tests {
             teammates: &teammates,
             goal: None,
             prev_goal: None,
+            sensing_range: 4,
             candidates: &candidates,
             dijkstra: &mut d,
             dijkstra_fresh: &mut fresh,

@@ -531,9 +531,9 @@ pub fn known_team(id: usize, pos: Pos, teammates: &[madenet_agent::TeammateRecor
 /// read.
 pub fn candidate_plan_moves(
     view: &madenet_agent::AgentView<'_>,
-    sensing_range: i32,
     fills: &[OccGrid],
 ) -> Option<Vec<f64>> {
+    let sensing_range = view.sensing_range;
     let team = known_team(view.id, view.pos, view.teammates);
     let grid = view.belief.grid();
     let far = 2 * (grid.height() + grid.width()) as u32;

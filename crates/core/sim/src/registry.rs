@@ -62,8 +62,8 @@ impl PolicyRegistry {
             "uniformly random goal candidate at each macro termination",
             |c| Box::new(RandomCandidate::new(c.seed, c.robot)),
         );
-        r.register("spread", "nearest goal candidate, penalised 2·d_s per teammate whose goal or position is within d_s (the simple rule)", |c| {
-            Box::new(Spread::new(c.config.sensing_range))
+        r.register("spread", "nearest goal candidate, penalised 2·d_s per teammate whose goal or position is within d_s (the simple rule)", |_| {
+            Box::new(Spread)
         });
         r
     }

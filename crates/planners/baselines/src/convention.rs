@@ -38,19 +38,12 @@ pub struct Convention {
 }
 
 impl Convention {
-    /// The policy for sensing range d_s = `sensing_range` cells on a `height` × `width` map,
-    /// redrawing over `futures` maps (0: unknown cells free) from the stream
-    /// `convention/redraw` of the trial's `seed`, a teammate's part costing `penalty` cells.
-    pub fn new(
-        sensing_range: i32,
-        futures: usize,
-        penalty: f64,
-        seed: u64,
-        height: usize,
-        width: usize,
-    ) -> Self {
+    /// The policy on a `height` × `width` map, redrawing over `futures` maps (0: unknown cells
+    /// free) from the stream `convention/redraw` of the trial's `seed`, a teammate's part
+    /// costing `penalty` cells (d_s: the view's).
+    pub fn new(futures: usize, penalty: f64, seed: u64, height: usize, width: usize) -> Self {
         Convention {
-            spread: Spread::new(sensing_range),
+            spread: Spread,
             futures,
             penalty,
             seed,
@@ -93,7 +86,7 @@ impl Convention {
         )
         .unwrap_or_default();
         let team: Vec<Pos> = group.iter().map(|&(_, p)| p).collect();
-        let ds = self.spread.sensing_range;
+        let ds = view.sensing_range;
         let mut viewpoints: Vec<(Pos, u8)> = Vec::new();
         for fill in madenet_sim::reference::plan_fills(&fills) {
             let Some(routes) =

@@ -124,26 +124,18 @@ pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
     registry.register(
         "belief-plan",
         "the known-map reference's team plan on the robot's own belief (unknown cells redrawn by the map generator over 4 maps, teammates at their announced goal or last known cell); the candidate nearest its first viewpoint",
-        |ctx| Box::new(BeliefPlan::new(ctx.config.sensing_range, 4, ctx.seed, ctx.robot)),
+        |ctx| Box::new(BeliefPlan::new(4, ctx.seed, ctx.robot)),
     );
     registry.register(
         "belief-plan-free",
         "belief-plan with the belief's unknown cells taken as free (optimistic) instead of redrawn",
-        |ctx| {
-            Box::new(BeliefPlan::new(
-                ctx.config.sensing_range,
-                0,
-                ctx.seed,
-                ctx.robot,
-            ))
-        },
+        |ctx| Box::new(BeliefPlan::new(0, ctx.seed, ctx.robot)),
     );
     registry.register(
         "convention",
         "spread with the teammates' parts of a team plan that every robot of a meeting computes alike (the known-map reference's planner on the merged map, 4 redrawn maps) d_s dearer, until the next meeting",
         |ctx| {
             Box::new(Convention::new(
-                ctx.config.sensing_range,
                 4,
                 f64::from(ctx.config.sensing_range),
                 ctx.seed,

@@ -22,12 +22,12 @@ pub struct BeliefPlan {
 }
 
 impl BeliefPlan {
-    /// The planner for sensing range d_s = `sensing_range` cells, redrawing over `futures` maps
-    /// (0: unknown cells free), its draws from the stream `belief-plan/redraw` of the trial's
-    /// `seed` and the robot's index `robot`.
-    pub fn new(sensing_range: i32, futures: usize, seed: u64, robot: usize) -> Self {
+    /// The planner redrawing over `futures` maps (0: unknown cells free), its draws from the
+    /// stream `belief-plan/redraw` of the trial's `seed` and the robot's index `robot` (d_s: the
+    /// view's).
+    pub fn new(futures: usize, seed: u64, robot: usize) -> Self {
         BeliefPlan {
-            spread: Spread::new(sensing_range),
+            spread: Spread,
             futures,
             seed,
             robot,
@@ -62,8 +62,7 @@ impl Policy for BeliefPlan {
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let spread = self.spread.scores(view);
         let fills = self.fills(view);
-        let moves =
-            madenet_sim::reference::candidate_plan_moves(view, self.spread.sensing_range, &fills);
+        let moves = madenet_sim::reference::candidate_plan_moves(view, &fills);
         let best = spread
             .iter()
             .enumerate()

@@ -30,7 +30,7 @@ fn both_sides_of_a_meeting_agree_on_the_split() {
             if meeting {
                 let parts: Vec<Vec<Option<usize>>> = (0..2)
                     .map(|i| {
-                        let mut c = Convention::new(4, 2, 4.0, seed, side, side);
+                        let mut c = Convention::new(2, 4.0, seed, side, side);
                         let mut view = trial.agents()[i].peek_view(true, &mut scratch);
                         c.decide(&mut view);
                         (0..side * side)

@@ -96,23 +96,16 @@ fn agnostic(c: &mut Criterion) {
     let cfg = AgnosticConfig::new();
     let net = cfg.init(&device).expect("agnostic DEP");
     let scorer = std::sync::Arc::new(AgnosticScorer::new(&net));
-    let ds = madenet_world::ScenarioConfig::default().sensing_range;
     for (side, team) in [(20, 3), (60, 5)] {
         let mut trial = mid_trial(side, team);
-        let mut policy = AgnosticPolicy::new("any", scorer.clone(), &cfg, ds);
+        let mut policy = AgnosticPolicy::new("any", scorer.clone(), &cfg);
         c.bench_function(&format!("agnostic_decide/{side}"), |b| {
             b.iter(|| black_box(policy.decide(&mut trial.agent_mut(0).view(true))))
         });
         c.bench_function(&format!("agnostic_inputs/{side}"), |b| {
-            b.iter(|| {
-                black_box(inputs(
-                    &mut trial.agent_mut(0).view(true),
-                    ds,
-                    cfg.crop_radius,
-                ))
-            })
+            b.iter(|| black_box(inputs(&mut trial.agent_mut(0).view(true), cfg.crop_radius)))
         });
-        let input = inputs(&mut trial.agent_mut(0).view(true), ds, cfg.crop_radius);
+        let input = inputs(&mut trial.agent_mut(0).view(true), cfg.crop_radius);
         c.bench_function(&format!("agnostic_scores/{side}"), |b| {
             b.iter(|| black_box(scorer.scores(&input)))
         });

@@ -44,14 +44,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut registry = PolicyRegistry::builtin();
     let m = Arc::clone(&model);
     registry.register("all", "the model for every robot", move |ctx| {
-        m.policy("all", ctx.robot, ctx.config.sensing_range)
+        m.policy("all", ctx.robot)
     });
     let builtin = PolicyRegistry::builtin();
     registry.register(
         "one",
         "the model for robot 0, spread for the rest",
         move |ctx| match ctx.robot {
-            0 => model.policy("one", 0, ctx.config.sensing_range),
+            0 => model.policy("one", 0),
             _ => builtin.make("spread", ctx).expect("spread is a built-in"),
         },
     );

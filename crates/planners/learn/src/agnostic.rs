@@ -300,10 +300,11 @@ pub struct AgnosticInput {
 /// * **crop** of each candidate: the robot's 4-channel map image (explored, obstacles, robots,
 ///   candidates) in a (2r + 1)² window centred on it; cells outside the map are explored
 ///   obstacles.
-pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) -> AgnosticInput {
+pub fn inputs(view: &mut AgentView<'_>, crop_radius: usize) -> AgnosticInput {
     let slots = view.candidates().slots;
     let mut base = vec![0.0; AgentView::candidate_features_len(slots)];
-    view.write_candidate_features(sensing_range, &mut base);
+    view.write_candidate_features(&mut base);
+    let sensing_range = view.sensing_range;
     let b = view.belief;
     let (h, w) = (b.height(), b.width());
     let cells = (h * w).max(1) as f32;
@@ -430,23 +431,15 @@ pub fn inputs(view: &mut AgentView<'_>, sensing_range: i32, crop_radius: usize) 
 /// 1. 1 for the candidates with the fewest such moves (the plan's choice, ties included), else 0.
 ///
 /// Both are 0 for an empty slot and for every slot when the plan gives the robot no viewpoint.
-pub fn inputs_for(
-    view: &mut AgentView<'_>,
-    sensing_range: i32,
-    sizes: &AgnosticConfig,
-) -> AgnosticInput {
-    let mut x = inputs(view, sensing_range, sizes.crop_radius);
+pub fn inputs_for(view: &mut AgentView<'_>, sizes: &AgnosticConfig) -> AgnosticInput {
+    let mut x = inputs(view, sizes.crop_radius);
     if !sizes.wide() && !sizes.territory() && !sizes.plan() {
         return x;
     }
     let slots = x.mask.len();
-    let wide = sizes
-        .wide()
-        .then(|| wide_inputs(view, sensing_range, slots));
+    let wide = sizes.wide().then(|| wide_inputs(view, slots));
     let territory = sizes.territory().then(|| territory_inputs(view, slots));
-    let plan = sizes
-        .plan()
-        .then(|| plan_inputs(view, sensing_range, slots));
+    let plan = sizes.plan().then(|| plan_inputs(view, slots));
     let mut features = Vec::with_capacity(slots * sizes.candidate_inputs());
     for k in 0..slots {
         features.extend_from_slice(&x.features[k * CANDIDATE_INPUTS..(k + 1) * CANDIDATE_INPUTS]);
@@ -465,7 +458,7 @@ pub fn inputs_for(
 }
 
 /// The [`WIDE_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
-fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f32; WIDE_INPUTS]> {
+fn wide_inputs(view: &AgentView<'_>, slots: usize) -> Vec<[f32; WIDE_INPUTS]> {
     let b = view.belief;
     let (h, w) = (b.height() as i32, b.width() as i32);
     // Summed-area table of unknown cells: O(1) per window (hand-written: two loops).
@@ -492,7 +485,7 @@ fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f
         }
         sat[cell(r1, c1)] + sat[cell(r0, c0)] - sat[cell(r0, c1)] - sat[cell(r1, c0)]
     };
-    let ds = sensing_range.max(1);
+    let ds = view.sensing_range.max(1);
     let area = |rad: i32| ((2 * rad + 1) * (2 * rad + 1)) as f32;
     let others: Vec<Pos> = view
         .recent_teammates()
@@ -532,12 +525,12 @@ fn wide_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f
 }
 
 /// The [`PLAN_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
-fn plan_inputs(view: &AgentView<'_>, sensing_range: i32, slots: usize) -> Vec<[f32; PLAN_INPUTS]> {
+fn plan_inputs(view: &AgentView<'_>, slots: usize) -> Vec<[f32; PLAN_INPUTS]> {
     let mut out = vec![[0.0; PLAN_INPUTS]; slots];
-    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, sensing_range, &[]) else {
+    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, &[]) else {
         return out;
     };
-    let reach = f64::from(4 * sensing_range.max(1));
+    let reach = f64::from(4 * view.sensing_range.max(1));
     let fewest = moves.iter().copied().min_by(f64::total_cmp);
     for (o, &m) in out.iter_mut().zip(&moves) {
         *o = [
@@ -731,26 +724,18 @@ pub struct AgnosticPolicy {
     name: String,
     net: Arc<AgnosticScorer>,
     sizes: AgnosticConfig,
-    sensing_range: i32,
     spread_margin: Option<f32>,
     /// The scores of the last decision (empty: it had no choice to weigh).
     last: Vec<f32>,
 }
 
 impl AgnosticPolicy {
-    /// Policy `name` deciding with `net` of `sizes` (its crops and inputs), d_s =
-    /// `sensing_range`.
-    pub fn new(
-        name: &str,
-        net: Arc<AgnosticScorer>,
-        sizes: &AgnosticConfig,
-        sensing_range: i32,
-    ) -> Self {
+    /// Policy `name` deciding with `net` of `sizes` (its crops and inputs; d_s: the view's).
+    pub fn new(name: &str, net: Arc<AgnosticScorer>, sizes: &AgnosticConfig) -> Self {
         AgnosticPolicy {
             name: name.into(),
             net,
             sizes: sizes.clone(),
-            sensing_range,
             spread_margin: None,
             last: Vec::new(),
         }
@@ -781,7 +766,7 @@ impl Policy for AgnosticPolicy {
         if view.candidates().cells.len() == 1 {
             return Decision::Candidate(0);
         }
-        let input = inputs_for(view, self.sensing_range, &self.sizes);
+        let input = inputs_for(view, &self.sizes);
         let q = self.net.scores(&input);
         self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &input.mask).expect("a valid candidate");

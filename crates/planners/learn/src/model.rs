@@ -322,25 +322,24 @@ impl Model {
             name,
             about,
             move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| model.policy(&owned, ctx.robot, ctx.config.sensing_range),
+            move |ctx| model.policy(&owned, ctx.robot),
         );
     }
 
-    /// Robot `robot`'s policy under name `name` (d_s = `sensing_range`): its grid DEP (or the
-    /// shared one), or the agnostic DEP.
-    pub fn policy(&self, name: &str, robot: usize, sensing_range: i32) -> Box<dyn Policy> {
+    /// Robot `robot`'s policy under name `name`: its grid DEP (or the shared one), or the
+    /// agnostic DEP.
+    pub fn policy(&self, name: &str, robot: usize) -> Box<dyn Policy> {
         let margin = self.info.spread_margin;
         if let (Some(scorer), Some(a)) = (&self.scorer, &self.info.agnostic) {
             return Box::new(
-                AgnosticPolicy::new(name, Arc::clone(scorer), a, sensing_range)
-                    .with_spread_margin(margin),
+                AgnosticPolicy::new(name, Arc::clone(scorer), a).with_spread_margin(margin),
             );
         }
         let deps = &self.deps;
         let net = Arc::clone(&deps[robot.min(deps.len() - 1)]);
         Box::new(
             DepPolicy::new(name, net)
-                .with_observation(self.info.observation, sensing_range)
+                .with_observation(self.info.observation)
                 .with_recurrence(self.info.recurrent)
                 .with_spread_margin(margin),
         )

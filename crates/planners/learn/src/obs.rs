@@ -84,8 +84,8 @@ impl Observation {
             }
     }
 
-    /// The vector of `view` (d_s = `sensing_range`).
-    pub fn vector(self, view: &mut AgentView<'_>, sensing_range: i32) -> Vec<f32> {
+    /// The vector of `view`.
+    pub fn vector(self, view: &mut AgentView<'_>) -> Vec<f32> {
         let mut z = view.macro_observation();
         if self == Observation::CandidateFeatures {
             let base = z.len();
@@ -93,7 +93,7 @@ impl Observation {
                 base + AgentView::candidate_features_len(view.candidates().slots),
                 0.0,
             );
-            view.write_candidate_features(sensing_range, &mut z[base..]);
+            view.write_candidate_features(&mut z[base..]);
         }
         z
     }

@@ -14,7 +14,6 @@ pub struct DepPolicy {
     state: Option<LstmState>,
     device: burn::tensor::Device,
     observation: Observation,
-    sensing_range: i32,
     recurrent: bool,
     spread_margin: Option<f32>,
     /// The Q-values of the last decision (empty: none).
@@ -31,7 +30,6 @@ impl DepPolicy {
             last: Vec::new(),
             device: crate::cpu(),
             observation: Observation::Paper,
-            sensing_range: 4,
             recurrent: true,
             spread_margin: None,
         }
@@ -51,10 +49,9 @@ impl DepPolicy {
         self
     }
 
-    /// Reads `observation`'s vector (d_s = `sensing_range`) instead of the paper's.
-    pub fn with_observation(mut self, observation: Observation, sensing_range: i32) -> Self {
+    /// Reads `observation`'s vector instead of the paper's.
+    pub fn with_observation(mut self, observation: Observation) -> Self {
         self.observation = observation;
-        self.sensing_range = sensing_range;
         self
     }
 }
@@ -72,7 +69,7 @@ impl Policy for DepPolicy {
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let (h, w) = (view.belief.height(), view.belief.width());
         let m: Vec<f32> = view.map_image().into_iter().map(f32::from).collect();
-        let vec = self.observation.vector(view, self.sensing_range);
+        let vec = self.observation.vector(view);
         let mask = action_mask(view);
         let maps = Tensor::<4>::from_data(TensorData::new(m, [1, 4, h, w]), &self.device);
         let obs =
@@ -91,16 +88,14 @@ impl Policy for DepPolicy {
         }
         self.last.clone_from(&q);
         let greedy = masked_argmax_slice(&q, &mask).expect("a valid candidate");
-        let anchor = self
-            .spread_margin
-            .and_then(|_| spread_choice(view, self.sensing_range));
+        let anchor = self.spread_margin.and_then(|_| spread_choice(view));
         Decision::Candidate(conservative(&q, greedy, self.spread_margin, anchor))
     }
 }
 
-/// The candidate the `spread` rule (d_s = `sensing_range`) takes, if any.
-pub(crate) fn spread_choice(view: &mut AgentView<'_>, sensing_range: i32) -> Option<usize> {
-    madenet_agent::Spread::new(sensing_range)
+/// The candidate the `spread` rule takes, if any.
+pub(crate) fn spread_choice(view: &mut AgentView<'_>) -> Option<usize> {
+    madenet_agent::Spread
         .scores(view)
         .iter()
         .enumerate()

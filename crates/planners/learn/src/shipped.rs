@@ -59,7 +59,7 @@ pub fn register(registry: &mut PolicyRegistry) {
             about,
             move || model(name).map_err(|e| e.to_string()),
             |m: &Model, ctx| m.check(ctx.height, ctx.width, ctx.config),
-            move |m, ctx| m.policy(name, ctx.robot, ctx.config.sensing_range),
+            move |m, ctx| m.policy(name, ctx.robot),
         );
     }
 }

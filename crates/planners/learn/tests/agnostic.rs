@@ -48,7 +48,7 @@ fn decision_for(side: usize, team: usize, seed: u64, sizes: &AgnosticConfig) -> 
     let mut trial = Trial::new(spec).unwrap();
     assert!(trial.begin_step());
     let mut view = trial.agent_mut(0).view(true);
-    inputs_for(&mut view, 4, sizes)
+    inputs_for(&mut view, sizes)
 }
 
 /// `wide_inputs` appends WIDE_INPUTS shares to each candidate's usual inputs (those unchanged):

@@ -441,7 +441,7 @@ fn observation_lengths_match_what_the_agent_writes() {
             assert_eq!(view.candidates().slots, goals);
             assert_eq!(robot_obs(&view).vec.len(), obs_dim_for(team, goals));
             for o in [Observation::Paper, Observation::CandidateFeatures] {
-                let v = o.vector(&mut view, config.sensing_range);
+                let v = o.vector(&mut view);
                 assert_eq!(
                     v.len(),
                     o.dim(team, goals),

@@ -209,7 +209,7 @@ pub(super) fn behaviour_registry(
     let name = cfg.base_policy.clone();
     r.register("behaviour", "data collection", move |ctx| {
         let inner: Box<dyn Policy> = match &student {
-            Some(model) => model.policy("student", ctx.robot, ctx.config.sensing_range),
+            Some(model) => model.policy("student", ctx.robot),
             None => base
                 .make(&name, ctx)
                 .expect("the base policy is a built-in (validated)"),

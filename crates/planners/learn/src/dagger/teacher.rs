@@ -447,7 +447,6 @@ impl Recorder for Labelling<'_> {
 
     fn decide(&mut self, trial: &mut Trial) -> Result<(), TrainError> {
         let cfg = self.cfg;
-        let ds = cfg.scenario.sensing_range;
         let n = trial.agents().len();
         // 1. A decision with a choice is labelled with probability `label_prob` (scaled by the
         //    area), drawn in robot order.
@@ -541,11 +540,11 @@ impl Recorder for Labelling<'_> {
                 match cfg.network {
                     Network::Grid => (
                         pack_bits(&view.map_image()),
-                        cfg.observation.vector(&mut view, ds),
+                        cfg.observation.vector(&mut view),
                         action_mask(&view),
                     ),
                     Network::Agnostic => {
-                        let x = crate::agnostic::inputs_for(&mut view, ds, &cfg.agnostic());
+                        let x = crate::agnostic::inputs_for(&mut view, &cfg.agnostic());
                         let mut vec = x.context;
                         vec.extend(x.features);
                         (x.crops, vec, x.mask)
