@@ -3,11 +3,10 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use madenet_map::paper::Corner;
 use madenet_sim::PolicyRegistry;
 use madenet_study::runner::{self, Planned, TrialOutcome};
 use madenet_study::StudyConfig;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
@@ -26,20 +25,11 @@ pub struct BatchArgs {
     /// Communication success probabilities (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "1.0")]
     csp: Vec<f64>,
-    /// Seeds per (map, start, CSP): `seed-base`, `seed-base + 1`, …
-    #[arg(long, default_value_t = 1)]
-    seeds: u64,
-    #[arg(long, default_value_t = 1)]
-    seed_base: u64,
-    /// Scenario config (TOML).
-    #[arg(long)]
-    config: Option<PathBuf>,
+    #[command(flatten)]
+    set: crate::scenario_args::TrialSetArgs,
     /// Output CSV (written atomically), in the schema of `madenet compare`'s `trials.csv`.
     #[arg(long, default_value = "batch.csv")]
     out: PathBuf,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = crate::threads_arg)]
-    threads: Option<usize>,
 }
 
 pub fn run(a: BatchArgs) -> Result<()> {
@@ -49,20 +39,15 @@ pub fn run(a: BatchArgs) -> Result<()> {
             a.policy
         );
     }
-    let registry = crate::registry(a.model.as_deref())?;
-    let mut cfg = trial_set(
-        &a.maps,
-        &a.starts,
-        &a.csp,
-        a.seeds,
-        a.seed_base,
-        a.config.as_deref(),
-    )?;
+    let registry = madenet_catalogue::with_model(&Default::default(), a.model.as_deref())?;
+    let scenario = crate::load_config(a.set.config.as_deref())?;
+    let seeds = (a.set.seeds, a.set.seed_base);
+    let mut cfg = StudyConfig::trial_set(&a.maps, &a.starts, &a.csp, seeds, scenario);
     cfg.methods = vec![a.policy.clone()];
     let flag = format!("--policy {}", a.policy);
-    let planned = plan(&cfg, &registry, a.config.as_deref(), &flag)?;
+    let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = run_planned(&planned, &registry, a.threads)?;
+    let outcomes = run_planned(&planned, &registry, a.set.threads)?;
     let elapsed = started.elapsed();
     let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
     madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))
@@ -73,86 +58,10 @@ pub fn run(a: BatchArgs) -> Result<()> {
         elapsed.as_secs_f64(),
         a.out.display()
     )?;
-    for &csp in &a.csp {
-        let sel: Vec<&runner::TrialRow> = outcomes
-            .iter()
-            .map(|o| &o.row)
-            .filter(|r| r.key.csp == runner::csp_label(csp))
-            .collect();
-        let n = sel.len().max(1) as f64;
-        let mean = |f: &dyn Fn(&runner::TrialRow) -> f64| sel.iter().map(|r| f(r)).sum::<f64>() / n;
-        out!(
-            "csp {csp:.2}: completed {}/{}  TNS {:.1}  TTD {:.1} m  NOLI {:.1}  OFV {:.2}",
-            sel.iter().filter(|r| r.completed).count(),
-            sel.len(),
-            mean(&|r| r.tns as f64),
-            mean(&|r| r.ttd),
-            mean(&|r| r.noli as f64),
-            mean(&|r| r.ofv),
-        )?;
+    for line in madenet_study::means_by_csp(&outcomes, &a.csp) {
+        out!("{line}")?;
     }
     Ok(())
-}
-
-/// The trial set the flags of `batch` and `oracle` describe, as a study config with no methods
-/// and no oracles yet: `--starts all` is the four corners, `--config` the scenario.
-pub fn trial_set(
-    maps: &[String],
-    starts: &[String],
-    csp: &[f64],
-    seeds: u64,
-    seed_base: u64,
-    config: Option<&Path>,
-) -> Result<StudyConfig> {
-    let mut corners = Vec::new();
-    for s in starts {
-        if s == "all" {
-            corners.extend(Corner::ALL.iter().map(|c| c.name().to_string()));
-        } else {
-            corners.push(s.clone());
-        }
-    }
-    Ok(StudyConfig {
-        methods: Vec::new(),
-        maps: maps.to_vec(),
-        starts: corners,
-        csp: csp.to_vec(),
-        seeds,
-        seed_base,
-        scenario: crate::load_config(config)?,
-        oracles: Vec::new(),
-        ..StudyConfig::default()
-    })
-}
-
-/// Checks `cfg` (a bad field named by its flag; `policy_flag` for the policy) and plans its
-/// trials with the study runner, in its order: methods, then oracles; maps, starts, CSPs, seeds.
-pub fn plan(
-    cfg: &StudyConfig,
-    registry: &PolicyRegistry,
-    config: Option<&Path>,
-    policy_flag: &str,
-) -> Result<Vec<Planned>> {
-    let (maps, starts) = cfg.validate(registry).map_err(|e| {
-        crate::compare::name_study_source(
-            e,
-            config,
-            &[
-                ("methods", policy_flag, true),
-                ("oracle_base", policy_flag, true),
-                ("oracle_futures", "--futures", true),
-                ("oracle_lookahead.horizon", "--horizon", true),
-                ("maps", "--maps", true),
-                ("starts", "--starts", true),
-                ("csp", "--csp", true),
-                ("seeds", "--seeds", true),
-                ("seed_base", "--seed-base", true),
-            ],
-        )
-    })?;
-    let planned = runner::plan(cfg, &maps, &starts);
-    runner::check_planned(&planned, registry)?;
-    Ok(planned)
 }
 
 /// Runs `planned` with a progress bar on `threads` workers; outcomes in plan order.

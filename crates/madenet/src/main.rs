@@ -11,7 +11,6 @@ macro_rules! out {
 
 mod batch;
 mod compare;
-mod interrupt;
 mod map_cmd;
 mod nodes;
 mod oracle;
@@ -23,6 +22,7 @@ mod scenario_args;
 mod train_cmd;
 
 use clap::{Parser, Subcommand};
+use madenet_runtime::signals::Interrupted;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -104,11 +104,13 @@ fn main() -> ExitCode {
         Command::World(a) => nodes::world(a),
         Command::Radio(a) => nodes::radio(a),
         Command::Agent(a) => nodes::agent(a),
-        Command::Policies => registry(None).and_then(|r| {
-            r.describe().into_iter().try_for_each(|(name, about)| {
-                out!("{name:<12} {about}").map_err(anyhow::Error::from)
-            })
-        }),
+        Command::Policies => madenet_catalogue::shipped()
+            .map_err(Into::into)
+            .and_then(|r| {
+                r.describe().into_iter().try_for_each(|(name, about)| {
+                    out!("{name:<12} {about}").map_err(anyhow::Error::from)
+                })
+            }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -119,38 +121,18 @@ fn main() -> ExitCode {
         {
             ExitCode::SUCCESS
         }
-        Err(e) if e.downcast_ref::<interrupt::Interrupted>().is_some() => {
+        Err(e) if e.downcast_ref::<Interrupted>().is_some() => {
             eprintln!("{e}");
-            let signal = e
-                .downcast_ref::<interrupt::Interrupted>()
-                .map_or(2, |i| i.signal);
-            ExitCode::from(128 + signal.clamp(0, 127) as u8)
+            ExitCode::from(
+                e.downcast_ref::<Interrupted>()
+                    .map_or(2, Interrupted::exit_code),
+            )
         }
         Err(e) => {
             eprintln!("error: {}", one_line(&e));
             ExitCode::from(2)
         }
     }
-}
-
-/// Every policy the CLI knows: the catalogue ([`madenet_catalogue::shipped`]) and the model
-/// in `model_dir` as `model`.
-pub fn registry(
-    model_dir: Option<&std::path::Path>,
-) -> anyhow::Result<madenet_sim::PolicyRegistry> {
-    registry_with(&Default::default(), model_dir)
-}
-
-/// [`registry`] with the baselines' parameters of a config (a study's `[baselines]`).
-pub fn registry_with(
-    baselines: &madenet_baselines::BaselineParams,
-    model_dir: Option<&std::path::Path>,
-) -> anyhow::Result<madenet_sim::PolicyRegistry> {
-    let mut r = madenet_catalogue::catalogue(baselines)?;
-    if let Some(dir) = model_dir {
-        madenet_catalogue::register_model(&mut r, "model", "the model given with --model", dir)?;
-    }
-    Ok(r)
 }
 
 /// Writes to stdout, reporting failures as errors.
@@ -219,4 +201,24 @@ pub fn load_config(
         Some(p) => madenet_world::ScenarioConfig::from_toml_file(p)?,
         None => madenet_world::ScenarioConfig::default(),
     })
+}
+
+/// `--kind` of `oracle`: an oracle's name ([`madenet_sim::rollout::OracleKind::name`]).
+pub fn oracle_arg(s: &str) -> Result<madenet_sim::rollout::OracleKind, String> {
+    use madenet_sim::rollout::OracleKind;
+    OracleKind::ALL
+        .into_iter()
+        .find(|k| k.name() == s)
+        .ok_or_else(|| {
+            let names: Vec<&str> = OracleKind::ALL.iter().map(|k| k.name()).collect();
+            format!("unknown oracle `{s}`; known: {}", names.join(", "))
+        })
+}
+
+/// An item of `compare --oracles`: an oracle's name, or `none`.
+pub fn oracles_arg(s: &str) -> Result<Option<madenet_sim::rollout::OracleKind>, String> {
+    match s {
+        "none" => Ok(None),
+        _ => oracle_arg(s).map(Some).map_err(|e| format!("{e}, none")),
+    }
 }

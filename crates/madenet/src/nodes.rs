@@ -7,14 +7,12 @@
 use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
-use madenet_render::Pictures;
-use madenet_ros2::record::RecorderSink;
-use madenet_runtime::launch::{run_nodes, LaunchError, LaunchEvent};
+use madenet_runtime::launch::{launch_team, LaunchError};
+use madenet_runtime::serve::{self, Served, Serving, WorldSink, WorldSinks};
+use madenet_runtime::signals::{Interrupted, Stop};
 use madenet_runtime::wire::{Node, Shown};
-use madenet_runtime::zenoh_bus::{free_port_block, loopback_endpoints};
-use madenet_runtime::{LockstepResult, RadioFaults, Timeouts, WorldOutput, ZenohBus};
-use madenet_sim::stepping::{Sink, WorldView};
-use std::ops::ControlFlow;
+use madenet_runtime::zenoh_bus::loopback_endpoints;
+use madenet_runtime::{RadioFaults, Timeouts, WorldOutput, ZenohBus};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -189,6 +187,20 @@ pub struct RealRobotArgs {
 }
 
 impl RealRobotArgs {
+    /// Refuses pictures and a bag or live view with real robots: there is no ground truth to
+    /// draw, and the robots' own topics are theirs to record.
+    fn refuse_outputs(&self, pictures: bool, watch: bool) -> Result<()> {
+        if self.ros2_robots.is_some() && pictures {
+            anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
+        }
+        if self.ros2_robots.is_some() && watch {
+            anyhow::bail!(
+                "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
+            );
+        }
+        Ok(())
+    }
+
     fn to_args(&self) -> Vec<String> {
         match &self.ros2_robots {
             Some(e) => vec![
@@ -263,22 +275,27 @@ impl Ros2Out {
     }
 }
 
-/// A world node's last timestep as shown: the world, what each robot showed, the exchanges.
-type LastShown = (madenet_world::World, Vec<Shown>, Vec<(usize, usize)>);
-
 pub fn world(a: WorldArgs) -> Result<()> {
     let (spec, _) = a.scenario.spec()?;
     a.pictures.check(spec.map.width(), spec.map.height())?;
+    let scenario = Some(scenario_of(&spec));
+    a.real.refuse_outputs(a.pictures.any(), a.watch.any())?;
     if let Some(endpoint) = &a.real.ros2_robots {
-        if a.pictures.any() {
-            anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
-        }
-        if a.watch.any() {
-            anyhow::bail!(
-                "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
-            );
-        }
-        return real_world(&a, &spec, endpoint);
+        let opts = madenet_ros2::Ros2Options {
+            connect: vec![endpoint.to_string()],
+            ..Default::default()
+        };
+        let ctx = opts.context().context("--ros2-robots")?;
+        let wait = Duration::from_secs(a.real.step_timeout_s);
+        let frame = madenet_ros2::MapFrame::of(&spec.map);
+        let (n, config) = (spec.starts.len(), spec.config.clone());
+        let real = madenet_ros2::RealRobots::new(&ctx, n, frame, config, wait, wait)
+            .context("--ros2-robots")?;
+        let stop = Stop::watch(a.pace_ms > 0 || a.node.progress)?;
+        let stopped = serve_world(&a, &spec, &stop, |bus, t, serving| {
+            serve::serve(real, bus, t, scenario, None, serving)
+        })?;
+        return Ok(Interrupted::result(stopped)?);
     }
     let mut world = madenet_world::World::new(
         spec.map.clone(),
@@ -290,87 +307,33 @@ pub fn world(a: WorldArgs) -> Result<()> {
     world.detach_radio();
     // Before the live view prints its address: a Ctrl-C from then on ends the run gracefully
     // (launched, always: `launch` passes its first signal on to this node).
-    let stop = crate::interrupt::Stop::watch(a.watch.any() || a.pace_ms > 0 || a.node.progress)?;
-    // The bag, the live view and the pictures: the run loop's sinks, told of each timestep
-    // the world node takes (the first, before the first timestep, starts them). The bag and
-    // the live view first: a refused --record leaves no picture behind either.
-    let mut sinks: Option<(Option<RecorderSink>, Option<Pictures>)> = None;
-    let mut failed: Option<anyhow::Error> = None;
-    // The last timestep shown (its world cloned: the node's world is gone when it returns),
-    // for the sinks' final state.
-    let mut last_view: Option<LastShown> = None;
+    let stop = Stop::watch(a.watch.any() || a.pace_ms > 0 || a.node.progress)?;
+    // The bag and the live view first (a refused --record leaves no picture behind either);
+    // the pictures finish first.
+    let mut sinks = WorldSinks::new(Box::new(|view| {
+        let rec =
+            crate::record::start(a.watch.record.as_deref(), a.watch.foxglove.as_deref(), view)?;
+        let pics = a.pictures.sink(1.0)?;
+        let mut sinks: Vec<WorldSink> = Vec::new();
+        sinks.extend(pics.map(|p| Box::new(p) as WorldSink));
+        sinks.extend(rec.map(|r| Box::new(r) as WorldSink));
+        Ok(sinks)
+    }));
     let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
-        if failed.is_some() {
-            return;
-        }
-        let view = WorldView {
-            world: w,
-            robots: shown.iter().map(Shown::view).collect(),
-            exchanges: links,
-        };
-        let r = match sinks.as_mut() {
-            None => crate::record::start(
-                a.watch.record.as_deref(),
-                a.watch.foxglove.as_deref(),
-                &view,
-            )
-            .and_then(|rec| {
-                let mut pics = a.pictures.sink(1.0)?;
-                if let Some(p) = pics.as_mut() {
-                    Sink::begin(p, &view).map_err(anyhow::Error::from_boxed)?;
-                }
-                sinks = Some((rec, pics));
-                Ok(())
-            }),
-            Some((rec, pics)) => {
-                // The recorder and the pictures never stop a run: their flow is always Continue.
-                let mut step = || -> Result<(), madenet_sim::stepping::SinkError> {
-                    if let Some(r) = rec.as_mut() {
-                        let _ = Sink::step(r, &view)?;
-                    }
-                    if let Some(p) = pics.as_mut() {
-                        let _ = Sink::step(p, &view)?;
-                    }
-                    Ok(())
-                };
-                step().map_err(anyhow::Error::from_boxed)
-            }
-        };
-        failed = r.err();
-        last_view = Some((w.clone(), shown.to_vec(), links.to_vec()));
+        sinks.show(w, shown, links)
     };
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
         (a.pictures.any() || a.watch.any()).then_some(&mut draw);
-    let scenario = Some(scenario_of(&spec));
-    let interrupted = serve_world(&a, &spec, &stop, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(world, bus, timeouts, scenario, show, |w, waiting| {
-            on_step(w, waiting)
-        })
+    let stopped = serve_world(&a, &spec, &stop, |bus, t, serving| {
+        serve::serve(world, bus, t, scenario, show, serving)
     })?;
-    if let Some(e) = failed {
-        return Err(e);
-    }
-    let mut wrote = Vec::new();
-    if let (Some((rec, pics)), Some((w, shown, links))) = (sinks, last_view) {
-        let view = WorldView {
-            world: &w,
-            robots: shown.iter().map(Shown::view).collect(),
-            exchanges: &links,
-        };
-        if let Some(mut p) = pics {
-            wrote.extend(Sink::finish(&mut p, &view).map_err(anyhow::Error::from_boxed)?);
-        }
-        if let Some(mut r) = rec {
-            wrote.extend(Sink::finish(&mut r, &view).map_err(anyhow::Error::from_boxed)?);
-        }
-    }
-    for line in wrote {
+    for line in sinks.finish().map_err(anyhow::Error::from_boxed)? {
         // Launched (`--progress`), launch names the files itself.
         if !a.node.progress {
             eprintln!("{line}");
         }
     }
-    crate::interrupt::Interrupted::result(interrupted)
+    Ok(Interrupted::result(stopped)?)
 }
 
 /// The digest every node's hello is checked by: map, starts and scenario config.
@@ -378,80 +341,27 @@ fn scenario_of(spec: &madenet_sim::TrialSpec) -> u64 {
     madenet_runtime::wire::scenario_digest(&spec.map, &spec.starts, &spec.config)
 }
 
-/// The world node on real robots' maps and poses (`--ros2-robots`).
-fn real_world(a: &WorldArgs, spec: &madenet_sim::TrialSpec, endpoint: &str) -> Result<()> {
-    let opts = madenet_ros2::Ros2Options {
-        connect: vec![endpoint.to_string()],
-        ..Default::default()
-    };
-    let ctx = opts.context().context("--ros2-robots")?;
-    let wait = Duration::from_secs(a.real.step_timeout_s);
-    let real = madenet_ros2::RealRobots::new(
-        &ctx,
-        spec.starts.len(),
-        madenet_ros2::MapFrame::of(&spec.map),
-        spec.config.clone(),
-        wait,
-        wait,
-    )
-    .context("--ros2-robots")?;
-    let scenario = Some(scenario_of(spec));
-    let stop = crate::interrupt::Stop::watch(a.pace_ms > 0 || a.node.progress)?;
-    let stopped = serve_world(a, spec, &stop, |bus, timeouts, on_step| {
-        madenet_runtime::run_ground_with(real, bus, timeouts, scenario, None, |g, waiting| {
-            on_step(g, waiting)
-        })
-    })?;
-    crate::interrupt::Interrupted::result(stopped)
-}
-
-/// Runs a world node (`run` gets the bus, the timeouts and the progress callback) and writes
-/// its result; a signal `stop` watches ends the run after its timestep, writes no result and
+/// Serves a world node (`run` gets the bus, the timeouts and how to serve) and writes its
+/// result; a signal `stop` watches ends the run after its timestep, writes no result and
 /// returns where it stopped and the signal.
 fn serve_world(
     a: &WorldArgs,
     spec: &madenet_sim::TrialSpec,
-    stop: &crate::interrupt::Stop,
-    run: impl FnOnce(
-        &ZenohBus,
-        Timeouts,
-        &mut dyn FnMut(&dyn madenet_runtime::Ground, &mut dyn FnMut()) -> ControlFlow<()>,
-    ) -> Result<LockstepResult, madenet_runtime::RuntimeError>,
+    stop: &Stop,
+    run: impl FnOnce(&ZenohBus, Timeouts, &Serving) -> Result<Served, madenet_runtime::RuntimeError>,
 ) -> Result<Option<(String, i32)>> {
     let bus = a.node.bus(Node::World, spec.starts.len())?;
-    let progress = a.node.progress;
-    let pace = Duration::from_millis(a.pace_ms);
-    let mut last = std::time::Instant::now();
-    let mut interrupted = None;
-    let r = run(&bus, a.node.timeouts(), &mut |w, waiting| {
-        if progress {
-            let explored = w.explored_fraction();
-            eprintln!("progress step={} explored={explored:.3}", w.t());
-        }
-        // The pace in slices, the robots told the world is still there (a pace may be longer
-        // than they wait in silence).
-        let until = last + pace;
-        loop {
-            let left = until.saturating_duration_since(std::time::Instant::now());
-            if left.is_zero() {
-                break;
-            }
-            std::thread::sleep(left.min(Duration::from_millis(100)));
-            waiting();
-        }
-        last = std::time::Instant::now();
-        match stop.requested() {
-            Some(signal) => {
-                interrupted = Some((format!("timestep {}", w.t()), signal));
-                ControlFlow::Break(())
-            }
-            None => ControlFlow::Continue(()),
-        }
-    })?;
+    let serving = Serving {
+        pace: Duration::from_millis(a.pace_ms),
+        progress: a.node.progress,
+        stop,
+    };
+    let served = run(&bus, a.node.timeouts(), &serving);
     bus.close();
-    if interrupted.is_some() {
-        return Ok(interrupted);
-    }
+    let r = match served? {
+        Served::Finished(r) => *r,
+        Served::Interrupted(at, signal) => return Ok(Some((at, signal))),
+    };
     let out = WorldOutput::new(spec, &a.scenario.policy, r, a.trajectory);
     let json = serde_json::to_string_pretty(&out)?;
     match &a.out {
@@ -546,71 +456,100 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     let (spec, registry) = a.scenario.spec()?;
     let n = spec.starts.len();
     a.pictures.check(spec.map.width(), spec.map.height())?;
-    if a.real.ros2_robots.is_some() && a.pictures.any() {
-        anyhow::bail!("--render/--snapshot: not with --ros2-robots (no ground truth to draw)");
-    }
-    if a.real.ros2_robots.is_some() && a.watch.any() {
-        anyhow::bail!(
-            "--record/--foxglove: not with --ros2-robots (record the robots' own topics)"
-        );
-    }
+    a.real.refuse_outputs(a.pictures.any(), a.watch.any())?;
     a.watch.check()?;
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
-    // Caught from here on, passed on to the world node (which finishes the run); the nodes
-    // lead process groups of their own, so a terminal's Ctrl-C does not reach them directly.
-    let signals = crate::interrupt::Stop::catch()?;
     if a.port != 0 {
         loopback_endpoints(a.port, n, Node::Robot(n - 1))
             .map_err(anyhow::Error::msg)
             .context("--port")?;
-        return launch_on(&a, n, a.port, &signals);
     }
-    // Free ports are found by binding and releasing them; another program may take one before
-    // the node binds it. Then the node fails to listen, and the run is tried on new ports.
-    let mut attempt = 1;
-    loop {
-        let port = free_port_block(n as u16 + 2).map_err(anyhow::Error::msg)?;
-        match launch_on(&a, n, port, &signals) {
-            Err(e)
-                if attempt < PORT_ATTEMPTS
-                    && matches!(
-                        e.downcast_ref::<LaunchError>(),
-                        Some(LaunchError::PortsTaken { .. })
-                    ) =>
-            {
-                tracing::warn!("{e}: trying again on other ports");
-                attempt += 1;
-                if let Some(signal) = signals.take() {
-                    // Asked to stop between two attempts: nothing written.
-                    return Err(crate::interrupt::Interrupted {
-                        at: "the start".into(),
-                        signal,
-                        finished: false,
-                    }
-                    .into());
-                }
-            }
-            r => return r,
-        }
-    }
-}
-
-/// Runs of `launch --port 0` tried before giving up on ports taken by other programs.
-const PORT_ATTEMPTS: usize = 3;
-
-/// One launch on the loopback ports from `port` on.
-fn launch_on(a: &LaunchArgs, n: usize, port: u16, signals: &crate::interrupt::Stop) -> Result<()> {
-    let run = format!("launch-{}-{port}", std::process::id());
     let dir = tempfile::tempdir().context("a folder for the world's result")?;
     let result_path = dir.path().join("result.json");
     let exe = std::env::current_exe().context("finding the madenet binary")?;
+    // Caught from here on, passed on to the world node (which finishes the run); the nodes
+    // lead process groups of their own, so a terminal's Ctrl-C does not reach them directly.
+    let signals = Stop::catch()?;
+    let nodes_on = |port| node_args(&a, n, port, &result_path);
+    let (outcome, world_at) = launch_team(&exe, a.port, n as u16 + 2, nodes_on, &signals);
+    let port = match outcome {
+        Ok(port) => port,
+        Err(LaunchError::Interrupted {
+            signal,
+            world_finished,
+            world_error,
+        }) => {
+            if let Some(line) = world_error {
+                eprintln!("world: {line}");
+            }
+            // The world node ended the run after its timestep and finished everything it
+            // writes (it exits with 128 + the signal only then); otherwise nothing asked for
+            // is finished.
+            if world_finished {
+                print_written(&a.pictures, &a.watch)?;
+            }
+            return Err(Interrupted {
+                at: world_at.unwrap_or_else(|| "the start".into()),
+                signal,
+                finished: world_finished,
+            }
+            .into());
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let json = std::fs::read_to_string(&result_path).context("the world's result")?;
+    if a.json {
+        out!("{}", json.trim_end())?;
+        return Ok(());
+    }
+    let out: WorldOutput = serde_json::from_str(&json).context("the world's result")?;
+    for line in out.result.summary(&a.scenario.start.name()) {
+        out!("{line}")?;
+    }
+    let rt = out.runtime;
+    out!(
+        "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
+        1e3 * rt.latency.mean_s,
+        1e3 * rt.latency.max_s,
+        rt.latency.acted
+    )?;
+    if rt.absent_robot_steps > 0 {
+        out!("absent     {} robot-timesteps", rt.absent_robot_steps)?;
+    }
+    out!(
+        "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
+        n + 2
+    )?;
+    print_written(&a.pictures, &a.watch)
+}
+
+/// The lines naming the pictures and the bag a run wrote.
+fn print_written(pictures: &crate::run::PictureArgs, watch: &WatchArgs) -> Result<()> {
+    for p in pictures.render.iter().chain(&pictures.snapshot) {
+        out!("wrote      {}", p.display())?;
+    }
+    if let Some(p) = &watch.record {
+        out!("wrote      {} (ROS 2 bag)", p.display())?;
+    }
+    Ok(())
+}
+
+/// Each node's arguments for a launch on the loopback ports from `port` on, the world's
+/// result written to `result_path`.
+fn node_args(
+    a: &LaunchArgs,
+    n: usize,
+    port: u16,
+    result_path: &std::path::Path,
+) -> Vec<(Node, Vec<String>)> {
+    let run = format!("launch-{}-{port}", std::process::id());
     let common: Vec<String> = a
         .scenario
         .to_args()
         .into_iter()
         .chain([
             "--run".into(),
-            run.clone(),
+            run,
             "--port".into(),
             port.to_string(),
             "--timeout-s".into(),
@@ -618,7 +557,7 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16, signals: &crate::interrupt::St
             "--progress".into(),
         ])
         .collect();
-    let nodes: Vec<(Node, Vec<String>)> = madenet_runtime::nodes_of(n)
+    madenet_runtime::nodes_of(n)
         .into_iter()
         .map(|node| {
             let mut args: Vec<String> = Vec::new();
@@ -656,109 +595,5 @@ fn launch_on(a: &LaunchArgs, n: usize, port: u16, signals: &crate::interrupt::St
             }
             (node, args)
         })
-        .collect();
-
-    // A progress line per node; warnings shown as they come (errors end the run and are in
-    // its one-line error).
-    let bars = indicatif::MultiProgress::new();
-    let style =
-        indicatif::ProgressStyle::with_template("{prefix:>8} {msg}").expect("a valid template");
-    let bar_of: Vec<indicatif::ProgressBar> = nodes
-        .iter()
-        .map(|(node, _)| {
-            bars.add(
-                indicatif::ProgressBar::new_spinner()
-                    .with_style(style.clone())
-                    .with_prefix(node.to_string())
-                    .with_message("starting"),
-            )
-        })
-        .collect();
-    let bar = |node: Node| &bar_of[nodes.iter().position(|n| n.0 == node).expect("a node")];
-    let mut world_at: Option<String> = None;
-    let outcome = run_nodes(
-        &exe,
-        &nodes,
-        port,
-        &mut |event| match event {
-            LaunchEvent::Progress(node, p) => {
-                if node == Node::World {
-                    // `step=12 explored=0.41`: where an interrupted run stopped.
-                    world_at = p.split_whitespace().next().map(|s| s.replace('=', " "));
-                }
-                bar(node).set_message(p.to_string())
-            }
-            // The world's own "interrupted at …" is said once more by launch, below.
-            LaunchEvent::Said(Node::World, line) if line.starts_with("interrupted") => {}
-            LaunchEvent::Said(node, line) if !line.starts_with("error") => {
-                if bars.is_hidden() {
-                    eprintln!("{node}: {line}");
-                } else {
-                    bars.println(format!("{node}: {line}")).ok();
-                }
-            }
-            LaunchEvent::Said(..) => {}
-            LaunchEvent::Finished(node, ok) => {
-                bar(node).finish_with_message(if ok { "done" } else { "failed" })
-            }
-        },
-        &mut || signals.take(),
-    );
-    bars.clear().ok();
-    if let Err(LaunchError::Interrupted {
-        signal,
-        world_finished,
-        world_error,
-    }) = outcome
-    {
-        if let Some(line) = world_error {
-            eprintln!("world: {line}");
-        }
-        // The world node ended the run after its timestep and finished everything it writes
-        // (it exits with 128 + the signal only then); otherwise nothing asked for is finished.
-        if world_finished {
-            let pictures = a.pictures.render.iter().chain(&a.pictures.snapshot);
-            for p in pictures {
-                out!("wrote      {}", p.display())?;
-            }
-            if let Some(p) = &a.watch.record {
-                out!("wrote      {} (ROS 2 bag)", p.display())?;
-            }
-        }
-        return Err(crate::interrupt::Interrupted {
-            at: world_at.unwrap_or_else(|| "the start".into()),
-            signal,
-            finished: world_finished,
-        }
-        .into());
-    }
-    outcome?;
-    let json = std::fs::read_to_string(&result_path).context("the world's result")?;
-    if a.json {
-        out!("{}", json.trim_end())?;
-    } else {
-        let out: WorldOutput = serde_json::from_str(&json).context("the world's result")?;
-        crate::run::print_summary(&out.result, &a.scenario.start.name())?;
-        let rt = out.runtime;
-        out!(
-            "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
-            1e3 * rt.latency.mean_s,
-            1e3 * rt.latency.max_s,
-            rt.latency.acted
-        )?;
-        if rt.absent_robot_steps > 0 {
-            out!("absent     {} robot-timesteps", rt.absent_robot_steps)?;
-        }
-        out!(
-            "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
-            nodes.len()
-        )?;
-        for p in a.pictures.render.iter().chain(&a.pictures.snapshot) {
-            out!("wrote      {}", p.display())?;
-        }
-        if let Some(p) = &a.watch.record {
-            out!("wrote      {} (ROS 2 bag)", p.display())?;
-        }
-    }
-    Ok(())
+        .collect()
 }

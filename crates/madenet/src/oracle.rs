@@ -6,35 +6,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use madenet_sim::rollout::{Lookahead, OracleKind, Value};
 use madenet_study::runner::{self, TrialOutcome};
+use madenet_study::StudyConfig;
 use std::path::PathBuf;
-
-#[derive(Clone, Copy, Debug, ValueEnum)]
-enum Kind {
-    /// Each candidate scored in the trial's own future (knows the map and the noise to come).
-    Replay,
-    /// Each candidate scored over --futures other futures (knows the map, not the noise).
-    Averaged,
-    /// The base rule's choice, in the best of --futures futures: luck alone.
-    Placebo,
-    /// Each candidate scored in the noiseless future (knows the map; no luck).
-    Noiseless,
-    /// The known-map reference: a clairvoyant team plan over the true map, in the trial's own
-    /// world (the base rule only names the pairing).
-    KnownMap,
-    /// Each candidate scored over --futures noiseless futures whose unseen cells are redrawn by
-    /// the map generator (knows what the team knows, not the map).
-    Redrawn,
-    /// Over --futures redrawn maps, the known-map reference plans the whole team's routes from
-    /// where it stands; the robot takes the candidate nearest its first viewpoint (a team-wide,
-    /// multi-step teacher).
-    PlanRedrawn,
-    /// plan-redrawn on the deciding robot's own map instead of the team's cells, every robot
-    /// at its true cell (what the positions alone are worth).
-    PlanOwnMap,
-    /// plan-redrawn on the team's cells with the teammates where the deciding robot last knew
-    /// them (what the team's map alone is worth).
-    PlanTeamMap,
-}
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum ValueArg {
@@ -60,9 +33,15 @@ pub struct OracleArgs {
     /// The base rule the oracle's continuations follow (and the trial runs by): a macro policy.
     #[arg(long, default_value = "spread")]
     base: String,
-    /// Which oracle.
-    #[arg(long, value_enum, default_value = "replay")]
-    kind: Kind,
+    /// Which oracle: replay (each candidate scored in the trial's own future), averaged (over
+    /// --futures other futures), placebo (the base rule's choice in the best of --futures
+    /// futures: luck alone), noiseless (in the noiseless future), known-map (a clairvoyant team
+    /// plan over the true map), redrawn (over --futures noiseless futures with the unseen cells
+    /// redrawn), plan-redrawn (the known-map plan over redrawn maps: a team-wide teacher),
+    /// plan-own-map, plan-team-map (plan-redrawn on the robot's own map, or with the teammates
+    /// where it last knew them); see `madenet_sim::rollout::OracleKind`.
+    #[arg(long, value_parser = crate::oracle_arg, default_value = "replay")]
+    kind: OracleKind,
     /// Futures per candidate (averaged, redrawn) or to choose from (placebo); 1–64.
     #[arg(long, default_value_t = 4)]
     futures: usize,
@@ -75,21 +54,12 @@ pub struct OracleArgs {
     /// Communication success probabilities (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "1.0,0.0")]
     csp: Vec<f64>,
-    /// Seeds per (map, start, CSP).
-    #[arg(long, default_value_t = 1)]
-    seeds: u64,
-    #[arg(long, default_value_t = 1)]
-    seed_base: u64,
-    /// Scenario config (TOML).
-    #[arg(long)]
-    config: Option<PathBuf>,
+    #[command(flatten)]
+    set: crate::scenario_args::TrialSetArgs,
     /// Also write the base rule's and the oracle's trials as CSV (the schema of `madenet batch`
     /// and the study's `trials.csv`; the oracle's rows are method `oracle-KIND`).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = crate::threads_arg)]
-    threads: Option<usize>,
 }
 
 pub fn run(a: OracleArgs) -> Result<()> {
@@ -98,33 +68,17 @@ pub fn run(a: OracleArgs) -> Result<()> {
     }
     let scoring = matches!(
         a.kind,
-        Kind::Replay | Kind::Averaged | Kind::Noiseless | Kind::Redrawn
+        OracleKind::Replay | OracleKind::Averaged | OracleKind::Noiseless | OracleKind::Redrawn
     );
     if !scoring && (a.horizon > 0 || !matches!(a.value, ValueArg::StepsLeft)) {
         bail!("--horizon/--value: only the scoring oracles (replay, averaged, noiseless, redrawn) value continuations");
     }
-    let registry = crate::registry(None)?;
-    let kind = match a.kind {
-        Kind::Replay => OracleKind::Replay,
-        Kind::Averaged => OracleKind::Averaged,
-        Kind::Placebo => OracleKind::Placebo,
-        Kind::Noiseless => OracleKind::Noiseless,
-        Kind::KnownMap => OracleKind::KnownMap,
-        Kind::Redrawn => OracleKind::Redrawn,
-        Kind::PlanRedrawn => OracleKind::PlanRedrawn,
-        Kind::PlanOwnMap => OracleKind::PlanOwnMap,
-        Kind::PlanTeamMap => OracleKind::PlanTeamMap,
-    };
-    let mut cfg = crate::batch::trial_set(
-        &a.maps,
-        &a.starts,
-        &a.csp,
-        a.seeds,
-        a.seed_base,
-        a.config.as_deref(),
-    )?;
+    let registry = madenet_catalogue::shipped()?;
+    let scenario = crate::load_config(a.set.config.as_deref())?;
+    let seeds = (a.set.seeds, a.set.seed_base);
+    let mut cfg = StudyConfig::trial_set(&a.maps, &a.starts, &a.csp, seeds, scenario);
     cfg.methods = vec![a.base.clone()];
-    cfg.oracles = vec![kind];
+    cfg.oracles = vec![a.kind];
     cfg.oracle_base = a.base.clone();
     cfg.oracle_futures = a.futures;
     cfg.oracle_lookahead = Lookahead {
@@ -136,9 +90,9 @@ pub fn run(a: OracleArgs) -> Result<()> {
     };
     let flag = format!("--base {}", a.base);
     // The base rule's trials, then the oracle's on the same (map, start, CSP, seed), in order.
-    let planned = crate::batch::plan(&cfg, &registry, a.config.as_deref(), &flag)?;
+    let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = crate::batch::run_planned(&planned, &registry, a.threads)?;
+    let outcomes = crate::batch::run_planned(&planned, &registry, a.set.threads)?;
     let (base, oracle) = outcomes.split_at(outcomes.len() / 2);
     if let Some(path) = &a.out {
         let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
@@ -146,15 +100,8 @@ pub fn run(a: OracleArgs) -> Result<()> {
             .with_context(|| format!("--out {}", path.display()))?;
     }
     let futures = match a.kind {
-        Kind::Averaged
-        | Kind::Placebo
-        | Kind::Redrawn
-        | Kind::PlanRedrawn
-        | Kind::PlanOwnMap
-        | Kind::PlanTeamMap => {
-            format!(" ({} futures)", a.futures)
-        }
-        Kind::Replay | Kind::Noiseless | Kind::KnownMap => String::new(),
+        OracleKind::Replay | OracleKind::Noiseless | OracleKind::KnownMap => String::new(),
+        _ => format!(" ({} futures)", a.futures),
     };
     let look = match (a.horizon, a.value) {
         (0, ValueArg::StepsLeft) => String::new(),
@@ -176,21 +123,8 @@ pub fn run(a: OracleArgs) -> Result<()> {
         a.kind,
         a.base
     )?;
-    for &csp in &a.csp {
-        let sel: Vec<(&TrialOutcome, &TrialOutcome)> = base
-            .iter()
-            .zip(oracle)
-            .filter(|(b, _)| b.row.key.csp == runner::csp_label(csp))
-            .collect();
-        let n = sel.len().max(1) as f64;
-        let mean = |f: &dyn Fn(&(&TrialOutcome, &TrialOutcome)) -> usize| {
-            sel.iter().map(|r| f(r) as f64).sum::<f64>() / n
-        };
-        let base_tns = mean(&|r| r.0.row.tns);
-        let oracle_tns = mean(&|r| r.1.row.tns);
-        let wins = sel.iter().filter(|r| r.1.row.tns < r.0.row.tns).count();
-        let losses = sel.iter().filter(|r| r.1.row.tns > r.0.row.tns).count();
-        out!("csp {csp:.2}: base TNS {base_tns:.1}  oracle TNS {oracle_tns:.1}  ({:+.1} %)  oracle better on {wins}, worse on {losses} of {}", 100.0 * (oracle_tns / base_tns - 1.0), sel.len())?;
+    for line in madenet_study::oracle_by_csp(base, oracle, &a.csp) {
+        out!("{line}")?;
     }
     Ok(())
 }

@@ -5,7 +5,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use madenet_continuous::ContinuousConfig;
 use madenet_render::{Drawn, Pictures, RenderOptions};
-use madenet_sim::continuous::ContinuousTrial;
+use madenet_runtime::signals::{Interrupted, OnSignal, Stop};
+use madenet_sim::continuous::{ContinuousResult, ContinuousTrial};
 use madenet_sim::stepping::{Pace, Sink, Stepping};
 use madenet_sim::Trial;
 use std::path::PathBuf;
@@ -189,38 +190,29 @@ pub fn run(a: RunArgs) -> Result<()> {
     let trial = Trial::with_registry(spec, &registry)
         .with_context(|| a.scenario.label())?
         .record_trajectory(a.trajectory);
-    let Some((result, wrote)) = drive(&a, trial, 1.0)? else {
-        return Ok(());
-    };
-    if a.json {
-        out!("{}", serde_json::to_string_pretty(&result)?)?;
-    } else {
-        print_summary(&result, &a.scenario.start.name())?;
-        for line in wrote {
-            out!("{line}")?;
-        }
-    }
-    Ok(())
+    drive(&a, trial, 1.0, madenet_sim::TrialResult::summary)
 }
 
 /// Runs `trial` to its end through the run loop with the sinks asked for — pictures (a GIF
 /// frame every `frame_s` simulated seconds), the bag and live view, pacing, Ctrl-C — and
-/// gives its outcome and the lines about what was written; interrupted, it prints those
-/// lines and ends with [`crate::interrupt::Interrupted`].
+/// prints its outcome (as JSON, or its `summary` and the lines about what was written);
+/// interrupted, it prints those lines and ends with [`Interrupted`].
 fn drive<S: Stepping + Drawn>(
     a: &RunArgs,
     mut trial: S,
     frame_s: f64,
-) -> Result<Option<(S::Outcome, Vec<String>)>> {
+    summary: impl Fn(&S::Outcome, &str) -> Vec<String>,
+) -> Result<()>
+where
+    S::Outcome: serde::Serialize,
+{
     let mut pace = a.pace();
     // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
-    let stop = crate::interrupt::Stop::watch(
-        a.record.is_some() || a.foxglove.is_some() || pace.is_some(),
-    )?;
+    let stop = Stop::watch(a.record.is_some() || a.foxglove.is_some() || pace.is_some())?;
     // The bag first: a refused --record leaves no picture behind either.
     let mut recorder = crate::record::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
     let mut pictures = a.pictures.sink(frame_s)?;
-    let mut interrupt = crate::interrupt::OnSignal::new(&stop);
+    let mut interrupt = OnSignal::new(&stop);
     let mut sinks: Vec<&mut dyn Sink<S>> = Vec::new();
     if let Some(p) = pictures.as_mut() {
         sinks.push(p);
@@ -238,33 +230,25 @@ fn drive<S: Stepping + Drawn>(
         for line in end.wrote {
             out!("{line}")?;
         }
-        return crate::interrupt::Interrupted::result(Some((at, signal))).map(|()| None);
+        let finished = true;
+        return Err(Interrupted {
+            at,
+            signal,
+            finished,
+        }
+        .into());
     }
-    Ok(Some((trial.finish(), end.wrote)))
-}
-
-/// The text summary of a trial's result (what `run` prints without `--json`).
-pub fn print_summary(result: &madenet_sim::TrialResult, start: &str) -> Result<()> {
-    let m = &result.metrics;
-    out!(
-        "map {}  start {start}  policy {}  csp {}  seed {}",
-        result.map,
-        result.policy,
-        result.comm_success_prob,
-        result.seed
-    )?;
-    out!("completed  {}", m.completed)?;
-    out!("TNS        {} steps", m.tns)?;
-    out!("TTD        {:.2} m", m.ttd)?;
-    out!("NOLI       {}", m.noli)?;
-    out!("OFV        {:.3}", m.ofv)?;
-    out!("explored   {:.1} %", 100.0 * m.explored)?;
-    out!(
-        "CT         {:.3} ms per trial, {:.1} µs per decision ({} decisions)",
-        1e3 * result.timing.trial_s,
-        1e6 * result.timing.per_decision_s,
-        result.timing.decisions
-    )?;
+    let result = trial.finish();
+    if a.json {
+        out!("{}", serde_json::to_string_pretty(&result)?)?;
+        return Ok(());
+    }
+    for line in summary(&result, &a.scenario.start.name())
+        .into_iter()
+        .chain(end.wrote)
+    {
+        out!("{line}")?;
+    }
     Ok(())
 }
 
@@ -288,52 +272,5 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
     a.scenario.warn_erasure(&spec.config)?;
     let trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
-    let Some((r, wrote)) = drive(&a, trial, a.frame_s)? else {
-        return Ok(());
-    };
-    if a.json {
-        out!("{}", serde_json::to_string_pretty(&r)?)?;
-        return Ok(());
-    }
-    out!(
-        "map {}  start {}  policy {}  csp {}  seed {}  (continuous world)",
-        r.map,
-        a.scenario.start.name(),
-        r.policy,
-        r.comm_success_prob,
-        r.seed
-    )?;
-    match (r.complete, r.no_frontier_at) {
-        (true, _) => out!("completed  true")?,
-        (false, Some(t)) => out!(
-            "completed  false: no robot had a reachable frontier from {t:.1} s on, the team \
-             stopped at {:.1} % explored (`no_frontier_time`)",
-            100.0 * r.explored.last().copied().unwrap_or(0.0)
-        )?,
-        (false, None) => out!("completed  false: time cap reached (`time_cap`)")?,
-    }
-    out!("ET         {:.1} s", r.exploration_time_s)?;
-    out!("TTD        {:.1} m", r.team_distance_m)?;
-    out!(
-        "collisions {} with obstacles, {} between robots",
-        r.obstacle_collisions,
-        r.robot_collisions
-    )?;
-    out!("local interactions {}", r.local_interactions)?;
-    out!(
-        "impassable cells {}  written off {}  held up {}  stuck {}",
-        r.impassable_cells,
-        r.written_off_cells,
-        r.held_up,
-        r.stuck
-    )?;
-    out!(
-        "wall clock {:.2} s ({:.0}x real time)",
-        r.wall_s,
-        r.real_time_factor()
-    )?;
-    for line in wrote {
-        out!("{line}")?;
-    }
-    Ok(())
+    drive(&a, trial, a.frame_s, ContinuousResult::summary)
 }

@@ -21,9 +21,6 @@ pub struct ScaleArgs {
     /// Output folder (created; an interrupted study there resumes).
     #[arg(long, default_value = "scale")]
     out: PathBuf,
-    /// Discard earlier results in the output folder.
-    #[arg(long)]
-    fresh: bool,
     /// Methods, overriding the config (comma-separated policy names; the first is judged
     /// against the others). `model` is the model given with --model.
     #[arg(long, value_delimiter = ',')]
@@ -44,23 +41,13 @@ pub struct ScaleArgs {
     /// A trained model directory, usable as method `model`.
     #[arg(long)]
     model: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = crate::threads_arg)]
-    threads: Option<usize>,
-    /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
-    /// study, re-run with their seeds: the same trials): `field=value` over method, map,
-    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either (quoted); e.g.
-    /// `--record-trials method=spread seed=1`. A bag already there is kept, as the study
-    /// keeps its rows (with --fresh: OUT/bags is made anew, replacing the old once every
-    /// chosen trial is recorded).
-    #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
-    record_trials: Option<Vec<String>>,
+    #[command(flatten)]
+    study: crate::scenario_args::StudyRunArgs,
 }
 
 /// Names where a bad field came from: the flag that set it, else the config file.
-fn name_source(e: StudyError, a: &ScaleArgs) -> anyhow::Error {
-    crate::compare::name_study_source(
-        e,
+fn name_source(e: StudyError, a: &ScaleArgs) -> StudyError {
+    e.named_by(
         a.config.as_deref(),
         &[
             ("methods", "--methods", a.methods.is_some()),
@@ -99,9 +86,9 @@ pub fn run(a: ScaleArgs) -> Result<()> {
         cfg.csp = c;
     }
     // The config's own `[baselines]` parameters (ub, pb), as `madenet compare` uses its own.
-    let registry = crate::registry_with(&cfg.baselines, a.model.as_deref())?;
+    let registry = madenet_catalogue::with_model(&cfg.baselines, a.model.as_deref())?;
     // The trials to record, checked before the study runs.
-    let planned = match &a.record_trials {
+    let planned = match &a.study.record_trials {
         Some(items) => {
             cfg.validate(&registry).map_err(|e| name_source(e, &a))?;
             let planned: Vec<_> = cfg
@@ -111,27 +98,17 @@ pub fn run(a: ScaleArgs) -> Result<()> {
                 .map(|p| p.planned)
                 .collect();
             madenet_ros2::study_bags::chosen_trials(items, &planned)?;
-            Some((items, planned))
+            Some(planned)
         }
         None => None,
     };
-    let (bar, pool) = crate::trials_bar_and_pool(0, a.threads)?;
     // The folder stays this run's until the chosen trials are recorded too.
-    let (result, _lock) = pool
-        .install(|| {
-            run_scale_held(&cfg, &registry, &a.out, a.fresh, &|done, total| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            })
-        })
-        .map_err(|e| name_source(e, &a))?;
-    bar.finish_and_clear();
+    let (held, pool) = a
+        .study
+        .run(|fresh, progress| run_scale_held(&cfg, &registry, &a.out, fresh, progress))?;
+    let (result, _lock) = held.map_err(|e| name_source(e, &a))?;
     out!("{} trials → {}", result.trials, result.report.display())?;
-    if let Some((items, planned)) = planned {
-        let chosen = madenet_ros2::study_bags::chosen_trials(items, &planned)?;
-        crate::record::record_study_trials(&chosen, &registry, &a.out, a.fresh, &pool)?;
-    } else if a.fresh {
-        madenet_ros2::study_bags::discard_bags(&a.out)?;
-    }
+    let planned = planned.as_deref().map(|p| (p, &registry));
+    a.study.record(planned, &a.out, &pool)?;
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! The flags that name one trial (map, start, policy, CSP, seed, config): shared by `run` and by
 //! every node of a decentralized run (`world`, `radio`, `agent`, `launch`), so all of them build
-//! the same trial from the same words.
+//! the same trial from the same words. And the flags trial sets (`batch`, `oracle`) and
+//! studies (`compare`, `scale`) share.
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -76,7 +77,7 @@ impl ScenarioArgs {
         let source = self.source();
         let map = source.load(&cfg)?;
         let starts = self.starts_on(&map, &cfg)?;
-        let registry = crate::registry(self.model.as_deref())?;
+        let registry = madenet_catalogue::with_model(&Default::default(), self.model.as_deref())?;
         let spec = TrialSpec {
             starts,
             map_name: source.name(),
@@ -105,7 +106,7 @@ impl ScenarioArgs {
         let scene = source.scene(side)?;
         let coarse = scene.coarse_truth(cfg.cell_size, &cfg.discretize);
         let starts = self.starts_on(&coarse, &cfg)?;
-        let registry = crate::registry(self.model.as_deref())?;
+        let registry = madenet_catalogue::with_model(&Default::default(), self.model.as_deref())?;
         let spec = ContinuousSpec {
             scene: std::sync::Arc::new(scene),
             starts,
@@ -166,5 +167,79 @@ impl ScenarioArgs {
     /// A label for messages: map and start.
     pub fn label(&self) -> String {
         format!("map {}, start {}", self.source().name(), self.start.name())
+    }
+}
+
+/// Seeds, config and threads of a trial set (`batch`, `oracle`).
+#[derive(Args, Debug)]
+pub struct TrialSetArgs {
+    /// Seeds per (map, start, CSP): `seed-base`, `seed-base + 1`, …
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u64,
+    #[arg(long, default_value_t = 1)]
+    pub seed_base: u64,
+    /// Scenario config (TOML).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = crate::threads_arg)]
+    pub threads: Option<usize>,
+}
+
+/// How a study runs (`compare`, `scale`).
+#[derive(Args, Debug)]
+pub struct StudyRunArgs {
+    /// Discard earlier results in the output folder.
+    #[arg(long)]
+    pub fresh: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = crate::threads_arg)]
+    pub threads: Option<usize>,
+    /// Record the trials these conditions choose as ROS 2 bags in OUT/bags/ (after the
+    /// study, re-run with their seeds: the same trials): `field=value` over method, map,
+    /// start, csp, seed as trials.csv writes them, all met; `a|b` for either (quoted); e.g.
+    /// `--record-trials method=spread seed=1`. A bag already there is kept, as the study
+    /// keeps its rows (with --fresh: OUT/bags is made anew, replacing the old once every
+    /// chosen trial is recorded).
+    #[arg(long, num_args = 1.., value_name = "FIELD=VALUE")]
+    pub record_trials: Option<Vec<String>>,
+}
+
+impl StudyRunArgs {
+    /// Runs `study(fresh, progress)` on `--threads` workers with a progress bar; gives its
+    /// result and the workers (to record chosen trials on, after).
+    pub fn run<T: Send>(
+        &self,
+        study: impl FnOnce(bool, &(dyn Fn(usize, usize) + Sync)) -> T + Send,
+    ) -> Result<(T, rayon::ThreadPool)> {
+        let (bar, pool) = crate::trials_bar_and_pool(0, self.threads)?;
+        let result = pool.install(|| {
+            study(self.fresh, &|done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })
+        });
+        bar.finish_and_clear();
+        Ok((result, pool))
+    }
+
+    /// After the study, while its folder `out` is still held: records the trials
+    /// `--record-trials` chose among `planned` by `registry`'s policies
+    /// ([`crate::record::record_study_trials`]), or with `--fresh` and none chosen, discards
+    /// the bags of earlier runs.
+    pub fn record(
+        &self,
+        planned: Option<(&[madenet_study::runner::Planned], &PolicyRegistry)>,
+        out: &std::path::Path,
+        pool: &rayon::ThreadPool,
+    ) -> Result<()> {
+        match (&self.record_trials, planned) {
+            (Some(items), Some((planned, registry))) => {
+                let chosen = madenet_ros2::study_bags::chosen_trials(items, planned)?;
+                crate::record::record_study_trials(&chosen, registry, out, self.fresh, pool)
+            }
+            _ if self.fresh => Ok(madenet_ros2::study_bags::discard_bags(out)?),
+            _ => Ok(()),
+        }
     }
 }

@@ -47,6 +47,7 @@ pub mod rewards;
 pub mod rollout;
 pub mod scenario;
 pub mod stepping;
+mod summary;
 mod trial;
 
 pub use registry::{PolicyContext, PolicyRegistry};

@@ -1,6 +1,6 @@
-//! Starting a run's nodes as processes and watching them until they end ([`run_nodes`]): the
-//! launcher behind `madenet launch`, for the tests and the Python package as well as the
-//! command line. Each node is a process of the same binary (`madenet world | radio | agent`);
+//! Starting a run's nodes as processes and watching them until they end ([`run_nodes`]; with a
+//! progress line per node on the terminal, [`run_team`]): the launcher behind `madenet
+//! launch`. Each node is a process of the same binary (`madenet world | radio | agent`);
 //! what a node says on stderr comes back as events: lines starting `progress ` as progress,
 //! any other line as something it said (a warning as it happens, an error before it exits).
 //! When one node fails the others are stopped (they would only wait for it to time out), and
@@ -54,6 +54,9 @@ pub enum LaunchError {
     /// The processes could not be waited for.
     #[error("waiting for the node processes: {0}")]
     Wait(std::io::Error),
+    /// No block of free loopback ports was found.
+    #[error("{0}")]
+    NoPorts(String),
     /// The launcher was asked to stop (`signal`: SIGINT, SIGTERM); the nodes have ended.
     #[error("interrupted by signal {signal}")]
     Interrupted {
@@ -271,6 +274,111 @@ pub fn run_nodes(
         }
     }
     Err(LaunchError::Failed(msg))
+}
+
+/// [`run_nodes`] as `madenet launch` shows it: a progress line per node on the terminal
+/// (hidden when stderr is not one), the nodes' warnings printed as they come (their errors end
+/// the run and are in its error), the first signal of `signals` passed on as [`run_nodes`]
+/// does. Returns the outcome and where the world node last said it was (`step 12`), for an
+/// interrupted run's message.
+pub fn run_team(
+    exe: &Path,
+    nodes: &[(Node, Vec<String>)],
+    port: u16,
+    signals: &crate::signals::Stop,
+) -> (Result<(), LaunchError>, Option<String>) {
+    let bars = indicatif::MultiProgress::new();
+    let style =
+        indicatif::ProgressStyle::with_template("{prefix:>8} {msg}").expect("a valid template");
+    let bar_of: Vec<indicatif::ProgressBar> = nodes
+        .iter()
+        .map(|(node, _)| {
+            bars.add(
+                indicatif::ProgressBar::new_spinner()
+                    .with_style(style.clone())
+                    .with_prefix(node.to_string())
+                    .with_message("starting"),
+            )
+        })
+        .collect();
+    let bar = |node: Node| &bar_of[nodes.iter().position(|n| n.0 == node).expect("a node")];
+    let mut world_at: Option<String> = None;
+    let outcome = run_nodes(
+        exe,
+        nodes,
+        port,
+        &mut |event| match event {
+            LaunchEvent::Progress(node, p) => {
+                if node == Node::World {
+                    // `step=12 explored=0.41`: where an interrupted run stopped.
+                    world_at = p.split_whitespace().next().map(|s| s.replace('=', " "));
+                }
+                bar(node).set_message(p.to_string())
+            }
+            // The world's own "interrupted at …" is said once more by the launcher's caller.
+            LaunchEvent::Said(Node::World, line) if line.starts_with("interrupted") => {}
+            LaunchEvent::Said(node, line) if !line.starts_with("error") => {
+                if bars.is_hidden() {
+                    eprintln!("{node}: {line}");
+                } else {
+                    bars.println(format!("{node}: {line}")).ok();
+                }
+            }
+            LaunchEvent::Said(..) => {}
+            LaunchEvent::Finished(node, ok) => {
+                bar(node).finish_with_message(if ok { "done" } else { "failed" })
+            }
+        },
+        &mut || signals.take(),
+    );
+    bars.clear().ok();
+    (outcome, world_at)
+}
+
+/// Launches tried on free ports ([`launch_team`] with port 0) before giving up on ports taken
+/// by other programs.
+pub const PORT_ATTEMPTS: usize = 3;
+
+/// [`run_team`] on `ports` loopback ports from `port` on, each node's arguments given by
+/// `nodes_on(first port)`. With `port` 0 the ports are free ones, found by binding and
+/// releasing them: another program may take one before its node binds it, and then the run
+/// is tried again on new ones, [`PORT_ATTEMPTS`] times at most (a signal between two
+/// attempts ends it as [`LaunchError::Interrupted`]). Returns the outcome (the first port the
+/// run used), and where the world node last said it was.
+pub fn launch_team(
+    exe: &Path,
+    port: u16,
+    ports: u16,
+    nodes_on: impl Fn(u16) -> Vec<(Node, Vec<String>)>,
+    signals: &crate::signals::Stop,
+) -> (Result<u16, LaunchError>, Option<String>) {
+    if port != 0 {
+        let (outcome, at) = run_team(exe, &nodes_on(port), port, signals);
+        return (outcome.map(|()| port), at);
+    }
+    let mut attempt = 1;
+    loop {
+        let port = match crate::zenoh_bus::free_port_block(ports) {
+            Ok(p) => p,
+            Err(e) => return (Err(LaunchError::NoPorts(e)), None),
+        };
+        let (outcome, at) = run_team(exe, &nodes_on(port), port, signals);
+        match outcome {
+            Err(e @ LaunchError::PortsTaken { .. }) if attempt < PORT_ATTEMPTS => {
+                tracing::warn!("{e}: trying again on other ports");
+                attempt += 1;
+                if let Some(signal) = signals.take() {
+                    let stopped = LaunchError::Interrupted {
+                        signal,
+                        world_finished: false,
+                        world_error: None,
+                    };
+                    return (Err(stopped), None);
+                }
+            }
+            outcome => return (outcome.map(|()| port), at),
+        }
+    }
 }
 
 #[cfg(test)]

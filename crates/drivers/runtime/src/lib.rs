@@ -60,6 +60,8 @@ mod mailbox;
 mod radio_node;
 mod report;
 mod robot;
+pub mod serve;
+pub mod signals;
 pub mod transport;
 pub mod wire;
 mod world_node;

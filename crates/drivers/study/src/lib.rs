@@ -22,6 +22,8 @@ pub mod report;
 pub mod runner;
 pub mod scale;
 pub mod select;
+mod trial_set;
+pub use trial_set::{means_by_csp, oracle_by_csp};
 
 pub use config::{StudyConfig, StudyError};
 pub use runner::{TrialKey, TrialOutcome};

@@ -109,10 +109,12 @@
 
 use std::path::PathBuf;
 
+mod iterations;
 mod log;
 mod plot;
 mod tfevents;
 
+pub use iterations::{plot_iterations, plot_run};
 pub use log::{
     read_episodes, read_rows, read_validation, truncate_rows, Env, EpisodeRow, LogRow, LogWriter,
     MaddpgUpdateRow, UpdateRow, ValidationRow,

@@ -25,12 +25,22 @@ use madenet_baselines::BaselineParams;
 use madenet_sim::PolicyRegistry;
 use std::path::Path;
 
+mod training;
+pub use training::TrainRequest;
+
 /// A catalogue that could not be built.
 #[derive(Debug, thiserror::Error)]
 pub enum CatalogueError {
     /// A trained model folder did not load; the message names the file and field.
     #[error("{0}")]
     Model(String),
+    /// A training run cannot start as asked ([`TrainRequest`]); the message names the flag or
+    /// the file and field.
+    #[error("{0}")]
+    Train(String),
+    /// Training failed ([`madenet_learn::TrainError`]).
+    #[error(transparent)]
+    Training(#[from] madenet_learn::TrainError),
 }
 
 /// Every policy madenet ships, the baselines with parameters `baselines`. The learned models
@@ -41,6 +51,18 @@ pub fn catalogue(baselines: &BaselineParams) -> Result<PolicyRegistry, Catalogue
     madenet_baselines::register(&mut r, baselines);
     madenet_learn::shipped::register(&mut r);
     madenet_dme::shipped::register(&mut r);
+    Ok(r)
+}
+
+/// [`catalogue`] with the model trained in `model_dir`, if given, as `model` (`--model DIR`).
+pub fn with_model(
+    baselines: &BaselineParams,
+    model_dir: Option<&Path>,
+) -> Result<PolicyRegistry, CatalogueError> {
+    let mut r = catalogue(baselines)?;
+    if let Some(dir) = model_dir {
+        register_model(&mut r, "model", "the model given with --model", dir)?;
+    }
     Ok(r)
 }
 

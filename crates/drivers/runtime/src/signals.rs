@@ -1,9 +1,10 @@
-//! Ctrl-C (SIGINT) or SIGTERM during a `run` that records, streams or is paced: the run stops
+//! Ctrl-C (SIGINT) or SIGTERM during a run that records, streams or is paced: the run stops
 //! after the timestep it is in and finishes what it writes — the bag then holds the run up to
 //! there, a valid bag, instead of a hidden partial folder — and `madenet` exits with 130
-//! (128 + SIGINT; 143 for SIGTERM). A second signal ends the process at once, with the same
-//! codes. `world` does the same; `launch` catches both ([`Stop::catch`]) and hands them to
-//! its launcher (the first to the world node, a second stops every node).
+//! (128 + SIGINT; 143 for SIGTERM; [`Interrupted`]). A second signal ends the process at once,
+//! with the same codes. A world node does the same ([`crate::serve`]); a launcher catches both
+//! ([`Stop::catch`]) and hands them on (the first to the world node, a second stops every
+//! node).
 
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -14,7 +15,7 @@ pub struct Stop(Vec<(i32, Arc<AtomicBool>)>);
 
 impl Stop {
     /// Watches SIGINT and SIGTERM when `wanted`; otherwise they end the process as usual.
-    pub fn watch(wanted: bool) -> anyhow::Result<Self> {
+    pub fn watch(wanted: bool) -> std::io::Result<Self> {
         if !wanted {
             return Ok(Stop(Vec::new()));
         }
@@ -38,7 +39,7 @@ impl Stop {
 
     /// Catches SIGINT and SIGTERM without ever ending the process: each signal is taken once
     /// by [`Self::take`] (a supervisor that must stop its children first).
-    pub fn catch() -> anyhow::Result<Self> {
+    pub fn catch() -> std::io::Result<Self> {
         let flags = [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM]
             .map(|s| (s, Arc::new(AtomicBool::new(false))));
         for (signal, flag) in &flags {
@@ -108,16 +109,20 @@ pub struct Interrupted {
 impl Interrupted {
     /// A run that a signal ended after it finished what it writes: `Err` of that, or `Ok` when
     /// no signal came (`stopped`: where it stopped and the signal).
-    pub fn result(stopped: Option<(String, i32)>) -> anyhow::Result<()> {
+    pub fn result(stopped: Option<(String, i32)>) -> Result<(), Interrupted> {
         match stopped {
             Some((at, signal)) => Err(Interrupted {
                 at,
                 signal,
                 finished: true,
-            }
-            .into()),
+            }),
             None => Ok(()),
         }
+    }
+
+    /// The process exit code: 128 + the signal.
+    pub fn exit_code(&self) -> u8 {
+        128 + self.signal.clamp(0, 127) as u8
     }
 }
 
