@@ -27,29 +27,38 @@ fn png_size(path: &Path) -> (u32, u32) {
     )
 }
 
-#[test]
-fn plot_training_writes_the_png_and_prints_its_path() {
-    let s = Scratch::new("ok");
-    let dir = s.path().join("run");
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("episodes.csv"), EPISODES).unwrap();
-
-    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
+/// `madenet plot-training <dir> <extra...>`, which must succeed; its stdout, trimmed.
+fn plot_ok(dir: &Path, extra: &[&str]) -> String {
+    let out = madenet(&[&["plot-training", dir.to_str().unwrap()][..], extra].concat());
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// A fresh run directory `run` under the scratch dir.
+fn run_dir(s: &Scratch) -> std::path::PathBuf {
+    let dir = s.path().join("run");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Plotting `dir` prints the default figure path, and that figure is two panels (1600 × 564).
+fn plots_two_panels_at_the_default_path(dir: &Path, why: &str) {
     let png = dir.join("fig2_training.png");
-    assert_eq!(
-        String::from_utf8_lossy(&out.stdout).trim(),
-        png.display().to_string()
-    );
-    assert_eq!(
-        png_size(&png),
-        (1600, 564),
-        "two panels side by side under the legend"
-    );
+    assert_eq!(plot_ok(dir, &[]), png.display().to_string());
+    assert_eq!(png_size(&png), (1600, 564), "{why}");
+}
+
+#[test]
+fn plot_training_writes_the_png_and_prints_its_path() {
+    let s = Scratch::new("ok");
+    let dir = run_dir(&s);
+    std::fs::write(dir.join("episodes.csv"), EPISODES).unwrap();
+
+    plots_two_panels_at_the_default_path(&dir, "two panels side by side under the legend");
 
     // With validation rows, a third panel; --out puts the figure elsewhere.
     std::fs::write(
@@ -58,17 +67,7 @@ fn plot_training_writes_the_png_and_prints_its_path() {
     )
     .unwrap();
     let other = s.path().join("figs").join("training.png");
-    let out = madenet(&[
-        "plot-training",
-        dir.to_str().unwrap(),
-        "--out",
-        other.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    plot_ok(&dir, &["--out", other.to_str().unwrap()]);
     assert_eq!(png_size(&other).0, 2400);
 }
 
@@ -105,8 +104,7 @@ fn plot_training_bad_input_is_one_line_naming_the_file() {
 #[test]
 fn a_rollout_runs_iterations_become_a_steps_and_a_loss_panel() {
     let s = Scratch::new("rollout");
-    let dir = s.path().join("run");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = run_dir(&s);
     let mut csv = String::from(
         "iteration,episodes,decisions,rollouts,behaviour_steps,updates,loss,validation_steps,greedy_steps,spread_margin,base_steps,validation_completed,validation_trials,wall_s\n",
     );
@@ -121,22 +119,7 @@ fn a_rollout_runs_iterations_become_a_steps_and_a_loss_panel() {
         );
     }
     std::fs::write(dir.join("iterations.csv"), csv).unwrap();
-    let out = madenet(&["plot-training", dir.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let png = dir.join("fig2_training.png");
-    assert_eq!(
-        String::from_utf8_lossy(&out.stdout).trim(),
-        png.display().to_string()
-    );
-    assert_eq!(
-        png_size(&png),
-        (1600, 564),
-        "steps and loss side by side under the legend"
-    );
+    plots_two_panels_at_the_default_path(&dir, "steps and loss side by side under the legend");
     // Only the figure asked for is written; a format it cannot write is refused.
     assert!(!dir.join("fig2_training.svg").exists());
     let out = madenet(&["plot-training", dir.to_str().unwrap(), "--out", "fig.jpg"]);

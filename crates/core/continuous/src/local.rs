@@ -465,6 +465,11 @@ mod tests {
     use super::*;
     use madenet_map::discretize::DiscretizeParams;
 
+    /// A pose at (`x`, `y`) facing +x.
+    fn facing_east(x: f64, y: f64) -> Pose {
+        Pose { x, y, theta: 0.0 }
+    }
+
     fn map_with_wall() -> RobotMap {
         // 4 m × 4 m, 1 m cells; a wall along x = 2.0–2.1 from y = 0 to 3.0 (a gap below).
         let mut m = RobotMap::new(
@@ -488,21 +493,13 @@ mod tests {
         let cfg = ContinuousConfig::default();
         let m = map_with_wall();
         let mut lp = LocalPlanner::default();
-        let pose = Pose {
-            x: 1.5,
-            y: 3.5,
-            theta: 0.0,
-        };
+        let pose = facing_east(1.5, 3.5);
         // Cell (3, 2) is straight ahead below the wall: a clear line.
         let c = lp.command(&cfg, 1.0, &m, pose, (0.0, 0.0), Pos::new(3, 2), &[], false);
         assert!(matches!(c, Command::Drive(v, _) if v > 0.0), "{c:?}");
         assert_eq!(lp.path().len(), 1);
         // Cell (1, 2) lies behind the wall from (1, 1): around through the gap below.
-        let pose = Pose {
-            x: 1.5,
-            y: 1.5,
-            theta: 0.0,
-        };
+        let pose = facing_east(1.5, 1.5);
         let c = lp.command(&cfg, 1.0, &m, pose, (0.0, 0.0), Pos::new(1, 2), &[], true);
         assert!(!matches!(c, Command::Impassable), "{c:?}");
         assert!(lp.path().iter().any(|&(_, y)| y > 3.0), "{:?}", lp.path());
@@ -521,11 +518,7 @@ mod tests {
         // 0.6 m ahead, driving away at full speed: at constant velocity it stays ahead, but
         // if it stops where it stands we would touch it within the second.
         let ahead = Neighbour {
-            pose: Pose {
-                x: 1.6,
-                y: 2.0,
-                theta: 0.0,
-            },
+            pose: facing_east(1.6, 2.0),
             velocity: (0.5, 0.0),
             priority: false,
         };
@@ -567,11 +560,7 @@ mod tests {
             }
         }
         let mut lp = LocalPlanner::default();
-        let pose = Pose {
-            x: 1.5,
-            y: 1.5,
-            theta: 0.0,
-        };
+        let pose = facing_east(1.5, 1.5);
         let c = lp.command(&cfg, 1.0, &m, pose, (0.0, 0.0), Pos::new(1, 2), &[], true);
         assert_eq!(c, Command::Impassable);
         let mate = Neighbour {

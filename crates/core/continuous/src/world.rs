@@ -755,6 +755,19 @@ mod tests {
     use super::*;
     use crate::scene::generate_cluttered;
 
+    /// The message of [`ContinuousWorld::new`]'s error (seed 1), which must refuse.
+    fn refusal(
+        scene: Arc<Scene>,
+        starts: &[Pos],
+        scenario: ScenarioConfig,
+        cfg: ContinuousConfig,
+    ) -> String {
+        ContinuousWorld::new(scene, starts, scenario, cfg, 1)
+            .err()
+            .unwrap()
+            .to_string()
+    }
+
     fn world(seed: u64) -> ContinuousWorld {
         let scene = Arc::new(generate_cluttered(20.0, 0.1, 1));
         let starts = [Pos::new(17, 2), Pos::new(17, 3), Pos::new(18, 2)];
@@ -869,16 +882,12 @@ mod tests {
         let scene = Arc::new(Scene::from_shapes(Vec::new(), 400.0, 400.0, 1.0, "big"));
         let mut cfg = ContinuousConfig::default();
         cfg.mapping.resolution = 0.01;
-        let err = ContinuousWorld::new(
+        let err = refusal(
             scene,
             &[Pos::new(1, 1), Pos::new(1, 3), Pos::new(3, 1)],
             ScenarioConfig::default(),
             cfg,
-            1,
-        )
-        .err()
-        .unwrap()
-        .to_string();
+        );
         assert!(
             err.contains("mapping.resolution") && err.contains("GB"),
             "{err}"
@@ -893,16 +902,12 @@ mod tests {
             .map(|k| Pos::new(k / 20, k % 20))
             .find(|&p| coarse.get(p) == Occupancy::Obstacle)
             .unwrap();
-        let err = ContinuousWorld::new(
+        let err = refusal(
             scene,
             &[blocked, Pos::new(17, 3), Pos::new(18, 2)],
             ScenarioConfig::default(),
             ContinuousConfig::default(),
-            1,
-        )
-        .err()
-        .unwrap()
-        .to_string();
+        );
         assert!(err.contains("inside an obstacle"), "{err}");
     }
 
@@ -965,10 +970,7 @@ mod tests {
         };
         let mut cfg = ContinuousConfig::default();
         cfg.robot.radius = 0.48;
-        let err = ContinuousWorld::new(scene.clone(), &[Pos::new(4, 4)], scenario.clone(), cfg, 1)
-            .err()
-            .unwrap()
-            .to_string();
+        let err = refusal(scene.clone(), &[Pos::new(4, 4)], scenario.clone(), cfg);
         assert!(
             err.contains("`robot.radius`") && err.contains("cannot leave"),
             "{err}"

@@ -21,7 +21,7 @@
 //! assert_eq!(map, floor_plan(&cfg, 7).unwrap()); // same seed, same plan
 //! ```
 
-use crate::generate::reachable_from_with;
+use crate::generate::{cell_outside, invalid_field, reachable_from_with};
 use crate::paper::Corner;
 use crate::{MapError, Movement, OccGrid, Occupancy, Pos};
 use rand::{RngExt, SeedableRng};
@@ -70,20 +70,13 @@ impl FloorPlanConfig {
             corridor_width: 2,
             corridor_prob: 0.3,
             clutter: 0.05,
-            keep_free: Corner::ALL
-                .iter()
-                .flat_map(|c| c.start_cells(height, width))
-                .collect(),
+            keep_free: Corner::all_start_cells(height, width),
         }
     }
 
     /// Checks every field; errors are [`MapError::Invalid`] naming the field.
     pub fn validate(&self) -> Result<(), MapError> {
-        let bad = |field: &str, msg: String| {
-            Err(MapError::Invalid(format!(
-                "floor plan config: field `{field}`: {msg}"
-            )))
-        };
+        let bad = |field: &str, msg: String| invalid_field("floor plan config", field, msg);
         for (name, v) in [("height", self.height), ("width", self.width)] {
             // Each piece of furniture checks connectivity over the whole grid: 256 keeps a
             // plan under a second.
@@ -124,8 +117,7 @@ impl FloorPlanConfig {
                 format!("must lie in [0, 0.3), got {}", self.clutter),
             );
         }
-        let probe = OccGrid::new(self.height, self.width, Occupancy::Free);
-        if let Some(p) = self.keep_free.iter().find(|p| !probe.in_bounds(**p)) {
+        if let Some(p) = cell_outside(&self.keep_free, self.height, self.width) {
             return bad(
                 "keep_free",
                 format!(
@@ -356,45 +348,44 @@ mod tests {
         let g = floor_plan(&cfg, 3).unwrap();
         let walls = g.count(Occupancy::Obstacle);
         assert!(walls >= 40, "{walls} wall cells");
-        let row_walls = (0..40)
-            .filter(|&r| {
-                (0..40)
-                    .filter(|&c| g.get(Pos::new(r, c)) == Occupancy::Obstacle)
-                    .count()
-                    >= 8
-            })
-            .count();
-        let col_walls = (0..40)
-            .filter(|&c| {
-                (0..40)
-                    .filter(|&r| g.get(Pos::new(r, c)) == Occupancy::Obstacle)
-                    .count()
-                    >= 8
-            })
-            .count();
+        // Lines (rows or columns, `cell(line, k)` the k-th cell of one) with 8+ wall cells.
+        let walled = |cell: fn(i32, i32) -> Pos| {
+            (0..40)
+                .filter(|&l| {
+                    (0..40)
+                        .filter(|&k| g.get(cell(l, k)) == Occupancy::Obstacle)
+                        .count()
+                        >= 8
+                })
+                .count()
+        };
+        let row_walls = walled(Pos::new);
+        let col_walls = walled(|c, r| Pos::new(r, c));
         assert!(row_walls + col_walls >= 2, "{row_walls} + {col_walls}");
         assert!(crate::generate::is_connected(&g));
     }
 
     #[test]
     fn bad_fields_are_named() {
-        let e = floor_plan(
-            &FloorPlanConfig {
-                door_width: 9,
-                ..FloorPlanConfig::default()
-            },
-            1,
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("`door_width`"), "{e}");
-        let e = floor_plan(
-            &FloorPlanConfig {
-                height: 3,
-                ..FloorPlanConfig::default()
-            },
-            1,
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("`height`"), "{e}");
+        let bad = [
+            (
+                FloorPlanConfig {
+                    door_width: 9,
+                    ..FloorPlanConfig::default()
+                },
+                "`door_width`",
+            ),
+            (
+                FloorPlanConfig {
+                    height: 3,
+                    ..FloorPlanConfig::default()
+                },
+                "`height`",
+            ),
+        ];
+        for (cfg, field) in bad {
+            let e = floor_plan(&cfg, 1).unwrap_err();
+            assert!(e.to_string().contains(field), "{e}");
+        }
     }
 }

@@ -155,6 +155,15 @@ impl Corner {
             Pos::new(r, clamp_c(c + dc)),
         ]
     }
+
+    /// The start cells of every corner, [`Corner::ALL`] order, in a `height × width` grid: the
+    /// 12 cells generated maps keep free by default.
+    pub fn all_start_cells(height: usize, width: usize) -> Vec<Pos> {
+        Corner::ALL
+            .iter()
+            .flat_map(|c| c.start_cells(height, width))
+            .collect()
+    }
 }
 
 impl fmt::Display for Corner {
@@ -268,22 +277,14 @@ mod tests {
     #[test]
     fn start_cells_for_20x20() {
         let p = |r, c| Pos::new(r, c);
-        assert_eq!(
-            Corner::TopLeft.start_cells(20, 20),
-            [p(0, 0), p(1, 0), p(0, 1)]
-        );
-        assert_eq!(
-            Corner::TopRight.start_cells(20, 20),
-            [p(0, 19), p(1, 19), p(0, 18)]
-        );
-        assert_eq!(
-            Corner::BottomLeft.start_cells(20, 20),
-            [p(19, 0), p(18, 0), p(19, 1)]
-        );
-        assert_eq!(
-            Corner::BottomRight.start_cells(20, 20),
-            [p(19, 19), p(18, 19), p(19, 18)]
-        );
+        for (corner, cells) in [
+            (Corner::TopLeft, [p(0, 0), p(1, 0), p(0, 1)]),
+            (Corner::TopRight, [p(0, 19), p(1, 19), p(0, 18)]),
+            (Corner::BottomLeft, [p(19, 0), p(18, 0), p(19, 1)]),
+            (Corner::BottomRight, [p(19, 19), p(18, 19), p(19, 18)]),
+        ] {
+            assert_eq!(corner.start_cells(20, 20), cells, "{corner}");
+        }
         // Non-square grids use H-1 and W-1.
         assert_eq!(
             Corner::BottomRight.start_cells(8, 12),

@@ -1,6 +1,6 @@
 //! Flat-array Dijkstra with early exit and reusable buffers.
 
-use crate::{DIAGONAL, STRAIGHT};
+use crate::{next_generation, DIAGONAL, STRAIGHT};
 use madenet_map::{Movement, Pos};
 
 /// Reusable single-source Dijkstra over a `height × width` grid. Buffers are kept between
@@ -104,13 +104,7 @@ impl Dijkstra {
         movement: Movement,
         mut stop: impl FnMut(usize, u32) -> bool,
     ) -> Option<usize> {
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.seen.fill(0);
-            self.settled.fill(0);
-            self.generation = 1;
-        }
-        let g = self.generation;
+        let g = next_generation(&mut self.generation, [&mut self.seen, &mut self.settled]);
         for b in &mut self.buckets {
             b.clear();
         }

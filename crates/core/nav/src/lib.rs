@@ -33,6 +33,21 @@ pub const STRAIGHT: u32 = 10_000;
 /// Cost of a diagonal step, √2 · [`STRAIGHT`] rounded down.
 pub const DIAGONAL: u32 = 14_142;
 
+/// Advances the generation counter of buffers reused across runs (an entry of `marks` is
+/// current when it equals the counter) and returns it; when the counter wraps, the marks are
+/// zeroed and it restarts at 1.
+#[inline]
+fn next_generation<const N: usize>(generation: &mut u32, marks: [&mut Vec<u32>; N]) -> u32 {
+    *generation = generation.wrapping_add(1);
+    if *generation == 0 {
+        for m in marks {
+            m.fill(0);
+        }
+        *generation = 1;
+    }
+    *generation
+}
+
 /// Integer cost of a move.
 #[inline]
 pub fn move_cost(m: Move) -> u32 {
@@ -79,12 +94,10 @@ pub fn astar(
     passable: impl Fn(Pos) -> bool + Copy,
     movement: Movement,
 ) -> Option<(Vec<Pos>, u32)> {
-    if start == goal {
-        return Some((Vec::new(), 0));
-    }
     // A goal one allowed step away: that step is the unique shortest path (any other takes two
     // steps, ≥ 2·STRAIGHT > DIAGONAL), so skip the search and its hash map — the common case of
-    // primitive moves and of PB's one-cell goals.
+    // primitive moves and of PB's one-cell goals. (`start == goal` is no step: the search
+    // answers it at once with the empty path.)
     if let Some(cost) = one_step(start, goal, passable, movement) {
         return Some((vec![goal], cost));
     }

@@ -1,6 +1,6 @@
 //! Spatial-temporal A* with a reservation table, for prioritized planning.
 
-use crate::{move_cost, Dijkstra};
+use crate::{move_cost, next_generation, Dijkstra};
 use madenet_map::{Movement, Pos};
 use madenet_world::{step_allowed, Move};
 use std::cmp::Reverse;
@@ -45,11 +45,7 @@ impl Reservations {
 
     /// Forget every reservation (O(1)).
     pub fn clear(&mut self) {
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.stamp.fill(0);
-            self.generation = 1;
-        }
+        next_generation(&mut self.generation, [&mut self.stamp]);
         self.count = 0;
     }
 
@@ -264,13 +260,7 @@ impl SpaceTimePlanner {
             self.seen = vec![0; n];
             self.closed = vec![0; n];
         }
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.seen.fill(0);
-            self.closed.fill(0);
-            self.generation = 1;
-        }
-        let gen = self.generation;
+        let gen = next_generation(&mut self.generation, [&mut self.seen, &mut self.closed]);
         let w = self.width;
         // A state's number (heap order, parents): t · cells + cell, as without windows.
         let state = |p: Pos, t: usize| (t * cells + p.row as usize * w + p.col as usize) as u32;

@@ -39,6 +39,26 @@ impl Grid {
     fn pos(&self, i: usize) -> Pos {
         Pos::new((i / self.w) as i32, (i % self.w) as i32)
     }
+    /// [`astar`] over this grid's free cells.
+    fn astar(&self, start: Pos, goal: Pos, movement: Movement) -> Option<(Vec<Pos>, u32)> {
+        astar(start, goal, |p| self.passable(p), movement)
+    }
+    /// [`space_time_astar`] over this grid's free cells.
+    fn space_time(
+        &self,
+        start: Pos,
+        goal: Pos,
+        movement: Movement,
+        res: &Reservations,
+    ) -> Option<Vec<Pos>> {
+        space_time_astar(start, goal, |p| self.passable(p), movement, res)
+    }
+    /// Frees the cell `s` picks and returns it.
+    fn free_cell(&mut self, s: prop::sample::Index) -> Pos {
+        let i = s.index(self.h * self.w);
+        self.free[i] = true;
+        self.pos(i)
+    }
     fn free_cells(&self) -> Vec<Pos> {
         (0..self.h * self.w)
             .map(|i| self.pos(i))
@@ -98,10 +118,7 @@ proptest! {
         s in any::<prop::sample::Index>(),
         g in any::<prop::sample::Index>(),
     ) {
-        let n = grid.h * grid.w;
-        let (start, goal) = (grid.pos(s.index(n)), grid.pos(g.index(n)));
-        grid.free[s.index(n)] = true;
-        grid.free[g.index(n)] = true;
+        let (start, goal) = (grid.free_cell(s), grid.free_cell(g));
         // One Dijkstra reused for all runs, so stale buffers from an earlier run would show.
         let mut dij = Dijkstra::new(grid.h, grid.w);
         for movement in RULES {
@@ -142,9 +159,7 @@ proptest! {
         mut grid in grid_strategy(6, 0.5),
         s in any::<prop::sample::Index>(),
     ) {
-        let n = grid.h * grid.w;
-        let start = grid.pos(s.index(n));
-        grid.free[s.index(n)] = true;
+        let start = grid.free_cell(s);
         for movement in RULES {
             for m in Move::ALL {
                 let goal = m.apply(start);
@@ -160,8 +175,7 @@ proptest! {
         s in any::<prop::sample::Index>(),
     ) {
         let n = grid.h * grid.w;
-        let start = grid.pos(s.index(n));
-        grid.free[s.index(n)] = true;
+        let start = grid.free_cell(s);
         let mut dij = Dijkstra::new(grid.h, grid.w);
         for movement in RULES {
             prop_assert_eq!(dij.run(start, |p| grid.passable(p), movement, |_| false), None);
@@ -215,13 +229,9 @@ fn astar_hand_cases() {
         "...#...", ".......", "...#...", "...#...",
     ]);
     for movement in RULES {
-        let (path, cost) = astar(
-            Pos::new(0, 0),
-            Pos::new(0, 6),
-            |p| grid.passable(p),
-            movement,
-        )
-        .unwrap();
+        let (path, cost) = grid
+            .astar(Pos::new(0, 0), Pos::new(0, 6), movement)
+            .unwrap();
         assert!(path.contains(&Pos::new(2, 3)), "{path:?}");
         assert_eq!(
             check_path(
@@ -242,30 +252,15 @@ fn astar_hand_cases() {
     }
     // A diagonal squeeze: passable only with corner cutting.
     let squeeze = Grid::from_rows(&[".#", "#."]);
-    let cut = astar(
-        Pos::new(0, 0),
-        Pos::new(1, 1),
-        |p| squeeze.passable(p),
-        Movement::CornerCutting,
-    );
+    let cut = squeeze.astar(Pos::new(0, 0), Pos::new(1, 1), Movement::CornerCutting);
     assert_eq!(cut, Some((vec![Pos::new(1, 1)], DIAGONAL)));
     assert_eq!(
-        astar(
-            Pos::new(0, 0),
-            Pos::new(1, 1),
-            |p| squeeze.passable(p),
-            Movement::NoCornerCutting
-        ),
+        squeeze.astar(Pos::new(0, 0), Pos::new(1, 1), Movement::NoCornerCutting),
         None
     );
     // Start equals goal.
     assert_eq!(
-        astar(
-            Pos::new(0, 0),
-            Pos::new(0, 0),
-            |p| squeeze.passable(p),
-            Movement::CornerCutting
-        ),
+        squeeze.astar(Pos::new(0, 0), Pos::new(0, 0), Movement::CornerCutting),
         Some((vec![], 0))
     );
     // path_length in cells.
@@ -643,21 +638,12 @@ fn space_time_with_no_reservations_matches_astar_cost() {
     ]);
     let res = Reservations::new(grid.h, grid.w, 20);
     for movement in RULES {
-        let (a, cost) = astar(
-            Pos::new(0, 0),
-            Pos::new(3, 5),
-            |p| grid.passable(p),
-            movement,
-        )
-        .unwrap();
-        let st = space_time_astar(
-            Pos::new(0, 0),
-            Pos::new(3, 5),
-            |p| grid.passable(p),
-            movement,
-            &res,
-        )
-        .unwrap();
+        let (a, cost) = grid
+            .astar(Pos::new(0, 0), Pos::new(3, 5), movement)
+            .unwrap();
+        let st = grid
+            .space_time(Pos::new(0, 0), Pos::new(3, 5), movement, &res)
+            .unwrap();
         let st_cost =
             check_path(&grid, Pos::new(0, 0), Pos::new(3, 5), &st, movement, false).unwrap();
         assert_eq!(st_cost, cost, "{movement:?}: {st:?} vs {a:?}");
@@ -666,10 +652,9 @@ fn space_time_with_no_reservations_matches_astar_cost() {
     let walled = Grid::from_rows(&["..#..", "..#..", "..#.."]);
     let res = Reservations::new(3, 5, 8);
     assert_eq!(
-        space_time_astar(
+        walled.space_time(
             Pos::new(0, 0),
             Pos::new(0, 4),
-            |p| walled.passable(p),
             Movement::CornerCutting,
             &res
         ),
@@ -677,10 +662,9 @@ fn space_time_with_no_reservations_matches_astar_cost() {
     );
     // start == goal: empty plan.
     assert_eq!(
-        space_time_astar(
+        walled.space_time(
             Pos::new(0, 0),
             Pos::new(0, 0),
-            |p| walled.passable(p),
             Movement::CornerCutting,
             &res
         ),
@@ -704,14 +688,9 @@ fn space_time_waits_for_a_crossing_robot() {
         "beyond the horizon nothing is reserved"
     );
     for movement in RULES {
-        let path = space_time_astar(
-            Pos::new(1, 0),
-            Pos::new(1, 2),
-            |p| grid.passable(p),
-            movement,
-            &res,
-        )
-        .unwrap();
+        let path = grid
+            .space_time(Pos::new(1, 0), Pos::new(1, 2), movement, &res)
+            .unwrap();
         check_path(&grid, Pos::new(1, 0), Pos::new(1, 2), &path, movement, true).unwrap();
         assert!(!res.conflicts(Pos::new(1, 0), &path));
         let plans = vec![vec![Pos::new(1, 1), Pos::new(2, 1)], path.clone()];
@@ -726,6 +705,11 @@ fn space_time_waits_for_a_crossing_robot() {
     }
 }
 
+/// The cells of row `r` at columns `cols`, in order: a path along the row.
+fn row(r: i32, cols: &[i32]) -> Vec<Pos> {
+    cols.iter().map(|&c| Pos::new(r, c)).collect()
+}
+
 #[test]
 fn reservations_conflicts_detects_reserved_cells() {
     let mut res = Reservations::new(5, 5, 6);
@@ -733,49 +717,25 @@ fn reservations_conflicts_detects_reserved_cells() {
     res.reserve(Pos::new(2, 2), 3);
     assert!(!res.is_empty());
     // Path in (2,2) at t = 3: conflict.
-    let path_at_3 = [
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 2),
-        Pos::new(2, 3),
-    ];
+    let path_at_3 = row(2, &[1, 1, 2, 3]);
     assert!(
         res.conflicts(Pos::new(2, 0), &path_at_3),
         "in (2,2) at t = 3"
     );
     // Entering (2,2) at t = 4 means entering a cell held at t = 3: conflict as well.
-    let path_at_4 = [
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 2),
-    ];
+    let path_at_4 = row(2, &[1, 1, 1, 2]);
     assert!(
         res.conflicts(Pos::new(2, 0), &path_at_4),
         "entering (2,2) at t = 4"
     );
     // In (2,2) at t = 2 and gone at t = 3: fine.
-    let path_at_2 = [Pos::new(2, 1), Pos::new(2, 2), Pos::new(2, 3)];
+    let path_at_2 = row(2, &[1, 2, 3]);
     assert!(!res.conflicts(Pos::new(2, 0), &path_at_2));
     // Entering at t = 5: fine.
-    let path_at_5 = [
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 1),
-        Pos::new(2, 2),
-    ];
+    let path_at_5 = row(2, &[1, 1, 1, 1, 2]);
     assert!(!res.conflicts(Pos::new(2, 0), &path_at_5));
     // Never touching it: fine.
-    assert!(!res.conflicts(
-        Pos::new(0, 0),
-        &[
-            Pos::new(0, 1),
-            Pos::new(0, 2),
-            Pos::new(0, 3),
-            Pos::new(0, 4)
-        ]
-    ));
+    assert!(!res.conflicts(Pos::new(0, 0), &row(0, &[1, 2, 3, 4])));
     // Reservations beyond the horizon are ignored; clear() forgets everything.
     res.reserve(Pos::new(0, 0), 7);
     assert!(!res.is_reserved(Pos::new(0, 0), 7));

@@ -12,33 +12,14 @@
 //! `cargo run --release -p madenet-sim --example footprint -- <side> <team> <steps>`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
-use madenet_sim::{Trial, TrialSpec};
-use madenet_world::{Move, ScenarioConfig, World};
+use madenet_sim::Trial;
+use madenet_world::{Move, World};
+use scaling_spec::spec;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-fn spec(side: usize, team: usize) -> TrialSpec {
-    let gen = GeneratorConfig {
-        keep_free: Vec::new(),
-        ..GeneratorConfig::for_size(side, side)
-    };
-    let config = ScenarioConfig {
-        num_robots: team,
-        step_cap: 100_000,
-        ..ScenarioConfig::default()
-    };
-    let map = generate_with_movement(&gen, 11, config.movement).expect("map");
-    let starts = random_starts(&map, team, config.movement, 11).expect("starts");
-    TrialSpec {
-        map,
-        map_name: format!("g{side}"),
-        starts,
-        config,
-        policy: "spread".into(),
-        seed: 1,
-    }
-}
+#[path = "support/scaling_spec.rs"]
+mod scaling_spec;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("timestep");

@@ -3,9 +3,10 @@
 //! around a random cell, `spread`), runs `steps` timesteps and prints the process's peak
 //! resident set (VmHWM, Linux) and the time per step. One process per size, so peaks do not mix.
 
-use madenet_map::generate::{generate_with_movement, random_starts, GeneratorConfig};
-use madenet_sim::{Trial, TrialSpec};
-use madenet_world::ScenarioConfig;
+use madenet_sim::Trial;
+
+#[path = "../benches/support/scaling_spec.rs"]
+mod scaling_spec;
 
 fn peak_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -23,25 +24,7 @@ fn main() {
         std::process::exit(2);
     };
     let before = peak_kib().unwrap_or(0);
-    let gen = GeneratorConfig {
-        keep_free: Vec::new(),
-        ..GeneratorConfig::for_size(side, side)
-    };
-    let config = ScenarioConfig {
-        num_robots: team,
-        step_cap: 100_000,
-        ..ScenarioConfig::default()
-    };
-    let map = generate_with_movement(&gen, 11, config.movement).expect("map");
-    let starts = random_starts(&map, team, config.movement, 11).expect("starts");
-    let spec = TrialSpec {
-        map,
-        map_name: format!("g{side}"),
-        starts,
-        config,
-        policy: "spread".into(),
-        seed: 1,
-    };
+    let spec = scaling_spec::spec(side, team);
     let mut trial = Trial::new(spec).expect("trial");
     let t0 = std::time::Instant::now();
     let mut done = 0;

@@ -726,6 +726,21 @@ mod tests {
     use madenet_map::paper::{paper_map, Corner};
     use madenet_world::ScenarioConfig;
 
+    /// A free 1 × `len` corridor, and `robots` robots sensing 2 cells, exactly, and moving
+    /// exactly.
+    fn corridor(len: usize, robots: usize) -> (OccGrid, ScenarioConfig) {
+        let text = format!("{}\n", ".".repeat(len));
+        let map = madenet_map::io::parse_text(&text, std::path::Path::new("corridor")).unwrap();
+        let cfg = ScenarioConfig {
+            num_robots: robots,
+            sensing_range: 2,
+            sensor_miss_prob: 0.0,
+            motion_success_prob: 1.0,
+            ..ScenarioConfig::default()
+        };
+        (map, cfg)
+    }
+
     fn spec(map: usize, corner: Corner, seed: u64, cfg: ScenarioConfig) -> TrialSpec {
         let map = paper_map(map).unwrap();
         TrialSpec {
@@ -742,18 +757,7 @@ mod tests {
     fn first_viewpoints_split_a_corridor_between_its_ends() {
         // A 1 × 24 corridor with a robot at each end, d_s = 2: the min–max plan sends each
         // robot to its own half, so each one's first viewpoint lies nearer itself than the other.
-        let map = madenet_map::io::parse_text(
-            &format!("{}\n", ".".repeat(24)),
-            std::path::Path::new("c"),
-        )
-        .unwrap();
-        let cfg = ScenarioConfig {
-            num_robots: 2,
-            sensing_range: 2,
-            sensor_miss_prob: 0.0,
-            motion_success_prob: 1.0,
-            ..ScenarioConfig::default()
-        };
+        let (map, cfg) = corridor(24, 2);
         let starts = [Pos::new(0, 0), Pos::new(0, 23)];
         let mut world = World::new(map, &starts, cfg, 1).unwrap();
         let moves = first_viewpoint_moves(&mut world);
@@ -842,15 +846,7 @@ mod tests {
     fn a_corridor_bound_by_hand() {
         // A 1 × 12 corridor, one robot at the left end, d_s = 2: it sees cells 0..=2 at t = 0,
         // and the last cell (11) from cell 9 at the earliest: 9 moves.
-        let map = madenet_map::io::parse_text("............\n", std::path::Path::new("corridor"))
-            .unwrap();
-        let cfg = ScenarioConfig {
-            num_robots: 1,
-            sensing_range: 2,
-            sensor_miss_prob: 0.0,
-            motion_success_prob: 1.0,
-            ..ScenarioConfig::default()
-        };
+        let (map, cfg) = corridor(12, 1);
         let s = TrialSpec {
             map,
             map_name: "corridor".into(),

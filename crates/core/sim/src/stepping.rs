@@ -269,24 +269,49 @@ pub struct WorldView<'a> {
     pub exchanges: &'a [(usize, usize)],
 }
 
+/// The [`Present`] methods a grid trial answers from its world, `self.world` (a
+/// [`madenet_world::World`] or a reference to one), the same way wherever its agents live:
+/// time, truth, poses and cells, the team's map, contacts and progress.
+macro_rules! present_grid_world {
+    () => {
+        fn time_s(&self) -> f64 {
+            self.world.t() as f64
+        }
+        fn step_s(&self) -> f64 {
+            1.0
+        }
+        fn truth(&self) -> &madenet_map::OccGrid {
+            self.world.truth()
+        }
+        fn pose(&self, i: usize) -> madenet_continuous::Pose {
+            $crate::stepping::cell_pose(self.world.positions()[i], self.world.truth().resolution)
+        }
+        fn cell(&self, i: usize) -> madenet_map::Pos {
+            self.world.positions()[i]
+        }
+        fn team_map(&self) -> std::borrow::Cow<'_, [madenet_map::Occupancy]> {
+            std::borrow::Cow::Borrowed(self.world.team_map())
+        }
+        fn contacts(&self) -> std::borrow::Cow<'_, [(usize, usize)]> {
+            std::borrow::Cow::Borrowed(self.world.contacts())
+        }
+        fn explored(&self) -> f64 {
+            self.world.explored_fraction()
+        }
+        fn distance(&self) -> f64 {
+            self.world.distances().iter().sum()
+        }
+        fn when(&self) -> String {
+            format!("timestep {}", self.world.t())
+        }
+    };
+}
+pub(crate) use present_grid_world;
+
 impl Present for WorldView<'_> {
+    present_grid_world!();
     fn robots(&self) -> usize {
         self.world.positions().len()
-    }
-    fn time_s(&self) -> f64 {
-        self.world.t() as f64
-    }
-    fn step_s(&self) -> f64 {
-        1.0
-    }
-    fn truth(&self) -> &OccGrid {
-        self.world.truth()
-    }
-    fn pose(&self, i: usize) -> Pose {
-        cell_pose(self.world.positions()[i], self.world.truth().resolution)
-    }
-    fn cell(&self, i: usize) -> Pos {
-        self.world.positions()[i]
     }
     fn robot(&self, i: usize) -> RobotShown<'_> {
         self.robots.get(i).copied().unwrap_or_default()
@@ -295,22 +320,7 @@ impl Present for WorldView<'_> {
     fn belief(&self, _: usize) -> Option<Cow<'_, [Occupancy]>> {
         None
     }
-    fn team_map(&self) -> Cow<'_, [Occupancy]> {
-        Cow::Borrowed(self.world.team_map())
-    }
-    fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
-        Cow::Borrowed(self.world.contacts())
-    }
     fn exchanges(&self) -> &[(usize, usize)] {
         self.exchanges
-    }
-    fn explored(&self) -> f64 {
-        self.world.explored_fraction()
-    }
-    fn distance(&self) -> f64 {
-        self.world.distances().iter().sum()
-    }
-    fn when(&self) -> String {
-        format!("timestep {}", self.world.t())
     }
 }

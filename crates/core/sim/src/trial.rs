@@ -2,7 +2,7 @@
 
 use crate::registry::{PolicyContext, PolicyRegistry};
 use crate::rewards::{RewardConfig, StepRewards};
-use crate::stepping::{cell_pose, Present, RobotShown, Stepping};
+use crate::stepping::{present_grid_world, Present, RobotShown, Stepping};
 use crate::SimError;
 use madenet_agent::{Agent, AgentConfig, Beta, Decision, External, JointPolicy, PlanMessage};
 use madenet_map::{OccGrid, Occupancy, Pos};
@@ -682,23 +682,9 @@ impl Trial {
 }
 
 impl Present for Trial {
+    present_grid_world!();
     fn robots(&self) -> usize {
         self.agents.len()
-    }
-    fn time_s(&self) -> f64 {
-        self.world.t() as f64
-    }
-    fn step_s(&self) -> f64 {
-        1.0
-    }
-    fn truth(&self) -> &OccGrid {
-        self.world.truth()
-    }
-    fn pose(&self, i: usize) -> madenet_continuous::Pose {
-        cell_pose(self.world.positions()[i], self.world.truth().resolution)
-    }
-    fn cell(&self, i: usize) -> Pos {
-        self.world.positions()[i]
     }
     fn robot(&self, i: usize) -> RobotShown<'_> {
         RobotShown::of(&self.agents[i])
@@ -720,23 +706,8 @@ impl Present for Trial {
         }
         Some(Cow::Owned(cells))
     }
-    fn team_map(&self) -> Cow<'_, [Occupancy]> {
-        Cow::Borrowed(self.world.team_map())
-    }
-    fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
-        Cow::Borrowed(self.world.contacts())
-    }
     fn exchanges(&self) -> &[(usize, usize)] {
         self.world.exchanges()
-    }
-    fn explored(&self) -> f64 {
-        self.world.explored_fraction()
-    }
-    fn distance(&self) -> f64 {
-        self.world.distances().iter().sum()
-    }
-    fn when(&self) -> String {
-        format!("timestep {}", self.world.t())
     }
 }
 

@@ -126,6 +126,21 @@ fn field(field: &'static str, message: impl Into<String>) -> ConfigError {
     }
 }
 
+/// Checks `1 <= value <= max`; the message gives the range with `unit` (" cells", or "").
+fn check_count<T>(name: &'static str, value: T, max: T, unit: &str) -> Result<(), ConfigError>
+where
+    T: PartialOrd + From<u8> + std::fmt::Display + Copy,
+{
+    if (T::from(1)..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(field(
+            name,
+            format!("must be in 1..={max}{unit}, got {value}"),
+        ))
+    }
+}
+
 fn check_prob(name: &'static str, p: f64) -> Result<(), ConfigError> {
     if (0.0..=1.0).contains(&p) {
         Ok(())
@@ -179,24 +194,16 @@ impl ScenarioConfig {
                 format!("at most {MAX_ROBOTS}, got {}", self.num_robots),
             ));
         }
-        if !(1..=MAX_SENSING_RANGE).contains(&self.sensing_range) {
-            return Err(field(
-                "sensing_range",
-                format!(
-                    "must be in 1..={MAX_SENSING_RANGE} cells, got {}",
-                    self.sensing_range
-                ),
-            ));
-        }
+        check_count(
+            "sensing_range",
+            self.sensing_range,
+            MAX_SENSING_RANGE,
+            " cells",
+        )?;
         check_prob("sensor_miss_prob", self.sensor_miss_prob)?;
         check_prob("motion_success_prob", self.motion_success_prob)?;
         check_prob("comm_success_prob", self.comm_success_prob)?;
-        if !(1..=MAX_STEP_CAP).contains(&self.step_cap) {
-            return Err(field(
-                "step_cap",
-                format!("must be in 1..={MAX_STEP_CAP}, got {}", self.step_cap),
-            ));
-        }
+        check_count("step_cap", self.step_cap, MAX_STEP_CAP, "")?;
         if !(self.cell_size > 0.0 && self.cell_size.is_finite()) {
             return Err(field(
                 "cell_size",
@@ -217,15 +224,12 @@ impl ScenarioConfig {
         if let Some(g) = self.goal_count.filter(|&g| g > MAX_GOALS) {
             return Err(field("goal_count", format!("at most {MAX_GOALS}, got {g}")));
         }
-        if !(1..=MAX_PLAN_HORIZON).contains(&self.plan_horizon) {
-            return Err(field(
-                "plan_horizon",
-                format!(
-                    "must be in 1..={MAX_PLAN_HORIZON} timesteps, got {}",
-                    self.plan_horizon
-                ),
-            ));
-        }
+        check_count(
+            "plan_horizon",
+            self.plan_horizon,
+            MAX_PLAN_HORIZON,
+            " timesteps",
+        )?;
         Ok(())
     }
 

@@ -58,6 +58,16 @@ fn from_rows(rows: &[&str]) -> Grid {
     Grid { n, blocked }
 }
 
+/// A 9×9 grid, free but for the `walls` cells (row, column).
+fn open_9x9(walls: &[(usize, usize)]) -> Grid {
+    let n = 9;
+    let mut blocked = vec![false; n * n];
+    for &(r, c) in walls {
+        blocked[r * n + c] = true;
+    }
+    Grid { n, blocked }
+}
+
 fn grid_strategy() -> impl Strategy<Value = (Grid, Pos, i32)> {
     (9usize..=13, 0.0f64..0.5, 1i32..=5).prop_flat_map(|(n, density, radius)| {
         (
@@ -185,17 +195,7 @@ fn picture(grid: &Grid, at: Pos, movement: Movement) -> Vec<String> {
 
 #[test]
 fn wall_in_front_blocks_cells_behind_but_is_itself_visible() {
-    let grid = from_rows(&[
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".....#...",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-    ]);
+    let grid = open_9x9(&[(4, 5)]);
     let at = Pos::new(4, 4);
     for movement in RULES {
         let view = ViewPattern::new(4, movement);
@@ -280,17 +280,7 @@ fn full_wall_hides_the_far_side() {
 #[test]
 fn diagonal_squeeze_blocks_only_without_corner_cutting() {
     // Two obstacles touching at a corner on the robot's NE diagonal: (3,4) and (4,5).
-    let grid = from_rows(&[
-        ".........",
-        ".........",
-        ".........",
-        "....#....",
-        ".....#...",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-    ]);
+    let grid = open_9x9(&[(3, 4), (4, 5)]);
     let at = Pos::new(4, 4);
     let blocked = |p: Pos| grid.is_blocked(p);
     let ne: Vec<Pos> = (1..=4).map(|k| Pos::new(4 - k, 4 + k)).collect();
@@ -330,17 +320,7 @@ fn diagonal_squeeze_blocks_only_without_corner_cutting() {
         Movement::CornerCutting
     ));
     // A single obstacle at a corner (no squeeze) does not block the diagonal under either rule.
-    let single = from_rows(&[
-        ".........",
-        ".........",
-        ".........",
-        "....#....",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-    ]);
+    let single = open_9x9(&[(3, 4)]);
     for movement in RULES {
         let seen = single.visible(&ViewPattern::new(4, movement), at);
         assert!(ne.iter().all(|p| seen.contains(p)), "{movement:?}");
@@ -349,17 +329,7 @@ fn diagonal_squeeze_blocks_only_without_corner_cutting() {
 
 #[test]
 fn window_is_clipped_at_the_grid_edge() {
-    let grid = from_rows(&[
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-        ".........",
-    ]);
+    let grid = open_9x9(&[]);
     for movement in RULES {
         let view = ViewPattern::new(4, movement);
         // Corner: 5×5 minus itself; edge middle: 9×5 minus itself.

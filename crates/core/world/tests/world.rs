@@ -45,6 +45,14 @@ fn exact(n: usize) -> ScenarioConfig {
     }
 }
 
+/// A world on `grid` with robots at `starts` (exact motion and sensing, seed 1) after one step
+/// of `moves`.
+fn after_step(grid: OccGrid, starts: &[Pos], moves: &[Move]) -> World {
+    let mut w = World::new(grid, starts, exact(starts.len()), 1).unwrap();
+    w.step(moves);
+    w
+}
+
 fn p(r: i32, c: i32) -> Pos {
     Pos::new(r, c)
 }
@@ -93,23 +101,27 @@ fn diagonal_past_a_corner_depends_on_the_movement_rule() {
 #[test]
 fn same_target_lower_index_moves() {
     // Both aim at (2,3); robot 0 comes from the left.
-    let mut w = World::new(open(5, 7), &[p(2, 2), p(2, 4)], exact(2), 1).unwrap();
-    w.step(&[Move::E, Move::W]);
+    let w = after_step(open(5, 7), &[p(2, 2), p(2, 4)], &[Move::E, Move::W]);
     assert_eq!(w.positions(), &[p(2, 3), p(2, 4)]);
     assert_eq!(w.executed_moves(), &[Move::E, Move::Stay]);
     assert_eq!(w.distances(), &[1.0, 0.0]);
     // Mirrored: robot 0 comes from the right; it still wins (index, not side).
-    let mut w = World::new(open(5, 7), &[p(2, 4), p(2, 2)], exact(2), 1).unwrap();
-    w.step(&[Move::W, Move::E]);
+    let w = after_step(open(5, 7), &[p(2, 4), p(2, 2)], &[Move::W, Move::E]);
     assert_eq!(w.positions(), &[p(2, 3), p(2, 2)]);
     // Three robots on one cell, robot 0 diagonal: 0 wins, 1 and 2 stay.
-    let mut w = World::new(open(5, 7), &[p(1, 2), p(2, 4), p(3, 3)], exact(3), 1).unwrap();
-    w.step(&[Move::SE, Move::W, Move::N]);
+    let w = after_step(
+        open(5, 7),
+        &[p(1, 2), p(2, 4), p(3, 3)],
+        &[Move::SE, Move::W, Move::N],
+    );
     assert_eq!(w.positions(), &[p(2, 3), p(2, 4), p(3, 3)]);
     assert!((w.distances()[0] - SQRT2).abs() < 1e-12);
     // If robot 0 does not compete, robot 1 wins over robot 2.
-    let mut w = World::new(open(5, 7), &[p(0, 0), p(2, 4), p(3, 3)], exact(3), 1).unwrap();
-    w.step(&[Move::Stay, Move::W, Move::N]);
+    let w = after_step(
+        open(5, 7),
+        &[p(0, 0), p(2, 4), p(3, 3)],
+        &[Move::Stay, Move::W, Move::N],
+    );
     assert_eq!(w.positions(), &[p(0, 0), p(2, 3), p(3, 3)]);
 }
 
@@ -131,20 +143,20 @@ fn swap_attempt_both_stay() {
 #[test]
 fn cannot_enter_a_cell_held_at_the_start_of_the_step() {
     // A train: robot 0 follows robot 1, which moves away. Robot 0 still may not enter.
-    let mut w = World::new(open(3, 6), &[p(1, 1), p(1, 2)], exact(2), 1).unwrap();
-    w.step(&[Move::E, Move::E]);
+    let w = after_step(open(3, 6), &[p(1, 1), p(1, 2)], &[Move::E, Move::E]);
     assert_eq!(w.positions(), &[p(1, 1), p(1, 3)]);
     // The same with the leader being the lower index.
-    let mut w = World::new(open(3, 6), &[p(1, 2), p(1, 1)], exact(2), 1).unwrap();
-    w.step(&[Move::E, Move::E]);
+    let w = after_step(open(3, 6), &[p(1, 2), p(1, 1)], &[Move::E, Move::E]);
     assert_eq!(w.positions(), &[p(1, 3), p(1, 1)]);
     // A rotation of three robots (0 -> 1's cell -> 2's cell -> 0's cell): nobody moves.
-    let mut w = World::new(open(4, 4), &[p(1, 1), p(1, 2), p(2, 2)], exact(3), 1).unwrap();
-    w.step(&[Move::E, Move::S, Move::NW]);
+    let w = after_step(
+        open(4, 4),
+        &[p(1, 1), p(1, 2), p(2, 2)],
+        &[Move::E, Move::S, Move::NW],
+    );
     assert_eq!(w.positions(), &[p(1, 1), p(1, 2), p(2, 2)]);
     // Entering a stationary robot's cell.
-    let mut w = World::new(open(3, 6), &[p(1, 1), p(1, 2)], exact(2), 1).unwrap();
-    w.step(&[Move::E, Move::Stay]);
+    let mut w = after_step(open(3, 6), &[p(1, 1), p(1, 2)], &[Move::E, Move::Stay]);
     assert_eq!(w.positions(), &[p(1, 1), p(1, 2)]);
     // Next step the cell is free: the follower can move in.
     w.step(&[Move::Stay, Move::E]);

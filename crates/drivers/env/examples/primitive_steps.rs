@@ -5,7 +5,7 @@
 //!
 //! `cargo run --release -p madenet-env --example primitive_steps -- [ENVS] [STEPS] [primitive|macro]`
 
-use madenet_env::{ActionMode, ExplorationEnv, VecBuffers, VecEnv};
+use madenet_env::{ActionMode, ExplorationEnv, VecEnv};
 use madenet_map::paper::{paper_map, Corner};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -28,45 +28,16 @@ fn main() {
         .to_vec();
     let env = ExplorationEnv::new(map, "paper_3", starts, ScenarioConfig::default(), mode).unwrap();
     let mut v = VecEnv::new(env, n, 1).unwrap();
-    let e = v.first();
-    let (r, ml, vl, al) = (
-        e.num_robots(),
-        e.map_len(),
-        e.vector_len(),
-        e.action_count(),
-    );
-    let (mut maps, mut vectors, mut masks) = (
-        vec![0.0; n * r * ml],
-        vec![0.0; n * r * vl],
-        vec![0u8; n * r * al],
-    );
-    let (mut rewards, mut needs, mut term, mut trunc) = (
-        vec![0.0; n * r],
-        vec![false; n * r],
-        vec![false; n],
-        vec![false; n],
-    );
-    macro_rules! buffers {
-        () => {
-            VecBuffers {
-                maps: &mut maps,
-                vectors: &mut vectors,
-                masks: &mut masks,
-                rewards: &mut rewards,
-                needs_action: &mut needs,
-                terminated: &mut term,
-                truncated: &mut trunc,
-            }
-        };
-    }
-    v.reset(buffers!()).unwrap();
+    let (r, al) = (v.first().num_robots(), v.first().action_count());
+    let mut out = v.outputs();
+    v.reset(out.buffers()).unwrap();
     let mut rng = madenet_world::rng::stream(1, "example/actions", 0);
     let actions: Vec<Vec<usize>> = (0..256)
         .map(|_| (0..n * r).map(|_| rng.random_range(0..al)).collect())
         .collect();
     let start = std::time::Instant::now();
     for s in 0..steps {
-        v.step(&actions[s % 256], buffers!()).unwrap();
+        v.step(&actions[s % 256], out.buffers()).unwrap();
     }
     let dt = start.elapsed().as_secs_f64();
     println!("{mode:?}: {n} envs x {r} robots, {steps} steps: {:.0} robot-steps/s ({:.2} µs per robot-step)", (steps * n * r) as f64 / dt, 1e6 * dt / (steps * n * r) as f64);

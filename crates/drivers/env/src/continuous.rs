@@ -106,9 +106,7 @@ impl ContinuousEnv {
 
     /// Which robots' actions the next [`ContinuousEnv::step`] uses.
     pub fn needs_action(&self) -> Vec<bool> {
-        let mut out = vec![false; self.num_robots()];
-        self.driver.needs_action_into(&mut out);
-        out
+        self.driver.needs_action()
     }
 
     /// Simulated seconds since the episode started.
@@ -128,10 +126,9 @@ impl ContinuousEnv {
         mask: &mut [u8],
     ) -> Result<(), EnvError> {
         let lengths = (self.map_len(), self.vector_len(), self.action_count());
-        crate::check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
-        let view = self.driver.view(robot, true)?;
-        view.write_map_image(map);
-        view.write_macro_observation(vector);
+        let view = self
+            .driver
+            .observe_into(robot, true, lengths, (map, vector, mask))?;
         crate::write_action_mask(&view, mask);
         Ok(())
     }

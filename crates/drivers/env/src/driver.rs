@@ -69,6 +69,39 @@ impl<S: Stepping> Driver<S> {
         }
     }
 
+    /// Which robots' decisions the next step uses (one per robot).
+    pub(crate) fn needs_action(&self) -> Vec<bool> {
+        let mut out = vec![false; self.scratch.len()];
+        self.needs_action_into(&mut out);
+        out
+    }
+
+    /// Robot `robot`'s view of the current state (as [`Driver::view`]) with its map image
+    /// written into `map` and its observation vector into `vector`, once `robot` and the
+    /// buffers' lengths (map, vector, mask) are checked against `lengths`; the caller writes
+    /// the mask.
+    pub(crate) fn observe_into(
+        &mut self,
+        robot: usize,
+        candidates: bool,
+        lengths: (usize, usize, usize),
+        (map, vector, mask): (&mut [f32], &mut [f32], &[u8]),
+    ) -> Result<AgentView<'_>, EnvError> {
+        let n = self.scratch.len();
+        if robot >= n {
+            return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
+        }
+        if (map.len(), vector.len(), mask.len()) != lengths {
+            return Err(EnvError::Usage(
+                "observation buffers of the wrong length".into(),
+            ));
+        }
+        let view = self.view(robot, candidates)?;
+        view.write_map_image(map);
+        view.write_macro_observation(vector);
+        Ok(view)
+    }
+
     /// Robot `robot`'s view of the current state (its goal candidates with `candidates`),
     /// kept for the next step; reading it never changes the trajectory.
     pub(crate) fn view(

@@ -40,7 +40,7 @@ mod driver;
 pub mod vector;
 
 pub use continuous::{ContinuousEnv, ContinuousStep};
-pub use vector::{VecBuffers, VecEnv};
+pub use vector::{VecBuffers, VecEnv, VecOutputs};
 
 pub use madenet_agent::Decision;
 
@@ -90,27 +90,6 @@ pub enum EnvError {
     /// the message says which.
     #[error("{0}")]
     Usage(String),
-}
-
-/// Checks an observation request: `robot` of a team of `n`, and buffers of the `lengths`
-/// (map image, vector, mask) the environment writes.
-pub(crate) fn check_observation(
-    robot: usize,
-    n: usize,
-    lengths: (usize, usize, usize),
-    map: &[f32],
-    vector: &[f32],
-    mask: &[u8],
-) -> Result<(), EnvError> {
-    if robot >= n {
-        return Err(EnvError::Usage(format!("robot {robot}: the team has {n}")));
-    }
-    if (map.len(), vector.len(), mask.len()) != lengths {
-        return Err(EnvError::Usage(
-            "observation buffers of the wrong length".into(),
-        ));
-    }
-    Ok(())
 }
 
 /// The macro action mask of `view` into `mask` (1 = valid candidate).
@@ -381,9 +360,7 @@ impl ExplorationEnv {
 
     /// Which robots' actions the next [`ExplorationEnv::step`] uses.
     pub fn needs_action(&self) -> Vec<bool> {
-        let mut out = vec![false; self.num_robots()];
-        self.driver.needs_action_into(&mut out);
-        out
+        self.driver.needs_action()
     }
 
     /// [`ExplorationEnv::needs_action`] written into `out` (one per robot).
@@ -407,12 +384,13 @@ impl ExplorationEnv {
         mask: &mut [u8],
     ) -> Result<(), EnvError> {
         let lengths = (self.map_len(), self.vector_len(), self.action_count());
-        check_observation(robot, self.num_robots(), lengths, map, vector, mask)?;
-        let mode = self.mode;
-        let view = self.driver.view(robot, self.observe_candidates)?;
-        view.write_map_image(map);
-        view.write_macro_observation(vector);
-        match mode {
+        let view = self.driver.observe_into(
+            robot,
+            self.observe_candidates,
+            lengths,
+            (map, vector, mask),
+        )?;
+        match self.mode {
             ActionMode::Macro => write_action_mask(&view, mask),
             ActionMode::Primitive => {
                 for (m, mv) in mask.iter_mut().zip(Move::ALL) {

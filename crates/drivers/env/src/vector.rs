@@ -26,6 +26,34 @@ pub struct VecBuffers<'a> {
     pub truncated: &'a mut [bool],
 }
 
+/// Owned, zeroed output buffers of the lengths a [`VecEnv`] needs ([`VecEnv::outputs`]), lent
+/// out as [`VecBuffers`] for each call (and to read them after): what a Rust caller keeps
+/// between steps.
+pub struct VecOutputs {
+    maps: Vec<f32>,
+    vectors: Vec<f32>,
+    masks: Vec<u8>,
+    rewards: Vec<f32>,
+    needs_action: Vec<bool>,
+    terminated: Vec<bool>,
+    truncated: Vec<bool>,
+}
+
+impl VecOutputs {
+    /// The buffers, borrowed for one [`VecEnv::reset`] or [`VecEnv::step`], or to read.
+    pub fn buffers(&mut self) -> VecBuffers<'_> {
+        VecBuffers {
+            maps: &mut self.maps,
+            vectors: &mut self.vectors,
+            masks: &mut self.masks,
+            rewards: &mut self.rewards,
+            needs_action: &mut self.needs_action,
+            terminated: &mut self.terminated,
+            truncated: &mut self.truncated,
+        }
+    }
+}
+
 /// One environment's share of the [`VecBuffers`].
 struct EnvOut<'a> {
     maps: &'a mut [f32],
@@ -154,6 +182,21 @@ impl VecEnv {
     /// Environment 0, e.g. to read the batch's shapes (robots, map size, action count).
     pub fn first(&self) -> &ExplorationEnv {
         &self.slots[0].env
+    }
+
+    /// Zeroed output buffers of the lengths this batch needs.
+    pub fn outputs(&self) -> VecOutputs {
+        let e = self.first();
+        let (n, r) = (self.len(), e.num_robots());
+        VecOutputs {
+            maps: vec![0.0; n * r * e.map_len()],
+            vectors: vec![0.0; n * r * e.vector_len()],
+            masks: vec![0; n * r * e.action_count()],
+            rewards: vec![0.0; n * r],
+            needs_action: vec![false; n * r],
+            terminated: vec![false; n],
+            truncated: vec![false; n],
+        }
     }
 
     /// The seed of each environment's current episode.

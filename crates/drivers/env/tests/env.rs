@@ -4,22 +4,45 @@
 
 use madenet_env::{ActionMode, EnvError, ExplorationEnv};
 use madenet_map::paper::{paper_map, paper_map_name, Corner};
-use madenet_sim::{Trial, TrialSpec};
+use madenet_sim::{Trial, TrialResult, TrialSpec};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
 
-fn env(mode: ActionMode, csp: f64) -> ExplorationEnv {
+/// Paper map 6, the team starting in its bottom-right corner, messages arriving with
+/// probability `csp`: the scenario of every test here.
+fn scene(csp: f64) -> TrialSpec {
     let map = paper_map(6).unwrap();
     let starts = Corner::BottomRight
         .start_cells(map.height(), map.width())
         .to_vec();
-    let scenario = ScenarioConfig {
-        comm_success_prob: csp,
-        ..Default::default()
-    };
-    ExplorationEnv::new(map, &paper_map_name(6), starts, scenario, mode)
+    TrialSpec {
+        map,
+        map_name: paper_map_name(6),
+        starts,
+        config: ScenarioConfig {
+            comm_success_prob: csp,
+            ..Default::default()
+        },
+        policy: String::new(),
+        seed: 0,
+    }
+}
+
+fn env(mode: ActionMode, csp: f64) -> ExplorationEnv {
+    let s = scene(csp);
+    ExplorationEnv::new(s.map, &s.map_name, s.starts, s.config, mode)
         .unwrap()
         .recording(true)
+}
+
+/// The trial `policy` runs on its own in [`scene`]`(csp)` with `seed`, its trajectory recorded.
+fn own_trial(csp: f64, policy: &str, seed: u64) -> TrialResult {
+    let spec = TrialSpec {
+        policy: policy.into(),
+        seed,
+        ..scene(csp)
+    };
+    Trial::new(spec).unwrap().record_trajectory(true).run()
 }
 
 #[test]
@@ -69,25 +92,10 @@ fn random_candidates_through_the_env_reproduce_the_random_policy_trial() {
             assert!(r.steps >= 1);
         }
         let ext = e.finish().unwrap();
-        let map = paper_map(6).unwrap();
-        let starts = Corner::BottomRight
-            .start_cells(map.height(), map.width())
-            .to_vec();
-        let spec = TrialSpec {
-            map,
-            map_name: paper_map_name(6),
-            starts,
-            config: ScenarioConfig {
-                comm_success_prob: csp,
-                ..Default::default()
-            },
-            policy: "random".into(),
-            seed,
-        };
-        let own = Trial::new(spec).unwrap().record_trajectory(true).run();
+        let own = own_trial(csp, "random", seed);
         assert_eq!(own.trajectory, ext.trajectory, "CSP {csp}");
         assert_eq!(own.metrics, ext.metrics);
-        assert_eq!(steps, own.metrics.tns as usize);
+        assert_eq!(steps, own.metrics.tns);
         let own_team: f64 = own.trajectory.iter().map(|s| s.rewards.team).sum();
         assert!((own_team - team).abs() < 1e-9);
     }
@@ -159,23 +167,7 @@ fn a_policys_decisions_through_the_env_reproduce_its_own_trial_and_modes_are_che
             e.step_decisions(&d).unwrap();
         }
         let ext = e.finish().unwrap();
-        let map = paper_map(6).unwrap();
-        let starts = Corner::BottomRight
-            .start_cells(map.height(), map.width())
-            .to_vec();
-        let scenario = ScenarioConfig {
-            comm_success_prob: 0.5,
-            ..Default::default()
-        };
-        let spec = TrialSpec {
-            map,
-            map_name: paper_map_name(6),
-            starts,
-            config: scenario,
-            policy: name.into(),
-            seed: 4,
-        };
-        let own = Trial::new(spec).unwrap().record_trajectory(true).run();
+        let own = own_trial(0.5, name, 4);
         assert_eq!(own.trajectory, ext.trajectory, "{name}");
         assert_eq!(own.metrics, ext.metrics, "{name}");
     }
@@ -294,7 +286,7 @@ fn a_restarted_episode_is_the_same_as_a_fresh_one() {
 /// of such environments keeps stepping (each step ends and restarts them) instead of failing.
 #[test]
 fn an_episode_over_at_its_start_ends_at_the_first_step() {
-    use madenet_env::{VecBuffers, VecEnv};
+    use madenet_env::VecEnv;
     use madenet_map::{OccGrid, Occupancy, Pos};
     let map = OccGrid::new(4, 4, Occupancy::Free);
     let starts = vec![Pos::new(0, 0), Pos::new(0, 1), Pos::new(1, 0)];
@@ -359,37 +351,15 @@ fn an_episode_over_at_its_start_ends_at_the_first_step() {
 
         let n = 2;
         let mut v = VecEnv::new(e.clone_config().unwrap(), n, 3).unwrap();
-        let (ml, vl, al) = (e.map_len(), e.vector_len(), e.action_count());
-        let (mut maps, mut vectors, mut masks) = (
-            vec![0.0; n * 3 * ml],
-            vec![0.0; n * 3 * vl],
-            vec![0u8; n * 3 * al],
-        );
-        let (mut rewards, mut needs, mut term, mut trunc) = (
-            vec![1.0; n * 3],
-            vec![false; n * 3],
-            vec![false; n],
-            vec![false; n],
-        );
-        macro_rules! buffers {
-            () => {
-                VecBuffers {
-                    maps: &mut maps,
-                    vectors: &mut vectors,
-                    masks: &mut masks,
-                    rewards: &mut rewards,
-                    needs_action: &mut needs,
-                    terminated: &mut term,
-                    truncated: &mut trunc,
-                }
-            };
-        }
-        v.reset(buffers!()).unwrap();
+        let mut out = v.outputs();
+        out.buffers().rewards.fill(1.0);
+        v.reset(out.buffers()).unwrap();
         let seeds = v.episode_seeds();
         for step in 0..3 {
-            v.step(&[0; 6], buffers!()).unwrap();
-            assert_eq!(term, vec![true; n], "{mode:?} step {step}");
-            assert!(rewards.iter().all(|&r| r == 0.0));
+            v.step(&[0; 6], out.buffers()).unwrap();
+            let b = out.buffers();
+            assert_eq!(b.terminated, vec![true; n], "{mode:?} step {step}");
+            assert!(b.rewards.iter().all(|&r| r == 0.0));
         }
         assert_ne!(
             v.episode_seeds(),

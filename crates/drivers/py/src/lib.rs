@@ -28,21 +28,25 @@ pub(crate) fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// The TOML file `config` as a table (`None` without one), errors naming the path.
+pub(crate) fn config_table(config: Option<&str>) -> PyResult<Option<toml::Table>> {
+    let Some(path) = config else {
+        return Ok(None);
+    };
+    let text = madenet_files::read_text_capped(
+        std::path::Path::new(path),
+        madenet_files::InputKind::Config,
+    )
+    .map_err(|e| value_error(format!("{path}: {e}")))?;
+    text.parse::<toml::Table>()
+        .map(Some)
+        .map_err(|e| value_error(format!("{path}: {}", e.message())))
+}
+
 /// The scenario: `config` (a TOML file, optional) with `overrides` (TOML text of top-level
 /// keys) on top; every field checked.
 pub(crate) fn scenario(config: Option<&str>, overrides: &str) -> PyResult<ScenarioConfig> {
-    let mut table = match config {
-        Some(path) => {
-            let text = madenet_files::read_text_capped(
-                std::path::Path::new(path),
-                madenet_files::InputKind::Config,
-            )
-            .map_err(|e| value_error(format!("{path}: {e}")))?;
-            text.parse::<toml::Table>()
-                .map_err(|e| value_error(format!("{path}: {}", e.message())))?
-        }
-        None => toml::Table::new(),
-    };
+    let mut table = config_table(config)?.unwrap_or_default();
     let extra = overrides
         .parse::<toml::Table>()
         .map_err(|e| value_error(format!("keyword arguments: {}", e.message())))?;
@@ -75,6 +79,23 @@ pub(crate) fn setup(
         )));
     }
     Ok((grid, source.name(), starts, scenario))
+}
+
+/// The environment the Python arguments describe ([`setup`], [`action_mode`]), and its map's
+/// name.
+pub(crate) fn exploration_env(
+    map: &str,
+    start: &str,
+    mode: &str,
+    config: Option<&str>,
+    overrides: &str,
+    candidates: bool,
+) -> PyResult<(ExplorationEnv, String)> {
+    let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
+    let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?)
+        .map_err(value_error)?
+        .observing_candidates(candidates);
+    Ok((env, name))
 }
 
 pub(crate) fn action_mode(mode: &str) -> PyResult<ActionMode> {
@@ -210,14 +231,10 @@ impl CoreEnv {
         candidates: bool,
         record: bool,
     ) -> PyResult<Self> {
-        let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
-        let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?)
-            .map_err(value_error)?
-            .observing_candidates(candidates)
-            .recording(record);
+        let (env, map_name) = exploration_env(map, start, mode, config, overrides, candidates)?;
         Ok(CoreEnv {
-            env,
-            map_name: name,
+            env: env.recording(record),
+            map_name,
         })
     }
 

@@ -2,7 +2,7 @@
 //! subset — all of them here, or batches in Ray workers — with the same result per trial.
 //! `CoreScale`: the scalability study (`madenet scale`, grid or continuous world) the same way.
 
-use crate::value_error;
+use crate::{config_table, value_error};
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::PolicyRegistry;
 use madenet_study::runner::{self, TrialOutcome};
@@ -33,18 +33,7 @@ fn config_with<T: serde::de::DeserializeOwned>(
     overrides_json: &str,
     what: &str,
 ) -> PyResult<T> {
-    let mut table = match config {
-        Some(path) => {
-            let text = madenet_files::read_text_capped(
-                std::path::Path::new(path),
-                madenet_files::InputKind::Config,
-            )
-            .map_err(|e| value_error(format!("{path}: {e}")))?;
-            text.parse::<toml::Table>()
-                .map_err(|e| value_error(format!("{path}: {}", e.message())))?
-        }
-        None => defaults.unwrap_or_default(),
-    };
+    let mut table = config_table(config)?.or(defaults).unwrap_or_default();
     let extra: serde_json::Value = serde_json::from_str(overrides_json)
         .map_err(|e| value_error(format!("keyword arguments: {e}")))?;
     let extra: toml::Table =

@@ -1,8 +1,8 @@
 //! `CoreVecEnv`: N environments stepped together in Rust ([`madenet_env::VecEnv`]) with the
 //! GIL released, writing into numpy arrays allocated once at construction.
 
-use crate::{action_mode, setup, value_error};
-use madenet_env::{ExplorationEnv, VecBuffers, VecEnv};
+use crate::{exploration_env, value_error};
+use madenet_env::{VecBuffers, VecEnv};
 use numpy::ndarray::{Ix1, Ix2, Ix3, Ix5};
 use numpy::{PyArray, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -92,10 +92,7 @@ impl CoreVecEnv {
         seed: u64,
         candidates: bool,
     ) -> PyResult<Self> {
-        let (grid, name, starts, scenario) = setup(map, start, config, overrides)?;
-        let env = ExplorationEnv::new(grid, &name, starts, scenario, action_mode(mode)?)
-            .map_err(value_error)?
-            .observing_candidates(candidates);
+        let (env, _) = exploration_env(map, start, mode, config, overrides, candidates)?;
         let (r, h, w, vl, al) = (
             env.num_robots(),
             env.height(),

@@ -6,12 +6,53 @@
 
 use madenet_map::paper::{paper_map, Corner};
 use madenet_map::Pos;
-use madenet_ros2::{loopback_router, run_continuous_stand_in, run_stand_in, MapFrame, RealRobots};
+use madenet_ros2::{
+    loopback_router, run_continuous_stand_in, run_stand_in, MapFrame, RealRobots, Ros2Options,
+};
 use madenet_runtime::transport::ChannelBus;
-use madenet_runtime::{nodes_of, run_ground_with, run_radio, run_robot, Timeouts};
+use madenet_runtime::{
+    nodes_of, run_ground_with, run_radio, run_robot, LockstepResult, RuntimeError, Timeouts,
+};
 use madenet_sim::{PolicyRegistry, TrialSpec};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
+
+/// Step timeout of every node.
+const TIMEOUTS: Duration = Duration::from_secs(10);
+
+/// Inside `s`: the radio and `spec`'s agents (its policy from the built-in registry) on the
+/// runtime's own nodes, and the world node on [`RealRobots`] over `opts`, run to the trial's
+/// end. A robot held up (a teammate in the cell it was sent to, say) stays after 2 s, as a
+/// real robot that did not get there.
+fn run_team<'scope>(
+    s: &'scope std::thread::Scope<'scope, '_>,
+    opts: &Ros2Options,
+    spec: &TrialSpec,
+) -> Result<LockstepResult, RuntimeError> {
+    let (n, timeouts) = (spec.starts.len(), Timeouts::new(TIMEOUTS));
+    let registry = PolicyRegistry::builtin();
+    let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
+    let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
+    let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
+    s.spawn(move || run_radio(radio, n, radio_bus, timeouts).unwrap());
+    for (i, bus) in buses.enumerate() {
+        let agent = madenet_sim::build_agent(spec, &registry, i).unwrap();
+        s.spawn(move || run_robot(agent, bus, timeouts).unwrap());
+    }
+    let ctx = opts.context().unwrap();
+    let real = RealRobots::new(
+        &ctx,
+        n,
+        MapFrame::of(&spec.map),
+        spec.config.clone(),
+        Duration::from_secs(2),
+        Duration::from_secs(20),
+    )
+    .unwrap();
+    run_ground_with(real, world_bus, timeouts, None, None, |_, _| {
+        std::ops::ControlFlow::Continue(())
+    })
+}
 
 #[test]
 fn nf_agents_explore_a_map_through_ros2_alone() {
@@ -27,8 +68,6 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
     };
     let n = spec.starts.len();
     let ds = spec.config.sensing_range;
-    let registry = PolicyRegistry::builtin();
-    let timeouts = Timeouts::new(Duration::from_secs(10));
     let stop = AtomicBool::new(false);
     let (result, paths) = std::thread::scope(|s| {
         let stacks: Vec<_> = (0..n)
@@ -37,27 +76,7 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
                 s.spawn(move || run_stand_in(opts, i, truth, start, ds, stop).unwrap())
             })
             .collect();
-        let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
-        let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
-        let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
-        s.spawn(move || run_radio(radio, n, radio_bus, timeouts).unwrap());
-        for (i, bus) in buses.enumerate() {
-            let agent = madenet_sim::build_agent(&spec, &registry, i).unwrap();
-            s.spawn(move || run_robot(agent, bus, timeouts).unwrap());
-        }
-        let ctx = opts.context().unwrap();
-        let real = RealRobots::new(
-            &ctx,
-            n,
-            MapFrame::of(&truth),
-            spec.config.clone(),
-            Duration::from_secs(2),
-            Duration::from_secs(20),
-        )
-        .unwrap();
-        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {
-            std::ops::ControlFlow::Continue(())
-        });
+        let result = run_team(s, &opts, &spec);
         stop.store(true, Ordering::Relaxed);
         let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
         (result, paths)
@@ -111,7 +130,6 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
         policy: "nf".into(),
         seed: 3,
     };
-    let n = spec.starts.len();
     let scene = Arc::new(Scene::from_grid(&truth, "room"));
     let world = ContinuousWorld::new(
         scene,
@@ -121,36 +139,13 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
         spec.seed,
     )
     .unwrap();
-    let registry = PolicyRegistry::builtin();
-    let timeouts = Timeouts::new(Duration::from_secs(10));
     let stop = AtomicBool::new(false);
     let (result, run) = std::thread::scope(|s| {
         let (opts, stop) = (&opts, &stop);
-        // 20 simulated seconds per second: a cell's drive in a fraction of the step timeout.
+        // 20 simulated seconds per second: a cell's drive in a fraction of the step timeout; a
+        // robot held up 2 s by the world node is held up 40 s simulated.
         let team = s.spawn(move || run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
-        let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
-        let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
-        let radio = madenet_world::Radio::new(&spec.config, n, spec.seed);
-        s.spawn(move || run_radio(radio, n, radio_bus, timeouts).unwrap());
-        for (i, bus) in buses.enumerate() {
-            let agent = madenet_sim::build_agent(&spec, &registry, i).unwrap();
-            s.spawn(move || run_robot(agent, bus, timeouts).unwrap());
-        }
-        let ctx = opts.context().unwrap();
-        let real = RealRobots::new(
-            &ctx,
-            n,
-            MapFrame::of(&truth),
-            spec.config.clone(),
-            // A robot held up by a teammate (both sent into one cell) stays after 2 s (40 s
-            // simulated), as a real robot that did not get there.
-            Duration::from_secs(2),
-            Duration::from_secs(20),
-        )
-        .unwrap();
-        let result = run_ground_with(real, world_bus, timeouts, None, None, |_, _| {
-            std::ops::ControlFlow::Continue(())
-        });
+        let result = run_team(s, opts, &spec);
         stop.store(true, Ordering::Relaxed);
         (result, team.join().unwrap())
     });

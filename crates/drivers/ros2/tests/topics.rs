@@ -320,11 +320,13 @@ fn a_finer_rotated_robot_map_reads_back_into_the_same_cells() {
     // An obstacle cell as SLAM maps it, its surface seen from one side: one row of 4 pixels
     // occupied, the rest unknown. Read over half its pixels it is an obstacle (4 > 25 % of
     // 8), not unknown for ever (a frontier beside every box a robot drives by).
+    // The top-left fine pixel of the first cell whose coarse value is `value`.
+    let first_cell = |value, what: &str| {
+        let cell = (0..h * w).find(|&i| coarse.data[i] == value).expect(what);
+        ((cell / w) * 4, (cell % w) * 4)
+    };
     let mut surface = fine.clone();
-    let obstacle = (0..h * w)
-        .find(|&i| coarse.data[i] == 100)
-        .expect("an obstacle cell");
-    let (r0, c0) = ((obstacle / w) * 4, (obstacle % w) * 4);
+    let (r0, c0) = first_cell(100, "an obstacle cell");
     for r in 0..4 {
         for c in 0..4 {
             surface.data[(r0 + r) * w * 4 + c0 + c] = if r == 0 { 100 } else { -1 };
@@ -337,10 +339,7 @@ fn a_finer_rotated_robot_map_reads_back_into_the_same_cells() {
     );
     // A glimpse of a free cell (3 of 16 pixels seen) stays unknown.
     let mut glimpse = fine.clone();
-    let free = (0..h * w)
-        .find(|&i| coarse.data[i] == 0)
-        .expect("a free cell");
-    let (r0, c0) = ((free / w) * 4, (free % w) * 4);
+    let (r0, c0) = first_cell(0, "a free cell");
     for k in 3..16 {
         glimpse.data[(r0 + k / 4) * w * 4 + c0 + k % 4] = -1;
     }

@@ -39,6 +39,16 @@ fn trials_without_time(dir: &std::path::Path) -> Vec<String> {
         .collect()
 }
 
+/// `report` contains every one of `needles`.
+fn assert_report_has(report: &str, needles: &[&str]) {
+    for needle in needles {
+        assert!(
+            report.contains(needle),
+            "report lacks {needle:?}:\n{report}"
+        );
+    }
+}
+
 #[test]
 fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     let cfg = tiny();
@@ -97,24 +107,22 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
         );
     }
     let report = std::fs::read_to_string(&r.report).unwrap();
-    for needle in [
-        "## 14 × 14",
-        "## 18 × 18",
-        "Friedman χ²",
-        "1→2",
-        "2→3",
-        "## spread against the others",
-        "| nf |",
-        "## Headroom: the known-map reference and the lower bound",
-        "| oracle-known-map |",
-        "| lower bound |",
-        "that spread closes: nf",
-    ] {
-        assert!(
-            report.contains(needle),
-            "report lacks {needle:?}:\n{report}"
-        );
-    }
+    assert_report_has(
+        &report,
+        &[
+            "## 14 × 14",
+            "## 18 × 18",
+            "Friedman χ²",
+            "1→2",
+            "2→3",
+            "## spread against the others",
+            "| nf |",
+            "## Headroom: the known-map reference and the lower bound",
+            "| oracle-known-map |",
+            "| lower bound |",
+            "that spread closes: nf",
+        ],
+    );
     for f in [
         "cells.csv",
         "fig7_scalability.png",
@@ -253,18 +261,16 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     };
     assert!(et(1) > et(3), "1 robot {} s vs 3 robots {} s", et(1), et(3));
     let report = std::fs::read_to_string(&r.report).unwrap();
-    for needle in [
-        "(continuous world)",
-        "Mean ET (s)",
-        "robot–obstacle",
-        "## 12 × 12 (time cap, s 1800)",
-        "Friedman χ²",
-    ] {
-        assert!(
-            report.contains(needle),
-            "report lacks {needle:?}:\n{report}"
-        );
-    }
+    assert_report_has(
+        &report,
+        &[
+            "(continuous world)",
+            "Mean ET (s)",
+            "robot–obstacle",
+            "## 12 × 12 (time cap, s 1800)",
+            "Friedman χ²",
+        ],
+    );
     let cells = std::fs::read_to_string(out.join("cells.csv")).unwrap();
     assert!(cells.starts_with("side,team,method,trials,completed,et_s,ttd_m,noli,collisions"));
     // The grid twin: the same trials (keys) in the grid world, beside them in the report.
@@ -276,18 +282,16 @@ fn a_tiny_continuous_study_reports_seconds_and_collisions_and_resumes_to_the_sam
     a.sort();
     b.sort();
     assert_eq!((a.len(), &a), (12, &b));
-    for needle in [
-        "## Grid and continuous worlds on the same maps",
-        "- grid: ",
-        "- continuous: ",
-        "| 12 | nf | ",
-        "| all | nf | ",
-    ] {
-        assert!(
-            report.contains(needle),
-            "report lacks {needle:?}:\n{report}"
-        );
-    }
+    assert_report_has(
+        &report,
+        &[
+            "## Grid and continuous worlds on the same maps",
+            "- grid: ",
+            "- continuous: ",
+            "| 12 | nf | ",
+            "| all | nf | ",
+        ],
+    );
     let grid_full = trials_without_time(&out.join("grid"));
     // Resumed after losing trials: the same rows.
     let full = trials_without_time(&out);
@@ -381,30 +385,30 @@ fn bad_designs_are_refused_naming_the_field() {
     }
 }
 
+/// The configuration shipped as `configs/<name>`.
+fn shipped(name: &str) -> ScaleConfig {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../configs")
+        .join(name);
+    ScaleConfig::from_toml_file(&path).unwrap()
+}
+
 #[test]
 fn shipped_scale_config_is_the_default() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../configs/scale.toml");
-    assert_eq!(
-        ScaleConfig::from_toml_file(&path).unwrap(),
-        ScaleConfig::default()
-    );
+    assert_eq!(shipped("scale.toml"), ScaleConfig::default());
 }
 
 #[test]
 fn shipped_continuous_scale_config_is_the_continuous_default() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../configs/scale-continuous.toml");
     assert_eq!(
-        ScaleConfig::from_toml_file(&path).unwrap(),
+        shipped("scale-continuous.toml"),
         ScaleConfig::continuous_default()
     );
 }
 
 #[test]
 fn heldout_large_config_is_the_default_study_on_maps_of_its_own() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../configs/heldout-large.toml");
-    let cfg = ScaleConfig::from_toml_file(&path).unwrap();
+    let cfg = shipped("heldout-large.toml");
     cfg.validate(&registry()).unwrap();
     // Everything but the design's extent and the maps' seed is the default study's, so the two
     // reports read alike; the maps are drawn from a seed the default grid does not use.

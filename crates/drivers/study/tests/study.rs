@@ -69,8 +69,14 @@ struct Table {
 
 impl Table {
     fn read(path: &Path) -> Table {
-        let mut rdr =
-            csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        Table::parse(
+            csv::Reader::from_path(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+        )
+    }
+    fn read_str(text: &str) -> Table {
+        Table::parse(csv::Reader::from_reader(text.as_bytes()))
+    }
+    fn parse<R: std::io::Read>(mut rdr: csv::Reader<R>) -> Table {
         let header = rdr.headers().unwrap().iter().map(String::from).collect();
         let rows = rdr
             .records()
@@ -723,6 +729,27 @@ fn assert_curves_close(got: &str, want: &str) {
     }
 }
 
+/// `trials.csv` and `curves.jsonl` of the study in `out`, as written.
+fn outputs(out: &Path) -> (String, String) {
+    (read(out.join("trials.csv")), read(out.join("curves.jsonl")))
+}
+
+/// Runs `cfg` uninterrupted into `out`: its [`outputs`].
+fn run_full(cfg: &StudyConfig, out: &Path) -> (String, String) {
+    run_ok(cfg, out, false);
+    outputs(out)
+}
+
+/// The study in `out` holds the trials and curves of an uninterrupted run's `trials_full` and
+/// `curves_full`, but for the wall-clock columns (and the last bit of a float in the curves).
+fn assert_same_results(out: &Path, trials_full: &str, curves_full: &str) {
+    assert_eq!(
+        deterministic_trials(out),
+        Table::read_str(trials_full).without(&WALL_CLOCK)
+    );
+    assert_curves_close(&read(out.join("curves.jsonl")), curves_full);
+}
+
 /// The first `k` lines of `text` (with their newlines).
 fn first_lines(text: &str, k: usize) -> String {
     text.split_inclusive('\n').take(k).collect()
@@ -736,8 +763,7 @@ fn interrupted_study_resumes_with_only_complete_consistent_trials() {
     let total = 2 * 2 * 2 * 2 * 2;
     let (_, first, _) = run_ok(&cfg, out, false);
     assert_eq!(first.len(), total);
-    let trials_full = read(out.join("trials.csv"));
-    let curves_full = read(out.join("curves.jsonl"));
+    let (trials_full, curves_full) = outputs(out);
     let summary_full = Table::read(&out.join("summary.csv")).without(&SUMMARY_CT);
     let stats_full = read(out.join("statistics.csv"));
 
@@ -773,11 +799,7 @@ fn interrupted_study_resumes_with_only_complete_consistent_trials() {
     assert_eq!(calls.iter().map(|c| c.0).max(), Some(total));
 
     // Same results as the uninterrupted run, but for the wall-clock columns …
-    assert_eq!(
-        deterministic_trials(out),
-        Table::read_str(&trials_full).without(&WALL_CLOCK)
-    );
-    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
+    assert_same_results(out, &trials_full, &curves_full);
     assert_eq!(
         Table::read(&out.join("summary.csv")).without(&SUMMARY_CT),
         summary_full
@@ -807,9 +829,7 @@ fn resume_drops_a_row_torn_inside_its_last_field() {
     let out = dir.path();
     let cfg = small(&["nf"], &[1.0], 2);
     let total = 2 * 2 * 2;
-    run_ok(&cfg, out, false);
-    let trials_full = read(out.join("trials.csv"));
-    let curves_full = read(out.join("curves.jsonl"));
+    let (trials_full, curves_full) = run_full(&cfg, out);
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     // The first row whose last field (to_100) is not empty.
     let i = (1..lines.len())
@@ -828,23 +848,7 @@ fn resume_drops_a_row_torn_inside_its_last_field() {
         Some(&(i - 1, total)),
         "the torn row is run again: {calls:?}"
     );
-    assert_eq!(
-        deterministic_trials(out),
-        Table::read_str(&trials_full).without(&WALL_CLOCK)
-    );
-    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
-}
-
-impl Table {
-    fn read_str(text: &str) -> Table {
-        let mut rdr = csv::Reader::from_reader(text.as_bytes());
-        let header = rdr.headers().unwrap().iter().map(String::from).collect();
-        let rows = rdr
-            .records()
-            .map(|r| r.unwrap().iter().map(String::from).collect())
-            .collect();
-        Table { header, rows }
-    }
+    assert_same_results(out, &trials_full, &curves_full);
 }
 
 #[test]
@@ -853,9 +857,7 @@ fn resume_ignores_records_outside_the_plan_and_garbage_lines() {
     let out = dir.path();
     let cfg = small(&["nf"], &[1.0], 1);
     let total = 2 * 2;
-    run_ok(&cfg, out, false);
-    let trials_full = read(out.join("trials.csv"));
-    let curves_full = read(out.join("curves.jsonl"));
+    let (trials_full, curves_full) = run_full(&cfg, out);
     // A line of garbage in each file, and a well-formed record of a trial this study does not plan.
     let lines: Vec<&str> = trials_full.split_inclusive('\n').collect();
     let alien = lines[1].replacen("nf,", "ub,", 1);
@@ -878,11 +880,7 @@ fn resume_ignores_records_outside_the_plan_and_garbage_lines() {
     assert_eq!(calls.first(), Some(&(1, total)), "{calls:?}");
     assert_eq!(outcomes.len(), total);
     assert!(outcomes.iter().all(|o| o.row.key.method == "nf"));
-    assert_eq!(
-        deterministic_trials(out),
-        Table::read_str(&trials_full).without(&WALL_CLOCK)
-    );
-    assert_curves_close(&read(out.join("curves.jsonl")), &curves_full);
+    assert_same_results(out, &trials_full, &curves_full);
 }
 
 #[test]

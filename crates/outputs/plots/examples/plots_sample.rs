@@ -161,25 +161,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         name: name.into(),
         points: v.iter().enumerate().map(|(e, &y)| (e as f64, y)).collect(),
     };
+    // One panel per quantity: its per-episode values and their EWMA.
+    let panel = |title: &str, y_label: &str, v: &[f64]| LinePanel {
+        title: title.into(),
+        x_label: "Episode".into(),
+        y_label: y_label.into(),
+        series: vec![curve("per episode", v), curve("EWMA (0.9)", &ewma(v, 0.9))],
+    };
     let fig2 = [
-        LinePanel {
-            title: "Team reward".into(),
-            x_label: "Episode".into(),
-            y_label: "Team reward".into(),
-            series: vec![
-                curve("per episode", &reward),
-                curve("EWMA (0.9)", &ewma(&reward, 0.9)),
-            ],
-        },
-        LinePanel {
-            title: "Steps per episode".into(),
-            x_label: "Episode".into(),
-            y_label: "Steps".into(),
-            series: vec![
-                curve("per episode", &steps),
-                curve("EWMA (0.9)", &ewma(&steps, 0.9)),
-            ],
-        },
+        panel("Team reward", "Team reward", &reward),
+        panel("Steps per episode", "Steps", &steps),
     ];
     for p in line_panels(&out.join("fig2"), &fig2, 2)? {
         println!("{}", p.display());

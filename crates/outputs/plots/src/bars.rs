@@ -4,7 +4,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::output::{s, Panels, Target};
-use crate::style::{colour, font, AXIS_DESC_PX, TICK_PX, TITLE_PX};
+use crate::style::{axes_look, colour, font, TITLE_PX};
 use crate::ticks::{nice, tick_label, y_label_area, CategoryAxis};
 use crate::BarPanel;
 
@@ -69,20 +69,17 @@ fn draw_bar_panel<DB: DrawingBackend>(
             String::new()
         }
     };
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_label_formatter(&x_fmt)
-        .y_desc(p.y_label.as_str())
-        .y_label_formatter(&tick_label)
-        .y_max_light_lines(1)
-        .label_style(font(TICK_PX))
-        .axis_desc_style(font(AXIS_DESC_PX))
-        .bold_line_style(RGBColor(0xD0, 0xD0, 0xD0).stroke_width(1))
-        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE).stroke_width(1))
-        .axis_style(BLACK.stroke_width(1))
-        .draw()
-        .map_err(s)?;
+    axes_look(
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_label_formatter(&x_fmt)
+            .y_desc(p.y_label.as_str())
+            .y_label_formatter(&tick_label)
+            .y_max_light_lines(1),
+    )
+    .draw()
+    .map_err(s)?;
 
     let group_w = 0.8;
     let bar_w = group_w / n_ser as f64;

@@ -207,28 +207,17 @@ pub fn bar_panels(
     panels: &[BarPanel],
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
-    let png = with_ext(stem, "png");
-    let invalid = |reason| PlotError::InvalidInput {
-        path: png.clone(),
-        reason,
-    };
-    validate_bars(panels, cols).map_err(invalid)?;
-    let names = legend_names(
+    write_grid(
+        stem,
+        cols,
+        validate_bars(panels, cols),
         panels
             .iter()
             .map(|p| p.series.iter().map(|s| s.name.as_str())),
+        LegendKind::Bar,
+        |n| vec![false; n],
+        |fig| write_figure(stem, fig, &Bars(panels)),
     )
-    .map_err(invalid)?;
-    let fig = Figure {
-        colours: (0..names.len()).collect(),
-        names: &names,
-        faint: vec![false; names.len()],
-        kind: LegendKind::Bar,
-        n_panels: panels.len(),
-        cols,
-    };
-    fig.check_size().map_err(invalid)?;
-    write_figure(stem, &fig, &Bars(panels))
 }
 
 /// Draws line panels in a grid (rows × `cols`, rows as needed) into
@@ -256,38 +245,67 @@ pub fn line_panels(
     panels: &[LinePanel],
     cols: usize,
 ) -> Result<Vec<PathBuf>, PlotError> {
+    write_grid(
+        stem,
+        cols,
+        validate_lines(panels, cols),
+        panels
+            .iter()
+            .map(|p| p.series.iter().map(|s| s.name.as_str())),
+        LegendKind::Line,
+        |n| faint_series(panels, n),
+        |fig| {
+            let looks = panels
+                .iter()
+                .map(|p| {
+                    jagged_series(p)
+                        .into_iter()
+                        .enumerate()
+                        .map(|(colour, faint)| Look { colour, faint })
+                        .collect()
+                })
+                .collect();
+            write_figure(stem, fig, &Lines { panels, looks })
+        },
+    )
+}
+
+/// What [`bar_panels`] and [`line_panels`] share: after `checked` (the panels' own input
+/// checks) and a check that the panels' `series` names agree (one iterator of names per
+/// panel), both as input errors naming `stem.png`, lays out a grid of `cols` columns with one
+/// legend entry per series, series `i` in colour `i`, `faint(n)` marking which of the `n`
+/// entries are faint, and hands it to `write` if it is not too large.
+fn write_grid<'a, P, S>(
+    stem: &Path,
+    cols: usize,
+    checked: Result<(), String>,
+    series: P,
+    kind: LegendKind,
+    faint: impl FnOnce(usize) -> Vec<bool>,
+    write: impl FnOnce(&Figure<'_>) -> Result<Vec<PathBuf>, PlotError>,
+) -> Result<Vec<PathBuf>, PlotError>
+where
+    P: ExactSizeIterator<Item = S>,
+    S: Iterator<Item = &'a str>,
+{
     let png = with_ext(stem, "png");
     let invalid = |reason| PlotError::InvalidInput {
         path: png.clone(),
         reason,
     };
-    validate_lines(panels, cols).map_err(invalid)?;
-    let names = legend_names(
-        panels
-            .iter()
-            .map(|p| p.series.iter().map(|s| s.name.as_str())),
-    )
-    .map_err(invalid)?;
+    checked.map_err(invalid)?;
+    let n_panels = series.len();
+    let names = legend_names(series).map_err(invalid)?;
     let fig = Figure {
         colours: (0..names.len()).collect(),
-        faint: faint_series(panels, names.len()),
+        faint: faint(names.len()),
         names: &names,
-        kind: LegendKind::Line,
-        n_panels: panels.len(),
+        kind,
+        n_panels,
         cols,
     };
     fig.check_size().map_err(invalid)?;
-    let looks = panels
-        .iter()
-        .map(|p| {
-            jagged_series(p)
-                .into_iter()
-                .enumerate()
-                .map(|(colour, faint)| Look { colour, faint })
-                .collect()
-        })
-        .collect();
-    write_figure(stem, &fig, &Lines { panels, looks })
+    write(&fig)
 }
 
 /// How [`styled_line_panels`] draws the series of one name, and that

@@ -5,7 +5,7 @@ use plotters::prelude::*;
 
 use crate::layout::{PANEL_H, PANEL_W};
 use crate::output::{s, Panels, Target};
-use crate::style::{colour, draw_marker, font, AXIS_DESC_PX, TICK_PX, TITLE_PX};
+use crate::style::{axes_look, colour, draw_marker, font, TITLE_PX};
 use crate::ticks::{tick_label, y_label_area};
 use crate::LinePanel;
 
@@ -205,21 +205,18 @@ fn draw_line_panel<DB: DrawingBackend>(
     } else {
         10
     };
-    chart
-        .configure_mesh()
-        .x_labels(x_labels)
-        .x_desc(p.x_label.as_str())
-        .y_desc(p.y_label.as_str())
-        .x_label_formatter(&tick_label)
-        .y_label_formatter(&tick_label)
-        .max_light_lines(1)
-        .label_style(font(TICK_PX))
-        .axis_desc_style(font(AXIS_DESC_PX))
-        .bold_line_style(RGBColor(0xD0, 0xD0, 0xD0).stroke_width(1))
-        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE).stroke_width(1))
-        .axis_style(BLACK.stroke_width(1))
-        .draw()
-        .map_err(s)?;
+    axes_look(
+        chart
+            .configure_mesh()
+            .x_labels(x_labels)
+            .x_desc(p.x_label.as_str())
+            .y_desc(p.y_label.as_str())
+            .x_label_formatter(&tick_label)
+            .y_label_formatter(&tick_label)
+            .max_light_lines(1),
+    )
+    .draw()
+    .map_err(s)?;
 
     let plot = chart.plotting_area();
     let screen = plot.use_screen_coord();

@@ -3,6 +3,7 @@
 use std::path::Path;
 use std::sync::OnceLock;
 
+use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -56,6 +57,18 @@ pub(crate) fn text_width(text: &str, size: f64) -> i32 {
         .box_size(text)
         .map(|(w, _)| w as i32)
         .unwrap_or((text.chars().count() as f64 * size * 0.6) as i32)
+}
+
+/// The look every panel's axes share: tick and axis-label fonts, light grey grid lines,
+/// black axes.
+pub(crate) fn axes_look<'m, 'a, 'b, X: Ranged, Y: Ranged, DB: DrawingBackend>(
+    mesh: &'m mut MeshStyle<'a, 'b, X, Y, DB>,
+) -> &'m mut MeshStyle<'a, 'b, X, Y, DB> {
+    mesh.label_style::<TextStyle<'b>>(font(TICK_PX))
+        .axis_desc_style::<TextStyle<'b>>(font(AXIS_DESC_PX))
+        .bold_line_style(RGBColor(0xD0, 0xD0, 0xD0).stroke_width(1))
+        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE).stroke_width(1))
+        .axis_style(BLACK.stroke_width(1))
 }
 
 pub(crate) fn font(size: f64) -> TextStyle<'static> {

@@ -2,101 +2,111 @@
 
 use crate::{BarPanel, LinePanel, MAX_ABS_VALUE};
 
-fn check_cols(n_panels: usize, cols: usize) -> Result<(), String> {
-    if n_panels == 0 {
+/// Checks that there are panels and columns, then each panel with `check`, whose complaint
+/// is prefixed with the panel's index and `title`.
+fn check_panels<P>(
+    panels: &[P],
+    cols: usize,
+    title: impl Fn(&P) -> &str,
+    check: impl Fn(&P) -> Result<(), String>,
+) -> Result<(), String> {
+    if panels.is_empty() {
         return Err("no panels given".into());
     }
     if cols == 0 {
         return Err("cols must be at least 1".into());
     }
+    for (pi, p) in panels.iter().enumerate() {
+        check(p).map_err(|what| format!("panel {pi} ({:?}): {what}", title(p)))?;
+    }
     Ok(())
 }
 
 pub(crate) fn validate_bars(panels: &[BarPanel], cols: usize) -> Result<(), String> {
-    check_cols(panels.len(), cols)?;
-    for (pi, p) in panels.iter().enumerate() {
-        let at = |what: String| format!("panel {pi} ({:?}): {what}", p.title);
-        if p.categories.is_empty() {
-            return Err(at("no categories".into()));
+    check_panels(panels, cols, |p| &p.title, check_bar_panel)
+}
+
+/// What is wrong with one panel, if anything.
+fn check_bar_panel(p: &BarPanel) -> Result<(), String> {
+    if p.categories.is_empty() {
+        return Err("no categories".into());
+    }
+    if p.series.is_empty() {
+        return Err("no series".into());
+    }
+    for s in &p.series {
+        if s.means.len() != p.categories.len() {
+            return Err(format!(
+                "series {:?} has {} means for {} categories",
+                s.name,
+                s.means.len(),
+                p.categories.len()
+            ));
         }
-        if p.series.is_empty() {
-            return Err(at("no series".into()));
+        if !s.errors.is_empty() && s.errors.len() != s.means.len() {
+            return Err(format!(
+                "series {:?} has {} errors for {} means",
+                s.name,
+                s.errors.len(),
+                s.means.len()
+            ));
         }
-        for s in &p.series {
-            if s.means.len() != p.categories.len() {
-                return Err(at(format!(
-                    "series {:?} has {} means for {} categories",
-                    s.name,
-                    s.means.len(),
-                    p.categories.len()
-                )));
-            }
-            if !s.errors.is_empty() && s.errors.len() != s.means.len() {
-                return Err(at(format!(
-                    "series {:?} has {} errors for {} means",
-                    s.name,
-                    s.errors.len(),
-                    s.means.len()
-                )));
-            }
-            if let Some(v) = s.means.iter().find(|v| !v.is_finite()) {
-                return Err(at(format!(
-                    "series {:?} has a non-finite mean ({v})",
-                    s.name
-                )));
-            }
-            if let Some(v) = s.errors.iter().find(|v| !v.is_finite() || **v < 0.0) {
-                return Err(at(format!(
-                    "series {:?} has an error that is negative or not finite ({v})",
-                    s.name
-                )));
-            }
-            let too_big =
-                s.means.iter().enumerate().find(|&(j, m)| {
-                    m.abs() + s.errors.get(j).copied().unwrap_or(0.0) > MAX_ABS_VALUE
-                });
-            if let Some((_, v)) = too_big {
-                return Err(at(format!(
-                    "series {:?} has a bar beyond ±{MAX_ABS_VALUE:e} ({v:e} with its error)",
-                    s.name
-                )));
-            }
+        if let Some(v) = s.means.iter().find(|v| !v.is_finite()) {
+            return Err(format!("series {:?} has a non-finite mean ({v})", s.name));
+        }
+        if let Some(v) = s.errors.iter().find(|v| !v.is_finite() || **v < 0.0) {
+            return Err(format!(
+                "series {:?} has an error that is negative or not finite ({v})",
+                s.name
+            ));
+        }
+        let too_big = s
+            .means
+            .iter()
+            .enumerate()
+            .find(|&(j, m)| m.abs() + s.errors.get(j).copied().unwrap_or(0.0) > MAX_ABS_VALUE);
+        if let Some((_, v)) = too_big {
+            return Err(format!(
+                "series {:?} has a bar beyond ±{MAX_ABS_VALUE:e} ({v:e} with its error)",
+                s.name
+            ));
         }
     }
     Ok(())
 }
 
 pub(crate) fn validate_lines(panels: &[LinePanel], cols: usize) -> Result<(), String> {
-    check_cols(panels.len(), cols)?;
-    for (pi, p) in panels.iter().enumerate() {
-        let at = |what: String| format!("panel {pi} ({:?}): {what}", p.title);
-        if p.series.is_empty() {
-            return Err(at("no series".into()));
+    check_panels(panels, cols, |p| &p.title, check_line_panel)
+}
+
+/// What is wrong with one panel, if anything.
+fn check_line_panel(p: &LinePanel) -> Result<(), String> {
+    if p.series.is_empty() {
+        return Err("no series".into());
+    }
+    for s in &p.series {
+        if s.points.is_empty() {
+            return Err(format!("series {:?} has no points", s.name));
         }
-        for s in &p.series {
-            if s.points.is_empty() {
-                return Err(at(format!("series {:?} has no points", s.name)));
-            }
-            if let Some((x, y)) = s
-                .points
-                .iter()
-                .find(|(x, y)| !x.is_finite() || !y.is_finite())
-            {
-                return Err(at(format!(
-                    "series {:?} has a non-finite point ({x}, {y})",
-                    s.name
-                )));
-            }
-            let too_big = s
-                .points
-                .iter()
-                .find(|(x, y)| x.abs() > MAX_ABS_VALUE || y.abs() > MAX_ABS_VALUE);
-            if let Some((x, y)) = too_big {
-                return Err(at(format!(
-                    "series {:?} has a point beyond ±{MAX_ABS_VALUE:e} ({x:e}, {y:e})",
-                    s.name
-                )));
-            }
+        if let Some((x, y)) = s
+            .points
+            .iter()
+            .find(|(x, y)| !x.is_finite() || !y.is_finite())
+        {
+            return Err(format!(
+                "series {:?} has a non-finite point ({x}, {y})",
+                s.name
+            ));
+        }
+        let too_big = s
+            .points
+            .iter()
+            .find(|(x, y)| x.abs() > MAX_ABS_VALUE || y.abs() > MAX_ABS_VALUE);
+        if let Some((x, y)) = too_big {
+            return Err(format!(
+                "series {:?} has a point beyond ±{MAX_ABS_VALUE:e} ({x:e}, {y:e})",
+                s.name
+            ));
         }
     }
     Ok(())

@@ -107,16 +107,14 @@ pub fn continuous_picture(trial: &ContinuousTrial, scale: f64) -> RgbaImage {
         );
         line(&mut img, ((x, y), head), 2, [0, 0, 0], None);
     }
-    text(
+    panel_title(
         &mut img,
-        (o.0 as i32, GAP as i32),
+        o,
         &format!(
             "world  t = {:.0} s  explored {:.0} %",
             w.time(),
             100.0 * w.explored_fraction()
         ),
-        1,
-        TITLE_FG,
     );
     // Panel 1: the team's coarse map (every robot's own reading, merged).
     let o = origin(1);
@@ -134,13 +132,7 @@ pub fn continuous_picture(trial: &ContinuousTrial, scale: f64) -> RgbaImage {
         let (x, y) = to_px(o, p.x, p.y);
         draw_filled_circle_mut(&mut img, (x, y), 4, rgba(robot_rgb(i)));
     }
-    text(
-        &mut img,
-        (o.0 as i32, GAP as i32),
-        "team map (1 m cells)",
-        1,
-        TITLE_FG,
-    );
+    panel_title(&mut img, o, "team map (1 m cells)");
     // Panels 2..: each robot's occupancy probabilities.
     for i in 0..n {
         let o = origin(2 + i as u32);
@@ -157,13 +149,7 @@ pub fn continuous_picture(trial: &ContinuousTrial, scale: f64) -> RgbaImage {
         let p = w.pose(i);
         let (x, y) = to_px(o, p.x, p.y);
         draw_filled_circle_mut(&mut img, (x, y), 4, rgba(robot_rgb(i)));
-        text(
-            &mut img,
-            (o.0 as i32, GAP as i32),
-            &format!("robot {i} map"),
-            1,
-            TITLE_FG,
-        );
+        panel_title(&mut img, o, &format!("robot {i} map"));
     }
     img
 }
@@ -175,6 +161,11 @@ pub fn save_continuous_png(
     path: &Path,
 ) -> Result<(), RenderError> {
     save_image_png(&continuous_picture(trial, scale), path)
+}
+
+/// Writes a panel's title in the gap above the panel at `o`.
+fn panel_title(img: &mut RgbaImage, o: (u32, u32), title: &str) {
+    text(img, (o.0 as i32, GAP as i32), title, 1, TITLE_FG);
 }
 
 /// Fills a `size` panel at `o` from a `cols` × `rows` raster by nearest neighbour.

@@ -57,6 +57,15 @@ fn frame20() -> Frame {
     }
 }
 
+/// [`frame20`], rendered with the default options, and its layout.
+fn rendered20() -> (Frame, image::RgbaImage, Layout) {
+    let frame = frame20();
+    let opts = RenderOptions::default();
+    let img = render(&frame, &opts);
+    let layout = Layout::for_frame(&frame, &opts);
+    (frame, img, layout)
+}
+
 fn px(img: &image::RgbaImage, (x, y): (u32, u32)) -> Rgba<u8> {
     *img.get_pixel(x, y)
 }
@@ -88,10 +97,7 @@ fn dimensions_of_a_20x20_frame() {
 
 #[test]
 fn robot_centre_has_robot_colour_on_both_panels() {
-    let frame = frame20();
-    let opts = RenderOptions::default();
-    let img = render(&frame, &opts);
-    let layout = Layout::for_frame(&frame, &opts);
+    let (frame, img, layout) = rendered20();
     for (i, r) in frame.robots.iter().enumerate() {
         for panel in [Panel::Truth, Panel::Team] {
             let c = layout.cell_center(panel, r.pos).unwrap();
@@ -113,10 +119,7 @@ fn robot_centre_has_robot_colour_on_both_panels() {
 
 #[test]
 fn unknown_is_gray_in_team_panel_and_known_cells_are_white_or_black() {
-    let frame = frame20();
-    let opts = RenderOptions::default();
-    let img = render(&frame, &opts);
-    let layout = Layout::for_frame(&frame, &opts);
+    let (_, img, layout) = rendered20();
     let unknown = layout.cell_center(Panel::Team, Pos::new(15, 15)).unwrap();
     let p = px(&img, unknown);
     assert!(

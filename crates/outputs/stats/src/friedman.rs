@@ -3,7 +3,7 @@
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use crate::rank::average_ranks;
-use crate::StatsError;
+use crate::{check_blocks, StatsError};
 
 /// Result of [`friedman`].
 #[derive(Clone, Debug, PartialEq)]
@@ -48,33 +48,8 @@ pub struct Friedman {
 /// [`StatsError::NaN`] if any value is NaN. Infinities are allowed (they rank
 /// like any other value).
 pub fn friedman(groups: &[&[f64]]) -> Result<Friedman, StatsError> {
-    const MIN_GROUPS: usize = 3;
     let k = groups.len();
-    if k < MIN_GROUPS {
-        return Err(StatsError::TooFewGroups {
-            got: k,
-            min: MIN_GROUPS,
-        });
-    }
-    let n = groups[0].len();
-    for (g, values) in groups.iter().enumerate() {
-        if values.len() != n {
-            return Err(StatsError::UnequalLengths {
-                what: format!("group {g}"),
-                expected: n,
-                got: values.len(),
-            });
-        }
-        if let Some(b) = values.iter().position(|v| v.is_nan()) {
-            return Err(StatsError::NaN {
-                what: format!("group {g}"),
-                position: b,
-            });
-        }
-    }
-    if n == 0 {
-        return Err(StatsError::TooFewBlocks { got: 0, min: 1 });
-    }
+    let n = check_blocks(groups, 3, |g| format!("group {g}"))?;
 
     let mut rank_sums = vec![0.0; k];
     let mut ties = 0.0;

@@ -170,28 +170,7 @@ pub fn pairwise_wilcoxon(
         });
     }
     let k = groups.len();
-    if k < 2 {
-        return Err(StatsError::TooFewGroups { got: k, min: 2 });
-    }
-    let n = groups[0].len();
-    for (name, values) in names.iter().zip(groups) {
-        if values.len() != n {
-            return Err(StatsError::UnequalLengths {
-                what: format!("group {name:?}"),
-                expected: n,
-                got: values.len(),
-            });
-        }
-        if let Some(position) = values.iter().position(|v| v.is_nan()) {
-            return Err(StatsError::NaN {
-                what: format!("group {name:?}"),
-                position,
-            });
-        }
-    }
-    if n == 0 {
-        return Err(StatsError::TooFewBlocks { got: 0, min: 1 });
-    }
+    check_blocks(groups, 2, |g| format!("group {:?}", names[g]))?;
 
     let comparisons = k * (k - 1) / 2;
     let mut out = Vec::with_capacity(comparisons);
@@ -217,6 +196,43 @@ pub fn pairwise_wilcoxon(
         }
     }
     Ok(out)
+}
+
+/// Checks blocked samples, `groups[g][b]` the value of group `g` in block `b`: at least
+/// `min_groups` groups, all of one length, no NaN, at least one block. `label(g)` names group
+/// `g` in the errors. Returns the number of blocks.
+pub(crate) fn check_blocks(
+    groups: &[&[f64]],
+    min_groups: usize,
+    label: impl Fn(usize) -> String,
+) -> Result<usize, StatsError> {
+    let k = groups.len();
+    if k < min_groups {
+        return Err(StatsError::TooFewGroups {
+            got: k,
+            min: min_groups,
+        });
+    }
+    let n = groups[0].len();
+    for (g, values) in groups.iter().enumerate() {
+        if values.len() != n {
+            return Err(StatsError::UnequalLengths {
+                what: label(g),
+                expected: n,
+                got: values.len(),
+            });
+        }
+        if let Some(position) = values.iter().position(|v| v.is_nan()) {
+            return Err(StatsError::NaN {
+                what: label(g),
+                position,
+            });
+        }
+    }
+    if n == 0 {
+        return Err(StatsError::TooFewBlocks { got: 0, min: 1 });
+    }
+    Ok(n)
 }
 
 #[cfg(test)]

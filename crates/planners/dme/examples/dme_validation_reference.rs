@@ -19,7 +19,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let device = Device::flex().autodiff();
     device.seed(cfg.seed);
     let nets = Maddpg::new(&cfg.nets(), &device);
-    let (steps, _, done, n) = validate(&cfg, &nets)?;
+    let v = validate(&cfg, &nets)?;
+    let (steps, done, n) = (v.mean_steps, v.completed, v.trials);
     println!("initial actors, greedy:   {steps:.1} mean steps, {done}/{n} complete");
     let actors: Vec<_> = (0..cfg.scenario.num_robots)
         .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))

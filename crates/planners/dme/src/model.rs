@@ -8,8 +8,8 @@ use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use madenet_agent::Policy;
-use madenet_learn::error::io_err;
 use madenet_learn::harness;
+use madenet_learn::model::{parse_model_toml, read_model_dir, register_trained};
 use madenet_learn::TrainError;
 use madenet_sim::PolicyRegistry;
 use madenet_world::ScenarioConfig;
@@ -60,23 +60,9 @@ pub struct Model {
 impl Model {
     /// Loads `dir/model.toml` and its actors.
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
-        let path = dir.join("model.toml");
-        let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
-            .map_err(io_err(&path))?;
-        let info: ModelInfo =
-            madenet_files::parse_toml(&text).map_err(|message| TrainError::Config {
-                path: path.display().to_string(),
-                message,
-            })?;
-        let mut files = Vec::new();
-        for f in &info.actors {
-            let p = dir.join(f);
-            files.push(
-                madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
-                    .map_err(io_err(&p))?,
-            );
-        }
-        Self::from_parts(info, files, &path.display().to_string())
+        let (info, files, label) =
+            read_model_dir(dir, parse_model_toml::<ModelInfo>, |i| &i.actors)?;
+        Self::from_parts(info, files.into_iter().map(|(_, b)| b).collect(), &label)
     }
 
     /// A model from the text of its `model.toml` and its actors' bytes in order.
@@ -85,11 +71,7 @@ impl Model {
         weights: &[&[u8]],
         label: &str,
     ) -> Result<Self, TrainError> {
-        let info: ModelInfo =
-            madenet_files::parse_toml(model_toml).map_err(|message| TrainError::Config {
-                path: label.to_string(),
-                message,
-            })?;
+        let info: ModelInfo = parse_model_toml(model_toml, label)?;
         Self::from_parts(info, weights.iter().map(|w| w.to_vec()).collect(), label)
     }
 
@@ -188,13 +170,6 @@ impl Model {
     /// Registers this model as policy `name` ([`Model::policy`]); it refuses scenarios it was
     /// not built for ([`Model::check`]).
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
-        let (model, checker) = (self.clone(), self.clone());
-        let owned = name.to_string();
-        registry.register_checked(
-            name,
-            about,
-            move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| model.policy(&owned, ctx.robot),
-        );
+        register_trained(registry, name, about, self, Self::check, Self::policy);
     }
 }

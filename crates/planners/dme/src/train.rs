@@ -27,12 +27,12 @@ use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use madenet_learn::episode;
-use madenet_learn::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
-use madenet_learn::scenario::{self, ScenarioDraw};
+use madenet_learn::harness::{self, replace_dir, EpisodeRun, Learner, Logs, Progress, Seen};
+use madenet_learn::scenario::{self, ScenarioDraw, Validation};
 use madenet_learn::TrainError;
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
-use madenet_trainlog::{EpisodeRow, MaddpgUpdateRow, ValidationRow};
+use madenet_trainlog::{EpisodeRow, MaddpgUpdateRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -149,15 +149,7 @@ impl Default for DmeTrainConfig {
 }
 
 impl DmeTrainConfig {
-    /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
-    pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        harness::read_config(path, Self::validate)
-    }
-
-    /// [`Self::from_toml_file`] on `text`, already read from `path`.
-    pub fn from_toml_text(path: &Path, text: &str) -> Result<Self, TrainError> {
-        harness::parse_config(path, text, Self::validate)
-    }
+    madenet_learn::toml_config_readers!();
 
     /// One message naming the first bad field.
     pub fn validate(&self) -> Result<(), String> {
@@ -700,12 +692,9 @@ fn restore(dir: &Path, mut nets: Maddpg) -> Result<(Maddpg, State, Replay), Trai
     Ok((nets, state, replay))
 }
 
-/// Validation: the greedy actors on the generated validation maps. Returns (mean steps, mean
-/// team return (Eq. 8, for comparison with MADE-Net's runs), completed, trials).
-pub fn validate(
-    cfg: &DmeTrainConfig,
-    nets: &Maddpg,
-) -> Result<(f64, f64, usize, usize), TrainError> {
+/// Validation: the greedy actors on the generated validation maps (its mean team return is
+/// Eq. 8's, for comparison with MADE-Net's runs).
+pub fn validate(cfg: &DmeTrainConfig, nets: &Maddpg) -> Result<Validation, TrainError> {
     let model = Model {
         info: model_info(cfg, &State::default(), None),
         actors: (0..nets.actors.len())
@@ -714,13 +703,12 @@ pub fn validate(
     };
     let mut registry = PolicyRegistry::default();
     model.register(&mut registry, "candidate", "the actors being trained");
-    let v = scenario::validate(
+    scenario::validate(
         &cfg.validation_maps()?,
         &cfg.validation_csp,
         &registry,
         "candidate",
-    )?;
-    Ok((v.mean_steps, v.mean_team_return, v.completed, v.trials))
+    )
 }
 
 /// DME-DRL as a [`Learner`] (`dme-drl`).
@@ -730,35 +718,143 @@ impl Learner for DmeLearner {
     type Config = DmeTrainConfig;
     const METHODS: &'static [&'static str] = &[METHOD];
 
-    fn parse_config(path: &Path, text: &str) -> Result<DmeTrainConfig, TrainError> {
-        DmeTrainConfig::from_toml_text(path, text)
-    }
+    madenet_learn::learner_config!();
 
-    fn check(cfg: &DmeTrainConfig) -> Result<(), String> {
-        cfg.validate()
-    }
-
-    fn run_fields(cfg: &DmeTrainConfig) -> RunFields {
-        RunFields {
-            episodes: cfg.episodes,
-            max_minutes: cfg.max_minutes,
-            seed: cfg.seed,
-            threads: cfg.threads,
-        }
-    }
-
-    fn set_run_fields(cfg: &mut DmeTrainConfig, f: RunFields) {
-        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
-            (f.episodes, f.max_minutes, f.seed, f.threads);
-    }
-
+    /// The loop: episodes, updates, validation, checkpoints ([`EpisodeRun`]).
     fn train_loop(
         run_dir: &Path,
         cfg: &DmeTrainConfig,
         resuming: bool,
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError> {
-        train_loop(run_dir, cfg, resuming, progress)
+        let ckpt_dir = run_dir.join("checkpoint");
+        let device = Device::flex().autodiff();
+        device.seed(cfg.seed);
+        let net_cfg = cfg.nets();
+        let nets = Maddpg::new(&net_cfg, &device);
+        let (mut nets, mut state, mut replay) = if resuming {
+            restore(&ckpt_dir, nets)?
+        } else {
+            (nets, State::default(), Replay::default())
+        };
+        let mut run = EpisodeRun::<MaddpgUpdateRow>::open(
+            run_dir,
+            Seen {
+                episodes: state.episode,
+                updates: state.updates,
+                first_loss_step: 0, // `loss/*` steps count updates from 0
+            },
+            state.wall_s,
+            state.best_validation,
+            madenet_learn::cadence!(cfg),
+        )?;
+        let params = cfg.update_params();
+        let team = cfg.scenario.num_robots;
+        let draw = cfg.scenario_draw();
+        // The acting actors: the policies read them, the trainer replaces them after each update.
+        let acting: Vec<SharedActor> = (0..team)
+            .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
+            .collect();
+        let rewards = RewardConfig {
+            new_cell: cfg.new_cell_reward,
+            reobserved_cell: 0.0,
+            interaction_from: u32::MAX,
+            ..RewardConfig::default()
+        };
+        while state.episode < cfg.episodes {
+            let e = state.episode;
+            let seed = derive_seed(cfg.seed, "dme", e);
+            let (map, starts) = draw.draw(seed)?;
+            let csp = stream(seed, "csp", 0).random::<f64>();
+            let recorder: DecisionSlots = Arc::new(Mutex::new(vec![None; team]));
+            let mut registry = PolicyRegistry::default();
+            {
+                let (acting, recorder, history) = (acting.clone(), recorder.clone(), cfg.history);
+                registry.register("dme-train", "DME-DRL actors sampling", move |ctx| {
+                    Box::new(
+                        DmePolicy::new(
+                            "dme-train",
+                            ctx.robot,
+                            Arc::clone(&acting[ctx.robot]),
+                            history,
+                        )
+                        .sampling(stream(ctx.seed, "dme/sample", ctx.robot as u64))
+                        .recording(recorder.clone()),
+                    )
+                });
+            }
+            let spec = TrialSpec {
+                map,
+                map_name: format!("train_dme_{e}"),
+                starts,
+                config: ScenarioConfig {
+                    comm_success_prob: csp,
+                    ..cfg.scenario.clone()
+                },
+                policy: "dme-train".into(),
+                seed,
+            };
+            let mut trial = Trial::with_registry(spec, &registry)
+                .map_err(|err| TrainError::Other(err.to_string()))?
+                .reward_config(rewards.clone());
+            let mut stepping = Stepping {
+                cfg,
+                net_cfg: &net_cfg,
+                params: &params,
+                slots: recorder,
+                acting: &acting,
+                episode: Episode::new(team),
+                nets: &mut nets,
+                replay: &replay,
+                state: &mut state,
+                logs: &mut run.logs,
+            };
+            let end = episode::run(&mut trial, &mut stepping)?;
+            let mut episode = stepping.episode;
+            episode.complete = end.complete;
+            let (steps, reward) = (episode.len(), episode.team_return());
+            run.logs.episodes.append(&EpisodeRow {
+                episode: e,
+                env: madenet_trainlog::Env::Dec,
+                csp,
+                steps: steps as u32,
+                team_reward: reward,
+                complete: episode.complete,
+                epsilon: 0.0,
+                updates: state.updates,
+                wall_s: run.clock.wall(),
+            })?;
+            run.logs.scalar("episode/reward", reward as f32, e)?;
+            run.logs.scalar("episode/steps", steps as f32, e)?;
+            replay.push(episode, cfg.replay_steps);
+            state.episode += 1;
+            if run.validates(state.episode) {
+                let v = validate(cfg, &nets)?;
+                run.log_validation(state.episode, state.updates, &v)?;
+                let steps = v.mean_steps;
+                if harness::new_best(&mut state.best_validation, steps) {
+                    save_model(
+                        &run_dir.join("best"),
+                        &nets,
+                        &model_info(cfg, &state, Some(steps)),
+                    )?;
+                }
+            }
+            let stopping = run.end_episode(state.episode, |wall_s| {
+                state.wall_s = wall_s;
+                checkpoint(&ckpt_dir, &nets, &state, &replay)?;
+                save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))
+            })?;
+            progress(&run.progress(
+                state.episode,
+                state.updates,
+                vec![("reward", reward, 2), ("steps", steps as f64, 0)],
+            ));
+            if stopping {
+                break;
+            }
+        }
+        Ok(())
     }
 
     fn register_model(
@@ -779,159 +875,6 @@ pub fn train(
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
     harness::train::<DmeLearner>(run_dir, cfg, progress)
-}
-
-fn train_loop(
-    run_dir: &Path,
-    cfg: &DmeTrainConfig,
-    resuming: bool,
-    progress: &mut (dyn FnMut(&Progress) + Send),
-) -> Result<(), TrainError> {
-    let ckpt_dir = run_dir.join("checkpoint");
-    let device = Device::flex().autodiff();
-    device.seed(cfg.seed);
-    let net_cfg = cfg.nets();
-    let nets = Maddpg::new(&net_cfg, &device);
-    let (mut nets, mut state, mut replay) = if resuming {
-        restore(&ckpt_dir, nets)?
-    } else {
-        (nets, State::default(), Replay::default())
-    };
-    let mut logs = Logs::<MaddpgUpdateRow>::open(
-        run_dir,
-        Seen {
-            episodes: state.episode,
-            updates: state.updates,
-            first_loss_step: 0, // `loss/*` steps count updates from 0
-        },
-    )?;
-    let mut clock = Clock::start(state.wall_s);
-    let params = cfg.update_params();
-    let team = cfg.scenario.num_robots;
-    let draw = cfg.scenario_draw();
-    // The acting actors: the policies read them, the trainer replaces them after each update.
-    let acting: Vec<SharedActor> = (0..team)
-        .map(|i| Arc::new(RwLock::new(nets.acting_actor(i))))
-        .collect();
-    let rewards = RewardConfig {
-        new_cell: cfg.new_cell_reward,
-        reobserved_cell: 0.0,
-        interaction_from: u32::MAX,
-        ..RewardConfig::default()
-    };
-    let mut last_validation = state.best_validation;
-    while state.episode < cfg.episodes {
-        let e = state.episode;
-        let seed = derive_seed(cfg.seed, "dme", e);
-        let (map, starts) = draw.draw(seed)?;
-        let csp = stream(seed, "csp", 0).random::<f64>();
-        let recorder: DecisionSlots = Arc::new(Mutex::new(vec![None; team]));
-        let mut registry = PolicyRegistry::default();
-        {
-            let (acting, recorder, history) = (acting.clone(), recorder.clone(), cfg.history);
-            registry.register("dme-train", "DME-DRL actors sampling", move |ctx| {
-                Box::new(
-                    DmePolicy::new(
-                        "dme-train",
-                        ctx.robot,
-                        Arc::clone(&acting[ctx.robot]),
-                        history,
-                    )
-                    .sampling(stream(ctx.seed, "dme/sample", ctx.robot as u64))
-                    .recording(recorder.clone()),
-                )
-            });
-        }
-        let spec = TrialSpec {
-            map,
-            map_name: format!("train_dme_{e}"),
-            starts,
-            config: ScenarioConfig {
-                comm_success_prob: csp,
-                ..cfg.scenario.clone()
-            },
-            policy: "dme-train".into(),
-            seed,
-        };
-        let mut trial = Trial::with_registry(spec, &registry)
-            .map_err(|err| TrainError::Other(err.to_string()))?
-            .reward_config(rewards.clone());
-        let mut stepping = Stepping {
-            cfg,
-            net_cfg: &net_cfg,
-            params: &params,
-            slots: recorder,
-            acting: &acting,
-            episode: Episode::new(team),
-            nets: &mut nets,
-            replay: &replay,
-            state: &mut state,
-            logs: &mut logs,
-        };
-        let end = episode::run(&mut trial, &mut stepping)?;
-        let mut episode = stepping.episode;
-        episode.complete = end.complete;
-        let (steps, reward) = (episode.len(), episode.team_return());
-        logs.episodes.append(&EpisodeRow {
-            episode: e,
-            env: madenet_trainlog::Env::Dec,
-            csp,
-            steps: steps as u32,
-            team_reward: reward,
-            complete: episode.complete,
-            epsilon: 0.0,
-            updates: state.updates,
-            wall_s: clock.wall(),
-        })?;
-        logs.scalar("episode/reward", reward as f32, e)?;
-        logs.scalar("episode/steps", steps as f32, e)?;
-        replay.push(episode, cfg.replay_steps);
-        state.episode += 1;
-        if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
-            let (steps, ret, done, n) = validate(cfg, &nets)?;
-            logs.validation.append(&ValidationRow {
-                episode: state.episode,
-                updates: state.updates,
-                mean_steps: steps,
-                mean_team_reward: ret,
-                completed: done as u32,
-                trials: n as u32,
-            })?;
-            logs.scalar("validation/mean_steps", steps as f32, state.episode)?;
-            last_validation = Some(steps);
-            if harness::new_best(&mut state.best_validation, steps) {
-                save_model(
-                    &run_dir.join("best"),
-                    &nets,
-                    &model_info(cfg, &state, Some(steps)),
-                )?;
-            }
-        }
-        let stopping = state.episode == cfg.episodes || clock.out_of_time(cfg.max_minutes);
-        if state.episode % cfg.checkpoint_every == 0
-            || stopping
-            || clock.checkpoint_due(cfg.checkpoint_minutes)
-        {
-            state.wall_s = clock.wall();
-            checkpoint(&ckpt_dir, &nets, &state, &replay)?;
-            clock.checkpointed();
-            save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
-        }
-        logs.flush()?;
-        progress(&Progress {
-            done: state.episode,
-            total: cfg.episodes,
-            unit: DmeLearner::UNIT,
-            updates: state.updates,
-            validation_steps: last_validation,
-            base_steps: None,
-            figures: vec![("reward", reward, 2), ("steps", steps as f64, 0)],
-        });
-        if stopping {
-            break;
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

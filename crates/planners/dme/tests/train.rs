@@ -206,42 +206,22 @@ fn tiny_run_resumes_exactly_and_its_actors_play() {
     );
 
     // Bad configs: one message naming the field.
-    let bad = |cfg: DmeTrainConfig| cfg.validate().unwrap_err();
-    assert!(bad(DmeTrainConfig {
-        critic_history: 4,
-        ..tiny(1)
-    })
-    .contains("critic_history"));
-    assert!(bad(DmeTrainConfig {
-        tau: 0.0,
-        ..tiny(1)
-    })
-    .contains("tau"));
-    assert!(bad(DmeTrainConfig {
-        method: "made-net".into(),
-        ..tiny(1)
-    })
-    .contains("method"));
-    assert!(bad(DmeTrainConfig {
-        replay_steps: 4,
-        ..tiny(1)
-    })
-    .contains("replay_steps"));
-    assert!(bad(DmeTrainConfig {
-        warmup_steps: 500,
-        ..tiny(1)
-    })
-    .contains("warmup_steps"));
-    assert!(bad(DmeTrainConfig {
-        move_cost: f64::NAN,
-        ..tiny(1)
-    })
-    .contains("move_cost"));
-    assert!(bad(DmeTrainConfig {
-        validation_csp: vec![],
-        ..tiny(1)
-    })
-    .contains("validation_csp"));
+    type Edit = fn(&mut DmeTrainConfig);
+    let cases: [(&str, Edit); 7] = [
+        ("critic_history", |c| c.critic_history = 4),
+        ("tau", |c| c.tau = 0.0),
+        ("method", |c| c.method = "made-net".into()),
+        ("replay_steps", |c| c.replay_steps = 4),
+        ("warmup_steps", |c| c.warmup_steps = 500),
+        ("move_cost", |c| c.move_cost = f64::NAN),
+        ("validation_csp", |c| c.validation_csp = vec![]),
+    ];
+    for (field, set) in cases {
+        let mut cfg = tiny(1);
+        set(&mut cfg);
+        let err = cfg.validate().unwrap_err();
+        assert!(err.contains(field), "{field}: {err}");
+    }
     assert!(DmeTrainConfig {
         validate_every: 0,
         validation_maps: 0,

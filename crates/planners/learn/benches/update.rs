@@ -13,43 +13,15 @@
 
 use burn::optim::AdamConfig;
 use criterion::{criterion_group, criterion_main, Criterion};
-use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{
-    cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
-};
+use madenet_learn::env::{ActorNets, EnvKind, Episode};
+use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, Window};
 use madenet_learn::{cpu_autodiff, TrainConfig};
-use madenet_sim::TrialSpec;
 use madenet_world::rng::stream;
 use rand::RngExt;
 
-fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<Episode> {
-    (0..n)
-        .map(|k| {
-            let (map, starts) = cfg.scenario_draw().draw(1000 + k).expect("training map");
-            let spec = TrialSpec {
-                map,
-                map_name: "bench".into(),
-                starts,
-                config: madenet_world::ScenarioConfig {
-                    comm_success_prob: 0.5,
-                    ..cfg.scenario.clone()
-                },
-                policy: String::new(),
-                seed: k,
-            };
-            let actor = Actor::new(
-                kind,
-                nets.clone(),
-                1.0,
-                false,
-                cfg.goals(),
-                3,
-                stream(k, "bench-actor", 0),
-            );
-            run_episode(spec, actor).expect("episode")
-        })
-        .collect()
-}
+#[path = "../tests/support/fixture.rs"]
+mod fixture;
+use fixture::{episodes, params};
 
 fn windows(eps: &[Episode], n: usize, trace: usize) -> Vec<Window<'_>> {
     let mut rng = stream(5, "bench-windows", 0);
@@ -74,23 +46,17 @@ fn bench(c: &mut Criterion) {
         let cfg = TrainConfig::default();
         let device = cpu_autodiff();
         device.seed(3);
-        let p = UpdateParams {
-            gamma: 1.0,
-            learning_rate: 1e-3,
-            reward_scale: 0.01,
-            map_height: 20,
-            map_width: 20,
-            team: 3,
-            goals: cfg.goals(),
-        };
+        let p = params(&cfg);
         let mut cep = Some(cfg.cep_config().init(&device).expect("CEP"));
         let mut dep = Some(cfg.dep_config().init(&device).expect("DEP"));
         let nets = ActorNets {
             cep: cep.as_ref().map(target_of),
             deps: vec![target_of(dep.as_ref().expect("DEP"))],
         };
-        let cen = episodes(&cfg, &nets, EnvKind::Centralized, 8);
-        let dec = episodes(&cfg, &nets, EnvKind::Decentralized, 8);
+        let names = ["bench", "bench-actor"];
+        let (maps, s) = ((1000, 8), &cfg.scenario);
+        let cen = episodes(&cfg, s, &nets, EnvKind::Centralized, maps, names);
+        let dec = episodes(&cfg, s, &nets, EnvKind::Decentralized, maps, names);
         let cen_w = windows(&cen, 16, cfg.trace_len);
         let dec_r: Vec<RobotWindow<'_>> = (0..16)
             .map(|k| RobotWindow::new(&dec[k % dec.len()], k % 3, k % 5, cfg.trace_len))
@@ -117,36 +83,27 @@ fn bench(c: &mut Criterion) {
             })
         });
         let cep_plain = target_of(cep.as_ref().expect("CEP"));
-        let mut optim = AdamConfig::new().init();
-        group.bench_function("dep_update_b16_t24", |b| {
-            b.iter(|| {
-                let (next, loss) = dep_update(
-                    dep.take().expect("DEP"),
-                    &dep_target,
-                    &mut optim,
-                    Some(&cep_plain),
-                    &dec_r,
-                    &p,
-                );
-                dep = Some(next);
-                loss
-            })
-        });
-        let mut optim = AdamConfig::new().init();
-        group.bench_function("dt_update_b16_t24", |b| {
-            b.iter(|| {
-                let (next, loss) = dep_update(
-                    dep.take().expect("DEP"),
-                    &dep_target,
-                    &mut optim,
-                    None,
-                    &dt_r,
-                    &p,
-                );
-                dep = Some(next);
-                loss
-            })
-        });
+        // The shared DEP's update (targets from the CEP), then MADE-Net-DT's (no CEP).
+        for (id, cep, batch) in [
+            ("dep_update_b16_t24", Some(&cep_plain), &dec_r),
+            ("dt_update_b16_t24", None, &dt_r),
+        ] {
+            let mut optim = AdamConfig::new().init();
+            group.bench_function(id, |b| {
+                b.iter(|| {
+                    let (next, loss) = dep_update(
+                        dep.take().expect("DEP"),
+                        &dep_target,
+                        &mut optim,
+                        cep,
+                        batch,
+                        &p,
+                    );
+                    dep = Some(next);
+                    loss
+                })
+            });
+        }
         group.finish();
     }
 }

@@ -7,6 +7,8 @@
 //!   truncated on resume to what the checkpoint has seen, then appended together;
 //! - [`Clock`]: wall time carried across resumes, the `max_minutes` budget and the
 //!   `checkpoint_minutes` cadence;
+//! - [`EpisodeRun`]: an episode-based learner's loop plumbing — its [`Logs`] and [`Clock`],
+//!   validation rows, and when it validates, checkpoints and stops ([`Cadence`]);
 //! - checkpoints and models: [`replace_dir`] (a directory replaced whole, never half-written),
 //!   [`read_json`] / [`read_postcard`] and [`write_json`] / [`write_postcard`] for the state and
 //!   replay files inside it, [`new_best`] for `best/`.
@@ -15,6 +17,7 @@
 
 use crate::error::{io_err, write_atomic, TrainError};
 use crate::model::ModelInfo;
+use crate::scenario::Validation;
 use madenet_trainlog::{
     truncate_rows, EpisodeRow, LogRow, LogWriter, MaddpgUpdateRow, TfEventWriter, UpdateRow,
     ValidationRow,
@@ -157,6 +160,27 @@ pub fn parse_config<C: DeserializeOwned>(
     Ok(cfg)
 }
 
+/// A learner config's readers, in its `impl` (`madenet_learn::toml_config_readers!();`):
+/// `from_toml_file` ([`read_config`]) and `from_toml_text` ([`parse_config`]), both checked
+/// with its `validate`.
+#[macro_export]
+macro_rules! toml_config_readers {
+    () => {
+        /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
+        pub fn from_toml_file(path: &std::path::Path) -> Result<Self, $crate::TrainError> {
+            $crate::harness::read_config(path, Self::validate)
+        }
+
+        /// [`Self::from_toml_file`] on `text`, already read from `path`.
+        pub fn from_toml_text(
+            path: &std::path::Path,
+            text: &str,
+        ) -> Result<Self, $crate::TrainError> {
+            $crate::harness::parse_config(path, text, Self::validate)
+        }
+    };
+}
+
 /// The largest CEP joint action space |G|^|I| a learner builds (the paper's is 4³ = 64).
 pub const MAX_JOINT_ACTIONS: u64 = 1 << 16;
 
@@ -272,11 +296,15 @@ pub trait Learner {
     const METHODS: &'static [&'static str];
     /// What its loop counts ([`Progress::unit`]): `"episodes"` or `"iterations"`.
     const UNIT: &'static str = "episodes";
-    /// The config in `text` (read from `path`, named in errors), checked.
-    fn parse_config(path: &Path, text: &str) -> Result<Self::Config, TrainError>;
+    /// The config in `text` (read from `path`, named in errors), checked with [`Self::check`]
+    /// ([`parse_config`]).
+    fn parse_config(path: &Path, text: &str) -> Result<Self::Config, TrainError> {
+        self::parse_config(path, text, Self::check)
+    }
     /// Why `cfg` cannot be trained, naming the field.
     fn check(cfg: &Self::Config) -> Result<(), String>;
-    /// The fields every config has.
+    /// The fields every config has ([`learner_config!`](crate::learner_config) where
+    /// they carry [`RunFields`]' names).
     fn run_fields(cfg: &Self::Config) -> RunFields;
     /// Sets the fields every config has.
     fn set_run_fields(cfg: &mut Self::Config, fields: RunFields);
@@ -330,6 +358,33 @@ pub trait Learner {
         crate::model::Model::load(dir)?.register(registry, name, about);
         Ok(())
     }
+}
+
+/// [`Learner::check`] (the config's own `validate`), [`Learner::run_fields`] and
+/// [`Learner::set_run_fields`] for a config whose fields carry [`RunFields`]' names
+/// (`episodes`, `max_minutes`, `seed`, `threads`), as every learner's config does:
+/// `madenet_learn::learner_config!();` in its `impl Learner`.
+#[macro_export]
+macro_rules! learner_config {
+    () => {
+        fn check(cfg: &Self::Config) -> Result<(), String> {
+            cfg.validate()
+        }
+
+        fn run_fields(cfg: &Self::Config) -> $crate::harness::RunFields {
+            $crate::harness::RunFields {
+                episodes: cfg.episodes,
+                max_minutes: cfg.max_minutes,
+                seed: cfg.seed,
+                threads: cfg.threads,
+            }
+        }
+
+        fn set_run_fields(cfg: &mut Self::Config, f: $crate::harness::RunFields) {
+            (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
+                (f.episodes, f.max_minutes, f.seed, f.threads);
+        }
+    };
 }
 
 /// Trains learner `L` into `run_dir` (created; if it holds a checkpoint, the run resumes from
@@ -625,6 +680,142 @@ impl<U: UpdateLog> Logs<U> {
     /// Flushes the TensorBoard events (the CSV logs are written row by row).
     pub fn flush(&mut self) -> Result<(), TrainError> {
         self.scalars.flush()
+    }
+}
+
+/// When an episode-based run validates, checkpoints and stops: the fields of its config.
+#[derive(Clone, Copy, Debug)]
+pub struct Cadence {
+    /// The run's length in episodes.
+    pub episodes: u64,
+    /// Wall-time budget in minutes (0: none; [`Clock::out_of_time`]).
+    pub max_minutes: f64,
+    /// Validate every this many episodes (0: never).
+    pub validate_every: u64,
+    /// Checkpoint every this many episodes.
+    pub checkpoint_every: u64,
+    /// Also checkpoint when this many minutes passed since the last checkpoint (0: by episodes
+    /// only; [`Clock::checkpoint_due`]).
+    pub checkpoint_minutes: f64,
+}
+
+/// The [`Cadence`] of a config with fields of its names (`episodes`, `max_minutes`,
+/// `validate_every`, `checkpoint_every`, `checkpoint_minutes`):
+/// `madenet_learn::cadence!(cfg)`.
+#[macro_export]
+macro_rules! cadence {
+    ($cfg:expr) => {
+        $crate::harness::Cadence {
+            episodes: $cfg.episodes,
+            max_minutes: $cfg.max_minutes,
+            validate_every: $cfg.validate_every,
+            checkpoint_every: $cfg.checkpoint_every,
+            checkpoint_minutes: $cfg.checkpoint_minutes,
+        }
+    };
+}
+
+/// The plumbing of an episode-based learner's loop (MADE-Net's, DME-DRL's) around its
+/// algorithm: its [`Logs`] and [`Clock`], its latest validation, and when it validates,
+/// checkpoints and stops ([`Cadence`]).
+pub struct EpisodeRun<U: UpdateLog> {
+    /// The run's logs.
+    pub logs: Logs<U>,
+    /// The run's clock.
+    pub clock: Clock,
+    /// The latest validation's mean steps (before the first in this process: the best so far).
+    pub last_validation: Option<f64>,
+    cadence: Cadence,
+}
+
+impl<U: UpdateLog> EpisodeRun<U> {
+    /// Opens the logs of `run_dir` cut to what the checkpoint has `seen` ([`Logs::open`]) and
+    /// starts the clock at its `wall_s`; `best_validation` is its best validation so far.
+    pub fn open(
+        run_dir: &Path,
+        seen: Seen,
+        wall_s: f64,
+        best_validation: Option<f64>,
+        cadence: Cadence,
+    ) -> Result<Self, TrainError> {
+        let logs = Logs::open(run_dir, seen)?;
+        Ok(EpisodeRun {
+            logs,
+            clock: Clock::start(wall_s),
+            last_validation: best_validation,
+            cadence,
+        })
+    }
+
+    /// Whether the run validates after `episode` episodes.
+    pub fn validates(&self, episode: u64) -> bool {
+        self.cadence.validate_every > 0 && episode.is_multiple_of(self.cadence.validate_every)
+    }
+
+    /// Logs validation `v`, made after `episode` episodes and `updates` updates: its row in
+    /// `validation.csv` and its mean steps as `validation/mean_steps` at step `episode`. It is
+    /// the latest validation from now on.
+    pub fn log_validation(
+        &mut self,
+        episode: u64,
+        updates: u64,
+        v: &Validation,
+    ) -> Result<(), TrainError> {
+        self.logs.validation.append(&ValidationRow {
+            episode,
+            updates,
+            mean_steps: v.mean_steps,
+            mean_team_reward: v.mean_team_return,
+            completed: v.completed as u32,
+            trials: v.trials as u32,
+        })?;
+        self.logs
+            .scalar("validation/mean_steps", v.mean_steps as f32, episode)?;
+        self.last_validation = Some(v.mean_steps);
+        Ok(())
+    }
+
+    /// The end of the run's episode `done` (counted from 1): checkpoints if due — every
+    /// `checkpoint_every` episodes, when the run stops, or `checkpoint_minutes` after the last
+    /// checkpoint — with `checkpoint(wall_s)` (`wall_s`: the run's wall time, to be saved with
+    /// it; the checkpoint and the models that go with it, such as `last/`), then flushes the
+    /// logs. Returns whether the run stops: its last episode, or out of time
+    /// ([`Clock::out_of_time`]).
+    pub fn end_episode(
+        &mut self,
+        done: u64,
+        checkpoint: impl FnOnce(f64) -> Result<(), TrainError>,
+    ) -> Result<bool, TrainError> {
+        let (c, clock) = (&self.cadence, &mut self.clock);
+        let stopping = done == c.episodes || clock.out_of_time(c.max_minutes);
+        if done.is_multiple_of(c.checkpoint_every)
+            || stopping
+            || clock.checkpoint_due(c.checkpoint_minutes)
+        {
+            checkpoint(clock.wall())?;
+            clock.checkpointed();
+        }
+        self.logs.flush()?;
+        Ok(stopping)
+    }
+
+    /// The progress after `done` episodes and `updates` updates, with the episode's own
+    /// `figures` ([`Progress::figures`]).
+    pub fn progress(
+        &self,
+        done: u64,
+        updates: u64,
+        figures: Vec<(&'static str, f64, usize)>,
+    ) -> Progress {
+        Progress {
+            done,
+            total: self.cadence.episodes,
+            unit: "episodes",
+            updates,
+            validation_steps: self.last_validation,
+            base_steps: None,
+            figures,
+        }
     }
 }
 

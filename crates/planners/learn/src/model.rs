@@ -99,6 +99,67 @@ pub struct NetConfigToml {
     pub concat_fc: bool,
 }
 
+/// A model folder's `model.toml` in `text` (`label` names it in errors): unknown keys and bad
+/// values are [`TrainError::Config`].
+pub fn parse_model_toml<I: serde::de::DeserializeOwned>(
+    text: &str,
+    label: &str,
+) -> Result<I, TrainError> {
+    madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
+        path: label.to_string(),
+        message,
+    })
+}
+
+/// A model folder's weight files in order: each one's path (or name) and bytes.
+pub type WeightFiles = Vec<(String, Vec<u8>)>;
+
+/// Reads the model folder `dir`: its `model.toml`, parsed by `parse(text, label)`, and then the
+/// weight files that `weights(&info)` lists, in order, each with its path. Returns the info,
+/// the files and the label (the `model.toml`'s path) that errors name.
+pub fn read_model_dir<I>(
+    dir: &Path,
+    parse: impl FnOnce(&str, &str) -> Result<I, TrainError>,
+    weights: impl FnOnce(&I) -> &[String],
+) -> Result<(I, WeightFiles, String), TrainError> {
+    let path = dir.join("model.toml");
+    let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
+        .map_err(io_err(&path))?;
+    let label = path.display().to_string();
+    let info = parse(&text, &label)?;
+    let mut files = Vec::new();
+    for f in weights(&info) {
+        let p = dir.join(f);
+        files.push((
+            p.display().to_string(),
+            madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
+                .map_err(io_err(&p))?,
+        ));
+    }
+    Ok((info, files, label))
+}
+
+/// Registers trained model `model` as policy `name`: it refuses the scenarios that
+/// `check(model, height, width, scenario)` refuses, and robot i plays
+/// `policy(model, name, i)` (a model's own `check` and `policy`).
+pub fn register_trained<M: Clone + Send + Sync + 'static>(
+    registry: &mut PolicyRegistry,
+    name: &str,
+    about: &str,
+    model: &M,
+    check: fn(&M, usize, usize, &ScenarioConfig) -> Result<(), String>,
+    policy: fn(&M, &str, usize) -> Box<dyn Policy>,
+) {
+    let (model, checker) = (model.clone(), model.clone());
+    let owned = name.to_string();
+    registry.register_checked(
+        name,
+        about,
+        move |ctx| check(&checker, ctx.height, ctx.width, ctx.config),
+        move |ctx| policy(&model, &owned, ctx.robot),
+    );
+}
+
 /// A loaded model: the DEP nets on the plain CPU device.
 #[derive(Clone)]
 pub struct Model {
@@ -148,20 +209,8 @@ impl Model {
 
     /// Loads `dir/model.toml` and its weight files.
     pub fn load(dir: &Path) -> Result<Self, TrainError> {
-        let path = dir.join("model.toml");
-        let text = madenet_files::read_text_capped(&path, madenet_files::InputKind::Config)
-            .map_err(io_err(&path))?;
-        let info = Self::parse_info(&text, &path.display().to_string())?;
-        let mut files = Vec::new();
-        for f in &info.deps {
-            let p = dir.join(f);
-            files.push((
-                p.display().to_string(),
-                madenet_files::read_capped(&p, madenet_files::InputKind::Weights)
-                    .map_err(io_err(&p))?,
-            ));
-        }
-        Self::from_parts(info, files, &path.display().to_string())
+        let (info, files, label) = read_model_dir(dir, Self::parse_info, |i| &i.deps)?;
+        Self::from_parts(info, files, &label)
     }
 
     /// A model from the text of its `model.toml` and its weight files' bytes, in the order of
@@ -182,11 +231,7 @@ impl Model {
     }
 
     fn parse_info(text: &str, label: &str) -> Result<ModelInfo, TrainError> {
-        let info: ModelInfo =
-            madenet_files::parse_toml(text).map_err(|message| TrainError::Config {
-                path: label.to_string(),
-                message,
-            })?;
+        let info: ModelInfo = parse_model_toml(text, label)?;
         if let Some(d) = &info.dep {
             // Sizes are checked here, by name, before any network is built from them.
             let max_robots = madenet_world::MAX_ROBOTS;
@@ -218,11 +263,7 @@ impl Model {
         Ok(info)
     }
 
-    fn from_parts(
-        info: ModelInfo,
-        files: Vec<(String, Vec<u8>)>,
-        label: &str,
-    ) -> Result<Self, TrainError> {
+    fn from_parts(info: ModelInfo, files: WeightFiles, label: &str) -> Result<Self, TrainError> {
         if files.len() != info.deps.len() || files.is_empty() {
             return Err(TrainError::Config {
                 path: label.to_string(),
@@ -315,15 +356,7 @@ impl Model {
     /// Registers this model as policy `name` (robot i uses DEP i, or the shared one); it
     /// refuses scenarios it was not built for ([`Model::check`]).
     pub fn register(&self, registry: &mut PolicyRegistry, name: &str, about: &str) {
-        let model = self.clone();
-        let checker = self.clone();
-        let owned = name.to_string();
-        registry.register_checked(
-            name,
-            about,
-            move |ctx| checker.check(ctx.height, ctx.width, ctx.config),
-            move |ctx| model.policy(&owned, ctx.robot),
-        );
+        register_trained(registry, name, about, self, Self::check, Self::policy);
     }
 
     /// Robot `robot`'s policy under name `name`: its grid DEP (or the shared one), or the

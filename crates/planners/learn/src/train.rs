@@ -26,7 +26,7 @@
 
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
 use crate::error::TrainError;
-use crate::harness::{self, replace_dir, Clock, Learner, Logs, Progress, RunFields, Seen};
+use crate::harness::{self, replace_dir, EpisodeRun, Learner, Progress, Seen};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::model::{Method, Model, ModelInfo, NetConfigToml};
 use crate::obs::Observation;
@@ -36,7 +36,7 @@ use burn::module::Module;
 use burn::optim::grad_clipping::GradientClippingConfig;
 use burn::optim::{AdamConfig, ModuleOptimizer};
 use madenet_sim::{PolicyRegistry, TrialSpec};
-use madenet_trainlog::{EpisodeRow, UpdateRow, ValidationRow};
+use madenet_trainlog::{EpisodeRow, UpdateRow};
 use madenet_world::rng::{derive_seed, stream};
 use madenet_world::ScenarioConfig;
 use rand::RngExt;
@@ -184,15 +184,7 @@ impl Default for TrainConfig {
 }
 
 impl TrainConfig {
-    /// Reads a TOML file (unknown keys and bad values are errors naming the file and field).
-    pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        harness::read_config(path, Self::validate)
-    }
-
-    /// [`Self::from_toml_file`] on `text`, already read from `path`.
-    pub fn from_toml_text(path: &Path, text: &str) -> Result<Self, TrainError> {
-        harness::parse_config(path, text, Self::validate)
-    }
+    crate::toml_config_readers!();
 
     /// Checks every field and the memory the sizes ask for ([`Self::memory_needs`]); the
     /// message names the field.
@@ -589,27 +581,7 @@ impl Learner for MadeNetLearner {
         PaperMethod::MadeNetDt.method().name(),
     ];
 
-    fn parse_config(path: &Path, text: &str) -> Result<TrainConfig, TrainError> {
-        TrainConfig::from_toml_text(path, text)
-    }
-
-    fn check(cfg: &TrainConfig) -> Result<(), String> {
-        cfg.validate()
-    }
-
-    fn run_fields(cfg: &TrainConfig) -> RunFields {
-        RunFields {
-            episodes: cfg.episodes,
-            max_minutes: cfg.max_minutes,
-            seed: cfg.seed,
-            threads: cfg.threads,
-        }
-    }
-
-    fn set_run_fields(cfg: &mut TrainConfig, f: RunFields) {
-        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
-            (f.episodes, f.max_minutes, f.seed, f.threads);
-    }
+    crate::learner_config!();
 
     fn set_method(cfg: &mut TrainConfig, method: &str) -> Result<(), String> {
         cfg.method = PaperMethod::ALL
@@ -619,13 +591,201 @@ impl Learner for MadeNetLearner {
         Ok(())
     }
 
+    /// The loop: episodes, updates, validation, checkpoints ([`EpisodeRun`]).
     fn train_loop(
         run_dir: &Path,
         cfg: &TrainConfig,
         resuming: bool,
         progress: &mut (dyn FnMut(&Progress) + Send),
     ) -> Result<(), TrainError> {
-        train_loop(run_dir, cfg, resuming, progress)
+        let ckpt_dir = run_dir.join("checkpoint");
+        let mut nets = Nets::init(cfg)?;
+        let (mut state, mut cen, mut dec) = if resuming {
+            let state: State = harness::read_json(&ckpt_dir.join("state.json"))?;
+            nets = nets.load(&ckpt_dir)?;
+            let (cen, dec): (Replay, Replay) =
+                harness::read_postcard(&ckpt_dir.join("replay.bin"))?;
+            (state, cen, dec)
+        } else {
+            (State::default(), Replay::default(), Replay::default())
+        };
+        let per_iter = match cfg.method {
+            PaperMethod::MadeNet => 2,
+            PaperMethod::MadeNetDt => 1,
+        };
+        // Logs keep what the checkpoint has seen; a resumed run appends from there.
+        let seen = state.episode * per_iter;
+        let mut run = EpisodeRun::<UpdateRow>::open(
+            run_dir,
+            Seen {
+                episodes: seen,
+                updates: state.updates,
+                first_loss_step: 1, // `loss/*` steps count updates from 1
+            },
+            state.wall_s,
+            state.best_validation,
+            crate::cadence!(cfg),
+        )?;
+        let params = cfg.update_params();
+        let groups = cfg.dep_groups();
+        let draw = cfg.scenario_draw();
+        // Drawn at the first validation (a run that never validates draws none), then kept.
+        let mut validation_maps: Option<Vec<TrialSpec>> = None;
+        while state.episode < cfg.episodes {
+            let e = state.episode;
+            let epsilon = cfg.epsilon(e);
+            let actor_nets = nets.actor_nets();
+            let (mut reward_sum, mut steps_sum) = (0.0, 0.0);
+            let envs: &[EnvKind] = match cfg.method {
+                PaperMethod::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
+                PaperMethod::MadeNetDt => &[EnvKind::Decentralized],
+            };
+            for (k, &kind) in envs.iter().enumerate() {
+                let seed = derive_seed(cfg.seed, kind.short(), e);
+                let (map, starts) = draw.draw(seed)?;
+                let csp = match kind {
+                    EnvKind::Centralized => 1.0,
+                    EnvKind::Decentralized => stream(seed, "csp", 0).random::<f64>(),
+                };
+                let spec = TrialSpec {
+                    map,
+                    map_name: format!("train_{}_{e}", kind.short()),
+                    starts,
+                    config: ScenarioConfig {
+                        comm_success_prob: csp,
+                        ..cfg.scenario.clone()
+                    },
+                    policy: String::new(),
+                    seed,
+                };
+                let actor = Actor::new(
+                    kind,
+                    actor_nets.clone(),
+                    epsilon,
+                    cfg.cen_explore,
+                    cfg.goals(),
+                    cfg.team(),
+                    stream(seed, "actor", 0),
+                );
+                let ep = run_episode(spec, actor)?;
+                let id = e * per_iter + k as u64;
+                run.logs.episodes.append(&EpisodeRow {
+                    episode: id,
+                    env: kind.into(),
+                    csp,
+                    steps: ep.len() as u32,
+                    team_reward: ep.team_return,
+                    complete: ep.complete,
+                    epsilon: f64::from(epsilon),
+                    updates: state.updates,
+                    wall_s: run.clock.wall(),
+                })?;
+                let tag = |what: &str| format!("episode/{}_{what}", kind.short());
+                run.logs
+                    .scalar(&tag("team_reward"), ep.team_return as f32, id)?;
+                run.logs.scalar(&tag("steps"), ep.len() as f32, id)?;
+                reward_sum += ep.team_return;
+                steps_sum += ep.len() as f64;
+                match kind {
+                    EnvKind::Centralized => cen.push(ep, cfg.replay_episodes),
+                    EnvKind::Decentralized => dec.push(ep, cfg.replay_episodes),
+                }
+            }
+            state.episode += 1;
+            if state.episode >= cfg.warmup_episodes {
+                for _ in 0..cfg.updates_per_episode {
+                    let mut rng = stream(cfg.seed, "sample", state.updates);
+                    let mut cep_loss = f32::NAN;
+                    if let Some((online, target, mut optim)) = nets.cep.take() {
+                        let batch = cen.sample(cfg.batch_size, cfg.trace_len, &mut rng);
+                        let (online, loss) =
+                            cep_update(online, &target, &mut optim, &batch, &params);
+                        cep_loss = loss;
+                        nets.cep = Some((online, target, optim));
+                    }
+                    // DEP batches: `batch_size` robot sequences — for a shared DEP of any robot,
+                    // for a per-robot DEP of its own.
+                    let cep_plain = nets.cep.as_ref().map(|(o, _, _)| target_of(o));
+                    let mut dep_loss = 0.0;
+                    let deps = std::mem::take(&mut nets.deps);
+                    for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
+                        let batch =
+                            dec.sample_robots(cfg.batch_size, cfg.trace_len, robots, &mut rng);
+                        let (online, loss) = dep_update(
+                            online,
+                            &target,
+                            &mut optim,
+                            cep_plain.as_ref(),
+                            &batch,
+                            &params,
+                        );
+                        dep_loss += loss / groups.len() as f32;
+                        nets.deps.push((online, target, optim));
+                    }
+                    state.updates += 1;
+                    if state.updates % cfg.target_update_every == 0 {
+                        nets.sync_targets();
+                    }
+                    run.logs.updates.append(&UpdateRow {
+                        update: state.updates - 1,
+                        cep_loss: cep_loss.into(),
+                        dep_loss: dep_loss.into(),
+                    })?;
+                    if cep_loss.is_finite() {
+                        run.logs.scalar("loss/cep", cep_loss, state.updates)?;
+                    }
+                    run.logs.scalar("loss/dep", dep_loss, state.updates)?;
+                }
+            }
+            if run.validates(state.episode) {
+                let model = Model::with_grid(
+                    model_info(cfg, &state, None),
+                    nets.deps
+                        .iter()
+                        .map(|(o, _, _)| Arc::new(target_of(o)))
+                        .collect(),
+                )
+                .expect("one DEP per group");
+                let mut registry = PolicyRegistry::default();
+                model.register(&mut registry, "candidate", "the DEPs being trained");
+                if validation_maps.is_none() {
+                    validation_maps = Some(cfg.validation_maps()?);
+                }
+                let v = validate(
+                    validation_maps.as_deref().expect("drawn above"),
+                    &cfg.validation_csp,
+                    &registry,
+                    "candidate",
+                )?;
+                let id = state.episode * per_iter;
+                run.log_validation(id, state.updates, &v)?;
+                let steps = v.mean_steps;
+                run.logs
+                    .scalar("validation/mean_team_reward", v.mean_team_return as f32, id)?;
+                if harness::new_best(&mut state.best_validation, steps) {
+                    let info = model_info(cfg, &state, Some(steps));
+                    save_model(&run_dir.join("best"), &nets, &info)?;
+                }
+            }
+            let stopping = run.end_episode(state.episode, |wall_s| {
+                state.wall_s = wall_s;
+                checkpoint(&ckpt_dir, &nets, &state, &cen, &dec)?;
+                save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))
+            })?;
+            progress(&run.progress(
+                state.episode,
+                state.updates,
+                vec![
+                    ("ε", epsilon as f64, 2),
+                    ("reward", reward_sum / envs.len() as f64, 0),
+                    ("steps", steps_sum / envs.len() as f64, 0),
+                ],
+            ));
+            if stopping {
+                break;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -637,215 +797,6 @@ pub fn train(
     progress: &mut (dyn FnMut(&Progress) + Send),
 ) -> Result<(), TrainError> {
     harness::train::<MadeNetLearner>(run_dir, cfg, progress)
-}
-
-fn train_loop(
-    run_dir: &Path,
-    cfg: &TrainConfig,
-    resuming: bool,
-    progress: &mut (dyn FnMut(&Progress) + Send),
-) -> Result<(), TrainError> {
-    let ckpt_dir = run_dir.join("checkpoint");
-    let mut nets = Nets::init(cfg)?;
-    let (mut state, mut cen, mut dec) = if resuming {
-        let state: State = harness::read_json(&ckpt_dir.join("state.json"))?;
-        nets = nets.load(&ckpt_dir)?;
-        let (cen, dec): (Replay, Replay) = harness::read_postcard(&ckpt_dir.join("replay.bin"))?;
-        (state, cen, dec)
-    } else {
-        (State::default(), Replay::default(), Replay::default())
-    };
-    let per_iter = match cfg.method {
-        PaperMethod::MadeNet => 2,
-        PaperMethod::MadeNetDt => 1,
-    };
-    // Logs keep what the checkpoint has seen; a resumed run appends from there.
-    let seen = state.episode * per_iter;
-    let mut logs = Logs::<UpdateRow>::open(
-        run_dir,
-        Seen {
-            episodes: seen,
-            updates: state.updates,
-            first_loss_step: 1, // `loss/*` steps count updates from 1
-        },
-    )?;
-    let mut clock = Clock::start(state.wall_s);
-    let params = cfg.update_params();
-    let groups = cfg.dep_groups();
-    let mut last_validation = state.best_validation;
-    let draw = cfg.scenario_draw();
-    // Drawn at the first validation (a run that never validates draws none), then kept.
-    let mut validation_maps: Option<Vec<TrialSpec>> = None;
-    while state.episode < cfg.episodes {
-        let e = state.episode;
-        let epsilon = cfg.epsilon(e);
-        let actor_nets = nets.actor_nets();
-        let (mut reward_sum, mut steps_sum) = (0.0, 0.0);
-        let envs: &[EnvKind] = match cfg.method {
-            PaperMethod::MadeNet => &[EnvKind::Centralized, EnvKind::Decentralized],
-            PaperMethod::MadeNetDt => &[EnvKind::Decentralized],
-        };
-        for (k, &kind) in envs.iter().enumerate() {
-            let seed = derive_seed(cfg.seed, kind.short(), e);
-            let (map, starts) = draw.draw(seed)?;
-            let csp = match kind {
-                EnvKind::Centralized => 1.0,
-                EnvKind::Decentralized => stream(seed, "csp", 0).random::<f64>(),
-            };
-            let spec = TrialSpec {
-                map,
-                map_name: format!("train_{}_{e}", kind.short()),
-                starts,
-                config: ScenarioConfig {
-                    comm_success_prob: csp,
-                    ..cfg.scenario.clone()
-                },
-                policy: String::new(),
-                seed,
-            };
-            let actor = Actor::new(
-                kind,
-                actor_nets.clone(),
-                epsilon,
-                cfg.cen_explore,
-                cfg.goals(),
-                cfg.team(),
-                stream(seed, "actor", 0),
-            );
-            let ep = run_episode(spec, actor)?;
-            let id = e * per_iter + k as u64;
-            logs.episodes.append(&EpisodeRow {
-                episode: id,
-                env: kind.into(),
-                csp,
-                steps: ep.len() as u32,
-                team_reward: ep.team_return,
-                complete: ep.complete,
-                epsilon: f64::from(epsilon),
-                updates: state.updates,
-                wall_s: clock.wall(),
-            })?;
-            let tag = |what: &str| format!("episode/{}_{what}", kind.short());
-            logs.scalar(&tag("team_reward"), ep.team_return as f32, id)?;
-            logs.scalar(&tag("steps"), ep.len() as f32, id)?;
-            reward_sum += ep.team_return;
-            steps_sum += ep.len() as f64;
-            match kind {
-                EnvKind::Centralized => cen.push(ep, cfg.replay_episodes),
-                EnvKind::Decentralized => dec.push(ep, cfg.replay_episodes),
-            }
-        }
-        state.episode += 1;
-        if state.episode >= cfg.warmup_episodes {
-            for _ in 0..cfg.updates_per_episode {
-                let mut rng = stream(cfg.seed, "sample", state.updates);
-                let mut cep_loss = f32::NAN;
-                if let Some((online, target, mut optim)) = nets.cep.take() {
-                    let batch = cen.sample(cfg.batch_size, cfg.trace_len, &mut rng);
-                    let (online, loss) = cep_update(online, &target, &mut optim, &batch, &params);
-                    cep_loss = loss;
-                    nets.cep = Some((online, target, optim));
-                }
-                // DEP batches: `batch_size` robot sequences — for a shared DEP of any robot,
-                // for a per-robot DEP of its own.
-                let cep_plain = nets.cep.as_ref().map(|(o, _, _)| target_of(o));
-                let mut dep_loss = 0.0;
-                let deps = std::mem::take(&mut nets.deps);
-                for ((online, target, mut optim), robots) in deps.into_iter().zip(&groups) {
-                    let batch = dec.sample_robots(cfg.batch_size, cfg.trace_len, robots, &mut rng);
-                    let (online, loss) = dep_update(
-                        online,
-                        &target,
-                        &mut optim,
-                        cep_plain.as_ref(),
-                        &batch,
-                        &params,
-                    );
-                    dep_loss += loss / groups.len() as f32;
-                    nets.deps.push((online, target, optim));
-                }
-                state.updates += 1;
-                if state.updates % cfg.target_update_every == 0 {
-                    nets.sync_targets();
-                }
-                logs.updates.append(&UpdateRow {
-                    update: state.updates - 1,
-                    cep_loss: cep_loss.into(),
-                    dep_loss: dep_loss.into(),
-                })?;
-                if cep_loss.is_finite() {
-                    logs.scalar("loss/cep", cep_loss, state.updates)?;
-                }
-                logs.scalar("loss/dep", dep_loss, state.updates)?;
-            }
-        }
-        if cfg.validate_every > 0 && state.episode % cfg.validate_every == 0 {
-            let model = Model::with_grid(
-                model_info(cfg, &state, None),
-                nets.deps
-                    .iter()
-                    .map(|(o, _, _)| Arc::new(target_of(o)))
-                    .collect(),
-            )
-            .expect("one DEP per group");
-            let mut registry = PolicyRegistry::default();
-            model.register(&mut registry, "candidate", "the DEPs being trained");
-            if validation_maps.is_none() {
-                validation_maps = Some(cfg.validation_maps()?);
-            }
-            let v = validate(
-                validation_maps.as_deref().expect("drawn above"),
-                &cfg.validation_csp,
-                &registry,
-                "candidate",
-            )?;
-            let (steps, ret, done, n) = (v.mean_steps, v.mean_team_return, v.completed, v.trials);
-            let id = state.episode * per_iter;
-            logs.validation.append(&ValidationRow {
-                episode: id,
-                updates: state.updates,
-                mean_steps: steps,
-                mean_team_reward: ret,
-                completed: done as u32,
-                trials: n as u32,
-            })?;
-            logs.scalar("validation/mean_steps", steps as f32, id)?;
-            logs.scalar("validation/mean_team_reward", ret as f32, id)?;
-            last_validation = Some(steps);
-            if harness::new_best(&mut state.best_validation, steps) {
-                let info = model_info(cfg, &state, Some(steps));
-                save_model(&run_dir.join("best"), &nets, &info)?;
-            }
-        }
-        let stopping = state.episode == cfg.episodes || clock.out_of_time(cfg.max_minutes);
-        if state.episode % cfg.checkpoint_every == 0
-            || stopping
-            || clock.checkpoint_due(cfg.checkpoint_minutes)
-        {
-            state.wall_s = clock.wall();
-            checkpoint(&ckpt_dir, &nets, &state, &cen, &dec)?;
-            clock.checkpointed();
-            save_model(&run_dir.join("last"), &nets, &model_info(cfg, &state, None))?;
-        }
-        logs.flush()?;
-        progress(&Progress {
-            done: state.episode,
-            total: cfg.episodes,
-            unit: MadeNetLearner::UNIT,
-            updates: state.updates,
-            validation_steps: last_validation,
-            base_steps: None,
-            figures: vec![
-                ("ε", epsilon as f64, 2),
-                ("reward", reward_sum / envs.len() as f64, 0),
-                ("steps", steps_sum / envs.len() as f64, 0),
-            ],
-        });
-        if stopping {
-            break;
-        }
-    }
-    Ok(())
 }
 
 fn model_info(cfg: &TrainConfig, state: &State, validation_steps: Option<f64>) -> ModelInfo {

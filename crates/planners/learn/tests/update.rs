@@ -3,43 +3,14 @@
 //! Single test: network initialisation draws from burn's process-wide RNG.
 
 use burn::optim::AdamConfig;
-use madenet_learn::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
-use madenet_learn::learner::{
-    cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window,
-};
+use madenet_learn::env::{ActorNets, EnvKind};
+use madenet_learn::learner::{cep_update, dep_update, target_of, RobotWindow, Window};
 use madenet_learn::{cpu_autodiff, TrainConfig};
-use madenet_sim::TrialSpec;
-use madenet_world::rng::stream;
 
-fn episodes(cfg: &TrainConfig, nets: &ActorNets, kind: EnvKind, n: u64) -> Vec<Episode> {
-    (0..n)
-        .map(|k| {
-            let (map, starts) = cfg.scenario_draw().draw(100 + k).unwrap();
-            let spec = TrialSpec {
-                map,
-                map_name: "t".into(),
-                starts,
-                config: madenet_world::ScenarioConfig {
-                    comm_success_prob: 0.5,
-                    step_cap: 60,
-                    ..cfg.scenario.clone()
-                },
-                policy: String::new(),
-                seed: k,
-            };
-            let actor = Actor::new(
-                kind,
-                nets.clone(),
-                1.0,
-                false,
-                cfg.goals(),
-                3,
-                stream(k, "test-actor", 0),
-            );
-            run_episode(spec, actor).unwrap()
-        })
-        .collect()
+mod support {
+    pub mod fixture;
 }
+use support::fixture::{episodes, params};
 
 fn falls(losses: &[f32]) -> bool {
     let first = losses[0];
@@ -52,23 +23,34 @@ fn losses_fall_on_a_fixed_batch() {
     let cfg = TrainConfig::default();
     let device = cpu_autodiff();
     device.seed(7);
-    let p = UpdateParams {
-        gamma: 1.0,
-        learning_rate: 1e-3,
-        reward_scale: 0.01,
-        map_height: 20,
-        map_width: 20,
-        team: 3,
-        goals: cfg.goals(),
-    };
+    let p = params(&cfg);
     let mut cep = cfg.cep_config().init(&device).unwrap();
     let mut dep = cfg.dep_config().init(&device).unwrap();
     let nets = ActorNets {
         cep: Some(target_of(&cep)),
         deps: vec![target_of(&dep)],
     };
-    let cen = episodes(&cfg, &nets, EnvKind::Centralized, 3);
-    let dec = episodes(&cfg, &nets, EnvKind::Decentralized, 3);
+    let scenario = madenet_world::ScenarioConfig {
+        step_cap: 60,
+        ..cfg.scenario.clone()
+    };
+    let names = ["t", "test-actor"];
+    let cen = episodes(
+        &cfg,
+        &scenario,
+        &nets,
+        EnvKind::Centralized,
+        (100, 3),
+        names,
+    );
+    let dec = episodes(
+        &cfg,
+        &scenario,
+        &nets,
+        EnvKind::Decentralized,
+        (100, 3),
+        names,
+    );
     // Episodes are consistent: every decision step is a primitive step with a decision.
     for e in cen.iter().chain(&dec) {
         assert_eq!(e.cep.len(), e.decisions.len());

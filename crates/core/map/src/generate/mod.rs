@@ -133,21 +133,14 @@ impl GeneratorConfig {
             width,
             density_min: 0.15,
             density_max: 0.40,
-            keep_free: Corner::ALL
-                .iter()
-                .flat_map(|c| c.start_cells(height, width))
-                .collect(),
+            keep_free: Corner::all_start_cells(height, width),
         }
     }
 
     /// Checks the configuration: `height, width >= 3`, `0 <= density_min <= density_max < 0.9`,
     /// every `keep_free` cell inside the grid. Errors are [`MapError::Invalid`] naming the field.
     pub fn validate(&self) -> Result<(), MapError> {
-        let bad = |field: &str, msg: String| {
-            Err(MapError::Invalid(format!(
-                "generator config: field `{field}`: {msg}"
-            )))
-        };
+        let bad = |field: &str, msg: String| invalid_field("generator config", field, msg);
         if self.height < 3 {
             return bad("height", format!("must be at least 3, got {}", self.height));
         }
@@ -185,8 +178,7 @@ impl GeneratorConfig {
                 ),
             );
         }
-        let probe = OccGrid::new(self.height, self.width, Occupancy::Free);
-        if let Some(p) = self.keep_free.iter().find(|p| !probe.in_bounds(**p)) {
+        if let Some(p) = cell_outside(&self.keep_free, self.height, self.width) {
             return bad(
                 "keep_free",
                 format!(
@@ -198,6 +190,17 @@ impl GeneratorConfig {
         }
         Ok(())
     }
+}
+
+/// A configuration error naming the field: `what: field `field`: msg`.
+pub(crate) fn invalid_field(what: &str, field: &str, msg: String) -> Result<(), MapError> {
+    Err(MapError::Invalid(format!("{what}: field `{field}`: {msg}")))
+}
+
+/// The first of `cells` outside a `height × width` grid, if any.
+pub(crate) fn cell_outside(cells: &[Pos], height: usize, width: usize) -> Option<&Pos> {
+    let probe = OccGrid::new(height, width, Occupancy::Free);
+    cells.iter().find(|p| !probe.in_bounds(**p))
 }
 
 /// The 8 unit steps, orthogonal first.
@@ -250,6 +253,21 @@ pub fn generate_with_movement(
     seed: u64,
     movement: Movement,
 ) -> Result<OccGrid, MapError> {
+    let mut cut = CutCheck::default();
+    generate_checked(cfg, seed, |grid, seen, _placed| {
+        cut.still_connected(grid, seen, movement)
+    })
+}
+
+/// The generator's loop, with the connectivity check of a tentative addition left to
+/// `still_connected(grid, seen, placed)`: `grid` already holds the new cells `seen` as
+/// obstacles, `placed` counts the obstacles accepted before them. [`generate_with_movement`]
+/// checks locally; the tests pass a full breadth-first count to show the maps are the same.
+fn generate_checked(
+    cfg: &GeneratorConfig,
+    seed: u64,
+    mut still_connected: impl FnMut(&OccGrid, &[Pos], usize) -> bool,
+) -> Result<OccGrid, MapError> {
     cfg.validate()?;
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let (h, w) = (cfg.height, cfg.width);
@@ -267,7 +285,6 @@ pub fn generate_with_movement(
         protected[grid.index(*p)] = true;
     }
     let mut obstacles: Vec<Pos> = Vec::with_capacity(target);
-    let mut cut = CutCheck::default();
     let mut shape = Vec::with_capacity(16);
     let mut seen = Vec::with_capacity(16);
     let mut failures = 0;
@@ -308,7 +325,7 @@ pub fn generate_with_movement(
                 // The free space was one component before this addition (it starts whole and
                 // every accepted addition keeps it so), so only the new cells' surroundings
                 // need checking rather than the whole grid.
-                let ok = cut.still_connected(&grid, &seen, movement);
+                let ok = still_connected(&grid, &seen, obstacles.len());
                 if !ok {
                     for &p in &seen {
                         grid.set(p, Occupancy::Free);

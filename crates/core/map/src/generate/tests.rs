@@ -87,7 +87,7 @@ proptest! {
     }
 }
 
-/// The generator as it was before its connectivity check became local (a full
+/// The generator with its connectivity check as it was before it became local (a full
 /// breadth-first count of the free cells after every addition), kept to show the maps did
 /// not change: every result stream of the project is built on them.
 fn reference_generate(
@@ -95,82 +95,20 @@ fn reference_generate(
     seed: u64,
     movement: Movement,
 ) -> Result<OccGrid, MapError> {
-    cfg.validate()?;
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    let (h, w) = (cfg.height, cfg.width);
-    let n = h * w;
-    let density = if cfg.density_min < cfg.density_max {
-        rng.random_range(cfg.density_min..=cfg.density_max)
-    } else {
-        cfg.density_min
-    };
-    let target = ((density * n as f64).round() as usize).min(n);
-
-    let mut grid = OccGrid::new(h, w, Occupancy::Free);
-    let mut protected = vec![false; n];
-    for p in &cfg.keep_free {
-        protected[grid.index(*p)] = true;
-    }
-    let mut obstacles: Vec<Pos> = Vec::with_capacity(target);
+    let n = cfg.height * cfg.width;
     let mut scratch = Bfs::default();
-    let mut shape = Vec::with_capacity(16);
-    let mut failures = 0;
-
-    while obstacles.len() < target && failures < GIVE_UP_AFTER {
-        random_shape(
-            &mut rng,
-            &grid,
-            &obstacles,
-            failures >= SHRINK_AFTER,
-            &mut shape,
-        );
-        let remaining = target - obstacles.len();
-        let mut seen = Vec::with_capacity(shape.len());
-        for &p in &shape {
-            if grid.is_free(p) && !seen.contains(&p) && seen.len() < remaining {
-                seen.push(p);
-            }
-        }
-        let touches = || {
-            seen.iter().any(|p| {
-                DIRS.iter().any(|(dr, dc)| {
-                    grid.get(Pos::new(p.row + dr, p.col + dc)) == Occupancy::Obstacle
-                        && grid.in_bounds(Pos::new(p.row + dr, p.col + dc))
-                })
-            })
-        };
-        let accepted = !seen.is_empty()
-            && !seen.iter().any(|&p| protected[grid.index(p)])
-            && (failures >= TOUCH_RELAX_AFTER || !touches() || rng.random_bool(TOUCH_ACCEPT))
-            && {
-                for &p in &seen {
-                    grid.set(p, Occupancy::Obstacle);
-                }
-                let free_left = n - obstacles.len() - seen.len();
-                let anchor = cfg.keep_free.first().copied().or_else(|| {
-                    grid.cells()
-                        .iter()
-                        .position(|&c| c == Occupancy::Free)
-                        .map(|i| grid.pos(i))
-                });
-                let ok = anchor.map_or(free_left == 0, |a| {
-                    scratch.reach_count(&grid, a, movement) == free_left
-                });
-                if !ok {
-                    for &p in &seen {
-                        grid.set(p, Occupancy::Free);
-                    }
-                }
-                ok
-            };
-        if accepted {
-            obstacles.extend_from_slice(&seen);
-            failures = 0;
-        } else {
-            failures += 1;
-        }
-    }
-    Ok(grid)
+    generate_checked(cfg, seed, |grid, seen, placed| {
+        let free_left = n - placed - seen.len();
+        let anchor = cfg.keep_free.first().copied().or_else(|| {
+            grid.cells()
+                .iter()
+                .position(|&c| c == Occupancy::Free)
+                .map(|i| grid.pos(i))
+        });
+        anchor.map_or(free_left == 0, |a| {
+            scratch.reach_count(grid, a, movement) == free_left
+        })
+    })
 }
 
 /// The density ranges and `keep_free` variants the identity tests cover: the default,

@@ -40,6 +40,38 @@ fn assert_names(err: &MapError, needle: &str) {
     );
 }
 
+/// Writes [`YAML_OK`] with `from` replaced by `to` to `dir/name`.
+fn write_yaml(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
+    write(dir, name, YAML_OK.replace(from, to).as_bytes())
+}
+
+/// Writes `bytes` to `dir/name` and loads it with the default options: the error, checked to
+/// be a format error naming the file.
+fn format_error(dir: &Path, name: &str, bytes: &[u8]) -> MapError {
+    let e = load(&write(dir, name, bytes), &LoadOptions::default()).unwrap_err();
+    assert!(matches!(e, MapError::Format { .. }), "{e}");
+    assert_names(&e, name);
+    e
+}
+
+/// Loads `path` with the default options but `cell_size`.
+fn load_with_cells(path: &Path, cell_size: f64) -> Result<OccGrid, MapError> {
+    load(
+        path,
+        &LoadOptions {
+            cell_size,
+            ..LoadOptions::default()
+        },
+    )
+}
+
+/// A scratch directory holding [`small_pgm`] as `m.pgm`, the image [`YAML_OK`] names.
+fn scratch_with_pgm(name: &str) -> Scratch {
+    let dir = Scratch::new(name);
+    write(&dir, "m.pgm", &small_pgm());
+    dir
+}
+
 fn small_pgm() -> Vec<u8> {
     b"P5\n3 2\n255\n\x00\xfe\xcd\xfe\xfe\x00".to_vec()
 }
@@ -63,15 +95,8 @@ fn save_thresholds_round_trip_the_three_pixel_values() {
 
 #[test]
 fn reads_yaml_with_pgm() {
-    let dir = Scratch::new("map-test-yaml-ok");
-    write(&dir, "m.pgm", &small_pgm());
-    let yaml = write(
-        &dir,
-        "m.yaml",
-        YAML_OK
-            .replace("[0.0, 0.0, 0.0]", "[1.5, -2, 0.0]")
-            .as_bytes(),
-    );
+    let dir = scratch_with_pgm("map-test-yaml-ok");
+    let yaml = write_yaml(&dir, "m.yaml", "[0.0, 0.0, 0.0]", "[1.5, -2, 0.0]");
     let g = load(&yaml, &LoadOptions::default()).expect("load");
     assert_eq!((g.height(), g.width()), (2, 3));
     assert_eq!(to_text(&g), "#.?\n..#\n");
@@ -81,13 +106,8 @@ fn reads_yaml_with_pgm() {
 
 #[test]
 fn negate_and_modes() {
-    let dir = Scratch::new("map-test-modes");
-    write(&dir, "m.pgm", &small_pgm());
-    let negated = write(
-        &dir,
-        "n.yaml",
-        YAML_OK.replace("negate: 0", "negate: 1").as_bytes(),
-    );
+    let dir = scratch_with_pgm("map-test-modes");
+    let negated = write_yaml(&dir, "n.yaml", "negate: 0", "negate: 1");
     let g = load(&negated, &LoadOptions::default()).expect("negated");
     // 0 → p 0 free; 254 → p 0.996 obstacle; 205 → p 0.80 obstacle.
     assert_eq!(to_text(&g), ".##\n##.\n");
@@ -128,112 +148,39 @@ fn ascii_pgm_and_maxval_scaling() {
 
 #[test]
 fn bad_inputs_give_the_right_error() {
-    let dir = Scratch::new("map-test-bad");
+    let dir = scratch_with_pgm("map-test-bad");
     let opts = LoadOptions::default();
-    write(&dir, "m.pgm", &small_pgm());
 
     let missing = dir.join("nope.yaml");
     let e = load(&missing, &opts).unwrap_err();
     assert!(matches!(e, MapError::Io { .. }), "{e}");
     assert_names(&e, "nope.yaml");
 
-    let no_res = write(
-        &dir,
-        "nores.yaml",
-        YAML_OK.replace("resolution: 1.0\n", "").as_bytes(),
-    );
-    let e = load(&no_res, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
-        "{e}"
-    );
-    assert_names(&e, "nores.yaml");
+    // YAML fields out of range or of the wrong type: (file, text replaced, by, field named).
+    #[rustfmt::skip]
+    let bad_fields = [
+        ("nores.yaml", "resolution: 1.0\n", "", "resolution"),
+        ("type.yaml", "resolution: 1.0", "resolution: fine", "resolution"),
+        ("negres.yaml", "resolution: 1.0", "resolution: -1", "resolution"),
+        ("thresh.yaml", "occupied_thresh: 0.65", "occupied_thresh: 1.5", "occupied_thresh"),
+        ("crossed.yaml", "free_thresh: 0.196", "free_thresh: 0.7", "free_thresh"),
+        ("origin.yaml", "[0.0, 0.0, 0.0]", "[0.0, 0.0]", "origin"),
+        ("negate.yaml", "negate: 0", "negate: 2", "negate"),
+    ];
+    for (name, from, to, expected) in bad_fields {
+        let yaml = YAML_OK.replace(from, to);
+        assert_ne!(yaml, YAML_OK, "{name}: nothing replaced");
+        let e = load(&write(&dir, name, yaml.as_bytes()), &opts).unwrap_err();
+        assert!(
+            matches!(e, MapError::Field { ref field, .. } if field == expected),
+            "{name}: {e}"
+        );
+        assert_names(&e, name);
+    }
 
-    let wrong_type = write(
-        &dir,
-        "type.yaml",
-        YAML_OK
-            .replace("resolution: 1.0", "resolution: fine")
-            .as_bytes(),
-    );
-    let e = load(&wrong_type, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
-        "{e}"
-    );
+    format_error(&dir, "garbage.yaml", b"image: [unclosed\n  - : :");
 
-    let neg_res = write(
-        &dir,
-        "negres.yaml",
-        YAML_OK
-            .replace("resolution: 1.0", "resolution: -1")
-            .as_bytes(),
-    );
-    let e = load(&neg_res, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
-        "{e}"
-    );
-
-    let bad_thresh = write(
-        &dir,
-        "thresh.yaml",
-        YAML_OK
-            .replace("occupied_thresh: 0.65", "occupied_thresh: 1.5")
-            .as_bytes(),
-    );
-    let e = load(&bad_thresh, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "occupied_thresh"),
-        "{e}"
-    );
-    assert_names(&e, "thresh.yaml");
-
-    let crossed = write(
-        &dir,
-        "crossed.yaml",
-        YAML_OK
-            .replace("free_thresh: 0.196", "free_thresh: 0.7")
-            .as_bytes(),
-    );
-    let e = load(&crossed, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "free_thresh"),
-        "{e}"
-    );
-
-    let bad_origin = write(
-        &dir,
-        "origin.yaml",
-        YAML_OK.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0]").as_bytes(),
-    );
-    let e = load(&bad_origin, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "origin"),
-        "{e}"
-    );
-
-    let bad_negate = write(
-        &dir,
-        "negate.yaml",
-        YAML_OK.replace("negate: 0", "negate: 2").as_bytes(),
-    );
-    let e = load(&bad_negate, &opts).unwrap_err();
-    assert!(
-        matches!(e, MapError::Field { ref field, .. } if field == "negate"),
-        "{e}"
-    );
-
-    let garbage = write(&dir, "garbage.yaml", b"image: [unclosed\n  - : :");
-    let e = load(&garbage, &opts).unwrap_err();
-    assert!(matches!(e, MapError::Format { .. }), "{e}");
-    assert_names(&e, "garbage.yaml");
-
-    let missing_image = write(
-        &dir,
-        "noimg.yaml",
-        YAML_OK.replace("m.pgm", "absent.pgm").as_bytes(),
-    );
+    let missing_image = write_yaml(&dir, "noimg.yaml", "m.pgm", "absent.pgm");
     let e = load(&missing_image, &opts).unwrap_err();
     assert!(matches!(e, MapError::Io { .. }), "{e}");
     assert_names(&e, "absent.pgm");
@@ -253,34 +200,18 @@ fn bad_inputs_give_the_right_error() {
     .enumerate()
     {
         let name = format!("t{i}.pgm");
-        let p = write(&dir, &name, bytes);
-        let e = load(&p, &opts).unwrap_err();
-        assert!(matches!(e, MapError::Format { .. }), "{e}");
-        assert_names(&e, &name);
-        let y = write(
-            &dir,
-            &format!("t{i}.yaml"),
-            YAML_OK.replace("m.pgm", &name).as_bytes(),
-        );
+        format_error(&dir, &name, bytes);
+        let y = write_yaml(&dir, &format!("t{i}.yaml"), "m.pgm", &name);
         let e = load(&y, &opts).unwrap_err();
         assert_names(&e, &name);
     }
 
-    let png = write(&dir, "broken.png", b"\x89PNG\r\n\x1a\nnot really");
-    let e = load(&png, &opts).unwrap_err();
-    assert!(matches!(e, MapError::Format { .. }), "{e}");
-    assert_names(&e, "broken.png");
+    format_error(&dir, "broken.png", b"\x89PNG\r\n\x1a\nnot really");
 
-    let ragged = write(&dir, "ragged.txt", b"...\n..\n...\n");
-    let e = load(&ragged, &opts).unwrap_err();
-    assert!(matches!(e, MapError::Format { .. }), "{e}");
-    assert_names(&e, "ragged.txt");
+    let e = format_error(&dir, "ragged.txt", b"...\n..\n...\n");
     assert_names(&e, "line 2");
 
-    let bad_char = write(&dir, "char.txt", b"...\n.x.\n");
-    let e = load(&bad_char, &opts).unwrap_err();
-    assert!(matches!(e, MapError::Format { .. }), "{e}");
-    assert_names(&e, "char.txt");
+    let e = format_error(&dir, "char.txt", b"...\n.x.\n");
     assert_names(&e, "line 2, column 2");
 
     let empty = write(&dir, "empty.txt", b"\n\n");
@@ -294,41 +225,20 @@ fn bad_inputs_give_the_right_error() {
     assert_names(&e, "map.bmp");
     assert_names(&e, ".yaml");
 
-    let e = load(
-        &dir.join("m.pgm"),
-        &LoadOptions {
-            cell_size: 0.0,
-            ..opts
-        },
-    )
-    .unwrap_err();
+    let e = load_with_cells(&dir.join("m.pgm"), 0.0).unwrap_err();
     assert!(matches!(e, MapError::Invalid(_)), "{e}");
 }
 
 #[test]
 fn resolution_must_not_be_coarser_than_the_cell_size() {
-    let dir = Scratch::new("map-test-res");
-    write(&dir, "m.pgm", &small_pgm());
+    let dir = scratch_with_pgm("map-test-res");
     let yaml = write(&dir, "m.yaml", YAML_OK.as_bytes());
-    let e = load(
-        &yaml,
-        &LoadOptions {
-            cell_size: 0.5,
-            ..LoadOptions::default()
-        },
-    )
-    .unwrap_err();
+    let e = load_with_cells(&yaml, 0.5).unwrap_err();
     assert!(
         matches!(e, MapError::Field { ref field, .. } if field == "resolution"),
         "{e}"
     );
-    let coarse = write(
-        &dir,
-        "c.yaml",
-        YAML_OK
-            .replace("resolution: 1.0", "resolution: 0.3")
-            .as_bytes(),
-    );
+    let coarse = write_yaml(&dir, "c.yaml", "resolution: 1.0", "resolution: 0.3");
     // 1 m cells of 3.33 pixels of 0.3 m: the 3 × 2 image (0.9 × 0.6 m) is one cell
     // holding all six pixel centres, 2 of them occupied (33 % > 25 %); the cell reaches
     // 0.4 m below the image, so the origin moves down by that.
@@ -337,14 +247,7 @@ fn resolution_must_not_be_coarser_than_the_cell_size() {
     assert_eq!(g.cells(), [Occupancy::Obstacle]);
     assert!((g.origin[1] + 0.4).abs() < 1e-9, "{:?}", g.origin);
     // Bare images are 1 m/pixel; a 2 m cell merges 2×2 blocks.
-    let g = load(
-        &dir.join("m.pgm"),
-        &LoadOptions {
-            cell_size: 2.0,
-            ..LoadOptions::default()
-        },
-    )
-    .expect("bare");
+    let g = load_with_cells(&dir.join("m.pgm"), 2.0).expect("bare");
     assert_eq!((g.height(), g.width(), g.resolution), (1, 2, 2.0));
 }
 
@@ -391,14 +294,7 @@ fn discretizes_a_fine_yaml_map() {
     assert_eq!(g.get(Pos::new(1, 0)), Occupancy::Free);
     assert_eq!(g.get(Pos::new(1, 1)), Occupancy::Free);
     // cell_size 0.25 keeps the pixels (and the unknown band).
-    let g = load(
-        &yaml,
-        &LoadOptions {
-            cell_size: 0.25,
-            ..LoadOptions::default()
-        },
-    )
-    .expect("pixels");
+    let g = load_with_cells(&yaml, 0.25).expect("pixels");
     assert_eq!(
         (g.height(), g.width(), g.count(Occupancy::Unknown)),
         (8, 8, 32 - 4)
@@ -407,26 +303,12 @@ fn discretizes_a_fine_yaml_map() {
 
 #[test]
 fn partial_bottom_block_moves_the_origin_down() {
-    let dir = Scratch::new("map-test-origin");
-    write(&dir, "m.pgm", &small_pgm()); // 3 wide, 2 high
-    let yaml = write(
-        &dir,
-        "m.yaml",
-        YAML_OK
-            .replace("resolution: 1.0", "resolution: 0.5")
-            .as_bytes(),
-    );
+    let dir = scratch_with_pgm("map-test-origin"); // m.pgm: 3 wide, 2 high
+    let yaml = write_yaml(&dir, "m.yaml", "resolution: 1.0", "resolution: 0.5");
     let g = load(&yaml, &LoadOptions::default()).expect("load");
     // 2 pixel rows fit one 2-pixel cell exactly; 3 columns → 2 cells, no vertical padding.
     assert_eq!((g.height(), g.width(), g.origin), (1, 2, [0.0, 0.0, 0.0]));
-    let g = load(
-        &yaml,
-        &LoadOptions {
-            cell_size: 1.5,
-            ..LoadOptions::default()
-        },
-    )
-    .expect("load");
+    let g = load_with_cells(&yaml, 1.5).expect("load");
     // 2 rows → 1 cell of 3 pixel rows: one padding row of 0.5 m below the image.
     assert_eq!((g.height(), g.width()), (1, 1));
     assert!((g.origin[1] + 0.5).abs() < 1e-12 && g.origin[0].abs() < 1e-12);

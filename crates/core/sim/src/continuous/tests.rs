@@ -83,28 +83,17 @@ fn outside_decisions_are_obeyed() {
 #[test]
 fn the_stuck_clock_runs_on_while_the_robot_stays_in_its_cell() {
     let (a, b) = (Pos::new(3, 3), Pos::new(3, 4));
+    let clock = |since, from| StuckClock { since, from };
     let mut c = StuckClock::default();
     c.named(false, a, 10.0);
-    assert_eq!(
-        c,
-        StuckClock {
-            since: 10.0,
-            from: a
-        }
-    );
+    assert_eq!(c, clock(10.0, a));
     // Other first steps named from the same cell while driving: the clock runs on.
     c.named(true, a, 25.0);
     c.named(true, a, 39.0);
     assert_eq!(c.since, 10.0);
     // Named from another cell (the robot moved): a new clock.
     c.named(true, b, 41.0);
-    assert_eq!(
-        c,
-        StuckClock {
-            since: 41.0,
-            from: b
-        }
-    );
+    assert_eq!(c, clock(41.0, b));
     // After a stay (no target) in the same cell: a new clock too.
     c.named(false, b, 60.0);
     assert_eq!(c.since, 60.0);

@@ -10,6 +10,17 @@ use madenet_stats::{friedman, wilcoxon};
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// The rest of a table's header after its first column: one column per team size, then the
+/// separator line (`2 robots | 3 robots |\n|---|---|---|`).
+fn team_columns(teams: &[usize]) -> String {
+    let names: Vec<String> = teams.iter().map(|t| format!("{t} robots")).collect();
+    format!(
+        "{} |\n|---|{}",
+        names.join(" | "),
+        "---|".repeat(teams.len())
+    )
+}
+
 fn p_text(p: f64) -> String {
     if p < 1e-3 {
         format!("{p:.1e}")
@@ -78,14 +89,9 @@ pub(super) fn report_text(
     for &side in &cfg.sides {
         let _ = writeln!(
             s,
-            "## {side} × {side} ({cap} {})\n\n| method | {} |\n|---|{}",
+            "## {side} × {side} ({cap} {})\n\n| method | {}",
             cfg.step_cap(side),
-            cfg.teams
-                .iter()
-                .map(|t| format!("{t} robots"))
-                .collect::<Vec<_>>()
-                .join(" | "),
-            "---|".repeat(cfg.teams.len())
+            team_columns(&cfg.teams)
         );
         for method in &cfg.methods {
             let row: Vec<String> = cfg
@@ -438,13 +444,8 @@ pub(super) fn headroom_text(
     for &side in &cfg.sides {
         let _ = writeln!(
             s,
-            "### {side} × {side}\n\n| run | {} |\n|---|{}",
-            cfg.teams
-                .iter()
-                .map(|t| format!("{t} robots"))
-                .collect::<Vec<_>>()
-                .join(" | "),
-            "---|".repeat(cfg.teams.len())
+            "### {side} × {side}\n\n| run | {}",
+            team_columns(&cfg.teams)
         );
         let bounds_row: Vec<String> = cfg
             .teams

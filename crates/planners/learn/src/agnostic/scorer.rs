@@ -12,8 +12,23 @@
 //! candidates scored equal to within them (burn's backend dispatched the same way).
 
 use super::{AgnosticInput, AgnosticNet, CONTEXT_FEATURES, CROP_CHANNELS};
+use crate::Tensor;
+use burn::module::Param;
 use burn::nn::conv::Conv2d;
 use burn::nn::{Linear, PaddingConfig2d};
+
+/// The values of a layer's parameter `p` (`what`: which, in the panic should they not be `f32`).
+fn values<const D: usize>(p: &Param<Tensor<D>>, what: &str) -> Vec<f32> {
+    p.val().into_data().try_into_vec_as::<f32>().expect(what)
+}
+
+/// A layer's bias, or `n` zeros for a layer without one.
+fn bias(b: &Option<Param<Tensor<1>>>, n: usize) -> Vec<f32> {
+    match b {
+        Some(b) => values(b, "f32 bias"),
+        None => vec![0.0; n],
+    }
+}
 
 /// A dense layer's weights: `w` is `[inputs, outputs]` row-major (burn's [`Linear`] layout).
 #[derive(Clone, Debug)]
@@ -27,23 +42,9 @@ struct Dense {
 impl Dense {
     fn of(l: &Linear) -> Self {
         let [inputs, outputs] = l.weight.val().dims();
-        let w = l
-            .weight
-            .val()
-            .into_data()
-            .try_into_vec_as::<f32>()
-            .expect("f32 weights");
-        let b = match &l.bias {
-            Some(b) => b
-                .val()
-                .into_data()
-                .try_into_vec_as::<f32>()
-                .expect("f32 bias"),
-            None => vec![0.0; outputs],
-        };
         Dense {
-            w,
-            b,
+            w: values(&l.weight, "f32 weights"),
+            b: bias(&l.bias, outputs),
             inputs,
             outputs,
         }
@@ -83,12 +84,7 @@ impl Conv {
         assert_eq!(c.stride[0], c.stride[1], "square strides");
         let [out, cin, kh, kw] = c.weight.val().dims();
         assert_eq!(kh, kw, "square kernels");
-        let w = c
-            .weight
-            .val()
-            .into_data()
-            .try_into_vec_as::<f32>()
-            .expect("f32 weights");
+        let w = values(&c.weight, "f32 weights");
         // burn's [out, in, kh, kw] → rows (in, kh, kw), columns out.
         let k = cin * kh * kw;
         let mut m = vec![0.0; k * out];
@@ -97,14 +93,7 @@ impl Conv {
                 m[r * out + o] = w[o * k + r];
             }
         }
-        let b = match &c.bias {
-            Some(b) => b
-                .val()
-                .into_data()
-                .try_into_vec_as::<f32>()
-                .expect("f32 bias"),
-            None => vec![0.0; out],
-        };
+        let b = bias(&c.bias, out);
         Conv {
             dense: Dense {
                 w: m,

@@ -1,7 +1,6 @@
 //! The learner's one config ([`RolloutTrainConfig`]): every knob with its default, and its
 //! validation (each refusal names the field).
 
-use crate::error::TrainError;
 use crate::harness::{self};
 use crate::model::Method;
 use crate::obs::Observation;
@@ -11,7 +10,6 @@ use madenet_sim::rollout::Value;
 use madenet_sim::PolicyRegistry;
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 
 /// The `method` of this learner's config and `model.toml`.
 pub const METHOD: &str = Method::MadeNetRollout.name();
@@ -316,15 +314,7 @@ impl Default for RolloutTrainConfig {
 }
 
 impl RolloutTrainConfig {
-    /// Reads a TOML config; errors name the file and the field.
-    pub fn from_toml_file(path: &Path) -> Result<Self, TrainError> {
-        harness::read_config(path, Self::validate)
-    }
-
-    /// [`Self::from_toml_file`] on `text`, already read from `path`.
-    pub fn from_toml_text(path: &Path, text: &str) -> Result<Self, TrainError> {
-        harness::parse_config(path, text, Self::validate)
-    }
+    crate::toml_config_readers!();
 
     /// Checks every field; the message names the field.
     pub fn validate(&self) -> Result<(), String> {

@@ -3,7 +3,7 @@
 
 use super::{collector::*, config::*, student::*, teacher::*};
 use crate::error::{write_atomic, TrainError};
-use crate::harness::{self, replace_dir, Clock, Learner, Progress, RunFields};
+use crate::harness::{self, replace_dir, Clock, Learner, Progress};
 use crate::model::{Method, ModelInfo, NetConfigToml};
 use crate::scenario::validate;
 use madenet_sim::{PolicyRegistry, TrialSpec};
@@ -240,27 +240,7 @@ impl Learner for RolloutLearner {
     const RESUME_EXTENDS_EPISODES: bool = false;
     const UNIT: &'static str = "iterations";
 
-    fn parse_config(path: &Path, text: &str) -> Result<RolloutTrainConfig, TrainError> {
-        RolloutTrainConfig::from_toml_text(path, text)
-    }
-
-    fn check(cfg: &RolloutTrainConfig) -> Result<(), String> {
-        cfg.validate()
-    }
-
-    fn run_fields(cfg: &RolloutTrainConfig) -> RunFields {
-        RunFields {
-            episodes: cfg.episodes,
-            max_minutes: cfg.max_minutes,
-            seed: cfg.seed,
-            threads: cfg.threads,
-        }
-    }
-
-    fn set_run_fields(cfg: &mut RolloutTrainConfig, f: RunFields) {
-        (cfg.episodes, cfg.max_minutes, cfg.seed, cfg.threads) =
-            (f.episodes, f.max_minutes, f.seed, f.threads);
-    }
+    crate::learner_config!();
 
     fn train_loop(
         run_dir: &Path,
