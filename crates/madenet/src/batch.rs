@@ -3,8 +3,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use madenet_sim::PolicyRegistry;
-use madenet_study::runner::{self, Planned, TrialOutcome};
+use madenet_study::runner::{self, TrialOutcome};
 use madenet_study::StudyConfig;
 use std::path::PathBuf;
 
@@ -40,14 +39,15 @@ pub fn run(a: BatchArgs) -> Result<()> {
         );
     }
     let registry = madenet_catalogue::with_model(&Default::default(), a.model.as_deref())?;
-    let scenario = crate::load_config(a.set.config.as_deref())?;
+    let scenario =
+        madenet_world::ScenarioConfig::from_toml_file_or_default(a.set.config.as_deref())?;
     let seeds = (a.set.seeds, a.set.seed_base);
     let mut cfg = StudyConfig::trial_set(&a.maps, &a.starts, &a.csp, seeds, scenario);
     cfg.methods = vec![a.policy.clone()];
     let flag = format!("--policy {}", a.policy);
     let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = run_planned(&planned, &registry, a.set.threads)?;
+    let outcomes = madenet_study::progress::run_planned(&planned, &registry, a.set.threads)?;
     let elapsed = started.elapsed();
     let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
     madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))
@@ -62,22 +62,4 @@ pub fn run(a: BatchArgs) -> Result<()> {
         out!("{line}")?;
     }
     Ok(())
-}
-
-/// Runs `planned` with a progress bar on `threads` workers; outcomes in plan order.
-pub fn run_planned(
-    planned: &[Planned],
-    registry: &PolicyRegistry,
-    threads: Option<usize>,
-) -> Result<Vec<TrialOutcome>> {
-    let (bar, pool) = crate::trials_bar_and_pool(planned.len() as u64, threads)?;
-    let all: Vec<&Planned> = planned.iter().collect();
-    let outcomes = pool.install(|| {
-        runner::run_all(&all, registry, &|_| {
-            bar.inc(1);
-            Ok(())
-        })
-    });
-    bar.finish_and_clear();
-    Ok(outcomes?)
 }

@@ -22,7 +22,7 @@ pub struct CompareArgs {
     /// Rollout oracles beside the methods, overriding the config (comma-separated: replay,
     /// averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map,
     /// plan-team-map; `none` for none).
-    #[arg(long, value_delimiter = ',', value_parser = crate::oracles_arg)]
+    #[arg(long, value_delimiter = ',', value_parser = madenet_sim::rollout::OracleKind::parse_or_none)]
     oracles: Option<Vec<Option<OracleKind>>>,
     /// Seeds per trial, overriding the config.
     #[arg(long)]

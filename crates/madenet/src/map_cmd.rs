@@ -54,7 +54,7 @@ pub fn run(c: MapCommand) -> Result<()> {
             output,
             config,
         } => {
-            let cfg = crate::load_config(config.as_deref())?;
+            let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
             save(&grid, &output)?;
             out!(
@@ -88,7 +88,7 @@ pub fn run(c: MapCommand) -> Result<()> {
             )?;
         }
         MapCommand::Show { input, config } => {
-            let cfg = crate::load_config(config.as_deref())?;
+            let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
             if let Some(w) = input.erasure_warning(&cfg)? {
                 eprintln!("warning: {w}");

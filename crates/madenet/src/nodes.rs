@@ -109,15 +109,45 @@ pub struct WorldArgs {
     /// Add every timestep's robot positions to the JSON (`positions`).
     #[arg(long)]
     trajectory: bool,
-    /// Take at least this long per timestep, milliseconds (real robots' pace; 0: as fast as the robots answer).
+    #[command(flatten)]
+    show: ShowArgs,
+}
+
+/// What a world node shows and at what pace, and whether its robots are real (`world`, `launch`).
+#[derive(Args, Debug, Clone)]
+pub struct ShowArgs {
+    /// Take at least this long per timestep, milliseconds (to watch a run live, or real robots'
+    /// pace; 0–60000, 0: as fast as the robots answer).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000), value_name = "MS")]
     pace_ms: u64,
     #[command(flatten)]
     real: RealRobotArgs,
     #[command(flatten)]
-    pictures: crate::run::PictureArgs,
+    pictures: crate::scenario_args::PictureArgs,
     #[command(flatten)]
     watch: WatchArgs,
+}
+
+impl ShowArgs {
+    /// Checks the flags against the trial's map before anything runs.
+    fn check(&self, map: &madenet_map::OccGrid) -> Result<()> {
+        self.pictures.check(map.width(), map.height())?;
+        self.real
+            .refuse_outputs(self.pictures.any(), self.watch.any())
+    }
+
+    /// The flags as given, for the world node `launch` starts.
+    fn to_args(&self) -> Vec<String> {
+        let mut args = self.real.to_args();
+        if self.pictures.any() {
+            args.extend(self.pictures.to_args());
+        }
+        args.extend(self.watch.to_args());
+        if self.pace_ms > 0 {
+            args.extend(["--pace-ms".into(), self.pace_ms.to_string()]);
+        }
+        args
+    }
 }
 
 /// A world node's run as ROS 2 messages (cargo feature `ros2`): a bag, a live view.
@@ -143,18 +173,10 @@ impl WatchArgs {
     /// cannot be bound (the world node would fail only once every node runs).
     fn check(&self) -> Result<()> {
         if let Some(p) = &self.record {
-            let taken = p.exists()
-                && !(p.is_dir() && std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none()));
-            if taken {
-                anyhow::bail!(
-                    "--record: {}: already exists (a file, or a folder that is not empty): choose a new name",
-                    p.display()
-                );
-            }
+            madenet_ros2::bag::Bag::check_place(p).context("--record")?;
         }
         if let Some(addr) = self.foxglove.as_deref().filter(|a| !a.ends_with(":0")) {
-            std::net::TcpListener::bind(addr)
-                .map_err(|e| anyhow::anyhow!("--foxglove: {addr}: {e}"))?;
+            std::net::TcpListener::bind(addr).with_context(|| format!("--foxglove: {addr}"))?;
         }
         Ok(())
     }
@@ -277,21 +299,20 @@ impl Ros2Out {
 
 pub fn world(a: WorldArgs) -> Result<()> {
     let (spec, _) = a.scenario.spec()?;
-    a.pictures.check(spec.map.width(), spec.map.height())?;
+    a.show.check(&spec.map)?;
     let scenario = Some(scenario_of(&spec));
-    a.real.refuse_outputs(a.pictures.any(), a.watch.any())?;
-    if let Some(endpoint) = &a.real.ros2_robots {
+    if let Some(endpoint) = &a.show.real.ros2_robots {
         let opts = madenet_ros2::Ros2Options {
             connect: vec![endpoint.to_string()],
             ..Default::default()
         };
         let ctx = opts.context().context("--ros2-robots")?;
-        let wait = Duration::from_secs(a.real.step_timeout_s);
+        let wait = Duration::from_secs(a.show.real.step_timeout_s);
         let frame = madenet_ros2::MapFrame::of(&spec.map);
         let (n, config) = (spec.starts.len(), spec.config.clone());
         let real = madenet_ros2::RealRobots::new(&ctx, n, frame, config, wait, wait)
             .context("--ros2-robots")?;
-        let stop = Stop::watch(a.pace_ms > 0 || a.node.progress)?;
+        let stop = Stop::watch(a.show.pace_ms > 0 || a.node.progress)?;
         let stopped = serve_world(&a, &spec, &stop, |bus, t, serving| {
             serve::serve(real, bus, t, scenario, None, serving)
         })?;
@@ -307,13 +328,16 @@ pub fn world(a: WorldArgs) -> Result<()> {
     world.detach_radio();
     // Before the live view prints its address: a Ctrl-C from then on ends the run gracefully
     // (launched, always: `launch` passes its first signal on to this node).
-    let stop = Stop::watch(a.watch.any() || a.pace_ms > 0 || a.node.progress)?;
+    let stop = Stop::watch(a.show.watch.any() || a.show.pace_ms > 0 || a.node.progress)?;
     // The bag and the live view first (a refused --record leaves no picture behind either);
     // the pictures finish first.
     let mut sinks = WorldSinks::new(Box::new(|view| {
-        let rec =
-            crate::record::start(a.watch.record.as_deref(), a.watch.foxglove.as_deref(), view)?;
-        let pics = a.pictures.sink(1.0)?;
+        let rec = crate::record::start(
+            a.show.watch.record.as_deref(),
+            a.show.watch.foxglove.as_deref(),
+            view,
+        )?;
+        let pics = a.show.pictures.sink(1.0)?;
         let mut sinks: Vec<WorldSink> = Vec::new();
         sinks.extend(pics.map(|p| Box::new(p) as WorldSink));
         sinks.extend(rec.map(|r| Box::new(r) as WorldSink));
@@ -323,7 +347,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
         sinks.show(w, shown, links)
     };
     let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
-        (a.pictures.any() || a.watch.any()).then_some(&mut draw);
+        (a.show.pictures.any() || a.show.watch.any()).then_some(&mut draw);
     let stopped = serve_world(&a, &spec, &stop, |bus, t, serving| {
         serve::serve(world, bus, t, scenario, show, serving)
     })?;
@@ -352,7 +376,7 @@ fn serve_world(
 ) -> Result<Option<(String, i32)>> {
     let bus = a.node.bus(Node::World, spec.starts.len())?;
     let serving = Serving {
-        pace: Duration::from_millis(a.pace_ms),
+        pace: Duration::from_millis(a.show.pace_ms),
         progress: a.node.progress,
         stop,
     };
@@ -440,14 +464,7 @@ pub struct LaunchArgs {
     #[command(flatten)]
     ros2: Ros2Args,
     #[command(flatten)]
-    real: RealRobotArgs,
-    #[command(flatten)]
-    pictures: crate::run::PictureArgs,
-    #[command(flatten)]
-    watch: WatchArgs,
-    /// Take at least this long per timestep, milliseconds (to watch a run live; 0–60000).
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=60_000), value_name = "MS")]
-    pace_ms: u64,
+    show: ShowArgs,
 }
 
 pub fn launch(a: LaunchArgs) -> Result<()> {
@@ -455,9 +472,8 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
     // rather than five.
     let (spec, registry) = a.scenario.spec()?;
     let n = spec.starts.len();
-    a.pictures.check(spec.map.width(), spec.map.height())?;
-    a.real.refuse_outputs(a.pictures.any(), a.watch.any())?;
-    a.watch.check()?;
+    a.show.check(&spec.map)?;
+    a.show.watch.check()?;
     madenet_sim::build(spec, &registry).with_context(|| a.scenario.label())?;
     if a.port != 0 {
         loopback_endpoints(a.port, n, Node::Robot(n - 1))
@@ -486,7 +502,7 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             // writes (it exits with 128 + the signal only then); otherwise nothing asked for
             // is finished.
             if world_finished {
-                print_written(&a.pictures, &a.watch)?;
+                print_written(&a.show.pictures, &a.show.watch)?;
             }
             return Err(Interrupted {
                 at: world_at.unwrap_or_else(|| "the start".into()),
@@ -503,28 +519,14 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
         return Ok(());
     }
     let out: WorldOutput = serde_json::from_str(&json).context("the world's result")?;
-    for line in out.result.summary(&a.scenario.start.name()) {
+    for line in out.summary(&a.scenario.start.name(), n + 2, port) {
         out!("{line}")?;
     }
-    let rt = out.runtime;
-    out!(
-        "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
-        1e3 * rt.latency.mean_s,
-        1e3 * rt.latency.max_s,
-        rt.latency.acted
-    )?;
-    if rt.absent_robot_steps > 0 {
-        out!("absent     {} robot-timesteps", rt.absent_robot_steps)?;
-    }
-    out!(
-        "nodes      {} processes over Zenoh (tcp/127.0.0.1:{port}…)",
-        n + 2
-    )?;
-    print_written(&a.pictures, &a.watch)
+    print_written(&a.show.pictures, &a.show.watch)
 }
 
 /// The lines naming the pictures and the bag a run wrote.
-fn print_written(pictures: &crate::run::PictureArgs, watch: &WatchArgs) -> Result<()> {
+fn print_written(pictures: &crate::scenario_args::PictureArgs, watch: &WatchArgs) -> Result<()> {
     for p in pictures.render.iter().chain(&pictures.snapshot) {
         out!("wrote      {}", p.display())?;
     }
@@ -567,17 +569,10 @@ fn node_args(
                     args.extend(common.iter().cloned());
                     args.push("--out".into());
                     args.push(result_path.display().to_string());
-                    args.extend(a.real.to_args());
-                    if a.pictures.any() {
-                        args.extend(a.pictures.to_args());
-                    }
                     if a.trajectory {
                         args.push("--trajectory".into());
                     }
-                    args.extend(a.watch.to_args());
-                    if a.pace_ms > 0 {
-                        args.extend(["--pace-ms".into(), a.pace_ms.to_string()]);
-                    }
+                    args.extend(a.show.to_args());
                 }
                 Node::Radio => {
                     args.push("radio".into());

@@ -40,7 +40,7 @@ pub struct OracleArgs {
     /// redrawn), plan-redrawn (the known-map plan over redrawn maps: a team-wide teacher),
     /// plan-own-map, plan-team-map (plan-redrawn on the robot's own map, or with the teammates
     /// where it last knew them); see `madenet_sim::rollout::OracleKind`.
-    #[arg(long, value_parser = crate::oracle_arg, default_value = "replay")]
+    #[arg(long, default_value = "replay")]
     kind: OracleKind,
     /// Futures per candidate (averaged, redrawn) or to choose from (placebo); 1–64.
     #[arg(long, default_value_t = 4)]
@@ -74,7 +74,8 @@ pub fn run(a: OracleArgs) -> Result<()> {
         bail!("--horizon/--value: only the scoring oracles (replay, averaged, noiseless, redrawn) value continuations");
     }
     let registry = madenet_catalogue::shipped()?;
-    let scenario = crate::load_config(a.set.config.as_deref())?;
+    let scenario =
+        madenet_world::ScenarioConfig::from_toml_file_or_default(a.set.config.as_deref())?;
     let seeds = (a.set.seeds, a.set.seed_base);
     let mut cfg = StudyConfig::trial_set(&a.maps, &a.starts, &a.csp, seeds, scenario);
     cfg.methods = vec![a.base.clone()];
@@ -92,7 +93,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
     // The base rule's trials, then the oracle's on the same (map, start, CSP, seed), in order.
     let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = crate::batch::run_planned(&planned, &registry, a.set.threads)?;
+    let outcomes = madenet_study::progress::run_planned(&planned, &registry, a.set.threads)?;
     let (base, oracle) = outcomes.split_at(outcomes.len() / 2);
     if let Some(path) = &a.out {
         let rows: Vec<&TrialOutcome> = outcomes.iter().collect();

@@ -1,10 +1,10 @@
 //! `madenet run`: one trial.
 
-use crate::scenario_args::ScenarioArgs;
+use crate::scenario_args::{PictureArgs, ScenarioArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use madenet_continuous::ContinuousConfig;
-use madenet_render::{Drawn, Pictures, RenderOptions};
+use madenet_render::Drawn;
 use madenet_runtime::signals::{Interrupted, OnSignal, Stop};
 use madenet_sim::continuous::{ContinuousResult, ContinuousTrial};
 use madenet_sim::stepping::{Pace, Sink, Stepping};
@@ -85,99 +85,6 @@ impl RunArgs {
             (None, None) => None,
         }
     }
-}
-
-/// Pictures of a trial (`run`, `launch` and `world`).
-#[derive(Args, Debug, Clone)]
-pub struct PictureArgs {
-    /// Write an animated GIF of the trial.
-    #[arg(long, value_name = "GIF")]
-    pub render: Option<PathBuf>,
-    /// Write a PNG of the final state.
-    #[arg(long, value_name = "PNG")]
-    pub snapshot: Option<PathBuf>,
-    /// Pixels per cell in pictures.
-    #[arg(long, default_value_t = 16)]
-    pub cell_px: u32,
-    /// GIF frame delay in milliseconds.
-    #[arg(long, default_value_t = 150)]
-    pub delay_ms: u32,
-}
-
-impl PictureArgs {
-    /// Whether any picture is asked for.
-    pub fn any(&self) -> bool {
-        self.render.is_some() || self.snapshot.is_some()
-    }
-
-    /// The flags as given, for a child process.
-    pub fn to_args(&self) -> Vec<String> {
-        let mut v = Vec::new();
-        if let Some(p) = &self.render {
-            v.extend(["--render".into(), p.display().to_string()]);
-        }
-        if let Some(p) = &self.snapshot {
-            v.extend(["--snapshot".into(), p.display().to_string()]);
-        }
-        v.extend([
-            "--cell-px".into(),
-            self.cell_px.to_string(),
-            "--delay-ms".into(),
-            self.delay_ms.to_string(),
-        ]);
-        v
-    }
-
-    /// Checks the flags against a `width × height` map, before anything runs.
-    pub fn check(&self, width: usize, height: usize) -> Result<()> {
-        check_extension(self.render.as_deref(), "--render", "gif")?;
-        check_extension(self.snapshot.as_deref(), "--snapshot", "png")?;
-        if self.any() {
-            madenet_render::check_size(width, height, &self.options())
-                .map_err(anyhow::Error::msg)
-                .context("--cell-px")?;
-        }
-        Ok(())
-    }
-
-    fn options(&self) -> RenderOptions {
-        RenderOptions {
-            cell_px: self.cell_px,
-            ..Default::default()
-        }
-    }
-
-    /// The pictures asked for as a sink of the run loop (`None`: none), a GIF frame every
-    /// `frame_s` simulated seconds.
-    pub fn sink(&self, frame_s: f64) -> Result<Option<Pictures>> {
-        if !self.any() {
-            return Ok(None);
-        }
-        Ok(Some(Pictures::new(
-            self.render.clone(),
-            self.snapshot.clone(),
-            self.cell_px,
-            self.delay_ms,
-            frame_s,
-        )?))
-    }
-}
-
-/// Refuses an output file whose extension names another picture format than the one written
-/// (`x.png` for the GIF, say); a path without an extension (`/dev/stdout`) is taken as is.
-pub fn check_extension(path: Option<&std::path::Path>, flag: &str, want: &str) -> Result<()> {
-    let Some(ext) = path.and_then(|p| p.extension()) else {
-        return Ok(());
-    };
-    let ext = ext.to_string_lossy().to_ascii_lowercase();
-    if ext != want {
-        anyhow::bail!(
-            "{flag}: writes a {} file, but {} ends in .{ext}: name it *.{want}",
-            want.to_uppercase(),
-            path.expect("has an extension").display()
-        );
-    }
-    Ok(())
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
@@ -267,8 +174,7 @@ fn run_continuous(a: RunArgs) -> Result<()> {
         Some(p) => madenet_files::read_toml(p)?,
         None => ContinuousConfig::default(),
     };
-    check_extension(a.pictures.render.as_deref(), "--render", "gif")?;
-    check_extension(a.pictures.snapshot.as_deref(), "--snapshot", "png")?;
+    a.pictures.check_names()?;
     let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
     a.scenario.warn_erasure(&spec.config)?;
     let trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;

@@ -1,10 +1,11 @@
 //! The flags that name one trial (map, start, policy, CSP, seed, config): shared by `run` and by
 //! every node of a decentralized run (`world`, `radio`, `agent`, `launch`), so all of them build
 //! the same trial from the same words. And the flags trial sets (`batch`, `oracle`) and
-//! studies (`compare`, `scale`) share.
+//! studies (`compare`, `scale`) share, and the pictures of a trial.
 
 use anyhow::{Context, Result};
 use clap::Args;
+use madenet_render::{Pictures, RenderOptions};
 use madenet_sim::continuous::ContinuousSpec;
 use madenet_sim::{MapSource, PolicyRegistry, StartSpec, TrialSpec};
 use std::path::PathBuf;
@@ -120,7 +121,8 @@ impl ScenarioArgs {
 
     /// The scenario config (`--config`, `--csp`), checked with `--model` and `--start`.
     fn checked_config(&self) -> Result<madenet_world::ScenarioConfig> {
-        let mut cfg = crate::load_config(self.config.as_deref())?;
+        let mut cfg =
+            madenet_world::ScenarioConfig::from_toml_file_or_default(self.config.as_deref())?;
         if let Some(csp) = self.csp {
             cfg.comm_success_prob = csp;
             cfg.validate().context("--csp")?;
@@ -212,7 +214,7 @@ impl StudyRunArgs {
         &self,
         study: impl FnOnce(bool, &(dyn Fn(usize, usize) + Sync)) -> T + Send,
     ) -> Result<(T, rayon::ThreadPool)> {
-        let (bar, pool) = crate::trials_bar_and_pool(0, self.threads)?;
+        let (bar, pool) = madenet_study::progress::trials_bar_and_pool(0, self.threads)?;
         let result = pool.install(|| {
             study(self.fresh, &|done, total| {
                 bar.set_length(total as u64);
@@ -241,5 +243,93 @@ impl StudyRunArgs {
             _ if self.fresh => Ok(madenet_ros2::study_bags::discard_bags(out)?),
             _ => Ok(()),
         }
+    }
+}
+
+/// Pictures of a trial (`run`, `launch` and `world`).
+#[derive(Args, Debug, Clone)]
+pub struct PictureArgs {
+    /// Write an animated GIF of the trial.
+    #[arg(long, value_name = "GIF")]
+    pub render: Option<PathBuf>,
+    /// Write a PNG of the final state.
+    #[arg(long, value_name = "PNG")]
+    pub snapshot: Option<PathBuf>,
+    /// Pixels per cell in pictures.
+    #[arg(long, default_value_t = 16)]
+    pub cell_px: u32,
+    /// GIF frame delay in milliseconds.
+    #[arg(long, default_value_t = 150)]
+    pub delay_ms: u32,
+}
+
+impl PictureArgs {
+    /// Whether any picture is asked for.
+    pub fn any(&self) -> bool {
+        self.render.is_some() || self.snapshot.is_some()
+    }
+
+    /// The flags as given, for a child process.
+    pub fn to_args(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(p) = &self.render {
+            v.extend(["--render".into(), p.display().to_string()]);
+        }
+        if let Some(p) = &self.snapshot {
+            v.extend(["--snapshot".into(), p.display().to_string()]);
+        }
+        v.extend([
+            "--cell-px".into(),
+            self.cell_px.to_string(),
+            "--delay-ms".into(),
+            self.delay_ms.to_string(),
+        ]);
+        v
+    }
+
+    /// Checks the flags against a `width × height` map, before anything runs.
+    pub fn check(&self, width: usize, height: usize) -> Result<()> {
+        self.check_names()?;
+        if self.any() {
+            madenet_render::check_size(width, height, &self.options())
+                .map_err(anyhow::Error::msg)
+                .context("--cell-px")?;
+        }
+        Ok(())
+    }
+
+    /// Checks the files' extensions (`.gif`, `.png`).
+    pub fn check_names(&self) -> Result<()> {
+        let named = [
+            (&self.render, "--render", "gif"),
+            (&self.snapshot, "--snapshot", "png"),
+        ];
+        for (path, flag, want) in named {
+            madenet_files::check_extension(path.as_deref(), flag, want)
+                .map_err(anyhow::Error::msg)?;
+        }
+        Ok(())
+    }
+
+    fn options(&self) -> RenderOptions {
+        RenderOptions {
+            cell_px: self.cell_px,
+            ..Default::default()
+        }
+    }
+
+    /// The pictures asked for as a sink of the run loop (`None`: none), a GIF frame every
+    /// `frame_s` simulated seconds.
+    pub fn sink(&self, frame_s: f64) -> Result<Option<Pictures>> {
+        if !self.any() {
+            return Ok(None);
+        }
+        Ok(Some(Pictures::new(
+            self.render.clone(),
+            self.snapshot.clone(),
+            self.cell_px,
+            self.delay_ms,
+            frame_s,
+        )?))
     }
 }

@@ -1,39 +1,23 @@
 //! The `madenet` binary end to end: good runs produce their outputs, bad input gives one
 //! clear line naming the file and field, exit code 2, and never a panic.
 
-use madenet_testkit::{assert_clean_error, run, Scratch};
-use std::process::Output;
+mod common;
 
-fn madenet(args: &[&str]) -> Output {
-    run(env!("CARGO_BIN_EXE_madenet"), args)
-}
+use common::{madenet, madenet_with, madenet_with_extra};
+use madenet_testkit::{assert_clean_error, assert_ok, Scratch};
+use std::process::Output;
 
 #[test]
 fn run_prints_metrics_and_writes_pictures() {
     let dir = Scratch::new("cli-run");
     let gif = dir.join("trial.gif");
     let png = dir.join("trial.png");
-    let out = madenet(&[
-        "run",
-        "--map",
-        "paper:3",
-        "--start",
-        "top-right",
-        "--csp",
-        "0.8",
-        "--seed",
-        "7",
-        "--render",
-        gif.to_str().unwrap(),
-        "--snapshot",
-        png.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = madenet_with(
+        "run --map paper:3 --start top-right --csp 0.8 --seed 7 --render {} --snapshot {}",
+        &[gif.to_str().unwrap(), png.to_str().unwrap()],
     );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_ok(&out);
     assert!(text.contains("completed  true"), "{text}");
     assert!(text.contains("TNS"), "{text}");
     assert!(std::fs::metadata(&gif).unwrap().len() > 1000);
@@ -164,13 +148,21 @@ fn missing_map_file() {
     );
 }
 
+/// `madenet run <flag> <file>`, the file `name` in a scratch folder tagged `tag` holding `text`,
+/// is refused with one error line naming each of `needles`.
+fn run_refuses_file(tag: &str, name: &str, text: &str, flag: &str, needles: &[&str]) {
+    let dir = Scratch::new(tag);
+    let file = dir.write(name, text);
+    assert_clean_error(&madenet(&["run", flag, file.to_str().unwrap()]), needles);
+}
+
 #[test]
 fn malformed_yaml_names_file_and_field() {
-    let dir = Scratch::new("cli-bad-yaml");
-    let yaml = dir.join("bad.yaml");
-    std::fs::write(&yaml, "image: x.pgm\nresolution: fast\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n").unwrap();
-    assert_clean_error(
-        &madenet(&["run", "--map", yaml.to_str().unwrap()]),
+    run_refuses_file(
+        "cli-bad-yaml",
+        "bad.yaml",
+        "image: x.pgm\nresolution: fast\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n",
+        "--map",
         &["bad.yaml", "resolution"],
     );
 }
@@ -202,11 +194,11 @@ fn start_in_obstacle() {
 
 #[test]
 fn more_robots_than_start_cells() {
-    let dir = Scratch::new("cli-robots");
-    let cfg = dir.join("four.toml");
-    std::fs::write(&cfg, "num_robots = 4\n").unwrap();
-    assert_clean_error(
-        &madenet(&["run", "--config", cfg.to_str().unwrap()]),
+    run_refuses_file(
+        "cli-robots",
+        "four.toml",
+        "num_robots = 4\n",
+        "--config",
         &["num_robots"],
     );
 }
@@ -246,27 +238,15 @@ fn bad_config_values() {
 fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
     // The noiseless oracle on two trials, with `extra` flags.
     let noiseless = |extra: &[&str]| {
-        let mut args = vec![
-            "oracle",
-            "--maps",
-            "generate-wide:5",
-            "--starts",
-            "top-left,random",
-            "--kind",
-            "noiseless",
-            "--csp",
-            "1",
-        ];
-        args.extend_from_slice(extra);
-        madenet(&args)
+        madenet_with_extra(
+            "oracle --maps generate-wide:5 --starts top-left,random --kind noiseless --csp 1",
+            &[],
+            extra,
+        )
     };
     let out = noiseless(&[]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     assert!(
         text.contains("2 trials")
             && text.contains("oracle Noiseless over base `spread`")
@@ -323,21 +303,11 @@ fn oracle_reports_beside_its_base_and_refuses_bad_arguments() {
 
 #[test]
 fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
-    let out = madenet(&[
-        "run",
-        "--map",
-        "generate-wide:5",
-        "--start",
-        "random",
-        "--policy",
-        "spread",
-        "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = madenet_with(
+        "run --map generate-wide:5 --start random --policy spread --json",
+        &[],
     );
+    assert_ok(&out);
     assert!(String::from_utf8_lossy(&out.stdout).contains("\"policy\": \"spread\""));
     // A map whose free cells are single pockets: no three connected free cells anywhere.
     let dir = Scratch::new("cli-pockets");
@@ -353,26 +323,12 @@ fn spread_and_random_starts_run_and_a_random_start_without_room_is_an_error() {
 fn a_continuous_run_explores_draws_and_refuses_bad_input() {
     let dir = Scratch::new("cli-continuous");
     let png = dir.join("run.png");
-    let out = madenet(&[
-        "run",
-        "--world",
-        "continuous",
-        "--generate",
-        "3",
-        "--side",
-        "10",
-        "--start",
-        "bottom-left",
-        "--json",
-        "--snapshot",
-        png.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = madenet_with(
+        "run --world continuous --generate 3 --side 10 --start bottom-left --json --snapshot {}",
+        &[png.to_str().unwrap()],
     );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_ok(&out);
     let r: serde_json::Value = serde_json::from_str(&text).expect("JSON result");
     assert_eq!(r["complete"], true, "{text}");
     assert_eq!(r["obstacle_collisions"], 0, "{text}");
@@ -388,42 +344,32 @@ fn a_continuous_run_explores_draws_and_refuses_bad_input() {
     );
 
     let bad = |args: &[&str], needles: &[&str]| {
-        let mut all = vec!["run", "--world", "continuous"];
-        all.extend_from_slice(args);
-        assert_clean_error(&madenet(&all), needles);
+        assert_clean_error(
+            &madenet_with_extra("run --world continuous", &[], args),
+            needles,
+        );
     };
     bad(&["--generate", "1", "--side", "2"], &["--side"]);
     let cfg = dir.join("c.toml");
-    std::fs::write(&cfg, "[robot]\nmax_speed = -1.0\n").unwrap();
-    bad(
-        &[
-            "--generate",
-            "1",
-            "--continuous-config",
-            cfg.to_str().unwrap(),
-        ],
-        &["--continuous-config", "robot.max_speed"],
-    );
-    std::fs::write(&cfg, "[lidar]\nbeam = 3\n").unwrap();
-    bad(
-        &[
-            "--generate",
-            "1",
-            "--continuous-config",
-            cfg.to_str().unwrap(),
-        ],
-        &["c.toml", "beam"],
-    );
-    // paper:1's top-left corner cells at 1 m: a robot of radius 0.6 m does not fit.
-    std::fs::write(&cfg, "[robot]\nradius = 0.6\n").unwrap();
-    bad(
-        &[
-            "--map",
-            "paper:1",
-            "--continuous-config",
-            cfg.to_str().unwrap(),
-        ],
-        &["robot.radius"],
-    );
+    // (the world's flags, the continuous config, what the error names)
+    let configs: [(&str, &str, &[&str]); 3] = [
+        (
+            "--generate 1",
+            "[robot]\nmax_speed = -1.0\n",
+            &["--continuous-config", "robot.max_speed"],
+        ),
+        ("--generate 1", "[lidar]\nbeam = 3\n", &["c.toml", "beam"]),
+        // paper:1's top-left corner cells at 1 m: a robot of radius 0.6 m does not fit.
+        (
+            "--map paper:1",
+            "[robot]\nradius = 0.6\n",
+            &["robot.radius"],
+        ),
+    ];
+    for (world, text, needles) in configs {
+        std::fs::write(&cfg, text).unwrap();
+        let line = format!("{world} --continuous-config {{}}");
+        bad(&common::words(&line, &[cfg.to_str().unwrap()]), needles);
+    }
     std::fs::remove_dir_all(&dir).ok();
 }

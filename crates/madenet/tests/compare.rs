@@ -2,13 +2,12 @@
 //! outputs; running it again resumes (no trial runs twice); bad input gives exit code 2 and one
 //! `error:` line naming the field, before any trial runs.
 
-use madenet_testkit::{assert_clean_error, run, Scratch};
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn madenet(args: &[&str]) -> Output {
-    run(env!("CARGO_BIN_EXE_madenet"), args)
-}
+use common::{madenet, madenet_with};
+use madenet_testkit::{assert_clean_error, assert_curves_close, assert_ok, Scratch};
+use std::path::Path;
+use std::process::Command;
 
 const SMALL: &str = r#"methods = ["nf", "ub"]
 maps = ["paper:1", "paper:2"]
@@ -40,26 +39,19 @@ fn deterministic_rows(path: &Path) -> Vec<Vec<String>> {
     rows
 }
 
-fn assert_curves_close(got: &str, want: &str) {
-    let (g, w): (Vec<&str>, Vec<&str>) = (got.lines().collect(), want.lines().collect());
-    assert_eq!(g.len(), w.len(), "curves.jsonl line count");
-    for (a, b) in g.iter().zip(&w) {
-        let a: serde_json::Value = serde_json::from_str(a).unwrap();
-        let b: serde_json::Value = serde_json::from_str(b).unwrap();
-        assert_eq!(a["key"], b["key"]);
-        for f in ["explored", "distance"] {
-            let (x, y) = (a[f].as_array().unwrap(), b[f].as_array().unwrap());
-            assert_eq!(x.len(), y.len());
-            for (p, q) in x.iter().zip(y) {
-                let (p, q) = (p.as_f64().unwrap(), q.as_f64().unwrap());
-                assert!(
-                    (p - q).abs() <= 1e-12 * q.abs().max(1.0),
-                    "{f} of {}: {p} vs {q}",
-                    a["key"]
-                );
-            }
-        }
-    }
+/// `madenet compare --config <cfg> --out <out> --threads <threads>`'s arguments.
+fn study_args(cfg: &str, out: &Path, threads: &str) -> Vec<String> {
+    let out = out.to_str().unwrap();
+    let args = [
+        "compare",
+        "--config",
+        cfg,
+        "--out",
+        out,
+        "--threads",
+        threads,
+    ];
+    args.iter().map(|s| s.to_string()).collect()
 }
 
 #[test]
@@ -67,22 +59,10 @@ fn compare_writes_the_study_and_a_second_run_resumes_without_rerunning() {
     let dir = Scratch::new("ok");
     let cfg = write(&dir.path().join("study.toml"), SMALL);
     let out = dir.path().join("results");
-    let args = [
-        "compare",
-        "--config",
-        &cfg,
-        "--out",
-        out.to_str().unwrap(),
-        "--threads",
-        "2",
-    ];
+    let args = study_args(&cfg, &out, "2");
     let first = madenet(&args);
     let stdout = String::from_utf8_lossy(&first.stdout);
-    assert!(
-        first.status.success(),
-        "{}",
-        String::from_utf8_lossy(&first.stderr)
-    );
+    assert_ok(&first);
     let report = out.join("report.md");
     assert!(
         stdout.contains(&report.display().to_string()),
@@ -114,11 +94,7 @@ fn compare_writes_the_study_and_a_second_run_resumes_without_rerunning() {
     // Again, identically: every trial is already recorded, so none runs, and trials.csv is
     // byte-identical, wall-clock columns included (a rerun trial would have new timings).
     let second = madenet(&args);
-    assert!(
-        second.status.success(),
-        "{}",
-        String::from_utf8_lossy(&second.stderr)
-    );
+    assert_ok(&second);
     assert!(String::from_utf8_lossy(&second.stdout).contains(&report.display().to_string()));
     assert_eq!(deterministic_rows(&out.join("trials.csv")), rows);
     assert_eq!(
@@ -134,35 +110,16 @@ fn compare_writes_the_study_and_a_second_run_resumes_without_rerunning() {
     );
 
     // A different study into the same folder is refused, naming the folder …
-    let refused = madenet(&[
-        "compare",
-        "--config",
-        &cfg,
-        "--out",
-        out.to_str().unwrap(),
-        "--seeds",
-        "3",
-    ]);
-    assert_clean_error(&refused, &[out.to_str().unwrap()]);
+    let o = out.to_str().unwrap();
+    let refused = madenet_with("compare --config {} --out {} --seeds 3", &[&cfg, o]);
+    assert_clean_error(&refused, &[o]);
     assert_eq!(std::fs::read(out.join("trials.csv")).unwrap(), trials_1);
     // … unless --fresh.
-    let fresh = madenet(&[
-        "compare",
-        "--config",
-        &cfg,
-        "--out",
-        out.to_str().unwrap(),
-        "--methods",
-        "nf",
-        "--seeds",
-        "1",
-        "--fresh",
-    ]);
-    assert!(
-        fresh.status.success(),
-        "{}",
-        String::from_utf8_lossy(&fresh.stderr)
+    let fresh = madenet_with(
+        "compare --config {} --out {} --methods nf --seeds 1 --fresh",
+        &[&cfg, o],
     );
+    assert_ok(&fresh);
     assert_eq!(deterministic_rows(&out.join("trials.csv")).len(), 1 + 8);
 }
 
@@ -292,27 +249,8 @@ oracles = []
     std::fs::write(&cfg, STUDY).unwrap();
     let cfg = cfg.to_str().unwrap().to_string();
     let (whole, killed) = (dir.path().join("whole"), dir.path().join("killed"));
-    let args = |out: &Path, threads: &str| -> Vec<String> {
-        [
-            "compare",
-            "--config",
-            &cfg,
-            "--out",
-            out.to_str().unwrap(),
-            "--threads",
-            threads,
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect()
-    };
-    let ok = |out: Output| {
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    };
+    let args = |out: &Path, threads: &str| study_args(&cfg, out, threads);
+    let ok = |out: std::process::Output| assert_ok(&out);
     ok(Command::new(env!("CARGO_BIN_EXE_madenet"))
         .args(args(&whole, "2"))
         .output()

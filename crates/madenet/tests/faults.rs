@@ -45,6 +45,13 @@ impl Run {
         }
     }
 
+    /// [`Run::new`] with [`Run::start_all`] called (no extra radio flags).
+    fn started(name: &str, pace_ms: &str) -> Run {
+        let mut run = Run::new(name);
+        run.start_all(pace_ms, &[]);
+        run
+    }
+
     /// Starts `madenet <command> <trial> <node flags> <extra>`, its stderr collected as `label`.
     fn start(&mut self, label: &str, command: &str, extra: &[&str]) {
         self.start_on(label, command, &TRIAL, extra)
@@ -141,6 +148,21 @@ impl Run {
             .unwrap_or(0)
     }
 
+    /// Waits (bounded) until the world has played 5 timesteps, then kills `label`.
+    fn kill_after_step_5(&mut self, label: &str) {
+        self.wait_for("world", |l| l.starts_with("progress step=5 "));
+        self.kill(label);
+    }
+
+    /// Waits (bounded) until `label` reports a timestep after `step`.
+    fn wait_past(&self, label: &str, step: usize) {
+        self.wait_for(label, |l| {
+            l.strip_prefix("progress step=")
+                .and_then(|s| s.split(' ').next()?.parse::<usize>().ok())
+                .is_some_and(|s| s > step)
+        });
+    }
+
     fn kill(&mut self, label: &str) {
         let (_, child) = self
             .children
@@ -163,6 +185,13 @@ impl Run {
             std::thread::sleep(Duration::from_millis(20));
         }
         None
+    }
+
+    /// [`Run::finish`], asserting that the exploration was completed.
+    fn finish_completed(&mut self) -> Value {
+        let result = self.finish();
+        assert_eq!(result["metrics"]["completed"], true, "{result}");
+        result
     }
 
     /// Waits (bounded) for the world to finish; returns its result.
@@ -207,14 +236,11 @@ fn cells_of(result: &Value, i: usize) -> Vec<Value> {
 
 #[test]
 fn a_killed_agent_leaves_its_robot_where_it_stopped_and_the_others_finish() {
-    let mut run = Run::new("kill");
-    run.start_all("40", &[]);
-    run.wait_for("world", |l| l.starts_with("progress step=5 "));
-    run.kill("robot 1");
+    let mut run = Run::started("kill", "40");
+    run.kill_after_step_5("robot 1");
     let killed_at = run.step();
     run.wait_for("world", |l| l.contains("robot 1 sent no move"));
-    let result = run.finish();
-    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    let result = run.finish_completed();
     assert!(
         result["runtime"]["absent_robot_steps"].as_u64().unwrap() > 5,
         "{result}"
@@ -234,23 +260,16 @@ fn a_killed_agent_leaves_its_robot_where_it_stopped_and_the_others_finish() {
 
 #[test]
 fn a_restarted_agent_rejoins_and_the_trial_completes() {
-    let mut run = Run::new("restart");
     // Slow enough that the run outlasts the restarted process's start and connection.
-    run.start_all("100", &[]);
-    run.wait_for("world", |l| l.starts_with("progress step=5 "));
-    run.kill("robot 2");
+    let mut run = Run::started("restart", "100");
+    run.kill_after_step_5("robot 2");
     run.wait_for("world", |l| l.contains("robot 2 sent no move"));
     let gone_at = run.step();
     run.start("robot 2", "agent", &["--robot", "2"]);
     run.wait_for("world", |l| l.contains("robot 2 is back"));
     // It moves again: its progress lines resume.
-    run.wait_for("robot 2", |l| {
-        l.strip_prefix("progress step=")
-            .and_then(|s| s.split(' ').next()?.parse::<usize>().ok())
-            .is_some_and(|s| s > gone_at)
-    });
-    let result = run.finish();
-    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    run.wait_past("robot 2", gone_at);
+    let result = run.finish_completed();
     let cells = cells_of(&result, 2);
     let tns = result["metrics"]["tns"].as_u64().unwrap() as usize;
     assert!(
@@ -261,15 +280,12 @@ fn a_restarted_agent_rejoins_and_the_trial_completes() {
 
 #[test]
 fn a_restarted_radio_carries_messages_again() {
-    let mut run = Run::new("radio");
-    run.start_all("40", &[]);
-    run.wait_for("world", |l| l.starts_with("progress step=5 "));
-    run.kill("radio");
+    let mut run = Run::started("radio", "40");
+    run.kill_after_step_5("radio");
     // Robots do without links for a while.
     run.wait_for("robot 0", |l| l.contains("no links from the radio"));
     run.start("radio", "radio", &[]);
-    let result = run.finish();
-    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    run.finish_completed();
 }
 
 #[test]
@@ -331,16 +347,11 @@ fn robots_wait_through_a_long_absence_and_notice_a_killed_world_soon() {
     let mut run = Run::new("heartbeat");
     run.timeout_s = "10";
     run.start_all("40", &[]);
-    run.wait_for("world", |l| l.starts_with("progress step=5 "));
-    run.kill("robot 1");
+    run.kill_after_step_5("robot 1");
     run.wait_for("world", |l| l.contains("robot 1 sent no move"));
     // Through that 10 s wait robots 0 and 2 stayed (a robot that gave up would have ended).
     let step = run.step();
-    run.wait_for("robot 0", |l| {
-        l.strip_prefix("progress step=")
-            .and_then(|s| s.split(' ').next()?.parse::<usize>().ok())
-            .is_some_and(|s| s > step)
-    });
+    run.wait_past("robot 0", step);
     // Now the world waits 10 s for robot 2's move, and is killed meanwhile.
     run.kill("robot 2");
     std::thread::sleep(Duration::from_secs(1));
@@ -363,8 +374,7 @@ fn robots_wait_through_a_long_absence_and_notice_a_killed_world_soon() {
 fn a_world_paced_slower_than_the_robots_wait_in_silence_keeps_them() {
     // --pace-ms 3000 with --timeout-s 2: each timestep lasts 3 s, longer than the 2 s a node
     // waits for the world in silence (2 × 0.5 s + 1 s); the world tells them it is there.
-    let mut run = Run::new("pace");
-    run.start_all("3000", &[]);
+    let mut run = Run::started("pace", "3000");
     run.wait_for("world", |l| l.starts_with("progress step=3 "));
     for label in ["robot 0", "robot 1", "robot 2", "radio"] {
         let errors: Vec<String> = run

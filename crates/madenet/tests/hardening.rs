@@ -3,7 +3,9 @@
 //! hang), and nothing the user pointed at is written. Outputs given as symlinks or devices are
 //! written through, never replaced.
 
-use madenet_testkit::{assert_clean_error_in, run_limited, Scratch};
+use madenet_testkit::{assert_clean_error_in, assert_ok, run_limited, Scratch};
+use std::ffi::OsStr;
+use std::fmt::Debug;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -24,7 +26,7 @@ fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
 }
 
 /// Runs madenet, killing it after 60 s (a hang or a runaway allocation fails the test).
-fn madenet(args: &[String]) -> Output {
+fn madenet<S: AsRef<OsStr> + Debug>(args: &[S]) -> Output {
     run_limited(env!("CARGO_BIN_EXE_madenet"), args, Duration::from_secs(60))
 }
 
@@ -102,158 +104,88 @@ fn bad_values_are_one_clear_error_and_write_nothing() {
             vec![format!("study{i}.toml"), field.to_string()],
         ));
     }
-    let flags: Vec<(&str, Vec<String>, Vec<&str>)> = vec![
+    // (case, its command line with `{d}` for the scratch folder and `{model}` for the model
+    // folder, what the error names)
+    let flags: [(&str, &str, &[&str]); 15] = [
         (
             "batch --seeds 1e12",
-            vec![
-                "batch".into(),
-                "--seeds".into(),
-                "1000000000000".into(),
-                "--out".into(),
-                format!("{d}/keep.csv"),
-            ],
-            vec!["--seeds"],
+            "batch --seeds 1000000000000 --out {d}/keep.csv",
+            &["--seeds"],
         ),
         (
             "batch --seed-base max",
-            vec![
-                "batch".into(),
-                "--seed-base".into(),
-                "18446744073709551615".into(),
-                "--seeds".into(),
-                "2".into(),
-                "--out".into(),
-                format!("{d}/keep.csv"),
-            ],
-            vec!["seed"],
+            "batch --seed-base 18446744073709551615 --seeds 2 --out {d}/keep.csv",
+            &["seed"],
         ),
         (
             "batch --threads 100000",
-            vec![
-                "batch".into(),
-                "--threads".into(),
-                "100000".into(),
-                "--out".into(),
-                format!("{d}/keep.csv"),
-            ],
-            vec!["--threads"],
+            "batch --threads 100000 --out {d}/keep.csv",
+            &["--threads"],
         ),
         (
             "compare --seeds 1e12",
-            vec![
-                "compare".into(),
-                "--seeds".into(),
-                "1000000000000".into(),
-                "--out".into(),
-                format!("{d}/cmp"),
-            ],
-            vec!["seeds"],
+            "compare --seeds 1000000000000 --out {d}/cmp",
+            &["seeds"],
         ),
         (
             "compare --threads 1000",
-            vec![
-                "compare".into(),
-                "--threads".into(),
-                "1000".into(),
-                "--out".into(),
-                format!("{d}/cmp"),
-            ],
-            vec!["--threads"],
+            "compare --threads 1000 --out {d}/cmp",
+            &["--threads"],
         ),
         (
             "run --cell-px 0",
-            vec![
-                "run".into(),
-                "--cell-px".into(),
-                "0".into(),
-                "--snapshot".into(),
-                format!("{d}/keep.png"),
-            ],
-            vec!["--cell-px"],
+            "run --cell-px 0 --snapshot {d}/keep.png",
+            &["--cell-px"],
         ),
         (
             "run --cell-px 5000",
-            vec![
-                "run".into(),
-                "--cell-px".into(),
-                "5000".into(),
-                "--render".into(),
-                format!("{d}/keep.gif"),
-            ],
-            vec!["--cell-px"],
+            "run --cell-px 5000 --render {d}/keep.gif",
+            &["--cell-px"],
         ),
         (
             "run --cell-px 100000",
-            vec![
-                "run".into(),
-                "--cell-px".into(),
-                "100000".into(),
-                "--snapshot".into(),
-                format!("{d}/keep.png"),
-            ],
-            vec!["--cell-px"],
+            "run --cell-px 100000 --snapshot {d}/keep.png",
+            &["--cell-px"],
         ),
         (
             "run --render x.png",
-            vec!["run".into(), "--render".into(), format!("{d}/keep.png")],
-            vec!["--render", ".png"],
+            "run --render {d}/keep.png",
+            &["--render", ".png"],
         ),
         (
             "run --snapshot x.gif",
-            vec!["run".into(), "--snapshot".into(), format!("{d}/keep.gif")],
-            vec!["--snapshot", ".gif"],
+            "run --snapshot {d}/keep.gif",
+            &["--snapshot", ".gif"],
         ),
         (
             "batch --model without --policy model",
-            vec![
-                "batch".into(),
-                "--model".into(),
-                model.display().to_string(),
-                "--out".into(),
-                format!("{d}/keep.csv"),
-            ],
-            vec!["--model", "--policy"],
+            "batch --model {model} --out {d}/keep.csv",
+            &["--model", "--policy"],
         ),
         (
             "run --model without --policy model",
-            vec![
-                "run".into(),
-                "--model".into(),
-                model.display().to_string(),
-                "--snapshot".into(),
-                format!("{d}/keep.png"),
-            ],
-            vec!["--model", "--policy"],
+            "run --model {model} --snapshot {d}/keep.png",
+            &["--model", "--policy"],
         ),
         (
             "run 4 cells for 3 robots",
-            vec![
-                "run".into(),
-                "--start".into(),
-                "0,0;0,1;0,2;0,3".into(),
-                "--snapshot".into(),
-                format!("{d}/keep.png"),
-            ],
-            vec!["--start", "4 cells"],
+            "run --start 0,0;0,1;0,2;0,3 --snapshot {d}/keep.png",
+            &["--start", "4 cells"],
         ),
         (
             "train --threads 100000",
-            vec![
-                "train".into(),
-                "--threads".into(),
-                "100000".into(),
-                "--out".into(),
-                format!("{d}/run"),
-            ],
-            vec!["--threads"],
+            "train --threads 100000 --out {d}/run",
+            &["--threads"],
         ),
-        (
-            "run --csp nan",
-            vec!["run".into(), "--csp".into(), "NaN".into()],
-            vec!["comm_success_prob"],
-        ),
+        ("run --csp nan", "run --csp NaN", &["comm_success_prob"]),
     ];
-    for (case, args, needles) in flags {
+    let model = model.display().to_string();
+    for (case, line, needles) in flags {
+        // Split before the paths go in: a path may hold a space.
+        let args = line
+            .split(' ')
+            .map(|w| w.replace("{d}", &d).replace("{model}", &model))
+            .collect();
         cases.push((
             case.to_string(),
             args,
@@ -291,38 +223,28 @@ fn outputs_through_symlinks_and_devices() {
         std::fs::write(target_dir.join(target), b"old").unwrap();
         std::os::unix::fs::symlink(target_dir.join(target), dir.join(link)).unwrap();
     }
+    let (gif, png) = (s(&dir.join("trial.gif")), s(&dir.join("final.png")));
     let out = madenet(&[
-        "run".into(),
-        "--render".into(),
-        s(&dir.join("trial.gif")),
-        "--snapshot".into(),
-        s(&dir.join("final.png")),
-        "--cell-px".into(),
-        "4".into(),
+        "run",
+        "--render",
+        &gif,
+        "--snapshot",
+        &png,
+        "--cell-px",
+        "4",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     assert!(
         String::from_utf8_lossy(&out.stdout).contains("frames"),
         "the GIF's size is reported"
     );
-    let out = madenet(&[
-        "batch".into(),
-        "--maps".into(),
-        "paper:1".into(),
-        "--csp".into(),
-        "1".into(),
-        "--out".into(),
-        s(&dir.join("latest.csv")),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // `batch` on paper map 1 at CSP 1, which must succeed, its CSV to `out`.
+    let batch = |out: &str| {
+        let o = madenet(&["batch", "--maps", "paper:1", "--csp", "1", "--out", out]);
+        assert_ok(&o);
+        o
+    };
+    batch(&s(&dir.join("latest.csv")));
     for (link, target, magic) in [
         ("trial.gif", "t.gif", &b"GIF89a"[..]),
         ("final.png", "f.png", &b"\x89PNG"[..]),
@@ -338,20 +260,7 @@ fn outputs_through_symlinks_and_devices() {
     }
 
     // A device: /dev/null stays a device (it used to be replaced by a regular file).
-    let out = madenet(&[
-        "batch".into(),
-        "--maps".into(),
-        "paper:1".into(),
-        "--csp".into(),
-        "1".into(),
-        "--out".into(),
-        "/dev/null".into(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    batch("/dev/null");
     use std::os::unix::fs::FileTypeExt;
     assert!(std::fs::metadata("/dev/null")
         .unwrap()
@@ -359,20 +268,7 @@ fn outputs_through_symlinks_and_devices() {
         .is_char_device());
 
     // /dev/stdout: the CSV arrives on standard output.
-    let out = madenet(&[
-        "batch".into(),
-        "--maps".into(),
-        "paper:1".into(),
-        "--csp".into(),
-        "1".into(),
-        "--out".into(),
-        "/dev/stdout".into(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = batch("/dev/stdout");
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.lines().any(|l| l.starts_with("method,map,")), "{text}");
     assert!(
@@ -393,58 +289,34 @@ fn second_pass_unknown_fields_oracles_and_multi_file_writes() {
         "[discretize]\nobstacle_fractoin = 0.9\n",
     )
     .unwrap();
-    let out = madenet(&[
-        "run".into(),
-        "--config".into(),
-        s(&dir.join("scenario.toml")),
-    ]);
+    let out = madenet(&["run", "--config", &s(&dir.join("scenario.toml"))]);
     assert_clean_error_in(
         "[discretize] typo",
         &out,
         &["scenario.toml", "obstacle_fractoin"],
     );
-    let model = dir.join("model");
-    std::fs::create_dir_all(&model).unwrap();
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net-paper");
-    for e in std::fs::read_dir(&shipped).unwrap() {
-        let p = e.unwrap().path();
-        if p.is_file() {
-            std::fs::copy(&p, model.join(p.file_name().unwrap())).unwrap();
-        }
-    }
-    let toml = std::fs::read_to_string(model.join("model.toml")).unwrap();
-    std::fs::write(
-        model.join("model.toml"),
-        format!("colour = \"red\"\n{toml}"),
-    )
-    .unwrap();
-    let out = madenet(&[
-        "run".into(),
-        "--policy".into(),
-        "model".into(),
-        "--model".into(),
-        s(&model),
-    ]);
-    assert_clean_error_in("model.toml typo", &out, &["model.toml", "colour"]);
+    let model = model_copy(&dir.join("model"), "made-net-paper", |toml| {
+        format!("colour = \"red\"\n{toml}")
+    });
+    assert_clean_error_in(
+        "model.toml typo",
+        &run_model(&model),
+        &["model.toml", "colour"],
+    );
     // `none` is no oracle at all: not beside others.
     let out = madenet(&[
-        "compare".into(),
-        "--oracles".into(),
-        "none,placebo".into(),
-        "--out".into(),
-        s(&dir.join("cmp")),
+        "compare",
+        "--oracles",
+        "none,placebo",
+        "--out",
+        &s(&dir.join("cmp")),
     ]);
     assert_clean_error_in("--oracles none,placebo", &out, &["--oracles", "none"]);
     assert!(!dir.join("cmp").exists());
     // A YAML map whose YAML target is a folder: its image beside it stays untouched.
     std::fs::create_dir_all(dir.join("keep.yaml")).unwrap();
     std::fs::write(dir.join("keep.pgm"), b"precious").unwrap();
-    let out = madenet(&[
-        "map".into(),
-        "convert".into(),
-        "paper:2".into(),
-        s(&dir.join("keep.yaml")),
-    ]);
+    let out = madenet(&["map", "convert", "paper:2", &s(&dir.join("keep.yaml"))]);
     assert_clean_error_in("convert onto a folder", &out, &["keep.yaml"]);
     assert_eq!(std::fs::read(dir.join("keep.pgm")).unwrap(), b"precious");
     let _ = std::fs::remove_dir_all(&dir);
@@ -468,11 +340,11 @@ fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
     }
     std::fs::write(dir.join("m.txt"), text).unwrap();
     let out = madenet(&[
-        "run".into(),
-        "--map".into(),
-        dir.join("m.txt").display().to_string(),
-        "--start".into(),
-        "top-left".into(),
+        "run",
+        "--map",
+        &dir.join("m.txt").display().to_string(),
+        "--start",
+        "top-left",
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(
@@ -494,40 +366,17 @@ fn unknown_cells_in_a_ground_truth_never_push_explored_past_100() {
 #[test]
 fn a_model_with_impossible_sizes_names_the_field() {
     let dir = Scratch::new("hard-sizes");
-    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/made-net-paper");
     for (field, bad) in [
         ("goal_count", "0"),
         ("team_size", "100000"),
         ("map_height", "3"),
     ] {
-        let model = dir.join(field);
-        std::fs::create_dir_all(&model).unwrap();
-        for e in std::fs::read_dir(&shipped).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_file() {
-                std::fs::copy(&p, model.join(p.file_name().unwrap())).unwrap();
-            }
-        }
-        let toml = std::fs::read_to_string(model.join("model.toml")).unwrap();
-        let edited: String = toml
-            .lines()
-            .map(|l| {
-                if l.starts_with(&format!("{field} =")) {
-                    format!("{field} = {bad}\n")
-                } else {
-                    format!("{l}\n")
-                }
-            })
-            .collect();
-        assert_ne!(edited, toml, "{field} is in model.toml");
-        std::fs::write(model.join("model.toml"), edited).unwrap();
-        let out = madenet(&[
-            "run".into(),
-            "--policy".into(),
-            "model".into(),
-            "--model".into(),
-            model.display().to_string(),
-        ]);
+        let model = model_copy(&dir.join(field), "made-net-paper", |toml| {
+            let edited = set_field(toml, field, bad);
+            assert_ne!(edited, toml, "{field} is in model.toml");
+            edited
+        });
+        let out = run_model(&model);
         assert_clean_error_in(field, &out, &["model.toml", &format!("dep.{field}")]);
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -550,15 +399,29 @@ fn model_copy(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf 
     dir.to_path_buf()
 }
 
+/// `toml` with the value of its line `field = …` replaced by `value`.
+fn set_field(toml: &str, field: &str, value: &str) -> String {
+    toml.lines()
+        .map(|l| {
+            if l.starts_with(&format!("{field} =")) {
+                format!("{field} = {value}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect()
+}
+
+/// `madenet train --config <cfg> --out <out> <extra>`.
+fn train(cfg: &Path, out: &Path, extra: &[&str]) -> Output {
+    let (cfg, out) = (cfg.display().to_string(), out.display().to_string());
+    madenet(&[&["train", "--config", &cfg, "--out", &out][..], extra].concat())
+}
+
 /// `run` on paper map 1 (20 × 20) with 3 robots and the model in `model`.
 fn run_model(model: &Path) -> Output {
-    madenet(&[
-        "run".into(),
-        "--policy".into(),
-        "model".into(),
-        "--model".into(),
-        model.display().to_string(),
-    ])
+    let model = model.display().to_string();
+    madenet(&["run", "--policy", "model", "--model", &model])
 }
 
 /// Weights that disagree with model.toml (sizes), are damaged (digest) or hold NaN are
@@ -566,19 +429,7 @@ fn run_model(model: &Path) -> Output {
 #[test]
 fn a_model_folder_is_checked_against_its_weights() {
     let dir = Scratch::new("hard-weights");
-    let set = |field: &'static str, value: &'static str| {
-        move |t: &str| {
-            t.lines()
-                .map(|l| {
-                    if l.starts_with(&format!("{field} =")) {
-                        format!("{field} = {value}\n")
-                    } else {
-                        format!("{l}\n")
-                    }
-                })
-                .collect::<String>()
-        }
-    };
+    let set = |field: &'static str, value: &'static str| move |t: &str| set_field(t, field, value);
     // Sizes that are possible but are not the weights' (a 20 × 20, 3-robot model).
     for (field, value) in [("map_height", "30"), ("team_size", "5")] {
         let m = model_copy(&dir.join(field), "made-net-paper", set(field, value));
@@ -675,13 +526,7 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
     ] {
         let cfg = dir.join(name);
         std::fs::write(&cfg, text).unwrap();
-        let out = madenet(&[
-            "train".into(),
-            "--config".into(),
-            cfg.display().to_string(),
-            "--out".into(),
-            dir.join(format!("{name}.out")).display().to_string(),
-        ]);
+        let out = train(&cfg, &dir.join(format!("{name}.out")), &[]);
         assert_clean_error_in(name, &out, &[name, needles[0], needles[1]]);
     }
     // A million updates in one iteration, 3 s of budget: it stops inside the iteration.
@@ -692,16 +537,7 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
     )
     .unwrap();
     let t0 = Instant::now();
-    let out = madenet(&[
-        "train".into(),
-        "--config".into(),
-        cfg.display().to_string(),
-        "--out".into(),
-        dir.join("long").display().to_string(),
-        "--max-minutes".into(),
-        "0.05".into(),
-        "-q".into(),
-    ]);
+    let out = train(&cfg, &dir.join("long"), &["--max-minutes", "0.05", "-q"]);
     // The call's first iteration cut: nothing trained, which is an error (resuming with the same
     // budget would cut it again), not a success that loops.
     assert_clean_error_in(
@@ -718,7 +554,7 @@ fn training_sizes_are_bounded_and_the_time_budget_holds_inside_iterations() {
 #[test]
 fn devices_and_fifos_as_inputs_are_bounded() {
     let dir = Scratch::new("hard-streams");
-    let out = madenet(&["run".into(), "--config".into(), "/dev/zero".into()]);
+    let out = madenet(&["run", "--config", "/dev/zero"]);
     assert_clean_error_in("config /dev/zero", &out, &["/dev/zero", "16 MiB"]);
     let fifo = |p: &Path| {
         let ok = Command::new("mkfifo").arg(p).status().expect("mkfifo");
@@ -726,7 +562,7 @@ fn devices_and_fifos_as_inputs_are_bounded() {
     };
     let map = dir.join("fifo.pgm");
     fifo(&map);
-    let out = madenet(&["run".into(), "--map".into(), map.display().to_string()]);
+    let out = madenet(&["run", "--map", &map.display().to_string()]);
     assert_clean_error_in("map fifo", &out, &["fifo.pgm"]);
     let model = model_copy(&dir.join("model"), "made-net-paper", |t| t.to_string());
     std::fs::remove_file(model.join("dep0.bpk")).unwrap();
@@ -742,24 +578,12 @@ fn devices_and_fifos_as_inputs_are_bounded() {
             std::fs::write(&cfg, "method = \"dme-drl\"\nhidden = 1000000000\n").unwrap()
         })
     };
-    let out = madenet(&[
-        "train".into(),
-        "--config".into(),
-        cfg.display().to_string(),
-        "--out".into(),
-        dir.join("run").display().to_string(),
-    ]);
+    let out = train(&cfg, &dir.join("run"), &[]);
     writer.join().unwrap();
     assert_clean_error_in("train config fifo", &out, &["train.toml", "`hidden`"]);
     // A --config that is not there is an error, not the defaults.
     let missing = dir.join("no-such-config.toml");
-    let out = madenet(&[
-        "train".into(),
-        "--config".into(),
-        missing.display().to_string(),
-        "--out".into(),
-        dir.join("run-missing").display().to_string(),
-    ]);
+    let out = train(&missing, &dir.join("run-missing"), &[]);
     assert_clean_error_in("train config missing", &out, &["no-such-config.toml"]);
     assert!(!dir.join("run-missing").exists(), "nothing written");
     let _ = std::fs::remove_dir_all(&dir);
@@ -808,7 +632,7 @@ fn yaml_errors_are_one_line_naming_the_field() {
     for (case, text, needle) in cases {
         let yaml = dir.join(format!("{case}.yaml"));
         std::fs::write(&yaml, text).unwrap();
-        let out = madenet(&["map".into(), "show".into(), yaml.display().to_string()]);
+        let out = madenet(&["map", "show", &yaml.display().to_string()]);
         assert_clean_error_in(case, &out, &[&format!("{case}.yaml"), needle]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(

@@ -3,51 +3,40 @@
 //! line naming the flag, and nothing half-written is left behind. (Readers nobody here wrote —
 //! `mcap`, `mcap-ros2-support`, `rosbags` — check the bag's content in the Python tests.)
 
-use madenet_testkit::{assert_clean_error, assert_clean_error_in, run, Scratch};
+mod common;
+
+use common::{madenet, madenet_with, madenet_with_extra, signal, spawn_piped};
+use madenet_testkit::{assert_clean_error, assert_clean_error_in, assert_ok, entries, Scratch};
 use std::path::Path;
 
-fn madenet(args: &[&str]) -> std::process::Output {
-    run(env!("CARGO_BIN_EXE_madenet"), args)
-}
-
 fn record(to: &Path) -> std::process::Output {
-    madenet(&[
-        "run",
-        "--map",
-        "paper:2",
-        "--policy",
-        "nf",
-        "--seed",
-        "3",
-        "--record",
-        to.to_str().unwrap(),
-    ])
+    madenet_with(
+        "run --map paper:2 --policy nf --seed 3 --record {}",
+        &[to.to_str().unwrap()],
+    )
 }
 
-/// The entries of `dir`, sorted.
-fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
+/// The bag at `bag` is finished (its metadata written) and nothing hidden is left in `dir`.
+fn assert_bag_finished(dir: &Path, bag: &Path) {
+    let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+    assert!(metadata.contains("message_count"), "{metadata}");
+    assert!(
+        entries(dir).iter().all(|e| !e.starts_with('.')),
+        "{:?}",
+        entries(dir)
+    );
 }
 
 #[test]
 fn a_run_is_recorded_the_same_for_the_same_seed() {
     let dir = Scratch::new("record-same");
     let out = record(&dir.join("a"));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     assert!(String::from_utf8_lossy(&out.stdout).contains("ROS 2 bag"));
     // An empty folder is taken as the bag's place.
     std::fs::create_dir(dir.join("b")).unwrap();
     assert!(record(&dir.join("b")).status.success());
-    assert_eq!(entries(&dir.join("a")), ["a_0.mcap", "metadata.yaml"]);
+    assert_eq!(entries(dir.join("a")), ["a_0.mcap", "metadata.yaml"]);
     assert_eq!(
         std::fs::read(dir.join("a/a_0.mcap")).unwrap(),
         std::fs::read(dir.join("b/b_0.mcap")).unwrap()
@@ -95,11 +84,7 @@ fn a_taken_or_unwritable_place_is_refused_and_nothing_is_left_behind() {
 fn bad_live_view_flags_are_refused() {
     let dir = Scratch::new("record-live");
     let bag = dir.join("bag");
-    let run_with = |extra: &[&str]| {
-        let mut args = vec!["run", "--map", "paper:2", "--seed", "3"];
-        args.extend_from_slice(extra);
-        madenet(&args)
-    };
+    let run_with = |extra: &[&str]| madenet_with_extra("run --map paper:2 --seed 3", &[], extra);
     assert_clean_error(
         &run_with(&["--foxglove", "localhost"]),
         &["--foxglove", "HOST:PORT"],
@@ -128,11 +113,7 @@ fn bad_live_view_flags_are_refused() {
     assert_clean_error(&out, &["--record/--foxglove", "--ros2-robots"]);
     // Launch refuses a taken bag place and a taken live-view port before any node starts.
     std::fs::write(&bag, "mine").unwrap();
-    let launch = |extra: &[&str]| {
-        let mut args = vec!["launch", "--map", "paper:2"];
-        args.extend_from_slice(extra);
-        madenet(&args)
-    };
+    let launch = |extra: &[&str]| madenet_with_extra("launch --map paper:2", &[], extra);
     assert_clean_error(
         &launch(&["--record", bag.to_str().unwrap()]),
         &["--record", "already exists"],
@@ -152,16 +133,8 @@ fn live_and_continuous_runs_are_recorded() {
     let dir = Scratch::new("record-both");
     let at = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let grid = |extra: &[&str]| {
-        let mut args = vec![
-            "run", "--map", "paper:2", "--policy", "spread", "--seed", "3",
-        ];
-        args.extend_from_slice(extra);
-        let out = madenet(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let line = "run --map paper:2 --policy spread --seed 3";
+        assert_ok(&madenet_with_extra(line, &[], extra));
     };
     grid(&["--record", &at("plain")]);
     grid(&["--record", &at("live"), "--foxglove", "127.0.0.1:0"]);
@@ -170,26 +143,10 @@ fn live_and_continuous_runs_are_recorded() {
         std::fs::read(dir.join("live/live_0.mcap")).unwrap()
     );
     let continuous = |name: &str| {
-        let out = madenet(&[
-            "run",
-            "--world",
-            "continuous",
-            "--generate",
-            "2",
-            "--side",
-            "10",
-            "--seed",
-            "4",
-            "--policy",
-            "spread",
-            "--record",
-            &at(name),
-        ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_ok(&madenet_with(
+            "run --world continuous --generate 2 --side 10 --seed 4 --policy spread --record {}",
+            &[&at(name)],
+        ));
     };
     continuous("c1");
     continuous("c2");
@@ -285,25 +242,13 @@ fn a_study_records_the_trials_it_is_told_to() {
     let dir = Scratch::new("record-trials");
     let out = dir.join("study");
     let study = |extra: &[&str]| {
-        let mut args = vec![
-            "compare",
-            "--methods",
-            "nf,spread",
-            "--oracles",
-            "none",
-            "--seeds",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        madenet(&args)
+        madenet_with_extra(
+            "compare --methods nf,spread --oracles none --seeds 2 --out {}",
+            &[out.to_str().unwrap()],
+            extra,
+        )
     };
-    let compare = |conditions: &[&str]| {
-        let mut extra = vec!["--record-trials"];
-        extra.extend_from_slice(conditions);
-        study(&extra)
-    };
+    let compare = |conditions: &[&str]| study(&[&["--record-trials"][..], conditions].concat());
     for (bad, needle) in [
         (&["team=3"][..], "unknown field `team`"),
         (&["method=nf", "seed=x"][..], "whole number"),
@@ -319,19 +264,10 @@ fn a_study_records_the_trials_it_is_told_to() {
         );
         assert!(!out.exists(), "{bad:?}: refused before the study ran");
     }
-    let with_oracle = madenet(&[
-        "compare",
-        "--methods",
-        "nf",
-        "--oracles",
-        "placebo",
-        "--seeds",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-        "--record-trials",
-        "map=test_2",
-    ]);
+    let with_oracle = madenet_with(
+        "compare --methods nf --oracles placebo --seeds 1 --out {} --record-trials map=test_2",
+        &[out.to_str().unwrap()],
+    );
     assert_clean_error(&with_oracle, &["--record-trials", "oracle-placebo"]);
     assert!(!out.exists());
 
@@ -343,11 +279,7 @@ fn a_study_records_the_trials_it_is_told_to() {
         "seed=2",
     ];
     let first = compare(&chosen);
-    assert!(
-        first.status.success(),
-        "{}",
-        String::from_utf8_lossy(&first.stderr)
-    );
+    assert_ok(&first);
     assert!(String::from_utf8_lossy(&first.stdout).contains("2 trials recorded"));
     let bags = out.join("bags");
     let names = [
@@ -356,21 +288,10 @@ fn a_study_records_the_trials_it_is_told_to() {
     ];
     assert_eq!(entries(&bags), names);
     let alone = dir.join("alone");
-    let run = madenet(&[
-        "run",
-        "--map",
-        "paper:5",
-        "--start",
-        "top-right",
-        "--policy",
-        "spread",
-        "--seed",
-        "2",
-        "--csp",
-        "0.5",
-        "--record",
-        alone.to_str().unwrap(),
-    ]);
+    let run = madenet_with(
+        "run --map paper:5 --start top-right --policy spread --seed 2 --csp 0.5 --record {}",
+        &[alone.to_str().unwrap()],
+    );
     assert!(run.status.success());
     let bag = |at: &Path| {
         let name = at.file_name().unwrap().to_string_lossy().into_owned();
@@ -421,23 +342,14 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
     .enumerate()
     {
         let bag = dir.join(format!("bag{k}"));
-        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
-            .arg("run")
-            .args(world)
-            .args([
-                "--policy",
-                "spread",
-                "--pace-ms",
-                "50",
-                "--foxglove",
-                "127.0.0.1:0",
-            ])
-            .arg("--record")
-            .arg(&bag)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
+        let mut child = spawn_piped(
+            std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+                .arg("run")
+                .args(world)
+                .args(["--policy", "spread", "--pace-ms", "50"])
+                .args(["--foxglove", "127.0.0.1:0", "--record"])
+                .arg(&bag),
+        );
         // The live view's address is printed once the signal is watched.
         let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
         let mut line = String::new();
@@ -445,12 +357,8 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
         assert!(line.contains("ws://"), "world {k}: {line}");
         std::thread::sleep(std::time::Duration::from_millis(500));
         // Ctrl-C in the grid world, SIGTERM in the continuous one.
-        let (signal, code) = [("-INT", 130), ("-TERM", 143)][k];
-        let kill = std::process::Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(kill.success());
+        let (name, code) = [("-INT", 130), ("-TERM", 143)][k];
+        signal(&child, name);
         let out = child.wait_with_output().unwrap();
         let mut rest = String::new();
         std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
@@ -461,13 +369,7 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
             stdout.contains("wrote") && stdout.contains("ROS 2 bag"),
             "{stdout}"
         );
-        let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
-        assert!(metadata.contains("message_count"), "{metadata}");
-        assert!(
-            entries(dir.path()).iter().all(|e| !e.starts_with('.')),
-            "{:?}",
-            entries(dir.path())
-        );
+        assert_bag_finished(&dir, &bag);
     }
 }
 
@@ -478,22 +380,12 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
 fn ctrl_c_to_launch_finishes_the_world_nodes_bag() {
     let dir = Scratch::new("record-launch-ctrl-c");
     let bag = dir.join("bag");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args([
-            "launch",
-            "--map",
-            "paper:8",
-            "--policy",
-            "spread",
-            "--pace-ms",
-            "100",
-        ])
-        .arg("--record")
-        .arg(&bag)
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_piped(
+        std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(["launch", "--map", "paper:8", "--policy", "spread"])
+            .args(["--pace-ms", "100", "--record"])
+            .arg(&bag),
+    );
     // The world node watches signals before it starts its bag (a hidden folder beside it):
     // once that is there, a second more puts the paced run (≈ 6 s) in its middle.
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
@@ -505,11 +397,7 @@ fn ctrl_c_to_launch_finishes_the_world_nodes_bag() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     std::thread::sleep(std::time::Duration::from_millis(1000));
-    let kill = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
+    signal(&child, "-INT");
     let out = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -533,11 +421,5 @@ fn ctrl_c_to_launch_finishes_the_world_nodes_bag() {
     let whole: serde_json::Value = serde_json::from_slice(&whole.stdout).unwrap();
     let tns = whole["metrics"]["tns"].as_u64().unwrap() as usize;
     assert!(at > 0 && at < tns, "stopped at {at} of {tns}");
-    let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
-    assert!(metadata.contains("message_count"), "{metadata}");
-    assert!(
-        entries(dir.path()).iter().all(|e| !e.starts_with('.')),
-        "{:?}",
-        entries(dir.path())
-    );
+    assert_bag_finished(&dir, &bag);
 }

@@ -25,6 +25,31 @@ fn router() -> (zenoh::Session, String) {
     (router, opts.connect[0].clone())
 }
 
+/// A router as [`router`] makes, and options that connect to it.
+fn router_and_options() -> (zenoh::Session, String, madenet_ros2::Ros2Options) {
+    let (router, endpoint) = router();
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.clone()],
+        ..Default::default()
+    };
+    (router, endpoint, opts)
+}
+
+/// `madenet launch --json --trajectory --map <map>`, more arguments to add.
+fn launch(map: &str) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_madenet"));
+    cmd.args(["launch", "--json", "--trajectory", "--map", map]);
+    cmd
+}
+
+/// The JSON result of a `launch` that succeeded and completed the exploration.
+fn completed_result(out: &std::process::Output) -> Value {
+    madenet_testkit::assert_ok(out);
+    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    result
+}
+
 #[test]
 fn launched_agents_publish_their_trajectory_as_ros2_poses() {
     let (router, endpoint) = router();
@@ -42,24 +67,11 @@ fn launched_agents_publish_their_trajectory_as_ros2_poses() {
         })
         .wait()
         .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
-        .args([
-            "launch",
-            "--json",
-            "--trajectory",
-            "--map",
-            "paper:3",
-            "--policy",
-            "nf",
-        ])
-        .args(["--seed", "2", "--ros2", &endpoint])
+    let out = launch("paper:3")
+        .args(["--policy", "nf", "--seed", "2", "--ros2", &endpoint])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    madenet_testkit::assert_ok(&out);
     std::thread::sleep(Duration::from_millis(500));
     let result: Value = serde_json::from_slice(&out.stdout).unwrap();
     let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
@@ -90,11 +102,7 @@ fn launched_agents_publish_their_trajectory_as_ros2_poses() {
 fn launch_on_real_robots_explores_through_their_maps_and_poses() {
     // Three stand-in robot stacks (their own map, pose and goal topics) on paper map 3, started
     // at the top-right corner; `launch --ros2-robots` runs radio and agents on them.
-    let (_router, endpoint) = router();
-    let opts = madenet_ros2::Ros2Options {
-        connect: vec![endpoint.clone()],
-        ..Default::default()
-    };
+    let (_router, endpoint, opts) = router_and_options();
     let truth = madenet_map::paper::paper_map(3).unwrap();
     let starts = madenet_map::paper::Corner::TopRight.start_cells(20, 20);
     let stop = std::sync::atomic::AtomicBool::new(false);
@@ -107,8 +115,7 @@ fn launch_on_real_robots_explores_through_their_maps_and_poses() {
                 })
             })
             .collect();
-        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
-            .args(["launch", "--json", "--trajectory", "--map", "paper:3"])
+        let out = launch("paper:3")
             .args([
                 "--start",
                 "top-right",
@@ -124,13 +131,7 @@ fn launch_on_real_robots_explores_through_their_maps_and_poses() {
         let paths: Vec<Vec<Pos>> = stacks.into_iter().map(|h| h.join().unwrap()).collect();
         (out, paths)
     });
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    let result = completed_result(&out);
     let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
     for (i, path) in paths.iter().enumerate() {
         // The world's trajectory of robot i, without the timesteps it did not move, is the
@@ -149,11 +150,7 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
     // the goals `launch --ros2-robots` sends; the world node reads the fine maps by the paper's
     // rule. A 10 × 10 m room with a free-standing 2 × 2 m block.
     use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
-    let (_router, endpoint) = router();
-    let opts = madenet_ros2::Ros2Options {
-        connect: vec![endpoint.clone()],
-        ..Default::default()
-    };
+    let (_router, endpoint, opts) = router_and_options();
     let room = "..........\n".repeat(4) + &"....##....\n".repeat(2) + &"..........\n".repeat(4);
     let dir = madenet_testkit::Scratch::new("ros2-continuous");
     let map = dir.join("room.txt");
@@ -175,14 +172,7 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
         let (opts, stop) = (&opts, &stop);
         let team = s
             .spawn(move || madenet_ros2::run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
-        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
-            .args([
-                "launch",
-                "--json",
-                "--trajectory",
-                "--map",
-                map.to_str().unwrap(),
-            ])
+        let out = launch(map.to_str().unwrap())
             .args(["--start", "0,0;0,1;1,0", "--policy", "nf"])
             .args(["--config", config.to_str().unwrap()])
             .args(["--ros2-robots", &endpoint, "--step-timeout-s", "2"])
@@ -191,13 +181,7 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
         stop.store(true, std::sync::atomic::Ordering::Relaxed);
         (out, team.join().unwrap())
     });
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let result: Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(result["metrics"]["completed"], true, "{result}");
+    let result = completed_result(&out);
     assert_eq!(run.collisions.obstacle + run.collisions.robot, 0, "{run:?}");
     let positions: Vec<Vec<Pos>> = serde_json::from_value(result["positions"].clone()).unwrap();
     for i in 0..3 {

@@ -2,36 +2,30 @@
 //! shipped agnostic model plays every side and team of it, and bad input gives exit code 2 and
 //! one `error:` line naming the flag or file and field.
 
-use madenet_testkit::{assert_clean_error, run, Scratch};
+mod common;
+
+use common::{madenet, madenet_with};
+use madenet_testkit::{assert_clean_error, assert_ok, Scratch};
+use std::path::PathBuf;
 use std::process::Output;
 
-fn madenet(args: &[&str]) -> Output {
-    run(env!("CARGO_BIN_EXE_madenet"), args)
+/// A scratch folder tagged `tag` and `madenet` run with `line`, its `{}` the folder's `s`, which
+/// must succeed: the folder, `s` and the output.
+fn scale_ok(tag: &str, line: &str) -> (Scratch, PathBuf, Output) {
+    let dir = Scratch::new(tag);
+    let out = dir.join("s");
+    let r = madenet_with(line, &[out.to_str().unwrap()]);
+    assert_ok(&r);
+    (dir, out, r)
 }
 
 #[test]
 fn tiny_grid_with_the_agnostic_model_and_bad_input() {
-    let dir = Scratch::new("scale-cli");
-    let out = dir.join("s");
+    let (dir, out, r) = scale_ok(
+        "scale-cli",
+        "scale --out {} --sides 14,24 --teams 2,4 --seeds 1 --csp 0.5 --methods made-net-any,nf --threads 2",
+    );
     let o = out.to_str().unwrap();
-    let r = madenet(&[
-        "scale",
-        "--out",
-        o,
-        "--sides",
-        "14,24",
-        "--teams",
-        "2,4",
-        "--seeds",
-        "1",
-        "--csp",
-        "0.5",
-        "--methods",
-        "made-net-any,nf",
-        "--threads",
-        "2",
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let stdout = String::from_utf8_lossy(&r.stdout);
     // (2 methods + the known-map reference) × 2 sides × 4 maps × 3 starts × 2 teams × 1 seed.
     assert!(
@@ -75,25 +69,10 @@ fn tiny_grid_with_the_agnostic_model_and_bad_input() {
 
 #[test]
 fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
-    let dir = Scratch::new("scale-cont");
-    let out = dir.join("s");
-    let o = out.to_str().unwrap();
-    let r = madenet(&[
-        "scale",
-        "--world",
-        "continuous",
-        "--out",
-        o,
-        "--sides",
-        "12",
-        "--teams",
-        "2",
-        "--seeds",
-        "1",
-        "--methods",
-        "spread",
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (_dir, out, r) = scale_ok(
+        "scale-cont",
+        "scale --world continuous --out {} --sides 12 --teams 2 --seeds 1 --methods spread",
+    );
     // 1 method × 1 scene × 3 starts × 1 team × 1 seed.
     assert!(String::from_utf8_lossy(&r.stdout).starts_with("3 trials → "));
     let trials = std::fs::read_to_string(out.join("trials.csv")).unwrap();
@@ -113,7 +92,7 @@ fn the_continuous_world_runs_from_the_flag_and_a_bad_world_is_refused() {
     );
     let twin_trials = std::fs::read_to_string(out.join("grid").join("trials.csv")).unwrap();
     assert_eq!(twin_trials.lines().count(), 4, "{twin_trials}");
-    let bad = madenet(&["scale", "--world", "gazebo", "--out", o]);
+    let bad = madenet_with("scale --world gazebo --out {}", &[out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&bad.stderr);
     assert_eq!(bad.status.code(), Some(2), "{err}");
     assert!(
@@ -135,16 +114,11 @@ fn the_configs_baseline_parameters_are_the_ones_played() {
         )
         .unwrap();
         let out = dir.join(format!("out{iterations}"));
-        let r = madenet(&[
-            "scale",
-            "--config",
-            cfg.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--threads",
-            "2",
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let r = madenet_with(
+            "scale --config {} --out {} --threads 2",
+            &[cfg.to_str().unwrap(), out.to_str().unwrap()],
+        );
+        assert_ok(&r);
         let text = std::fs::read_to_string(out.join("trials.csv")).unwrap();
         // Everything but the wall-clock columns.
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();

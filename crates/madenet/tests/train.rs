@@ -2,52 +2,67 @@
 //! `--model` playing the result, and bad input: exit code 2 and one `error:` line naming the
 //! file or flag.
 
-use madenet_testkit::{error_line, run, Scratch};
-use std::process::Output;
+mod common;
 
-fn madenet(args: &[&str]) -> Output {
-    run(env!("CARGO_BIN_EXE_madenet"), args)
+use common::{madenet, madenet_with};
+use madenet_testkit::{assert_ok, error_line, Scratch};
+use std::path::{Path, PathBuf};
+
+/// A scratch folder tagged `tag` holding the training config `name` (its text `config`), and
+/// the run folder `run` beside it, trained by `madenet train --config <config> --out <run>
+/// --method <method> -q` (which must succeed): the folder, the config's path and the run's.
+fn tiny_run(tag: &str, name: &str, config: &str, method: &str) -> (Scratch, PathBuf, PathBuf) {
+    let dir = Scratch::new(tag);
+    let cfg = dir.write(name, config);
+    let run = dir.join("run");
+    let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
+    assert_ok(&madenet(&[
+        "train", "--config", c, "--out", r, "--method", method, "-q",
+    ]));
+    (dir, cfg, run)
+}
+
+/// The lines of `run`'s episodes.csv, its header included.
+fn episode_lines(run: &Path) -> usize {
+    madenet_testkit::read(run.join("episodes.csv"))
+        .lines()
+        .count()
+}
+
+/// The model in `model` plays a generated map and reports its TNS.
+fn assert_model_plays(model: &Path) {
+    let o = madenet_with(
+        "run --map generate:2 --policy model --model {} --json",
+        &[model.to_str().unwrap()],
+    );
+    assert_ok(&o);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
+}
+
+/// `madenet train --config <config> --out <out>`'s one error line.
+fn config_error(config: &Path, out: &Path) -> String {
+    error_line(&madenet(&[
+        "train",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]))
 }
 
 const TINY: &str = "episodes = 3\nwarmup_episodes = 1\nbatch_size = 2\ntrace_len = 4\nreplay_episodes = 4\nvalidate_every = 3\nvalidation_maps = 1\nvalidation_csp = [0.5]\ncheckpoint_every = 2\nthreads = 1\n[scenario]\nstep_cap = 30\n";
 
 #[test]
 fn tiny_run_resume_and_model() {
-    let dir = Scratch::new("train-cli-run");
-    let cfg = dir.join("tiny.toml");
-    std::fs::write(&cfg, TINY).unwrap();
-    let run = dir.join("run");
+    let (dir, cfg, run) = tiny_run("train-cli-run", "tiny.toml", TINY, "made-net-dt");
     let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
-    let o = madenet(&[
-        "train",
-        "--config",
-        c,
-        "--out",
-        r,
-        "--method",
-        "made-net-dt",
-        "-q",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(
-        std::fs::read_to_string(run.join("episodes.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 3
-    );
+    assert_eq!(episode_lines(&run), 1 + 3);
     // A second --out into the same folder is refused; --resume with --episodes extends the run.
     let e = error_line(&madenet(&["train", "--config", c, "--out", r, "-q"]));
     assert!(e.contains("--resume"), "{e}");
     let o = madenet(&["train", "--resume", r, "--episodes", "4", "-q"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(
-        std::fs::read_to_string(run.join("episodes.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 4
-    );
+    assert_ok(&o);
+    assert_eq!(episode_lines(&run), 1 + 4);
     assert!(
         !String::from_utf8_lossy(&o.stderr).contains("nothing left"),
         "it trained"
@@ -74,19 +89,13 @@ fn tiny_run_resume_and_model() {
         before,
         "a resume that trains nothing adds no event file"
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         e.contains("nothing left to train") && e.contains("--episodes 2"),
         "{e}"
     );
-    assert_eq!(
-        std::fs::read_to_string(run.join("episodes.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 4
-    );
+    assert_eq!(episode_lines(&run), 1 + 4);
     // A size edited in the run's config.toml after the start is refused by field on resume
     // (not burn's panic on weights that no longer fit); undoing the edit resumes again.
     let cfg_toml = run.join("config.toml");
@@ -108,18 +117,7 @@ fn tiny_run_resume_and_model() {
     let info = std::fs::read_to_string(best.join("model.toml")).unwrap();
     assert!(info.contains("digests = [\""), "{info}");
     // The trained model plays a generated map.
-    let o = madenet(&[
-        "run",
-        "--map",
-        "generate:2",
-        "--policy",
-        "model",
-        "--model",
-        best.to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
+    assert_model_plays(&best);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -129,13 +127,7 @@ fn bad_training_input_is_one_line() {
     let cfg = dir.join("bad.toml");
     std::fs::write(&cfg, "gamma = 2.0\n").unwrap();
     let out = dir.join("out");
-    let e = error_line(&madenet(&[
-        "train",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    let e = config_error(&cfg, &out);
     assert!(e.contains("bad.toml") && e.contains("gamma"), "{e}");
     let e = error_line(&madenet(&[
         "train",
@@ -176,30 +168,17 @@ const TINY_DME: &str = "method = \"dme-drl\"\nepisodes = 2\nbatch_size = 4\nrepl
 
 #[test]
 fn dme_drl_tiny_run_resume_model_and_bad_input() {
-    let dir = Scratch::new("train-cli-dme");
-    let cfg = dir.join("tiny-dme.toml");
-    std::fs::write(&cfg, TINY_DME).unwrap();
-    let run = dir.join("run");
-    let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
     // The config's `method` picks the learner; --method dme-drl says the same.
-    let o = madenet(&[
-        "train", "--config", c, "--out", r, "--method", "dme-drl", "-q",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (dir, _, run) = tiny_run("train-cli-dme", "tiny-dme.toml", TINY_DME, "dme-drl");
+    let r = run.to_str().unwrap();
     let updates = std::fs::read_to_string(run.join("updates.csv")).unwrap();
     assert!(
         updates.starts_with("update,critic_loss,actor_loss"),
         "{updates}"
     );
     let o = madenet(&["train", "--resume", r, "--episodes", "3", "-q"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(
-        std::fs::read_to_string(run.join("episodes.csv"))
-            .unwrap()
-            .lines()
-            .count(),
-        1 + 3
-    );
+    assert_ok(&o);
+    assert_eq!(episode_lines(&run), 1 + 3);
     let o = madenet(&["train", "--resume", r, "--episodes", "3", "-q"]);
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -207,38 +186,15 @@ fn dme_drl_tiny_run_resume_model_and_bad_input() {
         "{e}"
     );
     let o = madenet(&["plot-training", r]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = madenet(&[
-        "run",
-        "--map",
-        "generate:2",
-        "--policy",
-        "model",
-        "--model",
-        run.join("last").to_str().unwrap(),
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("\"tns\""));
+    assert_ok(&o);
+    assert_model_plays(&run.join("last"));
     // Bad DME-DRL input: the file and field named, exit 2.
     let bad = dir.join("bad-dme.toml");
     std::fs::write(&bad, "method = \"dme-drl\"\ntau = 0.0\n").unwrap();
-    let e = error_line(&madenet(&[
-        "train",
-        "--config",
-        bad.to_str().unwrap(),
-        "--out",
-        dir.join("x").to_str().unwrap(),
-    ]));
+    let e = config_error(&bad, &dir.join("x"));
     assert!(e.contains("bad-dme.toml") && e.contains("tau"), "{e}");
     std::fs::write(&bad, "method = \"dme-drl\"\ntrace_len = 4\n").unwrap();
-    let e = error_line(&madenet(&[
-        "train",
-        "--config",
-        bad.to_str().unwrap(),
-        "--out",
-        dir.join("x").to_str().unwrap(),
-    ]));
+    let e = config_error(&bad, &dir.join("x"));
     assert!(e.contains("bad-dme.toml") && e.contains("trace_len"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

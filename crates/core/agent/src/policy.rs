@@ -29,8 +29,11 @@ pub enum Decision {
 pub trait Policy: Send {
     /// Registry name (e.g. `"nf"`).
     fn name(&self) -> &str;
-    /// When this policy is asked for a decision.
-    fn mode(&self) -> DecisionMode;
+    /// When this policy is asked for a decision. The default is macro actions, decided when
+    /// the current one terminates, as the paper's planners do.
+    fn mode(&self) -> DecisionMode {
+        DecisionMode::OnTermination
+    }
     /// Whether the view must carry goal candidates (their extraction costs a full Dijkstra).
     fn needs_candidates(&self) -> bool {
         true
@@ -70,9 +73,6 @@ pub struct External;
 impl Policy for External {
     fn name(&self) -> &str {
         "external"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, _view: &mut AgentView<'_>) -> Decision {
         Decision::Idle
@@ -124,9 +124,6 @@ impl RandomCandidate {
 impl Policy for RandomCandidate {
     fn name(&self) -> &str {
         "random"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let n = view.candidates().cells.len();
@@ -195,9 +192,6 @@ impl Spread {
 impl Policy for Spread {
     fn name(&self) -> &str {
         "spread"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let best = self

@@ -38,6 +38,30 @@ use std::path::{Path, PathBuf};
 /// Symlink hops followed before giving up (Linux's own limit is 40).
 const MAX_LINKS: usize = 40;
 
+/// Refuses an output `path` (given as `flag`) whose extension is not `want` (any case): a
+/// `.png` asked of a GIF writer says so before anything runs. No extension is accepted.
+///
+/// ```
+/// use std::path::Path;
+/// assert!(madenet_files::check_extension(Some(Path::new("a.GIF")), "--render", "gif").is_ok());
+/// let e = madenet_files::check_extension(Some(Path::new("a.png")), "--render", "gif");
+/// assert_eq!(e.unwrap_err(), "--render: writes a GIF file, but a.png ends in .png: name it *.gif");
+/// ```
+pub fn check_extension(path: Option<&Path>, flag: &str, want: &str) -> Result<(), String> {
+    let Some((path, ext)) = path.and_then(|p| Some((p, p.extension()?))) else {
+        return Ok(());
+    };
+    let ext = ext.to_string_lossy().to_ascii_lowercase();
+    if ext != want {
+        return Err(format!(
+            "{flag}: writes a {} file, but {} ends in .{ext}: name it *.{want}",
+            want.to_uppercase(),
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` as described in the crate doc.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;

@@ -2,17 +2,9 @@
 //! devices and pipes streamed into, folders refused.
 
 use madenet_files::{write_atomic, AtomicFile};
+use madenet_testkit::entries as names;
 use std::io::Write;
 use std::path::Path;
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
 
 #[test]
 fn a_regular_file_is_replaced_and_no_temporary_file_is_left() {
@@ -69,7 +61,7 @@ fn a_symlink_stays_a_link_and_its_target_is_replaced() {
         .file_type()
         .is_symlink());
     assert_eq!(std::fs::read(&target).unwrap(), b"new");
-    assert_eq!(names(&dir.path().join("results")), ["run1.csv"]);
+    assert_eq!(names(dir.path().join("results")), ["run1.csv"]);
     // A dangling link creates its target.
     let dangling = dir.path().join("next.csv");
     std::os::unix::fs::symlink("results/run2.csv", &dangling).unwrap();

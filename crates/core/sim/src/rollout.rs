@@ -205,6 +205,20 @@ pub enum OracleKind {
     PlanTeamMap,
 }
 
+/// An oracle by its [`OracleKind::name`] (`oracle --kind`, `compare --oracles`).
+impl std::str::FromStr for OracleKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        OracleKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = OracleKind::ALL.iter().map(|k| k.name()).collect();
+                format!("unknown oracle `{s}`; known: {}", names.join(", "))
+            })
+    }
+}
+
 impl OracleKind {
     /// Every oracle: replay, averaged, noiseless, placebo, known-map, redrawn, plan-redrawn,
     /// plan-own-map, plan-team-map.
@@ -219,6 +233,14 @@ impl OracleKind {
         OracleKind::PlanOwnMap,
         OracleKind::PlanTeamMap,
     ];
+
+    /// An item of a list that may say `none` (no oracle), as `compare --oracles` takes it.
+    pub fn parse_or_none(s: &str) -> Result<Option<OracleKind>, String> {
+        match s {
+            "none" => Ok(None),
+            _ => s.parse().map(Some).map_err(|e| format!("{e}, none")),
+        }
+    }
 
     /// The name in configs and on the command line.
     pub fn name(self) -> &'static str {

@@ -153,6 +153,11 @@ fn check_prob(name: &'static str, p: f64) -> Result<(), ConfigError> {
 }
 
 impl ScenarioConfig {
+    /// The file's config if a path is given (`--config`), else the paper's defaults.
+    pub fn from_toml_file_or_default(path: Option<&Path>) -> Result<Self, ConfigError> {
+        path.map_or_else(|| Ok(Self::default()), Self::from_toml_file)
+    }
+
     /// Reads a TOML file; errors name the file and the offending key.
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
         let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)

@@ -1,7 +1,7 @@
 //! `CoreContinuousEnv`: the continuous world as a step-wise environment
 //! ([`madenet_env::ContinuousEnv`]), for the Python package's `ContinuousExplorationEnv`.
 
-use crate::{observation, registry, scenario, value_error, Observation};
+use crate::{registry, scenario, value_error};
 use madenet_continuous::ContinuousConfig;
 use madenet_env::ContinuousEnv;
 use madenet_sim::continuous::ContinuousSpec;
@@ -19,158 +19,110 @@ pub struct CoreContinuousEnv {
     map_name: String,
 }
 
-#[pymethods]
-impl CoreContinuousEnv {
-    #[new]
-    #[pyo3(signature = (map = "generate:1", side = 20.0, start = "bottom-left", policy = "nf", config = None, overrides = "", continuous_config = None))]
-    fn new(
-        map: &str,
-        side: f64,
-        start: &str,
-        policy: &str,
-        config: Option<&str>,
-        overrides: &str,
-        continuous_config: Option<&str>,
-    ) -> PyResult<Self> {
-        let scenario = scenario(config, overrides)?;
-        if !(side.is_finite() && (4.0..=1000.0).contains(&side)) {
-            return Err(value_error(format!(
-                "side: a generated world is 4 to 1000 m square, got {side}"
-            )));
-        }
-        let continuous: ContinuousConfig = match continuous_config {
-            Some(p) => madenet_files::read_toml(std::path::Path::new(p))
-                .map_err(|e| value_error(format!("continuous_config: {e}")))?,
-            None => ContinuousConfig::default(),
-        };
-        continuous
-            .validate()
-            .map_err(|e| value_error(format!("continuous_config: {e}")))?;
-        let source = MapSource::from_str(map).map_err(|e| value_error(format!("map: {e}")))?;
-        let scene = source
-            .scene(side)
-            .map_err(|e| value_error(format!("map: {e}")))?;
-        let coarse = scene.coarse_truth(scenario.cell_size, &scenario.discretize);
-        let starts = StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?;
-        starts
-            .check_team(scenario.num_robots)
-            .map_err(|e| value_error(format!("start: {e}")))?;
-        let starts = starts.cells(&coarse, scenario.num_robots, scenario.movement);
-        if starts.is_empty() {
-            return Err(value_error(format!(
-                "start: map {} has no {} connected free cells there",
-                source.name(),
-                scenario.num_robots
-            )));
-        }
-        let spec = ContinuousSpec {
-            scene: std::sync::Arc::new(scene),
-            starts,
-            config: scenario,
-            continuous,
-            policy: policy.to_string(),
-            seed: 0,
-        };
-        let env = ContinuousEnv::new(spec, registry()?).map_err(value_error)?;
-        Ok(CoreContinuousEnv {
-            env,
-            map_name: source.name(),
-        })
-    }
-
-    /// Team size |I|.
-    #[getter]
-    fn num_robots(&self) -> usize {
-        self.env.num_robots()
-    }
-    /// Rows H of the agents' cells.
-    #[getter]
-    fn height(&self) -> usize {
-        self.env.height()
-    }
-    /// Columns W of the agents' cells.
-    #[getter]
-    fn width(&self) -> usize {
-        self.env.width()
-    }
-    /// Actions per robot: |G| goal candidates.
-    #[getter]
-    fn action_count(&self) -> usize {
-        self.env.action_count()
-    }
-    /// Length of one robot's observation vector.
-    #[getter]
-    fn vector_len(&self) -> usize {
-        self.env.vector_len()
-    }
-    /// Name of the map in outputs.
-    #[getter]
-    fn map_name(&self) -> String {
-        self.map_name.clone()
-    }
-    /// Simulated seconds since the episode started.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.env.time()
-    }
-    /// The episode has ended (explored, time cap, or no reachable frontier left).
-    #[getter]
-    fn done(&self) -> bool {
-        self.env.is_done()
-    }
-
-    /// Starts an episode (the seed drives the sensors, the radio and the robots' policies)
-    /// and runs it to its first decision point.
-    fn reset(&mut self, py: Python<'_>, seed: u64) -> PyResult<()> {
-        let env = &mut self.env;
-        py.detach(|| env.reset(seed)).map_err(value_error)
-    }
-
-    /// Which robots' actions the next step uses.
-    fn needs_action(&self) -> Vec<bool> {
-        self.env.needs_action()
-    }
-
-    /// Robot `robot`'s observation: map image `[4, H, W]` float32, vector float32, mask int8.
-    fn observe<'py>(&mut self, py: Python<'py>, robot: usize) -> PyResult<Observation<'py>> {
-        let (h, w) = (self.env.height(), self.env.width());
-        let mut map = vec![0.0f32; self.env.map_len()];
-        let mut vector = vec![0.0f32; self.env.vector_len()];
-        let mut mask = vec![0u8; self.env.action_count()];
-        self.env
-            .observe_into(robot, &mut map, &mut vector, &mut mask)
-            .map_err(value_error)?;
-        observation(py, (h, w), map, vector, mask)
-    }
-
-    /// Applies one action per robot (a candidate index, or `None`: the robot's own policy);
-    /// returns (team reward, simulated seconds, terminated, truncated).
-    fn step(
-        &mut self,
-        py: Python<'_>,
-        actions: Vec<Option<i64>>,
-    ) -> PyResult<(f64, f64, bool, bool)> {
-        let actions = actions
-            .into_iter()
-            .map(|a| {
-                a.map(|k| {
-                    usize::try_from(k).map_err(|_| value_error(format!("action {k}: negative")))
-                })
-                .transpose()
+env_pymethods! {
+    CoreContinuousEnv {
+        #[new]
+        #[pyo3(signature = (map = "generate:1", side = 20.0, start = "bottom-left", policy = "nf", config = None, overrides = "", continuous_config = None))]
+        fn new(
+            map: &str,
+            side: f64,
+            start: &str,
+            policy: &str,
+            config: Option<&str>,
+            overrides: &str,
+            continuous_config: Option<&str>,
+        ) -> PyResult<Self> {
+            let scenario = scenario(config, overrides)?;
+            if !(side.is_finite() && (4.0..=1000.0).contains(&side)) {
+                return Err(value_error(format!(
+                    "side: a generated world is 4 to 1000 m square, got {side}"
+                )));
+            }
+            let continuous: ContinuousConfig = match continuous_config {
+                Some(p) => madenet_files::read_toml(std::path::Path::new(p))
+                    .map_err(|e| value_error(format!("continuous_config: {e}")))?,
+                None => ContinuousConfig::default(),
+            };
+            continuous
+                .validate()
+                .map_err(|e| value_error(format!("continuous_config: {e}")))?;
+            let source = MapSource::from_str(map).map_err(|e| value_error(format!("map: {e}")))?;
+            let scene = source
+                .scene(side)
+                .map_err(|e| value_error(format!("map: {e}")))?;
+            let coarse = scene.coarse_truth(scenario.cell_size, &scenario.discretize);
+            let starts =
+                StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?;
+            starts
+                .check_team(scenario.num_robots)
+                .map_err(|e| value_error(format!("start: {e}")))?;
+            let starts = starts.cells(&coarse, scenario.num_robots, scenario.movement);
+            if starts.is_empty() {
+                return Err(value_error(format!(
+                    "start: map {} has no {} connected free cells there",
+                    source.name(),
+                    scenario.num_robots
+                )));
+            }
+            let spec = ContinuousSpec {
+                scene: std::sync::Arc::new(scene),
+                starts,
+                config: scenario,
+                continuous,
+                policy: policy.to_string(),
+                seed: 0,
+            };
+            let env = ContinuousEnv::new(spec, registry()?).map_err(value_error)?;
+            Ok(CoreContinuousEnv {
+                env,
+                map_name: source.name(),
             })
-            .collect::<PyResult<Vec<_>>>()?;
-        let env = &mut self.env;
-        let s = py.detach(|| env.step(&actions)).map_err(value_error)?;
-        Ok((s.team_reward, s.seconds, s.terminated, s.truncated))
+        }
+
+        /// Simulated seconds since the episode started.
+        #[getter]
+        fn time(&self) -> f64 {
+            self.env.time()
+        }
+
+        /// Starts an episode (the seed drives the sensors, the radio and the robots' policies)
+        /// and runs it to its first decision point.
+        fn reset(&mut self, py: Python<'_>, seed: u64) -> PyResult<()> {
+            let env = &mut self.env;
+            py.detach(|| env.reset(seed)).map_err(value_error)
+        }
+
+        /// Applies one action per robot (a candidate index, or `None`: the robot's own policy);
+        /// returns (team reward, simulated seconds, terminated, truncated).
+        fn step(
+            &mut self,
+            py: Python<'_>,
+            actions: Vec<Option<i64>>,
+        ) -> PyResult<(f64, f64, bool, bool)> {
+            let actions = actions
+                .into_iter()
+                .map(|a| {
+                    a.map(|k| {
+                        usize::try_from(k).map_err(|_| value_error(format!("action {k}: negative")))
+                    })
+                    .transpose()
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            let env = &mut self.env;
+            let s = py.detach(|| env.step(&actions)).map_err(value_error)?;
+            Ok((s.team_reward, s.seconds, s.terminated, s.truncated))
+        }
     }
 
+    /// Rows H of the agents' cells.
+    height;
+    /// Columns W of the agents' cells.
+    width;
+    /// Actions per robot: |G| goal candidates.
+    action_count;
+    /// The episode has ended (explored, time cap, or no reachable frontier left).
+    done;
     /// The episode's result as `madenet run --world continuous --json` prints it (a JSON
     /// string); ends the episode.
-    fn finish(&mut self) -> PyResult<String> {
-        let result = self
-            .env
-            .finish()
-            .ok_or_else(|| value_error("no episode: call reset() first"))?;
-        serde_json::to_string(&result).map_err(value_error)
-    }
+    finish;
 }

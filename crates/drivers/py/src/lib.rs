@@ -7,6 +7,94 @@
 
 #![deny(missing_docs)]
 
+/// The `#[pymethods]` of an environment class over its `env` and `map_name` fields, an
+/// [`ExplorationEnv`] (`CoreEnv`) or a [`madenet_env::ContinuousEnv`] (`CoreContinuousEnv`):
+/// the class's own methods, then the accessors and calls the two share — team size, rows,
+/// columns, actions per robot, vector length, map name, whether the episode ended, the robots
+/// awaiting actions, one robot's observation, the episode's result. Where what they mean
+/// differs between the worlds, the doc comments after the class's methods are theirs.
+macro_rules! env_pymethods {
+    (
+        $class:ident { $($own:tt)* }
+        $(#[$height:meta])* height;
+        $(#[$width:meta])* width;
+        $(#[$action_count:meta])* action_count;
+        $(#[$done:meta])* done;
+        $(#[$finish:meta])* finish;
+    ) => {
+        #[::pyo3::pymethods]
+        impl $class {
+            /// Team size |I|.
+            #[getter]
+            fn num_robots(&self) -> usize {
+                self.env.num_robots()
+            }
+            $(#[$height])*
+            #[getter]
+            fn height(&self) -> usize {
+                self.env.height()
+            }
+            $(#[$width])*
+            #[getter]
+            fn width(&self) -> usize {
+                self.env.width()
+            }
+            $(#[$action_count])*
+            #[getter]
+            fn action_count(&self) -> usize {
+                self.env.action_count()
+            }
+            /// Length of one robot's observation vector.
+            #[getter]
+            fn vector_len(&self) -> usize {
+                self.env.vector_len()
+            }
+            /// Name of the map in outputs (e.g. `test_1` for `paper:1`).
+            #[getter]
+            fn map_name(&self) -> String {
+                self.map_name.clone()
+            }
+            $(#[$done])*
+            #[getter]
+            fn done(&self) -> bool {
+                self.env.is_done()
+            }
+
+            /// Which robots' actions the next step uses.
+            fn needs_action(&self) -> Vec<bool> {
+                self.env.needs_action()
+            }
+
+            /// Robot `robot`'s observation: map image `[4, H, W]` float32, vector float32, mask int8.
+            fn observe<'py>(
+                &mut self,
+                py: ::pyo3::Python<'py>,
+                robot: usize,
+            ) -> ::pyo3::PyResult<$crate::Observation<'py>> {
+                let (h, w) = (self.env.height(), self.env.width());
+                let mut map = vec![0.0f32; self.env.map_len()];
+                let mut vector = vec![0.0f32; self.env.vector_len()];
+                let mut mask = vec![0u8; self.env.action_count()];
+                self.env
+                    .observe_into(robot, &mut map, &mut vector, &mut mask)
+                    .map_err($crate::value_error)?;
+                $crate::observation(py, (h, w), map, vector, mask)
+            }
+
+            $(#[$finish])*
+            fn finish(&mut self) -> ::pyo3::PyResult<String> {
+                let result = self
+                    .env
+                    .finish()
+                    .ok_or_else(|| $crate::value_error("no episode: call reset() first"))?;
+                serde_json::to_string(&result).map_err($crate::value_error)
+            }
+
+            $($own)*
+        }
+    };
+}
+
 mod continuous;
 mod study;
 mod train;
@@ -218,219 +306,174 @@ pub struct CoreEnv {
     map_name: String,
 }
 
-#[pymethods]
-impl CoreEnv {
-    #[new]
-    #[pyo3(signature = (map = "paper:1", start = "top-left", mode = "macro", config = None, overrides = "", candidates = false, record = false))]
-    fn new(
-        map: &str,
-        start: &str,
-        mode: &str,
-        config: Option<&str>,
-        overrides: &str,
-        candidates: bool,
-        record: bool,
-    ) -> PyResult<Self> {
-        let (env, map_name) = exploration_env(map, start, mode, config, overrides, candidates)?;
-        Ok(CoreEnv {
-            env: env.recording(record),
-            map_name,
-        })
-    }
+env_pymethods! {
+    CoreEnv {
+        #[new]
+        #[pyo3(signature = (map = "paper:1", start = "top-left", mode = "macro", config = None, overrides = "", candidates = false, record = false))]
+        fn new(
+            map: &str,
+            start: &str,
+            mode: &str,
+            config: Option<&str>,
+            overrides: &str,
+            candidates: bool,
+            record: bool,
+        ) -> PyResult<Self> {
+            let (env, map_name) = exploration_env(map, start, mode, config, overrides, candidates)?;
+            Ok(CoreEnv {
+                env: env.recording(record),
+                map_name,
+            })
+        }
 
-    /// Team size |I|.
-    #[getter]
-    fn num_robots(&self) -> usize {
-        self.env.num_robots()
-    }
-    /// Map height H, cells.
-    #[getter]
-    fn height(&self) -> usize {
-        self.env.height()
-    }
-    /// Map width W, cells.
-    #[getter]
-    fn width(&self) -> usize {
-        self.env.width()
-    }
-    /// Actions per robot: |G| goal candidates (macro mode) or 9 moves (primitive mode).
-    #[getter]
-    fn action_count(&self) -> usize {
-        self.env.action_count()
-    }
-    /// Goal candidates per decision |G| for this map.
-    #[getter]
-    fn goal_count(&self) -> usize {
-        self.env.goal_count()
-    }
-    /// Length of one robot's observation vector.
-    #[getter]
-    fn vector_len(&self) -> usize {
-        self.env.vector_len()
-    }
-    /// Length of the joint observation vector (every robot's vector, in robot order).
-    #[getter]
-    fn joint_vector_len(&self) -> usize {
-        self.env.joint_vector_len()
-    }
-    /// Number of joint macro actions |G|^|I|; a `ValueError` if it overflows.
-    #[getter]
-    fn joint_action_count(&self) -> PyResult<usize> {
-        self.env
-            .joint_action_count()
-            .ok_or_else(|| value_error("num_robots: |G|^|I| joint actions overflow"))
-    }
-    /// Name of the map in outputs (e.g. `test_1` for `paper:1`).
-    #[getter]
-    fn map_name(&self) -> String {
-        self.map_name.clone()
-    }
-    /// The current timestep of the episode.
-    #[getter]
-    fn t(&self) -> usize {
-        self.env.t()
-    }
-    /// The episode has ended (map explored or step cap reached).
-    #[getter]
-    fn done(&self) -> bool {
-        self.env.is_done()
-    }
+        /// Goal candidates per decision |G| for this map.
+        #[getter]
+        fn goal_count(&self) -> usize {
+            self.env.goal_count()
+        }
+        /// Length of the joint observation vector (every robot's vector, in robot order).
+        #[getter]
+        fn joint_vector_len(&self) -> usize {
+            self.env.joint_vector_len()
+        }
+        /// Number of joint macro actions |G|^|I|; a `ValueError` if it overflows.
+        #[getter]
+        fn joint_action_count(&self) -> PyResult<usize> {
+            self.env
+                .joint_action_count()
+                .ok_or_else(|| value_error("num_robots: |G|^|I| joint actions overflow"))
+        }
+        /// The current timestep of the episode.
+        #[getter]
+        fn t(&self) -> usize {
+            self.env.t()
+        }
 
-    /// Starts an episode (the seed drives the world's noise and dropouts).
-    fn reset(&mut self, seed: u64) -> PyResult<()> {
-        self.env.reset(seed).map_err(value_error)
-    }
+        /// Starts an episode (the seed drives the world's noise and dropouts).
+        fn reset(&mut self, seed: u64) -> PyResult<()> {
+            self.env.reset(seed).map_err(value_error)
+        }
 
-    /// Which robots' actions the next step uses.
-    fn needs_action(&self) -> Vec<bool> {
-        self.env.needs_action()
-    }
+        /// The centralized observation: merged map image `[4, H, W]`, every robot's vector, the
+        /// joint action mask (int8, |G|^|I|).
+        fn observe_joint<'py>(&mut self, py: Python<'py>) -> PyResult<Observation<'py>> {
+            let (h, w) = (self.env.height(), self.env.width());
+            let count = self.joint_action_count()?;
+            let mut map = vec![0.0f32; self.env.map_len()];
+            let mut vector = vec![0.0f32; self.env.joint_vector_len()];
+            let mut mask = vec![0u8; count];
+            self.env
+                .observe_joint_into(&mut map, &mut vector, &mut mask)
+                .map_err(value_error)?;
+            observation(py, (h, w), map, vector, mask)
+        }
 
-    /// Robot `robot`'s observation: map image `[4, H, W]` float32, vector float32, mask int8.
-    fn observe<'py>(&mut self, py: Python<'py>, robot: usize) -> PyResult<Observation<'py>> {
-        let (h, w) = (self.env.height(), self.env.width());
-        let mut map = vec![0.0f32; self.env.map_len()];
-        let mut vector = vec![0.0f32; self.env.vector_len()];
-        let mut mask = vec![0u8; self.env.action_count()];
-        self.env
-            .observe_into(robot, &mut map, &mut vector, &mut mask)
-            .map_err(value_error)?;
-        observation(py, (h, w), map, vector, mask)
-    }
-
-    /// The centralized observation: merged map image `[4, H, W]`, every robot's vector, the
-    /// joint action mask (int8, |G|^|I|).
-    fn observe_joint<'py>(&mut self, py: Python<'py>) -> PyResult<Observation<'py>> {
-        let (h, w) = (self.env.height(), self.env.width());
-        let count = self.joint_action_count()?;
-        let mut map = vec![0.0f32; self.env.map_len()];
-        let mut vector = vec![0.0f32; self.env.joint_vector_len()];
-        let mut mask = vec![0u8; count];
-        self.env
-            .observe_joint_into(&mut map, &mut vector, &mut mask)
-            .map_err(value_error)?;
-        observation(py, (h, w), map, vector, mask)
-    }
-
-    /// Applies one action per robot; returns (rewards, team reward, timesteps, terminated,
-    /// truncated). Each action is an int (candidate / move index), `None` (idle) or a
-    /// `(row, col)` goal cell.
-    fn step(
-        &mut self,
-        py: Python<'_>,
-        actions: Vec<Bound<'_, PyAny>>,
-    ) -> PyResult<(Vec<f64>, f64, usize, bool, bool)> {
-        let count = self.env.action_count();
-        let decisions = actions.iter().map(decision).collect::<PyResult<Vec<_>>>()?;
-        let env = &mut self.env;
-        let r: StepResult = if decisions
-            .iter()
-            .all(|d| matches!(d, Decision::Candidate(_)))
-        {
-            let idx: Vec<usize> = decisions
+        /// Applies one action per robot; returns (rewards, team reward, timesteps, terminated,
+        /// truncated). Each action is an int (candidate / move index), `None` (idle) or a
+        /// `(row, col)` goal cell.
+        fn step(
+            &mut self,
+            py: Python<'_>,
+            actions: Vec<Bound<'_, PyAny>>,
+        ) -> PyResult<(Vec<f64>, f64, usize, bool, bool)> {
+            let count = self.env.action_count();
+            let decisions = actions.iter().map(decision).collect::<PyResult<Vec<_>>>()?;
+            let env = &mut self.env;
+            let r: StepResult = if decisions
                 .iter()
-                .map(|d| {
-                    if let Decision::Candidate(k) = d {
-                        *k
-                    } else {
-                        0
-                    }
-                })
-                .collect();
-            if let Some(a) = idx.iter().find(|&&a| a >= count) {
-                return Err(value_error(format!("action {a}: expected 0..{count}")));
-            }
-            py.detach(|| env.step(&idx))
-        } else {
-            if env.mode() == ActionMode::Primitive
-                && decisions
-                    .iter()
-                    .any(|d| matches!(d, Decision::Candidate(_)))
+                .all(|d| matches!(d, Decision::Candidate(_)))
             {
-                return Err(value_error(
-                    "actions: in primitive mode move indices cannot be mixed with goals or None",
-                ));
+                let idx: Vec<usize> = decisions
+                    .iter()
+                    .map(|d| {
+                        if let Decision::Candidate(k) = d {
+                            *k
+                        } else {
+                            0
+                        }
+                    })
+                    .collect();
+                if let Some(a) = idx.iter().find(|&&a| a >= count) {
+                    return Err(value_error(format!("action {a}: expected 0..{count}")));
+                }
+                py.detach(|| env.step(&idx))
+            } else {
+                if env.mode() == ActionMode::Primitive
+                    && decisions
+                        .iter()
+                        .any(|d| matches!(d, Decision::Candidate(_)))
+                {
+                    return Err(value_error(
+                        "actions: in primitive mode move indices cannot be mixed with goals or None",
+                    ));
+                }
+                py.detach(|| env.step_decisions(&decisions))
             }
-            py.detach(|| env.step_decisions(&decisions))
-        }
-        .map_err(value_error)?;
-        Ok((r.rewards, r.team_reward, r.steps, r.terminated, r.truncated))
-    }
-
-    /// Applies joint action a = Σ k_i·|G|^i.
-    fn step_joint(&mut self, py: Python<'_>, action: i64) -> PyResult<(f64, usize, bool, bool)> {
-        let a = usize::try_from(action)
-            .map_err(|_| value_error(format!("action {action}: negative")))?;
-        let env = &mut self.env;
-        let r = py.detach(|| env.step_joint(a)).map_err(value_error)?;
-        Ok((r.team_reward, r.steps, r.terminated, r.truncated))
-    }
-
-    /// What shipped policy `name` decides now for each robot (int, `(row, col)` or `None`).
-    fn policy_actions(&mut self, py: Python<'_>, name: &str) -> PyResult<Vec<Py<PyAny>>> {
-        // An unknown name is the registry's error, naming the known policies.
-        let decisions = self
-            .env
-            .policy_decisions(name, registry()?)
             .map_err(value_error)?;
-        decisions
-            .into_iter()
-            .map(|d| decision_to_py(py, d))
-            .collect()
-    }
-
-    /// The frame `madenet run --render` draws, as an RGB array `[height, width, 3]` uint8.
-    fn render<'py>(&self, py: Python<'py>, cell_px: u32) -> PyResult<Bound<'py, PyArray3<u8>>> {
-        if !(1..=MAX_CELL_PX).contains(&cell_px) {
-            return Err(value_error(format!(
-                "cell_px: {cell_px} is not in 1..={MAX_CELL_PX}"
-            )));
+            Ok((r.rewards, r.team_reward, r.steps, r.terminated, r.truncated))
         }
-        let frame = self.env.frame().map_err(value_error)?;
-        let img = madenet_render::render(
-            &frame,
-            &madenet_render::RenderOptions {
-                cell_px,
-                ..Default::default()
-            },
-        );
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        let rgb: Vec<u8> = img
-            .pixels()
-            .flat_map(|p| [p.0[0], p.0[1], p.0[2]])
-            .collect();
-        PyArray1::from_vec(py, rgb).reshape([h, w, 3])
+
+        /// Applies joint action a = Σ k_i·|G|^i.
+        fn step_joint(
+            &mut self,
+            py: Python<'_>,
+            action: i64,
+        ) -> PyResult<(f64, usize, bool, bool)> {
+            let a = usize::try_from(action)
+                .map_err(|_| value_error(format!("action {action}: negative")))?;
+            let env = &mut self.env;
+            let r = py.detach(|| env.step_joint(a)).map_err(value_error)?;
+            Ok((r.team_reward, r.steps, r.terminated, r.truncated))
+        }
+
+        /// What shipped policy `name` decides now for each robot (int, `(row, col)` or `None`).
+        fn policy_actions(&mut self, py: Python<'_>, name: &str) -> PyResult<Vec<Py<PyAny>>> {
+            // An unknown name is the registry's error, naming the known policies.
+            let decisions = self
+                .env
+                .policy_decisions(name, registry()?)
+                .map_err(value_error)?;
+            decisions
+                .into_iter()
+                .map(|d| decision_to_py(py, d))
+                .collect()
+        }
+
+        /// The frame `madenet run --render` draws, as an RGB array `[height, width, 3]` uint8.
+        fn render<'py>(&self, py: Python<'py>, cell_px: u32) -> PyResult<Bound<'py, PyArray3<u8>>> {
+            if !(1..=MAX_CELL_PX).contains(&cell_px) {
+                return Err(value_error(format!(
+                    "cell_px: {cell_px} is not in 1..={MAX_CELL_PX}"
+                )));
+            }
+            let frame = self.env.frame().map_err(value_error)?;
+            let img = madenet_render::render(
+                &frame,
+                &madenet_render::RenderOptions {
+                    cell_px,
+                    ..Default::default()
+                },
+            );
+            let (w, h) = (img.width() as usize, img.height() as usize);
+            let rgb: Vec<u8> = img
+                .pixels()
+                .flat_map(|p| [p.0[0], p.0[1], p.0[2]])
+                .collect();
+            PyArray1::from_vec(py, rgb).reshape([h, w, 3])
+        }
     }
 
+    /// Map height H, cells.
+    height;
+    /// Map width W, cells.
+    width;
+    /// Actions per robot: |G| goal candidates (macro mode) or 9 moves (primitive mode).
+    action_count;
+    /// The episode has ended (map explored or step cap reached).
+    done;
     /// The episode's result as `madenet run --json` prints it (a JSON string; the trajectory
     /// if the environment records); ends the episode.
-    fn finish(&mut self) -> PyResult<String> {
-        let result = self
-            .env
-            .finish()
-            .ok_or_else(|| value_error("no episode: call reset() first"))?;
-        serde_json::to_string(&result).map_err(value_error)
-    }
+    finish;
 }
 
 #[pymodule]

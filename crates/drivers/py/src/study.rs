@@ -112,8 +112,77 @@ fn run_indices(
     Ok((indices, outcomes.map_err(value_error)?))
 }
 
-#[pymethods]
-impl CoreStudy {
+/// The `#[pymethods]` of a planned study class (fields `config`, `registry`, `planned`; built
+/// by `build` from a configuration, its trials listed by `trials`, the map side and team size
+/// leading a row, if any, from `side_team`): what the two share — rebuilding it from the TOML
+/// text of its configuration (errors naming `$what`), that text, the number of planned
+/// trials, running a subset of them (documented at the class) — then the class's own methods.
+macro_rules! study_pymethods {
+    (
+        $class:ident($what:literal) {
+            $(#[$run:meta])* run;
+        }
+        $($own:tt)*
+    ) => {
+        #[pymethods]
+        impl $class {
+            /// The study from the TOML text `toml_text()` returned (how Ray workers rebuild it).
+            #[staticmethod]
+            fn from_toml(text: &str) -> PyResult<Self> {
+                Self::build(
+                    madenet_files::parse_toml(text)
+                        .map_err(|message| value_error(format!("{}: {message}", $what)))?,
+                )
+            }
+
+            /// The full configuration as TOML (every field, defaults included).
+            fn toml_text(&self) -> PyResult<String> {
+                toml::to_string(&self.config).map_err(value_error)
+            }
+
+            /// Number of planned trials.
+            fn __len__(&self) -> usize {
+                self.planned.len()
+            }
+
+            $(#[$run])*
+            #[pyo3(signature = (indices = None, threads = None))]
+            fn run<'py>(
+                &self,
+                py: Python<'py>,
+                indices: Option<Vec<usize>>,
+                threads: Option<usize>,
+            ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+                let trials = self.trials();
+                let (indices, outcomes) =
+                    run_indices(py, &trials, &self.registry, indices, threads)?;
+                indices
+                    .iter()
+                    .zip(&outcomes)
+                    .map(|(&i, o)| {
+                        let d = outcome_dict(py, o)?;
+                        if let Some((side, team)) = self.side_team(i) {
+                            d.set_item("side", side)?;
+                            d.set_item("team", team)?;
+                        }
+                        Ok(d)
+                    })
+                    .collect()
+            }
+
+            $($own)*
+        }
+    };
+}
+
+study_pymethods! {
+    CoreStudy("study") {
+        /// Runs the planned trials `indices` (all if `None`) on `threads` threads (all cores if
+        /// `None`) with the GIL released; returns one dict per trial (the columns of
+        /// `trials.csv`), in the order of `indices`.
+        run;
+    }
+
     #[new]
     #[pyo3(signature = (config = None, overrides = "{}"))]
     fn new(config: Option<&str>, overrides: &str) -> PyResult<Self> {
@@ -131,44 +200,10 @@ impl CoreStudy {
         Self::build(config)
     }
 
-    /// The study from the TOML text `toml_text()` returned (how Ray workers rebuild it).
-    #[staticmethod]
-    fn from_toml(text: &str) -> PyResult<Self> {
-        Self::build(
-            madenet_files::parse_toml(text)
-                .map_err(|message| value_error(format!("study: {message}")))?,
-        )
-    }
-
-    /// The full configuration as TOML (every field, defaults included).
-    fn toml_text(&self) -> PyResult<String> {
-        toml::to_string(&self.config).map_err(value_error)
-    }
-
-    /// Number of planned trials.
-    fn __len__(&self) -> usize {
-        self.planned.len()
-    }
-
     /// The columns of `trials.csv`, in order.
     #[staticmethod]
     fn columns() -> Vec<String> {
         runner::header()
-    }
-
-    /// Runs the planned trials `indices` (all if `None`) on `threads` threads (all cores if
-    /// `None`) with the GIL released; returns one dict per trial (the columns of
-    /// `trials.csv`), in the order of `indices`.
-    #[pyo3(signature = (indices = None, threads = None))]
-    fn run<'py>(
-        &self,
-        py: Python<'py>,
-        indices: Option<Vec<usize>>,
-        threads: Option<usize>,
-    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let planned: Vec<&runner::Planned> = self.planned.iter().collect();
-        let (_, outcomes) = run_indices(py, &planned, &self.registry, indices, threads)?;
-        outcomes.iter().map(|o| outcome_dict(py, o)).collect()
     }
 
     /// Runs the whole study into folder `out` exactly as `madenet compare --out OUT` does
@@ -196,6 +231,16 @@ impl CoreStudy {
 }
 
 impl CoreStudy {
+    /// The planned trials, in plan order.
+    fn trials(&self) -> Vec<&runner::Planned> {
+        self.planned.iter().collect()
+    }
+
+    /// A comparison trial's row has no map side and team size.
+    fn side_team(&self, _i: usize) -> Option<(usize, usize)> {
+        None
+    }
+
     fn build(config: StudyConfig) -> PyResult<Self> {
         let registry = config.registry().map_err(value_error)?;
         let (maps, starts) = config.validate(&registry).map_err(value_error)?;
@@ -217,8 +262,15 @@ pub struct CoreScale {
     planned: Vec<ScalePlanned>,
 }
 
-#[pymethods]
-impl CoreScale {
+study_pymethods! {
+    CoreScale("scale") {
+        /// Runs the planned trials `indices` (all if `None`) on `threads` threads (all cores if
+        /// `None`) with the GIL released; one dict per trial in the order of `indices`: its map
+        /// side and team size, then the columns of the study's `trials.csv`. Only the trials
+        /// themselves: the grid twin of a continuous study and the report are `madenet scale`'s.
+        run;
+    }
+
     /// `config` (a scale TOML file, optional) with `overrides` (JSON of top-level fields) on
     /// top. Without a file, `world = "continuous"` starts from the continuous study's
     /// defaults, as `madenet scale --world continuous` does.
@@ -238,25 +290,6 @@ impl CoreScale {
         Self::build(config_with(config, defaults, overrides, "scale")?)
     }
 
-    /// The study from the TOML text `toml_text()` returned (how Ray workers rebuild it).
-    #[staticmethod]
-    fn from_toml(text: &str) -> PyResult<Self> {
-        Self::build(
-            madenet_files::parse_toml(text)
-                .map_err(|message| value_error(format!("scale: {message}")))?,
-        )
-    }
-
-    /// The full configuration as TOML (every field, defaults included).
-    fn toml_text(&self) -> PyResult<String> {
-        toml::to_string(&self.config).map_err(value_error)
-    }
-
-    /// Number of planned trials.
-    fn __len__(&self) -> usize {
-        self.planned.len()
-    }
-
     /// The columns of its rows, in order: `side`, `team`, then those of `trials.csv`.
     fn columns(&self) -> Vec<String> {
         let mut c = vec!["side".to_string(), "team".to_string()];
@@ -266,34 +299,19 @@ impl CoreScale {
         });
         c
     }
-
-    /// Runs the planned trials `indices` (all if `None`) on `threads` threads (all cores if
-    /// `None`) with the GIL released; one dict per trial in the order of `indices`: its map
-    /// side and team size, then the columns of the study's `trials.csv`. Only the trials
-    /// themselves: the grid twin of a continuous study and the report are `madenet scale`'s.
-    #[pyo3(signature = (indices = None, threads = None))]
-    fn run<'py>(
-        &self,
-        py: Python<'py>,
-        indices: Option<Vec<usize>>,
-        threads: Option<usize>,
-    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let planned: Vec<&runner::Planned> = self.planned.iter().map(|p| &p.planned).collect();
-        let (indices, outcomes) = run_indices(py, &planned, &self.registry, indices, threads)?;
-        indices
-            .iter()
-            .zip(&outcomes)
-            .map(|(&i, o)| {
-                let d = outcome_dict(py, o)?;
-                d.set_item("side", self.planned[i].side)?;
-                d.set_item("team", self.planned[i].team)?;
-                Ok(d)
-            })
-            .collect()
-    }
 }
 
 impl CoreScale {
+    /// The planned trials, in plan order.
+    fn trials(&self) -> Vec<&runner::Planned> {
+        self.planned.iter().map(|p| &p.planned).collect()
+    }
+
+    /// The map side and team size of planned trial `i`, the first columns of its row.
+    fn side_team(&self, i: usize) -> Option<(usize, usize)> {
+        Some((self.planned[i].side, self.planned[i].team))
+    }
+
     fn build(config: ScaleConfig) -> PyResult<Self> {
         let registry = madenet_catalogue::catalogue(&config.baselines).map_err(value_error)?;
         config.validate(&registry).map_err(value_error)?;

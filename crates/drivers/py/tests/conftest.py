@@ -1,4 +1,5 @@
-"""Shared helpers: the `madenet` command line (to check Python against it) and a PNG reader."""
+"""Shared helpers: the `madenet` command line (to check Python against it), a comparison of a
+study's table with its trials.csv, and a PNG reader."""
 
 import os
 import pathlib
@@ -20,6 +21,30 @@ def cli() -> str:
         if c and pathlib.Path(c).is_file():
             return str(c)
     pytest.fail("the madenet command line is needed: `cargo build --release -p madenet` or set MADENET_CLI")
+
+
+def assert_same_rows(table: dict, rows: list, tolerance: float, extra=()):
+    """`table` (a study's, from madenet) holds `rows` (its trials.csv's), value for value: the
+    wall-clock columns aside, names exactly, `to_*` with -1 for an empty cell, `completed` as a
+    bool, numbers within `tolerance`; and it has the columns `extra`."""
+    import madenet  # here: the helpers that do not need the built package load without it
+
+    assert len(table["method"]) == len(rows)
+    for i, row in enumerate(rows):
+        for column, value in row.items():
+            if column in madenet.TIMING_COLUMNS:
+                continue
+            got = table[column][i]
+            if column in ("method", "map", "start"):
+                assert got == value, column
+            elif column.startswith("to_"):
+                assert got == (int(value) if value else -1), column
+            elif column == "completed":
+                assert bool(got) == (value == "true"), column
+            else:
+                assert float(got) == pytest.approx(float(value), abs=tolerance), (column, i)
+    for column in extra:
+        assert column in table
 
 
 def read_png_rgb(path) -> np.ndarray:

@@ -5,31 +5,12 @@ import csv
 import subprocess
 
 import pytest
+from conftest import assert_same_rows
 
 import madenet
 
 GRID = dict(methods=["nf", "spread"], sides=[20, 30], teams=[2, 3], seeds=1)
 CONTINUOUS = dict(world="continuous", methods=["spread"], sides=[12], teams=[2], seeds=1)
-
-
-def assert_same_rows(table: dict, rows: list, extra=("side", "team")):
-    """`table` (madenet.scale's) holds `rows` (a trials.csv's), value for value."""
-    assert len(table["method"]) == len(rows)
-    for i, row in enumerate(rows):
-        for column, value in row.items():
-            if column in madenet.TIMING_COLUMNS:
-                continue
-            got = table[column][i]
-            if column in ("method", "map", "start"):
-                assert got == value, column
-            elif column.startswith("to_"):
-                assert got == (int(value) if value else -1), column
-            elif column == "completed":
-                assert bool(got) == (value == "true"), column
-            else:
-                assert float(got) == pytest.approx(float(value), abs=1e-9), (column, i)
-    for column in extra:
-        assert column in table
 
 
 def cli_rows(cli, tmp_path, name, flags):
@@ -44,13 +25,13 @@ def test_scale_matches_the_command_line_grid_and_continuous(cli, tmp_path):
     table = madenet.scale(**GRID, threads=2)
     # (methods + the known-map reference) × sides × maps per side × teams × starts
     assert len(rows) == (2 + 1) * 2 * 4 * 2 * 3
-    assert_same_rows(table, rows)
+    assert_same_rows(table, rows, 1e-9, extra=("side", "team"))
     assert sorted(set(table["side"])) == [20, 30] and sorted(set(table["team"])) == [2, 3]
     rows = cli_rows(cli, tmp_path, "continuous",
                     ["--world", "continuous", "--methods", "spread", "--sides", "12", "--teams", "2", "--seeds", "1"])
     table = madenet.scale(**CONTINUOUS, threads=2)
     assert len(rows) == 3 and "et_s" in table
-    assert_same_rows(table, rows)
+    assert_same_rows(table, rows, 1e-9, extra=("side", "team"))
 
 
 def test_scale_rejects_bad_fields():

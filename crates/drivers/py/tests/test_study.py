@@ -5,6 +5,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from conftest import assert_same_rows
 
 import madenet
 
@@ -29,19 +30,7 @@ def test_compare_matches_the_command_line(cli, tmp_path):
         rows = list(csv.DictReader(f))
     table = madenet.compare(config)
     assert len(rows) == len(table["tns"]) == 2 * 2 * 2 * 2 * 2
-    for i, row in enumerate(rows):
-        for column, value in row.items():
-            if column in madenet.TIMING_COLUMNS:
-                continue
-            got = table[column][i]
-            if column in ("method", "map", "start"):
-                assert got == value, column
-            elif column.startswith("to_"):
-                assert got == (int(value) if value else -1), column
-            elif column == "completed":
-                assert bool(got) == (value == "true"), column
-            else:
-                assert float(got) == pytest.approx(float(value), abs=1e-6), column
+    assert_same_rows(table, rows, 1e-6)
     # In memory (keyword fields) and into a folder (the CLI's outputs) give the same table.
     assert_same_table(madenet.compare(**SMALL, threads=1), table)
     into = madenet.compare(config, out=tmp_path / "py")

@@ -98,18 +98,28 @@ pub struct Bag {
 }
 
 impl Bag {
+    /// Refuses a place for a bag that is taken: a file, or a directory that is not empty.
+    pub fn check_place(dir: &Path) -> Result<(), BagError> {
+        let taken = |source| BagError::Io {
+            path: dir.to_path_buf(),
+            source,
+        };
+        if dir.is_file()
+            || (dir.is_dir() && std::fs::read_dir(dir).map_err(taken)?.next().is_some())
+            || (dir.exists() && !dir.is_dir())
+        {
+            return Err(BagError::Exists(dir.to_path_buf()));
+        }
+        Ok(())
+    }
+
     /// Starts a bag that [`Bag::finish`] puts at `dir`: a new path, or an empty directory.
     pub fn create(dir: &Path) -> Result<Self, BagError> {
         let io = |path: &Path| {
             let path = path.to_path_buf();
             move |source| BagError::Io { path, source }
         };
-        if dir.is_file()
-            || (dir.is_dir() && std::fs::read_dir(dir).map_err(io(dir))?.next().is_some())
-            || (dir.exists() && !dir.is_dir())
-        {
-            return Err(BagError::Exists(dir.to_path_buf()));
-        }
+        Self::check_place(dir)?;
         let name = dir
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())

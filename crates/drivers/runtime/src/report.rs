@@ -57,4 +57,27 @@ impl WorldOutput {
             positions: positions.then_some(r.positions),
         }
     }
+
+    /// The lines `launch` prints: the trial's ([`TrialResult::summary`], `start` named), then
+    /// the latency, the absent robot-timesteps (if any) and the `nodes` processes from `port`.
+    pub fn summary(&self, start: &str, nodes: usize, port: u16) -> Vec<String> {
+        let mut lines = self.result.summary(start);
+        let rt = &self.runtime;
+        lines.push(format!(
+            "latency    {:.2} ms mean, {:.2} ms longest from a robot's observation to its move ({} moves)",
+            1e3 * rt.latency.mean_s,
+            1e3 * rt.latency.max_s,
+            rt.latency.acted
+        ));
+        if rt.absent_robot_steps > 0 {
+            lines.push(format!(
+                "absent     {} robot-timesteps",
+                rt.absent_robot_steps
+            ));
+        }
+        lines.push(format!(
+            "nodes      {nodes} processes over Zenoh (tcp/127.0.0.1:{port}…)"
+        ));
+        lines
+    }
 }

@@ -18,6 +18,7 @@
 pub mod analysis;
 pub mod calibration;
 pub mod config;
+pub mod progress;
 pub mod report;
 pub mod runner;
 pub mod scale;

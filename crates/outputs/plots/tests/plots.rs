@@ -2,6 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
+use madenet_testkit::{entries as files_in, fresh_dir};
+
 use madenet_plots::{
     bar_panels, ewma, line_panels, styled_line_panels, BarPanel, BarSeries, LinePanel, LineSeries,
     LineStyle, PlotError,
@@ -9,12 +11,10 @@ use madenet_plots::{
 
 /// A fresh, empty directory for one test.
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("madenet-plots-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    fresh_dir(format!(
+        "{}/madenet-plots-tests/{name}",
+        env!("CARGO_TARGET_TMPDIR")
+    ))
 }
 
 const METHODS: [&str; 5] = ["NF", "UB", "PB", "MADE-Net-DT", "MADE-Net"];
@@ -58,15 +58,6 @@ fn line_panel(title: &str) -> LinePanel {
             })
             .collect(),
     }
-}
-
-fn files_in(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 /// Noisy training-like values that drift upwards (Fig. 2 style).

@@ -4,18 +4,7 @@ use madenet_render::{
     render, robot_color, save_gif, save_png, Frame, GifWriter, Layout, Panel, RenderError,
     RenderOptions, RobotFrame,
 };
-use madenet_testkit::Scratch;
-use std::path::Path;
-
-/// The names of the files in `dir`, sorted.
-fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
+use madenet_testkit::{entries, Scratch};
 
 /// 20 × 20: a wall in truth, the right half of the team map unknown, three robots.
 fn frame20() -> Frame {

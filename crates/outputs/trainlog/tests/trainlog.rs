@@ -10,12 +10,10 @@ use madenet_trainlog::{
 
 /// A fresh, empty directory for one test.
 fn dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("madenet-trainlog-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    madenet_testkit::fresh_dir(format!(
+        "{}/madenet-trainlog-tests/{name}",
+        env!("CARGO_TARGET_TMPDIR")
+    ))
 }
 
 fn episode(episode: u64, env: Env, steps: u32, team_reward: f64) -> EpisodeRow {

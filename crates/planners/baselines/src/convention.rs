@@ -2,7 +2,7 @@
 //! at every meeting each of them computes the same team plan from the same inputs, and each
 //! keeps (softly) to its own part of it until the next meeting.
 
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
+use madenet_agent::{AgentView, Decision, Policy, Spread};
 use madenet_map::Pos;
 
 /// No owner: a cell outside every convention so far.
@@ -116,9 +116,6 @@ impl Convention {
 impl Policy for Convention {
     fn name(&self) -> &str {
         "convention"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let spread = self.spread.scores(view);

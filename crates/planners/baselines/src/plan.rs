@@ -2,7 +2,7 @@
 //! ([`madenet_sim::reference::candidate_plan_moves`]) — a decentralized, multi-step planner
 //! that is not learned, the yardstick a learned planner must beat besides `spread`.
 
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
+use madenet_agent::{AgentView, Decision, Policy, Spread};
 use madenet_map::OccGrid;
 
 /// At each macro termination the robot plans the whole team's routes on its own belief m_i —
@@ -55,9 +55,6 @@ impl BeliefPlan {
 impl Policy for BeliefPlan {
     fn name(&self) -> &str {
         "belief-plan"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let spread = self.spread.scores(view);

@@ -10,7 +10,7 @@ use madenet_dme::maddpg::Maddpg;
 use madenet_dme::model::Model;
 use madenet_dme::policy::DmePolicy;
 use madenet_dme::train::{validate, DmeTrainConfig};
-use madenet_learn::scenario;
+use madenet_harness::scenario;
 use madenet_sim::PolicyRegistry;
 use std::sync::{Arc, RwLock};
 

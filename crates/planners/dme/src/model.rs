@@ -8,9 +8,10 @@ use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
 use madenet_agent::Policy;
-use madenet_learn::harness;
-use madenet_learn::model::{parse_model_toml, read_model_dir, register_trained};
-use madenet_learn::TrainError;
+use madenet_harness::harness;
+use madenet_harness::integrity::{check_digests, checked_weights};
+use madenet_harness::model::{parse_model_toml, read_model_dir, register_trained};
+use madenet_harness::TrainError;
 use madenet_sim::PolicyRegistry;
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
@@ -36,7 +37,7 @@ pub struct ModelInfo {
     /// Weight files of the actors in robot order, relative to the model's directory
     /// (`actor0.bpk`, …).
     pub actors: Vec<String>,
-    /// Each actor file's digest ([`madenet_learn::integrity::digest`]), in the order of
+    /// Each actor file's digest ([`madenet_harness::integrity::digest`]), in the order of
     /// `actors`; written by training, checked at load (absent in older folders: unchecked).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub digests: Vec<String>,
@@ -92,8 +93,8 @@ impl Model {
                 ),
             });
         }
-        let min_side = madenet_learn::MIN_MAP_SIDE as u64;
-        let side = madenet_learn::MAX_TRAIN_MAP_SIDE as u64;
+        let min_side = madenet_harness::MIN_MAP_SIDE as u64;
+        let side = madenet_harness::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("map_height", info.map_height as u64, min_side, side),
             ("map_width", info.map_width as u64, min_side, side),
@@ -121,7 +122,7 @@ impl Model {
             message,
         })?;
         let named: Vec<(String, Vec<u8>)> = info.actors.iter().cloned().zip(files).collect();
-        madenet_learn::integrity::check_digests(&info.digests, &named, label)?;
+        check_digests(&info.digests, &named, label)?;
         let sizes = format!(
             "`map_height` {}, `map_width` {}, `team_size` {}, `history` {}, `hidden` {}",
             info.map_height, info.map_width, info.team_size, info.history, info.hidden
@@ -133,7 +134,7 @@ impl Model {
                     path: format!("{label}: {name}"),
                     message: e.to_string(),
                 })?;
-            let actor = madenet_learn::integrity::checked_weights(
+            let actor = checked_weights(
                 cfg.actor(&Device::flex()).try_load_record(rec),
                 &name,
                 label,

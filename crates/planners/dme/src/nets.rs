@@ -23,11 +23,11 @@ use burn::tensor::{Device, Tensor};
 /// Sizes of the DME-DRL networks.
 #[derive(Config, Debug, PartialEq)]
 pub struct DmeConfig {
-    /// Map height H in cells.
-    #[config(default = 20)]
+    /// Map height H in cells (default: the paper's training maps').
+    #[config(default = "madenet_harness::DEFAULT_MAP_SIDE")]
     pub map_height: usize,
-    /// Map width W in cells.
-    #[config(default = 20)]
+    /// Map width W in cells (default: the paper's training maps').
+    #[config(default = "madenet_harness::DEFAULT_MAP_SIDE")]
     pub map_width: usize,
     /// Robots |I|.
     #[config(default = 3)]

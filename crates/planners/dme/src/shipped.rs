@@ -3,7 +3,7 @@
 //! trained (config, command, wall time, validation) is in `models/README.md`.
 
 use crate::model::Model;
-use madenet_learn::TrainError;
+use madenet_harness::TrainError;
 use madenet_sim::PolicyRegistry;
 
 /// The policy name of the shipped model.

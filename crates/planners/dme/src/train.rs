@@ -26,10 +26,13 @@ use crate::SECTORS;
 use burn::module::Module;
 use burn::store::ModuleRecord;
 use burn::tensor::Device;
-use madenet_learn::episode;
-use madenet_learn::harness::{self, replace_dir, EpisodeRun, Learner, Logs, Progress, Seen};
-use madenet_learn::scenario::{self, ScenarioDraw, Validation};
-use madenet_learn::TrainError;
+use madenet_harness::bits::{pack_bits, unpack_bits};
+use madenet_harness::episode;
+use madenet_harness::harness::{
+    self, replace_dir, EpisodeRun, Learner, Logs, Progress, Seen, TrainRun,
+};
+use madenet_harness::scenario::{self, ScenarioDraw, Validation};
+use madenet_harness::TrainError;
 use madenet_sim::rewards::RewardConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_trainlog::{EpisodeRow, MaddpgUpdateRow};
@@ -119,8 +122,8 @@ impl Default for DmeTrainConfig {
             episodes: 20_000,
             max_minutes: 55.0,
             scenario: ScenarioConfig::default(),
-            map_height: 20,
-            map_width: 20,
+            map_height: madenet_harness::DEFAULT_MAP_SIDE,
+            map_width: madenet_harness::DEFAULT_MAP_SIDE,
             density_min: 0.40,
             density_max: 0.60,
             history: 3,
@@ -149,7 +152,7 @@ impl Default for DmeTrainConfig {
 }
 
 impl DmeTrainConfig {
-    madenet_learn::toml_config_readers!();
+    madenet_harness::toml_config_readers!();
 
     /// One message naming the first bad field.
     pub fn validate(&self) -> Result<(), String> {
@@ -162,7 +165,7 @@ impl DmeTrainConfig {
                 ),
             );
         }
-        let side = madenet_learn::MAX_TRAIN_MAP_SIDE as u64;
+        let side = madenet_harness::MAX_TRAIN_MAP_SIDE as u64;
         harness::check_sizes(&[
             ("episodes", self.episodes, 1, 10_000_000),
             ("map_height", self.map_height as u64, 1, side),
@@ -372,7 +375,7 @@ impl Episode {
     }
     fn push(&mut self, records: &[crate::policy::StepRecord], rewards: &[f32]) {
         for (i, r) in records.iter().enumerate() {
-            let words = madenet_learn::obs::pack_bits(&r.frame);
+            let words = pack_bits(&r.frame);
             self.words = words.len();
             self.frames.extend(words);
             self.poses.extend(&r.pose);
@@ -555,7 +558,7 @@ impl Replay {
                         let s = history_step(step, cfg.history, slot);
                         let at = ((k * team + i) * cfg.history + slot) * frame_len;
                         let words = &e.frames[(s * team + i) * e.words..][..e.words];
-                        madenet_learn::obs::unpack_bits(words, &mut maps[at..at + frame_len]);
+                        unpack_bits(words, &mut maps[at..at + frame_len]);
                     }
                     let m = e.masks[step * team + i];
                     for a in 0..SECTORS {
@@ -718,21 +721,17 @@ impl Learner for DmeLearner {
     type Config = DmeTrainConfig;
     const METHODS: &'static [&'static str] = &[METHOD];
 
-    madenet_learn::learner_config!();
+    madenet_harness::learner_config!(model = Model);
 
     /// The loop: episodes, updates, validation, checkpoints ([`EpisodeRun`]).
-    fn train_loop(
-        run_dir: &Path,
-        cfg: &DmeTrainConfig,
-        resuming: bool,
-        progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> Result<(), TrainError> {
+    fn train_loop(run: TrainRun<'_, DmeTrainConfig>) -> Result<(), TrainError> {
+        let (run_dir, cfg, progress) = (run.dir, run.cfg, run.progress);
         let ckpt_dir = run_dir.join("checkpoint");
         let device = Device::flex().autodiff();
         device.seed(cfg.seed);
         let net_cfg = cfg.nets();
         let nets = Maddpg::new(&net_cfg, &device);
-        let (mut nets, mut state, mut replay) = if resuming {
+        let (mut nets, mut state, mut replay) = if run.resuming {
             restore(&ckpt_dir, nets)?
         } else {
             (nets, State::default(), Replay::default())
@@ -746,7 +745,7 @@ impl Learner for DmeLearner {
             },
             state.wall_s,
             state.best_validation,
-            madenet_learn::cadence!(cfg),
+            madenet_harness::cadence!(cfg),
         )?;
         let params = cfg.update_params();
         let team = cfg.scenario.num_robots;
@@ -854,16 +853,6 @@ impl Learner for DmeLearner {
                 break;
             }
         }
-        Ok(())
-    }
-
-    fn register_model(
-        dir: &Path,
-        registry: &mut PolicyRegistry,
-        name: &str,
-        about: &str,
-    ) -> Result<(), TrainError> {
-        Model::load(dir)?.register(registry, name, about);
         Ok(())
     }
 }

@@ -1,6 +1,6 @@
 //! Debugging aid: the "always goal candidate 0" macro policy on the validation set; prints the
 //! failing trials' last steps.
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
+use madenet_agent::{AgentView, Decision, Policy};
 use madenet_learn::TrainConfig;
 use madenet_sim::{PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::derive_seed;
@@ -10,9 +10,6 @@ struct First;
 impl Policy for First {
     fn name(&self) -> &str {
         "first"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         if view.candidates().valid_mask()[0] {

@@ -30,7 +30,7 @@ use burn::module::Module;
 use burn::nn::conv::{Conv2d, Conv2dConfig};
 use burn::nn::{LeakyRelu, LeakyReluConfig, Linear, LinearConfig};
 use burn::tensor::Device;
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy, Spread};
+use madenet_agent::{AgentView, Decision, Policy, Spread};
 use madenet_map::Pos;
 use std::sync::Arc;
 
@@ -751,9 +751,6 @@ impl AgnosticPolicy {
 impl Policy for AgnosticPolicy {
     fn name(&self) -> &str {
         &self.name
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn last_scores(&self) -> Option<&[f32]> {
         (!self.last.is_empty()).then_some(&self.last[..])

@@ -51,14 +51,9 @@ pub enum ConfigError {
     Zero(&'static str),
 }
 
-/// Smallest map side the paper's MFE accepts: 12 → C1 (4, 2) 5 → C2 (3, 2) 2 → C3 (2, 2) 1,
-/// while 11 → 4 → 1 leaves C3's 2×2 kernel nothing to cover. [`NetConfig::min_map_side`] computes
-/// it for any conv specs; this is its value at the paper's.
-pub const MIN_MAP_SIDE: usize = 12;
-
-/// The largest map side a learner trains or a grid model is built for (the paper's maps are
-/// 20; a 200 × 200 grid DEP has ≈ 5 M parameters, a 1 000 × 1 000 one would have ≈ 130 M).
-pub const MAX_TRAIN_MAP_SIDE: usize = 200;
+/// The map sides every learner accepts ([`madenet_harness`]'s): [`MIN_MAP_SIDE`] is the
+/// smallest the paper's MFE accepts ([`NetConfig::min_map_side`] at the paper's conv specs).
+pub use madenet_harness::{MAX_TRAIN_MAP_SIDE, MIN_MAP_SIDE};
 
 /// Number of binary channels of the map image (paper Sec. III.C.1): explored space, obstacles,
 /// observed robot positions, goal candidates.

@@ -8,16 +8,20 @@
 //!   observation with the merged map);
 //! * [`env`](mod@env) — the two training environments (CEP-driven with full communication, DEP-driven
 //!   with CSP ~ U(0, 1)) as an ε-greedy [`madenet_agent::JointPolicy`] recording [`env::Episode`]s;
-//! * [`episode`] — the one episode runner of every learner (the trial's staged step with a
-//!   [`episode::Recorder`] per learner);
 //! * [`replay`] — episodes of primitive steps squeezed into the CEP's and DEPs' macro transitions;
 //! * [`learner`] — the updates of Eq. (5) and (6) (and MADE-Net-DT's double DRQN) on sampled
 //!   windows;
 //! * [`train`](mod@train) — the paper's training loop ([`MadeNetLearner`]) and its [`TrainConfig`];
 //!   [`dagger`] the rollout teacher's;
-//! * [`harness`] — what every learner does around its algorithm: the [`Learner`] contract, run
-//!   directories and resume, [`Progress`], logs, checkpoints; [`scenario`] — the generated
-//!   training and validation scenarios and the one validator; [`error`] — [`TrainError`];
+//! * what every learner does around its algorithm lives in [`madenet_harness`], shared with
+//!   `madenet-dme`, and is re-exported here at its old paths: [`harness`] (the [`Learner`]
+//!   contract, run directories and resume, [`Progress`], logs, checkpoints; here also
+//!   [`harness::write_model_toml`] for MADE-Net's model folder), [`episode`] (the one episode
+//!   runner), [`scenario`] (the generated training and validation scenarios and the one
+//!   validator), [`integrity`] (the weight files' digests and checks), [`error`]
+//!   ([`TrainError`]; here also how MADE-Net's errors become one), the model-folder helpers of
+//!   [`model`], the bit packing of [`obs`] and the map sides [`MIN_MAP_SIDE`] ..=
+//!   [`MAX_TRAIN_MAP_SIDE`];
 //! * [`model`] / [`policy`] / [`shipped`] — a trained model as shipped and loaded, the DEP acting
 //!   alone at execution, and the models shipped in `models/`, registered as the policies
 //!   `made-net`, `made-net-paper`, `made-net-dt` and `made-net-any` (loaded on first use).
@@ -77,17 +81,14 @@ pub mod agnostic;
 mod config;
 pub mod dagger;
 pub mod env;
-pub mod episode;
 pub mod error;
 pub mod harness;
-pub mod integrity;
 pub mod learner;
 pub mod model;
 mod net;
 pub mod obs;
 pub mod policy;
 pub mod replay;
-pub mod scenario;
 pub mod shipped;
 pub mod train;
 
@@ -103,6 +104,8 @@ pub use config::{
 };
 pub use error::TrainError;
 pub use harness::{Learner, Progress};
+pub use madenet_harness::{cadence, learner_config, toml_config_readers};
+pub use madenet_harness::{episode, integrity, scenario};
 pub use model::{Method, Model, ModelInfo};
 pub use net::{LayerShape, LstmState, QNet};
 pub use policy::DepPolicy;

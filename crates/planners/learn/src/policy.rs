@@ -4,7 +4,7 @@
 
 use crate::obs::{action_mask, Observation};
 use crate::{masked_argmax_slice, LstmState, QNet, Tensor, TensorData};
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
+use madenet_agent::{AgentView, Decision, Policy};
 use std::sync::Arc;
 
 /// One robot's MADE-Net (or MADE-Net-DT) policy.
@@ -59,9 +59,6 @@ impl DepPolicy {
 impl Policy for DepPolicy {
     fn name(&self) -> &str {
         &self.name
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn last_scores(&self) -> Option<&[f32]> {
         (!self.last.is_empty()).then_some(&self.last[..])

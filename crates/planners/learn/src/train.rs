@@ -26,7 +26,7 @@
 
 use crate::env::{run_episode, Actor, ActorNets, EnvKind, Episode};
 use crate::error::TrainError;
-use crate::harness::{self, replace_dir, EpisodeRun, Learner, Progress, Seen};
+use crate::harness::{self, replace_dir, EpisodeRun, Learner, Progress, Seen, TrainRun};
 use crate::learner::{cep_update, dep_update, target_of, RobotWindow, UpdateParams, Window};
 use crate::model::{Method, Model, ModelInfo, NetConfigToml};
 use crate::obs::Observation;
@@ -581,7 +581,7 @@ impl Learner for MadeNetLearner {
         PaperMethod::MadeNetDt.method().name(),
     ];
 
-    crate::learner_config!();
+    crate::learner_config!(model = Model);
 
     fn set_method(cfg: &mut TrainConfig, method: &str) -> Result<(), String> {
         cfg.method = PaperMethod::ALL
@@ -592,15 +592,11 @@ impl Learner for MadeNetLearner {
     }
 
     /// The loop: episodes, updates, validation, checkpoints ([`EpisodeRun`]).
-    fn train_loop(
-        run_dir: &Path,
-        cfg: &TrainConfig,
-        resuming: bool,
-        progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> Result<(), TrainError> {
+    fn train_loop(run: TrainRun<'_, TrainConfig>) -> Result<(), TrainError> {
+        let (run_dir, cfg, progress) = (run.dir, run.cfg, run.progress);
         let ckpt_dir = run_dir.join("checkpoint");
         let mut nets = Nets::init(cfg)?;
-        let (mut state, mut cen, mut dec) = if resuming {
+        let (mut state, mut cen, mut dec) = if run.resuming {
             let state: State = harness::read_json(&ckpt_dir.join("state.json"))?;
             nets = nets.load(&ckpt_dir)?;
             let (cen, dec): (Replay, Replay) =

@@ -6,11 +6,10 @@ import json
 
 import numpy as np
 from gymnasium import spaces
-from gymnasium.utils import seeding
-from pettingzoo import ParallelEnv
 
 from madenet._config import path_or_none, scenario_overrides
 from madenet._core import CoreContinuousEnv
+from madenet._parallel import CoreParallelEnv
 
 
 def _action(agent: str, value):
@@ -22,7 +21,7 @@ def _action(agent: str, value):
     return int(value)
 
 
-class ContinuousExplorationEnv(ParallelEnv):
+class ContinuousExplorationEnv(CoreParallelEnv):
     """The team exploring a continuous world — differential-drive robots, lidar, each robot's
     own occupancy grid read into 1 m cells, a local planner, time in seconds — as a PettingZoo
     ``ParallelEnv`` of macro actions.
@@ -53,29 +52,13 @@ class ContinuousExplorationEnv(ParallelEnv):
         self._core = CoreContinuousEnv(map, float(side), start, policy, path_or_none(config),
                                        scenario_overrides(overrides),
                                        path_or_none(continuous_config, "continuous_config"))
-        self.possible_agents = [f"robot_{i}" for i in range(self._core.num_robots)]
-        self.agents: list[str] = []
-        self._np_random, _ = seeding.np_random(None)
-        h, w, k = self._core.height, self._core.width, self._core.action_count
-        self._obs_space = spaces.Dict({
-            "map": spaces.Box(0.0, 1.0, (4, h, w), np.float32),
-            "vector": spaces.Box(-1.0, 1.0, (self._core.vector_len,), np.float32),
-            "action_mask": spaces.MultiBinary(k),
-        })
-        self._act_space = spaces.Discrete(k)
+        self._act_space = spaces.Discrete(self._start())
 
     def observation_space(self, agent: str):
         return self._obs_space
 
     def action_space(self, agent: str):
         return self._act_space
-
-    def _observations(self) -> dict:
-        obs = {}
-        for i, a in enumerate(self.possible_agents):
-            m, v, mask = self._core.observe(i)
-            obs[a] = {"map": m, "vector": v, "action_mask": mask}
-        return obs
 
     def _infos(self, seconds: float) -> dict:
         needs = self._core.needs_action()
@@ -84,13 +67,7 @@ class ContinuousExplorationEnv(ParallelEnv):
                 for i, a in enumerate(self.possible_agents)}
 
     def reset(self, seed: int | None = None, options: dict | None = None):
-        if seed is not None:
-            self._np_random, _ = seeding.np_random(seed)
-            episode_seed = int(seed)
-        else:
-            episode_seed = int(self._np_random.integers(0, 2**63 - 1))
-        self._core.reset(episode_seed)
-        self.agents = self.possible_agents[:]
+        self._reset_core(seed)
         return self._observations(), self._infos(0.0)
 
     def step(self, actions: dict):
@@ -101,11 +78,7 @@ class ContinuousExplorationEnv(ParallelEnv):
         obs = self._observations()
         infos = self._infos(seconds)
         rew = {a: float(team) for a in self.possible_agents}
-        term = {a: bool(terminated) for a in self.possible_agents}
-        trunc = {a: bool(truncated) for a in self.possible_agents}
-        if terminated or truncated:
-            self.agents = []
-        return obs, rew, term, trunc, infos
+        return self._end_step(obs, rew, terminated, truncated, infos)
 
     def result(self) -> dict:
         """The episode as ``madenet run --world continuous --json`` prints it (ET, TTD,
@@ -114,6 +87,3 @@ class ContinuousExplorationEnv(ParallelEnv):
 
     def render(self):
         return None
-
-    def close(self):
-        pass

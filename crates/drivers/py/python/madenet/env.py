@@ -4,16 +4,14 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 from gymnasium import spaces
-from gymnasium.utils import seeding
-from pettingzoo import ParallelEnv
 
 from madenet._config import check_render, path_or_none, scenario_overrides
 from madenet._core import CoreEnv
+from madenet._parallel import CoreParallelEnv
 
 
-class ExplorationEnv(ParallelEnv):
+class ExplorationEnv(CoreParallelEnv):
     """The team of robots exploring one map, as a PettingZoo ``ParallelEnv``.
 
     ``map``: ``"paper:N"`` (the paper's maps 1-10), ``"generate:SEED"`` or a ROS map YAML path;
@@ -49,16 +47,8 @@ class ExplorationEnv(ParallelEnv):
         self.cell_px = cell_px
         self._core = CoreEnv(map, start, mode, path_or_none(config), scenario_overrides(overrides), bool(candidates), bool(record))
         self.mode = mode
-        self.possible_agents = [f"robot_{i}" for i in range(self._core.num_robots)]
-        self.agents: list[str] = []
         self.max_cycles = None
-        self._np_random, _ = seeding.np_random(None)
-        h, w, k = self._core.height, self._core.width, self._core.action_count
-        self._obs_space = spaces.Dict({
-            "map": spaces.Box(0.0, 1.0, (4, h, w), np.float32),
-            "vector": spaces.Box(-1.0, 1.0, (self._core.vector_len,), np.float32),
-            "action_mask": spaces.MultiBinary(k),
-        })
+        k = self._start()
         self._obs_spaces = {a: self._obs_space for a in self.possible_agents}
         self._act_spaces = {a: spaces.Discrete(k) for a in self.possible_agents}
 
@@ -68,26 +58,13 @@ class ExplorationEnv(ParallelEnv):
     def action_space(self, agent: str):
         return self._act_spaces[agent]
 
-    def _observations(self) -> dict:
-        obs = {}
-        for i, a in enumerate(self.possible_agents):
-            m, v, mask = self._core.observe(i)
-            obs[a] = {"map": m, "vector": v, "action_mask": mask}
-        return obs
-
     def _infos(self, team_reward: float, steps: int) -> dict:
         needs = self._core.needs_action()
         return {a: {"needs_action": bool(needs[i]), "team_reward": float(team_reward), "steps": int(steps), "t": int(self._core.t)}
                 for i, a in enumerate(self.possible_agents)}
 
     def reset(self, seed: int | None = None, options: dict | None = None):
-        if seed is not None:
-            self._np_random, _ = seeding.np_random(seed)
-            episode_seed = int(seed)
-        else:
-            episode_seed = int(self._np_random.integers(0, 2**63 - 1))
-        self._core.reset(episode_seed)
-        self.agents = self.possible_agents[:]
+        self._reset_core(seed)
         return self._observations(), self._infos(0.0, 0)
 
     def step(self, actions: dict):
@@ -98,11 +75,7 @@ class ExplorationEnv(ParallelEnv):
         obs = self._observations()
         infos = self._infos(team, steps)
         rew = {a: float(rewards[i]) for i, a in enumerate(self.possible_agents)}
-        term = {a: bool(terminated) for a in self.possible_agents}
-        trunc = {a: bool(truncated) for a in self.possible_agents}
-        if terminated or truncated:
-            self.agents = []
-        return obs, rew, term, trunc, infos
+        return self._end_step(obs, rew, terminated, truncated, infos)
 
     def result(self) -> dict:
         """The episode as ``madenet run --json`` prints it (metrics, timing, and the trajectory
@@ -117,6 +90,3 @@ class ExplorationEnv(ParallelEnv):
         if self.render_mode is None:
             return None
         return self._core.render(self.cell_px)
-
-    def close(self):
-        pass

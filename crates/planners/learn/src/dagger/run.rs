@@ -3,8 +3,8 @@
 
 use super::{collector::*, config::*, student::*, teacher::*};
 use crate::error::{write_atomic, TrainError};
-use crate::harness::{self, replace_dir, Clock, Learner, Progress};
-use crate::model::{Method, ModelInfo, NetConfigToml};
+use crate::harness::{self, replace_dir, Clock, Learner, Progress, TrainRun};
+use crate::model::{Method, Model, ModelInfo, NetConfigToml};
 use crate::scenario::validate;
 use madenet_sim::{PolicyRegistry, TrialSpec};
 use serde::{Deserialize, Serialize};
@@ -240,15 +240,10 @@ impl Learner for RolloutLearner {
     const RESUME_EXTENDS_EPISODES: bool = false;
     const UNIT: &'static str = "iterations";
 
-    crate::learner_config!();
+    crate::learner_config!(model = Model);
 
-    fn train_loop(
-        run_dir: &Path,
-        cfg: &RolloutTrainConfig,
-        resuming: bool,
-        progress: &mut (dyn FnMut(&Progress) + Send),
-    ) -> Result<(), TrainError> {
-        train_loop(run_dir, cfg, resuming, progress, &mut Collector::Local)
+    fn train_loop(run: TrainRun<'_, RolloutTrainConfig>) -> Result<(), TrainError> {
+        train_loop(run, &mut Collector::Local)
     }
 }
 
@@ -270,17 +265,21 @@ pub fn train_with(
     collector: &mut Collector<'_>,
 ) -> Result<(), TrainError> {
     harness::train_with::<RolloutLearner>(run_dir, cfg, |dir, cfg, resuming| {
-        train_loop(dir, cfg, resuming, progress, collector)
+        let run = TrainRun {
+            dir,
+            cfg,
+            resuming,
+            progress,
+        };
+        train_loop(run, collector)
     })
 }
 
 pub(super) fn train_loop(
-    run_dir: &Path,
-    cfg: &RolloutTrainConfig,
-    resuming: bool,
-    progress: &mut (dyn FnMut(&Progress) + Send),
+    run: TrainRun<'_, RolloutTrainConfig>,
     collector: &mut Collector<'_>,
 ) -> Result<(), TrainError> {
+    let (run_dir, cfg, resuming, progress) = (run.dir, run.cfg, run.resuming, run.progress);
     let ckpt = run_dir.join("checkpoint");
     let (mut net, mut optim) = fresh_student(cfg, None)?;
     if !resuming && !cfg.init_model.is_empty() {

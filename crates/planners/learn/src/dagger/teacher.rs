@@ -9,7 +9,7 @@ use crate::error::TrainError;
 use crate::model::Model;
 use crate::obs::{action_mask, pack_bits};
 use crate::scenario::ScenarioDraw;
-use madenet_agent::{AgentView, Decision, DecisionMode, Policy};
+use madenet_agent::{AgentView, Decision, Policy};
 use madenet_sim::rollout::{candidate_values_by, plan_values, Lookahead};
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
@@ -94,9 +94,6 @@ pub(super) struct Behaviour {
 impl Policy for Behaviour {
     fn name(&self) -> &str {
         "behaviour"
-    }
-    fn mode(&self) -> DecisionMode {
-        DecisionMode::OnTermination
     }
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let d = self.inner.decide(view);

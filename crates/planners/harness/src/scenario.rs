@@ -3,7 +3,7 @@
 //! fixed set of them.
 //!
 //! ```
-//! use madenet_learn::scenario::ScenarioDraw;
+//! use madenet_harness::scenario::ScenarioDraw;
 //! use madenet_map::Movement;
 //!
 //! let draw = ScenarioDraw::new(20, 20, (0.1, 0.3), 3, Movement::default());

@@ -5,7 +5,7 @@
 //! are three recorders of this one loop.
 //!
 //! ```
-//! use madenet_learn::episode::{self, Recorder};
+//! use madenet_harness::episode::{self, Recorder};
 //! use madenet_sim::{Trial, TrialSpec};
 //!
 //! /// Counts the timesteps and sums the team reward (Eq. 8) of an episode played by the

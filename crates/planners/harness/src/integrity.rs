@@ -5,19 +5,23 @@
 //!   (`digests`); loading recomputes it, so a flipped byte is refused instead of playing.
 //!   (XXH3 guards against corruption, not against an adversary: a model folder is code-like
 //!   input a user chose to run.)
-//! - **Shapes**: weights are applied with burn's fallible `try_load_record`, so sizes in
-//!   `model.toml` that disagree with the weights are an error, not a panic.
-//! - **Finite**: a NaN or ∞ parameter is refused by name.
+//! - **Shapes** (feature `burn`): weights are applied with burn's fallible `try_load_record`,
+//!   so sizes in `model.toml` that disagree with the weights are an error, not a panic
+//!   (`checked_weights`).
+//! - **Finite** (feature `burn`): a NaN or ∞ parameter is refused by name
+//!   (`first_non_finite`).
 //!
 //! ```
-//! let d = madenet_learn::integrity::digest(b"weights");
+//! let d = madenet_harness::integrity::digest(b"weights");
 //! assert_eq!(d.len(), 32);
-//! assert!(madenet_learn::integrity::check_digest(b"weights", &d).is_ok());
-//! assert!(madenet_learn::integrity::check_digest(b"weighTs", &d).is_err());
+//! assert!(madenet_harness::integrity::check_digest(b"weights", &d).is_ok());
+//! assert!(madenet_harness::integrity::check_digest(b"weighTs", &d).is_err());
 //! ```
 
 use crate::error::TrainError;
+#[cfg(feature = "burn")]
 use burn::module::{Module, ModuleVisitor, Param};
+#[cfg(feature = "burn")]
 use burn::tensor::Tensor;
 
 /// The digest `model.toml` records for a weight file: XXH3-128, 32 lowercase hex digits.
@@ -38,18 +42,21 @@ pub fn check_digest(bytes: &[u8], expected: &str) -> Result<(), String> {
 }
 
 /// The first parameter of `module` holding a NaN or ∞, as `path.to.param`, if any.
+#[cfg(feature = "burn")]
 pub fn first_non_finite<M: Module>(module: &M) -> Option<String> {
     let mut v = FiniteCheck::default();
     module.visit(&mut v);
     v.found
 }
 
+#[cfg(feature = "burn")]
 #[derive(Default)]
 struct FiniteCheck {
     path: Vec<String>,
     found: Option<String>,
 }
 
+#[cfg(feature = "burn")]
 impl ModuleVisitor for FiniteCheck {
     fn enter_module(&mut self, name: &str, _container_type: &str) {
         self.path.push(name.to_string());
@@ -106,6 +113,7 @@ pub fn check_digests(
 
 /// A network loaded from weight file `name` of the model `label`: weights that do not fit the
 /// sizes (`sizes` names the fields that set them) or hold a NaN/∞ are refused by name.
+#[cfg(feature = "burn")]
 pub fn checked_weights<M: burn::module::Module>(
     loaded: Result<M, burn::store::RecordError>,
     name: &str,
@@ -125,7 +133,7 @@ pub fn checked_weights<M: burn::module::Module>(
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "burn"))]
 mod tests {
     use super::*;
     use burn::nn::LinearConfig;
