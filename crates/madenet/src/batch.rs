@@ -47,7 +47,7 @@ pub fn run(a: BatchArgs) -> Result<()> {
     let flag = format!("--policy {}", a.policy);
     let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = madenet_study::progress::run_planned(&planned, &registry, a.set.threads)?;
+    let outcomes = madenet_study::progress::run_with_bar(&planned, &registry, a.set.threads)?;
     let elapsed = started.elapsed();
     let rows: Vec<&TrialOutcome> = outcomes.iter().collect();
     madenet_files::write_atomic(&a.out, &runner::trials_csv(&rows))

@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use madenet_sim::rollout::OracleKind;
+use madenet_baselines::rollout::OracleKind;
 use madenet_study::{run_study_held, StudyConfig, StudyError};
 use std::path::PathBuf;
 
@@ -22,7 +22,7 @@ pub struct CompareArgs {
     /// Rollout oracles beside the methods, overriding the config (comma-separated: replay,
     /// averaged, noiseless, placebo, known-map, redrawn, plan-redrawn, plan-own-map,
     /// plan-team-map; `none` for none).
-    #[arg(long, value_delimiter = ',', value_parser = madenet_sim::rollout::OracleKind::parse_or_none)]
+    #[arg(long, value_delimiter = ',', value_parser = madenet_baselines::rollout::OracleKind::parse_or_none)]
     oracles: Option<Vec<Option<OracleKind>>>,
     /// Seeds per trial, overriding the config.
     #[arg(long)]

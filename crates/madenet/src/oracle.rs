@@ -1,10 +1,10 @@
 //! `madenet oracle`: the rollout oracle (and its placebo) beside the base rule on a trial set —
 //! the ceiling a candidate rule or a learned policy is judged against
-//! ([`madenet_sim::rollout`]).
+//! ([`madenet_baselines::rollout`]).
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use madenet_sim::rollout::{Lookahead, OracleKind, Value};
+use madenet_baselines::rollout::{Lookahead, OracleKind, Value};
 use madenet_study::runner::{self, TrialOutcome};
 use madenet_study::StudyConfig;
 use std::path::PathBuf;
@@ -39,7 +39,7 @@ pub struct OracleArgs {
     /// plan over the true map), redrawn (over --futures noiseless futures with the unseen cells
     /// redrawn), plan-redrawn (the known-map plan over redrawn maps: a team-wide teacher),
     /// plan-own-map, plan-team-map (plan-redrawn on the robot's own map, or with the teammates
-    /// where it last knew them); see `madenet_sim::rollout::OracleKind`.
+    /// where it last knew them); see `madenet_baselines::rollout::OracleKind`.
     #[arg(long, default_value = "replay")]
     kind: OracleKind,
     /// Futures per candidate (averaged, redrawn) or to choose from (placebo); 1–64.
@@ -93,7 +93,7 @@ pub fn run(a: OracleArgs) -> Result<()> {
     // The base rule's trials, then the oracle's on the same (map, start, CSP, seed), in order.
     let planned = cfg.plan_flags(&registry, a.set.config.as_deref(), &flag)?;
     let started = std::time::Instant::now();
-    let outcomes = madenet_study::progress::run_planned(&planned, &registry, a.set.threads)?;
+    let outcomes = madenet_study::progress::run_with_bar(&planned, &registry, a.set.threads)?;
     let (base, oracle) = outcomes.split_at(outcomes.len() / 2);
     if let Some(path) = &a.out {
         let rows: Vec<&TrialOutcome> = outcomes.iter().collect();

@@ -41,10 +41,8 @@
 #![deny(missing_docs)]
 
 pub mod continuous;
-pub mod reference;
 mod registry;
 pub mod rewards;
-pub mod rollout;
 pub mod scenario;
 pub mod stepping;
 mod summary;
@@ -87,7 +85,7 @@ pub enum SimError {
     /// A bad config on its own (the world's own validation arrives as [`SimError::Scenario`]).
     #[error(transparent)]
     Config(#[from] madenet_world::ConfigError),
-    /// The map generator cannot draw a map of the trial's size ([`rollout::OracleKind::Redrawn`]).
+    /// The map generator cannot draw a map of the trial's size (the redrawn oracle, `madenet_baselines::rollout`).
     #[error("the redrawn oracle cannot draw a map of the trial's size: {0}")]
     Redraw(madenet_map::MapError),
 }

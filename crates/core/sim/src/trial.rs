@@ -29,6 +29,32 @@ pub struct TrialSpec {
     pub seed: u64,
 }
 
+impl TrialSpec {
+    /// A trial on the paper's map `map` (1–10) from `corner`, at CSP `csp`, the rest of the
+    /// scenario at the paper's defaults.
+    pub fn paper(
+        map: usize,
+        corner: madenet_map::paper::Corner,
+        policy: &str,
+        csp: f64,
+        seed: u64,
+    ) -> Result<Self, madenet_map::MapError> {
+        let grid = madenet_map::paper::paper_map(map)?;
+        let starts = corner.start_cells(grid.height(), grid.width()).to_vec();
+        Ok(TrialSpec {
+            map: grid,
+            map_name: madenet_map::paper::paper_map_name(map),
+            starts,
+            config: ScenarioConfig {
+                comm_success_prob: csp,
+                ..Default::default()
+            },
+            policy: policy.to_string(),
+            seed,
+        })
+    }
+}
+
 /// One timestep of a trajectory (state after the step).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepRecord {

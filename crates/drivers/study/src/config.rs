@@ -1,8 +1,8 @@
 //! [`StudyConfig`]: what the study runs, in one TOML file.
 
+use madenet_baselines::rollout::{Lookahead, OracleKind};
 use madenet_baselines::BaselineParams;
 use madenet_map::paper::{Corner, PAPER_MAP_COUNT};
-use madenet_sim::rollout::{Lookahead, OracleKind};
 use madenet_sim::{MapSource, PolicyRegistry, StartSpec};
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
@@ -40,7 +40,7 @@ pub struct StudyConfig {
     pub oracle_futures: usize,
     /// How the scoring oracles (replay, averaged, noiseless, redrawn) cut and value their continuations
     /// (`horizon`: steps, none by default; `value`: `steps-left` by default or
-    /// `mean-discovery`; [`madenet_sim::rollout::Value`]).
+    /// `mean-discovery`; [`madenet_baselines::rollout::Value`]).
     pub oracle_lookahead: Lookahead,
     /// Parameters of the classical baselines.
     pub baselines: BaselineParams,
@@ -324,7 +324,7 @@ impl StudyConfig {
                     policy: self.oracle_base.clone(),
                     seed: self.seed_base,
                 };
-                madenet_sim::rollout::check_base(&spec, registry)
+                madenet_baselines::rollout::check_base(&spec, registry)
                     .map_err(|e| field("oracle_base", e))?;
             }
         }

@@ -88,13 +88,13 @@ pub type StudyPlan = (
     Vec<runner::Planned>,
 );
 
-/// The lower bound ([`madenet_sim::reference::lower_bound`]) of every trial of `planned` the
+/// The lower bound ([`madenet_baselines::reference::lower_bound`]) of every trial of `planned` the
 /// known-map reference runs, by map, start and seed (in parallel; none if it does not run).
 pub(crate) fn lower_bounds<'a>(
     planned: impl Iterator<Item = &'a runner::Planned>,
 ) -> Result<report::Bounds, StudyError> {
     use rayon::prelude::*;
-    let kind = madenet_sim::rollout::OracleKind::KnownMap;
+    let kind = madenet_baselines::rollout::OracleKind::KnownMap;
     let mut specs = std::collections::BTreeMap::new();
     for p in planned.filter(|p| p.oracle.is_some_and(|(k, _)| k == kind)) {
         let k = &p.key;
@@ -106,7 +106,7 @@ pub(crate) fn lower_bounds<'a>(
     specs
         .into_par_iter()
         .map(|(key, spec)| {
-            madenet_sim::reference::lower_bound(spec)
+            madenet_baselines::reference::lower_bound(spec)
                 .map(|b| (key, b))
                 .map_err(|e| StudyError::Other(format!("{}: {e}", spec.map_name)))
         })

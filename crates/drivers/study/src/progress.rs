@@ -24,8 +24,9 @@ pub fn trials_bar_and_pool(
     Ok((bar, pool))
 }
 
-/// Runs `planned` with a progress bar on `threads` workers; outcomes in plan order.
-pub fn run_planned(
+/// Runs `planned` with a progress bar on `threads` workers (no records, unlike
+/// [`runner::run_planned`]); outcomes in plan order.
+pub fn run_with_bar(
     planned: &[Planned],
     registry: &PolicyRegistry,
     threads: Option<usize>,

@@ -126,15 +126,17 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
     };
     let mut s = format!(
         "Rollout oracles over the base rule `{base}` on the same trials (`madenet oracle`; \
-         `madenet_sim::rollout`): at every decision with two or more goal candidates the oracle \
+         `madenet_baselines::rollout`): at every decision with two or more goal candidates the oracle \
          scores each candidate by continuing the trial with it under `{base}`, and takes the best. \
          Oracles are never ranked with the methods.\n\n"
     );
     let look = cfg.oracle_lookahead;
     if look != Default::default() {
         let value = match look.value {
-            madenet_sim::rollout::Value::StepsLeft => "the steps left until the map is explored",
-            madenet_sim::rollout::Value::MeanDiscovery => {
+            madenet_baselines::rollout::Value::StepsLeft => {
+                "the steps left until the map is explored"
+            }
+            madenet_baselines::rollout::Value::MeanDiscovery => {
                 "the mean over cells of the steps until each is known"
             }
         };
@@ -149,7 +151,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
         );
     }
     for kind in &cfg.oracles {
-        use madenet_sim::rollout::OracleKind;
+        use madenet_baselines::rollout::OracleKind;
         let f = cfg.oracle_futures;
         let text = match kind {
             OracleKind::Noiseless => "scores in the noiseless future: it knows the map but not the noise to come — what the best choice among these candidates is worth, the ceiling of a policy that learns to choose".to_string(),
@@ -160,7 +162,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
             OracleKind::PlanRedrawn => format!("plans the whole team's routes with the known-map reference on {f} maps whose unseen cells the map generator redraws, and takes the candidate nearest the robot's first viewpoint: a team-wide, multi-step teacher that knows what the team knows"),
             OracleKind::PlanOwnMap => format!("plans as plan-redrawn but on the deciding robot's own map (its unseen cells redrawn over {f} maps), every robot at its true cell: what knowing where the teammates are is worth without their maps"),
             OracleKind::PlanTeamMap => format!("plans as plan-redrawn on the team's cells ({f} redrawn maps) but with the teammates where the deciding robot last knew them: what the team's map is worth without their positions"),
-            OracleKind::KnownMap => "is the known-map reference (`madenet_sim::reference`): a team that knows the map — viewpoints that see every cell left after t = 0 (set cover), routes that keep the longest robot's time short (min–max insertion, 2-opt, relocation), walked on true shortest paths in the trial's own world and re-planned as misses and slips demand; it ignores the base rule and the radio (see Headroom)".to_string(),
+            OracleKind::KnownMap => "is the known-map reference (`madenet_baselines::reference`): a team that knows the map — viewpoints that see every cell left after t = 0 (set cover), routes that keep the longest robot's time short (min–max insertion, 2-opt, relocation), walked on true shortest paths in the trial's own world and re-planned as misses and slips demand; it ignores the base rule and the radio (see Headroom)".to_string(),
         };
         let _ = writeln!(s, "- **{}** {text}.", oracle_method(*kind));
     }
@@ -172,7 +174,7 @@ fn ceiling_md(cfg: &StudyConfig, outcomes: &[TrialOutcome], cs: &[(f64, String)]
     s.push_str("\n|---|");
     s.push_str(&"---|".repeat(cs.len()));
     s.push('\n');
-    let noiseless = oracle_method(madenet_sim::rollout::OracleKind::Noiseless);
+    let noiseless = oracle_method(madenet_baselines::rollout::OracleKind::Noiseless);
     for m in &runs {
         let role = if m == base {
             " (base)"
@@ -210,10 +212,10 @@ pub(crate) const HEADROOM_DEFINITIONS: &str = "How far every run is from what is
     The **lower bound** of a trial: no team explores its map in fewer timesteps — the largest, \
     over the cells left unknown after t = 0, of the fewest moves any robot needs to reach a cell \
     that sees it (slips never shorten a path, misses only add time). The **known-map reference** \
-    (`oracle-known-map`, `madenet_sim::reference`) is a team that knows the map: set-cover \
+    (`oracle-known-map`, `madenet_baselines::reference`) is a team that knows the map: set-cover \
     viewpoints, min–max routes, re-planned as misses and slips demand, in each trial's own world.";
 
-/// Lower bounds of the trials (see [`madenet_sim::reference::lower_bound`]), by map, start and
+/// Lower bounds of the trials (see [`madenet_baselines::reference::lower_bound`]), by map, start and
 /// seed (a bound does not depend on the CSP).
 pub type Bounds = std::collections::BTreeMap<(String, String, u64), u32>;
 
@@ -226,7 +228,7 @@ fn headroom_md(
     cs: &[(f64, String)],
 ) -> String {
     let base = &cfg.oracle_base;
-    let reference = oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let reference = oracle_method(madenet_baselines::rollout::OracleKind::KnownMap);
     let mut runs = vec![base.clone()];
     runs.extend(cfg.methods.iter().filter(|m| *m != base).cloned());
     runs.extend(cfg.oracles.iter().map(|&k| oracle_method(k)));
@@ -578,7 +580,7 @@ pub fn write_all(
     }
     if cfg
         .oracles
-        .contains(&madenet_sim::rollout::OracleKind::KnownMap)
+        .contains(&madenet_baselines::rollout::OracleKind::KnownMap)
     {
         let _ = writeln!(
             r,

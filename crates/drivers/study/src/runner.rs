@@ -1,9 +1,9 @@
 //! Running the trials: in parallel, appended as whole lines as they finish, resumable.
 
 use crate::config::{oracle_method, StudyConfig, StudyError, StudyMap};
+use madenet_baselines::rollout::{run_oracle_by, OracleKind};
 use madenet_metrics::COVERAGE_LEVELS;
 use madenet_sim::continuous::{ContinuousSpec, ContinuousTrial};
-use madenet_sim::rollout::{run_oracle_by, OracleKind};
 use madenet_sim::{PolicyRegistry, StartSpec, Trial, TrialSpec};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -320,7 +320,7 @@ pub struct Planned {
     /// The oracle and its number of futures.
     pub oracle: Option<(OracleKind, usize)>,
     /// How a scoring oracle cuts and values its continuations.
-    pub look: madenet_sim::rollout::Lookahead,
+    pub look: madenet_baselines::rollout::Lookahead,
     /// `Some`: the trial runs in the continuous world on this geometry, `spec.map` being its
     /// coarse truth and `spec.starts` the cells whose centres the robots start at.
     pub continuous: Option<PlannedContinuous>,

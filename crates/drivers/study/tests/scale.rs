@@ -145,10 +145,10 @@ fn tiny_grid_writes_tables_tests_and_figure_and_resumes_to_the_same_trials() {
     assert_eq!(reference.len(), 24);
     let rows = std::fs::read_to_string(out.join("trials.csv")).unwrap();
     for p in reference {
-        let (tns, _) = madenet_sim::reference::run(&p.planned.spec)
+        let (tns, _) = madenet_baselines::reference::run(&p.planned.spec)
             .map(|(r, pl)| (r.metrics.tns, pl))
             .unwrap();
-        let bound = madenet_sim::reference::lower_bound(&p.planned.spec).unwrap() as usize;
+        let bound = madenet_baselines::reference::lower_bound(&p.planned.spec).unwrap() as usize;
         assert!(tns >= bound, "{}: {tns} < {bound}", p.planned.key);
         assert!(rows.lines().any(|l| l.starts_with(&format!(
             "oracle-known-map,{},{},",

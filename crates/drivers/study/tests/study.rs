@@ -1143,12 +1143,12 @@ fn a_restarted_trial_equals_a_fresh_one_for_every_policy() {
 }
 
 /// Oracles run beside the methods on the same trials: their rows are what
-/// `madenet_sim::rollout::run_oracle` gives for the same spec, their base rule runs although it
+/// `madenet_baselines::rollout::run_oracle` gives for the same spec, their base rule runs although it
 /// is not a method, and they appear in the report's ceiling section only — never in the
 /// summary, the statistics or the figures' ranking.
 #[test]
 fn oracles_run_beside_the_methods_and_are_reported_apart() {
-    use madenet_sim::rollout::{run_oracle, OracleKind};
+    use madenet_baselines::rollout::{run_oracle, OracleKind};
     let dir = Scratch::new("study-oracles");
     let out = dir.path();
     let cfg = StudyConfig {
@@ -1214,7 +1214,7 @@ fn oracles_run_beside_the_methods_and_are_reported_apart() {
 
     // Cut and valued by mean discovery: each row is `run_oracle_by` with that lookahead, and
     // the report says how the oracle valued.
-    use madenet_sim::rollout::{run_oracle_by, Lookahead, Value};
+    use madenet_baselines::rollout::{run_oracle_by, Lookahead, Value};
     let look = Lookahead {
         horizon: Some(30),
         value: Value::MeanDiscovery,
@@ -1245,7 +1245,7 @@ fn oracles_run_beside_the_methods_and_are_reported_apart() {
 
 #[test]
 fn bad_oracle_fields_are_refused() {
-    use madenet_sim::rollout::OracleKind;
+    use madenet_baselines::rollout::OracleKind;
     let base = StudyConfig {
         oracles: vec![OracleKind::Noiseless],
         ..small(&["nf"], &[1.0], 1)
@@ -1273,7 +1273,7 @@ fn bad_oracle_fields_are_refused() {
     );
     assert_refused(
         &StudyConfig {
-            oracle_lookahead: madenet_sim::rollout::Lookahead {
+            oracle_lookahead: madenet_baselines::rollout::Lookahead {
                 horizon: Some(0),
                 ..Default::default()
             },

@@ -12,7 +12,7 @@ const NONE: u8 = u8::MAX;
 /// timestep at which it exchanged β with every teammate it detects (a macro action ends when
 /// one is newly detected, so both sides of a meeting decide then, their maps merged both
 /// ways), the group — itself and those teammates — plans the whole group's routes with the
-/// known-map reference's planner ([`madenet_sim::reference::belief_team_routes`]) on the
+/// known-map reference's planner ([`crate::reference::belief_team_routes`]) on the
 /// merged map, its unknown cells redrawn over `futures` generated maps whose seeds depend only
 /// on the trial and the timestep, the members where they stand, in index order: every member
 /// computes the same plan without negotiating. Each cell then belongs to the member whose
@@ -76,7 +76,7 @@ impl Convention {
         }
         let map = view.belief.grid();
         let movement = view.belief.movement();
-        let fills = madenet_sim::rollout::generated_maps(
+        let fills = crate::rollout::generated_maps(
             h,
             w,
             movement,
@@ -88,9 +88,8 @@ impl Convention {
         let team: Vec<Pos> = group.iter().map(|&(_, p)| p).collect();
         let ds = view.sensing_range;
         let mut viewpoints: Vec<(Pos, u8)> = Vec::new();
-        for fill in madenet_sim::reference::plan_fills(&fills) {
-            let Some(routes) =
-                madenet_sim::reference::belief_team_routes(map, fill, &team, ds, movement)
+        for fill in crate::reference::plan_fills(&fills) {
+            let Some(routes) = crate::reference::belief_team_routes(map, fill, &team, ds, movement)
             else {
                 continue;
             };

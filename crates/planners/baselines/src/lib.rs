@@ -33,6 +33,8 @@
 mod convention;
 mod dvf;
 mod plan;
+pub mod reference;
+pub mod rollout;
 mod utility;
 
 pub use convention::Convention;

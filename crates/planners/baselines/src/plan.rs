@@ -1,5 +1,5 @@
 //! **belief-plan**: the known-map reference's team plan run on what one robot knows
-//! ([`madenet_sim::reference::candidate_plan_moves`]) — a decentralized, multi-step planner
+//! ([`crate::reference::candidate_plan_moves`]) — a decentralized, multi-step planner
 //! that is not learned, the yardstick a learned planner must beat besides `spread`.
 
 use madenet_agent::{AgentView, Decision, Policy, Spread};
@@ -40,7 +40,7 @@ impl BeliefPlan {
     fn fills(&mut self, view: &AgentView<'_>) -> Vec<OccGrid> {
         self.decisions += 1;
         let base = ((self.robot as u64) << 40) | (self.decisions << 8);
-        madenet_sim::rollout::generated_maps(
+        crate::rollout::generated_maps(
             view.belief.height(),
             view.belief.width(),
             view.belief.movement(),
@@ -59,7 +59,7 @@ impl Policy for BeliefPlan {
     fn decide(&mut self, view: &mut AgentView<'_>) -> Decision {
         let spread = self.spread.scores(view);
         let fills = self.fills(view);
-        let moves = madenet_sim::reference::candidate_plan_moves(view, &fills);
+        let moves = crate::reference::candidate_plan_moves(view, &fills);
         let best = spread
             .iter()
             .enumerate()

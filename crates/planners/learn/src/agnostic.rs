@@ -85,7 +85,7 @@ pub struct AgnosticConfig {
     pub territory_inputs: Option<bool>,
     /// `Some(true)`: [`PLAN_INPUTS`] more values per candidate (after the territory ones), from
     /// the team plan on the robot's own belief (the `belief-plan` policy's,
-    /// [`madenet_sim::reference::candidate_plan_moves`]; [`inputs_for`]). An option for the same
+    /// [`madenet_baselines::reference::candidate_plan_moves`]; [`inputs_for`]). An option for the same
     /// reason as `wide_inputs`.
     pub plan_inputs: Option<bool>,
 }
@@ -424,7 +424,7 @@ pub fn inputs(view: &mut AgentView<'_>, crop_radius: usize) -> AgnosticInput {
 ///
 /// **Plan inputs**, from the team plan on the robot's own belief (unknown cells free, the
 /// teammates it knows of at their last announced goal or last known cell: `belief-plan-free`'s,
-/// [`madenet_sim::reference::candidate_plan_moves`]):
+/// [`madenet_baselines::reference::candidate_plan_moves`]):
 ///
 /// 0. the candidate's moves to the robot's first viewpoint / (4 d_s), capped at 4 and divided by
 ///    4 (size-free, as inputs 9–10);
@@ -527,7 +527,7 @@ fn wide_inputs(view: &AgentView<'_>, slots: usize) -> Vec<[f32; WIDE_INPUTS]> {
 /// The [`PLAN_INPUTS`] of each of `slots` candidates (see [`inputs_for`]).
 fn plan_inputs(view: &AgentView<'_>, slots: usize) -> Vec<[f32; PLAN_INPUTS]> {
     let mut out = vec![[0.0; PLAN_INPUTS]; slots];
-    let Some(moves) = madenet_sim::reference::candidate_plan_moves(view, &[]) else {
+    let Some(moves) = madenet_baselines::reference::candidate_plan_moves(view, &[]) else {
         return out;
     };
     let reach = f64::from(4 * view.sensing_range.max(1));

@@ -90,7 +90,7 @@ pub struct ScaleConfig {
     pub world: ScaleWorld,
     /// The continuous world's parameters (`world = "continuous"` only).
     pub continuous: madenet_continuous::ContinuousConfig,
-    /// Run the known-map reference (`oracle-known-map`, [`madenet_sim::reference`]) on every
+    /// Run the known-map reference (`oracle-known-map`, [`madenet_baselines::reference`]) on every
     /// (map, start, team, seed) beside the methods, and report every method's distance to it
     /// and to the trials' lower bound. Grid world only (ignored in the continuous world).
     pub known_map: bool,

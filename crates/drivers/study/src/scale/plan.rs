@@ -4,10 +4,10 @@
 use super::{ScaleConfig, ScaleWorld};
 use crate::config::StudyError;
 use crate::runner::{Planned, PlannedContinuous, TrialKey};
+use madenet_baselines::rollout::OracleKind;
 use madenet_continuous::scene::generate_cluttered;
 use madenet_map::generate::{generate_with_movement, starts_near, GeneratorConfig};
 use madenet_map::Pos;
-use madenet_sim::rollout::OracleKind;
 use madenet_sim::TrialSpec;
 use madenet_world::rng::derive_seed;
 use madenet_world::ScenarioConfig;

@@ -376,7 +376,7 @@ pub(super) fn headroom_figure(
     outcomes: &[TrialOutcome],
     out: &Path,
 ) -> Result<(), StudyError> {
-    let reference = crate::config::oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let reference = crate::config::oracle_method(madenet_baselines::rollout::OracleKind::KnownMap);
     let mean_tns = |m: &str, side: usize, team: usize| {
         let v = paired(planned, outcomes, m, Some(side), Some(team), tns);
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
@@ -412,7 +412,7 @@ pub(super) fn headroom_text(
     outcomes: &[TrialOutcome],
     bounds: &crate::report::Bounds,
 ) -> String {
-    let reference = crate::config::oracle_method(madenet_sim::rollout::OracleKind::KnownMap);
+    let reference = crate::config::oracle_method(madenet_baselines::rollout::OracleKind::KnownMap);
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let tns_of = |m: &str, side: usize, team: Option<usize>| {
         mean(&paired(planned, outcomes, m, Some(side), team, tns))

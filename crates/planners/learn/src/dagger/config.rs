@@ -6,7 +6,7 @@ use crate::model::Method;
 use crate::obs::Observation;
 use crate::NetConfig;
 use madenet_agent::DecisionMode;
-use madenet_sim::rollout::Value;
+use madenet_baselines::rollout::Value;
 use madenet_sim::PolicyRegistry;
 use madenet_world::ScenarioConfig;
 use serde::{Deserialize, Serialize};
@@ -37,7 +37,7 @@ pub enum Teacher {
     /// `value`: one step of policy improvement over the base.
     #[default]
     Rollout,
-    /// The team plan ([`madenet_sim::rollout::plan_values`]): over `rollouts` redrawn futures
+    /// The team plan ([`madenet_baselines::rollout::plan_values`]): over `rollouts` redrawn futures
     /// (`futures = "redrawn"`), the known-map reference plans the whole team's routes from where
     /// it stands, and a candidate is valued by its moves to the robot's first viewpoint — a
     /// team-wide, multi-step teacher; no base rule enters the values.
@@ -152,10 +152,10 @@ pub struct RolloutTrainConfig {
     /// `futures = "redrawn"`, excludes `expert_iteration`, `policy_iteration` and `team_rounds`).
     pub teacher: Teacher,
     /// Steps after which a continuation is cut (with `value = "steps-left"` its rest estimated at
-    /// the trial's exploration rate so far, [`madenet_sim::rollout::Value::StepsLeft`]; with
+    /// the trial's exploration rate so far, [`madenet_baselines::rollout::Value::StepsLeft`]; with
     /// `mean-discovery` the cells still unknown count the horizon); 0: run to the end.
     pub horizon: usize,
-    /// What a continuation's value measures ([`madenet_sim::rollout::Value`]): `steps-left`
+    /// What a continuation's value measures ([`madenet_baselines::rollout::Value`]): `steps-left`
     /// (default: steps until the map is explored) or `mean-discovery` (the mean over cells of
     /// the steps until each is known, capped at `horizon`: every discovery counts).
     pub value: Value,

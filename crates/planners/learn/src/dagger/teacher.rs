@@ -10,7 +10,7 @@ use crate::model::Model;
 use crate::obs::{action_mask, pack_bits};
 use crate::scenario::ScenarioDraw;
 use madenet_agent::{AgentView, Decision, Policy};
-use madenet_sim::rollout::{candidate_values_by, plan_values, Lookahead};
+use madenet_baselines::rollout::{candidate_values_by, plan_values, Lookahead};
 use madenet_sim::{Future, PolicyRegistry, Trial, TrialSpec};
 use madenet_world::rng::{derive_seed, stream, Rng};
 use madenet_world::ScenarioConfig;
@@ -181,7 +181,7 @@ pub struct LabelFit {
     pub teacher_label_gain: Option<f64>,
     /// What the student gains on the labels over `spread`'s choice as it acts, per margin
     /// (`None`: greedy; then the margins given, in their order): the mean over the labelled
-    /// decisions of the advantage of the choice it makes ([`crate::policy::conservative`]) less
+    /// decisions of the advantage of the choice it makes (`policy::conservative`) less
     /// that of `spread`'s. The offline counterpart of the validation's gain over `spread`.
     pub student_gains: Vec<(Option<f32>, f64)>,
 }

@@ -13,8 +13,8 @@
 //! candidates over 4 other futures is *worse* than the base rule (the candidates' differences
 //! drown in that luck); the noiseless future scores them without it.
 
-use crate::{Future, PolicyRegistry, SimError, Trial, TrialResult, TrialSpec};
 use madenet_agent::Decision;
+use madenet_sim::{Future, PolicyRegistry, SimError, Trial, TrialResult, TrialSpec};
 use serde::{Deserialize, Serialize};
 
 /// Values of robot `i`'s candidates in `trial` — between [`Trial::begin_step`] and the

@@ -18,10 +18,9 @@
 //! A method's gap to the reference says how much room coordination and map knowledge leave;
 //! the reference's own gap to the bound says how far the heuristic is from any possible team.
 
-use crate::trial::{record_step, TrialResult, TrialSpec};
-use crate::SimError;
 use madenet_map::{Movement, OccGrid, Occupancy, Pos};
 use madenet_metrics::{MetricsRecorder, Timing};
+use madenet_sim::{record_step, SimError, TrialResult, TrialSpec};
 use madenet_world::geometry::step_allowed;
 use madenet_world::{Move, World};
 use std::collections::{HashMap, VecDeque};
@@ -421,8 +420,8 @@ fn belief_world(
 }
 
 /// The reference's team plan on what one robot knows — the decentralized counterpart of
-/// [`first_viewpoint_moves`], which knows the team's cells and every robot's position. It plans
-/// on [`belief_world`]'s world: `belief` with its unknown cells from `fill` (or free), `team[0]`
+/// `first_viewpoint_moves`, which knows the team's cells and every robot's position. It plans
+/// on `belief_world`'s world: `belief` with its unknown cells from `fill` (or free), `team[0]`
 /// the robot itself and the rest the teammates at their last known cells. Returns the moves on
 /// that world from every cell to the robot's first viewpoint (`u32::MAX` where unreachable), or
 /// `None` when the plan gives it none (nothing left to see, every viewpoint is a teammate's, or
@@ -449,7 +448,7 @@ pub fn belief_first_viewpoint_moves(
         .flatten()
 }
 
-/// The reference's team plan on [`belief_world`]'s world (`belief`, its unknown cells from
+/// The reference's team plan on `belief_world`'s world (`belief`, its unknown cells from
 /// `fill` or free; a robot at each cell of `team`): each member's viewpoints in visiting order,
 /// empty for a member the plan gives none or that was dropped (its cell blocked, or a teammate's
 /// duplicate). `None` when no member is left. What the `convention` policy splits the map by.
@@ -912,8 +911,10 @@ mod tests {
         };
         let mut specs = Vec::new();
         for seed in 1..=12 {
-            let map = crate::MapSource::FloorPlan(seed).load(&strict).unwrap();
-            let starts = crate::StartSpec::Random.cells(&map, 3, strict.movement);
+            let map = madenet_sim::MapSource::FloorPlan(seed)
+                .load(&strict)
+                .unwrap();
+            let starts = madenet_sim::StartSpec::Random.cells(&map, 3, strict.movement);
             specs.push(TrialSpec {
                 map,
                 map_name: format!("floorplan:{seed}"),
