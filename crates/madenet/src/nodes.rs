@@ -8,9 +8,9 @@ use crate::scenario_args::ScenarioArgs;
 use anyhow::{Context, Result};
 use clap::Args;
 use madenet_runtime::launch::{launch_team, LaunchError};
-use madenet_runtime::serve::{self, Served, Serving, WorldSink, WorldSinks};
+use madenet_runtime::serve::{self, ServeError, Served, Serving, WorldSink};
 use madenet_runtime::signals::{Interrupted, Stop};
-use madenet_runtime::wire::{Node, Shown};
+use madenet_runtime::wire::Node;
 use madenet_runtime::zenoh_bus::loopback_endpoints;
 use madenet_runtime::{RadioFaults, Timeouts, WorldOutput, ZenohBus};
 use std::path::PathBuf;
@@ -331,7 +331,7 @@ pub fn world(a: WorldArgs) -> Result<()> {
     let stop = Stop::watch(a.show.watch.any() || a.show.pace_ms > 0 || a.node.progress)?;
     // The bag and the live view first (a refused --record leaves no picture behind either);
     // the pictures finish first.
-    let mut sinks = WorldSinks::new(Box::new(|view| {
+    let sinks: serve::StartSinks<'_> = Box::new(|view| {
         let rec = crate::record::start(
             a.show.watch.record.as_deref(),
             a.show.watch.foxglove.as_deref(),
@@ -342,21 +342,11 @@ pub fn world(a: WorldArgs) -> Result<()> {
         sinks.extend(pics.map(|p| Box::new(p) as WorldSink));
         sinks.extend(rec.map(|r| Box::new(r) as WorldSink));
         Ok(sinks)
-    }));
-    let mut draw = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
-        sinks.show(w, shown, links)
-    };
-    let show: Option<madenet_runtime::ShowFn<'_, madenet_world::World>> =
-        (a.show.pictures.any() || a.show.watch.any()).then_some(&mut draw);
+    });
+    let sinks = (a.show.pictures.any() || a.show.watch.any()).then_some(sinks);
     let stopped = serve_world(&a, &spec, &stop, |bus, t, serving| {
-        serve::serve(world, bus, t, scenario, show, serving)
+        serve::serve(world, bus, t, scenario, sinks, serving)
     })?;
-    for line in sinks.finish().map_err(anyhow::Error::from_boxed)? {
-        // Launched (`--progress`), launch names the files itself.
-        if !a.node.progress {
-            eprintln!("{line}");
-        }
-    }
     Ok(Interrupted::result(stopped)?)
 }
 
@@ -365,14 +355,14 @@ fn scenario_of(spec: &madenet_sim::TrialSpec) -> u64 {
     madenet_runtime::wire::scenario_digest(&spec.map, &spec.starts, &spec.config)
 }
 
-/// Serves a world node (`run` gets the bus, the timeouts and how to serve) and writes its
-/// result; a signal `stop` watches ends the run after its timestep, writes no result and
-/// returns where it stopped and the signal.
+/// Serves a world node (`run` gets the bus, the timeouts and how to serve), prints what its
+/// outputs wrote and writes its result; a signal `stop` watches ends the run after its
+/// timestep, writes no result and returns where it stopped and the signal.
 fn serve_world(
     a: &WorldArgs,
     spec: &madenet_sim::TrialSpec,
     stop: &Stop,
-    run: impl FnOnce(&ZenohBus, Timeouts, &Serving) -> Result<Served, madenet_runtime::RuntimeError>,
+    run: impl FnOnce(&ZenohBus, Timeouts, &Serving) -> Result<(Served, Vec<String>), ServeError>,
 ) -> Result<Option<(String, i32)>> {
     let bus = a.node.bus(Node::World, spec.starts.len())?;
     let serving = Serving {
@@ -382,7 +372,17 @@ fn serve_world(
     };
     let served = run(&bus, a.node.timeouts(), &serving);
     bus.close();
-    let r = match served? {
+    let (served, wrote) = served.map_err(|e| match e {
+        ServeError::Node(e) => anyhow::Error::from(e),
+        ServeError::Sink(e) => anyhow::Error::from_boxed(e),
+    })?;
+    for line in wrote {
+        // Launched (`--progress`), launch names the files itself.
+        if !a.node.progress {
+            eprintln!("{line}");
+        }
+    }
+    let r = match served {
         Served::Finished(r) => *r,
         Served::Interrupted(at, signal) => return Ok(Some((at, signal))),
     };

@@ -49,7 +49,10 @@
 //! ```
 
 use madenet_agent::{Agent, Decision};
-use madenet_continuous::{ContinuousWorld, Pose};
+use madenet_continuous::ContinuousWorld;
+/// A robot's pose as [`Present::pose`] gives it (re-exported for worlds that implement
+/// [`Present`] without the continuous world's crate).
+pub use madenet_continuous::Pose;
 use madenet_map::{OccGrid, Occupancy, Pos};
 use std::borrow::Cow;
 use std::ops::ControlFlow;

@@ -32,7 +32,9 @@
 //!
 //! The world node stands on a [`Ground`]: madenet's simulated [`madenet_world::World`]
 //! ([`run_world`]), or anything else that can say what each robot observes and carry out its
-//! moves — real robots through ROS 2 (`madenet_ros2::RealRobots`, [`run_ground_with`]).
+//! moves — real robots through ROS 2 (`madenet_ros2::RealRobots`, [`run_ground_with`]). It is a
+//! world of the stepping contract ([`LockstepWorld`]), driven by the one run loop
+//! ([`madenet_sim::stepping::run`]) with its sinks, as any trial ([`serve`]).
 //!
 //! ```
 //! use madenet_map::paper::{paper_map, Corner};
@@ -71,7 +73,7 @@ pub use mailbox::Traffic;
 pub use radio_node::{run_radio, run_radio_with, RadioFaults, MAX_DELAY_STEPS};
 pub use report::{RuntimeReport, WorldOutput};
 pub use robot::{run_robot, run_robot_with};
-pub use world_node::{run_ground_with, run_world, run_world_with, Ground, ShowFn};
+pub use world_node::{run_ground_with, run_world, run_world_with, Ground, LockstepWorld, ShowFn};
 
 use madenet_map::Pos;
 use madenet_metrics::{Timing, TrialMetrics};

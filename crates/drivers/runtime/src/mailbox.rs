@@ -44,7 +44,7 @@ impl<T: Transport> Mailbox<T> {
 
     /// [`Mailbox::send`] without counting it in `sent`: the world's heartbeats, whose number
     /// depends on timing (traffic counts stay a function of the trial).
-    pub(crate) fn send_uncounted(&mut self, e: &Envelope) -> Result<(), RuntimeError> {
+    pub(crate) fn send_uncounted(&self, e: &Envelope) -> Result<(), RuntimeError> {
         self.deliver(e.to, e.encode())
     }
 
@@ -54,7 +54,7 @@ impl<T: Transport> Mailbox<T> {
         self.deliver(via, bytes)
     }
 
-    fn deliver(&mut self, via: Node, bytes: Vec<u8>) -> Result<(), RuntimeError> {
+    fn deliver(&self, via: Node, bytes: Vec<u8>) -> Result<(), RuntimeError> {
         if self.transport.send(via, bytes) {
             Ok(())
         } else {

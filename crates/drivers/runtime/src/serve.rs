@@ -1,21 +1,20 @@
-//! A world node as `madenet world` serves it: the lockstep loop of [`run_ground_with`] with the
-//! run loop's outputs around it — the sinks of [`madenet_sim::stepping`] (bag, live view,
-//! pictures) told of every timestep the node shows, through a [`WorldView`]; pacing that keeps
-//! the robots told the world is there; a progress line per timestep; and a signal ([`Stop`])
-//! that ends the run after its timestep.
+//! A world node as `madenet world` serves it: the node ([`LockstepWorld`]) driven by the run
+//! loop ([`madenet_sim::stepping::run`]) with its sinks — the outputs (bag, live view,
+//! pictures) told of every timestep through a [`WorldView`], a progress line per timestep, and
+//! a signal ([`OnSignal`]) that ends the run after its timestep — and paced, the robots told
+//! meanwhile that the world is there.
 //!
 //! The simulated world and real robots ([`Ground`]) are served by the same [`serve`]; only the
-//! simulated world has a ground truth to show ([`WorldSinks`]).
+//! simulated world has a ground truth to show ([`Ground::world`]).
 
-use crate::signals::Stop;
+use crate::signals::{OnSignal, Stop};
 use crate::transport::Transport;
 use crate::wire::Shown;
-use crate::world_node::{run_ground_with, Ground, ShowFn};
+use crate::world_node::{Ground, LockstepWorld};
 use crate::{LockstepResult, RuntimeError, Timeouts};
-use madenet_sim::stepping::{Sink, SinkError, WorldView};
-use madenet_world::World;
+use madenet_sim::stepping::{Present, Sink, SinkError, WorldView};
 use std::ops::ControlFlow;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// How a world node is served around its timesteps.
 pub struct Serving<'a> {
@@ -37,48 +36,37 @@ pub enum Served {
     Interrupted(String, i32),
 }
 
-/// Serves `ground` as the world node of a run over `transport` ([`run_ground_with`]: `show`
-/// asks the robots what they show), paced, with progress lines and ended early by a signal as
-/// `serving` says.
-pub fn serve<G: Ground, T: Transport>(
-    ground: G,
-    transport: T,
-    timeouts: Timeouts,
-    scenario: Option<u64>,
-    show: Option<ShowFn<'_, G>>,
-    serving: &Serving<'_>,
-) -> Result<Served, RuntimeError> {
-    let mut last = Instant::now();
-    let mut interrupted = None;
-    let r = run_ground_with(ground, transport, timeouts, scenario, show, |w, waiting| {
-        if serving.progress {
-            let explored = w.explored_fraction();
-            eprintln!("progress step={} explored={explored:.3}", w.t());
+/// Why serving a world node failed: the node (a robot, the radio, the ground), or an output.
+#[derive(Debug)]
+pub enum ServeError {
+    /// The node failed ([`RuntimeError`]).
+    Node(RuntimeError),
+    /// An output failed; the robots and the radio were stopped.
+    Sink(SinkError),
+}
+
+impl std::fmt::Display for ServeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ServeError::Node(e) => e.fmt(f),
+            ServeError::Sink(e) => e.fmt(f),
         }
-        // The pace in slices, the robots told the world is still there (a pace may be longer
-        // than they wait in silence).
-        let until = last + serving.pace;
-        loop {
-            let left = until.saturating_duration_since(Instant::now());
-            if left.is_zero() {
-                break;
-            }
-            std::thread::sleep(left.min(Duration::from_millis(100)));
-            waiting();
+    }
+}
+
+impl std::error::Error for ServeError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            ServeError::Node(e) => e.source(),
+            ServeError::Sink(e) => e.source(),
         }
-        last = Instant::now();
-        match serving.stop.requested() {
-            Some(signal) => {
-                interrupted = Some((format!("timestep {}", w.t()), signal));
-                ControlFlow::Break(())
-            }
-            None => ControlFlow::Continue(()),
-        }
-    })?;
-    Ok(match interrupted {
-        Some((at, signal)) => Served::Interrupted(at, signal),
-        None => Served::Finished(Box::new(r)),
-    })
+    }
+}
+
+impl From<RuntimeError> for ServeError {
+    fn from(e: RuntimeError) -> Self {
+        ServeError::Node(e)
+    }
 }
 
 /// An output of a world node's run: a sink of any timestep's [`WorldView`].
@@ -88,69 +76,48 @@ pub type WorldSink = Box<dyn for<'v> Sink<WorldView<'v>>>;
 /// state), in the order they finish.
 pub type StartSinks<'f> = Box<dyn FnOnce(&WorldView<'_>) -> Result<Vec<WorldSink>, SinkError> + 'f>;
 
-/// The last timestep shown: the world (cloned: the node's world is gone when the run returns),
-/// what each robot showed, the exchanges.
-type LastShown = (World, Vec<Shown>, Vec<(usize, usize)>);
-
-/// The sinks of a world node's run, fed by its `show` callback ([`WorldSinks::show`]): started
-/// on the first timestep shown, told of every later one, finished on the last
-/// ([`WorldSinks::finish`]). The first failure stops feeding them; `finish` returns it.
-pub struct WorldSinks<'f> {
-    start: Option<StartSinks<'f>>,
-    sinks: Vec<WorldSink>,
-    failed: Option<SinkError>,
-    last: Option<LastShown>,
+/// The node's present as a [`WorldView`], where its ground is the simulated world.
+fn view<G: Ground, T: Transport>(w: &LockstepWorld<G, T>) -> Option<WorldView<'_>> {
+    Some(WorldView {
+        world: w.ground().world()?,
+        robots: w.shown().iter().map(Shown::view).collect(),
+        exchanges: w.exchanges(),
+    })
 }
 
-impl<'f> WorldSinks<'f> {
-    /// Sinks that `start` makes on the first timestep shown.
-    pub fn new(start: StartSinks<'f>) -> Self {
-        WorldSinks {
-            start: Some(start),
-            sinks: Vec::new(),
-            failed: None,
-            last: None,
-        }
+/// The outputs as one sink of the node: started on its first view, told of every later one,
+/// finished on the last — unless the node failed (then they are dropped unfinished: a bag
+/// being written removes itself).
+struct Views<'f> {
+    start: Option<StartSinks<'f>>,
+    sinks: Vec<WorldSink>,
+}
+
+impl<G: Ground, T: Transport> Sink<LockstepWorld<G, T>> for Views<'_> {
+    fn begin(&mut self, w: &LockstepWorld<G, T>) -> Result<(), SinkError> {
+        let (Some(view), Some(start)) = (view(w), self.start.take()) else {
+            return Ok(());
+        };
+        self.sinks = start(&view)?;
+        self.sinks.iter_mut().try_for_each(|s| s.begin(&view))
     }
 
-    /// A timestep shown: the world, what each robot shows, the pairs exchanging.
-    pub fn show(&mut self, w: &World, shown: &[Shown], links: &[(usize, usize)]) {
-        if self.failed.is_some() {
-            return;
+    fn step(&mut self, w: &LockstepWorld<G, T>) -> Result<ControlFlow<String>, SinkError> {
+        let Some(view) = view(w) else {
+            return Ok(ControlFlow::Continue(()));
+        };
+        for s in &mut self.sinks {
+            if let ControlFlow::Break(why) = s.step(&view)? {
+                return Ok(ControlFlow::Break(why));
+            }
         }
-        let view = WorldView {
-            world: w,
-            robots: shown.iter().map(Shown::view).collect(),
-            exchanges: links,
-        };
-        let r = match self.start.take() {
-            Some(start) => start(&view).and_then(|sinks| {
-                self.sinks = sinks;
-                self.sinks.iter_mut().try_for_each(|s| s.begin(&view))
-            }),
-            // The sinks here never stop a run: a world node's run is ended by its signal.
-            None => self
-                .sinks
-                .iter_mut()
-                .try_for_each(|s| s.step(&view).map(drop)),
-        };
-        self.failed = r.err();
-        self.last = Some((w.clone(), shown.to_vec(), links.to_vec()));
+        Ok(ControlFlow::Continue(()))
     }
 
-    /// The sinks finished on the last timestep shown (in order): their lines about what they
-    /// wrote; or the first failure.
-    pub fn finish(mut self) -> Result<Vec<String>, SinkError> {
-        if let Some(e) = self.failed {
-            return Err(e);
-        }
-        let Some((w, shown, links)) = self.last else {
+    fn finish(&mut self, w: &LockstepWorld<G, T>) -> Result<Vec<String>, SinkError> {
+        let view = view(w).filter(|_| w.failed().is_none());
+        let Some(view) = view else {
             return Ok(Vec::new());
-        };
-        let view = WorldView {
-            world: &w,
-            robots: shown.iter().map(Shown::view).collect(),
-            exchanges: &links,
         };
         let mut wrote = Vec::new();
         for s in &mut self.sinks {
@@ -158,4 +125,62 @@ impl<'f> WorldSinks<'f> {
         }
         Ok(wrote)
     }
+}
+
+/// The line `progress step=12 explored=0.410` on stderr after every timestep.
+struct Progress;
+
+impl<G: Ground, T: Transport> Sink<LockstepWorld<G, T>> for Progress {
+    fn step(&mut self, w: &LockstepWorld<G, T>) -> Result<ControlFlow<String>, SinkError> {
+        let explored = w.ground().explored_fraction();
+        eprintln!("progress step={} explored={explored:.3}", w.ground().t());
+        Ok(ControlFlow::Continue(()))
+    }
+}
+
+/// Serves `ground` as the world node of a run over `transport` ([`LockstepWorld`]), paced,
+/// with progress lines and ended early by a signal as `serving` says. With `sinks`, the robots
+/// and the radio report what they show and `sinks` starts the outputs on the first view (only
+/// the simulated world is shown: [`Ground::world`]). Returns how the run ended and the
+/// outputs' lines about what they wrote.
+pub fn serve<G: Ground, T: Transport>(
+    ground: G,
+    transport: T,
+    timeouts: Timeouts,
+    scenario: Option<u64>,
+    sinks: Option<StartSinks<'_>>,
+    serving: &Serving<'_>,
+) -> Result<(Served, Vec<String>), ServeError> {
+    let show = sinks.is_some();
+    let mut node = LockstepWorld::connect(ground, transport, timeouts, scenario, show)?;
+    node.set_pace(serving.pace);
+    let mut views = Views {
+        start: sinks,
+        sinks: Vec::new(),
+    };
+    let mut progress = Progress;
+    let mut interrupt = OnSignal::new(serving.stop);
+    let ran = {
+        let mut all: Vec<&mut dyn Sink<LockstepWorld<G, T>>> = vec![&mut views];
+        if serving.progress {
+            all.push(&mut progress);
+        }
+        all.push(&mut interrupt);
+        madenet_sim::stepping::run(&mut node, &mut all)
+    };
+    let end = match ran {
+        Ok(end) => end,
+        Err(e) => {
+            // The robots and the radio are stopped all the same; the output's failure is the
+            // error.
+            let _ = node.finish();
+            return Err(ServeError::Sink(e));
+        }
+    };
+    let result = node.finish()?;
+    let served = match (end.stopped, interrupt.signal) {
+        (Some((_, at)), Some(signal)) => Served::Interrupted(at, signal),
+        _ => Served::Finished(Box::new(result)),
+    };
+    Ok((served, end.wrote))
 }

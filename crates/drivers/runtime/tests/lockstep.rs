@@ -292,3 +292,187 @@ fn a_robot_refuses_malformed_messages_with_an_error() {
         );
     }
 }
+
+/// What a sink reads of a grid run's present ([`madenet_sim::stepping::Present`]), for
+/// comparing what the in-process run shows with what the world node shows.
+#[derive(Clone, Debug, PartialEq)]
+struct Seen {
+    when: String,
+    cells: Vec<madenet_map::Pos>,
+    contacts: Vec<(usize, usize)>,
+    exchanges: Vec<(usize, usize)>,
+    explored: f64,
+    distance: f64,
+    /// Per robot: goal, path, candidates, decisions.
+    robots: Vec<RobotSeen>,
+}
+
+type RobotSeen = (
+    Option<madenet_map::Pos>,
+    Vec<madenet_map::Pos>,
+    Vec<madenet_map::Pos>,
+    u64,
+);
+
+/// Per robot, the candidate its goal was chosen as, where it says (the world node knows only
+/// the goal and the candidates, so names the first candidate equal to the goal).
+type ChosenSeen = Vec<Option<madenet_map::Pos>>;
+
+fn seen<S: madenet_sim::stepping::Present + ?Sized>(s: &S) -> (Seen, ChosenSeen) {
+    let n = s.robots();
+    let shown: Vec<_> = (0..n).map(|i| s.robot(i)).collect();
+    (
+        Seen {
+            when: s.when(),
+            cells: (0..n).map(|i| s.cell(i)).collect(),
+            contacts: s.contacts().to_vec(),
+            exchanges: s.exchanges().to_vec(),
+            explored: s.explored(),
+            distance: s.distance(),
+            robots: shown
+                .iter()
+                .map(|r| (r.goal, r.path.to_vec(), r.candidates.to_vec(), r.decisions))
+                .collect(),
+        },
+        shown
+            .iter()
+            .map(|r| r.chosen.map(|k| r.candidates[k]))
+            .collect(),
+    )
+}
+
+/// A sink that records what it is shown at the start, after every step and at the end.
+#[derive(Default)]
+struct Recording(Vec<(&'static str, Seen, ChosenSeen)>);
+
+impl Recording {
+    fn push<S: madenet_sim::stepping::Present + ?Sized>(&mut self, what: &'static str, s: &S) {
+        let (seen, chosen) = seen(s);
+        self.0.push((what, seen, chosen));
+    }
+}
+
+impl<S: madenet_sim::stepping::Present + ?Sized> madenet_sim::stepping::Sink<S> for Recording {
+    fn begin(&mut self, s: &S) -> Result<(), madenet_sim::stepping::SinkError> {
+        self.push("begin", s);
+        Ok(())
+    }
+    fn step(
+        &mut self,
+        s: &S,
+    ) -> Result<std::ops::ControlFlow<String>, madenet_sim::stepping::SinkError> {
+        self.push("step", s);
+        Ok(std::ops::ControlFlow::Continue(()))
+    }
+    fn finish(&mut self, s: &S) -> Result<Vec<String>, madenet_sim::stepping::SinkError> {
+        self.push("finish", s);
+        Ok(Vec::new())
+    }
+}
+
+/// The world node, its radio and robots on threads over [`ChannelBus`], showing: what it shows
+/// (before the first timestep, after each and at the end, as a run loop's sink is shown it),
+/// its result and what the radio sent.
+fn world_node_shows(
+    s: &TrialSpec,
+) -> (
+    Recording,
+    madenet_runtime::LockstepResult,
+    madenet_runtime::Traffic,
+) {
+    use madenet_runtime::transport::ChannelBus;
+    use madenet_runtime::wire::Shown;
+    use madenet_runtime::{nodes_of, run_ground_with, run_radio, run_robot, Timeouts};
+    use madenet_sim::stepping::{Sink, WorldView};
+    let n = s.starts.len();
+    let radio = madenet_world::Radio::new(&s.config, n, s.seed);
+    let (mut world, agents) = madenet_sim::build(s.clone(), &REGISTRY).unwrap();
+    world.detach_radio();
+    let timeouts = Timeouts::new(Duration::from_secs(30));
+    let mut buses = ChannelBus::connect(&nodes_of(n)).into_iter();
+    let (world_bus, radio_bus) = (buses.next().unwrap(), buses.next().unwrap());
+    let mut rec = Recording::default();
+    let mut started = false;
+    let mut show = |w: &madenet_world::World, shown: &[Shown], links: &[(usize, usize)]| {
+        let view = WorldView {
+            world: w,
+            robots: shown.iter().map(Shown::view).collect(),
+            exchanges: links,
+        };
+        if std::mem::replace(&mut started, true) {
+            assert!(rec.step(&view).unwrap().is_continue());
+        } else {
+            rec.begin(&view).unwrap();
+        }
+    };
+    let (result, radio_sent, between) = std::thread::scope(|sc| {
+        let radio = sc.spawn(move || run_radio(radio, n, radio_bus, timeouts));
+        let robots: Vec<_> = agents
+            .into_iter()
+            .zip(buses)
+            .map(|(agent, bus)| sc.spawn(move || run_robot(agent, bus, timeouts)))
+            .collect();
+        let result = run_ground_with(world, world_bus, timeouts, None, Some(&mut show), |_, _| {
+            std::ops::ControlFlow::Continue(())
+        })
+        .unwrap();
+        let between: usize = robots
+            .into_iter()
+            .map(|r| r.join().unwrap().unwrap().1.messages)
+            .sum();
+        (result, radio.join().unwrap().unwrap(), between)
+    });
+    // The end is the last state shown.
+    let (_, last, chosen) = rec.0.last().cloned().expect("something was shown");
+    rec.0.push(("finish", last, chosen));
+    let mut result = result;
+    result.between_robots.messages = between;
+    (rec, result, radio_sent)
+}
+
+#[test]
+fn world_node_shows_what_the_in_process_run_shows() {
+    for policy in ["nf", "made-net"] {
+        for (map, corner) in [(3, Corner::TopRight), (8, Corner::BottomLeft)] {
+            for csp in [0.5, 1.0] {
+                let case = format!("{policy} map {map} {corner:?} csp {csp}");
+                let s = spec(map, corner, policy, csp, 1);
+                let mut trial = Trial::with_registry(s.clone(), &REGISTRY).unwrap();
+                let mut together = Recording::default();
+                let end = madenet_sim::stepping::run(&mut trial, &mut [&mut together]).unwrap();
+                assert!(end.stopped.is_none(), "{case}");
+                let metrics = madenet_sim::stepping::Stepping::finish(trial).metrics;
+                let (apart, result, radio_sent) = world_node_shows(&s);
+                assert_eq!(result.metrics, metrics, "{case}");
+                let steps = metrics.tns;
+                assert_eq!(together.0.len(), steps + 2, "{case}");
+                assert_eq!(apart.0.len(), together.0.len(), "{case}: shown as often");
+                let mut compared = 0;
+                for (k, (a, t)) in apart.0.iter().zip(&together.0).enumerate() {
+                    assert_eq!(a.0, t.0, "{case}: call {k}");
+                    assert_eq!(a.1, t.1, "{case}: {} {k}", t.0);
+                    // The chosen candidate where the in-process agent names one and it is its
+                    // goal (a decision that named a cell has none).
+                    for (i, (ca, ct)) in a.2.iter().zip(&t.2).enumerate() {
+                        if ct.is_some() && *ct == t.1.robots[i].0 {
+                            assert_eq!(ca, ct, "{case}: {} {k}, robot {i}'s choice", t.0);
+                            compared += 1;
+                        }
+                    }
+                }
+                assert!(
+                    policy == "nf" || compared > 0,
+                    "{case}: some choices compared"
+                );
+                // One radio round per timestep and one for the last picture: n links and the
+                // exchanges to the world per round, and the robots' messages forwarded.
+                let n = s.starts.len();
+                assert_eq!(
+                    radio_sent.messages,
+                    result.between_robots.messages + (n + 1) * (steps + 1),
+                    "{case}"
+                );
+            }
+        }
+    }
+}
