@@ -59,7 +59,7 @@ pub enum BagError {
 struct Topic {
     channel: u16,
     type_name: &'static str,
-    type_hash: &'static str,
+    type_hash: String,
     qos: crate::QosProfile,
     count: u64,
 }
@@ -219,7 +219,7 @@ impl Bag {
                 let qos = crate::recorded_qos(topic);
                 let meta = BTreeMap::from([
                     ("offered_qos_profiles".to_string(), qos_yaml(&qos, 0)),
-                    ("topic_type_hash".to_string(), T::TYPE_HASH.to_string()),
+                    ("topic_type_hash".to_string(), T::type_hash()),
                 ]);
                 let channel = writer
                     .add_channel(schema, topic, "cdr", &meta)
@@ -229,7 +229,7 @@ impl Bag {
                     Topic {
                         channel,
                         type_name: T::TYPE_NAME,
-                        type_hash: T::TYPE_HASH,
+                        type_hash: T::type_hash(),
                         qos,
                         count: 0,
                     },
@@ -320,7 +320,7 @@ impl Bag {
             y.push_str(&qos_yaml(&t.qos, 10));
             y.push_str(&format!(
                 "        type_description_hash: {}\n",
-                q(t.type_hash)
+                q(&t.type_hash)
             ));
             y.push_str(&format!("      message_count: {}\n", t.count));
         }

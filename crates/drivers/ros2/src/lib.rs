@@ -56,6 +56,7 @@ pub use real::RealRobots;
 pub use rmw::{Durability, Node, Publisher, QosProfile, Reliability, Ros2Context, Subscription};
 pub use stand_in::run_stand_in;
 
+pub mod actions;
 pub mod bag;
 pub mod continuous_stand_in;
 #[cfg(feature = "foxglove")]
@@ -68,8 +69,11 @@ pub mod msgs;
 mod real;
 pub mod record;
 pub mod rmw;
+pub mod services;
 mod stand_in;
 pub mod study_bags;
+pub mod tf;
+pub mod typehash;
 
 /// The frame every madenet topic is stamped with (REP 105's `map`).
 pub const FRAME_ID: &str = "map";
@@ -103,6 +107,14 @@ pub enum Ros2Error {
         /// The message field at fault.
         field: &'static str,
         /// Why.
+        why: String,
+    },
+    /// A service or action call that the other side refused, or that got no answer in time.
+    #[error("{what}: {why}")]
+    Call {
+        /// The call (service or action name, and what was asked).
+        what: String,
+        /// Why it failed: the server's error reply, or the timeout.
         why: String,
     },
 }

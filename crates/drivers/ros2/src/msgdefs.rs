@@ -3,9 +3,12 @@
 //! of 80 `=` and `MSG: package/Name`), as the Python `rosbags` package generates them from its
 //! ROS 2 Jazzy typestore (`generate_msgdef(name, ros_version=2)`); tests decode bags with them.
 //!
-//! Each type's fields are written once, in `fields!`; `msgdef!` joins a message's own
-//! fields and its nested types, in the order `rosbags` lists them (depth first, each type at
-//! its first use).
+//! Each type's fields are written once, in `fields!` (as in the Jazzy `.msg`, `.srv` and
+//! `.action` files): `msgdef!` joins a message's own fields and its nested types, in the order
+//! `rosbags` lists them (depth first, each type at its first use), and [`jazzy_types`]
+//! registers every type for its type hash ([`crate::typehash`]).
+
+use crate::typehash::TypeTable;
 
 /// The `ros2msg` fields of a type, one per line.
 macro_rules! fields {
@@ -138,6 +141,154 @@ float32 v
 uint8[] data
 "
     };
+    ("visualization_msgs/MarkerArray") => {
+        "visualization_msgs/Marker[] markers
+"
+    };
+    ("rosgraph_msgs/Clock") => {
+        "builtin_interfaces/Time clock
+"
+    };
+    ("tf2_msgs/TFMessage") => {
+        "geometry_msgs/TransformStamped[] transforms
+"
+    };
+    ("nav_msgs/OccupancyGrid") => {
+        "std_msgs/Header header
+nav_msgs/MapMetaData info
+int8[] data
+"
+    };
+    ("nav_msgs/Path") => {
+        "std_msgs/Header header
+geometry_msgs/PoseStamped[] poses
+"
+    };
+    ("sensor_msgs/LaserScan") => {
+        "std_msgs/Header header
+float32 angle_min
+float32 angle_max
+float32 angle_increment
+float32 time_increment
+float32 scan_time
+float32 range_min
+float32 range_max
+float32[] ranges
+float32[] intensities
+"
+    };
+    ("std_msgs/String") => {
+        "string data
+"
+    };
+    ("std_msgs/Bool") => {
+        "bool data
+"
+    };
+    ("map_msgs/OccupancyGridUpdate") => {
+        "std_msgs/Header header
+int32 x
+int32 y
+uint32 width
+uint32 height
+int8[] data
+"
+    };
+    ("unique_identifier_msgs/UUID") => {
+        "uint8[16] uuid
+"
+    };
+    // As in rcl_interfaces: `char` is `uint8` to rosidl (the rosbags typestore keeps `char`,
+    // which changes the hash of every service type).
+    ("service_msgs/ServiceEventInfo") => {
+        "uint8 REQUEST_SENT=0
+uint8 REQUEST_RECEIVED=1
+uint8 RESPONSE_SENT=2
+uint8 RESPONSE_RECEIVED=3
+uint8 event_type
+builtin_interfaces/Time stamp
+char[16] client_gid
+int64 sequence_number
+"
+    };
+    ("action_msgs/GoalInfo") => {
+        "unique_identifier_msgs/UUID goal_id
+builtin_interfaces/Time stamp
+"
+    };
+    ("action_msgs/GoalStatus") => {
+        "int8 STATUS_UNKNOWN=0
+int8 STATUS_ACCEPTED=1
+int8 STATUS_EXECUTING=2
+int8 STATUS_CANCELING=3
+int8 STATUS_SUCCEEDED=4
+int8 STATUS_CANCELED=5
+int8 STATUS_ABORTED=6
+action_msgs/GoalInfo goal_info
+int8 status
+"
+    };
+    ("action_msgs/GoalStatusArray") => {
+        "action_msgs/GoalStatus[] status_list
+"
+    };
+    ("action_msgs/srv/CancelGoal_Request") => {
+        "action_msgs/GoalInfo goal_info
+"
+    };
+    ("action_msgs/srv/CancelGoal_Response") => {
+        "int8 ERROR_NONE=0
+int8 ERROR_REJECTED=1
+int8 ERROR_UNKNOWN_GOAL_ID=2
+int8 ERROR_GOAL_TERMINATED=3
+int8 return_code
+action_msgs/GoalInfo[] goals_canceling
+"
+    };
+    ("example_interfaces/srv/AddTwoInts_Request") => {
+        "int64 a
+int64 b
+"
+    };
+    ("example_interfaces/srv/AddTwoInts_Response") => {
+        "int64 sum
+"
+    };
+    ("example_interfaces/action/Fibonacci_Goal") => {
+        "int32 order
+"
+    };
+    ("example_interfaces/action/Fibonacci_Result") => {
+        "int32[] sequence
+"
+    };
+    ("example_interfaces/action/Fibonacci_Feedback") => {
+        "int32[] sequence
+"
+    };
+    // nav2_msgs (navigation2, branch jazzy).
+    ("nav2_msgs/action/NavigateToPose_Goal") => {
+        "geometry_msgs/PoseStamped pose
+string behavior_tree
+"
+    };
+    ("nav2_msgs/action/NavigateToPose_Result") => {
+        "uint16 NONE=0
+uint16 UNKNOWN=9000
+uint16 FAILED_TO_LOAD_BEHAVIOR_TREE=9001
+uint16 TF_ERROR=9002
+uint16 error_code
+string error_msg
+"
+    };
+    ("nav2_msgs/action/NavigateToPose_Feedback") => {
+        "geometry_msgs/PoseStamped current_pose
+builtin_interfaces/Duration navigation_time
+builtin_interfaces/Duration estimated_time_remaining
+int16 number_of_recoveries
+float32 distance_remaining
+"
+    };
 }
 
 /// A full definition: the message's own fields, then each nested type (`"package/Name"`, see
@@ -157,11 +308,11 @@ macro_rules! msgdef {
 }
 
 /// `rosgraph_msgs/msg/Clock`.
-pub const CLOCK: &str = msgdef!("builtin_interfaces/Time clock\n", "builtin_interfaces/Time");
+pub const CLOCK: &str = msgdef!(fields!("rosgraph_msgs/Clock"), "builtin_interfaces/Time");
 
 /// `tf2_msgs/msg/TFMessage`.
 pub const TF_MESSAGE: &str = msgdef!(
-    "geometry_msgs/TransformStamped[] transforms\n",
+    fields!("tf2_msgs/TFMessage"),
     "geometry_msgs/TransformStamped",
     "std_msgs/Header",
     "builtin_interfaces/Time",
@@ -172,10 +323,7 @@ pub const TF_MESSAGE: &str = msgdef!(
 
 /// `nav_msgs/msg/OccupancyGrid`.
 pub const OCCUPANCY_GRID: &str = msgdef!(
-    "std_msgs/Header header
-nav_msgs/MapMetaData info
-int8[] data
-",
+    fields!("nav_msgs/OccupancyGrid"),
     "std_msgs/Header",
     "builtin_interfaces/Time",
     "nav_msgs/MapMetaData",
@@ -196,26 +344,14 @@ pub const POSE_STAMPED: &str = msgdef!(
 
 /// `sensor_msgs/msg/LaserScan`.
 pub const LASER_SCAN: &str = msgdef!(
-    "std_msgs/Header header
-float32 angle_min
-float32 angle_max
-float32 angle_increment
-float32 time_increment
-float32 scan_time
-float32 range_min
-float32 range_max
-float32[] ranges
-float32[] intensities
-",
+    fields!("sensor_msgs/LaserScan"),
     "std_msgs/Header",
     "builtin_interfaces/Time",
 );
 
 /// `nav_msgs/msg/Path`.
 pub const PATH: &str = msgdef!(
-    "std_msgs/Header header
-geometry_msgs/PoseStamped[] poses
-",
+    fields!("nav_msgs/Path"),
     "std_msgs/Header",
     "builtin_interfaces/Time",
     "geometry_msgs/PoseStamped",
@@ -226,7 +362,7 @@ geometry_msgs/PoseStamped[] poses
 
 /// `visualization_msgs/msg/MarkerArray`.
 pub const MARKER_ARRAY: &str = msgdef!(
-    "visualization_msgs/Marker[] markers\n",
+    fields!("visualization_msgs/MarkerArray"),
     "visualization_msgs/Marker",
     "std_msgs/Header",
     "builtin_interfaces/Time",
@@ -243,3 +379,102 @@ pub const MARKER_ARRAY: &str = msgdef!(
 
 /// `std_msgs/msg/Float64`.
 pub const FLOAT64: &str = msgdef!(fields!("std_msgs/Float64"));
+
+/// `std_msgs/msg/Bool`.
+pub const BOOL: &str = msgdef!(fields!("std_msgs/Bool"));
+
+/// `map_msgs/msg/OccupancyGridUpdate`.
+pub const OCCUPANCY_GRID_UPDATE: &str = msgdef!(
+    fields!("map_msgs/OccupancyGridUpdate"),
+    "std_msgs/Header",
+    "builtin_interfaces/Time",
+);
+
+/// `action_msgs/msg/GoalStatusArray`.
+pub const GOAL_STATUS_ARRAY: &str = msgdef!(
+    fields!("action_msgs/GoalStatusArray"),
+    "action_msgs/GoalStatus",
+    "action_msgs/GoalInfo",
+    "unique_identifier_msgs/UUID",
+    "builtin_interfaces/Time",
+);
+
+/// Registers in `t` every ROS 2 Jazzy type madenet speaks, from the fields above: the messages
+/// of its topics and bags and the types they use, `std_msgs/msg/String` and `Bool`,
+/// `map_msgs/msg/OccupancyGridUpdate`, the types of ROS 2 services and actions
+/// (`service_msgs`, `unique_identifier_msgs`, `action_msgs` with its service `CancelGoal`),
+/// `example_interfaces/srv/AddTwoInts`, `example_interfaces/action/Fibonacci` and
+/// `nav2_msgs/action/NavigateToPose`, with the types derived from each service and action.
+///
+/// # Panics
+/// If a definition here does not read as `.msg` text, or clashes with one already in `t` (a
+/// programming error; the tests register them all).
+pub fn jazzy_types(t: &mut TypeTable) {
+    fn ok(r: Result<(), String>) {
+        if let Err(e) = r {
+            panic!("madenet's Jazzy type definitions: {e}");
+        }
+    }
+    // `pkg/Name` (the `fields!` key of a message) is `pkg/msg/Name`.
+    macro_rules! messages {
+        ($($name:tt),* $(,)?) => {$(
+            let (pkg, name) = $name.split_once('/').expect("fields! keys are pkg/Name");
+            ok(t.add_message(&format!("{pkg}/msg/{name}"), fields!($name)));
+        )*};
+    }
+    messages!(
+        "builtin_interfaces/Time",
+        "builtin_interfaces/Duration",
+        "std_msgs/Header",
+        "std_msgs/ColorRGBA",
+        "std_msgs/Float64",
+        "std_msgs/String",
+        "std_msgs/Bool",
+        "geometry_msgs/Vector3",
+        "geometry_msgs/Point",
+        "geometry_msgs/Quaternion",
+        "geometry_msgs/Pose",
+        "geometry_msgs/PoseStamped",
+        "geometry_msgs/Transform",
+        "geometry_msgs/TransformStamped",
+        "nav_msgs/MapMetaData",
+        "nav_msgs/OccupancyGrid",
+        "nav_msgs/Path",
+        "map_msgs/OccupancyGridUpdate",
+        "sensor_msgs/LaserScan",
+        "sensor_msgs/CompressedImage",
+        "visualization_msgs/Marker",
+        "visualization_msgs/MarkerArray",
+        "visualization_msgs/UVCoordinate",
+        "visualization_msgs/MeshFile",
+        "rosgraph_msgs/Clock",
+        "tf2_msgs/TFMessage",
+        "unique_identifier_msgs/UUID",
+        "service_msgs/ServiceEventInfo",
+        "action_msgs/GoalInfo",
+        "action_msgs/GoalStatus",
+        "action_msgs/GoalStatusArray",
+    );
+    ok(t.add_service(
+        "action_msgs/srv/CancelGoal",
+        fields!("action_msgs/srv/CancelGoal_Request"),
+        fields!("action_msgs/srv/CancelGoal_Response"),
+    ));
+    ok(t.add_service(
+        "example_interfaces/srv/AddTwoInts",
+        fields!("example_interfaces/srv/AddTwoInts_Request"),
+        fields!("example_interfaces/srv/AddTwoInts_Response"),
+    ));
+    ok(t.add_action(
+        "example_interfaces/action/Fibonacci",
+        fields!("example_interfaces/action/Fibonacci_Goal"),
+        fields!("example_interfaces/action/Fibonacci_Result"),
+        fields!("example_interfaces/action/Fibonacci_Feedback"),
+    ));
+    ok(t.add_action(
+        "nav2_msgs/action/NavigateToPose",
+        fields!("nav2_msgs/action/NavigateToPose_Goal"),
+        fields!("nav2_msgs/action/NavigateToPose_Result"),
+        fields!("nav2_msgs/action/NavigateToPose_Feedback"),
+    ));
+}

@@ -1,6 +1,6 @@
 //! The ROS 2 messages madenet speaks, as plain structs with their ROS type names and Jazzy
-//! type hashes, and their CDR encoding (the `cdr-encoding` crate, little endian, after the
-//! 4-byte encapsulation header `00 01 00 00`).
+//! type hashes ([`crate::typehash`]), and their CDR encoding (the `cdr-encoding` crate, little
+//! endian, after the 4-byte encapsulation header `00 01 00 00`).
 //!
 //! Field order and types follow the `.msg` definitions of ROS 2 Jazzy (`builtin_interfaces`,
 //! `std_msgs`, `geometry_msgs`, `nav_msgs`); CDR has no field names, so order is the format.
@@ -27,53 +27,83 @@ pub const CDR_LE: [u8; 4] = [0, 1, 0, 0];
 pub trait RosMessage: Serialize + for<'de> Deserialize<'de> {
     /// The ROS type name, e.g. `nav_msgs/msg/OccupancyGrid`.
     const TYPE_NAME: &'static str;
-    /// The Jazzy type description hash (REP 2011, `RIHS01_` and 64 hex digits).
-    const TYPE_HASH: &'static str;
     /// The full `ros2msg` definition, nested types included ([`crate::msgdefs`]).
     const DEFINITION: &'static str;
+
+    /// The type's ROS 2 Jazzy type hash (REP 2011: `RIHS01_` and 64 hex digits), computed
+    /// from its type description ([`crate::typehash::jazzy_hash`]: once per process).
+    fn type_hash() -> String {
+        crate::typehash::jazzy_hash(Self::TYPE_NAME)
+    }
 
     /// The DDS type name rmw_zenoh puts in key expressions, e.g.
     /// `nav_msgs::msg::dds_::OccupancyGrid_`.
     fn dds_type_name() -> String {
-        let (head, name) = Self::TYPE_NAME
-            .rsplit_once('/')
-            .expect("ROS type names are package/msg/Name");
-        format!("{}::dds_::{name}_", head.replace('/', "::"))
+        dds_type_name(Self::TYPE_NAME)
     }
 
     /// The message as CDR bytes: the little-endian encapsulation header, then the fields.
     fn to_cdr(&self) -> Vec<u8> {
-        let mut out = Vec::new();
-        self.write_cdr(&mut out);
-        out
+        cdr_bytes(self)
     }
 
     /// [`RosMessage::to_cdr`] into `out` (cleared first), reusing its allocation.
     fn write_cdr(&self, out: &mut Vec<u8>) {
-        out.clear();
-        out.extend_from_slice(&CDR_LE);
-        cdr_encoding::to_writer::<_, byteorder::LittleEndian, _>(&mut *out, self)
-            .expect("every madenet message is CDR-serializable (no maps, no unsized sequences)");
+        write_cdr(self, out)
     }
 
     /// Reads a message from CDR bytes (little or big endian, per the header). Trailing bytes
     /// are refused.
     fn from_cdr(bytes: &[u8]) -> Result<Self, String> {
-        let (header, body) = bytes
-            .split_first_chunk::<4>()
-            .ok_or_else(|| format!("{} bytes: shorter than the CDR header", bytes.len()))?;
-        let (msg, used) = match header[..2] {
-            [0, 1] => cdr_encoding::from_bytes::<Self, byteorder::LittleEndian>(body),
-            [0, 0] => cdr_encoding::from_bytes::<Self, byteorder::BigEndian>(body),
-            _ => return Err(format!("encapsulation {header:02x?} is not plain CDR")),
-        }
-        .map_err(|e| e.to_string())?;
-        // Up to 3 bytes of padding may follow the last field.
-        if body.len() - used > 3 {
-            return Err(format!("{} bytes after the message", body.len() - used));
-        }
-        Ok(msg)
+        read_cdr(bytes)
     }
+}
+
+/// The DDS type name of a ROS type name (`pkg/msg/Name` → `pkg::msg::dds_::Name_`), as
+/// rmw_zenoh puts it in key expressions; also for services and actions' parts.
+///
+/// # Panics
+/// If `type_name` has no `/` (madenet's own names always have).
+pub fn dds_type_name(type_name: &str) -> String {
+    let (head, name) = type_name
+        .rsplit_once('/')
+        .expect("ROS type names are package/msg/Name");
+    format!("{}::dds_::{name}_", head.replace('/', "::"))
+}
+
+/// Any serializable value (a message, a service request or reply) as CDR bytes:
+/// the little-endian encapsulation header, then the fields.
+pub fn cdr_bytes<T: Serialize>(value: &T) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_cdr(value, &mut out);
+    out
+}
+
+/// [`cdr_bytes`] into `out` (cleared first), reusing its allocation.
+pub fn write_cdr<T: Serialize>(value: &T, out: &mut Vec<u8>) {
+    out.clear();
+    out.extend_from_slice(&CDR_LE);
+    cdr_encoding::to_writer::<_, byteorder::LittleEndian, _>(&mut *out, value)
+        .expect("every madenet message is CDR-serializable (no maps, no unsized sequences)");
+}
+
+/// Reads a value from CDR bytes (little or big endian, per the header). More than 3 bytes
+/// after the last field (its padding) are refused.
+pub fn read_cdr<T: for<'de> Deserialize<'de>>(bytes: &[u8]) -> Result<T, String> {
+    let (header, body) = bytes
+        .split_first_chunk::<4>()
+        .ok_or_else(|| format!("{} bytes: shorter than the CDR header", bytes.len()))?;
+    let (msg, used) = match header[..2] {
+        [0, 1] => cdr_encoding::from_bytes::<T, byteorder::LittleEndian>(body),
+        [0, 0] => cdr_encoding::from_bytes::<T, byteorder::BigEndian>(body),
+        _ => return Err(format!("encapsulation {header:02x?} is not plain CDR")),
+    }
+    .map_err(|e| e.to_string())?;
+    // Up to 3 bytes of padding may follow the last field.
+    if body.len() - used > 3 {
+        return Err(format!("{} bytes after the message", body.len() - used));
+    }
+    Ok(msg)
 }
 
 /// `builtin_interfaces/msg/Time`.
@@ -384,6 +414,32 @@ pub struct Float64 {
     pub data: f64,
 }
 
+/// `std_msgs/msg/Bool` (explore_lite's `explore/resume`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Bool {
+    /// The value.
+    pub data: bool,
+}
+
+/// `map_msgs/msg/OccupancyGridUpdate`: a rectangle of new cell values for an
+/// [`OccupancyGrid`] published on the same name (costmaps' `*_updates` topics).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct OccupancyGridUpdate {
+    /// Stamp and frame (the full grid's).
+    pub header: Header,
+    /// The rectangle's first column in the full grid.
+    pub x: i32,
+    /// The rectangle's first row in the full grid (rows from the grid's origin).
+    pub y: i32,
+    /// Columns in the rectangle.
+    pub width: u32,
+    /// Rows in the rectangle.
+    pub height: u32,
+    /// Row-major values (0 free … 100 occupied, −1 unknown), `width × height` of them.
+    #[serde(with = "int8_sequence")]
+    pub data: Vec<i8>,
+}
+
 /// An `int8[]` written as one byte block (the same bytes as a sequence of `int8`, without a
 /// serializer call per element).
 mod int8_sequence {
@@ -425,58 +481,52 @@ mod int8_sequence {
 
 impl RosMessage for PoseStamped {
     const TYPE_NAME: &'static str = "geometry_msgs/msg/PoseStamped";
-    const TYPE_HASH: &'static str =
-        "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8";
     const DEFINITION: &'static str = crate::msgdefs::POSE_STAMPED;
 }
 
 impl RosMessage for OccupancyGrid {
     const TYPE_NAME: &'static str = "nav_msgs/msg/OccupancyGrid";
-    const TYPE_HASH: &'static str =
-        "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7";
     const DEFINITION: &'static str = crate::msgdefs::OCCUPANCY_GRID;
 }
 
 impl RosMessage for LaserScan {
     const TYPE_NAME: &'static str = "sensor_msgs/msg/LaserScan";
-    const TYPE_HASH: &'static str =
-        "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828";
     const DEFINITION: &'static str = crate::msgdefs::LASER_SCAN;
 }
 
 impl RosMessage for Clock {
     const TYPE_NAME: &'static str = "rosgraph_msgs/msg/Clock";
-    const TYPE_HASH: &'static str =
-        "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564";
     const DEFINITION: &'static str = crate::msgdefs::CLOCK;
 }
 
 impl RosMessage for TFMessage {
     const TYPE_NAME: &'static str = "tf2_msgs/msg/TFMessage";
-    const TYPE_HASH: &'static str =
-        "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087";
     const DEFINITION: &'static str = crate::msgdefs::TF_MESSAGE;
 }
 
 impl RosMessage for Path {
     const TYPE_NAME: &'static str = "nav_msgs/msg/Path";
-    const TYPE_HASH: &'static str =
-        "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b";
     const DEFINITION: &'static str = crate::msgdefs::PATH;
 }
 
 impl RosMessage for MarkerArray {
     const TYPE_NAME: &'static str = "visualization_msgs/msg/MarkerArray";
-    const TYPE_HASH: &'static str =
-        "RIHS01_86cb8800b6fb05b5eff1abd7a56f62a5641d3ae9a1c29e78e67e704f1d067dcf";
     const DEFINITION: &'static str = crate::msgdefs::MARKER_ARRAY;
 }
 
 impl RosMessage for Float64 {
     const TYPE_NAME: &'static str = "std_msgs/msg/Float64";
-    const TYPE_HASH: &'static str =
-        "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a";
     const DEFINITION: &'static str = crate::msgdefs::FLOAT64;
+}
+
+impl RosMessage for Bool {
+    const TYPE_NAME: &'static str = "std_msgs/msg/Bool";
+    const DEFINITION: &'static str = crate::msgdefs::BOOL;
+}
+
+impl RosMessage for OccupancyGridUpdate {
+    const TYPE_NAME: &'static str = "map_msgs/msg/OccupancyGridUpdate";
+    const DEFINITION: &'static str = crate::msgdefs::OCCUPANCY_GRID_UPDATE;
 }
 
 #[cfg(test)]
@@ -485,19 +535,40 @@ mod tests {
 
     #[test]
     fn type_hashes_are_jazzys() {
-        // From the ROS 2 Jazzy message definitions, computed independently by the Python
-        // `rosbags` package (typestore ROS2_JAZZY, hash_rihs01).
+        // The hashes madenet used to hard-code: from the ROS 2 Jazzy message definitions,
+        // computed independently by the Python `rosbags` package (typestore ROS2_JAZZY,
+        // hash_rihs01).
         assert_eq!(
-            OccupancyGrid::TYPE_HASH,
+            OccupancyGrid::type_hash(),
             "RIHS01_8d348150c12913a31ee0ec170fbf25089e4745d17035792a1ba94d6f0bc0cfc7"
         );
         assert_eq!(
-            PoseStamped::TYPE_HASH,
+            PoseStamped::type_hash(),
             "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8"
         );
         assert_eq!(
-            LaserScan::TYPE_HASH,
+            LaserScan::type_hash(),
             "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828"
+        );
+        assert_eq!(
+            Clock::type_hash(),
+            "RIHS01_692f7a66e93a3c83e71765d033b60349ba68023a8c689a79e48078bcb5c58564"
+        );
+        assert_eq!(
+            TFMessage::type_hash(),
+            "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087"
+        );
+        assert_eq!(
+            Path::type_hash(),
+            "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b"
+        );
+        assert_eq!(
+            MarkerArray::type_hash(),
+            "RIHS01_86cb8800b6fb05b5eff1abd7a56f62a5641d3ae9a1c29e78e67e704f1d067dcf"
+        );
+        assert_eq!(
+            Float64::type_hash(),
+            "RIHS01_705ba9c3d1a09df43737eb67095534de36fd426c0587779bda2bc51fe790182a"
         );
         assert_eq!(
             OccupancyGrid::dds_type_name(),

@@ -116,8 +116,14 @@ fn mangle(name: &str) -> String {
 
 /// The key expression of `topic`'s data for message type `T` in `domain`.
 pub fn topic_key<T: RosMessage>(domain: usize, topic: &str) -> String {
-    let topic = topic.trim_start_matches('/').trim_end_matches('/');
-    format!("{domain}/{topic}/{}/{}", T::dds_type_name(), T::TYPE_HASH)
+    data_key(domain, topic, &T::dds_type_name(), &T::type_hash())
+}
+
+/// The key expression of a topic's or service's data: `<domain>/<name>/<DDS type>/<hash>`,
+/// without the name's leading or trailing `/`.
+pub(crate) fn data_key(domain: usize, name: &str, dds_type: &str, hash: &str) -> String {
+    let name = name.trim_start_matches('/').trim_end_matches('/');
+    format!("{domain}/{name}/{dds_type}/{hash}")
 }
 
 /// The GID of an entity: XXH3-128 of its liveliness token's key expression, low 64 bits then
@@ -174,25 +180,45 @@ impl Ros2Context {
 
     /// A node `name` in the root namespace, announced by its liveliness token.
     pub fn create_node(&self, name: &str) -> Result<Node, Ros2Error> {
+        self.create_node_in("", name)
+    }
+
+    /// A node `name` in `namespace` (`""` or `/` for the root, else e.g. `/robot0`), announced
+    /// by its liveliness token. Its relative topic and service names resolve in the namespace
+    /// ([`Node::resolve`]).
+    pub fn create_node_in(&self, namespace: &str, name: &str) -> Result<Node, Ros2Error> {
+        let ns = namespace.trim_matches('/');
+        let namespace = if ns.is_empty() {
+            String::new()
+        } else {
+            format!("/{ns}")
+        };
         let id = self.counter.fetch_add(1, Ordering::Relaxed);
         let prefix = format!(
             "{ADMIN_SPACE}/{}/{}/{id}",
             self.domain_id,
             self.session.zid()
         );
-        let key = format!("{prefix}/{id}/NN/{EMPTY}/{EMPTY}/{}", mangle(name));
+        let ns_field = if namespace.is_empty() {
+            EMPTY.to_string()
+        } else {
+            mangle(&namespace)
+        };
+        let key = format!("{prefix}/{id}/NN/{EMPTY}/{ns_field}/{}", mangle(name));
         let token = self
             .session
             .liveliness()
             .declare_token(key)
             .wait()
-            .map_err(middleware(format!("node {name}")))?;
+            .map_err(middleware(format!("node {namespace}/{name}")))?;
         Ok(Node {
             session: self.session.clone(),
             domain_id: self.domain_id,
             counter: self.counter.clone(),
             prefix,
             name: name.to_string(),
+            namespace,
+            ns_field,
             _token: token,
         })
     }
@@ -206,27 +232,50 @@ pub struct Node {
     /// `@ros2_lv/<domain>/<zid>/<node id>`.
     prefix: String,
     name: String,
+    /// `""` (root) or `/robot0`.
+    namespace: String,
+    /// The namespace as liveliness tokens write it (`%` for the root).
+    ns_field: String,
     _token: LivelinessToken,
 }
 
 impl Node {
-    /// Announces a new entity of `kind` (`MP` publisher, `MS` subscription) on `topic` with
-    /// its liveliness token; returns the token's key expression and the token.
-    fn announce<T: RosMessage>(
+    /// The fully qualified form of a topic or service name: a name that starts with `/` is
+    /// absolute; any other is relative to the node's namespace (`map` in `/robot0` is
+    /// `/robot0/map`).
+    pub fn resolve(&self, name: &str) -> String {
+        if name.starts_with('/') {
+            format!("/{}", name.trim_matches('/'))
+        } else {
+            format!("{}/{}", self.namespace, name.trim_matches('/'))
+        }
+    }
+
+    /// The node's namespace: `""` (root) or e.g. `/robot0`.
+    pub fn namespace(&self) -> &str {
+        &self.namespace
+    }
+
+    /// Announces a new entity of `kind` (`MP` publisher, `MS` subscription, `SS` service
+    /// server, `SC` service client) on `name` of type `(DDS type name, RIHS01 hash)` with its
+    /// liveliness token; returns the token's key expression and the token.
+    pub(crate) fn announce(
         &self,
         kind: &str,
-        topic: &str,
+        name: &str,
+        (dds_type, hash): (&str, &str),
         qos: &QosProfile,
         what: &str,
     ) -> Result<(String, LivelinessToken), Ros2Error> {
         let id = self.counter.fetch_add(1, Ordering::Relaxed);
         let key = format!(
-            "{}/{id}/{kind}/{EMPTY}/{EMPTY}/{}/{}/{}/{}/{}",
+            "{}/{id}/{kind}/{EMPTY}/{}/{}/{}/{}/{}/{}",
             self.prefix,
+            self.ns_field,
             mangle(&self.name),
-            mangle(topic.trim_end_matches('/')),
-            mangle(&T::dds_type_name()),
-            T::TYPE_HASH,
+            mangle(name.trim_end_matches('/')),
+            mangle(dds_type),
+            hash,
             qos.encode()
         );
         let token = self
@@ -238,12 +287,24 @@ impl Node {
         Ok((key, token))
     }
 
-    /// A publisher of `T` on `topic` with `qos`.
+    /// The zenoh session the node's context opened.
+    pub(crate) fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
+    /// The ROS domain id.
+    pub fn domain_id(&self) -> usize {
+        self.domain_id
+    }
+
+    /// A publisher of `T` on `topic` (relative names resolve in the node's namespace) with
+    /// `qos`.
     pub fn create_pub<T: RosMessage>(
         &self,
         topic: &str,
         qos: QosProfile,
     ) -> Result<Publisher<T>, Ros2Error> {
+        let topic = &self.resolve(topic);
         let what = || format!("publisher {topic}");
         let mut b = self
             .session
@@ -264,7 +325,13 @@ impl Node {
             }
         }
         let inner = b.wait().map_err(middleware(what()))?;
-        let (key, token) = self.announce::<T>("MP", topic, &qos, &what())?;
+        let (key, token) = self.announce(
+            "MP",
+            topic,
+            (&T::dds_type_name(), &T::type_hash()),
+            &qos,
+            &what(),
+        )?;
         Ok(Publisher {
             inner,
             gid: gid(&key),
@@ -281,6 +348,7 @@ impl Node {
         topic: &str,
         qos: QosProfile,
     ) -> Result<Subscription<T>, Ros2Error> {
+        let topic = &self.resolve(topic);
         let what = || format!("subscriber {topic}");
         let mut b = self
             .session
@@ -301,7 +369,13 @@ impl Node {
             }
         }
         let inner = b.wait().map_err(middleware(what()))?;
-        let (_, token) = self.announce::<T>("MS", topic, &qos, &what())?;
+        let (_, token) = self.announce(
+            "MS",
+            topic,
+            (&T::dds_type_name(), &T::type_hash()),
+            &qos,
+            &what(),
+        )?;
         Ok(Subscription {
             inner,
             topic: topic.to_string(),
