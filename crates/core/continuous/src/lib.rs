@@ -17,6 +17,7 @@
 //!   sensing; radio contacts on demand.
 //! - [`mapping`]: [`RobotMap`], log-odds per pixel and the coarse cells read from it.
 //! - [`local`]: the local planner, [`LocalPlanner`].
+//! - [`navigate`]: navigation to a point (nav2's `NavigateToPose`), [`Navigator`].
 //!
 //! ```
 //! use madenet_continuous::{scene::generate_cluttered, ContinuousConfig, ContinuousWorld};
@@ -38,11 +39,13 @@
 pub mod config;
 pub mod local;
 pub mod mapping;
+pub mod navigate;
 pub mod scene;
 pub mod world;
 
 pub use config::{ConfigError, ContinuousConfig};
 pub use local::{Command, LocalPlanner, Neighbour};
 pub use mapping::RobotMap;
+pub use navigate::{NavError, NavParams, NavStatus, Navigator};
 pub use scene::Scene;
 pub use world::{Collisions, ContinuousError, ContinuousWorld, Pose};

@@ -22,6 +22,12 @@
 //! with `RMW_IMPLEMENTATION=rmw_zenoh_cpp` sees the topics through its router (`ros2 run
 //! rmw_zenoh_cpp rmw_zenohd`, `tcp/127.0.0.1:7447`, [`Ros2Options::default`]).
 //!
+//! Beside topics, the same wire carries ROS 2 [`services`] (queryables with rmw_zenoh's
+//! attachment), [`actions`] (three services and two topics, as rcl builds them; nav2's
+//! `NavigateToPose`) and [`tf`] (`/tf`, `/tf_static` and a buffer composing
+//! `map → odom → base_link`), with nodes in namespaces ([`Ros2Context::create_node_in`]) and
+//! every type's RIHS01 hash computed from its type description ([`typehash`]).
+//!
 //! ## Geometry
 //! A madenet grid's row 0 is the image's top row and its `origin` is the pose of the lower-left
 //! corner (the map_server convention), so cell `(row, col)` of an `H × W` grid with cells of
@@ -64,6 +70,7 @@ pub mod live;
 #[cfg(not(feature = "foxglove"))]
 #[path = "live_off.rs"]
 pub mod live;
+pub mod map_updates;
 pub mod msgdefs;
 pub mod msgs;
 mod real;

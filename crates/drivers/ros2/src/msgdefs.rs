@@ -78,6 +78,28 @@ string child_frame_id
 geometry_msgs/Transform transform
 "
     };
+    ("geometry_msgs/Twist") => {
+        "geometry_msgs/Vector3 linear
+geometry_msgs/Vector3 angular
+"
+    };
+    ("geometry_msgs/PoseWithCovariance") => {
+        "geometry_msgs/Pose pose
+float64[36] covariance
+"
+    };
+    ("geometry_msgs/TwistWithCovariance") => {
+        "geometry_msgs/Twist twist
+float64[36] covariance
+"
+    };
+    ("nav_msgs/Odometry") => {
+        "std_msgs/Header header
+string child_frame_id
+geometry_msgs/PoseWithCovariance pose
+geometry_msgs/TwistWithCovariance twist
+"
+    };
     ("nav_msgs/MapMetaData") => {
         "builtin_interfaces/Time map_load_time
 float32 resolution
@@ -380,6 +402,20 @@ pub const MARKER_ARRAY: &str = msgdef!(
 /// `std_msgs/msg/Float64`.
 pub const FLOAT64: &str = msgdef!(fields!("std_msgs/Float64"));
 
+/// `nav_msgs/msg/Odometry`.
+pub const ODOMETRY: &str = msgdef!(
+    fields!("nav_msgs/Odometry"),
+    "std_msgs/Header",
+    "builtin_interfaces/Time",
+    "geometry_msgs/PoseWithCovariance",
+    "geometry_msgs/Pose",
+    "geometry_msgs/Point",
+    "geometry_msgs/Quaternion",
+    "geometry_msgs/TwistWithCovariance",
+    "geometry_msgs/Twist",
+    "geometry_msgs/Vector3",
+);
+
 /// `std_msgs/msg/Bool`.
 pub const BOOL: &str = msgdef!(fields!("std_msgs/Bool"));
 
@@ -440,6 +476,10 @@ pub fn jazzy_types(t: &mut TypeTable) {
         "nav_msgs/MapMetaData",
         "nav_msgs/OccupancyGrid",
         "nav_msgs/Path",
+        "geometry_msgs/Twist",
+        "geometry_msgs/PoseWithCovariance",
+        "geometry_msgs/TwistWithCovariance",
+        "nav_msgs/Odometry",
         "map_msgs/OccupancyGridUpdate",
         "sensor_msgs/LaserScan",
         "sensor_msgs/CompressedImage",

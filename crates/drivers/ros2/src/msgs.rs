@@ -414,6 +414,50 @@ pub struct Float64 {
     pub data: f64,
 }
 
+/// `geometry_msgs/msg/Twist`: linear (m/s) and angular (rad/s) velocity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Twist {
+    /// Linear velocity.
+    pub linear: Vector3,
+    /// Angular velocity.
+    pub angular: Vector3,
+}
+
+/// A row-major 6 × 6 covariance (`float64[36]`: the same 36 doubles on the wire).
+pub type Covariance = [[f64; 6]; 6];
+
+/// `geometry_msgs/msg/PoseWithCovariance`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PoseWithCovariance {
+    /// The pose.
+    pub pose: Pose,
+    /// Its covariance (x, y, z, roll, pitch, yaw).
+    pub covariance: Covariance,
+}
+
+/// `geometry_msgs/msg/TwistWithCovariance`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TwistWithCovariance {
+    /// The velocity.
+    pub twist: Twist,
+    /// Its covariance.
+    pub covariance: Covariance,
+}
+
+/// `nav_msgs/msg/Odometry`: the pose in `header.frame_id` (`odom`), the velocity in
+/// `child_frame_id` (`base_link`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Odometry {
+    /// Stamp and the pose's frame.
+    pub header: Header,
+    /// The velocity's frame.
+    pub child_frame_id: String,
+    /// The pose.
+    pub pose: PoseWithCovariance,
+    /// The velocity.
+    pub twist: TwistWithCovariance,
+}
+
 /// `std_msgs/msg/Bool` (explore_lite's `explore/resume`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Bool {
@@ -517,6 +561,11 @@ impl RosMessage for MarkerArray {
 impl RosMessage for Float64 {
     const TYPE_NAME: &'static str = "std_msgs/msg/Float64";
     const DEFINITION: &'static str = crate::msgdefs::FLOAT64;
+}
+
+impl RosMessage for Odometry {
+    const TYPE_NAME: &'static str = "nav_msgs/msg/Odometry";
+    const DEFINITION: &'static str = crate::msgdefs::ODOMETRY;
 }
 
 impl RosMessage for Bool {
