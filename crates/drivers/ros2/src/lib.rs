@@ -73,6 +73,7 @@ pub mod live;
 pub mod map_updates;
 pub mod msgdefs;
 pub mod msgs;
+pub mod nav2_sim;
 mod real;
 pub mod record;
 pub mod rmw;

@@ -1,0 +1,190 @@
+//! The continuous world as a nav2 robot, driven over the wire by an action client as a ROS 2
+//! node would drive nav2: goals reached, aborted with nav2's codes, rejected, preempted and
+//! canceled; the robot's map (slam_toolbox's values, transient local) and its TF.
+
+use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
+use madenet_map::generate::reachable_from_with;
+use madenet_map::{Movement, OccGrid, Occupancy};
+use madenet_ros2::actions::{
+    nav2_error, status, ActionClient, NavigateToPose, NavigateToPoseGoal, SentGoal,
+};
+use madenet_ros2::map_updates::MapSubscriber;
+use madenet_ros2::msgs::{Header, PoseStamped, Time};
+use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
+use madenet_ros2::tf::{TfListener, TfNaming};
+use madenet_ros2::{loopback_router, MapFrame};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+const WAIT: Duration = Duration::from_secs(30);
+
+fn goal(frame_id: &str, x: f64, y: f64) -> NavigateToPoseGoal {
+    let mut pose = PoseStamped {
+        header: Header {
+            stamp: Time::default(),
+            frame_id: frame_id.into(),
+        },
+        ..Default::default()
+    };
+    pose.pose.position.x = x;
+    pose.pose.position.y = y;
+    NavigateToPoseGoal {
+        pose,
+        behavior_tree: String::new(),
+    }
+}
+
+fn outcome(g: &SentGoal<NavigateToPose>, wait: Duration) -> (i8, u16) {
+    let (st, r) = g.result(wait).unwrap().expect("a result");
+    (st, r.error_code)
+}
+
+#[test]
+fn a_client_drives_a_simulated_nav2_robot() {
+    let mut cfg = FloorPlanConfig::for_size(20, 20);
+    cfg.door_width = 1;
+    let grid: OccGrid = floor_plan(&cfg, 1).unwrap();
+    let start = cfg.keep_free[0];
+    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: 1,
+        ..Default::default()
+    };
+    let world =
+        ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), 1).unwrap();
+    let frame = MapFrame::of(&grid);
+    // Goals in the `map` frame: true free cells reachable from the start, off their centres.
+    let reach = reachable_from_with(&grid, start, Movement::NoCornerCutting);
+    let free_far: Vec<(f64, f64)> = (0..grid.len())
+        .filter(|&k| reach[k] && grid.cells()[k] == Occupancy::Free)
+        .map(|k| frame.cell_center(grid.pos(k)))
+        .collect();
+    let (router, opts) = loopback_router().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let sim = {
+        let (opts, stop) = (opts.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let sim = Nav2SimOptions {
+                realtime: 40.0,
+                ..Default::default()
+            };
+            run_nav2_sim(&opts, world, &sim, &stop)
+        })
+    };
+    let ctx = opts.context().unwrap();
+    let node = ctx.create_node_in("/robot0", "client").unwrap();
+    let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
+    assert!(client.wait_for_server(WAIT).unwrap(), "no navigate_to_pose");
+    let send = |g: NavigateToPoseGoal| client.send_goal(g, WAIT).unwrap();
+
+    // Three reachable goals, 4 m or more apart, each reached.
+    let mut last = frame.cell_center(start);
+    let mut k = 3;
+    let mut feedbacks = 0;
+    for _ in 0..3 {
+        let (x, y) = loop {
+            k = (k + 29) % free_far.len();
+            let c = free_far[k];
+            if (c.0 - last.0).hypot(c.1 - last.1) > 4.0 {
+                break c;
+            }
+        };
+        let sent = send(goal("map", x + 0.2, y - 0.1)).expect("accepted");
+        while client
+            .feedback(Duration::from_millis(50))
+            .unwrap()
+            .is_some()
+        {
+            feedbacks += 1;
+        }
+        assert_eq!(
+            outcome(&sent, WAIT),
+            (status::SUCCEEDED, 0),
+            "goal ({x}, {y})"
+        );
+        last = (x, y);
+    }
+    while client
+        .feedback(Duration::from_millis(10))
+        .unwrap()
+        .is_some()
+    {
+        feedbacks += 1;
+    }
+    assert!(feedbacks > 0, "no feedback");
+
+    // Off the map: aborted with the planner's code. An unknown frame: TF_ERROR.
+    let off = send(goal("map", -50.0, 3.0)).expect("accepted");
+    assert_eq!(
+        outcome(&off, WAIT),
+        (status::ABORTED, nav2_error::GOAL_OUTSIDE_MAP)
+    );
+    let nowhere = send(goal("robot7/odom", 1.0, 1.0)).expect("accepted");
+    assert_eq!(
+        outcome(&nowhere, WAIT),
+        (status::ABORTED, nav2_error::TF_ERROR)
+    );
+    // A non-finite pose is rejected.
+    assert!(send(goal("map", f64::NAN, 1.0)).is_none());
+
+    // Preemption: the first goal ends aborted, the second is reached.
+    let far = free_far[(k + 101) % free_far.len()];
+    let first = send(goal("map", far.0, far.1)).expect("accepted");
+    let second = send(goal("map", last.0, last.1)).expect("accepted");
+    assert_eq!(outcome(&first, WAIT).0, status::ABORTED);
+    assert_eq!(outcome(&second, WAIT), (status::SUCCEEDED, 0));
+
+    // Cancel: acknowledged within 1 s, the goal ends CANCELED.
+    let far = free_far[(k + 57) % free_far.len()];
+    let long = send(goal("map", far.0, far.1)).expect("accepted");
+    client
+        .feedback(WAIT)
+        .unwrap()
+        .expect("feedback before the cancel");
+    let t = Instant::now();
+    let answer = client.cancel(long.id, WAIT).unwrap();
+    assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+    assert_eq!(answer.goals_canceling.len(), 1);
+    assert_eq!(outcome(&long, WAIT).0, status::CANCELED);
+
+    // A late subscriber gets the robot's map, with slam_toolbox's values only.
+    let mut maps = MapSubscriber::new(&node, "map").unwrap();
+    let map = maps.latest(WAIT).unwrap().expect("the map").clone();
+    assert!(map.data.iter().all(|v| [-1, 0, 100].contains(v)));
+    assert!(map.data.contains(&0) && map.data.contains(&100));
+    assert!((map.info.resolution - 0.1).abs() < 1e-6);
+    // TF: map → base_link (namespaced /robot0/tf, frames without prefix).
+    let mut tf = TfListener::new(&node, "/robot0", TfNaming::NamespacedTopics).unwrap();
+    let deadline = Instant::now() + WAIT;
+    let pose = loop {
+        tf.spin(Duration::from_millis(100)).unwrap();
+        if let Ok(t) = tf
+            .buffer
+            .lookup("map", "base_link", Time::default(), Duration::from_secs(1))
+        {
+            break t;
+        }
+        assert!(Instant::now() < deadline, "no map → base_link");
+    };
+    let (x, y) = (pose.translation.x, pose.translation.y);
+    assert!(frame.cell_at(x, y).is_some(), "({x}, {y}) on the map");
+
+    stop.store(true, Ordering::Relaxed);
+    let run = sim.join().unwrap().unwrap();
+    drop(router);
+    assert_eq!(run.rejected, 1);
+    assert_eq!(
+        run.collisions.obstacle + run.collisions.robot,
+        0,
+        "{:?}",
+        run.collisions
+    );
+    let codes: Vec<(i8, u16)> = run.outcomes[0]
+        .iter()
+        .map(|o| (o.status, o.error_code))
+        .collect();
+    assert_eq!(codes.len(), 8, "{codes:?}");
+    eprintln!("{:.0} s simulated; outcomes {codes:?}", run.time);
+}
