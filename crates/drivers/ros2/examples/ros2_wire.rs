@@ -9,6 +9,12 @@
 //! - `ros2_wire send-fib ENDPOINT ORDER`: sends a Fibonacci goal, prints each feedback's
 //!   length, then the final status and sequence.
 //!
+//! - `ros2_wire nav2-sim ENDPOINT SEED`: one simulated nav2 robot (`/robot0`, the continuous
+//!   world on a 20 m generated floor plan) at 40× real time; prints `goal X Y` for ten
+//!   reachable points of the `map` frame (its server is up when its `navigate_to_pose` liveliness
+//!   tokens are); runs until its stdin closes, then
+//!   prints `outcomes …` and `collisions N`.
+//!
 //! ENDPOINT is a zenoh endpoint such as `tcp/127.0.0.1:7447` (a router or a listening peer).
 
 use madenet_ros2::actions::{
@@ -135,8 +141,66 @@ fn send_fib(endpoint: &str, order: i32) -> Result<(), String> {
     Err("no result".into())
 }
 
+fn nav2_sim(endpoint: &str, seed: u64) -> Result<(), String> {
+    use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+    use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
+    use madenet_map::generate::reachable_from_with;
+    use madenet_map::{Movement, Occupancy};
+    use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let mut cfg = FloorPlanConfig::for_size(20, 20);
+    cfg.door_width = 1;
+    let grid = floor_plan(&cfg, seed).map_err(|e| e.to_string())?;
+    let start = cfg.keep_free[0];
+    let frame = madenet_ros2::MapFrame::of(&grid);
+    let reach = reachable_from_with(&grid, start, Movement::NoCornerCutting);
+    let free: Vec<usize> = (0..grid.len())
+        .filter(|&k| reach[k] && grid.cells()[k] == Occupancy::Free)
+        .collect();
+    for j in 0..10 {
+        let (x, y) = frame.cell_center(grid.pos(free[(j * 37 + 11) % free.len()]));
+        println!("goal {x} {y}");
+    }
+    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: 1,
+        ..Default::default()
+    };
+    let world = ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), seed)
+        .map_err(|e| e.to_string())?;
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.to_string()],
+        listen: Vec::new(),
+        domain_id: Some(0),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let halt = stop.clone();
+    // Stops when stdin closes.
+    std::thread::spawn(move || {
+        let _ = std::io::copy(&mut std::io::stdin(), &mut std::io::sink());
+        halt.store(true, Ordering::Relaxed);
+    });
+    let sim = Nav2SimOptions {
+        realtime: 40.0,
+        ..Default::default()
+    };
+    let run = run_nav2_sim(&opts, world, &sim, &stop).map_err(|e| e.to_string())?;
+    let outcomes: Vec<String> = run.outcomes[0]
+        .iter()
+        .map(|o| format!("{}:{}", o.status, o.error_code))
+        .collect();
+    println!("outcomes {}", outcomes.join(" "));
+    println!(
+        "collisions {}",
+        run.collisions.obstacle + run.collisions.robot
+    );
+    Ok(())
+}
+
 fn run(args: &[String]) -> Result<(), String> {
-    let usage = "usage: ros2_wire hashes | serve-add ENDPOINT N | call-add ENDPOINT A B | serve-fib ENDPOINT N | send-fib ENDPOINT ORDER";
+    let usage = "usage: ros2_wire hashes | serve-add ENDPOINT N | call-add ENDPOINT A B | serve-fib ENDPOINT N | send-fib ENDPOINT ORDER | nav2-sim ENDPOINT SEED";
     match args.first().map(String::as_str) {
         Some("hashes") => {
             for name in madenet_ros2::typehash::jazzy_types().names() {
@@ -182,6 +246,7 @@ fn run(args: &[String]) -> Result<(), String> {
             Ok(())
         }
         Some("serve-fib") => serve_fib(args.get(1).ok_or(usage)?, number(args, 2, "N")?),
+        Some("nav2-sim") => nav2_sim(args.get(1).ok_or(usage)?, number(args, 2, "SEED")?),
         Some("send-fib") => send_fib(args.get(1).ok_or(usage)?, number(args, 2, "ORDER")?),
         _ => Err(usage.into()),
     }

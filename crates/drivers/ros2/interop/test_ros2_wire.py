@@ -310,3 +310,83 @@ def test_a_python_action_server_answers_madenet_s_action_client(ts, peer):
         p.kill()
         for t in tokens:
             t.undeclare()
+
+
+def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
+    """NavigateToPose as nav2 users send it: goals reached with feedback, one canceled."""
+    session, endpoint = peer
+    act = "nav2_msgs/action/NavigateToPose"
+    p = subprocess.Popen(
+        [WIRE, "nav2-sim", endpoint, "1"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        goals = []
+        for _ in range(10):
+            word, x, y = p.stdout.readline().split()
+            assert word == "goal"
+            goals.append((float(x), float(y)))
+        ns = "robot0/navigate_to_pose/_action"
+        send = key(ts, f"{ns}/send_goal", f"{act}_SendGoal")
+        result = key(ts, f"{ns}/get_result", f"{act}_GetResult")
+        cancel = key(ts, f"{ns}/cancel_goal", "action_msgs/srv/CancelGoal")
+        feedback = key(ts, f"{ns}/feedback", f"{act}_FeedbackMessage")
+        wait_token(session, "@ros2_lv/0/*/*/*/SS/%/%robot0/bt_navigator/%robot0%navigate_to_pose%_action%send_goal/**")
+        # A ring: feedback not read while waiting for a result is dropped, oldest first.
+        feedbacks = session.declare_subscriber(feedback, zenoh.handlers.RingChannel(8))
+        gid = uuid.uuid4().bytes
+        UUID = ts.types["unique_identifier_msgs/msg/UUID"]
+        Goal = ts.types[f"{act}_Goal"]
+        SendReq = ts.types[f"{act}_SendGoal_Request"]
+        ResReq = ts.types[f"{act}_GetResult_Request"]
+        Header = ts.types["std_msgs/msg/Header"]
+        Time = ts.types["builtin_interfaces/msg/Time"]
+        PoseStamped = ts.types["geometry_msgs/msg/PoseStamped"]
+        Pose = ts.types["geometry_msgs/msg/Pose"]
+        Point = ts.types["geometry_msgs/msg/Point"]
+        Quaternion = ts.types["geometry_msgs/msg/Quaternion"]
+
+        def send_goal(x, y, seq):
+            goal_id = UUID(uuid=np.frombuffer(uuid.uuid4().bytes, dtype=np.uint8))
+            pose = PoseStamped(
+                header=Header(stamp=Time(sec=0, nanosec=0), frame_id="map"),
+                pose=Pose(position=Point(x=x, y=y, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)),
+            )
+            req = SendReq(goal_id=goal_id, goal=Goal(pose=pose, behavior_tree=""))
+            r = query(session, send, cdr(ts, req, f"{act}_SendGoal_Request"), seq, gid)
+            assert r.ok is not None, r.err
+            assert ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), f"{act}_SendGoal_Response").accepted
+            return goal_id
+
+        def result_of(goal_id, seq):
+            r = query(session, result, cdr(ts, ResReq(goal_id=goal_id), f"{act}_GetResult_Request"), seq, gid, timeout=120)
+            assert r.ok is not None, (bytes(r.err.payload.to_bytes()), p.poll())
+            return ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), f"{act}_GetResult_Response")
+
+        # Two goals reached, with feedback on the way.
+        for seq, (x, y) in enumerate(goals[:2], start=1):
+            goal_id = send_goal(x + 0.2, y - 0.1, 10 * seq)
+            res = result_of(goal_id, 10 * seq + 1)
+            assert (res.status, res.result.error_code) == (4, 0), (x, y, res)
+        fb = ts.deserialize_cdr(bytes(feedbacks.recv().payload.to_bytes()), f"{act}_FeedbackMessage")
+        assert fb.feedback.current_pose.header.frame_id == "map"
+        assert fb.feedback.distance_remaining >= 0.0
+        # A third, canceled once it is under way.
+        far = max(goals, key=lambda g: abs(g[0] - goals[1][0]) + abs(g[1] - goals[1][1]))
+        goal_id = send_goal(far[0], far[1], 40)
+        while True:
+            fb = ts.deserialize_cdr(bytes(feedbacks.recv().payload.to_bytes()), f"{act}_FeedbackMessage")
+            if bytes(fb.goal_id.uuid) == bytes(goal_id.uuid):
+                break
+        GoalInfo = ts.types["action_msgs/msg/GoalInfo"]
+        CancelReq = ts.types["action_msgs/srv/CancelGoal_Request"]
+        req = CancelReq(goal_info=GoalInfo(goal_id=goal_id, stamp=Time(sec=0, nanosec=0)))
+        r = query(session, cancel, cdr(ts, req, "action_msgs/srv/CancelGoal_Request"), 41, gid)
+        ans = ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), "action_msgs/srv/CancelGoal_Response")
+        assert ans.return_code == 0 and len(ans.goals_canceling) == 1
+        assert result_of(goal_id, 42).status == 5
+        out, err = p.communicate(input="", timeout=30)
+        assert p.returncode == 0, err
+        assert "outcomes 4:0 4:0 5:0" in out, out
+        assert "collisions 0" in out, out
+    finally:
+        p.kill()

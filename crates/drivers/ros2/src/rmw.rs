@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicI64, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use zenoh::bytes::ZBytes;
-use zenoh::handlers::FifoChannelHandler;
+use zenoh::handlers::RingChannelHandler;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::sample::Sample;
 use zenoh::Wait;
@@ -46,7 +46,8 @@ const SAMPLE_MISS_HEARTBEAT: Duration = Duration::from_millis(500);
 /// Reliability of a topic (ROS `RMW_QOS_POLICY_RELIABILITY_*`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Reliability {
-    /// Every sample arrives (zenoh congestion control `Block`).
+    /// Samples are sent reliably (retransmitted); as rmw_zenoh's keep-last publishers, they
+    /// are dropped only when a subscriber stops reading and the queue to it is full.
     #[default]
     Reliable,
     /// Samples may be dropped under congestion.
@@ -309,10 +310,9 @@ impl Node {
         let mut b = self
             .session
             .declare_publisher(topic_key::<T>(self.domain_id, topic))
-            .congestion_control(match qos.reliability {
-                Reliability::Reliable => zenoh::qos::CongestionControl::Block,
-                Reliability::BestEffort => zenoh::qos::CongestionControl::Drop,
-            })
+            // As rmw_zenoh_cpp for keep-last history (the only history here): a subscriber
+            // that stops reading must not stall the publisher, so congested samples drop.
+            .congestion_control(zenoh::qos::CongestionControl::Drop)
             .advanced();
         if qos.durability == Durability::TransientLocal {
             b = b
@@ -353,7 +353,10 @@ impl Node {
         let mut b = self
             .session
             .declare_subscriber(topic_key::<T>(self.domain_id, topic))
-            .with(zenoh::handlers::FifoChannel::default())
+            // Keep last `depth` (ROS's history): a reader that falls behind loses the oldest
+            // samples, and never stalls the session (whose replies and other topics would
+            // wait behind a full queue).
+            .with(zenoh::handlers::RingChannel::new(qos.depth.max(1)))
             .advanced();
         if qos.durability == Durability::TransientLocal {
             b = b
@@ -414,7 +417,7 @@ impl<T: RosMessage> Publisher<T> {
 
 /// A subscription to `T` messages.
 pub struct Subscription<T> {
-    inner: AdvancedSubscriber<FifoChannelHandler<Sample>>,
+    inner: AdvancedSubscriber<RingChannelHandler<Sample>>,
     topic: String,
     dropped: AtomicUsize,
     _token: LivelinessToken,

@@ -435,7 +435,15 @@ impl TfListener {
     pub fn new(node: &Node, ns: &str, naming: TfNaming) -> Result<Self, Ros2Error> {
         Ok(TfListener {
             tf: node.create_sub(&naming.tf_topic(ns), tf_qos())?,
-            tf_static: node.create_sub(&naming.tf_static_topic(ns), tf_static_qos())?,
+            // tf2's StaticListenerQoS: transient local, keep last 100 (each broadcaster keeps
+            // its own last message; the listener hears every broadcaster's).
+            tf_static: node.create_sub(
+                &naming.tf_static_topic(ns),
+                QosProfile {
+                    depth: 100,
+                    ..tf_static_qos()
+                },
+            )?,
             buffer: TfBuffer::default(),
         })
     }

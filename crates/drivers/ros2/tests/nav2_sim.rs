@@ -1,6 +1,7 @@
 //! The continuous world as a nav2 robot, driven over the wire by an action client as a ROS 2
 //! node would drive nav2: goals reached, aborted with nav2's codes, rejected, preempted and
-//! canceled; the robot's map (slam_toolbox's values, transient local) and its TF.
+//! canceled; the robot's map (slam_toolbox's values, transient local) and its TF; a client
+//! that subscribes and never reads does not hold the sim up.
 
 use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
 use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
@@ -17,6 +18,7 @@ use madenet_ros2::{loopback_router, MapFrame};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use zenoh::Wait;
 
 const WAIT: Duration = Duration::from_secs(30);
 
@@ -73,6 +75,15 @@ fn a_client_drives_a_simulated_nav2_robot() {
             run_nav2_sim(&opts, world, &sim, &stop)
         })
     };
+    // A foreign client that subscribes to everything and never reads: the sim must not wait
+    // for it (its queue of one fills at once).
+    let stuck = opts.context().unwrap();
+    let _never_read = stuck
+        .session()
+        .declare_subscriber("0/**")
+        .with(zenoh::handlers::FifoChannel::new(1))
+        .wait()
+        .unwrap();
     let ctx = opts.context().unwrap();
     let node = ctx.create_node_in("/robot0", "client").unwrap();
     let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();

@@ -64,6 +64,10 @@ fn a_malformed_request_gets_an_error_reply_and_the_server_goes_on() {
     let server = ServiceServer::<AddTwoInts>::new(&s_node, "/add_two_ints").unwrap();
     let done = serve(server, 1);
     let key = service_key::<AddTwoInts>(0, "/add_two_ints");
+    // The foreign client below queries at once: first see the server in the graph.
+    let c_node = c_ctx.create_node("watcher").unwrap();
+    let watcher = ServiceClient::<AddTwoInts>::new(&c_node, "/add_two_ints").unwrap();
+    assert!(watcher.wait_for_server(WAIT).unwrap());
     // A foreign client: no attachment, then a good attachment with a truncated payload.
     let garbage = |attach: bool| {
         let mut g = c_ctx
@@ -106,6 +110,10 @@ fn replies_echo_the_sequence_number_and_the_clients_gid() {
     let server = ServiceServer::<AddTwoInts>::new(&s_node, "/add_two_ints").unwrap();
     let done = serve(server, 1);
     let key = service_key::<AddTwoInts>(0, "/add_two_ints");
+    // The foreign client below queries at once: first see the server in the graph.
+    let c_node = c_ctx.create_node("watcher").unwrap();
+    let watcher = ServiceClient::<AddTwoInts>::new(&c_node, "/add_two_ints").unwrap();
+    assert!(watcher.wait_for_server(WAIT).unwrap());
     let replies = c_ctx
         .session()
         .get(&key)
