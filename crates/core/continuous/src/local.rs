@@ -26,6 +26,18 @@ use std::collections::BinaryHeap;
 /// Path points considered per pursuit step (in thirds of the candidates looked at).
 const PATH_STRIDE: usize = 4;
 
+/// The 8 neighbours of a pixel with their step costs in thousandths of a pixel (√2 ≈ 1.414).
+pub(crate) const EIGHT_NEIGHBOURS: [(i64, i64, u64); 8] = [
+    (-1, 0, 1000),
+    (1, 0, 1000),
+    (0, -1, 1000),
+    (0, 1, 1000),
+    (-1, -1, 1414),
+    (-1, 1, 1414),
+    (1, -1, 1414),
+    (1, 1, 1414),
+];
+
 /// Metres within which a path point counts as passed.
 const PASSED: f64 = 0.15;
 
@@ -417,16 +429,7 @@ fn local_astar(
             reached = Some(k);
             break;
         }
-        for (dr, dc, cost) in [
-            (-1, 0, 1000),
-            (1, 0, 1000),
-            (0, -1, 1000),
-            (0, 1, 1000),
-            (-1, -1, 1414),
-            (-1, 1, 1414),
-            (1, -1, 1414),
-            (1, 1, 1414),
-        ] {
+        for (dr, dc, cost) in EIGHT_NEIGHBOURS {
             let (nr, nc) = (r + dr, c + dc);
             if nr < r0 || nr >= r1 || nc < c0 || nc >= c1 {
                 continue;

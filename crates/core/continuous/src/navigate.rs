@@ -457,16 +457,7 @@ fn global_path(
                 && (nc as usize) < w
                 && passable(nr as usize, nc as usize)
         };
-        for (dr, dc, step) in [
-            (-1, 0, 1000),
-            (1, 0, 1000),
-            (0, -1, 1000),
-            (0, 1, 1000),
-            (-1, -1, 1414),
-            (-1, 1, 1414),
-            (1, -1, 1414),
-            (1, 1, 1414),
-        ] {
+        for (dr, dc, step) in crate::local::EIGHT_NEIGHBOURS {
             if !open(dr, dc) || (dr != 0 && dc != 0 && !(open(dr, 0) && open(0, dc))) {
                 continue;
             }

@@ -456,6 +456,19 @@ impl ContinuousWorld {
         out
     }
 
+    /// Robot `i`'s teammates in view ([`ContinuousWorld::in_view`]) as its local planner
+    /// predicts them; lower indices have right of way.
+    pub fn neighbours(&self, i: usize) -> Vec<crate::local::Neighbour> {
+        (0..self.robots())
+            .filter(|&j| j != i && self.in_view(i, j))
+            .map(|j| crate::local::Neighbour {
+                pose: self.pose(j),
+                velocity: self.velocity(j),
+                priority: j < i,
+            })
+            .collect()
+    }
+
     /// Whether robot `j` is within d_s of robot `i` with a clear line of sight.
     pub fn in_view(&self, i: usize, j: usize) -> bool {
         let (a, b) = (self.poses[i], self.poses[j]);

@@ -18,7 +18,7 @@ use crate::msgs::{LaserScan, OccupancyGrid, PoseStamped, Time};
 use crate::{
     header, map_qos, stamp, MapFrame, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription,
 };
-use madenet_continuous::{Collisions, Command, ContinuousWorld, LocalPlanner, Neighbour, Pose};
+use madenet_continuous::{Collisions, Command, ContinuousWorld, LocalPlanner, Pose};
 use madenet_map::Pos;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime};
@@ -118,14 +118,7 @@ pub fn run_continuous_stand_in(
                 planners[i].reset();
                 continue;
             }
-            let neighbours: Vec<Neighbour> = (0..n)
-                .filter(|&j| j != i && world.in_view(i, j))
-                .map(|j| Neighbour {
-                    pose: world.pose(j),
-                    velocity: world.velocity(j),
-                    priority: j < i,
-                })
-                .collect();
+            let neighbours = world.neighbours(i);
             let replan = ticks.is_multiple_of(scan_every);
             match planners[i].command(
                 &cfg,

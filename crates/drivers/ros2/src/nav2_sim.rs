@@ -37,7 +37,7 @@ use crate::msgs::{
 use crate::tf::{planar, TfNaming, TfPublisher};
 use crate::{MapFrame, Node, Publisher, QosProfile, Ros2Error, Ros2Options};
 use madenet_continuous::{
-    Collisions, ContinuousWorld, NavError, NavParams, NavStatus, Navigator, Neighbour, Pose,
+    Collisions, ContinuousWorld, NavError, NavParams, NavStatus, Navigator, Pose,
 };
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -288,15 +288,7 @@ pub fn run_nav2_sim(
                         match r.nav.start(target, &world, i) {
                             Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
                             Err(e) => {
-                                let why = e.to_string();
-                                end(
-                                    r,
-                                    &mut run.outcomes[i],
-                                    id,
-                                    status::ABORTED,
-                                    nav2_code(e),
-                                    &why,
-                                )?;
+                                failed(r, &mut run.outcomes[i], id, e)?;
                             }
                         }
                     }
@@ -313,14 +305,7 @@ pub fn run_nav2_sim(
         // Navigation.
         let mut commands = vec![(0.0, 0.0); n];
         for i in 0..n {
-            let neighbours: Vec<Neighbour> = (0..n)
-                .filter(|&j| j != i && world.in_view(i, j))
-                .map(|j| Neighbour {
-                    pose: world.pose(j),
-                    velocity: world.velocity(j),
-                    priority: j < i,
-                })
-                .collect();
+            let neighbours = world.neighbours(i);
             let r = &mut robots[i];
             let Some((id, since, last_fb)) = r.current else {
                 continue;
@@ -361,15 +346,7 @@ pub fn run_nav2_sim(
                 }
                 NavStatus::Failed(e) => {
                     r.current = None;
-                    let why = e.to_string();
-                    end(
-                        r,
-                        &mut run.outcomes[i],
-                        id,
-                        status::ABORTED,
-                        nav2_code(e),
-                        &why,
-                    )?;
+                    failed(r, &mut run.outcomes[i], id, e)?;
                 }
                 NavStatus::Idle => r.current = None,
             }
@@ -447,6 +424,23 @@ pub fn run_nav2_sim(
     run.collisions = world.collisions();
     run.time = world.time();
     Ok(run)
+}
+
+/// Ends goal `id` of robot `r` as ABORTED with the code and text of `e`.
+fn failed(
+    r: &mut Robot,
+    outcomes: &mut Vec<GoalOutcome>,
+    id: Uuid,
+    e: NavError,
+) -> Result<(), Ros2Error> {
+    end(
+        r,
+        outcomes,
+        id,
+        status::ABORTED,
+        nav2_code(e),
+        &e.to_string(),
+    )
 }
 
 /// Ends goal `id` of robot `r` and notes its outcome (an unknown or ended goal: nothing).

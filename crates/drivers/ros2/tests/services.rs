@@ -34,6 +34,14 @@ fn serve(server: ServiceServer<AddTwoInts>, n: usize) -> std::thread::JoinHandle
     })
 }
 
+/// Waits until `ctx` sees the `/add_two_ints` server in the graph (a foreign client's query
+/// sent before would find no queryable).
+fn see_server(ctx: &Ros2Context) {
+    let node = ctx.create_node("watcher").unwrap();
+    let watcher = ServiceClient::<AddTwoInts>::new(&node, "/add_two_ints").unwrap();
+    assert!(watcher.wait_for_server(WAIT).unwrap());
+}
+
 #[test]
 fn calls_are_answered_and_matched_to_their_requests() {
     let (_router, s_ctx, c_ctx) = two_contexts();
@@ -64,10 +72,7 @@ fn a_malformed_request_gets_an_error_reply_and_the_server_goes_on() {
     let server = ServiceServer::<AddTwoInts>::new(&s_node, "/add_two_ints").unwrap();
     let done = serve(server, 1);
     let key = service_key::<AddTwoInts>(0, "/add_two_ints");
-    // The foreign client below queries at once: first see the server in the graph.
-    let c_node = c_ctx.create_node("watcher").unwrap();
-    let watcher = ServiceClient::<AddTwoInts>::new(&c_node, "/add_two_ints").unwrap();
-    assert!(watcher.wait_for_server(WAIT).unwrap());
+    see_server(&c_ctx);
     // A foreign client: no attachment, then a good attachment with a truncated payload.
     let garbage = |attach: bool| {
         let mut g = c_ctx
@@ -110,10 +115,7 @@ fn replies_echo_the_sequence_number_and_the_clients_gid() {
     let server = ServiceServer::<AddTwoInts>::new(&s_node, "/add_two_ints").unwrap();
     let done = serve(server, 1);
     let key = service_key::<AddTwoInts>(0, "/add_two_ints");
-    // The foreign client below queries at once: first see the server in the graph.
-    let c_node = c_ctx.create_node("watcher").unwrap();
-    let watcher = ServiceClient::<AddTwoInts>::new(&c_node, "/add_two_ints").unwrap();
-    assert!(watcher.wait_for_server(WAIT).unwrap());
+    see_server(&c_ctx);
     let replies = c_ctx
         .session()
         .get(&key)

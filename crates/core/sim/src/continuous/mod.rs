@@ -24,7 +24,7 @@ use crate::trial::{build_agent, TrialSpec};
 use crate::SimError;
 use madenet_agent::{Agent, Beta, Decision};
 use madenet_continuous::{
-    Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Neighbour, Scene,
+    Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Scene,
 };
 use madenet_map::{OccGrid, Occupancy, Pos};
 use madenet_world::{Observation, Radio, ScenarioConfig};
@@ -534,14 +534,7 @@ impl ContinuousTrial {
                 self.asks[i] = Ask::Yes;
                 continue;
             }
-            let neighbours: Vec<Neighbour> = (0..n)
-                .filter(|&j| j != i && self.world.in_view(i, j))
-                .map(|j| Neighbour {
-                    pose: self.world.pose(j),
-                    velocity: self.world.velocity(j),
-                    priority: j < i,
-                })
-                .collect();
+            let neighbours = self.world.neighbours(i);
             let replan = std::mem::take(&mut self.replan[i]);
             let c = self.planners[i].command(
                 &cfg,
