@@ -159,7 +159,7 @@ fn nav2_sim(endpoint: &str, seed: u64) -> Result<(), String> {
     let free: Vec<usize> = (0..grid.len())
         .filter(|&k| reach[k] && grid.cells()[k] == Occupancy::Free)
         .collect();
-    for j in 0..10 {
+    for j in 0..20 {
         let (x, y) = frame.cell_center(grid.pos(free[(j * 37 + 11) % free.len()]));
         println!("goal {x} {y}");
     }
@@ -192,6 +192,8 @@ fn nav2_sim(endpoint: &str, seed: u64) -> Result<(), String> {
         .map(|o| format!("{}:{}", o.status, o.error_code))
         .collect();
     println!("outcomes {}", outcomes.join(" "));
+    println!("rejected {}", run.rejected);
+    println!("refused {}", run.refused);
     println!(
         "collisions {}",
         run.collisions.obstacle + run.collisions.robot

@@ -313,7 +313,9 @@ def test_a_python_action_server_answers_madenet_s_action_client(ts, peer):
 
 
 def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
-    """NavigateToPose as nav2 users send it: goals reached with feedback, one canceled."""
+    """NavigateToPose as nav2 users send it: 20 goals on a generated floor plan reached with
+    feedback; a goal off the map aborted with nav2's GOAL_OUTSIDE_MAP (204); a NaN pose
+    rejected; a malformed request answered with an error; one goal canceled under way."""
     session, endpoint = peer
     act = "nav2_msgs/action/NavigateToPose"
     p = subprocess.Popen(
@@ -321,7 +323,7 @@ def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
     )
     try:
         goals = []
-        for _ in range(10):
+        for _ in range(20):
             word, x, y = p.stdout.readline().split()
             assert word == "goal"
             goals.append((float(x), float(y)))
@@ -345,7 +347,7 @@ def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
         Point = ts.types["geometry_msgs/msg/Point"]
         Quaternion = ts.types["geometry_msgs/msg/Quaternion"]
 
-        def send_goal(x, y, seq):
+        def send_goal(x, y, seq, accepted=True):
             goal_id = UUID(uuid=np.frombuffer(uuid.uuid4().bytes, dtype=np.uint8))
             pose = PoseStamped(
                 header=Header(stamp=Time(sec=0, nanosec=0), frame_id="map"),
@@ -354,7 +356,8 @@ def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
             req = SendReq(goal_id=goal_id, goal=Goal(pose=pose, behavior_tree=""))
             r = query(session, send, cdr(ts, req, f"{act}_SendGoal_Request"), seq, gid)
             assert r.ok is not None, r.err
-            assert ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), f"{act}_SendGoal_Response").accepted
+            answer = ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), f"{act}_SendGoal_Response")
+            assert answer.accepted == accepted, (x, y)
             return goal_id
 
         def result_of(goal_id, seq):
@@ -362,17 +365,25 @@ def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
             assert r.ok is not None, (bytes(r.err.payload.to_bytes()), p.poll())
             return ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), f"{act}_GetResult_Response")
 
-        # Two goals reached, with feedback on the way.
-        for seq, (x, y) in enumerate(goals[:2], start=1):
+        # Twenty goals reached, with feedback on the way.
+        for seq, (x, y) in enumerate(goals, start=1):
             goal_id = send_goal(x + 0.2, y - 0.1, 10 * seq)
             res = result_of(goal_id, 10 * seq + 1)
-            assert (res.status, res.result.error_code) == (4, 0), (x, y, res)
+            assert (res.status, res.result.error_code) == (4, 0), (seq, x, y, res)
         fb = ts.deserialize_cdr(bytes(feedbacks.recv().payload.to_bytes()), f"{act}_FeedbackMessage")
         assert fb.feedback.current_pose.header.frame_id == "map"
         assert fb.feedback.distance_remaining >= 0.0
-        # A third, canceled once it is under way.
-        far = max(goals, key=lambda g: abs(g[0] - goals[1][0]) + abs(g[1] - goals[1][1]))
-        goal_id = send_goal(far[0], far[1], 40)
+        # Off the map: aborted with the planner's code. A NaN pose: rejected. A malformed
+        # request: an error reply.
+        res = result_of(send_goal(-50.0, 3.0, 300), 301)
+        assert (res.status, res.result.error_code) == (6, 204), res
+        send_goal(float("nan"), 1.0, 302, accepted=False)
+        bad = query(session, send, b"\x00\x01\x00\x00\x07", 303, gid)
+        assert bad.err is not None
+        # One more, canceled once it is under way.
+        last = goals[-1]
+        far = max(goals, key=lambda g: abs(g[0] - last[0]) + abs(g[1] - last[1]))
+        goal_id = send_goal(far[0], far[1], 400)
         while True:
             fb = ts.deserialize_cdr(bytes(feedbacks.recv().payload.to_bytes()), f"{act}_FeedbackMessage")
             if bytes(fb.goal_id.uuid) == bytes(goal_id.uuid):
@@ -380,13 +391,15 @@ def test_a_python_client_drives_a_simulated_nav2_robot(ts, peer):
         GoalInfo = ts.types["action_msgs/msg/GoalInfo"]
         CancelReq = ts.types["action_msgs/srv/CancelGoal_Request"]
         req = CancelReq(goal_info=GoalInfo(goal_id=goal_id, stamp=Time(sec=0, nanosec=0)))
-        r = query(session, cancel, cdr(ts, req, "action_msgs/srv/CancelGoal_Request"), 41, gid)
+        r = query(session, cancel, cdr(ts, req, "action_msgs/srv/CancelGoal_Request"), 401, gid)
         ans = ts.deserialize_cdr(bytes(r.ok.payload.to_bytes()), "action_msgs/srv/CancelGoal_Response")
         assert ans.return_code == 0 and len(ans.goals_canceling) == 1
-        assert result_of(goal_id, 42).status == 5
+        assert result_of(goal_id, 402).status == 5
         out, err = p.communicate(input="", timeout=30)
         assert p.returncode == 0, err
-        assert "outcomes 4:0 4:0 5:0" in out, out
+        assert "outcomes " + "4:0 " * 20 + "6:204 5:0" in out, out
+        assert "rejected 1" in out, out
+        assert "refused 1" in out, out
         assert "collisions 0" in out, out
     finally:
         p.kill()

@@ -36,11 +36,16 @@ use crate::msgs::{
 };
 use crate::tf::{planar, TfNaming, TfPublisher};
 use crate::{MapFrame, Node, Publisher, QosProfile, Ros2Error, Ros2Options};
+use madenet_agent::{Agent, Decision};
 use madenet_continuous::{
     Collisions, ContinuousWorld, NavError, NavParams, NavStatus, Navigator, Pose,
 };
+use madenet_map::{OccGrid, Occupancy, Pos};
+use madenet_sim::stepping::{run, Pace, Present, RobotShown, Sink, SinkError, Stepping};
+use std::borrow::Cow;
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Seconds of simulated time between two feedback messages of a goal.
 const FEEDBACK_PERIOD: f64 = 0.2;
@@ -77,13 +82,15 @@ pub struct GoalOutcome {
 }
 
 /// What a run did: per robot its goals' outcomes in order, the team's collisions (ground
-/// truth), the simulated seconds, goals rejected.
+/// truth), the simulated seconds, goals rejected and malformed requests refused.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Nav2SimRun {
     /// Per robot, how each goal it accepted ended.
     pub outcomes: Vec<Vec<GoalOutcome>>,
     /// Goals rejected (pose not finite).
     pub rejected: usize,
+    /// Malformed requests from clients, answered with an error reply (and logged).
+    pub refused: usize,
     /// Collisions counted by the world.
     pub collisions: Collisions,
     /// Simulated seconds.
@@ -98,7 +105,7 @@ pub fn namespace(i: usize) -> String {
 /// Robot `i`'s part of the sim.
 struct Robot {
     ns: String,
-    node: Node,
+    _node: Node,
     server: ActionServer<NavigateToPose>,
     nav: Navigator,
     /// The goal being navigated: id, when it was accepted (simulated s), last feedback.
@@ -191,60 +198,140 @@ fn seconds(t: f64) -> crate::msgs::Duration {
     }
 }
 
-/// Runs `world`'s robots as nav2 robots until `stop` is set (see the module doc).
-pub fn run_nav2_sim(
-    opts: &Ros2Options,
-    mut world: ContinuousWorld,
-    sim: &Nav2SimOptions,
-    stop: &AtomicBool,
-) -> Result<Nav2SimRun, Ros2Error> {
-    let ctx = opts.context()?;
-    let n = world.robots();
-    let frame = MapFrame::of(world.coarse_truth());
-    let cfg = *world.config();
-    let clock_node = ctx.create_node("madenet_nav2_sim")?;
-    let clock: Publisher<Clock> = clock_node.create_pub("/clock", QosProfile::default())?;
-    let mut robots = Vec::with_capacity(n);
-    for i in 0..n {
-        let ns = namespace(i);
-        let node = ctx.create_node_in(&ns, "bt_navigator")?;
-        let tf = TfPublisher::new(&node, sim.naming)?;
-        let frame_of = |name: &str| sim.naming.frame(&ns, name);
-        // map → odom: odometry is exact, so identity (static: it never moves).
-        tf.send_static(vec![planar(
-            &frame_of("map"),
-            &frame_of("odom"),
-            Time::default(),
-            0.0,
-            0.0,
-            0.0,
-        )])?;
-        robots.push(Robot {
-            server: ActionServer::new(&node, "navigate_to_pose")?,
-            nav: Navigator::new(sim.nav),
-            current: None,
-            map: MapPublisher::new(&node, "map")?,
-            scan: node.create_pub("scan", QosProfile::default())?,
-            odom: node.create_pub("odom", QosProfile::default())?,
-            tf,
-            node,
-            ns,
-        });
+/// The continuous world's robots as nav2 robots (see the module doc): a driver of the one
+/// stepping contract ([`madenet_sim::stepping::Stepping`]), so the run loop reports it to the
+/// same sinks as every world (a bag and live view of the ground truth, pacing, an interrupt).
+/// Its robots wait for goals from outside, never for decisions: it runs until a sink stops
+/// it, and [`Nav2Team::finish`] gives what it did.
+pub struct Nav2Team {
+    world: ContinuousWorld,
+    robots: Vec<Robot>,
+    clock: Publisher<Clock>,
+    _clock_node: Node,
+    frame: MapFrame,
+    sim: Nav2SimOptions,
+    run: Nav2SimRun,
+    ticks: u64,
+    /// Control periods between two scans (and maps), and between two poses (odom, TF).
+    scan_every: u64,
+    pose_every: u64,
+    /// The middleware error that ended the run, if one did.
+    failed: Option<Ros2Error>,
+    /// All false: the robots wait for goals, not for decisions.
+    deciding: Vec<bool>,
+    /// Per robot, for outputs: its goal's cell and its path's cells.
+    shown: Vec<(Option<Pos>, Vec<Pos>)>,
+}
+
+impl Nav2Team {
+    /// Opens every robot's node in `/robot<i>` on the ROS 2 graph `opts` reaches, with its
+    /// action server, publishers and static TF.
+    pub fn new(
+        opts: &Ros2Options,
+        world: ContinuousWorld,
+        sim: &Nav2SimOptions,
+    ) -> Result<Self, Ros2Error> {
+        let ctx = opts.context()?;
+        let n = world.robots();
+        let frame = MapFrame::of(world.coarse_truth());
+        let cfg = *world.config();
+        let clock_node = ctx.create_node("madenet_nav2_sim")?;
+        let clock: Publisher<Clock> = clock_node.create_pub("/clock", QosProfile::default())?;
+        let mut robots = Vec::with_capacity(n);
+        for i in 0..n {
+            let ns = namespace(i);
+            let node = ctx.create_node_in(&ns, "bt_navigator")?;
+            let tf = TfPublisher::new(&node, sim.naming)?;
+            let frame_of = |name: &str| sim.naming.frame(&ns, name);
+            // map → odom: odometry is exact, so identity (static: it never moves).
+            tf.send_static(vec![planar(
+                &frame_of("map"),
+                &frame_of("odom"),
+                Time::default(),
+                0.0,
+                0.0,
+                0.0,
+            )])?;
+            robots.push(Robot {
+                server: ActionServer::new(&node, "navigate_to_pose")?,
+                nav: Navigator::new(sim.nav),
+                current: None,
+                map: MapPublisher::new(&node, "map")?,
+                scan: node.create_pub("scan", QosProfile::default())?,
+                odom: node.create_pub("odom", QosProfile::default())?,
+                tf,
+                _node: node,
+                ns,
+            });
+        }
+        let scan_every = (1.0 / (cfg.lidar.rate_hz * cfg.control_period))
+            .round()
+            .max(1.0) as u64;
+        let pose_every = (0.05 / cfg.control_period).round().max(1.0) as u64;
+        Ok(Nav2Team {
+            world,
+            robots,
+            clock,
+            _clock_node: clock_node,
+            frame,
+            sim: *sim,
+            run: Nav2SimRun {
+                outcomes: vec![Vec::new(); n],
+                ..Default::default()
+            },
+            ticks: 0,
+            scan_every,
+            pose_every,
+            failed: None,
+            deciding: vec![false; n],
+            shown: vec![(None, Vec::new()); n],
+        })
     }
-    let mut run = Nav2SimRun {
-        outcomes: vec![Vec::new(); n],
-        ..Default::default()
-    };
-    let scan_every = (1.0 / (cfg.lidar.rate_hz * cfg.control_period))
-        .round()
-        .max(1.0) as u64;
-    let pose_every = (0.05 / cfg.control_period).round().max(1.0) as u64;
-    let started = Instant::now();
-    let mut ticks: u64 = 0;
-    while !stop.load(Ordering::Relaxed) {
-        let now = world.time();
-        // Goals and cancels.
-        for (i, r) in robots.iter_mut().enumerate() {
+
+    /// The simulated world (ground truth).
+    pub fn world(&self) -> &ContinuousWorld {
+        &self.world
+    }
+
+    /// The run so far: goals' outcomes, goals rejected (collisions and time at [`Self::finish`]).
+    pub fn outcomes(&self) -> &Nav2SimRun {
+        &self.run
+    }
+
+    /// What the run did; the middleware error that ended it early, if one did. Goals still
+    /// running end ABORTED (UNKNOWN): the robots are gone.
+    pub fn finish(mut self) -> Result<Nav2SimRun, Ros2Error> {
+        if let Some(e) = self.failed.take() {
+            return Err(e);
+        }
+        for (i, r) in self.robots.iter_mut().enumerate() {
+            if let Some((id, _, _)) = r.current.take() {
+                let why = "the simulation stopped";
+                let code = nav2_error::UNKNOWN;
+                end(r, &mut self.run.outcomes[i], id, status::ABORTED, code, why)?;
+            }
+        }
+        self.run.refused = self.robots.iter().map(|r| r.server.refused()).sum();
+        self.run.collisions = self.world.collisions();
+        self.run.time = self.world.time();
+        Ok(self.run)
+    }
+
+    /// One control period: goals and cancels, navigation, the world's step, what the robots
+    /// publish.
+    fn play(&mut self) -> Result<(), Ros2Error> {
+        self.take_goals()?;
+        let commands = self.navigate()?;
+        self.world.step(&commands);
+        self.ticks += 1;
+        self.publish()
+    }
+
+    /// Goals and cancels that came since the last step.
+    fn take_goals(&mut self) -> Result<(), Ros2Error> {
+        let (world, frame, sim, now) = (&self.world, &self.frame, &self.sim, self.world.time());
+        for (i, r) in self.robots.iter_mut().enumerate() {
+            let outcomes = &mut self.run.outcomes[i];
             while let Some(event) = r.server.poll(Duration::ZERO)? {
                 match event {
                     ActionEvent::Goal(g) => {
@@ -262,34 +349,26 @@ pub fn run_nav2_sim(
                         .all(|v| v.is_finite());
                         if !finite {
                             tracing::warn!("{}: rejected a goal with a non-finite pose", r.ns);
-                            run.rejected += 1;
+                            self.run.rejected += 1;
                             r.server.reject(g)?;
                             continue;
                         }
                         let target =
-                            goal_in_world(&g.goal().pose, world.pose(i), &frame, &r.ns, sim.naming);
+                            goal_in_world(&g.goal().pose, world.pose(i), frame, &r.ns, sim.naming);
                         let id = r.server.accept(g)?;
                         if let Some((old, _, _)) = r.current.take() {
                             let why = "preempted by a new goal";
-                            end(r, &mut run.outcomes[i], old, status::ABORTED, 0, why)?;
+                            end(r, outcomes, old, status::ABORTED, 0, why)?;
                         }
                         let Some(target) = target else {
                             let why = "the goal's frame is not in the robot's TF tree";
-                            end(
-                                r,
-                                &mut run.outcomes[i],
-                                id,
-                                status::ABORTED,
-                                nav2_error::TF_ERROR,
-                                why,
-                            )?;
+                            let code = nav2_error::TF_ERROR;
+                            end(r, outcomes, id, status::ABORTED, code, why)?;
                             continue;
                         };
-                        match r.nav.start(target, &world, i) {
+                        match r.nav.start(target, world, i) {
                             Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
-                            Err(e) => {
-                                failed(r, &mut run.outcomes[i], id, e)?;
-                            }
+                            Err(e) => failed(r, outcomes, id, e)?,
                         }
                     }
                     ActionEvent::Cancel(id) => {
@@ -297,28 +376,38 @@ pub fn run_nav2_sim(
                             r.current = None;
                             r.nav.cancel();
                         }
-                        end(r, &mut run.outcomes[i], id, status::CANCELED, 0, "canceled")?;
+                        end(r, outcomes, id, status::CANCELED, 0, "canceled")?;
                     }
                 }
             }
         }
-        // Navigation.
+        Ok(())
+    }
+
+    /// Each navigating robot's command for this step, its feedback, and the goals it ended.
+    fn navigate(&mut self) -> Result<Vec<(f64, f64)>, Ros2Error> {
+        let (world, frame, sim, now) = (&self.world, &self.frame, &self.sim, self.world.time());
+        let cfg = world.config();
+        let n = self.robots.len();
         let mut commands = vec![(0.0, 0.0); n];
-        for i in 0..n {
+        for (i, command_i) in commands.iter_mut().enumerate() {
             let neighbours = world.neighbours(i);
-            let r = &mut robots[i];
+            let r = &mut self.robots[i];
+            let outcomes = &mut self.run.outcomes[i];
             let Some((id, since, last_fb)) = r.current else {
+                self.shown[i] = (None, Vec::new());
                 continue;
             };
-            match r.nav.step(&world, i, &neighbours) {
+            match r.nav.step(world, i, &neighbours) {
                 NavStatus::Driving {
                     command,
                     distance_remaining,
                 } => {
-                    commands[i] = command;
+                    *command_i = command;
+                    self.shown[i] = shown(world, &r.nav);
                     if now - last_fb >= FEEDBACK_PERIOD {
                         r.current = Some((id, since, now));
-                        let (x, y, yaw) = map_pose(&frame, world.pose(i));
+                        let (x, y, yaw) = map_pose(frame, world.pose(i));
                         let mut current_pose = PoseStamped {
                             header: Header {
                                 stamp: sim_stamp(now),
@@ -342,32 +431,35 @@ pub fn run_nav2_sim(
                 }
                 NavStatus::Succeeded => {
                     r.current = None;
-                    end(r, &mut run.outcomes[i], id, status::SUCCEEDED, 0, "")?;
+                    end(r, outcomes, id, status::SUCCEEDED, 0, "")?;
                 }
                 NavStatus::Failed(e) => {
                     r.current = None;
-                    failed(r, &mut run.outcomes[i], id, e)?;
+                    failed(r, outcomes, id, e)?;
                 }
                 NavStatus::Idle => r.current = None,
             }
         }
-        world.step(&commands);
-        ticks += 1;
-        let t = world.time();
-        let stamp = sim_stamp(t);
-        clock.publish(&Clock { clock: stamp })?;
-        for (i, r) in robots.iter_mut().enumerate() {
+        Ok(commands)
+    }
+
+    /// `/clock`, and each robot's scan and map (at the lidar's rate), odom and TF (20 Hz).
+    fn publish(&mut self) -> Result<(), Ros2Error> {
+        let (world, frame, sim, ticks) = (&self.world, &self.frame, &self.sim, self.ticks);
+        let stamp = sim_stamp(world.time());
+        self.clock.publish(&Clock { clock: stamp })?;
+        for (i, r) in self.robots.iter_mut().enumerate() {
             let base = sim.naming.frame(&r.ns, "base_link");
-            if (ticks + i as u64).is_multiple_of(scan_every) {
-                let mut scan = laser_scan(&world, i, stamp);
+            if (ticks + i as u64).is_multiple_of(self.scan_every) {
+                let mut scan = laser_scan(world, i, stamp);
                 scan.header.frame_id = base.clone();
                 r.scan.publish(&scan)?;
-                let mut grid = thresholded(fine_grid(&world, i, &frame, stamp));
+                let mut grid = thresholded(fine_grid(world, i, frame, stamp));
                 grid.header.frame_id = sim.naming.frame(&r.ns, "map");
                 r.map.publish(&grid)?;
             }
-            if ticks.is_multiple_of(pose_every) {
-                let (x, y, yaw) = map_pose(&frame, world.pose(i));
+            if ticks.is_multiple_of(self.pose_every) {
+                let (x, y, yaw) = map_pose(frame, world.pose(i));
                 let odom_frame = sim.naming.frame(&r.ns, "odom");
                 r.tf.send(vec![planar(&odom_frame, &base, stamp, x, y, yaw)])?;
                 let (v, w) = world.velocity(i);
@@ -399,31 +491,149 @@ pub fn run_nav2_sim(
                 r.odom.publish(&odom)?;
             }
         }
-        if sim.realtime > 0.0 {
-            let due = Duration::from_secs_f64(t / sim.realtime);
-            if let Some(wait) = due.checked_sub(started.elapsed()) {
-                std::thread::sleep(wait);
+        Ok(())
+    }
+}
+
+/// A navigating robot's goal and path as agent cells, for outputs (consecutive repeats
+/// dropped).
+fn shown(world: &ContinuousWorld, nav: &Navigator) -> (Option<Pos>, Vec<Pos>) {
+    let c = world.scenario().cell_size;
+    let cell = |(x, y): (f64, f64)| Pos::new((y / c).floor() as i32, (x / c).floor() as i32);
+    let mut path: Vec<Pos> = nav.path().iter().map(|&p| cell(p)).collect();
+    path.dedup();
+    (nav.goal().map(cell), path)
+}
+
+impl Present for Nav2Team {
+    fn robots(&self) -> usize {
+        self.world.robots()
+    }
+    fn time_s(&self) -> f64 {
+        self.world.time()
+    }
+    fn step_s(&self) -> f64 {
+        self.world.config().control_period
+    }
+    fn truth(&self) -> &OccGrid {
+        self.world.coarse_truth()
+    }
+    fn pose(&self, i: usize) -> Pose {
+        self.world.pose(i)
+    }
+    fn cell(&self, i: usize) -> Pos {
+        self.world.cell_of(i)
+    }
+    /// Its goal and path; no candidates (goals come from outside).
+    fn robot(&self, i: usize) -> RobotShown<'_> {
+        let (goal, path) = &self.shown[i];
+        RobotShown {
+            goal: *goal,
+            path,
+            decisions: self.run.outcomes[i].len() as u64,
+            ..Default::default()
+        }
+    }
+    /// None: each robot's fine map is shown ([`Present::continuous`]).
+    fn belief(&self, _: usize) -> Option<Cow<'_, [Occupancy]>> {
+        None
+    }
+    fn team_map(&self) -> Cow<'_, [Occupancy]> {
+        Cow::Owned(self.world.team_map())
+    }
+    /// None: the robots talk over ROS 2, not madenet's radio.
+    fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
+        Cow::Borrowed(&[])
+    }
+    fn exchanges(&self) -> &[(usize, usize)] {
+        &[]
+    }
+    fn explored(&self) -> f64 {
+        self.world.explored_fraction()
+    }
+    fn distance(&self) -> f64 {
+        (0..self.world.robots())
+            .map(|i| self.world.distance(i))
+            .sum()
+    }
+    fn continuous(&self) -> Option<&ContinuousWorld> {
+        Some(&self.world)
+    }
+}
+
+impl Stepping for Nav2Team {
+    type Outcome = Result<Nav2SimRun, Ros2Error>;
+
+    /// One control period; false once a middleware error ended the run.
+    fn step(&mut self) -> bool {
+        if self.failed.is_some() {
+            return false;
+        }
+        match self.play() {
+            Ok(()) => true,
+            Err(e) => {
+                self.failed = Some(e);
+                false
             }
         }
     }
-    // Goals still running end as aborted: the robots are gone.
-    for (i, r) in robots.iter_mut().enumerate() {
-        if let Some((id, _, _)) = r.current.take() {
-            let why = "the simulation stopped";
-            end(
-                r,
-                &mut run.outcomes[i],
-                id,
-                status::ABORTED,
-                nav2_error::UNKNOWN,
-                why,
-            )?;
-        }
-        let _ = &r.node;
+    /// Only after a middleware error: robots wait for goals until a sink stops the run.
+    fn is_done(&self) -> bool {
+        self.failed.is_some()
     }
-    run.collisions = world.collisions();
-    run.time = world.time();
-    Ok(run)
+    fn is_complete(&self) -> bool {
+        self.world.is_complete()
+    }
+    fn deciding(&self) -> &[bool] {
+        &self.deciding
+    }
+    fn apply_decisions(&mut self, _: &[Option<Decision>]) {}
+    /// None: goals come from outside, over ROS 2.
+    fn agents(&self) -> &[Agent] {
+        &[]
+    }
+    /// # Panics
+    /// Always: the robots have no agents here (goals come over ROS 2).
+    fn agent_mut(&mut self, i: usize) -> &mut Agent {
+        panic!("robot {i} of the nav2 sim has no agent: its goals come over ROS 2")
+    }
+    fn finish(self) -> Self::Outcome {
+        Nav2Team::finish(self)
+    }
+}
+
+/// A sink that ends the run once `.0` is set.
+pub struct StopFlag<'a>(pub &'a AtomicBool);
+
+impl<S: ?Sized> Sink<S> for StopFlag<'_> {
+    fn step(&mut self, _: &S) -> Result<ControlFlow<String>, SinkError> {
+        Ok(match self.0.load(Ordering::Relaxed) {
+            true => ControlFlow::Break("stopped".into()),
+            false => ControlFlow::Continue(()),
+        })
+    }
+}
+
+/// Runs `world`'s robots as nav2 robots ([`Nav2Team`]) until `stop` is set, paced at
+/// `sim.realtime`.
+pub fn run_nav2_sim(
+    opts: &Ros2Options,
+    world: ContinuousWorld,
+    sim: &Nav2SimOptions,
+    stop: &AtomicBool,
+) -> Result<Nav2SimRun, Ros2Error> {
+    let mut team = Nav2Team::new(opts, world, sim)?;
+    let mut halt = StopFlag(stop);
+    let mut pace = Pace::RealTime(sim.realtime);
+    let mut sinks: Vec<&mut dyn Sink<Nav2Team>> = vec![&mut halt];
+    if sim.realtime > 0.0 {
+        sinks.push(&mut pace);
+    }
+    run(&mut team, &mut sinks).map_err(|e| Ros2Error::Middleware {
+        what: "nav2 sim".into(),
+        source: e,
+    })?;
+    team.finish()
 }
 
 /// Ends goal `id` of robot `r` as ABORTED with the code and text of `e`.

@@ -199,3 +199,143 @@ fn a_client_drives_a_simulated_nav2_robot() {
     assert_eq!(codes.len(), 8, "{codes:?}");
     eprintln!("{:.0} s simulated; outcomes {codes:?}", run.time);
 }
+
+/// Three robots in `/robot0..2`, each driven at once by its own client (its own zenoh
+/// session, as a separate process would have): every goal reached, each robot's TF tree on its
+/// own `/robot<i>/tf` puts that robot (not another) at its last goal, and a map subscriber
+/// that joins after 30 s gets every robot's map (transient local). A goal for a namespace
+/// with no robot gets a clear error, and the sim goes on.
+#[test]
+fn three_clients_drive_three_robots_at_once() {
+    let cfg = FloorPlanConfig::for_size(20, 20);
+    let grid: OccGrid = floor_plan(&cfg, 2).unwrap();
+    let frame = MapFrame::of(&grid);
+    let reach = reachable_from_with(&grid, cfg.keep_free[0], Movement::NoCornerCutting);
+    let free: Vec<_> = (0..grid.len())
+        .filter(|&k| reach[k] && grid.cells()[k] == Occupancy::Free)
+        .map(|k| grid.pos(k))
+        .collect();
+    // Starts: the free cells nearest three corners; goals: two cells 2–4 cells from the start.
+    let nearest = |r: i32, c: i32| {
+        *free
+            .iter()
+            .min_by_key(|p| (p.row - r).abs() + (p.col - c).abs())
+            .unwrap()
+    };
+    let starts = [nearest(0, 0), nearest(0, 19), nearest(19, 0)];
+    let goals: Vec<Vec<(f64, f64)>> = starts
+        .iter()
+        .map(|s| {
+            free.iter()
+                .filter(|p| (2..=4).contains(&((p.row - s.row).abs() + (p.col - s.col).abs())))
+                .step_by(3)
+                .take(2)
+                .map(|&p| frame.cell_center(p))
+                .collect()
+        })
+        .collect();
+    assert!(goals.iter().all(|g| g.len() == 2), "{goals:?}");
+    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: 3,
+        ..Default::default()
+    };
+    let world =
+        ContinuousWorld::new(scene, &starts, scenario, ContinuousConfig::default(), 2).unwrap();
+    let (router, opts) = loopback_router().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let started = Instant::now();
+    let sim = {
+        let (opts, stop) = (opts.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let sim = Nav2SimOptions {
+                realtime: 10.0,
+                ..Default::default()
+            };
+            run_nav2_sim(&opts, world, &sim, &stop)
+        })
+    };
+    let clients: Vec<_> = (0..3)
+        .map(|i| {
+            let (opts, goals) = (opts.clone(), goals[i].clone());
+            std::thread::spawn(move || {
+                let ctx = opts.context().unwrap();
+                let ns = format!("/robot{i}");
+                let node = ctx.create_node_in(&ns, "client").unwrap();
+                let client =
+                    ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
+                assert!(
+                    client.wait_for_server(WAIT).unwrap(),
+                    "no {ns}/navigate_to_pose"
+                );
+                for &(x, y) in &goals {
+                    let sent = client.send_goal(goal("map", x, y), WAIT).unwrap().unwrap();
+                    assert_eq!(
+                        outcome(&sent, WAIT),
+                        (status::SUCCEEDED, 0),
+                        "{ns} ({x}, {y})"
+                    );
+                }
+                // Its own TF tree: map → base_link on /robot<i>/tf puts it at its last goal.
+                let mut tf = TfListener::new(&node, &ns, TfNaming::NamespacedTopics).unwrap();
+                let deadline = Instant::now() + WAIT;
+                let at = loop {
+                    tf.spin(Duration::from_millis(100)).unwrap();
+                    if let Ok(t) = tf.buffer.lookup(
+                        "map",
+                        "base_link",
+                        Time::default(),
+                        Duration::from_secs(1),
+                    ) {
+                        break (t.translation.x, t.translation.y);
+                    }
+                    assert!(Instant::now() < deadline, "{ns}: no map → base_link");
+                };
+                let (gx, gy) = goals[1];
+                let off = (at.0 - gx).hypot(at.1 - gy);
+                assert!(off < 0.4, "{ns} at {at:?}, its goal ({gx}, {gy}): {off} m");
+            })
+        })
+        .collect();
+    for c in clients {
+        c.join().unwrap();
+    }
+    // A namespace with no robot: the goal gets an error, not a hang.
+    let ctx = opts.context().unwrap();
+    let node = ctx.create_node_in("/robot9", "client").unwrap();
+    let nobody = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
+    let t = Instant::now();
+    let e = nobody
+        .send_goal(goal("map", 1.0, 1.0), WAIT)
+        .err()
+        .expect("an error");
+    assert!(e.to_string().contains("no server answered"), "{e}");
+    assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
+    // A subscriber that joins after 30 s gets every robot's map.
+    std::thread::sleep(Duration::from_secs(30).saturating_sub(started.elapsed()));
+    let late = opts.context().unwrap();
+    let node = late.create_node("late_maps").unwrap();
+    for i in 0..3 {
+        let mut maps = MapSubscriber::new(&node, &format!("/robot{i}/map")).unwrap();
+        let map = maps
+            .latest(Duration::from_secs(5))
+            .unwrap()
+            .unwrap_or_else(|| panic!("no /robot{i}/map"));
+        assert!(
+            map.data.contains(&0) && map.data.contains(&100),
+            "/robot{i}/map"
+        );
+    }
+    stop.store(true, Ordering::Relaxed);
+    let run = sim.join().unwrap().unwrap();
+    drop(router);
+    assert_eq!(
+        run.collisions.obstacle + run.collisions.robot,
+        0,
+        "{:?}",
+        run.collisions
+    );
+    for (i, o) in run.outcomes.iter().enumerate() {
+        assert_eq!(o.len(), 2, "robot {i}: {o:?}");
+    }
+}
