@@ -56,6 +56,13 @@ pub struct RunArgs {
     /// continuous world's control period its own length): 0.02–1000.
     #[arg(long, value_name = "FACTOR", value_parser = realtime_arg)]
     realtime: Option<f64>,
+    /// Serve the continuous world's robots as nav2 robots over ROS 2 (rmw_zenoh) through this
+    /// zenoh endpoint (bare `--nav2`: the router, tcp/127.0.0.1:7447): each robot in
+    /// `/robot<i>` takes goals on `navigate_to_pose` and publishes map, map_updates, scan,
+    /// odom, TF (`/robot<i>/tf`) and /clock. No policy runs; it goes at `--realtime` (default
+    /// 1; `--pace-ms 0`: as fast as it runs, follow /clock) until Ctrl-C, then prints its goals.
+    #[arg(long, value_name = "ENDPOINT", num_args = 0..=1, default_missing_value = "tcp/127.0.0.1:7447")]
+    nav2: Option<String>,
 }
 
 /// `--pace-ms`: 0–60 000 ms.
@@ -88,6 +95,11 @@ impl RunArgs {
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
+    if a.nav2.is_some() && (a.world != "continuous" || a.json || a.pictures.any()) {
+        anyhow::bail!(
+            "--nav2: only with --world continuous, and without --json/--render/--snapshot"
+        );
+    }
     if a.world == "continuous" {
         return run_continuous(a);
     }
@@ -177,6 +189,49 @@ fn run_continuous(a: RunArgs) -> Result<()> {
     a.pictures.check_names()?;
     let (spec, registry) = a.scenario.continuous_spec(a.side, continuous)?;
     a.scenario.warn_erasure(&spec.config)?;
+    if let Some(endpoint) = &a.nav2 {
+        return serve_nav2(&a, spec.world()?, endpoint);
+    }
     let trial = ContinuousTrial::new(spec, &registry).with_context(|| a.scenario.label())?;
     drive(&a, trial, a.frame_s, ContinuousResult::summary)
+}
+
+/// `run --world continuous --nav2`: the robots as nav2 robots ([`madenet_ros2::nav2_sim`])
+/// through the run loop (bag and live view of the ground truth, pacing), until Ctrl-C.
+fn serve_nav2(
+    a: &RunArgs,
+    world: madenet_continuous::ContinuousWorld,
+    endpoint: &str,
+) -> Result<()> {
+    use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2Team};
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.to_string()],
+        ..Default::default()
+    };
+    let n = world.robots();
+    let mut team = Nav2Team::new(&opts, world, &Nav2SimOptions::default()).context("--nav2")?;
+    let stop = Stop::watch(true)?;
+    let mut recorder = crate::record::start(a.record.as_deref(), a.foxglove.as_deref(), &team)?;
+    let mut pace = a.pace().unwrap_or(Pace::RealTime(1.0));
+    let mut interrupt = OnSignal::new(&stop);
+    let mut sinks: Vec<&mut dyn Sink<Nav2Team>> = vec![&mut pace, &mut interrupt];
+    if let Some(r) = recorder.as_mut() {
+        sinks.insert(0, r);
+    }
+    eprintln!(
+        "nav2       {n} robots, /robot0 … /robot{}: navigate_to_pose via {endpoint} (Ctrl-C ends)",
+        n - 1
+    );
+    let end =
+        madenet_sim::stepping::run(&mut team, &mut sinks).map_err(anyhow::Error::from_boxed)?;
+    for line in team
+        .finish()
+        .context("--nav2")?
+        .summary()
+        .into_iter()
+        .chain(end.wrote)
+    {
+        out!("{line}")?;
+    }
+    Ok(())
 }

@@ -2,6 +2,8 @@
 //! the rmw_zenoh format. The subscriber is a plain zenoh router (as `rmw_zenohd`) that knows the
 //! message layouts only: each robot's poses, in order, are the trial's trajectory.
 
+mod common;
+
 use madenet_map::Pos;
 use madenet_ros2::MapFrame;
 use serde_json::Value;
@@ -192,4 +194,125 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
         // (A robot still driving when the world node ended may have gone on.)
         assert!(run.cells[i].contains(&positions.last().unwrap()[i]));
     }
+}
+
+/// `run --world continuous --nav2 ENDPOINT --record DIR`: the generated world's robots serve
+/// `navigate_to_pose`; a goal 1–2 m away on a free patch of the robot's own map is reached;
+/// Ctrl-C ends the run with exit 0, the goals counted and the ground truth's bag written.
+#[test]
+fn run_nav2_serves_goals_until_ctrl_c() {
+    use madenet_ros2::actions::{status, ActionClient, NavigateToPose, NavigateToPoseGoal};
+    use madenet_ros2::map_updates::MapSubscriber;
+    use madenet_ros2::msgs::PoseStamped;
+    use madenet_ros2::tf::{TfListener, TfNaming};
+    use std::io::BufRead;
+    use std::time::Instant;
+    const WAIT: Duration = Duration::from_secs(30);
+    let (_router, endpoint, opts) = router_and_options();
+    let dir = madenet_testkit::Scratch::new("ros2-nav2");
+    let bag = dir.join("bag");
+    let mut child = common::spawn_piped(
+        Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args([
+                "run",
+                "--world",
+                "continuous",
+                "--generate",
+                "4",
+                "--side",
+                "12",
+            ])
+            .args(["--realtime", "10", "--nav2", &endpoint, "--record"])
+            .arg(&bag),
+    );
+    let mut stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    assert!(
+        line.contains("/robot0") && line.contains("navigate_to_pose"),
+        "{line}"
+    );
+    let ctx = opts.context().unwrap();
+    let node = ctx.create_node_in("/robot0", "client").unwrap();
+    let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
+    assert!(
+        client.wait_for_server(WAIT).unwrap(),
+        "no /robot0/navigate_to_pose"
+    );
+    // Where the robot is (its TF), and its map.
+    let mut tf = TfListener::new(&node, "/robot0", TfNaming::NamespacedTopics).unwrap();
+    let deadline = Instant::now() + WAIT;
+    let (rx, ry) = loop {
+        tf.spin(Duration::from_millis(100)).unwrap();
+        let now = madenet_ros2::msgs::Time::default();
+        if let Ok(t) = tf
+            .buffer
+            .lookup("map", "base_link", now, Duration::from_secs(1))
+        {
+            break (t.translation.x, t.translation.y);
+        }
+        assert!(Instant::now() < deadline, "no map → base_link");
+    };
+    let mut maps = MapSubscriber::new(&node, "map").unwrap();
+    let map = maps.latest(WAIT).unwrap().expect("/robot0/map").clone();
+    let (w, h, res) = (
+        map.info.width as i64,
+        map.info.height as i64,
+        map.info.resolution as f64,
+    );
+    let (ox, oy) = (map.info.origin.position.x, map.info.origin.position.y);
+    assert!(
+        (map.info.origin.orientation.w - 1.0).abs() < 1e-9,
+        "a generated map has no yaw"
+    );
+    // A free cell 1–2 m away whose 0.5 m around is all seen free.
+    let free = |c: i64, r: i64| {
+        (-5..=5).all(|dr| {
+            (-5..=5).all(|dc| {
+                let (cc, rr) = (c + dc, r + dr);
+                (0..w).contains(&cc)
+                    && (0..h).contains(&rr)
+                    && map.data[(rr * w + cc) as usize] == 0
+            })
+        })
+    };
+    let (gx, gy) = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .filter(|&(c, r)| free(c, r))
+        .map(|(c, r)| (ox + (c as f64 + 0.5) * res, oy + (r as f64 + 0.5) * res))
+        .find(|&(x, y)| (1.0..2.0).contains(&(x - rx).hypot(y - ry)))
+        .expect("a free patch 1–2 m away");
+    let mut pose = PoseStamped::default();
+    pose.header.frame_id = "map".into();
+    pose.pose.position.x = gx;
+    pose.pose.position.y = gy;
+    pose.pose.orientation.w = 1.0;
+    let goal = NavigateToPoseGoal {
+        pose,
+        behavior_tree: String::new(),
+    };
+    let sent = client.send_goal(goal, WAIT).unwrap().expect("accepted");
+    let (st, result) = sent.result(WAIT).unwrap().expect("a result");
+    assert_eq!(
+        (st, result.error_code),
+        (status::SUCCEEDED, 0),
+        "{result:?}"
+    );
+    common::signal(&child, "-INT");
+    let out = child.wait_with_output().unwrap();
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stderr, &mut rest).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{rest}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("goals      1 succeeded, 0 aborted"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("collisions 0 with obstacles, 0 between robots"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("ROS 2 bag"), "{stdout}");
+    let metadata = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+    assert!(metadata.contains("/team_map"), "{metadata}");
 }

@@ -97,6 +97,46 @@ pub struct Nav2SimRun {
     pub time: f64,
 }
 
+impl Nav2SimRun {
+    /// The run in lines for people: goals by outcome, rejected and refused, collisions, time.
+    pub fn summary(&self) -> Vec<String> {
+        let count = |st: i8| {
+            self.outcomes
+                .iter()
+                .flatten()
+                .filter(|o| o.status == st)
+                .count()
+        };
+        let mut codes: Vec<u16> = self
+            .outcomes
+            .iter()
+            .flatten()
+            .filter(|o| o.error_code != 0)
+            .map(|o| o.error_code)
+            .collect();
+        codes.sort_unstable();
+        codes.dedup();
+        let codes: Vec<String> = codes.iter().map(u16::to_string).collect();
+        let Collisions { obstacle, robot } = self.collisions;
+        vec![
+            format!(
+                "goals      {} succeeded, {} aborted{}, {} canceled, {} rejected",
+                count(status::SUCCEEDED),
+                count(status::ABORTED),
+                match codes.is_empty() {
+                    true => String::new(),
+                    false => format!(" (error codes {})", codes.join(", ")),
+                },
+                count(status::CANCELED),
+                self.rejected
+            ),
+            format!("refused    {} malformed requests", self.refused),
+            format!("collisions {obstacle} with obstacles, {robot} between robots"),
+            format!("simulated  {:.1} s", self.time),
+        ]
+    }
+}
+
 /// The namespace of robot `i`: `/robot<i>`.
 pub fn namespace(i: usize) -> String {
     format!("/robot{i}")

@@ -51,6 +51,21 @@ pub struct ContinuousSpec {
     pub seed: u64,
 }
 
+impl ContinuousSpec {
+    /// The world this spec names: its robots at their starts, no agents (a
+    /// [`ContinuousTrial`] adds them; the nav2 sim drives the robots from outside).
+    pub fn world(&self) -> Result<ContinuousWorld, SimError> {
+        ContinuousWorld::new(
+            self.scene.clone(),
+            &self.starts,
+            self.config.clone(),
+            self.continuous,
+            self.seed,
+        )
+        .map_err(|e| SimError::Continuous(e.to_string()))
+    }
+}
+
 /// The outcome of a continuous trial.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContinuousResult {
@@ -266,14 +281,7 @@ const TRAIL_EVERY: u64 = 4;
 impl ContinuousTrial {
     /// Builds the world and the agents (policies from `registry`).
     pub fn new(spec: ContinuousSpec, registry: &PolicyRegistry) -> Result<Self, SimError> {
-        let world = ContinuousWorld::new(
-            spec.scene.clone(),
-            &spec.starts,
-            spec.config.clone(),
-            spec.continuous,
-            spec.seed,
-        )
-        .map_err(|e| SimError::Continuous(e.to_string()))?;
+        let world = spec.world()?;
         let n = world.robots();
         // The agents see only the map's size (their cells).
         let grid_spec = TrialSpec {
