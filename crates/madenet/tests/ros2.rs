@@ -172,8 +172,12 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
     let stop = std::sync::atomic::AtomicBool::new(false);
     let (out, run) = std::thread::scope(|s| {
         let (opts, stop) = (&opts, &stop);
-        let team = s
-            .spawn(move || madenet_ros2::run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
+        let sim = madenet_ros2::nav2_sim::Nav2SimOptions {
+            realtime: 20.0,
+            ..Default::default()
+        };
+        let team =
+            s.spawn(move || madenet_ros2::nav2_sim::run_nav2_sim(opts, world, &sim, stop).unwrap());
         let out = launch(map.to_str().unwrap())
             .args(["--start", "0,0;0,1;1,0", "--policy", "nf"])
             .args(["--config", config.to_str().unwrap()])

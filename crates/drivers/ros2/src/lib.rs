@@ -12,9 +12,10 @@
 //! madenet cells ([`cells_from_grid`], [`MapFrame::cell_at`]). [`RealRobots`] puts real robots
 //! in place of madenet's simulated world: the world node ([`madenet_runtime::run_ground_with`])
 //! observes them through their maps and poses and sends each move as `/robot<i>/goal_pose`.
-//! [`run_continuous_stand_in`] lets madenet's continuous world be those robots: each simulated
+//! The nav2 sim ([`nav2_sim`]) lets madenet's continuous world be those robots: each simulated
 //! robot publishes `/robot<i>/scan` (`sensor_msgs/msg/LaserScan`), its own fine
-//! `/robot<i>/map` and `/robot<i>/pose`, and drives to each `/robot<i>/goal_pose`.
+//! `/robot<i>/map` (with `map_updates`) and `/robot<i>/pose`, and drives to each
+//! `/robot<i>/goal_pose` as to a `navigate_to_pose` goal.
 //!
 //! The wire format is rmw_zenoh's (ROS 2 Jazzy): key expressions
 //! `<domain>/<topic>/<type>/<RIHS01 type hash>`, CDR payloads, liveliness tokens for the ROS
@@ -57,14 +58,12 @@ use madenet_runtime::zenoh_bus::zenoh_config;
 use msgs::{Header, MapMetaData, OccupancyGrid, Point, Pose, PoseStamped, Quaternion, Time};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-pub use continuous_stand_in::{run_continuous_stand_in, StandInRun};
 pub use real::RealRobots;
 pub use rmw::{Durability, Node, Publisher, QosProfile, Reliability, Ros2Context, Subscription};
 pub use stand_in::run_stand_in;
 
 pub mod actions;
 pub mod bag;
-pub mod continuous_stand_in;
 #[cfg(feature = "foxglove")]
 pub mod live;
 #[cfg(not(feature = "foxglove"))]
@@ -78,6 +77,7 @@ mod real;
 pub mod record;
 pub mod rmw;
 pub mod services;
+pub mod sim_sensors;
 mod stand_in;
 pub mod study_bags;
 pub mod tf;
@@ -609,13 +609,14 @@ impl RobotPublisher {
     }
 }
 
-/// A real robot's `/robot<i>/map` and `/robot<i>/pose`, read into madenet cells of `frame`:
-/// what a robot stack provides in place of madenet's simulated world.
+/// A real robot's `/robot<i>/map` (with `/robot<i>/map_updates`, as costmaps and the nav2 sim
+/// send them) and `/robot<i>/pose`, read into madenet cells of `frame`: what a robot stack
+/// provides in place of madenet's simulated world.
 pub struct RobotFeed {
     _node: Node,
     frame: MapFrame,
     topics: [String; 3],
-    map: Subscription<OccupancyGrid>,
+    map: map_updates::MapSubscriber,
     pose: Subscription<PoseStamped>,
     cells: Option<Vec<Occupancy>>,
     at: Option<Pos>,
@@ -627,7 +628,7 @@ impl RobotFeed {
     pub fn new(ctx: &Ros2Context, i: usize, frame: MapFrame) -> Result<Self, Ros2Error> {
         let node = ctx.create_node(&format!("madenet_feed{i}"))?;
         let topics = topics(i);
-        let map = node.create_sub::<OccupancyGrid>(&topics[0], map_qos())?;
+        let map = map_updates::MapSubscriber::new(&node, &topics[0])?;
         let pose = node.create_sub::<PoseStamped>(&topics[1], QosProfile::default())?;
         Ok(RobotFeed {
             _node: node,
@@ -653,14 +654,11 @@ impl RobotFeed {
     pub fn latest(&mut self, wait: Duration) -> Result<Option<(&[Occupancy], Pos)>, Ros2Error> {
         let deadline = std::time::Instant::now() + wait;
         loop {
-            // Only the newest map counts: read the cells of that one alone.
-            let mut newest = None;
-            while let Some(m) = self.map.recv_timeout(Duration::ZERO)? {
-                newest = Some(m);
-            }
-            if let Some(m) = newest {
+            // Only the newest map counts (full grids and `map_updates` applied): read the
+            // cells of that one alone.
+            if let Some(m) = self.map.poll()? {
                 let topic = &self.topics[0];
-                self.cells = Some(cells_from_grid_by(&m, &self.frame, topic, &self.rule)?);
+                self.cells = Some(cells_from_grid_by(m, &self.frame, topic, &self.rule)?);
             }
             while let Some(p) = self.pose.recv_timeout(Duration::ZERO)? {
                 let (x, y) = (p.pose.position.x, p.pose.position.y);

@@ -333,6 +333,15 @@ impl MapSubscriber {
         Ok(self.grid.as_ref())
     }
 
+    /// Takes what arrived, without waiting: the current grid if something new came since the
+    /// last call, else `None`.
+    pub fn poll(&mut self) -> Result<Option<&OccupancyGrid>, Ros2Error> {
+        Ok(match self.drain()? {
+            0 => None,
+            _ => self.grid.as_ref(),
+        })
+    }
+
     /// Takes what arrived on both topics, in stamp order; returns how many messages.
     fn drain(&mut self) -> Result<usize, Ros2Error> {
         let mut fulls = VecDeque::new();

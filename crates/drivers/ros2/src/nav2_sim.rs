@@ -7,7 +7,9 @@
 //! | `navigate_to_pose` | action `nav2_msgs/action/NavigateToPose` | goals in `map`, `odom` or `base_link` |
 //! | `map`, `map_updates` | `nav_msgs/OccupancyGrid`, `map_msgs/OccupancyGridUpdate` | its own 0.1 m map as slam_toolbox publishes it: 100 above 0.65, 0 below 0.25, −1 between or unseen; transient local |
 //! | `scan` | `sensor_msgs/LaserScan` | its lidar, frame `base_link` |
-//! | `odom` | `nav_msgs/Odometry` | pose and velocity (odometry is exact here) |
+//! | `odom` | `nav_msgs/Odometry` | pose and velocity (odometry is exact here), 20 Hz |
+//! | `pose` | `geometry_msgs/PoseStamped` | its pose in `map`, 20 Hz (what `launch --ros2-robots` reads) |
+//! | `goal_pose` (subscribed) | `geometry_msgs/PoseStamped` | a goal as RViz's "2D Goal Pose" sends it: bt_navigator takes it as a goal of its own (no feedback, same outcomes) |
 //! | `tf`, `tf_static` | `tf2_msgs/TFMessage` | `map → odom` (identity) and `odom → base_link` ([`TfNaming`]) |
 //!
 //! and `/clock` (`rosgraph_msgs/Clock`, simulated time) for `use_sim_time`. Every stamp is
@@ -23,19 +25,22 @@
 //!   recoveries) every 0.2 s of simulated time.
 //!
 //! The navigation itself is [`madenet_continuous::Navigator`]; the ground truth (collisions,
-//! the true map) stays inside, in [`Nav2SimRun`].
+//! the true map) stays inside, in [`Nav2SimRun`] and what the run loop's sinks record
+//! ([`Nav2Team`] is a driver of the one stepping contract). The same robots stand in for a
+//! real team under `launch --ros2-robots` (its world node sends `goal_pose` and reads `map`,
+//! `map_updates` and `pose`).
 
 use crate::actions::{
     nav2_error, status, ActionEvent, ActionServer, NavigateToPose, NavigateToPoseFeedback,
     NavigateToPoseResult, Uuid,
 };
-use crate::continuous_stand_in::{fine_grid, laser_scan, map_point};
 use crate::map_updates::MapPublisher;
 use crate::msgs::{
     Clock, Header, LaserScan, Odometry, PoseStamped, Time, Twist, TwistWithCovariance, Vector3,
 };
+use crate::sim_sensors::{fine_grid, laser_scan, map_point, pose_stamped};
 use crate::tf::{planar, TfNaming, TfPublisher};
-use crate::{MapFrame, Node, Publisher, QosProfile, Ros2Error, Ros2Options};
+use crate::{MapFrame, Node, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription};
 use madenet_agent::{Agent, Decision};
 use madenet_continuous::{
     Collisions, ContinuousWorld, NavError, NavParams, NavStatus, Navigator, Pose,
@@ -91,6 +96,8 @@ pub struct Nav2SimRun {
     pub rejected: usize,
     /// Malformed requests from clients, answered with an error reply (and logged).
     pub refused: usize,
+    /// Per robot, the cells it passed through, in order (each once per visit).
+    pub cells: Vec<Vec<Pos>>,
     /// Collisions counted by the world.
     pub collisions: Collisions,
     /// Simulated seconds.
@@ -118,15 +125,26 @@ impl Nav2SimRun {
         codes.dedup();
         let codes: Vec<String> = codes.iter().map(u16::to_string).collect();
         let Collisions { obstacle, robot } = self.collisions;
+        // Aborted without an error code: preempted by a newer goal.
+        let preempted = (self.outcomes.iter().flatten())
+            .filter(|o| o.status == status::ABORTED && o.error_code == 0)
+            .count();
+        let mut why = Vec::new();
+        if preempted > 0 {
+            why.push(format!("{preempted} preempted"));
+        }
+        if !codes.is_empty() {
+            why.push(format!("error codes {}", codes.join(", ")));
+        }
+        let why = match why.is_empty() {
+            true => String::new(),
+            false => format!(" ({})", why.join("; ")),
+        };
         vec![
             format!(
-                "goals      {} succeeded, {} aborted{}, {} canceled, {} rejected",
+                "goals      {} succeeded, {} aborted{why}, {} canceled, {} rejected",
                 count(status::SUCCEEDED),
                 count(status::ABORTED),
-                match codes.is_empty() {
-                    true => String::new(),
-                    false => format!(" (error codes {})", codes.join(", ")),
-                },
                 count(status::CANCELED),
                 self.rejected
             ),
@@ -142,6 +160,25 @@ pub fn namespace(i: usize) -> String {
     format!("/robot{i}")
 }
 
+/// A goal's action id; `None` for one that came on `goal_pose`.
+type GoalId = Option<Uuid>;
+
+/// Whether every number of a goal pose is finite.
+fn finite(goal: &PoseStamped) -> bool {
+    let p = goal.pose;
+    [
+        p.position.x,
+        p.position.y,
+        p.position.z,
+        p.orientation.x,
+        p.orientation.y,
+        p.orientation.z,
+        p.orientation.w,
+    ]
+    .iter()
+    .all(|v| v.is_finite())
+}
+
 /// Robot `i`'s part of the sim.
 struct Robot {
     ns: String,
@@ -149,7 +186,12 @@ struct Robot {
     server: ActionServer<NavigateToPose>,
     nav: Navigator,
     /// The goal being navigated: id, when it was accepted (simulated s), last feedback.
-    current: Option<(Uuid, f64, f64)>,
+    current: Option<(GoalId, f64, f64)>,
+    /// `goal_pose`: goals as RViz's "2D Goal Pose" sends them (bt_navigator takes them as
+    /// action goals of its own).
+    goal_pose: Subscription<PoseStamped>,
+    /// `pose`: where it is in `map` (madenet's real-robot interface reads it).
+    pose: Publisher<PoseStamped>,
     map: MapPublisher,
     scan: Publisher<LaserScan>,
     odom: Publisher<Odometry>,
@@ -296,6 +338,8 @@ impl Nav2Team {
                 server: ActionServer::new(&node, "navigate_to_pose")?,
                 nav: Navigator::new(sim.nav),
                 current: None,
+                goal_pose: node.create_sub("goal_pose", QosProfile::default())?,
+                pose: node.create_pub("pose", QosProfile::default())?,
                 map: MapPublisher::new(&node, "map")?,
                 scan: node.create_pub("scan", QosProfile::default())?,
                 odom: node.create_pub("odom", QosProfile::default())?,
@@ -308,6 +352,7 @@ impl Nav2Team {
             .round()
             .max(1.0) as u64;
         let pose_every = (0.05 / cfg.control_period).round().max(1.0) as u64;
+        let cells = (0..n).map(|i| vec![world.cell_of(i)]).collect();
         Ok(Nav2Team {
             world,
             robots,
@@ -317,6 +362,7 @@ impl Nav2Team {
             sim: *sim,
             run: Nav2SimRun {
                 outcomes: vec![Vec::new(); n],
+                cells,
                 ..Default::default()
             },
             ticks: 0,
@@ -364,62 +410,80 @@ impl Nav2Team {
         let commands = self.navigate()?;
         self.world.step(&commands);
         self.ticks += 1;
+        for (i, cells) in self.run.cells.iter_mut().enumerate() {
+            let cell = self.world.cell_of(i);
+            if cells.last() != Some(&cell) {
+                cells.push(cell);
+            }
+        }
         self.publish()
     }
 
-    /// Goals and cancels that came since the last step.
+    /// Goals (action goals and `goal_pose` messages) and cancels that came since the last step.
     fn take_goals(&mut self) -> Result<(), Ros2Error> {
-        let (world, frame, sim, now) = (&self.world, &self.frame, &self.sim, self.world.time());
-        for (i, r) in self.robots.iter_mut().enumerate() {
-            let outcomes = &mut self.run.outcomes[i];
-            while let Some(event) = r.server.poll(Duration::ZERO)? {
-                match event {
-                    ActionEvent::Goal(g) => {
-                        let p = g.goal().pose.pose;
-                        let finite = [
-                            p.position.x,
-                            p.position.y,
-                            p.position.z,
-                            p.orientation.x,
-                            p.orientation.y,
-                            p.orientation.z,
-                            p.orientation.w,
-                        ]
-                        .iter()
-                        .all(|v| v.is_finite());
-                        if !finite {
+        for i in 0..self.robots.len() {
+            loop {
+                let r = &mut self.robots[i];
+                let (id, pose) = match r.server.poll(Duration::ZERO)? {
+                    Some(ActionEvent::Goal(g)) => {
+                        if !finite(&g.goal().pose) {
                             tracing::warn!("{}: rejected a goal with a non-finite pose", r.ns);
                             self.run.rejected += 1;
                             r.server.reject(g)?;
                             continue;
                         }
-                        let target =
-                            goal_in_world(&g.goal().pose, world.pose(i), frame, &r.ns, sim.naming);
-                        let id = r.server.accept(g)?;
-                        if let Some((old, _, _)) = r.current.take() {
-                            let why = "preempted by a new goal";
-                            end(r, outcomes, old, status::ABORTED, 0, why)?;
-                        }
-                        let Some(target) = target else {
-                            let why = "the goal's frame is not in the robot's TF tree";
-                            let code = nav2_error::TF_ERROR;
-                            end(r, outcomes, id, status::ABORTED, code, why)?;
-                            continue;
-                        };
-                        match r.nav.start(target, world, i) {
-                            Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
-                            Err(e) => failed(r, outcomes, id, e)?,
-                        }
+                        let pose = g.goal().pose.clone();
+                        (Some(r.server.accept(g)?), pose)
                     }
-                    ActionEvent::Cancel(id) => {
-                        if r.current.is_some_and(|c| c.0 == id) {
+                    Some(ActionEvent::Cancel(id)) => {
+                        if r.current.is_some_and(|c| c.0 == Some(id)) {
                             r.current = None;
                             r.nav.cancel();
                         }
-                        end(r, outcomes, id, status::CANCELED, 0, "canceled")?;
+                        let outcomes = &mut self.run.outcomes[i];
+                        end(r, outcomes, Some(id), status::CANCELED, 0, "canceled")?;
+                        continue;
                     }
-                }
+                    None => match r.goal_pose.recv_timeout(Duration::ZERO)? {
+                        Some(pose) if finite(&pose) => (None, pose),
+                        Some(_) => {
+                            tracing::warn!("{}: dropped a goal_pose that is not finite", r.ns);
+                            self.run.rejected += 1;
+                            continue;
+                        }
+                        None => break,
+                    },
+                };
+                self.start_goal(i, id, &pose)?;
             }
+        }
+        Ok(())
+    }
+
+    /// Robot `i` takes goal `id` (`None`: from `goal_pose`) to `pose`, preempting the one it
+    /// had (which ends ABORTED).
+    fn start_goal(&mut self, i: usize, id: GoalId, pose: &PoseStamped) -> Result<(), Ros2Error> {
+        let (world, now) = (&self.world, self.world.time());
+        let r = &mut self.robots[i];
+        let outcomes = &mut self.run.outcomes[i];
+        let target = goal_in_world(pose, world.pose(i), &self.frame, &r.ns, self.sim.naming);
+        if let Some((old, _, _)) = r.current.take() {
+            end(
+                r,
+                outcomes,
+                old,
+                status::ABORTED,
+                0,
+                "preempted by a new goal",
+            )?;
+        }
+        let Some(target) = target else {
+            let why = "the goal's frame is not in the robot's TF tree";
+            return end(r, outcomes, id, status::ABORTED, nav2_error::TF_ERROR, why);
+        };
+        match r.nav.start(target, world, i) {
+            Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
+            Err(e) => failed(r, outcomes, id, e)?,
         }
         Ok(())
     }
@@ -445,8 +509,8 @@ impl Nav2Team {
                 } => {
                     *command_i = command;
                     self.shown[i] = shown(world, &r.nav);
-                    if now - last_fb >= FEEDBACK_PERIOD {
-                        r.current = Some((id, since, now));
+                    if let Some(id) = id.filter(|_| now - last_fb >= FEEDBACK_PERIOD) {
+                        r.current = Some((Some(id), since, now));
                         let (x, y, yaw) = map_pose(frame, world.pose(i));
                         let mut current_pose = PoseStamped {
                             header: Header {
@@ -529,6 +593,9 @@ impl Nav2Team {
                 };
                 odom.pose.pose = frame.pose(x, y, yaw);
                 r.odom.publish(&odom)?;
+                let mut pose = pose_stamped(world.pose(i), frame, stamp);
+                pose.header.frame_id = sim.naming.frame(&r.ns, "map");
+                r.pose.publish(&pose)?;
             }
         }
         Ok(())
@@ -680,7 +747,7 @@ pub fn run_nav2_sim(
 fn failed(
     r: &mut Robot,
     outcomes: &mut Vec<GoalOutcome>,
-    id: Uuid,
+    id: GoalId,
     e: NavError,
 ) -> Result<(), Ros2Error> {
     end(
@@ -693,11 +760,12 @@ fn failed(
     )
 }
 
-/// Ends goal `id` of robot `r` and notes its outcome (an unknown or ended goal: nothing).
+/// Ends goal `id` of robot `r` and notes its outcome (an unknown or ended action goal:
+/// nothing).
 fn end(
     r: &mut Robot,
     outcomes: &mut Vec<GoalOutcome>,
-    id: Uuid,
+    id: GoalId,
     final_status: i8,
     error_code: u16,
     why: &str,
@@ -706,7 +774,11 @@ fn end(
         error_code,
         error_msg: why.to_string(),
     };
-    if r.server.end(id, final_status, result)? {
+    let known = match id {
+        Some(id) => r.server.end(id, final_status, result)?,
+        None => true,
+    };
+    if known {
         outcomes.push(GoalOutcome {
             status: final_status,
             error_code,

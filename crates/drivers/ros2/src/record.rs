@@ -51,13 +51,13 @@
 //! ```
 
 use crate::bag::{Bag, BagError};
-use crate::continuous_stand_in::{fine_grid, laser_scan, pose_stamped, scan_topic};
 use crate::live::Live;
 use crate::msgs::RosMessage;
 use crate::msgs::{
     Clock, ColorRGBA, Float64, Header, Marker, MarkerArray, Path, Point, TFMessage, Time,
     Transform, TransformStamped, Vector3,
 };
+use crate::sim_sensors::{fine_grid, laser_scan, pose_stamped, scan_topic};
 use crate::{occupancy_grid, MapFrame, FRAME_ID};
 use madenet_map::{Occupancy, Pos};
 use madenet_sim::stepping::{Present, RobotShown, Sink, SinkError};

@@ -6,9 +6,8 @@
 
 use madenet_map::paper::{paper_map, Corner};
 use madenet_map::Pos;
-use madenet_ros2::{
-    loopback_router, run_continuous_stand_in, run_stand_in, MapFrame, RealRobots, Ros2Options,
-};
+use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
+use madenet_ros2::{loopback_router, run_stand_in, MapFrame, RealRobots, Ros2Options};
 use madenet_runtime::transport::ChannelBus;
 use madenet_runtime::{
     nodes_of, run_ground_with, run_radio, run_robot, LockstepResult, RuntimeError, Timeouts,
@@ -101,8 +100,9 @@ fn nf_agents_explore_a_map_through_ros2_alone() {
 }
 
 /// The continuous world in place of real robots: three simulated differential-drive robots
-/// ([`run_continuous_stand_in`]) publish their lidar scans, their own fine occupancy grids and
-/// their poses, and drive with the local planner to the cells `/robot<i>/goal_pose` names. The
+/// (the nav2 sim, [`run_nav2_sim`]) publish their lidar scans, their own fine occupancy grids
+/// (slam_toolbox's values, with `map_updates`) and their poses, and drive with the navigator to
+/// the cells `/robot<i>/goal_pose` names. The
 /// world node stands on [`RealRobots`], which reads the fine maps by the scenario's rule; the nf
 /// agents explore the room (a free-standing 2 × 2 m block in a 10 × 10 m room) to completion
 /// through ROS 2 alone, without a collision.
@@ -144,15 +144,22 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
         let (opts, stop) = (&opts, &stop);
         // 20 simulated seconds per second: a cell's drive in a fraction of the step timeout; a
         // robot held up 2 s by the world node is held up 40 s simulated.
-        let team = s.spawn(move || run_continuous_stand_in(opts, world, 20.0, stop).unwrap());
+        let sim = Nav2SimOptions {
+            realtime: 20.0,
+            ..Default::default()
+        };
+        let team = s.spawn(move || run_nav2_sim(opts, world, &sim, stop).unwrap());
         let result = run_team(s, opts, &spec);
         stop.store(true, Ordering::Relaxed);
         (result, team.join().unwrap())
     });
     let r = result.unwrap();
     eprintln!(
-        "continuous robots: {} timesteps, {:.1} s simulated, {} goals aborted, explored {:.3}",
-        r.metrics.tns, run.time, run.aborted, r.metrics.explored
+        "continuous robots: {} timesteps, {:.1} s simulated, {:?}, explored {:.3}",
+        r.metrics.tns,
+        run.time,
+        run.summary(),
+        r.metrics.explored
     );
     assert!(r.metrics.completed, "no frontier left: {:?}", r.metrics);
     assert_eq!(r.absent_robot_steps, 0);
@@ -164,7 +171,11 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
         let cells = &run.cells[i];
         assert!(cells.len() > 3, "robot {i} hardly moved: {cells:?}");
         assert!(cells.iter().all(|&p| truth.is_free(p)), "{cells:?}");
-        assert!(run.goals[i].len() > 3, "robot {i}: {:?}", run.goals[i]);
+        assert!(
+            run.outcomes[i].len() > 3,
+            "robot {i}: {:?}",
+            run.outcomes[i]
+        );
         // (A robot that was still driving when the world node ended may have gone on.)
         assert!(cells.contains(&at), "robot {i}: {at:?} not in {cells:?}");
     }

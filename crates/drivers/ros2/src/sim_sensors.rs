@@ -1,43 +1,14 @@
-//! The continuous world as a stand-in for a real robot team over ROS 2: each simulated
-//! differential-drive robot publishes what a TurtleBot with a lidar and SLAM would —
-//! `/robot<i>/scan` (`sensor_msgs/LaserScan`), `/robot<i>/map` (its own fine occupancy grid,
-//! `nav_msgs/OccupancyGrid`) and `/robot<i>/pose` — and drives to the cell each
-//! `/robot<i>/goal_pose` names with the continuous world's local planner, the way nav2 would
-//! drive to a goal. [`crate::RealRobots`] (the world node of `launch --ros2-robots`) reads the
-//! fine maps through the paper's rule, as it would a real robot's.
+//! What the continuous world's robots sense, as ROS 2 messages: a robot's lidar as
+//! `sensor_msgs/LaserScan`, its own fine occupancy grid as `nav_msgs/OccupancyGrid`, its pose
+//! as `geometry_msgs/PoseStamped` — for the nav2 sim ([`crate::nav2_sim`]) and the recorder.
 //!
 //! Coordinates: the world's x runs right and y down from the map's top-left corner; ROS's
 //! `map` frame has y up from the bottom-left corner, shifted and rotated by the map's origin
-//! (the map_server convention, as [`crate::MapFrame`]), so y and headings are mirrored. Stamps
-//! are wall clock, as every madenet topic's. Each robot's scan and map go out when its lidar
-//! has scanned (the robots' scans are staggered over the scan period). A goal is reached when
-//! the robot has entered its cell ([`madenet_continuous::LocalPlanner::entered`]); a goal the
-//! local planner finds impassable is dropped (nav2 aborts it) and the robot stays.
+//! (the map_server convention, as [`crate::MapFrame`]), so y and headings are mirrored.
 
 use crate::msgs::{LaserScan, OccupancyGrid, PoseStamped, Time};
-use crate::{
-    header, map_qos, stamp, MapFrame, Publisher, QosProfile, Ros2Error, Ros2Options, Subscription,
-};
-use madenet_continuous::{Collisions, Command, ContinuousWorld, LocalPlanner, Pose};
-use madenet_map::Pos;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant, SystemTime};
-
-/// What a stand-in run did, for checks: per robot the cells it stood in (in order, each once
-/// per visit) and the goals it was sent; the team's collisions; the simulated seconds.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct StandInRun {
-    /// Per robot, the cells it passed through, in order.
-    pub cells: Vec<Vec<Pos>>,
-    /// Per robot, the goal cells it was sent.
-    pub goals: Vec<Vec<Pos>>,
-    /// Goals dropped because the local planner found them impassable.
-    pub aborted: usize,
-    /// Collisions counted by the world.
-    pub collisions: Collisions,
-    /// Simulated seconds.
-    pub time: f64,
-}
+use crate::{header, MapFrame};
+use madenet_continuous::{ContinuousWorld, Pose};
 
 /// The ROS `/robot<i>/scan` topic of robot `i`.
 pub fn scan_topic(i: usize) -> String {
@@ -47,129 +18,6 @@ pub fn scan_topic(i: usize) -> String {
 /// The sensor frame of robot `i`'s scans (`robot<i>/base_link`, REP 105).
 pub fn base_frame(i: usize) -> String {
     format!("robot{i}/base_link")
-}
-
-/// Runs `world`'s robots as a ROS 2 robot team until `stop` is set: each robot publishes its
-/// pose at 10 Hz; every scan its `LaserScan` and, when it changed, its fine map.
-/// `realtime` simulated seconds pass per wall-clock second (≤ 0: as fast as it runs).
-pub fn run_continuous_stand_in(
-    opts: &Ros2Options,
-    mut world: ContinuousWorld,
-    realtime: f64,
-    stop: &AtomicBool,
-) -> Result<StandInRun, Ros2Error> {
-    let ctx = opts.context()?;
-    let n = world.robots();
-    let frame = MapFrame::of(world.coarse_truth());
-    let cell_size = world.scenario().cell_size;
-    let cfg = *world.config();
-    let mut nodes = Vec::with_capacity(n);
-    let mut pubs: Vec<(
-        Publisher<LaserScan>,
-        Publisher<OccupancyGrid>,
-        Publisher<PoseStamped>,
-    )> = Vec::with_capacity(n);
-    let mut goal_subs: Vec<Subscription<PoseStamped>> = Vec::with_capacity(n);
-    for i in 0..n {
-        let node = ctx.create_node(&format!("stand_in{i}"))?;
-        let [map_t, pose_t, goal_t] = crate::topics(i);
-        pubs.push((
-            node.create_pub(&scan_topic(i), QosProfile::default())?,
-            node.create_pub(&map_t, map_qos())?,
-            node.create_pub(&pose_t, QosProfile::default())?,
-        ));
-        goal_subs.push(node.create_sub(&goal_t, QosProfile::default())?);
-        nodes.push(node);
-    }
-    let mut planners = vec![LocalPlanner::default(); n];
-    let mut targets: Vec<Option<Pos>> = vec![None; n];
-    let mut run = StandInRun {
-        cells: (0..n).map(|i| vec![world.cell_of(i)]).collect(),
-        goals: vec![Vec::new(); n],
-        ..Default::default()
-    };
-    let scan_every = (1.0 / (cfg.lidar.rate_hz * cfg.control_period))
-        .round()
-        .max(1.0) as u64;
-    // Poses at 10 Hz (a robot's odometry or localization rate), at least every period.
-    let pose_every = (0.1 / cfg.control_period).round().max(1.0) as u64;
-    let mut last_maps: Vec<Option<Vec<i8>>> = vec![None; n];
-    let started = Instant::now();
-    let mut ticks: u64 = 0;
-    while !stop.load(Ordering::Relaxed) {
-        for i in 0..n {
-            while let Some(g) = goal_subs[i].recv_timeout(Duration::ZERO)? {
-                let (x, y) = (g.pose.position.x, g.pose.position.y);
-                if let Some(cell) = frame.cell_at(x, y) {
-                    if targets[i] != Some(cell) {
-                        planners[i].reset();
-                    }
-                    targets[i] = Some(cell);
-                    run.goals[i].push(cell);
-                }
-            }
-        }
-        let mut commands = vec![(0.0, 0.0); n];
-        for i in 0..n {
-            let Some(target) = targets[i] else { continue };
-            let pose = world.pose(i);
-            if world.cell_of(i) == target && planners[i].entered(pose, target, cell_size) {
-                targets[i] = None;
-                planners[i].reset();
-                continue;
-            }
-            let neighbours = world.neighbours(i);
-            let replan = ticks.is_multiple_of(scan_every);
-            match planners[i].command(
-                &cfg,
-                cell_size,
-                world.map(i),
-                pose,
-                world.velocity(i),
-                target,
-                &neighbours,
-                replan,
-            ) {
-                Command::Drive(v, w) | Command::Held(v, w) => commands[i] = (v, w),
-                Command::Impassable => {
-                    targets[i] = None;
-                    planners[i].reset();
-                    run.aborted += 1;
-                }
-            }
-        }
-        world.step(&commands);
-        ticks += 1;
-        let t = stamp(SystemTime::now());
-        for (i, (scan_pub, map_pub, pose_pub)) in pubs.iter().enumerate() {
-            let cell = world.cell_of(i);
-            if run.cells[i].last() != Some(&cell) {
-                run.cells[i].push(cell);
-            }
-            // The world scans robot i at the end of the periods where (ticks + i) is a
-            // multiple of the scan period, from the pose it has now.
-            if (ticks + i as u64).is_multiple_of(scan_every) {
-                scan_pub.publish(&laser_scan(&world, i, t))?;
-                let grid = fine_grid(&world, i, &frame, t);
-                if last_maps[i].as_ref() != Some(&grid.data) {
-                    map_pub.publish(&grid)?;
-                    last_maps[i] = Some(grid.data);
-                }
-            }
-            if ticks.is_multiple_of(pose_every) {
-                pose_pub.publish(&pose_stamped(world.pose(i), &frame, t))?;
-            }
-        }
-        if realtime > 0.0 {
-            let due = Duration::from_secs_f64(world.time() / realtime);
-            if let Some(wait) = due.checked_sub(started.elapsed()) {
-                std::thread::sleep(wait);
-            }
-        }
-    }
-    run.collisions = world.collisions();
-    run.time = world.time();
-    Ok(run)
 }
 
 /// A world point (x right, y down from the top-left corner, metres) in the `map` frame.
@@ -275,7 +123,7 @@ pub(crate) fn fine_grid(
 mod tests {
     use super::*;
     use madenet_continuous::{ContinuousConfig, Scene};
-    use madenet_map::{OccGrid, Occupancy};
+    use madenet_map::{OccGrid, Occupancy, Pos};
     use std::sync::Arc;
 
     /// A 10 × 10 m room: a wall at x ∈ [7, 8] m (every row) and one at image y ∈ [8, 9] m
