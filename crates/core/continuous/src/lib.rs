@@ -48,4 +48,4 @@ pub use local::{Command, LocalPlanner, Neighbour};
 pub use mapping::RobotMap;
 pub use navigate::{NavError, NavParams, NavStatus, Navigator};
 pub use scene::Scene;
-pub use world::{Collisions, ContinuousError, ContinuousWorld, Pose};
+pub use world::{normalize_angle, Collisions, ContinuousError, ContinuousWorld, Pose};

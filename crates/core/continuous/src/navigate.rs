@@ -7,8 +7,9 @@
 //! a goal off the map ([`NavError::GoalOutsideMap`]), on an occupied pixel of the robot's map
 //! ([`NavError::GoalOccupied`]) or without a path ([`NavError::NoValidPath`]). Then
 //! [`Navigator::step`], once per control period before [`ContinuousWorld::step`], gives the
-//! command and reports [`NavStatus::Succeeded`] within `xy_goal_tolerance` of the goal point,
-//! or a failure: the map closed every path ([`NavError::NoValidPath`]), or the robot moved
+//! command and reports [`NavStatus::Succeeded`] within `xy_goal_tolerance` of the goal point
+//! (and, for a goal with a heading, [`Navigator::start_pose`], then turned in place to within
+//! `yaw_goal_tolerance` of it), or a failure: the map closed every path ([`NavError::NoValidPath`]), or the robot moved
 //! less than `progress_required_movement_radius` in `progress_movement_time_allowance`
 //! ([`NavError::FailedToMakeProgress`], nav2's `SimpleProgressChecker`).
 //!
@@ -40,6 +41,10 @@ pub struct NavParams {
     /// Metres from the goal point within which the goal is reached (nav2's goal checker
     /// `xy_goal_tolerance`, default 0.25).
     pub xy_goal_tolerance: f64,
+    /// Radians from a goal's heading within which it is reached, once the robot is within
+    /// `xy_goal_tolerance` (nav2's `SimpleGoalChecker.yaw_goal_tolerance`, default 0.25; the
+    /// checker is stateful, as nav2's default: once in position, the robot only turns).
+    pub yaw_goal_tolerance: f64,
     /// Metres the robot must move from where the progress checker last reset (nav2's
     /// `SimpleProgressChecker.required_movement_radius`, default 0.5).
     pub progress_required_movement_radius: f64,
@@ -60,6 +65,7 @@ impl Default for NavParams {
     fn default() -> Self {
         NavParams {
             xy_goal_tolerance: 0.25,
+            yaw_goal_tolerance: 0.25,
             progress_required_movement_radius: 0.5,
             progress_movement_time_allowance: 10.0,
             allow_unknown: true,
@@ -99,7 +105,8 @@ pub enum NavStatus {
         /// Metres left along the current path.
         distance_remaining: f64,
     },
-    /// The robot stands within `xy_goal_tolerance` of the goal (the navigator is idle again).
+    /// The robot stands within `xy_goal_tolerance` of the goal, facing its heading if it has
+    /// one (the navigator is idle again).
     Succeeded,
     /// Navigation failed (the navigator is idle again).
     Failed(NavError),
@@ -110,6 +117,10 @@ pub enum NavStatus {
 pub struct Navigator {
     params: NavParams,
     goal: Option<(f64, f64)>,
+    /// The goal's heading (world frame), if it has one.
+    goal_yaw: Option<f64>,
+    /// Within `xy_goal_tolerance` once: only the heading is left (stateful goal checker).
+    in_position: bool,
     /// The global path, pixel centres in metres, from the robot's pixel to the goal's.
     path: Vec<(f64, f64)>,
     /// Metres along the path from each point to its end.
@@ -133,6 +144,8 @@ impl Navigator {
         Navigator {
             params,
             goal: None,
+            goal_yaw: None,
+            in_position: false,
             path: Vec::new(),
             remaining: Vec::new(),
             along: 0,
@@ -172,12 +185,28 @@ impl Navigator {
         world: &ContinuousWorld,
         i: usize,
     ) -> Result<(), NavError> {
+        self.start_pose(goal, None, world, i)
+    }
+
+    /// [`Navigator::start`] with a heading to reach as well: `yaw` (rad, the world's
+    /// [`Pose::theta`]), within `yaw_goal_tolerance` once in position (turning in place).
+    pub fn start_pose(
+        &mut self,
+        goal: (f64, f64),
+        yaw: Option<f64>,
+        world: &ContinuousWorld,
+        i: usize,
+    ) -> Result<(), NavError> {
         self.cancel();
+        if yaw.is_some_and(|y| !y.is_finite()) {
+            return Err(NavError::GoalOutsideMap);
+        }
         let map = world.map(i);
         goal_pixel(map, goal)?;
         let pose = world.pose(i);
         self.plan(map, pose, goal)?;
         self.goal = Some(goal);
+        self.goal_yaw = yaw;
         self.planned_at = world.time();
         self.progress = ((pose.x, pose.y), world.time());
         Ok(())
@@ -186,6 +215,8 @@ impl Navigator {
     /// Forgets the goal: the navigator is idle.
     pub fn cancel(&mut self) {
         self.goal = None;
+        self.goal_yaw = None;
+        self.in_position = false;
         self.path.clear();
         self.remaining.clear();
         self.along = 0;
@@ -210,9 +241,24 @@ impl Navigator {
             nav.cancel();
             NavStatus::Failed(e)
         };
-        if (pose.x - goal.0).hypot(pose.y - goal.1) <= self.params.xy_goal_tolerance {
-            self.cancel();
-            return NavStatus::Succeeded;
+        if self.in_position
+            || (pose.x - goal.0).hypot(pose.y - goal.1) <= self.params.xy_goal_tolerance
+        {
+            self.in_position = true;
+            let turn = self
+                .goal_yaw
+                .map_or(0.0, |yaw| crate::world::normalize_angle(yaw - pose.theta));
+            if turn.abs() <= self.params.yaw_goal_tolerance {
+                self.cancel();
+                return NavStatus::Succeeded;
+            }
+            // Turn in place toward the heading (always safe), proportionally, so the turn
+            // rate's acceleration limit does not swing it past.
+            let max = world.config().robot.max_turn_rate;
+            return NavStatus::Driving {
+                command: (0.0, (2.0 * turn).clamp(-max, max)),
+                distance_remaining: 0.0,
+            };
         }
         // The progress checker (nav2's SimpleProgressChecker).
         let (base, since) = self.progress;

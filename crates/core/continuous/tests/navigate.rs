@@ -221,3 +221,33 @@ fn a_robot_that_does_not_move_fails_to_make_progress() {
     assert_eq!(end, Some(NavStatus::Failed(NavError::FailedToMakeProgress)));
     assert!(world.time() > 10.0 - 1e-9, "{}", world.time());
 }
+
+/// A goal with a heading: in position first, then it turns in place until it faces the
+/// heading within nav2's `yaw_goal_tolerance` (0.25 rad), for headings all around.
+#[test]
+fn a_goal_with_a_heading_is_reached_facing_it() {
+    use madenet_continuous::normalize_angle;
+    let grid = room(&"........\n".repeat(8));
+    let mut world = world_on(&grid, Pos::new(1, 1), 1);
+    let mut nav = Navigator::new(NavParams::default());
+    let goals = [((5.5, 5.5), 3.0), ((2.5, 5.5), -1.2), ((5.0, 2.0), 0.4)];
+    for (goal, yaw) in goals {
+        nav.start_pose(goal, Some(yaw), &world, 0).unwrap();
+        let end = drive(&mut world, &mut nav, 120.0);
+        let p = world.pose(0);
+        assert_eq!(end, Some(NavStatus::Succeeded), "{goal:?} {yaw}: {p:?}");
+        let off = normalize_angle(p.theta - yaw).abs();
+        assert!(
+            off <= 0.25 + 1e-9,
+            "{goal:?}: heading {} for {yaw}",
+            p.theta
+        );
+        // In position once: it may drift a little while it turns (nav2's stateful checker).
+        assert!((p.x - goal.0).hypot(p.y - goal.1) < 0.4, "{goal:?}: {p:?}");
+    }
+    assert_eq!(
+        nav.start_pose((3.0, 3.0), Some(f64::NAN), &world, 0),
+        Err(NavError::GoalOutsideMap)
+    );
+    assert_eq!(world.collisions().obstacle, 0);
+}

@@ -17,7 +17,8 @@
 //! - a well-formed goal is accepted and preempts the one running, which ends ABORTED (nav2's
 //!   `SimpleActionServer` aborts the old goal when it takes a new one); a goal whose pose is
 //!   not finite is rejected;
-//! - it then ends by its outcome: SUCCEEDED within nav2's goal tolerance (0.25 m), or ABORTED
+//! - it then ends by its outcome: SUCCEEDED within nav2's goal tolerance (0.25 m, then the
+//!   goal's heading within 0.25 rad, turning in place, as nav2's stateful goal checker), or ABORTED
 //!   with the planner's or controller's error code ([`nav2_error`]): GOAL_OUTSIDE_MAP,
 //!   GOAL_OCCUPIED, NO_VALID_PATH, FAILED_TO_MAKE_PROGRESS (nav2's progress checker), or
 //!   TF_ERROR for a frame the robot does not have; a cancel ends it CANCELED;
@@ -236,31 +237,32 @@ fn thresholded(mut grid: crate::msgs::OccupancyGrid) -> crate::msgs::OccupancyGr
     grid
 }
 
-/// Where a goal pose is in world coordinates, if its frame is one the robot has (`map`,
-/// `odom` — the same here —, `base_link`, or empty for `map`).
+/// Where a goal pose is in world coordinates, and its heading there ([`Pose::theta`]), if its
+/// frame is one the robot has (`map`, `odom` — the same here —, `base_link`, or empty for
+/// `map`). The heading is the quaternion's yaw as tf2's `getYaw` reads it (an all-zero
+/// quaternion: 0), as nav2's goal checker does.
 fn goal_in_world(
     goal: &PoseStamped,
     robot: Pose,
     frame: &MapFrame,
     ns: &str,
     naming: TfNaming,
-) -> Option<(f64, f64)> {
+) -> Option<(f64, f64, f64)> {
     let f = goal.header.frame_id.trim_start_matches('/');
     let (gx, gy) = (goal.pose.position.x, goal.pose.position.y);
+    let gyaw = crate::tf::yaw(&goal.pose.orientation);
     let is = |name: &str| f == naming.frame(ns, name) || f == name;
-    if f.is_empty() || is("map") || is("odom") {
-        Some(world_point(frame, gx, gy))
+    let (x, y, yaw) = if f.is_empty() || is("map") || is("odom") {
+        (gx, gy, gyaw)
     } else if is("base_link") {
         let (rx, ry, ryaw) = map_pose(frame, robot);
         let (s, c) = ryaw.sin_cos();
-        Some(world_point(
-            frame,
-            rx + gx * c - gy * s,
-            ry + gx * s + gy * c,
-        ))
+        (rx + gx * c - gy * s, ry + gx * s + gy * c, ryaw + gyaw)
     } else {
-        None
-    }
+        return None;
+    };
+    let (wx, wy) = world_point(frame, x, y);
+    Some((wx, wy, frame.origin[2] - yaw))
 }
 
 fn nav2_code(e: NavError) -> u16 {
@@ -481,7 +483,8 @@ impl Nav2Team {
             let why = "the goal's frame is not in the robot's TF tree";
             return end(r, outcomes, id, status::ABORTED, nav2_error::TF_ERROR, why);
         };
-        match r.nav.start(target, world, i) {
+        let (x, y, yaw) = target;
+        match r.nav.start_pose((x, y), Some(yaw), world, i) {
             Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
             Err(e) => failed(r, outcomes, id, e)?,
         }

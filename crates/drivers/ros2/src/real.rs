@@ -199,7 +199,10 @@ impl Ground for RealRobots {
             .collect();
         for (i, target) in targets.iter().enumerate() {
             if let Some(g) = target {
-                let msg = pose_stamped(&self.frame, *g, t);
+                // Facing the way it moves: a nav2 robot turns to a goal's heading once there.
+                let (p, mut msg) = (self.positions[i], pose_stamped(&self.frame, *g, t));
+                let (dx, dy) = ((g.col - p.col) as f64, (p.row - g.row) as f64);
+                msg.pose.orientation = crate::tf::from_yaw(self.frame.origin[2] + dy.atan2(dx));
                 self.goals[i]
                     .publish(&msg)
                     .map_err(|e| format!("publishing {}: {e}", crate::topics(i)[2]))?;
