@@ -13,8 +13,9 @@ use madenet_ros2::actions::{
 use madenet_ros2::map_updates::MapSubscriber;
 use madenet_ros2::msgs::{Header, PoseStamped, Time};
 use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
-use madenet_ros2::tf::{TfListener, TfNaming};
+use madenet_ros2::tf::{from_yaw, yaw, TfListener, TfNaming};
 use madenet_ros2::{loopback_router, MapFrame};
+use std::f64::consts::PI;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -268,8 +269,12 @@ fn three_clients_drive_three_robots_at_once() {
                     client.wait_for_server(WAIT).unwrap(),
                     "no {ns}/navigate_to_pose"
                 );
+                // Each goal with a heading: robot i ends facing 1 + i rad in `map`.
+                let heading = 1.0 + i as f64;
                 for &(x, y) in &goals {
-                    let sent = client.send_goal(goal("map", x, y), WAIT).unwrap().unwrap();
+                    let mut g = goal("map", x, y);
+                    g.pose.pose.orientation = from_yaw(heading);
+                    let sent = client.send_goal(g, WAIT).unwrap().unwrap();
                     assert_eq!(
                         outcome(&sent, WAIT),
                         (status::SUCCEEDED, 0),
@@ -287,10 +292,13 @@ fn three_clients_drive_three_robots_at_once() {
                         Time::default(),
                         Duration::from_secs(1),
                     ) {
-                        break (t.translation.x, t.translation.y);
+                        break (t.translation.x, t.translation.y, yaw(&t.rotation));
                     }
                     assert!(Instant::now() < deadline, "{ns}: no map → base_link");
                 };
+                let turn = (at.2 - heading + PI).rem_euclid(2.0 * PI) - PI;
+                assert!(turn.abs() < 0.3, "{ns} faces {} rad, not {heading}", at.2);
+                let at = (at.0, at.1);
                 let (gx, gy) = goals[1];
                 let off = (at.0 - gx).hypot(at.1 - gy);
                 assert!(off < 0.4, "{ns} at {at:?}, its goal ({gx}, {gy}): {off} m");
