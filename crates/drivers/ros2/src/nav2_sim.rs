@@ -18,12 +18,15 @@
 //!   `SimpleActionServer` aborts the old goal when it takes a new one); a goal whose pose is
 //!   not finite is rejected;
 //! - it then ends by its outcome: SUCCEEDED within nav2's goal tolerance (0.25 m, then the
-//!   goal's heading within 0.25 rad, turning in place, as nav2's stateful goal checker), or ABORTED
-//!   with the planner's or controller's error code ([`nav2_error`]): GOAL_OUTSIDE_MAP,
-//!   GOAL_OCCUPIED, NO_VALID_PATH, FAILED_TO_MAKE_PROGRESS (nav2's progress checker), or
-//!   TF_ERROR for a frame the robot does not have; a cancel ends it CANCELED;
-//! - feedback (current pose, distance and estimated time remaining, navigation time, no
-//!   recoveries) every 0.2 s of simulated time.
+//!   goal's heading within 0.25 rad, turning in place, as nav2's stateful goal checker), or
+//!   ABORTED with the planner's or controller's error code ([`nav2_error`]): GOAL_OUTSIDE_MAP,
+//!   GOAL_OCCUPIED (at once, as nav2's tree: no recovery helps those), NO_VALID_PATH or
+//!   FAILED_TO_MAKE_PROGRESS (nav2's progress checker) after the tree's six retries, each
+//!   after one of its recoveries in turn (clear the costmaps, spin 1.57 rad, wait 5 s, back up
+//!   0.3 m), or at once TF_ERROR for a frame the robot does not have; a cancel ends it
+//!   CANCELED;
+//! - feedback (current pose, distance and estimated time remaining, navigation time, number
+//!   of recoveries) every 0.2 s of simulated time, recovering or not.
 //!
 //! The navigation itself is [`madenet_continuous::Navigator`]; the ground truth (collisions,
 //! the true map) stays inside, in [`Nav2SimRun`] and what the run loop's sinks record
@@ -161,6 +164,106 @@ pub fn namespace(i: usize) -> String {
     format!("/robot{i}")
 }
 
+/// A goal being pursued.
+#[derive(Clone, Copy, Debug)]
+struct Active {
+    /// Its action id (`None`: it came on `goal_pose`).
+    id: GoalId,
+    /// Where it is (world x, y) and the heading to face there ([`Pose::theta`]).
+    target: (f64, f64, f64),
+    /// When it was accepted, and when its last feedback went out (simulated s).
+    since: f64,
+    last_feedback: f64,
+    /// Retries of the navigation so far (at most [`RETRIES`]).
+    retries: u16,
+    /// Recovery actions run for it so far: feedback's `number_of_recoveries`.
+    recoveries: u16,
+    /// The recovery under way, if one is.
+    recovery: Option<Recovery>,
+    /// Metres left along its path at the last step.
+    distance_remaining: f64,
+}
+
+/// Retries of a goal's navigation in nav2's default behaviour tree
+/// (`navigate_to_pose_w_replanning_and_recovery.xml`, as of nav2 Jazzy): its outer
+/// `RecoveryNode number_of_retries="6"`.
+const RETRIES: u16 = 6;
+
+/// That tree's recoveries, taken in turn (its `RoundRobin`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Behaviour {
+    /// Clear the local and global costmaps: nothing to clear here (a robot's map is its SLAM
+    /// map), done at once.
+    ClearCostmaps,
+    /// Turn in place 1.57 rad counter-clockwise at 1 rad/s (nav2's `Spin`; 10 s allowed).
+    Spin,
+    /// Stand still 5 s (nav2's `Wait`).
+    Wait,
+    /// Back up 0.30 m at 0.15 m/s, stopping short of anything behind (nav2's `BackUp`;
+    /// 10 s allowed).
+    BackUp,
+}
+
+const ROUND_ROBIN: [Behaviour; 4] = [
+    Behaviour::ClearCostmaps,
+    Behaviour::Spin,
+    Behaviour::Wait,
+    Behaviour::BackUp,
+];
+
+/// A recovery under way.
+#[derive(Clone, Copy, Debug)]
+struct Recovery {
+    behaviour: Behaviour,
+    /// When it started (simulated s) and where the robot was.
+    since: f64,
+    from: Pose,
+    /// Radians turned so far (Spin) and the heading at the last step.
+    turned: f64,
+    last_theta: f64,
+}
+
+impl Recovery {
+    /// Robot `i`'s command this control period; `None` once the recovery is done.
+    fn command(&mut self, world: &ContinuousWorld, i: usize, now: f64) -> Option<(f64, f64)> {
+        let pose = world.pose(i);
+        let elapsed = now - self.since;
+        match self.behaviour {
+            Behaviour::ClearCostmaps => None,
+            Behaviour::Spin => {
+                self.turned +=
+                    madenet_continuous::normalize_angle(pose.theta - self.last_theta).abs();
+                self.last_theta = pose.theta;
+                // Counter-clockwise in `map` (y up) is clockwise in the world (y down).
+                (self.turned < 1.57 && elapsed < 10.0).then_some((0.0, -1.0))
+            }
+            Behaviour::Wait => (elapsed < 5.0).then_some((0.0, 0.0)),
+            Behaviour::BackUp => {
+                let moved = (pose.x - self.from.x).hypot(pose.y - self.from.y);
+                (moved < 0.30 && elapsed < 10.0 && clear_behind(world, i)).then_some((-0.15, 0.0))
+            }
+        }
+    }
+}
+
+/// Whether robot `i`'s own map shows nothing occupied within 0.15 m behind its footprint.
+fn clear_behind(world: &ContinuousWorld, i: usize) -> bool {
+    let (p, map) = (world.pose(i), world.map(i));
+    let reach = world.config().robot.radius + 0.15;
+    let res = map.resolution();
+    let steps = (reach / (res / 2.0)).ceil() as usize;
+    (1..=steps).all(|k| {
+        let d = k as f64 * res / 2.0;
+        let (x, y) = (p.x - d * p.theta.cos(), p.y - d * p.theta.sin());
+        let (r, c) = ((y / res).floor(), (x / res).floor());
+        r >= 0.0
+            && c >= 0.0
+            && (r as usize) < map.height()
+            && (c as usize) < map.width()
+            && !map.occupied(r as usize, c as usize)
+    })
+}
+
 /// A goal's action id; `None` for one that came on `goal_pose`.
 type GoalId = Option<Uuid>;
 
@@ -186,8 +289,8 @@ struct Robot {
     _node: Node,
     server: ActionServer<NavigateToPose>,
     nav: Navigator,
-    /// The goal being navigated: id, when it was accepted (simulated s), last feedback.
-    current: Option<(GoalId, f64, f64)>,
+    /// The goal being pursued.
+    current: Option<Active>,
     /// `goal_pose`: goals as RViz's "2D Goal Pose" sends them (bt_navigator takes them as
     /// action goals of its own).
     goal_pose: Subscription<PoseStamped>,
@@ -393,10 +496,17 @@ impl Nav2Team {
             return Err(e);
         }
         for (i, r) in self.robots.iter_mut().enumerate() {
-            if let Some((id, _, _)) = r.current.take() {
+            if let Some(goal) = r.current.take() {
                 let why = "the simulation stopped";
                 let code = nav2_error::UNKNOWN;
-                end(r, &mut self.run.outcomes[i], id, status::ABORTED, code, why)?;
+                end(
+                    r,
+                    &mut self.run.outcomes[i],
+                    goal.id,
+                    status::ABORTED,
+                    code,
+                    why,
+                )?;
             }
         }
         self.run.refused = self.robots.iter().map(|r| r.server.refused()).sum();
@@ -438,7 +548,7 @@ impl Nav2Team {
                         (Some(r.server.accept(g)?), pose)
                     }
                     Some(ActionEvent::Cancel(id)) => {
-                        if r.current.is_some_and(|c| c.0 == Some(id)) {
+                        if r.current.is_some_and(|c| c.id == Some(id)) {
                             r.current = None;
                             r.nav.cancel();
                         }
@@ -469,83 +579,115 @@ impl Nav2Team {
         let r = &mut self.robots[i];
         let outcomes = &mut self.run.outcomes[i];
         let target = goal_in_world(pose, world.pose(i), &self.frame, &r.ns, self.sim.naming);
-        if let Some((old, _, _)) = r.current.take() {
-            end(
-                r,
-                outcomes,
-                old,
-                status::ABORTED,
-                0,
-                "preempted by a new goal",
-            )?;
+        if let Some(old) = r.current.take() {
+            let why = "preempted by a new goal";
+            end(r, outcomes, old.id, status::ABORTED, 0, why)?;
         }
         let Some(target) = target else {
             let why = "the goal's frame is not in the robot's TF tree";
             return end(r, outcomes, id, status::ABORTED, nav2_error::TF_ERROR, why);
         };
+        let mut goal = Active {
+            id,
+            target,
+            since: now,
+            last_feedback: f64::NEG_INFINITY,
+            retries: 0,
+            recoveries: 0,
+            recovery: None,
+            distance_remaining: 0.0,
+        };
         let (x, y, yaw) = target;
         match r.nav.start_pose((x, y), Some(yaw), world, i) {
-            Ok(()) => r.current = Some((id, now, f64::NEG_INFINITY)),
-            Err(e) => failed(r, outcomes, id, e)?,
+            Ok(()) => r.current = Some(goal),
+            Err(e) => {
+                r.current = recover_or_end(r, outcomes, &mut goal, e, world.pose(i), now)?;
+            }
         }
         Ok(())
     }
 
-    /// Each navigating robot's command for this step, its feedback, and the goals it ended.
+    /// Each robot's command for this step (navigating or recovering), its feedback, and the
+    /// goals it ended.
     fn navigate(&mut self) -> Result<Vec<(f64, f64)>, Ros2Error> {
         let (world, frame, sim, now) = (&self.world, &self.frame, &self.sim, self.world.time());
-        let cfg = world.config();
+        let speed = world.config().robot.max_speed.max(1e-3);
         let n = self.robots.len();
         let mut commands = vec![(0.0, 0.0); n];
         for (i, command_i) in commands.iter_mut().enumerate() {
             let neighbours = world.neighbours(i);
             let r = &mut self.robots[i];
             let outcomes = &mut self.run.outcomes[i];
-            let Some((id, since, last_fb)) = r.current else {
+            let Some(mut goal) = r.current.take() else {
                 self.shown[i] = (None, Vec::new());
                 continue;
             };
-            match r.nav.step(world, i, &neighbours) {
-                NavStatus::Driving {
-                    command,
-                    distance_remaining,
-                } => {
-                    *command_i = command;
-                    self.shown[i] = shown(world, &r.nav);
-                    if let Some(id) = id.filter(|_| now - last_fb >= FEEDBACK_PERIOD) {
-                        r.current = Some((Some(id), since, now));
-                        let (x, y, yaw) = map_pose(frame, world.pose(i));
-                        let mut current_pose = PoseStamped {
-                            header: Header {
-                                stamp: sim_stamp(now),
-                                frame_id: sim.naming.frame(&r.ns, "map"),
-                            },
-                            ..Default::default()
+            let pose = world.pose(i);
+            let mut next;
+            if let Some(mut rec) = goal.recovery {
+                match rec.command(world, i, now) {
+                    Some(command) => {
+                        *command_i = command;
+                        goal.recovery = Some(rec);
+                        next = Some(goal);
+                    }
+                    // Done: the goal again (nav2's RecoveryNode retries its pipeline).
+                    None => {
+                        goal.recovery = None;
+                        let (x, y, yaw) = goal.target;
+                        next = match r.nav.start_pose((x, y), Some(yaw), world, i) {
+                            Ok(()) => Some(goal),
+                            Err(e) => recover_or_end(r, outcomes, &mut goal, e, pose, now)?,
                         };
-                        current_pose.pose = frame.pose(x, y, yaw);
-                        let speed = cfg.robot.max_speed.max(1e-3);
-                        r.server.publish_feedback(
-                            id,
-                            NavigateToPoseFeedback {
-                                current_pose,
-                                navigation_time: seconds(now - since),
-                                estimated_time_remaining: seconds(distance_remaining / speed),
-                                number_of_recoveries: 0,
-                                distance_remaining: distance_remaining as f32,
-                            },
-                        )?;
                     }
                 }
-                NavStatus::Succeeded => {
-                    r.current = None;
-                    end(r, outcomes, id, status::SUCCEEDED, 0, "")?;
+            } else {
+                match r.nav.step(world, i, &neighbours) {
+                    NavStatus::Driving {
+                        command,
+                        distance_remaining,
+                    } => {
+                        *command_i = command;
+                        goal.distance_remaining = distance_remaining;
+                        self.shown[i] = shown(world, &r.nav);
+                        next = Some(goal);
+                    }
+                    NavStatus::Succeeded => {
+                        end(r, outcomes, goal.id, status::SUCCEEDED, 0, "")?;
+                        next = None;
+                    }
+                    NavStatus::Failed(e) => {
+                        next = recover_or_end(r, outcomes, &mut goal, e, pose, now)?;
+                    }
+                    NavStatus::Idle => next = None,
                 }
-                NavStatus::Failed(e) => {
-                    r.current = None;
-                    failed(r, outcomes, id, e)?;
-                }
-                NavStatus::Idle => r.current = None,
             }
+            // Feedback every FEEDBACK_PERIOD, recovering or not (action goals only).
+            if let Some(g) = next.as_mut() {
+                if let Some(id) = g.id.filter(|_| now - g.last_feedback >= FEEDBACK_PERIOD) {
+                    g.last_feedback = now;
+                    let (x, y, yaw) = map_pose(frame, pose);
+                    let mut current_pose = PoseStamped {
+                        header: Header {
+                            stamp: sim_stamp(now),
+                            frame_id: sim.naming.frame(&r.ns, "map"),
+                        },
+                        ..Default::default()
+                    };
+                    current_pose.pose = frame.pose(x, y, yaw);
+                    r.server.publish_feedback(
+                        id,
+                        NavigateToPoseFeedback {
+                            current_pose,
+                            navigation_time: seconds(now - g.since),
+                            estimated_time_remaining: seconds(g.distance_remaining / speed),
+                            number_of_recoveries: g.recoveries as i16,
+                            distance_remaining: g.distance_remaining as f32,
+                        },
+                    )?;
+                }
+            }
+            r.current = next;
         }
         Ok(commands)
     }
@@ -746,21 +888,51 @@ pub fn run_nav2_sim(
     team.finish()
 }
 
-/// Ends goal `id` of robot `r` as ABORTED with the code and text of `e`.
-fn failed(
+/// After failure `e` of `goal`, as nav2's default behaviour tree goes on: a failure recovery
+/// can help (`WouldAPlannerRecoveryHelp`: NO_VALID_PATH; `WouldAControllerRecoveryHelp`:
+/// FAILED_TO_MAKE_PROGRESS) clears the costmap in context, then, while retries are left
+/// ([`RETRIES`]), runs the next of the tree's recoveries; otherwise the goal ends ABORTED with
+/// `e`'s code and text. (nav2 retries the planner or controller once after the context clear;
+/// clearing changes nothing here, so that retry is the same failure and is not simulated.)
+fn recover_or_end(
     r: &mut Robot,
     outcomes: &mut Vec<GoalOutcome>,
-    id: GoalId,
+    goal: &mut Active,
     e: NavError,
-) -> Result<(), Ros2Error> {
-    end(
-        r,
-        outcomes,
-        id,
-        status::ABORTED,
-        nav2_code(e),
-        &e.to_string(),
-    )
+    pose: Pose,
+    now: f64,
+) -> Result<Option<Active>, Ros2Error> {
+    let helps = matches!(e, NavError::NoValidPath | NavError::FailedToMakeProgress);
+    if helps {
+        goal.recoveries += 1; // the context clear
+    }
+    if !helps || goal.retries >= RETRIES {
+        end(
+            r,
+            outcomes,
+            goal.id,
+            status::ABORTED,
+            nav2_code(e),
+            &e.to_string(),
+        )?;
+        return Ok(None);
+    }
+    let behaviour = ROUND_ROBIN[goal.retries as usize % ROUND_ROBIN.len()];
+    goal.retries += 1;
+    // Each costmap clear and each behaviour counts (nav2's `increment_recovery_count`).
+    goal.recoveries += match behaviour {
+        Behaviour::ClearCostmaps => 2,
+        _ => 1,
+    };
+    tracing::debug!("{}: {e}; retry {} after {behaviour:?}", r.ns, goal.retries);
+    goal.recovery = Some(Recovery {
+        behaviour,
+        since: now,
+        from: pose,
+        turned: 0.0,
+        last_theta: pose.theta,
+    });
+    Ok(Some(*goal))
 }
 
 /// Ends goal `id` of robot `r` and notes its outcome (an unknown or ended action goal:

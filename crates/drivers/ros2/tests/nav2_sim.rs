@@ -127,7 +127,8 @@ fn a_client_drives_a_simulated_nav2_robot() {
     }
     assert!(feedbacks > 0, "no feedback");
 
-    // Off the map: aborted with the planner's code. An unknown frame: TF_ERROR.
+    // Off the map: aborted at once with the planner's code (no recovery helps that, in nav2's
+    // tree). An unknown frame: TF_ERROR.
     let off = send(goal("map", -50.0, 3.0)).expect("accepted");
     assert_eq!(
         outcome(&off, WAIT),
@@ -346,4 +347,62 @@ fn three_clients_drive_three_robots_at_once() {
     for (i, o) in run.outcomes.iter().enumerate() {
         assert_eq!(o.len(), 2, "robot {i}: {o:?}");
     }
+}
+
+/// A goal inside a closed box: the robot drives until its map closes every path, then nav2's
+/// tree recovers six times (clear, spin, wait, back up, clear, spin: 14 recovery actions with
+/// the context clears, counted in the feedback) and aborts with NO_VALID_PATH.
+#[test]
+fn a_goal_in_a_closed_box_is_aborted_after_nav2s_recoveries() {
+    let mut rows = vec!["............".to_string(); 12];
+    rows[4] = "....####....".into();
+    rows[5] = "....#..#....".into();
+    rows[6] = "....#..#....".into();
+    rows[7] = "....####....".into();
+    let text = rows.join("\n") + "\n";
+    let grid = madenet_map::io::parse_text(&text, std::path::Path::new("box.txt")).unwrap();
+    let scene = Arc::new(Scene::from_grid(&grid, "box"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: 1,
+        ..Default::default()
+    };
+    let start = madenet_map::Pos::new(1, 1);
+    let world =
+        ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), 2).unwrap();
+    let frame = MapFrame::of(&grid);
+    let (router, opts) = loopback_router().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let sim = {
+        let (opts, stop) = (opts.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let sim = Nav2SimOptions {
+                realtime: 40.0,
+                ..Default::default()
+            };
+            run_nav2_sim(&opts, world, &sim, &stop)
+        })
+    };
+    let ctx = opts.context().unwrap();
+    let node = ctx.create_node_in("/robot0", "client").unwrap();
+    let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
+    assert!(client.wait_for_server(WAIT).unwrap());
+    let (x, y) = frame.cell_center(madenet_map::Pos::new(5, 5));
+    let sent = client.send_goal(goal("map", x, y), WAIT).unwrap().unwrap();
+    let mut most = 0;
+    while let Some(fb) = client.feedback(Duration::from_secs(5)).unwrap() {
+        most = most.max(fb.feedback.number_of_recoveries);
+        if sent.result(Duration::ZERO).unwrap().is_some() {
+            break;
+        }
+    }
+    assert_eq!(
+        outcome(&sent, WAIT),
+        (status::ABORTED, nav2_error::NO_VALID_PATH)
+    );
+    assert_eq!(most, 14, "recovery actions in the feedback");
+    stop.store(true, Ordering::Relaxed);
+    let run = sim.join().unwrap().unwrap();
+    drop(router);
+    assert_eq!(run.collisions.obstacle + run.collisions.robot, 0);
+    eprintln!("closed box: aborted after {:.0} s simulated", run.time);
 }
