@@ -11,6 +11,8 @@
 //!   higher-priority robots' plans are reserved as (cell, time) and a later robot plans around
 //!   them, waiting being an action. This resolves the corridor and head-on deadlocks that
 //!   plain A* leaves.
+//! * [`frontiers`] — explore_lite's frontier search and cost, for the `explore-lite` policy
+//!   and the exploration node of a nav2 robot.
 //!
 //! Costs are integers: a straight step costs [`STRAIGHT`], a diagonal [`DIAGONAL`]
 //! (≈ √2·STRAIGHT), so path lengths in metres are `cost / STRAIGHT` times the cell size.
@@ -19,6 +21,7 @@
 #![deny(missing_docs)]
 
 mod dijkstra;
+pub mod frontiers;
 mod spacetime;
 
 pub use dijkstra::Dijkstra;

@@ -19,19 +19,22 @@
 //!   nearest its own first viewpoint at each macro termination. A multi-step, team-wide
 //!   planner that is not learned: the other yardstick, besides `spread`, that a learned
 //!   planner must beat.
+//! * [`ExploreLite`] (**explore-lite**) — explore_lite's frontier search and cost, what ROS 2
+//!   users run today, for comparisons inside one tool.
 //! * [`Convention`] (**convention**, ours) — the robots of a meeting each compute the same team
 //!   plan on their merged map (redrawn maps seeded by the trial and the timestep only) and keep
 //!   softly to their own part of it until the next meeting: `spread` with a teammate's part
 //!   d_s cells dearer.
 //!
 //! Every constant of UB and PB is a documented field of [`BaselineParams`] (serde, with the
-//! defaults named after their source). [`register`] adds `ub`, `pb`, `belief-plan`,
+//! defaults named after their source). [`register`] adds `ub`, `pb`, `explore-lite`, `belief-plan`,
 //! `belief-plan-free` and `convention` to a [`madenet_sim::PolicyRegistry`].
 
 #![deny(missing_docs)]
 
 mod convention;
 mod dvf;
+mod explore_lite;
 mod plan;
 pub mod reference;
 pub mod rollout;
@@ -39,6 +42,7 @@ mod utility;
 
 pub use convention::Convention;
 pub use dvf::{DistributedValueFunctions, PbParams};
+pub use explore_lite::{ExploreLite, ExploreLiteParams};
 pub use plan::BeliefPlan;
 pub use utility::{UbParams, UtilityBased};
 
@@ -53,6 +57,8 @@ pub struct BaselineParams {
     pub ub: UbParams,
     /// The constants of PB, [`DistributedValueFunctions`].
     pub pb: PbParams,
+    /// explore_lite's parameters, [`ExploreLite`].
+    pub explore_lite: ExploreLiteParams,
 }
 
 impl BaselineParams {
@@ -97,13 +103,19 @@ impl BaselineParams {
         at_least("pb.teammate_weight", pb.teammate_weight as f64, 0.0)?;
         at_least("pb.crowding_weight", pb.crowding_weight as f64, 0.0)?;
         at_least("pb.stuck_threshold", pb.stuck_threshold as f64, 0.0)?;
-        Ok(())
+        self.explore_lite.validate()
     }
 }
 
-/// Registers `ub` and `pb` with these parameters, and `belief-plan`, `belief-plan-free` and
-/// `convention` at their fixed settings.
+/// Registers `ub`, `pb` and `explore-lite` with these parameters, and `belief-plan`,
+/// `belief-plan-free` and `convention` at their fixed settings.
 pub fn register(registry: &mut PolicyRegistry, params: &BaselineParams) {
+    let el = params.explore_lite.clone();
+    registry.register(
+        "explore-lite",
+        "explore_lite's frontier search and cost (m-explore-ros2, what ROS 2 users run today), each robot on its own: the cheapest frontier off its blacklist, replanned at 0.15 Hz",
+        move |ctx| Box::new(ExploreLite::new(el.clone(), ctx.config.cell_size)),
+    );
     let ub = params.ub.clone();
     registry.register(
         "ub",
