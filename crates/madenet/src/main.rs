@@ -65,6 +65,8 @@ enum Command {
     Radio(nodes::RadioArgs),
     /// One robot's node of a run over processes: belief, goal candidates, policy, navigator.
     Agent(nodes::AgentArgs),
+    /// One robot's exploration node for a robot that nav2 drives (explore_lite's parameter file; its frontier choice; navigate_to_pose).
+    Explore(madenet_explore::cli::ExploreArgs),
 }
 
 fn main() -> ExitCode {
@@ -88,7 +90,7 @@ fn main() -> ExitCode {
         .with_target(false)
         .with_ansi(false)
         .with_env_filter(tracing_subscriber::EnvFilter::new(
-            "error,madenet_runtime=warn,madenet=warn,madenet_learn=warn,madenet_dme=warn",
+            "error,madenet_runtime=warn,madenet=warn,madenet_learn=warn,madenet_dme=warn,madenet_explore=info",
         ))
         .try_init();
     let result = match cli.command {
@@ -104,6 +106,13 @@ fn main() -> ExitCode {
         Command::World(a) => nodes::world(a),
         Command::Radio(a) => nodes::radio(a),
         Command::Agent(a) => nodes::agent(a),
+        Command::Explore(a) => madenet_explore::cli::run(a)
+            .map_err(anyhow::Error::from_boxed)
+            .and_then(|lines| {
+                lines
+                    .iter()
+                    .try_for_each(|l| out!("{l}").map_err(Into::into))
+            }),
         Command::Policies => madenet_catalogue::shipped()
             .map_err(Into::into)
             .and_then(|r| {

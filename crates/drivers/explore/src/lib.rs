@@ -3,7 +3,9 @@
 //!
 //! Built so far: [`params`], explore_lite's parameter file read as ROS 2 reads a
 //! `--params-file` (node keys matched against the node's fully qualified name, as rclcpp
-//! matches them), with madenet's own settings beside explore_lite's.
+//! matches them), with madenet's own settings beside explore_lite's; and [`node`], one robot's
+//! node choosing frontiers as explore_lite does and driving its nav2 through
+//! `navigate_to_pose`, with an expiring blacklist.
 //!
 //! ```
 //! use madenet_explore::params::ExploreParams;
@@ -14,4 +16,6 @@
 //! assert_eq!(p.costmap_updates_topic, "costmap_updates"); // explore_lite's default
 //! ```
 
+pub mod cli;
+pub mod node;
 pub mod params;

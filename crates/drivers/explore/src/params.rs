@@ -25,8 +25,9 @@
 //! | `transform_tolerance` | double | 0.3 | seconds a TF lookup may be old |
 //! | `min_frontier_size` | double | 0.5 | metres; smaller frontiers are ignored |
 //! | `return_to_init` | bool | false | go back to the start when done |
-//! | `policy` | string | `spread` | madenet: the policy choosing goals (`madenet policies`) |
+//! | `policy` | string | `explore-lite` | madenet: the policy choosing goals (so far the node runs `explore-lite` only) |
 //! | `teammates` | string array | `[]` | madenet: the teammates' namespaces (`/robot1`, …) |
+//! | `use_sim_time` | bool | false | ROS's own: follow `/clock` |
 //!
 //! As rclcpp, a double parameter given as an integer (`planner_frequency: 1`) is a type error
 //! (write `1.0`); a parameter not in the table is an error naming it.
@@ -109,11 +110,13 @@ pub struct ExploreParams {
     pub policy: String,
     /// madenet: the teammates' namespaces.
     pub teammates: Vec<String>,
+    /// ROS's own: follow `/clock` (simulated time) instead of the wall clock.
+    pub use_sim_time: bool,
 }
 
 impl Default for ExploreParams {
-    /// explore_lite's declared defaults (`explore.cpp`, `costmap_client.cpp`), madenet's
-    /// `spread` and no teammates.
+    /// explore_lite's declared defaults (`explore.cpp`, `costmap_client.cpp`), the
+    /// `explore-lite` policy and no teammates.
     fn default() -> Self {
         ExploreParams {
             robot_base_frame: "base_link".into(),
@@ -128,8 +131,9 @@ impl Default for ExploreParams {
             transform_tolerance: 0.3,
             min_frontier_size: 0.5,
             return_to_init: false,
-            policy: "spread".into(),
+            policy: "explore-lite".into(),
             teammates: Vec::new(),
+            use_sim_time: false,
         }
     }
 }
@@ -389,6 +393,7 @@ impl ExploreParams {
             "transform_tolerance" => double(&mut self.transform_tolerance),
             "min_frontier_size" => double(&mut self.min_frontier_size),
             "return_to_init" => flag(&mut self.return_to_init),
+            "use_sim_time" => flag(&mut self.use_sim_time),
             "policy" => text(&mut self.policy),
             "teammates" => match value {
                 Value::List(items) => {
@@ -410,7 +415,7 @@ impl ExploreParams {
                 _ => wrong("a string array"),
             },
             _ => Err(format!(
-                "unknown (explore_lite's parameters: {}; madenet's: policy, teammates)",
+                "unknown (explore_lite's parameters: {}; madenet's: policy, teammates; ROS's: use_sim_time)",
                 EXPLORE_LITE.join(", ")
             )),
         }

@@ -302,8 +302,14 @@ impl MapSubscriber {
     /// first: by the time the full grid's transient-local history arrives, the publisher's
     /// updates already reach this subscriber.
     pub fn new(node: &Node, name: &str) -> Result<Self, Ros2Error> {
+        Self::with_updates(node, name, &format!("{name}_updates"))
+    }
+
+    /// [`MapSubscriber::new`] with the updates on `updates` (explore_lite's
+    /// `costmap_updates_topic`) instead of `<name>_updates`.
+    pub fn with_updates(node: &Node, name: &str, updates: &str) -> Result<Self, Ros2Error> {
         let topic = node.resolve(name);
-        let updates = node.create_sub(&format!("{topic}_updates"), updates_qos())?;
+        let updates = node.create_sub(&node.resolve(updates), updates_qos())?;
         let full = node.create_sub(&topic, map_qos())?;
         Ok(MapSubscriber {
             topic,

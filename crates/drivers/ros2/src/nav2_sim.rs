@@ -102,6 +102,8 @@ pub struct Nav2SimRun {
     pub refused: usize,
     /// Per robot, the cells it passed through, in order (each once per visit).
     pub cells: Vec<Vec<Pos>>,
+    /// The share of the explorable cells the robots' maps together know (ground truth), 0–1.
+    pub explored: f64,
     /// Collisions counted by the world.
     pub collisions: Collisions,
     /// Simulated seconds.
@@ -154,6 +156,10 @@ impl Nav2SimRun {
             ),
             format!("refused    {} malformed requests", self.refused),
             format!("collisions {obstacle} with obstacles, {robot} between robots"),
+            format!(
+                "explored   {:.1} % (the robots' maps together, ground truth)",
+                100.0 * self.explored
+            ),
             format!("simulated  {:.1} s", self.time),
         ]
     }
@@ -512,6 +518,7 @@ impl Nav2Team {
         self.run.refused = self.robots.iter().map(|r| r.server.refused()).sum();
         self.run.collisions = self.world.collisions();
         self.run.time = self.world.time();
+        self.run.explored = self.world.explored_fraction();
         Ok(self.run)
     }
 

@@ -1,0 +1,75 @@
+//! `madenet explore`'s flags and what the command does with them (the binary only dispatches).
+
+use crate::node;
+use crate::params::ExploreParams;
+use std::error::Error;
+use std::path::PathBuf;
+
+/// `madenet explore`: one robot's exploration node for a robot that nav2 drives.
+#[derive(clap::Args, Debug)]
+pub struct ExploreArgs {
+    /// explore_lite's parameter file (ROS 2 YAML, as `--params-file` of a ROS node: its `/**`
+    /// section and the node's own, `<namespace>/explore_node`, apply).
+    #[arg(long, value_name = "FILE")]
+    pub params_file: PathBuf,
+    /// The robot's namespace (`/robot0`); the node is `<namespace>/explore_node`, its map,
+    /// TF and `navigate_to_pose` are the robot's in that namespace.
+    #[arg(long, default_value = "/", value_name = "NS")]
+    pub namespace: String,
+    /// The zenoh endpoint of the ROS 2 graph (rmw_zenoh's router by default).
+    #[arg(long, value_name = "ENDPOINT", default_value = "tcp/127.0.0.1:7447")]
+    pub ros2: String,
+    /// Check the parameter file, print the parameters that apply, and exit.
+    #[arg(long)]
+    pub check: bool,
+}
+
+/// Whether `ns` is a ROS namespace: `/`, or `/` and names of letters, digits and `_` (not
+/// starting with a digit) separated by `/`.
+fn is_namespace(ns: &str) -> bool {
+    ns == "/"
+        || (ns.starts_with('/')
+            && ns[1..].split('/').all(|seg| {
+                !seg.is_empty()
+                    && !seg.starts_with(|c: char| c.is_ascii_digit())
+                    && seg.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            }))
+}
+
+/// Runs `madenet explore` until exploration is complete or a signal comes; the lines to print.
+pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> {
+    if !is_namespace(&a.namespace) {
+        return Err(format!(
+            "--namespace: {:?} is not a ROS namespace (/robot0)",
+            a.namespace
+        )
+        .into());
+    }
+    let node_name = match a.namespace.as_str() {
+        "/" => "/explore_node".to_string(),
+        ns => format!("{ns}/explore_node"),
+    };
+    let p = ExploreParams::from_file(&a.params_file, &node_name)
+        .map_err(|e| format!("--params-file: {e}"))?;
+    if a.check {
+        return Ok(vec![format!(
+            "{} for {node_name}: {p:?}",
+            a.params_file.display()
+        )]);
+    }
+    if p.policy != "explore-lite" {
+        return Err(format!(
+            "--params-file: policy {:?}: the node runs explore-lite only so far (madenet's team policies come with issue 58)",
+            p.policy
+        )
+        .into());
+    }
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![a.ros2.clone()],
+        ..Default::default()
+    };
+    let stop = madenet_runtime::signals::Stop::watch(true)?;
+    let run = node::run(&opts, &a.namespace, &p, &|| stop.requested().is_some())
+        .map_err(|e| format!("--ros2: {e}"))?;
+    Ok(run.summary())
+}

@@ -1,0 +1,74 @@
+//! The exploration node against a simulated nav2 robot (the continuous world serving
+//! `navigate_to_pose`), through ROS 2 alone: it explores a generated floor plan.
+
+use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+use madenet_explore::node;
+use madenet_explore::params::ExploreParams;
+use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
+use madenet_ros2::loopback_router;
+use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+#[test]
+fn one_node_explores_a_floor_plan_through_its_nav2() {
+    let cfg = FloorPlanConfig::for_size(14, 14);
+    let grid = floor_plan(&cfg, 3).unwrap();
+    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: 1,
+        ..Default::default()
+    };
+    let world = ContinuousWorld::new(
+        scene,
+        &[cfg.keep_free[0]],
+        scenario,
+        ContinuousConfig::default(),
+        3,
+    )
+    .unwrap();
+    let (router, opts) = loopback_router().unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let sim = {
+        let (opts, stop) = (opts.clone(), stop.clone());
+        std::thread::spawn(move || {
+            let sim = Nav2SimOptions {
+                realtime: 20.0,
+                ..Default::default()
+            };
+            run_nav2_sim(&opts, world, &sim, &stop)
+        })
+    };
+    let params = ExploreParams::from_yaml(
+        "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n",
+        "/robot0/explore_node",
+    )
+    .unwrap();
+    // A watchdog: the node must finish on its own well before this.
+    let watchdog = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            let t = std::time::Instant::now();
+            while !stop.load(Ordering::Relaxed) && t.elapsed().as_secs() < 180 {
+                std::thread::sleep(std::time::Duration::from_millis(200));
+            }
+            stop.store(true, Ordering::Relaxed);
+        })
+    };
+    let run = node::run(&opts, "/robot0", &params, &|| stop.load(Ordering::Relaxed)).unwrap();
+    stop.store(true, Ordering::Relaxed);
+    let truth = sim.join().unwrap().unwrap();
+    watchdog.join().unwrap();
+    drop(router);
+    eprintln!(
+        "{run:?}; {:.0} s simulated, explored {:.3}",
+        truth.time, truth.explored
+    );
+    assert!(run.complete, "{run:?}");
+    // The paper's cell rule reads 98.7 % of this plan's explorable cells from the robot's
+    // 0.1 m map when the node finds no frontier left (the last 2 of 156 cells: see issue 58's
+    // notes).
+    assert!(truth.explored >= 0.98, "explored {}", truth.explored);
+    assert_eq!(truth.collisions.obstacle + truth.collisions.robot, 0);
+    assert!(run.succeeded >= 3, "{run:?}");
+}
