@@ -207,7 +207,6 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
 fn run_nav2_serves_goals_until_ctrl_c() {
     use madenet_ros2::actions::{status, ActionClient, NavigateToPose, NavigateToPoseGoal};
     use madenet_ros2::map_updates::MapSubscriber;
-    use madenet_ros2::msgs::PoseStamped;
     use madenet_ros2::tf::{TfListener, TfNaming};
     use std::io::BufRead;
     use std::time::Instant;
@@ -286,15 +285,7 @@ fn run_nav2_serves_goals_until_ctrl_c() {
         .map(|(c, r)| (ox + (c as f64 + 0.5) * res, oy + (r as f64 + 0.5) * res))
         .find(|&(x, y)| (1.0..2.0).contains(&(x - rx).hypot(y - ry)))
         .expect("a free patch 1–2 m away");
-    let mut pose = PoseStamped::default();
-    pose.header.frame_id = "map".into();
-    pose.pose.position.x = gx;
-    pose.pose.position.y = gy;
-    pose.pose.orientation.w = 1.0;
-    let goal = NavigateToPoseGoal {
-        pose,
-        behavior_tree: String::new(),
-    };
+    let goal = NavigateToPoseGoal::at("map", gx, gy, 0.0);
     let sent = client.send_goal(goal, WAIT).unwrap().expect("accepted");
     let (st, result) = sent.result(WAIT).unwrap().expect("a result");
     assert_eq!(

@@ -272,6 +272,54 @@ pub struct WorldView<'a> {
     pub exchanges: &'a [(usize, usize)],
 }
 
+/// The [`Present`] methods a continuous run answers from its world, `self.world` (a
+/// [`ContinuousWorld`]), the same way whoever decides its robots' goals (its agents, or
+/// nav2 clients in the nav2 sim): robots, time, truth, poses and cells, the team's map,
+/// progress, and the world itself; no agent's cell map (each robot's fine map is shown).
+/// Exported for `madenet_ros2::nav2_sim`; the paths it names are fully qualified.
+#[macro_export]
+macro_rules! present_continuous_world {
+    () => {
+        fn robots(&self) -> usize {
+            self.world.robots()
+        }
+        fn time_s(&self) -> f64 {
+            self.world.time()
+        }
+        fn step_s(&self) -> f64 {
+            self.world.config().control_period
+        }
+        fn truth(&self) -> &madenet_map::OccGrid {
+            self.world.coarse_truth()
+        }
+        fn pose(&self, i: usize) -> $crate::stepping::Pose {
+            self.world.pose(i)
+        }
+        fn cell(&self, i: usize) -> madenet_map::Pos {
+            self.world.cell_of(i)
+        }
+        /// None: the continuous world shows each robot's fine map
+        /// ([`Present::continuous`](madenet_sim::stepping::Present::continuous)).
+        fn belief(&self, _: usize) -> Option<std::borrow::Cow<'_, [madenet_map::Occupancy]>> {
+            None
+        }
+        fn team_map(&self) -> std::borrow::Cow<'_, [madenet_map::Occupancy]> {
+            std::borrow::Cow::Owned(self.world.team_map())
+        }
+        fn explored(&self) -> f64 {
+            self.world.explored_fraction()
+        }
+        fn distance(&self) -> f64 {
+            (0..self.world.robots())
+                .map(|i| self.world.distance(i))
+                .sum()
+        }
+        fn continuous(&self) -> Option<&madenet_continuous::ContinuousWorld> {
+            Some(&self.world)
+        }
+    };
+}
+
 /// The [`Present`] methods a grid trial answers from its world, `self.world` (a
 /// [`madenet_world::World`] or a reference to one), the same way wherever its agents live:
 /// time, truth, poses and cells, the team's map, contacts and progress.

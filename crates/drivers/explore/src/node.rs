@@ -29,7 +29,7 @@ use madenet_nav::frontiers::{
 };
 use madenet_ros2::actions::{status, ActionClient, NavigateToPose, NavigateToPoseGoal, SentGoal};
 use madenet_ros2::map_updates::MapSubscriber;
-use madenet_ros2::msgs::{Clock, PoseStamped, Time};
+use madenet_ros2::msgs::{Clock, Time};
 use madenet_ros2::tf::{TfListener, TfNaming};
 use madenet_ros2::{QosProfile, Ros2Error, Ros2Options, Subscription};
 use std::time::{Duration, Instant};
@@ -293,15 +293,8 @@ pub fn run(
             // A new frontier preempts the goal (nav2 aborts the old one itself).
             drop(sent);
         }
-        let mut pose = PoseStamped::default();
-        pose.header.frame_id = frame.to_string();
-        pose.pose.position.x = target.0;
-        pose.pose.position.y = target.1;
-        pose.pose.orientation.w = 1.0;
-        let msg = NavigateToPoseGoal {
-            pose,
-            behavior_tree: String::new(),
-        };
+        // explore_lite's goal: the centroid, orientation w = 1.
+        let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
         match nav.send_goal(msg, Duration::from_secs(10)) {
             Ok(Some(sent)) => {
                 run.sent += 1;
@@ -344,15 +337,7 @@ fn go_to(
     to: (f64, f64),
     stop: &dyn Fn() -> bool,
 ) -> Result<bool, Ros2Error> {
-    let mut pose = PoseStamped::default();
-    pose.header.frame_id = frame.to_string();
-    pose.pose.position.x = to.0;
-    pose.pose.position.y = to.1;
-    pose.pose.orientation.w = 1.0;
-    let goal = NavigateToPoseGoal {
-        pose,
-        behavior_tree: String::new(),
-    };
+    let goal = NavigateToPoseGoal::at(frame, to.0, to.1, 0.0);
     let Some(sent) = nav.send_goal(goal, Duration::from_secs(10))? else {
         return Ok(false);
     };

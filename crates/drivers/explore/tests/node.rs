@@ -6,8 +6,8 @@ use madenet_explore::node;
 use madenet_explore::params::ExploreParams;
 use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
 use madenet_ros2::loopback_router;
-use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
-use std::sync::atomic::{AtomicBool, Ordering};
+use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimThread};
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 #[test]
@@ -28,17 +28,15 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
     )
     .unwrap();
     let (router, opts) = loopback_router().unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let sim = {
-        let (opts, stop) = (opts.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let sim = Nav2SimOptions {
-                realtime: 20.0,
-                ..Default::default()
-            };
-            run_nav2_sim(&opts, world, &sim, &stop)
-        })
-    };
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime: 20.0,
+            ..Default::default()
+        },
+    );
+    let stop = sim.stop_flag();
     let params = ExploreParams::from_yaml(
         "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n",
         "/robot0/explore_node",
@@ -56,8 +54,7 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
         })
     };
     let run = node::run(&opts, "/robot0", &params, &|| stop.load(Ordering::Relaxed)).unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let truth = sim.join().unwrap().unwrap();
+    let truth = sim.stop().unwrap();
     watchdog.join().unwrap();
     drop(router);
     eprintln!(

@@ -677,6 +677,21 @@ pub struct NavigateToPoseGoal {
     pub behavior_tree: String,
 }
 
+impl NavigateToPoseGoal {
+    /// A goal at (`x`, `y`) in `frame`, facing `yaw` (rad), with the default behaviour tree.
+    pub fn at(frame: &str, x: f64, y: f64, yaw: f64) -> Self {
+        let mut pose = PoseStamped::default();
+        pose.header.frame_id = frame.to_string();
+        pose.pose.position.x = x;
+        pose.pose.position.y = y;
+        pose.pose.orientation = crate::tf::from_yaw(yaw);
+        NavigateToPoseGoal {
+            pose,
+            behavior_tree: String::new(),
+        }
+    }
+}
+
 /// `nav2_msgs/action/NavigateToPose_Result`: `error_code` 0 on success, else nav2's code
 /// ([`nav2_error`]).
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

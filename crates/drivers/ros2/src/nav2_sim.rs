@@ -49,11 +49,12 @@ use madenet_agent::{Agent, Decision};
 use madenet_continuous::{
     Collisions, ContinuousWorld, NavError, NavParams, NavStatus, Navigator, Pose,
 };
-use madenet_map::{OccGrid, Occupancy, Pos};
+use madenet_map::Pos;
 use madenet_sim::stepping::{run, Pace, Present, RobotShown, Sink, SinkError, Stepping};
 use std::borrow::Cow;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Seconds of simulated time between two feedback messages of a goal.
@@ -765,24 +766,7 @@ fn shown(world: &ContinuousWorld, nav: &Navigator) -> (Option<Pos>, Vec<Pos>) {
 }
 
 impl Present for Nav2Team {
-    fn robots(&self) -> usize {
-        self.world.robots()
-    }
-    fn time_s(&self) -> f64 {
-        self.world.time()
-    }
-    fn step_s(&self) -> f64 {
-        self.world.config().control_period
-    }
-    fn truth(&self) -> &OccGrid {
-        self.world.coarse_truth()
-    }
-    fn pose(&self, i: usize) -> Pose {
-        self.world.pose(i)
-    }
-    fn cell(&self, i: usize) -> Pos {
-        self.world.cell_of(i)
-    }
+    madenet_sim::present_continuous_world!();
     /// Its goal and path; no candidates (goals come from outside).
     fn robot(&self, i: usize) -> RobotShown<'_> {
         let (goal, path) = &self.shown[i];
@@ -793,30 +777,12 @@ impl Present for Nav2Team {
             ..Default::default()
         }
     }
-    /// None: each robot's fine map is shown ([`Present::continuous`]).
-    fn belief(&self, _: usize) -> Option<Cow<'_, [Occupancy]>> {
-        None
-    }
-    fn team_map(&self) -> Cow<'_, [Occupancy]> {
-        Cow::Owned(self.world.team_map())
-    }
     /// None: the robots talk over ROS 2, not madenet's radio.
     fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
         Cow::Borrowed(&[])
     }
     fn exchanges(&self) -> &[(usize, usize)] {
         &[]
-    }
-    fn explored(&self) -> f64 {
-        self.world.explored_fraction()
-    }
-    fn distance(&self) -> f64 {
-        (0..self.world.robots())
-            .map(|i| self.world.distance(i))
-            .sum()
-    }
-    fn continuous(&self) -> Option<&ContinuousWorld> {
-        Some(&self.world)
     }
 }
 
@@ -869,6 +835,39 @@ impl<S: ?Sized> Sink<S> for StopFlag<'_> {
         Ok(match self.0.load(Ordering::Relaxed) {
             true => ControlFlow::Break("stopped".into()),
             false => ControlFlow::Continue(()),
+        })
+    }
+}
+
+/// The nav2 sim on a thread of its own, for tests and tools that drive it from the same
+/// process: [`Nav2SimThread::stop`] ends it and gives what it did.
+pub struct Nav2SimThread {
+    stop: Arc<AtomicBool>,
+    handle: std::thread::JoinHandle<Result<Nav2SimRun, Ros2Error>>,
+}
+
+impl Nav2SimThread {
+    /// Starts [`run_nav2_sim`] on a new thread.
+    pub fn spawn(opts: Ros2Options, world: ContinuousWorld, sim: Nav2SimOptions) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = stop.clone();
+        let handle = std::thread::spawn(move || run_nav2_sim(&opts, world, &sim, &flag));
+        Nav2SimThread { stop, handle }
+    }
+
+    /// The flag that ends the run (set it to stop the sim from elsewhere).
+    pub fn stop_flag(&self) -> Arc<AtomicBool> {
+        self.stop.clone()
+    }
+
+    /// Ends the run and gives what it did.
+    pub fn stop(self) -> Result<Nav2SimRun, Ros2Error> {
+        self.stop.store(true, Ordering::Relaxed);
+        self.handle.join().unwrap_or_else(|_| {
+            Err(Ros2Error::Middleware {
+                what: "nav2 sim".into(),
+                source: "its thread panicked".into(),
+            })
         })
     }
 }

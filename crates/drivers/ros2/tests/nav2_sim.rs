@@ -11,12 +11,11 @@ use madenet_ros2::actions::{
     nav2_error, status, ActionClient, NavigateToPose, NavigateToPoseGoal, SentGoal,
 };
 use madenet_ros2::map_updates::MapSubscriber;
-use madenet_ros2::msgs::{Header, PoseStamped, Time};
-use madenet_ros2::nav2_sim::{run_nav2_sim, Nav2SimOptions};
+use madenet_ros2::msgs::Time;
+use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimThread};
 use madenet_ros2::tf::{from_yaw, yaw, TfListener, TfNaming};
 use madenet_ros2::{loopback_router, MapFrame};
 use std::f64::consts::PI;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use zenoh::Wait;
@@ -24,19 +23,7 @@ use zenoh::Wait;
 const WAIT: Duration = Duration::from_secs(30);
 
 fn goal(frame_id: &str, x: f64, y: f64) -> NavigateToPoseGoal {
-    let mut pose = PoseStamped {
-        header: Header {
-            stamp: Time::default(),
-            frame_id: frame_id.into(),
-        },
-        ..Default::default()
-    };
-    pose.pose.position.x = x;
-    pose.pose.position.y = y;
-    NavigateToPoseGoal {
-        pose,
-        behavior_tree: String::new(),
-    }
+    NavigateToPoseGoal::at(frame_id, x, y, 0.0)
 }
 
 fn outcome(g: &SentGoal<NavigateToPose>, wait: Duration) -> (i8, u16) {
@@ -65,17 +52,14 @@ fn a_client_drives_a_simulated_nav2_robot() {
         .map(|k| frame.cell_center(grid.pos(k)))
         .collect();
     let (router, opts) = loopback_router().unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let sim = {
-        let (opts, stop) = (opts.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let sim = Nav2SimOptions {
-                realtime: 40.0,
-                ..Default::default()
-            };
-            run_nav2_sim(&opts, world, &sim, &stop)
-        })
-    };
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime: 40.0,
+            ..Default::default()
+        },
+    );
     // A foreign client that subscribes to everything and never reads: the sim must not wait
     // for it (its queue of one fills at once).
     let stuck = opts.context().unwrap();
@@ -184,8 +168,7 @@ fn a_client_drives_a_simulated_nav2_robot() {
     let (x, y) = (pose.translation.x, pose.translation.y);
     assert!(frame.cell_at(x, y).is_some(), "({x}, {y}) on the map");
 
-    stop.store(true, Ordering::Relaxed);
-    let run = sim.join().unwrap().unwrap();
+    let run = sim.stop().unwrap();
     drop(router);
     assert_eq!(run.rejected, 1);
     assert_eq!(
@@ -245,18 +228,15 @@ fn three_clients_drive_three_robots_at_once() {
     let world =
         ContinuousWorld::new(scene, &starts, scenario, ContinuousConfig::default(), 2).unwrap();
     let (router, opts) = loopback_router().unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
     let started = Instant::now();
-    let sim = {
-        let (opts, stop) = (opts.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let sim = Nav2SimOptions {
-                realtime: 10.0,
-                ..Default::default()
-            };
-            run_nav2_sim(&opts, world, &sim, &stop)
-        })
-    };
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime: 10.0,
+            ..Default::default()
+        },
+    );
     let clients: Vec<_> = (0..3)
         .map(|i| {
             let (opts, goals) = (opts.clone(), goals[i].clone());
@@ -335,8 +315,7 @@ fn three_clients_drive_three_robots_at_once() {
             "/robot{i}/map"
         );
     }
-    stop.store(true, Ordering::Relaxed);
-    let run = sim.join().unwrap().unwrap();
+    let run = sim.stop().unwrap();
     drop(router);
     assert_eq!(
         run.collisions.obstacle + run.collisions.robot,
@@ -371,17 +350,14 @@ fn a_goal_in_a_closed_box_is_aborted_after_nav2s_recoveries() {
         ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), 2).unwrap();
     let frame = MapFrame::of(&grid);
     let (router, opts) = loopback_router().unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let sim = {
-        let (opts, stop) = (opts.clone(), stop.clone());
-        std::thread::spawn(move || {
-            let sim = Nav2SimOptions {
-                realtime: 40.0,
-                ..Default::default()
-            };
-            run_nav2_sim(&opts, world, &sim, &stop)
-        })
-    };
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime: 40.0,
+            ..Default::default()
+        },
+    );
     let ctx = opts.context().unwrap();
     let node = ctx.create_node_in("/robot0", "client").unwrap();
     let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
@@ -400,8 +376,7 @@ fn a_goal_in_a_closed_box_is_aborted_after_nav2s_recoveries() {
         (status::ABORTED, nav2_error::NO_VALID_PATH)
     );
     assert_eq!(most, 14, "recovery actions in the feedback");
-    stop.store(true, Ordering::Relaxed);
-    let run = sim.join().unwrap().unwrap();
+    let run = sim.stop().unwrap();
     drop(router);
     assert_eq!(run.collisions.obstacle + run.collisions.robot, 0);
     eprintln!("closed box: aborted after {:.0} s simulated", run.time);

@@ -26,7 +26,7 @@ use madenet_agent::{Agent, Beta, Decision};
 use madenet_continuous::{
     Collisions, Command, ContinuousConfig, ContinuousWorld, LocalPlanner, Scene,
 };
-use madenet_map::{OccGrid, Occupancy, Pos};
+use madenet_map::{Occupancy, Pos};
 use madenet_world::{Observation, Radio, ScenarioConfig};
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -833,48 +833,15 @@ impl ContinuousTrial {
 }
 
 impl Present for ContinuousTrial {
-    fn robots(&self) -> usize {
-        self.agents.len()
-    }
-    fn time_s(&self) -> f64 {
-        self.world.time()
-    }
-    fn step_s(&self) -> f64 {
-        self.world.config().control_period
-    }
-    fn truth(&self) -> &OccGrid {
-        self.world.coarse_truth()
-    }
-    fn pose(&self, i: usize) -> madenet_continuous::Pose {
-        self.world.pose(i)
-    }
-    fn cell(&self, i: usize) -> Pos {
-        self.world.cell_of(i)
-    }
+    crate::present_continuous_world!();
     fn robot(&self, i: usize) -> RobotShown<'_> {
         RobotShown::of(&self.agents[i])
-    }
-    /// None: the continuous world shows each robot's fine map ([`Present::continuous`]).
-    fn belief(&self, _: usize) -> Option<Cow<'_, [Occupancy]>> {
-        None
-    }
-    fn team_map(&self) -> Cow<'_, [Occupancy]> {
-        Cow::Owned(self.world.team_map())
     }
     fn contacts(&self) -> Cow<'_, [(usize, usize)]> {
         Cow::Borrowed(&self.radio_contacts)
     }
     fn exchanges(&self) -> &[(usize, usize)] {
         &self.radio_exchanges
-    }
-    fn explored(&self) -> f64 {
-        self.world.explored_fraction()
-    }
-    fn distance(&self) -> f64 {
-        self.team_distance()
-    }
-    fn continuous(&self) -> Option<&ContinuousWorld> {
-        Some(&self.world)
     }
 }
 
