@@ -301,6 +301,18 @@ mod tests {
         (w, h, cost)
     }
 
+    /// `cost` as a 1 m grid at the origin, searched as explore_lite does (4-connected).
+    fn on(cost: &[u8], w: usize, h: usize) -> CostGrid<'_> {
+        CostGrid {
+            width: w,
+            height: h,
+            resolution: 1.0,
+            origin: (0.0, 0.0),
+            cost,
+            connectivity: Connectivity::Four,
+        }
+    }
+
     const P: FrontierParams = FrontierParams {
         potential_scale: 3.0,
         gain_scale: 1.0,
@@ -311,14 +323,7 @@ mod tests {
     fn a_wall_of_unknown_is_one_frontier_with_explore_lites_centroid() {
         // Free columns 0–2, unknown columns 3–4; robot in cell (0, 0).
         let (w, h, cost) = grid(&["...??", "...??", "...??"]);
-        let g = CostGrid {
-            width: w,
-            height: h,
-            resolution: 1.0,
-            origin: (0.0, 0.0),
-            cost: &cost,
-            connectivity: Connectivity::Four,
-        };
+        let g = on(&cost, w, h);
         let fs = search_from(&g, (0.5, 0.5), &P);
         assert_eq!(fs.len(), 1, "{fs:?}");
         let f = &fs[0];
@@ -339,14 +344,7 @@ mod tests {
         // at 1.5 m), three wide at the bottom.
         let rows = ["####?#", "#....#", "#....#", "#....#", "#???##"];
         let (w, h, cost) = grid(&rows);
-        let g = CostGrid {
-            width: w,
-            height: h,
-            resolution: 1.0,
-            origin: (0.0, 0.0),
-            cost: &cost,
-            connectivity: Connectivity::Four,
-        };
+        let g = on(&cost, w, h);
         let all = search_from(&g, (1.5, 2.5), &P);
         assert_eq!(all.len(), 2, "{all:?}");
         let sizes: Vec<u32> = all.iter().map(|f| f.size).collect();
@@ -369,14 +367,7 @@ mod tests {
         // The robot's corner is closed by a diagonal line: 8-connected robots pass it.
         let rows = ["..#???", ".#.???", "#..???"];
         let (w, h, cost) = grid(&rows);
-        let mut g = CostGrid {
-            width: w,
-            height: h,
-            resolution: 1.0,
-            origin: (0.0, 0.0),
-            cost: &cost,
-            connectivity: Connectivity::Four,
-        };
+        let mut g = on(&cost, w, h);
         assert!(search_from(&g, (0.5, 2.5), &P).is_empty());
         g.connectivity = Connectivity::Eight;
         let fs = search_from(&g, (0.5, 2.5), &P);

@@ -14,7 +14,7 @@ use madenet_ros2::map_updates::MapSubscriber;
 use madenet_ros2::msgs::Time;
 use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimThread};
 use madenet_ros2::tf::{from_yaw, yaw, TfListener, TfNaming};
-use madenet_ros2::{loopback_router, MapFrame};
+use madenet_ros2::{loopback_router, MapFrame, Ros2Options};
 use std::f64::consts::PI;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -24,6 +24,34 @@ const WAIT: Duration = Duration::from_secs(30);
 
 fn goal(frame_id: &str, x: f64, y: f64) -> NavigateToPoseGoal {
     NavigateToPoseGoal::at(frame_id, x, y, 0.0)
+}
+
+/// The continuous world of `grid` (1 m cells) with a robot in each of `starts`.
+fn world_on(grid: &OccGrid, starts: &[madenet_map::Pos], seed: u64) -> ContinuousWorld {
+    let scene = Arc::new(Scene::from_grid(grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: starts.len(),
+        ..Default::default()
+    };
+    ContinuousWorld::new(scene, starts, scenario, ContinuousConfig::default(), seed).unwrap()
+}
+
+/// A zenoh router on loopback, options that reach it, and the nav2 sim of `world` on it at
+/// `realtime` × real time.
+fn start_sim(
+    world: ContinuousWorld,
+    realtime: f64,
+) -> (zenoh::Session, Ros2Options, Nav2SimThread) {
+    let (router, opts) = loopback_router().unwrap();
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime,
+            ..Default::default()
+        },
+    );
+    (router, opts, sim)
 }
 
 fn outcome(g: &SentGoal<NavigateToPose>, wait: Duration) -> (i8, u16) {
@@ -37,13 +65,7 @@ fn a_client_drives_a_simulated_nav2_robot() {
     cfg.door_width = 1;
     let grid: OccGrid = floor_plan(&cfg, 1).unwrap();
     let start = cfg.keep_free[0];
-    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
-    let scenario = madenet_world::ScenarioConfig {
-        num_robots: 1,
-        ..Default::default()
-    };
-    let world =
-        ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), 1).unwrap();
+    let world = world_on(&grid, &[start], 1);
     let frame = MapFrame::of(&grid);
     // Goals in the `map` frame: true free cells reachable from the start, off their centres.
     let reach = reachable_from_with(&grid, start, Movement::NoCornerCutting);
@@ -51,15 +73,7 @@ fn a_client_drives_a_simulated_nav2_robot() {
         .filter(|&k| reach[k] && grid.cells()[k] == Occupancy::Free)
         .map(|k| frame.cell_center(grid.pos(k)))
         .collect();
-    let (router, opts) = loopback_router().unwrap();
-    let sim = Nav2SimThread::spawn(
-        opts.clone(),
-        world,
-        Nav2SimOptions {
-            realtime: 40.0,
-            ..Default::default()
-        },
-    );
+    let (router, opts, sim) = start_sim(world, 40.0);
     // A foreign client that subscribes to everything and never reads: the sim must not wait
     // for it (its queue of one fills at once).
     let stuck = opts.context().unwrap();
@@ -220,23 +234,9 @@ fn three_clients_drive_three_robots_at_once() {
         })
         .collect();
     assert!(goals.iter().all(|g| g.len() == 2), "{goals:?}");
-    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
-    let scenario = madenet_world::ScenarioConfig {
-        num_robots: 3,
-        ..Default::default()
-    };
-    let world =
-        ContinuousWorld::new(scene, &starts, scenario, ContinuousConfig::default(), 2).unwrap();
-    let (router, opts) = loopback_router().unwrap();
+    let world = world_on(&grid, &starts, 2);
     let started = Instant::now();
-    let sim = Nav2SimThread::spawn(
-        opts.clone(),
-        world,
-        Nav2SimOptions {
-            realtime: 10.0,
-            ..Default::default()
-        },
-    );
+    let (router, opts, sim) = start_sim(world, 10.0);
     let clients: Vec<_> = (0..3)
         .map(|i| {
             let (opts, goals) = (opts.clone(), goals[i].clone());
@@ -340,24 +340,9 @@ fn a_goal_in_a_closed_box_is_aborted_after_nav2s_recoveries() {
     rows[7] = "....####....".into();
     let text = rows.join("\n") + "\n";
     let grid = madenet_map::io::parse_text(&text, std::path::Path::new("box.txt")).unwrap();
-    let scene = Arc::new(Scene::from_grid(&grid, "box"));
-    let scenario = madenet_world::ScenarioConfig {
-        num_robots: 1,
-        ..Default::default()
-    };
-    let start = madenet_map::Pos::new(1, 1);
-    let world =
-        ContinuousWorld::new(scene, &[start], scenario, ContinuousConfig::default(), 2).unwrap();
+    let world = world_on(&grid, &[madenet_map::Pos::new(1, 1)], 2);
     let frame = MapFrame::of(&grid);
-    let (router, opts) = loopback_router().unwrap();
-    let sim = Nav2SimThread::spawn(
-        opts.clone(),
-        world,
-        Nav2SimOptions {
-            realtime: 40.0,
-            ..Default::default()
-        },
-    );
+    let (router, opts, sim) = start_sim(world, 40.0);
     let ctx = opts.context().unwrap();
     let node = ctx.create_node_in("/robot0", "client").unwrap();
     let client = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose").unwrap();
