@@ -135,9 +135,10 @@ pub fn run(
     let mut run = ExploreRun::default();
     let mut blacklist: Vec<Listed> = Vec::new();
     let mut goal: Option<(SentGoal<NavigateToPose>, (f64, f64))> = None;
-    let mut progress = (f64::INFINITY, 0.0); // (nearest distance to the frontier, when)
-                                             // The frontier last chosen (explore_lite's `prev_goal_`): kept after its goal ends, so a
-                                             // frontier still there after its goal succeeded is not sent again but timed out.
+    // The nearest distance to the current frontier, and when it was reached.
+    let mut progress = (f64::INFINITY, 0.0);
+    // The frontier last chosen (explore_lite's `prev_goal_`): kept after its goal ends, so a
+    // frontier still there after its goal succeeded is not sent again but timed out.
     let mut prev_target: Option<(f64, f64)> = None;
     // The frontier of the last goal reached: still there at the next plan, it cannot be seen
     // from where it is reached, and is blacklisted at once.
@@ -149,20 +150,22 @@ pub fn run(
     let wait = Duration::from_millis(20);
     while !stop() {
         tf.spin(Duration::ZERO)?;
-        let map = maps.latest(wait)?.cloned();
+        // The map's frame only, every turn; the map itself is read when a plan is due.
+        let frame = maps
+            .latest(wait)?
+            .map(|m| match m.header.frame_id.as_str() {
+                "" => "map".to_string(),
+                f => f.to_string(),
+            });
         let now = clock.now()?;
-        let Some(map) = map else {
+        let Some(frame) = frame else {
             if !waiting_logged.0 {
                 tracing::info!("{ns}: waiting for the map on {}", maps.topic());
                 waiting_logged.0 = true;
             }
             continue;
         };
-        let frame = if map.header.frame_id.is_empty() {
-            "map"
-        } else {
-            map.header.frame_id.as_str()
-        };
+        let frame = frame.as_str();
         let tol = Duration::from_secs_f64(p.transform_tolerance.max(0.05) + 1.0);
         let Ok(pose) = tf
             .buffer
@@ -200,6 +203,9 @@ pub fn run(
         }
         next_plan = now + period;
         blacklist.retain(|b| b.failures < 2 || b.until > now);
+        let Some(map) = maps.latest(Duration::ZERO)? else {
+            continue;
+        };
         let cost: Vec<u8> = map.data.iter().map(|&v| occupancy_to_cost(v)).collect();
         let grid = CostGrid {
             width: map.info.width as usize,
