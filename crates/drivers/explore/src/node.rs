@@ -40,14 +40,18 @@ pub const BLACKLIST_EXPIRY: f64 = 120.0;
 /// How a run of the node ended, for callers and tests.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ExploreRun {
-    /// Goals sent, and how many ended SUCCEEDED, ABORTED (or were rejected), CANCELED.
+    /// Goals sent (and accepted); each ends as one of the counts below, or is still under way.
     pub sent: usize,
     /// Goals that succeeded.
     pub succeeded: usize,
-    /// Goals aborted or rejected by nav2.
+    /// Goals aborted by nav2.
     pub aborted: usize,
+    /// Goals nav2 rejected (not counted in `sent`).
+    pub rejected: usize,
     /// Goals it gave up for lack of progress (canceled).
     pub given_up: usize,
+    /// Goals replaced by a goal to a new frontier before they ended (nav2 aborts them).
+    pub preempted: usize,
     /// Whether it found exploration complete (rather than being stopped).
     pub complete: bool,
     /// Whether it went back to its start after (`return_to_init`).
@@ -59,8 +63,8 @@ impl ExploreRun {
     pub fn summary(&self) -> Vec<String> {
         vec![
             format!(
-                "goals      {} sent: {} succeeded, {} aborted, {} given up",
-                self.sent, self.succeeded, self.aborted, self.given_up
+                "goals      {} sent: {} succeeded, {} aborted, {} given up, {} preempted; {} rejected",
+                self.sent, self.succeeded, self.aborted, self.given_up, self.preempted, self.rejected
             ),
             format!(
                 "explored   {}{}",
@@ -295,9 +299,9 @@ pub fn run(
         if same {
             continue;
         }
-        if let Some((sent, _)) = goal.take() {
+        if goal.take().is_some() {
             // A new frontier preempts the goal (nav2 aborts the old one itself).
-            drop(sent);
+            run.preempted += 1;
         }
         // explore_lite's goal: the centroid, orientation w = 1.
         let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
@@ -307,7 +311,7 @@ pub fn run(
                 goal = Some((sent, target));
             }
             Ok(None) => {
-                run.aborted += 1;
+                run.rejected += 1;
                 list(&mut blacklist, target, now);
             }
             Err(e) => {

@@ -68,5 +68,9 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
     // 0.1 m map (the last 1–2 of 156 cells: see issue 58's notes).
     assert!(truth.explored >= 0.98, "explored {}", truth.explored);
     assert_eq!(truth.collisions.obstacle + truth.collisions.robot, 0);
-    assert!(run.succeeded >= 3, "{run:?}");
+    // How many goals end reached rather than preempted by a nearer frontier depends on timing
+    // (1 of 45 in one CI run): the node drove the robot by several goals, each accounted for.
+    assert!(run.sent >= 3, "{run:?}");
+    let ended = run.succeeded + run.aborted + run.given_up + run.preempted;
+    assert!(ended + 1 >= run.sent && ended <= run.sent, "{run:?}");
 }
