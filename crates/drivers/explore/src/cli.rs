@@ -57,19 +57,17 @@ pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> 
             a.params_file.display()
         )]);
     }
-    if p.policy != "explore-lite" {
-        return Err(format!(
-            "--params-file: policy {:?}: the node runs explore-lite only so far (madenet's team policies come with issue 58)",
-            p.policy
-        )
-        .into());
-    }
     let opts = madenet_ros2::Ros2Options {
         connect: vec![a.ros2.clone()],
         ..Default::default()
     };
     let stop = madenet_runtime::signals::Stop::watch(true)?;
-    let run = node::run(&opts, &a.namespace, &p, &|| stop.requested().is_some())
-        .map_err(|e| format!("--ros2: {e}"))?;
+    let run =
+        node::run(&opts, &a.namespace, &p, &|| stop.requested().is_some()).map_err(
+            |e| match e {
+                node::ExploreError::Ros2(e) => format!("--ros2: {e}"),
+                e => format!("--params-file: {e}"),
+            },
+        )?;
     Ok(run.summary())
 }

@@ -1,11 +1,14 @@
 //! `madenet explore`, one robot's exploration node for a team that nav2 drives (issue 58): a
 //! drop-in for explore_lite (`m-explore-ros2`) that coordinates with its teammates.
 //!
-//! Built so far: [`params`], explore_lite's parameter file read as ROS 2 reads a
-//! `--params-file` (node keys matched against the node's fully qualified name, as rclcpp
-//! matches them), with madenet's own settings beside explore_lite's; and [`node`], one robot's
-//! node choosing frontiers as explore_lite does and driving its nav2 through
-//! `navigate_to_pose`, with an expiring blacklist.
+//! Its parts:
+//! - [`params`]: explore_lite's parameter file read as ROS 2 reads a `--params-file` (node keys
+//!   matched against the node's fully qualified name, as rclcpp matches them), with madenet's
+//!   own settings beside explore_lite's;
+//! - [`node`]: one robot's node, driving its nav2 through `navigate_to_pose`, with an expiring
+//!   blacklist; its goals chosen by explore_lite's frontiers ([`lite`]) or any madenet policy on
+//!   the paper's cells ([`choice`], [`cells`]);
+//! - [`team`]: what teammates share over ROS 2 topics (maps as deltas, positions, goals).
 //!
 //! ```
 //! use madenet_explore::params::ExploreParams;
@@ -16,6 +19,10 @@
 //! assert_eq!(p.costmap_updates_topic, "costmap_updates"); // explore_lite's default
 //! ```
 
+pub mod cells;
+pub mod choice;
 pub mod cli;
+pub mod lite;
 pub mod node;
 pub mod params;
+pub mod team;

@@ -1,35 +1,32 @@
 //! One robot's exploration node (`madenet explore`): a ROS 2 node `<ns>/explore_node` that
-//! reads the robot's map and its pose from TF, chooses frontiers as explore_lite does
-//! ([`madenet_nav::frontiers`]) and sends them to the robot's nav2 (`navigate_to_pose`).
+//! reads the robot's map and its pose from TF, chooses goals, and sends them to the robot's
+//! nav2 (`navigate_to_pose`). With teammates, it shares its map, position and goal with them
+//! and hears theirs ([`crate::team`]).
 //!
-//! As explore_lite, it plans on a timer of `planner_frequency` and at once when a goal ends;
-//! it sends the cheapest frontier's centroid (orientation w = 1, in the map's frame); a goal
-//! that has not brought the robot nearer its frontier for `progress_timeout` seconds is
-//! given up (canceled) and blacklisted. Unlike explore_lite:
-//! - the blacklist **expires** ([`BLACKLIST_EXPIRY`] seconds), so a door that opens later is
-//!   tried again; a frontier that fails again after its retry stays blacklisted;
-//! - it waits for the map and the pose with a log line, rather than silently;
-//! - exploration is **complete** only when no frontier is left that is not blacklisted for good
-//!   (frontiers waiting out a blacklist keep it going), and then, with `return_to_init`, it
-//!   drives back to where it started;
-//! - every goal is on the map (a centroid off the map's cells is never sent);
-//! - a frontier still there when its goal has been reached cannot be seen from there: it is
-//!   blacklisted at once (explore_lite waits out its progress timeout); a frontier whose
-//!   centroid moved less than the blacklist's tolerance (5 cells) is the same one, and
-//!   progress is getting nearer by a cell (explore_lite: 0.01 m and any decrease, so a
-//!   flickering map resends goals for ever).
+//! The loop is the same whatever chooses the goals: it waits for the map and the pose (with a
+//! log line, not silently), follows `/clock` with `use_sim_time`, takes each goal's end
+//! (succeeded, aborted with nav2's codes, canceled), and plans on a timer of
+//! `planner_frequency` and at once when a goal ends. What plans is one of two choosers:
+//! - `policy: explore-lite` ([`crate::lite`]): explore_lite's frontiers on the robot's map —
+//!   merged with its teammates' maps when it has teammates;
+//! - any other madenet policy (`spread`, `made-net-any`, `nf`, …: [`crate::choice`]): the
+//!   paper's agent on the map read into its 1 m cells, hearing its teammates' maps, positions
+//!   and goals as the paper's β.
 //!
-//! Time is the wall clock, or `/clock` with `use_sim_time`. Still to come (issue 58): madenet's
-//! policies and the team's shared maps, positions and goals; `explore/frontiers` markers and
-//! `explore/resume`; remapping.
+//! Both give a goal up when it has not brought the robot nearer for `progress_timeout`
+//! seconds; unreachable goals (aborted, given up) go on a [`Blacklist`] that **expires**
+//! ([`BLACKLIST_EXPIRY`] seconds), so a door that opens later is tried again, and a goal that
+//! fails again after its retry stays on it. Exploration is **complete** only when nothing is
+//! left but goals blacklisted for good; then, with `return_to_init`, the robot drives back to
+//! where it started. Every goal is on the map.
+//!
+//! Still to come (issue 58): `explore/frontiers` markers and `explore/resume`; remapping.
 
 use crate::params::ExploreParams;
-use madenet_nav::frontiers::{
-    occupancy_to_cost, search_from, Connectivity, CostGrid, FrontierParams,
-};
+use crate::team::Team;
 use madenet_ros2::actions::{status, ActionClient, NavigateToPose, NavigateToPoseGoal, SentGoal};
 use madenet_ros2::map_updates::MapSubscriber;
-use madenet_ros2::msgs::{Clock, Time};
+use madenet_ros2::msgs::{Clock, OccupancyGrid, Time};
 use madenet_ros2::tf::{TfListener, TfNaming};
 use madenet_ros2::{QosProfile, Ros2Error, Ros2Options, Subscription};
 use std::time::{Duration, Instant};
@@ -83,12 +80,114 @@ impl ExploreRun {
     }
 }
 
-/// A blacklisted frontier centroid: until when, and how often it failed.
-#[derive(Clone, Copy, Debug)]
-struct Listed {
-    at: (f64, f64),
-    until: f64,
-    failures: u32,
+/// What went wrong in a run of the node.
+#[derive(Debug, thiserror::Error)]
+pub enum ExploreError {
+    /// The ROS 2 graph.
+    #[error(transparent)]
+    Ros2(#[from] Ros2Error),
+    /// The policy is unknown, or cannot run on this map or team.
+    #[error("policy {name:?}: {why}")]
+    Policy {
+        /// The policy's name.
+        name: String,
+        /// Why.
+        why: String,
+    },
+}
+
+/// Goals (points of the map's frame) that failed: each until when, and how often.
+#[derive(Clone, Debug, Default)]
+pub struct Blacklist {
+    listed: Vec<(f64, f64, f64, u32)>,
+}
+
+impl Blacklist {
+    /// Puts `at` on the list until `now` + [`BLACKLIST_EXPIRY`] (a second failure after its
+    /// retry, or `for_good`: for good). Points within `tol` of a listed one are that one.
+    pub fn list(&mut self, at: (f64, f64), now: f64, tol: f64, for_good: bool) {
+        let near =
+            |b: &&mut (f64, f64, f64, u32)| (b.0 - at.0).abs() < tol && (b.1 - at.1).abs() < tol;
+        let failures = if for_good { 2 } else { 1 };
+        match self.listed.iter_mut().find(near) {
+            Some(b) => {
+                b.3 = (b.3 + 1).max(failures);
+                b.2 = now + BLACKLIST_EXPIRY;
+            }
+            None => self
+                .listed
+                .push((at.0, at.1, now + BLACKLIST_EXPIRY, failures)),
+        }
+    }
+
+    /// Whether `c` is listed now (within `tol` of a listed point).
+    pub fn listed(&self, c: (f64, f64), now: f64, tol: f64) -> bool {
+        self.listed
+            .iter()
+            .any(|b| (b.2 > now || b.3 >= 2) && (b.0 - c.0).abs() < tol && (b.1 - c.1).abs() < tol)
+    }
+
+    /// Whether `c` is listed for good.
+    pub fn for_good(&self, c: (f64, f64), tol: f64) -> bool {
+        self.listed
+            .iter()
+            .any(|b| b.3 >= 2 && (b.0 - c.0).abs() < tol && (b.1 - c.1).abs() < tol)
+    }
+
+    /// Whether a point is listed now but not for good (it will be tried again).
+    pub fn pending(&self, now: f64) -> bool {
+        self.listed.iter().any(|b| b.3 < 2 && b.2 > now)
+    }
+
+    /// Whether a listing that is not for good has expired by `now` (kept, to be counted on a
+    /// second failure).
+    pub fn expired_since(&self, then: f64, now: f64) -> bool {
+        self.listed
+            .iter()
+            .any(|b| b.3 < 2 && b.2 > then && b.2 <= now)
+    }
+
+    /// Points listed.
+    pub fn len(&self) -> usize {
+        self.listed.len()
+    }
+
+    /// Whether none is.
+    pub fn is_empty(&self) -> bool {
+        self.listed.is_empty()
+    }
+}
+
+/// What a chooser decides when a plan is due.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Choice {
+    /// Keep the goal under way (or, with none, wait).
+    Keep,
+    /// Send a goal to this point of the map's frame (preempting the one under way).
+    Send((f64, f64)),
+    /// Give the goal under way up (cancel it) and plan again at once.
+    GiveUp,
+    /// Nothing left to explore.
+    Complete,
+}
+
+/// What a plan sees: the robot's map, where it is, the time, its team.
+pub(crate) struct PlanInput<'a> {
+    pub ns: &'a str,
+    pub map: &'a OccupancyGrid,
+    pub here: (f64, f64),
+    pub now: f64,
+    pub team: Option<&'a mut Team>,
+}
+
+/// Chooses the robot's goals ([`crate::lite`], [`crate::choice`]).
+pub(crate) trait Chooser {
+    /// A plan is due.
+    fn plan(&mut self, at: PlanInput<'_>) -> Result<Choice, ExploreError>;
+    /// The goal sent last ended with `status` (`action_msgs/msg/GoalStatus`), or was rejected.
+    fn ended(&mut self, status: i8, now: f64);
+    /// How many goals are blacklisted (for the log).
+    fn blacklisted(&self) -> usize;
 }
 
 /// The node's clock: the wall clock, or `/clock` (`use_sim_time`).
@@ -118,12 +217,20 @@ pub fn run(
     ns: &str,
     p: &ExploreParams,
     stop: &dyn Fn() -> bool,
-) -> Result<ExploreRun, Ros2Error> {
+) -> Result<ExploreRun, ExploreError> {
+    let mut chooser: Box<dyn Chooser> = match p.policy.as_str() {
+        "explore-lite" => Box::new(crate::lite::Lite::new(p)),
+        name => Box::new(crate::choice::AgentChoice::new(name, p, ns)?),
+    };
     let ctx = opts.context()?;
     let node = ctx.create_node_in(ns, "explore_node")?;
     let mut maps = MapSubscriber::with_updates(&node, &p.costmap_topic, &p.costmap_updates_topic)?;
     let mut tf = TfListener::new(&node, ns, TfNaming::NamespacedTopics)?;
     let nav = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose")?;
+    let mut team = match p.teammates.is_empty() {
+        true => None,
+        false => Some(Team::new(&node, ns, &p.teammates)?),
+    };
     let mut clock = NodeClock {
         started: Instant::now(),
         sim: match p.use_sim_time {
@@ -131,22 +238,8 @@ pub fn run(
             false => None,
         },
     };
-    let fp = FrontierParams {
-        potential_scale: p.potential_scale,
-        gain_scale: p.gain_scale,
-        min_frontier_size: p.min_frontier_size,
-    };
     let mut run = ExploreRun::default();
-    let mut blacklist: Vec<Listed> = Vec::new();
     let mut goal: Option<(SentGoal<NavigateToPose>, (f64, f64))> = None;
-    // The nearest distance to the current frontier, and when it was reached.
-    let mut progress = (f64::INFINITY, 0.0);
-    // The frontier last chosen (explore_lite's `prev_goal_`): kept after its goal ends, so a
-    // frontier still there after its goal succeeded is not sent again but timed out.
-    let mut prev_target: Option<(f64, f64)> = None;
-    // The frontier of the last goal reached: still there at the next plan, it cannot be seen
-    // from where it is reached, and is blacklisted at once.
-    let mut reached: Option<(f64, f64)> = None;
     let mut next_plan = 0.0;
     let mut start: Option<(f64, f64)> = None;
     let mut waiting_logged = (false, false);
@@ -183,21 +276,19 @@ pub fn run(
         };
         let here = (pose.translation.x, pose.translation.y);
         start.get_or_insert(here);
+        if let Some(team) = &mut team {
+            team.poll(now, frame, ns)?;
+        }
         // The goal's end.
         let mut replan = false;
-        if let Some((sent, at)) = &goal {
+        if let Some((sent, _)) = &goal {
             if let Some((st, _)) = sent.result(Duration::ZERO)? {
                 match st {
-                    status::SUCCEEDED => {
-                        run.succeeded += 1;
-                        reached = Some(*at);
-                    }
+                    status::SUCCEEDED => run.succeeded += 1,
                     status::CANCELED => {}
-                    _ => {
-                        run.aborted += 1;
-                        list(&mut blacklist, *at, now);
-                    }
+                    _ => run.aborted += 1,
                 }
+                chooser.ended(st, now);
                 goal = None;
                 replan = true;
             }
@@ -206,57 +297,47 @@ pub fn run(
             continue;
         }
         next_plan = now + period;
-        blacklist.retain(|b| b.failures < 2 || b.until > now);
         let Some(map) = maps.latest(Duration::ZERO)? else {
             continue;
         };
-        let cost: Vec<u8> = map.data.iter().map(|&v| occupancy_to_cost(v)).collect();
-        let grid = CostGrid {
-            width: map.info.width as usize,
-            height: map.info.height as usize,
-            resolution: map.info.resolution as f64,
-            origin: (map.info.origin.position.x, map.info.origin.position.y),
-            cost: &cost,
-            connectivity: Connectivity::Four,
-        };
-        if grid.width * grid.height != cost.len() || grid.width == 0 {
+        if map.info.width as u64 * map.info.height as u64 != map.data.len() as u64
+            || map.info.width == 0
+        {
             tracing::warn!("{ns}: skipped a map whose size does not match its data");
             continue;
         }
-        let frontiers = search_from(&grid, here, &fp);
-        let on_map = |(x, y): (f64, f64)| {
-            let (lx, ly) = (x - grid.origin.0, y - grid.origin.1);
-            lx >= 0.0
-                && ly >= 0.0
-                && lx < grid.width as f64 * grid.resolution
-                && ly < grid.height as f64 * grid.resolution
-        };
-        let tol = 5.0 * grid.resolution;
-        let listed = |c: (f64, f64), now: f64| {
-            blacklist
-                .iter()
-                .any(|b| b.until > now && (b.at.0 - c.0).abs() < tol && (b.at.1 - c.1).abs() < tol)
-        };
-        let forever = |c: (f64, f64)| {
-            blacklist.iter().any(|b| {
-                b.failures >= 2 && (b.at.0 - c.0).abs() < tol && (b.at.1 - c.1).abs() < tol
-            })
-        };
-        let open: Vec<_> = frontiers
-            .iter()
-            .filter(|f| on_map(f.centroid) && !forever(f.centroid))
-            .collect();
-        let Some(f) = open.iter().find(|f| !listed(f.centroid, now)) else {
-            if open.is_empty() {
-                // Nothing left but frontiers blacklisted for good: done.
+        let stamp = map.header.stamp;
+        if let Some(team) = &mut team {
+            team.share(map, frame, here, goal.as_ref().map(|g| g.1), stamp)?;
+        }
+        let choice = chooser.plan(PlanInput {
+            ns,
+            map,
+            here,
+            now,
+            team: team.as_mut(),
+        })?;
+        match choice {
+            Choice::Keep => {}
+            Choice::GiveUp => {
+                if let Some((sent, _)) = goal.take() {
+                    let _ = nav.cancel(sent.id, Duration::from_secs(5));
+                    run.given_up += 1;
+                }
+                next_plan = now;
+            }
+            Choice::Complete => {
                 if let Some((sent, _)) = goal.take() {
                     let _ = nav.cancel(sent.id, Duration::from_secs(5));
                 }
                 run.complete = true;
                 tracing::info!(
-                    "{ns}: exploration complete ({} frontiers blacklisted)",
-                    blacklist.len()
+                    "{ns}: exploration complete ({} goals blacklisted)",
+                    chooser.blacklisted()
                 );
+                if let Some(team) = &mut team {
+                    team.share_goal(frame, None, stamp)?;
+                }
                 if p.return_to_init {
                     if let Some(s) = start {
                         run.returned = go_to(&nav, frame, s, stop)?;
@@ -264,80 +345,34 @@ pub fn run(
                 }
                 return Ok(run);
             }
-            // Frontiers wait out their blacklist: keep going.
-            continue;
-        };
-        let target = f.centroid;
-        // Within the blacklist's tolerance: the same frontier, its centroid moved a little as
-        // the map changed (explore_lite's 0.01 m makes a flickering map resend for ever).
-        let near = |a: Option<(f64, f64)>| {
-            a.is_some_and(|a| (a.0 - target.0).abs() < tol && (a.1 - target.1).abs() < tol)
-        };
-        if near(reached.take()) {
-            list(&mut blacklist, target, now);
-            prev_target = None;
-            next_plan = now;
-            continue;
-        }
-        let same = near(prev_target);
-        prev_target = Some(target);
-        // Progress: nearer by a map cell or more.
-        if !same || progress.0 - f.min_distance > grid.resolution {
-            progress = (f.min_distance, now);
-        }
-        if same && now - progress.1 > p.progress_timeout {
-            // No progress: give it up (cancel), blacklist it, plan again at once.
-            if let Some((sent, _)) = goal.take() {
-                let _ = nav.cancel(sent.id, Duration::from_secs(5));
-                run.given_up += 1;
-            }
-            list(&mut blacklist, target, now);
-            prev_target = None;
-            next_plan = now;
-            continue;
-        }
-        if same {
-            continue;
-        }
-        if goal.take().is_some() {
-            // A new frontier preempts the goal (nav2 aborts the old one itself).
-            run.preempted += 1;
-        }
-        // explore_lite's goal: the centroid, orientation w = 1.
-        let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
-        match nav.send_goal(msg, Duration::from_secs(10)) {
-            Ok(Some(sent)) => {
-                run.sent += 1;
-                goal = Some((sent, target));
-            }
-            Ok(None) => {
-                run.rejected += 1;
-                list(&mut blacklist, target, now);
-            }
-            Err(e) => {
-                tracing::warn!("{ns}: navigate_to_pose did not answer: {e}");
-                next_plan = now + period;
+            Choice::Send(target) => {
+                if goal.take().is_some() {
+                    // A new goal preempts the one under way (nav2 aborts the old one itself).
+                    run.preempted += 1;
+                }
+                // explore_lite's goal: the point, orientation w = 1.
+                let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
+                match nav.send_goal(msg, Duration::from_secs(10)) {
+                    Ok(Some(sent)) => {
+                        run.sent += 1;
+                        goal = Some((sent, target));
+                        if let Some(team) = &mut team {
+                            team.share_goal(frame, Some(target), stamp)?;
+                        }
+                    }
+                    Ok(None) => {
+                        run.rejected += 1;
+                        chooser.ended(status::ABORTED, now);
+                    }
+                    Err(e) => {
+                        tracing::warn!("{ns}: navigate_to_pose did not answer: {e}");
+                        chooser.ended(status::UNKNOWN, now);
+                    }
+                }
             }
         }
     }
     Ok(run)
-}
-
-/// Puts `at` on the blacklist until `now` + [`BLACKLIST_EXPIRY`] (a second failure after its
-/// retry: for good).
-fn list(blacklist: &mut Vec<Listed>, at: (f64, f64), now: f64) {
-    let near = |b: &&mut Listed| (b.at.0 - at.0).hypot(b.at.1 - at.1) < 0.01;
-    match blacklist.iter_mut().find(|b| near(b)) {
-        Some(b) => {
-            b.failures += 1;
-            b.until = now + BLACKLIST_EXPIRY;
-        }
-        None => blacklist.push(Listed {
-            at,
-            until: now + BLACKLIST_EXPIRY,
-            failures: 1,
-        }),
-    }
 }
 
 /// Sends the robot to `to` and waits for the result; whether it got there.

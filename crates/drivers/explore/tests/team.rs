@@ -1,0 +1,101 @@
+//! A team of exploration nodes, one thread each, and the simulated nav2 team (the continuous
+//! world serving `navigate_to_pose`), talking only through a zenoh router: each node shares its
+//! map, position and goal over ROS 2 topics, and the team explores a generated floor plan.
+
+use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+use madenet_explore::node::{self, ExploreRun};
+use madenet_explore::params::ExploreParams;
+use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
+use madenet_map::paper::Corner;
+use madenet_ros2::loopback_router;
+use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimRun, Nav2SimThread};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Runs `n` nodes of `policy` on a `size` m floor plan of `seed` until every node is done (or
+/// `watchdog` seconds pass); node `kill` (if any) is stopped after `kill_after` wall seconds.
+/// Returns each node's run and the sim's ground truth.
+fn explore_team(
+    policy: &str,
+    n: usize,
+    size: usize,
+    seed: u64,
+    kill: Option<(usize, f64)>,
+    watchdog: u64,
+) -> (Vec<ExploreRun>, Nav2SimRun) {
+    let cfg = FloorPlanConfig::for_size(size, size);
+    let grid = floor_plan(&cfg, seed).unwrap();
+    let starts = &Corner::TopLeft.start_cells(size, size)[..n];
+    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
+    let scenario = madenet_world::ScenarioConfig {
+        num_robots: n,
+        ..Default::default()
+    };
+    let world =
+        ContinuousWorld::new(scene, starts, scenario, ContinuousConfig::default(), seed).unwrap();
+    let (router, opts) = loopback_router().unwrap();
+    let sim = Nav2SimThread::spawn(
+        opts.clone(),
+        world,
+        Nav2SimOptions {
+            realtime: 10.0,
+            ..Default::default()
+        },
+    );
+    let stop_all = sim.stop_flag();
+    let names: Vec<String> = (0..n).map(|i| format!("/robot{i}")).collect();
+    let t0 = Instant::now();
+    let nodes: Vec<_> = (0..n)
+        .map(|i| {
+            let opts = opts.clone();
+            let ns = names[i].clone();
+            let mates: Vec<String> = names.iter().filter(|m| **m != ns).cloned().collect();
+            let yaml = format!(
+                "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n    policy: {policy}\n    teammates: [{}]\n",
+                mates.join(", ")
+            );
+            let p = ExploreParams::from_yaml(&yaml, &format!("{ns}/explore_node")).unwrap();
+            let stop_all = stop_all.clone();
+            std::thread::spawn(move || {
+                let stop = || {
+                    stop_all.load(Ordering::Relaxed)
+                        || kill.is_some_and(|(k, after)| k == i && t0.elapsed().as_secs_f64() > after)
+                };
+                node::run(&opts, &ns, &p, &stop).unwrap()
+            })
+        })
+        .collect();
+    let watch = {
+        let stop = stop_all.clone();
+        std::thread::spawn(move || {
+            let t = Instant::now();
+            while !stop.load(Ordering::Relaxed) && t.elapsed().as_secs() < watchdog {
+                std::thread::sleep(Duration::from_millis(200));
+            }
+            stop.store(true, Ordering::Relaxed);
+        })
+    };
+    let mut runs = Vec::new();
+    for h in nodes {
+        runs.push(h.join().unwrap());
+    }
+    let truth = sim.stop().unwrap();
+    watch.join().unwrap();
+    drop(router);
+    eprintln!(
+        "{policy}: {runs:?}; {:.0} s simulated, explored {:.3}, {:.0} s wall",
+        truth.time,
+        truth.explored,
+        t0.elapsed().as_secs_f64()
+    );
+    (runs, truth)
+}
+
+#[test]
+fn three_spread_nodes_explore_a_20_m_plan_together() {
+    let (runs, truth) = explore_team("spread", 3, 20, 5, None, 240);
+    assert!(runs.iter().all(|r| r.complete), "{runs:?}");
+    assert!(truth.explored >= 0.98, "explored {}", truth.explored);
+    assert_eq!(truth.collisions.obstacle + truth.collisions.robot, 0);
+}
