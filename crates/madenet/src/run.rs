@@ -63,6 +63,15 @@ pub struct RunArgs {
     /// 1; `--pace-ms 0`: as fast as it runs, follow /clock) until Ctrl-C, then prints its goals.
     #[arg(long, value_name = "ENDPOINT", num_args = 0..=1, default_missing_value = "tcp/127.0.0.1:7447")]
     nav2: Option<String>,
+    /// With `--nav2`: also run one `madenet explore` process per robot with this policy
+    /// (bare `--explore`: explore-lite; or any of `madenet policies`), this run hosting the
+    /// zenoh router at the `--nav2` endpoint; the run ends when every node has exited.
+    #[arg(long, value_name = "POLICY", num_args = 0..=1, default_missing_value = "explore-lite", requires = "nav2")]
+    explore: Option<String>,
+    /// With `--explore`: the nodes' parameter files (explore_lite's format), before the one
+    /// the run adds (the sim's topics, /clock, the policy, teammates). Repeatable.
+    #[arg(long, value_name = "FILE", requires = "explore")]
+    params_file: Vec<PathBuf>,
 }
 
 /// `--pace-ms`: 0–60 000 ms.
@@ -95,9 +104,11 @@ impl RunArgs {
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
-    if a.nav2.is_some() && (a.world != "continuous" || a.json || a.pictures.any()) {
+    if a.nav2.is_some()
+        && (a.world != "continuous" || (a.json && a.explore.is_none()) || a.pictures.any())
+    {
         anyhow::bail!(
-            "--nav2: only with --world continuous, and without --json/--render/--snapshot"
+            "--nav2: only with --world continuous, and without --render/--snapshot (--json only with --explore)"
         );
     }
     if a.world == "continuous" {
@@ -204,6 +215,11 @@ fn serve_nav2(
     endpoint: &str,
 ) -> Result<()> {
     use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2Team};
+    // With --explore this run is the graph's router (the nodes and the sim connect to it).
+    let _router = match &a.explore {
+        Some(_) => Some(madenet_ros2::router(endpoint).context("--nav2")?),
+        None => None,
+    };
     let opts = madenet_ros2::Ros2Options {
         connect: vec![endpoint.to_string()],
         ..Default::default()
@@ -214,23 +230,66 @@ fn serve_nav2(
     let mut recorder = crate::record::start(a.record.as_deref(), a.foxglove.as_deref(), &team)?;
     let mut pace = a.pace().unwrap_or(Pace::RealTime(1.0));
     let mut interrupt = OnSignal::new(&stop);
+    let mut nodes = match &a.explore {
+        Some(policy) => {
+            let exe = std::env::current_exe().context("finding the madenet binary")?;
+            let nodes = madenet_explore::launch::TeamNodes::spawn(
+                &exe,
+                endpoint,
+                n,
+                policy,
+                &a.params_file,
+            )
+            .context("--explore: starting the exploration nodes")?;
+            Some(nodes)
+        }
+        None => None,
+    };
     let mut sinks: Vec<&mut dyn Sink<Nav2Team>> = vec![&mut pace, &mut interrupt];
     if let Some(r) = recorder.as_mut() {
         sinks.insert(0, r);
     }
+    if let Some(nodes) = nodes.as_mut() {
+        sinks.push(nodes);
+    }
     eprintln!(
-        "nav2       {n} robots, /robot0 … /robot{}: navigate_to_pose via {endpoint} (Ctrl-C ends)",
-        n - 1
+        "nav2       {n} robots, /robot0 … /robot{}: navigate_to_pose via {endpoint} (Ctrl-C ends){}",
+        n - 1,
+        match &a.explore {
+            Some(p) => format!("; an exploration node each ({p})"),
+            None => String::new(),
+        }
     );
     let end =
         madenet_sim::stepping::run(&mut team, &mut sinks).map_err(anyhow::Error::from_boxed)?;
-    for line in team
-        .finish()
-        .context("--nav2")?
-        .summary()
-        .into_iter()
-        .chain(end.wrote)
-    {
+    let run = team.finish().context("--nav2")?;
+    let (node_lines, complete, stopped_at) = match nodes.as_mut() {
+        Some(nodes) => {
+            nodes.kill();
+            let at = nodes.all_exited_at();
+            let (lines, complete) = nodes.report();
+            (lines, complete, at)
+        }
+        None => (Vec::new(), false, None),
+    };
+    if a.json {
+        let json = serde_json::json!({
+            "robots": n,
+            "policy": a.explore,
+            "simulated_s": run.time,
+            "explored": run.explored,
+            "covered_99_s": run.covered_at(0.99),
+            "nodes_stopped_s": stopped_at,
+            "nodes_complete": complete,
+            "team_distance_m": run.distance,
+            "obstacle_collisions": run.collisions.obstacle,
+            "robot_collisions": run.collisions.robot,
+            "nodes": node_lines,
+        });
+        out!("{}", serde_json::to_string_pretty(&json)?)?;
+        return Ok(());
+    }
+    for line in run.summary().into_iter().chain(node_lines).chain(end.wrote) {
         out!("{line}")?;
     }
     Ok(())

@@ -52,6 +52,8 @@ pub struct CellReader {
     row_cell: Vec<u32>,
     col_cell: Vec<u32>,
     pixels: Vec<u32>,
+    /// Observed pixels per cell at the last read.
+    observed: Vec<u32>,
     cells: Vec<Occupancy>,
 }
 
@@ -87,6 +89,7 @@ impl CellReader {
             cols,
             row_cell,
             col_cell,
+            observed: vec![0; pixels.len()],
             pixels,
             cells: vec![Occupancy::Unknown; rows * cols],
         }
@@ -133,7 +136,8 @@ impl CellReader {
     /// Reads `grid` (of this reader's geometry: checked by the caller) and appends each cell
     /// whose read changed to `changes`.
     pub fn read(&mut self, grid: &OccupancyGrid, changes: &mut Vec<(Pos, Occupancy)>) {
-        let mut observed = vec![0u32; self.cells.len()];
+        let mut observed = std::mem::take(&mut self.observed);
+        observed.fill(0);
         let mut occupied = vec![0u32; self.cells.len()];
         let w = self.geometry.width;
         for (r, row) in grid.data.chunks_exact(w.max(1)).enumerate() {
@@ -171,6 +175,15 @@ impl CellReader {
                 ));
             }
         }
+        self.observed = observed;
+    }
+
+    /// Pixels of cell `p` observed at the last read (0 off the map).
+    pub fn observed(&self, p: Pos) -> u32 {
+        if p.row < 0 || p.col < 0 || p.row as usize >= self.rows || p.col as usize >= self.cols {
+            return 0;
+        }
+        self.observed[p.row as usize * self.cols + p.col as usize]
     }
 
     /// Marks cell `p` an obstacle (written off) and reports it in `changes` if it was not one.

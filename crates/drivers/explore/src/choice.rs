@@ -10,8 +10,9 @@
 //! cell's centre goes to nav2.
 //!
 //! Cells the robot cannot resolve are written off, as in the continuous trial: the unknown
-//! neighbours of a goal it reached, a second after (it cannot see them from there; for good),
-//! and a goal nav2 aborted or that made no progress for `progress_timeout` (on the expiring
+//! neighbours of a goal it reached, a second after (it cannot see them from there: for good if
+//! its map saw part of them, a wall's face; else until the blacklist expires, as they may be
+//! round a corner or behind a teammate), and a goal nav2 aborted or that made no progress for `progress_timeout` (on the expiring
 //! [`Blacklist`]: when it expires the agent's belief is read afresh from the maps, so the cell
 //! is tried again).
 
@@ -26,6 +27,10 @@ use madenet_world::{Observation, ScenarioConfig};
 
 /// Seconds since a teammate's position was heard within which it counts as detected.
 pub const DETECTION_AGE: f64 = 2.0;
+
+/// Seconds without a goal or a reachable frontier before exploration is complete (the maps
+/// the node reads may lag what the robot saw).
+pub const NO_FRONTIER_TIME: f64 = 5.0;
 
 /// The continuous world's `mapping.known_fraction`: a cell is known free once this fraction
 /// of its pixels are observed.
@@ -59,6 +64,8 @@ pub(crate) struct AgentChoice {
     reached: Option<(Pos, f64)>,
     /// The time of the last plan.
     last_plan: f64,
+    /// Since when the agent has had no goal and no frontier.
+    idle_since: Option<f64>,
 }
 
 impl AgentChoice {
@@ -91,6 +98,7 @@ impl AgentChoice {
             progress: (f64::INFINITY, 0.0),
             reached: None,
             last_plan: 0.0,
+            idle_since: None,
         })
     }
 
@@ -206,7 +214,13 @@ impl Chooser for AgentChoice {
                         && (q.col as usize) < cols
                         && r.agent.belief().get(q) == Occupancy::Unknown
                     {
-                        self.blacklist.list(r.own.centre(q), now, tol, true);
+                        // Seen in part (a wall's face): for good; not seen at all (round a
+                        // corner, behind a teammate): until the blacklist expires.
+                        let seen_part = r.own.observed(q) > 0;
+                        tracing::debug!(
+                            "{ns} at {now:.1} s: wrote off {q:?} (seen in part: {seen_part})"
+                        );
+                        self.blacklist.list(r.own.centre(q), now, tol, seen_part);
                         if !self.written.contains(&q) {
                             self.written.push(q);
                         }
@@ -284,12 +298,22 @@ impl Chooser for AgentChoice {
             );
         }
         let Some(g) = a.goal() else {
-            let done = !a.frontier_reachable() && !self.blacklist.pending(now);
-            return Ok(match done {
+            // Done when no frontier is reachable, teammates or not in the way, with nothing
+            // waiting out the blacklist, for NO_FRONTIER_TIME (the maps may lag).
+            let b = a.belief();
+            let reach = a.reachable();
+            let open = (0..b.map().len()).any(|k| reach[k] && b.is_frontier_index(k));
+            if open || self.blacklist.pending(now) {
+                self.idle_since = None;
+                return Ok(Choice::Keep);
+            }
+            let since = *self.idle_since.get_or_insert(now);
+            return Ok(match now - since >= NO_FRONTIER_TIME {
                 true => Choice::Complete,
                 false => Choice::Keep,
             });
         };
+        self.idle_since = None;
         let target = r.own.centre(g);
         let d = (here.0 - target.0).hypot(here.1 - target.1);
         if self.goal != Some(g) {

@@ -9,9 +9,10 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct ExploreArgs {
     /// explore_lite's parameter file (ROS 2 YAML, as `--params-file` of a ROS node: its `/**`
-    /// section and the node's own, `<namespace>/explore_node`, apply).
-    #[arg(long, value_name = "FILE")]
-    pub params_file: PathBuf,
+    /// section and the node's own, `<namespace>/explore_node`, apply). Repeatable: later
+    /// files' values win, as in ROS.
+    #[arg(long, value_name = "FILE", required = true)]
+    pub params_file: Vec<PathBuf>,
     /// The robot's namespace (`/robot0`); the node is `<namespace>/explore_node`, its map,
     /// TF and `navigate_to_pose` are the robot's in that namespace.
     #[arg(long, default_value = "/", value_name = "NS")]
@@ -49,12 +50,14 @@ pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> 
         "/" => "/explore_node".to_string(),
         ns => format!("{ns}/explore_node"),
     };
-    let p = ExploreParams::from_file(&a.params_file, &node_name)
-        .map_err(|e| format!("--params-file: {e}"))?;
+    let files: Vec<&std::path::Path> = a.params_file.iter().map(|f| f.as_path()).collect();
+    let p =
+        ExploreParams::from_files(&files, &node_name).map_err(|e| format!("--params-file: {e}"))?;
     if a.check {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
         return Ok(vec![format!(
             "{} for {node_name}: {p:?}",
-            a.params_file.display()
+            names.join(" + ")
         )]);
     }
     let opts = madenet_ros2::Ros2Options {

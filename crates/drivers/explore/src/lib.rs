@@ -8,6 +8,7 @@
 //! - [`node`]: one robot's node, driving its nav2 through `navigate_to_pose`, with an expiring
 //!   blacklist; its goals chosen by explore_lite's frontiers ([`lite`]) or any madenet policy on
 //!   the paper's cells ([`choice`], [`cells`]);
+//! - [`launch`]: a team of nodes as processes, beside the simulated nav2 team;
 //! - [`team`]: what teammates share over ROS 2 topics (maps as deltas, positions, goals).
 //!
 //! ```
@@ -22,6 +23,7 @@
 pub mod cells;
 pub mod choice;
 pub mod cli;
+pub mod launch;
 pub mod lite;
 pub mod node;
 pub mod params;

@@ -266,21 +266,60 @@ fn flatten(map: &[(String, Value)], prefix: &str, out: &mut Vec<(String, Value)>
 impl ExploreParams {
     /// Reads `path` for the node whose fully qualified name is `node` (`/robot0/explore_node`).
     pub fn from_file(path: &Path, node: &str) -> Result<Self, ParamsError> {
-        let file = path.display().to_string();
-        let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
-            .map_err(|source| ParamsError::Read {
-                file: file.clone(),
-                source,
-            })?;
-        Self::parse(&text, node, &file)
+        Self::from_files(&[path], node)
+    }
+
+    /// Reads `paths` in order for node `node`, as a ROS node takes several `--params-file`:
+    /// each file's sections for the node apply over what the files before set. It is an error
+    /// when no file has a section for the node.
+    pub fn from_files(paths: &[&Path], node: &str) -> Result<Self, ParamsError> {
+        let mut p = ExploreParams::default();
+        let mut misses = Vec::new();
+        for path in paths {
+            let file = path.display().to_string();
+            let text = madenet_files::read_text_capped(path, madenet_files::InputKind::Config)
+                .map_err(|source| ParamsError::Read {
+                    file: file.clone(),
+                    source,
+                })?;
+            if let Err(miss) = p.apply(&text, node, &file) {
+                match miss {
+                    ParamsError::NoSection { .. } if paths.len() > 1 => misses.push(miss),
+                    e => return Err(e),
+                }
+            }
+        }
+        if misses.len() == paths.len() {
+            return Err(misses.remove(0));
+        }
+        p.checked(
+            &paths
+                .last()
+                .map(|f| f.display().to_string())
+                .unwrap_or_default(),
+        )
     }
 
     /// [`ExploreParams::from_file`] on YAML text.
     pub fn from_yaml(text: &str, node: &str) -> Result<Self, ParamsError> {
-        Self::parse(text, node, "parameters")
+        let mut p = ExploreParams::default();
+        p.apply(text, node, "parameters")?;
+        p.checked("parameters")
     }
 
-    fn parse(text: &str, node: &str, file: &str) -> Result<Self, ParamsError> {
+    fn checked(self, file: &str) -> Result<Self, ParamsError> {
+        self.validate()
+            .map_err(|(name, why)| ParamsError::Parameter {
+                file: file.to_string(),
+                section: "(all)".into(),
+                name: name.into(),
+                why,
+            })?;
+        Ok(self)
+    }
+
+    /// Applies the sections of `text` (file `file`) that apply to `node` over these values.
+    fn apply(&mut self, text: &str, node: &str, file: &str) -> Result<(), ParamsError> {
         let format = |why: String| ParamsError::Format {
             file: file.to_string(),
             why,
@@ -317,7 +356,7 @@ impl ExploreParams {
         };
         // rclcpp: `/**` first, then the node's own name (its values win); file order within.
         let mut applied = 0;
-        let mut p = ExploreParams::default();
+        let p = self;
         for want in ["/**", node.as_str()] {
             for (section, params) in sections.iter().filter(|(s, _)| s == want) {
                 applied += 1;
@@ -339,13 +378,7 @@ impl ExploreParams {
                 sections: names.join(", "),
             });
         }
-        p.validate().map_err(|(name, why)| ParamsError::Parameter {
-            file: file.to_string(),
-            section: "(all)".into(),
-            name: name.into(),
-            why,
-        })?;
-        Ok(p)
+        Ok(())
     }
 
     /// Sets parameter `name` to `value`, typed as explore_lite declares it.

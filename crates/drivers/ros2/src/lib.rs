@@ -238,7 +238,6 @@ impl Ros2Options {
 /// options that reach it (domain 0): a ROS 2 graph on one machine for tests, benches and demos.
 /// The port is found by binding and releasing it; another program could take it in between.
 pub fn loopback_router() -> Result<(zenoh::Session, Ros2Options), Ros2Error> {
-    use zenoh::Wait;
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
         .map_err(|e| Ros2Error::Middleware {
@@ -246,21 +245,33 @@ pub fn loopback_router() -> Result<(zenoh::Session, Ros2Options), Ros2Error> {
             source: Box::new(e),
         })?
         .port();
-    let c = zenoh_config([
-        ("mode", "\"router\"".to_string()),
-        ("scouting/multicast/enabled", "false".into()),
-        ("listen/endpoints", format!("[\"tcp/127.0.0.1:{port}\"]")),
-    ])
-    .map_err(|(pair, e)| middleware(format!("router config {pair}"))(e))?;
-    let router = zenoh::open(c)
-        .wait()
-        .map_err(middleware(format!("router on tcp/127.0.0.1:{port}")))?;
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let router = router(&endpoint)?;
     let opts = Ros2Options {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
+        connect: vec![endpoint],
         listen: Vec::new(),
         domain_id: Some(0),
     };
     Ok((router, opts))
+}
+
+/// A zenoh router listening on `endpoint` (as rmw_zenoh's `rmw_zenohd`: ROS 2 nodes with
+/// rmw_zenoh, and madenet's, connect to it), with multicast scouting off. It routes while the
+/// session lives.
+pub fn router(endpoint: &str) -> Result<zenoh::Session, Ros2Error> {
+    use zenoh::Wait;
+    let c = zenoh_config([
+        ("mode", "\"router\"".to_string()),
+        ("scouting/multicast/enabled", "false".into()),
+        (
+            "listen/endpoints",
+            serde_json::to_string(&[endpoint]).unwrap_or_default(),
+        ),
+    ])
+    .map_err(|(pair, e)| middleware(format!("router config {pair}"))(e))?;
+    zenoh::open(c)
+        .wait()
+        .map_err(middleware(format!("a router listening on {endpoint}")))
 }
 
 /// Where a madenet grid lies in the ROS `map` frame: its size, cell size and origin.

@@ -109,9 +109,22 @@ pub struct Nav2SimRun {
     pub collisions: Collisions,
     /// Simulated seconds.
     pub time: f64,
+    /// The explored share (as `explored`) at every whole simulated second (index = second).
+    pub curve: Vec<f64>,
+    /// Metres the whole team drove.
+    pub distance: f64,
 }
 
 impl Nav2SimRun {
+    /// The first whole simulated second at which the robots' maps together covered `share`
+    /// (0–1) of the explorable cells, if they did.
+    pub fn covered_at(&self, share: f64) -> Option<f64> {
+        self.curve
+            .iter()
+            .position(|&e| e >= share)
+            .map(|s| s as f64)
+    }
+
     /// The run in lines for people: goals by outcome, rejected and refused, collisions, time.
     pub fn summary(&self) -> Vec<String> {
         let count = |st: i8| {
@@ -160,6 +173,14 @@ impl Nav2SimRun {
             format!(
                 "explored   {:.1} % (the robots' maps together, ground truth)",
                 100.0 * self.explored
+            ),
+            format!(
+                "covered    99 % at {}; {:.1} m driven by the team",
+                match self.covered_at(0.99) {
+                    Some(t) => format!("{t:.0} s"),
+                    None => "never".into(),
+                },
+                self.distance
             ),
             format!("simulated  {:.1} s", self.time),
         ]
@@ -520,6 +541,7 @@ impl Nav2Team {
         self.run.collisions = self.world.collisions();
         self.run.time = self.world.time();
         self.run.explored = self.world.explored_fraction();
+        self.run.distance = (0..self.robots.len()).map(|i| self.world.distance(i)).sum();
         Ok(self.run)
     }
 
@@ -530,6 +552,9 @@ impl Nav2Team {
         let commands = self.navigate()?;
         self.world.step(&commands);
         self.ticks += 1;
+        if self.world.time() >= self.run.curve.len() as f64 {
+            self.run.curve.push(self.world.explored_fraction());
+        }
         for (i, cells) in self.run.cells.iter_mut().enumerate() {
             let cell = self.world.cell_of(i);
             if cells.last() != Some(&cell) {
