@@ -52,8 +52,15 @@ fn bad_input_gets_one_clear_error() {
         "/**:\n  ros__parameters:\n    planner_frequncy: 0.5\n",
     )
     .unwrap();
+    let unknown_policy = dir.join("policy.yaml");
+    std::fs::write(
+        &unknown_policy,
+        "/**:\n  ros__parameters:\n    policy: no-such-policy\n",
+    )
+    .unwrap();
     let other = other.to_str().unwrap();
     let typo = typo.to_str().unwrap();
+    let unknown_policy = unknown_policy.to_str().unwrap();
     let cases: [(&str, Vec<&str>, &[&str]); 5] = [
         (
             "another node's file",
@@ -75,11 +82,16 @@ fn bad_input_gets_one_clear_error() {
             vec!["--params-file", "/nonexistent.yaml", "--check"],
             &["--params-file", "/nonexistent.yaml"],
         ),
-        // The fixture's /robot0 section asks for spread: not in the node yet.
         (
-            "a policy the node does not run",
-            vec!["--params-file", FIXTURE, "--namespace", "/robot0"],
-            &["policy", "spread", "explore-lite"],
+            "an unknown policy",
+            vec!["--params-file", FIXTURE, "--params-file", unknown_policy],
+            &[
+                "--params-file",
+                "policy",
+                "no-such-policy",
+                "unknown",
+                "spread",
+            ],
         ),
     ];
     for (case, args, needles) in cases {
@@ -171,4 +183,117 @@ fn the_node_explores_a_simulated_nav2_robots_floor_plan() {
         .unwrap_or_else(|| panic!("{sim_text}"));
     eprintln!("{text}{sim_text}");
     assert!(explored >= 95.0, "{sim_text}");
+}
+
+/// A free loopback endpoint (bound and released: another program could take it in between).
+fn free_endpoint() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    format!("tcp/127.0.0.1:{port}")
+}
+
+/// Waits for `child` to exit on its own; after `secs` seconds, interrupts `all` and fails.
+fn wait_for(child: &mut std::process::Child, secs: u64, what: &str, all: &[&std::process::Child]) {
+    let started = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed().as_secs() > secs {
+            for c in all {
+                signal(c, "-INT");
+            }
+            panic!("{what} did not finish within {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+}
+
+/// The issue's first check: `run --world continuous --nav2 --explore` runs three `madenet
+/// explore` processes beside the simulated nav2 team, this run hosting the router; the team
+/// explores a generated 20 m floor plan and every node ends on its own, with no collision,
+/// and `--record` writes the bag.
+#[test]
+fn three_explore_processes_and_the_nav2_sim_explore_a_20_m_plan() {
+    let dir = Scratch::new("explore-team");
+    let bag = dir.join("bag");
+    let mut run = spawn_piped(
+        Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(["run", "--world", "continuous", "--map", "floorplan:4"])
+            .args([
+                "--realtime",
+                "10",
+                "--json",
+                "--record",
+                bag.to_str().unwrap(),
+            ])
+            .args(["--nav2", &free_endpoint(), "--explore", "spread"]),
+    );
+    wait_for(&mut run, 400, "the team", &[]);
+    let out = run.wait_with_output().unwrap();
+    assert_ok(&out);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stdout)));
+    eprintln!("{v:#}");
+    assert_eq!(v["robots"], 3);
+    assert_eq!(v["nodes_complete"], true, "{v:#}");
+    assert!(v["explored"].as_f64().unwrap() >= 0.99, "{v:#}");
+    assert!(v["covered_99_s"].as_f64().is_some(), "{v:#}");
+    assert_eq!(v["obstacle_collisions"], 0, "{v:#}");
+    assert_eq!(v["robot_collisions"], 0, "{v:#}");
+    assert!(bag.join("metadata.yaml").is_file());
+}
+
+/// No central node: three `madenet explore` processes and the sim through a router; one node
+/// is killed (SIGKILL) mid-run, and the other two still explore the whole plan.
+#[test]
+fn with_one_explore_process_killed_the_other_two_finish_the_map() {
+    let (_router, opts) = madenet_ros2::loopback_router().unwrap();
+    let endpoint = opts.connect[0].clone();
+    let dir = Scratch::new("explore-kill");
+    let sim = spawn_piped(
+        Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(["run", "--world", "continuous", "--map", "floorplan:4"])
+            .args(["--realtime", "10", "--nav2", &endpoint]),
+    );
+    let params = dir.join("team.yaml");
+    std::fs::write(&params, madenet_explore::launch::team_params(3, "spread")).unwrap();
+    let mut nodes: Vec<_> = (0..3)
+        .map(|i| {
+            spawn_piped(
+                Command::new(env!("CARGO_BIN_EXE_madenet"))
+                    .args(["explore", "--params-file", params.to_str().unwrap()])
+                    .args(["--namespace", &format!("/robot{i}"), "--ros2", &endpoint]),
+            )
+        })
+        .collect();
+    // 8 s wall is about 80 s simulated: the team is well under way.
+    std::thread::sleep(std::time::Duration::from_secs(8));
+    let mut killed = nodes.remove(1);
+    killed.kill().unwrap();
+    killed.wait().unwrap();
+    for (k, node) in nodes.iter_mut().enumerate() {
+        wait_for(node, 400, &format!("node {k}"), &[&sim]);
+    }
+    signal(&sim, "-INT");
+    let sim_out = sim.wait_with_output().unwrap();
+    for node in nodes {
+        let out = node.wait_with_output().unwrap();
+        assert_ok(&out);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("complete: no frontier left"), "{text}");
+    }
+    let sim_text = String::from_utf8_lossy(&sim_out.stdout);
+    eprintln!("{sim_text}");
+    assert!(
+        sim_text.contains("collisions 0 with obstacles, 0 between robots"),
+        "{sim_text}"
+    );
+    let explored: f64 = sim_text
+        .split("explored   ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{sim_text}"));
+    assert!(explored >= 99.0, "{sim_text}");
 }

@@ -14,14 +14,13 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Runs `n` nodes of `policy` on a `size` m floor plan of `seed` until every node is done (or
-/// `watchdog` seconds pass); node `kill` (if any) is stopped after `kill_after` wall seconds.
+/// `watchdog` seconds pass).
 /// Returns each node's run and the sim's ground truth.
 fn explore_team(
     policy: &str,
     n: usize,
     size: usize,
     seed: u64,
-    kill: Option<(usize, f64)>,
     watchdog: u64,
 ) -> (Vec<ExploreRun>, Nav2SimRun) {
     let cfg = FloorPlanConfig::for_size(size, size);
@@ -58,10 +57,7 @@ fn explore_team(
             let p = ExploreParams::from_yaml(&yaml, &format!("{ns}/explore_node")).unwrap();
             let stop_all = stop_all.clone();
             std::thread::spawn(move || {
-                let stop = || {
-                    stop_all.load(Ordering::Relaxed)
-                        || kill.is_some_and(|(k, after)| k == i && t0.elapsed().as_secs_f64() > after)
-                };
+                let stop = || stop_all.load(Ordering::Relaxed);
                 node::run(&opts, &ns, &p, &stop).unwrap()
             })
         })
@@ -92,9 +88,11 @@ fn explore_team(
     (runs, truth)
 }
 
+/// explore-lite with teammates: each node plans on its map merged with its teammates' shared
+/// maps (the study's method (b)).
 #[test]
-fn three_spread_nodes_explore_a_20_m_plan_together() {
-    let (runs, truth) = explore_team("spread", 3, 20, 5, None, 240);
+fn three_explore_lite_nodes_with_merged_maps_explore_a_plan() {
+    let (runs, truth) = explore_team("explore-lite", 3, 16, 5, 300);
     assert!(runs.iter().all(|r| r.complete), "{runs:?}");
     assert!(truth.explored >= 0.98, "explored {}", truth.explored);
     assert_eq!(truth.collisions.obstacle + truth.collisions.robot, 0);
