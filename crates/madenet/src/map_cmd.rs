@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::Subcommand;
+use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
 use madenet_map::generate::{generate, is_connected, GeneratorConfig};
 use madenet_map::io::{save, to_text};
 use madenet_map::Occupancy;
@@ -35,6 +36,14 @@ pub enum MapCommand {
         /// Maximum obstacle density.
         #[arg(long, default_value_t = 0.40)]
         density_max: f64,
+        /// A floor plan (rooms, doors, corridors, some furniture: `madenet_map::floorplan`)
+        /// instead of scattered obstacles (the densities do not apply).
+        #[arg(long)]
+        floorplan: bool,
+        /// With `--floorplan`: cells kept free (`r,c;r,c;…`, e.g. robots' start cells; default:
+        /// the 12 corner start cells).
+        #[arg(long, value_name = "CELLS", requires = "floorplan")]
+        keep_free: Option<madenet_sim::StartSpec>,
         /// Output file (format by extension).
         output: PathBuf,
     },
@@ -70,14 +79,26 @@ pub fn run(c: MapCommand) -> Result<()> {
             width,
             density_min,
             density_max,
+            floorplan,
+            keep_free,
             output,
         } => {
-            let cfg = GeneratorConfig {
-                density_min,
-                density_max,
-                ..GeneratorConfig::for_size(height, width)
+            let grid = if floorplan {
+                let mut cfg = FloorPlanConfig::for_size(height, width);
+                match keep_free {
+                    Some(madenet_sim::StartSpec::Cells(cells)) => cfg.keep_free = cells,
+                    Some(_) => anyhow::bail!("--keep-free: cells `r,c;r,c;…`"),
+                    None => {}
+                }
+                floor_plan(&cfg, seed).context("map generate --floorplan")?
+            } else {
+                let cfg = GeneratorConfig {
+                    density_min,
+                    density_max,
+                    ..GeneratorConfig::for_size(height, width)
+                };
+                generate(&cfg, seed).context("map generate")?
             };
-            let grid = generate(&cfg, seed).context("map generate")?;
             save(&grid, &output)?;
             out!(
                 "wrote {} ({}×{}, obstacle density {:.2})",

@@ -72,6 +72,10 @@ pub struct RunArgs {
     /// the run adds (the sim's topics, /clock, the policy, teammates). Repeatable.
     #[arg(long, value_name = "FILE", requires = "explore")]
     params_file: Vec<PathBuf>,
+    /// With `--explore`: give the nodes no teammates — each explores on its own map, as
+    /// explore_lite's users run it today.
+    #[arg(long, requires = "explore")]
+    alone: bool,
 }
 
 /// `--pace-ms`: 0–60 000 ms.
@@ -238,6 +242,7 @@ fn serve_nav2(
                 endpoint,
                 n,
                 policy,
+                !a.alone,
                 &a.params_file,
             )
             .context("--explore: starting the exploration nodes")?;
@@ -276,6 +281,7 @@ fn serve_nav2(
         let json = serde_json::json!({
             "robots": n,
             "policy": a.explore,
+            "alone": a.alone,
             "simulated_s": run.time,
             "explored": run.explored,
             "covered_99_s": run.covered_at(0.99),

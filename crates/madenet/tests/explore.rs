@@ -257,7 +257,11 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
             .args(["--realtime", "10", "--nav2", &endpoint]),
     );
     let params = dir.join("team.yaml");
-    std::fs::write(&params, madenet_explore::launch::team_params(3, "spread")).unwrap();
+    std::fs::write(
+        &params,
+        madenet_explore::launch::team_params(3, "spread", true),
+    )
+    .unwrap();
     let mut nodes: Vec<_> = (0..3)
         .map(|i| {
             spawn_piped(

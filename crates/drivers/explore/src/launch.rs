@@ -29,13 +29,16 @@ struct Node {
 }
 
 /// The parameter file the launcher adds for a team of `n`: the sim's topics, `/clock`,
-/// `policy`, and each node's teammates.
-pub fn team_params(n: usize, policy: &str) -> String {
+/// `policy`, and each node's teammates (none unless `team`).
+pub fn team_params(n: usize, policy: &str, team: bool) -> String {
     let mut y = format!(
         "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    use_sim_time: true\n    policy: {policy}\n"
     );
     for i in 0..n {
-        let mates: Vec<String> = (0..n).filter(|&j| j != i).map(namespace).collect();
+        let mates: Vec<String> = match team {
+            true => (0..n).filter(|&j| j != i).map(namespace).collect(),
+            false => Vec::new(),
+        };
         y.push_str(&format!(
             "{}/explore_node:\n  ros__parameters:\n    teammates: [{}]\n",
             namespace(i),
@@ -47,18 +50,20 @@ pub fn team_params(n: usize, policy: &str) -> String {
 
 impl TeamNodes {
     /// Starts `madenet explore` (`exe`) for robots `/robot0` … of a team of `n` on the ROS 2
-    /// graph at `endpoint`, with policy `policy` after the user's `params_files`. Their logs go
+    /// graph at `endpoint`, with policy `policy` (teammates of each other if `team`) after the
+    /// user's `params_files`. Their logs go
     /// to this process's stderr; what each prints at its end is collected.
     pub fn spawn(
         exe: &Path,
         endpoint: &str,
         n: usize,
         policy: &str,
+        team: bool,
         params_files: &[PathBuf],
     ) -> std::io::Result<Self> {
         let dir = tempfile::tempdir()?;
         let team_file = dir.path().join("team.yaml");
-        std::fs::write(&team_file, team_params(n, policy))?;
+        std::fs::write(&team_file, team_params(n, policy, team))?;
         let mut nodes = Vec::new();
         for i in 0..n {
             let mut cmd = Command::new(exe);
