@@ -17,7 +17,7 @@
 //! is tried again).
 
 use crate::cells::{CellReader, Geometry};
-use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput};
+use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Shown};
 use crate::params::ExploreParams;
 use madenet_agent::{Agent, AgentConfig, Beta};
 use madenet_map::{Occupancy, Pos};
@@ -157,6 +157,18 @@ impl Chooser for AgentChoice {
 
     fn blacklisted(&self) -> usize {
         self.blacklist.len()
+    }
+
+    fn shown(&self) -> Shown {
+        let Some(r) = &self.reading else {
+            return Shown::default();
+        };
+        Shown {
+            options: (r.agent.candidates().cells.iter())
+                .map(|&c| r.own.centre(c))
+                .collect(),
+            blacklisted: self.blacklist.points(self.last_plan),
+        }
     }
 
     fn plan(&mut self, at: PlanInput<'_>) -> Result<Choice, ExploreError> {

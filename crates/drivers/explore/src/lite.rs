@@ -13,7 +13,7 @@
 //!   decrease, so a flickering map resends goals for ever);
 //! - a centroid off the map's cells is never sent.
 
-use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput};
+use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Shown};
 use crate::params::ExploreParams;
 use madenet_nav::frontiers::{
     occupancy_to_cost, search_from, Connectivity, CostGrid, FrontierParams,
@@ -37,6 +37,8 @@ pub(crate) struct Lite {
     progress: (f64, f64),
     /// The blacklist's tolerance (5 map cells), set at each plan.
     tol: f64,
+    /// What the last plan weighed.
+    shown: Shown,
 }
 
 impl Lite {
@@ -54,6 +56,7 @@ impl Lite {
             reached: None,
             progress: (f64::INFINITY, 0.0),
             tol: 0.25,
+            shown: Shown::default(),
         }
     }
 }
@@ -73,6 +76,10 @@ impl Chooser for Lite {
 
     fn blacklisted(&self) -> usize {
         self.blacklist.len()
+    }
+
+    fn shown(&self) -> Shown {
+        self.shown.clone()
     }
 
     fn plan(&mut self, at: PlanInput<'_>) -> Result<Choice, ExploreError> {
@@ -114,6 +121,10 @@ impl Chooser for Lite {
             .iter()
             .filter(|f| on_map(f.centroid) && !self.blacklist.for_good(f.centroid, tol))
             .collect();
+        self.shown = Shown {
+            options: open.iter().map(|f| f.centroid).collect(),
+            blacklisted: self.blacklist.points(now),
+        };
         let Some(f) = open
             .iter()
             .find(|f| !self.blacklist.listed(f.centroid, now, tol))

@@ -20,13 +20,20 @@
 //! left but goals blacklisted for good; then, with `return_to_init`, the robot drives back to
 //! where it started. Every goal is on the map.
 //!
-//! Still to come (issue 58): `explore/frontiers` markers and `explore/resume`; remapping.
+//! As explore_lite, with `visualize` it publishes what it weighed on `explore/frontiers`
+//! (`visualization_msgs/MarkerArray`: options blue, blacklisted red, the goal green), and
+//! `explore/resume` (`std_msgs/Bool`) pauses it (false: the goal under way is canceled) and
+//! resumes it (true).
+//!
+//! Still to come (issue 58): remapping (`-r from:=to`).
 
 use crate::params::ExploreParams;
 use crate::team::Team;
 use madenet_ros2::actions::{status, ActionClient, NavigateToPose, NavigateToPoseGoal, SentGoal};
 use madenet_ros2::map_updates::MapSubscriber;
-use madenet_ros2::msgs::{Clock, OccupancyGrid, Time};
+use madenet_ros2::msgs::{
+    Bool, Clock, ColorRGBA, Header, Marker, MarkerArray, OccupancyGrid, Point, Time,
+};
 use madenet_ros2::tf::{TfListener, TfNaming};
 use madenet_ros2::{QosProfile, Ros2Error, Ros2Options, Subscription};
 use std::time::{Duration, Instant};
@@ -45,6 +52,8 @@ pub struct ExploreRun {
     pub aborted: usize,
     /// Goals nav2 rejected (not counted in `sent`).
     pub rejected: usize,
+    /// Goals canceled because `explore/resume` said false.
+    pub paused: usize,
     /// Goals it gave up for lack of progress (canceled).
     pub given_up: usize,
     /// Goals replaced by a goal to a new frontier before they ended (nav2 aborts them).
@@ -188,6 +197,72 @@ pub(crate) trait Chooser {
     fn ended(&mut self, status: i8, now: f64);
     /// How many goals are blacklisted (for the log).
     fn blacklisted(&self) -> usize;
+    /// What to show on `explore/frontiers`: the points the last plan weighed (frontiers, or
+    /// goal candidates) and the blacklisted ones, in the map's frame.
+    fn shown(&self) -> Shown;
+}
+
+/// What the node shows on `explore/frontiers` (with `visualize`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Shown {
+    /// Frontiers (explore-lite) or goal candidates (madenet policies).
+    pub options: Vec<(f64, f64)>,
+    /// Points on the blacklist now.
+    pub blacklisted: Vec<(f64, f64)>,
+}
+
+impl Blacklist {
+    /// The points listed now (for good, or not yet expired).
+    pub fn points(&self, now: f64) -> Vec<(f64, f64)> {
+        self.listed
+            .iter()
+            .filter(|b| b.2 > now || b.3 >= 2)
+            .map(|b| (b.0, b.1))
+            .collect()
+    }
+}
+
+/// `explore/frontiers` as explore_lite draws it: the options as blue spheres, blacklisted
+/// points red, the goal under way green (one `SPHERE_LIST` each, after a `DELETEALL`).
+fn markers(frame: &str, stamp: Time, shown: &Shown, goal: Option<(f64, f64)>) -> MarkerArray {
+    let header = Header {
+        stamp,
+        frame_id: frame.to_string(),
+    };
+    let list = |id: i32, pts: &[(f64, f64)], (r, g, b): (f32, f32, f32), size: f64| {
+        let mut m = Marker {
+            header: header.clone(),
+            ns: "frontiers".into(),
+            id,
+            kind: Marker::SPHERE_LIST,
+            action: Marker::ADD,
+            color: ColorRGBA { r, g, b, a: 1.0 },
+            points: pts.iter().map(|&(x, y)| Point { x, y, z: 0.0 }).collect(),
+            ..Default::default()
+        };
+        m.pose.orientation.w = 1.0;
+        (m.scale.x, m.scale.y, m.scale.z) = (size, size, size);
+        m
+    };
+    let clear = Marker {
+        header: header.clone(),
+        ns: "frontiers".into(),
+        action: Marker::DELETEALL,
+        ..Default::default()
+    };
+    MarkerArray {
+        markers: vec![
+            clear,
+            list(0, &shown.options, (0.0, 0.4, 1.0), 0.25),
+            list(1, &shown.blacklisted, (1.0, 0.0, 0.0), 0.25),
+            list(
+                2,
+                &goal.into_iter().collect::<Vec<_>>(),
+                (0.0, 0.8, 0.2),
+                0.35,
+            ),
+        ],
+    }
 }
 
 /// The node's clock: the wall clock, or `/clock` (`use_sim_time`).
@@ -231,6 +306,12 @@ pub fn run(
         true => None,
         false => Some(Team::new(&node, ns, &p.teammates)?),
     };
+    let frontiers = match p.visualize {
+        true => Some(node.create_pub::<MarkerArray>("explore/frontiers", QosProfile::default())?),
+        false => None,
+    };
+    let resume = node.create_sub::<Bool>("explore/resume", QosProfile::default())?;
+    let mut paused = false;
     let mut clock = NodeClock {
         started: Instant::now(),
         sim: match p.use_sim_time {
@@ -276,6 +357,27 @@ pub fn run(
         };
         let here = (pose.translation.x, pose.translation.y);
         start.get_or_insert(here);
+        // explore/resume: false stops (the goal under way canceled), true goes on.
+        while let Some(b) = resume.recv_timeout(Duration::ZERO)? {
+            if paused == b.data {
+                paused = !b.data;
+                tracing::info!(
+                    "{ns}: exploration {}",
+                    if paused { "paused" } else { "resumed" }
+                );
+                if paused {
+                    if let Some((sent, _)) = goal.take() {
+                        let _ = nav.cancel(sent.id, Duration::from_secs(5));
+                        run.paused += 1;
+                    }
+                    chooser.ended(status::CANCELED, now);
+                }
+                next_plan = now;
+            }
+        }
+        if paused {
+            continue;
+        }
         if let Some(team) = &mut team {
             team.poll(now, frame, ns)?;
         }
@@ -317,6 +419,14 @@ pub fn run(
             now,
             team: team.as_mut(),
         })?;
+        if let Some(publisher) = &frontiers {
+            let under_way = match choice {
+                Choice::Send(t) => Some(t),
+                Choice::Keep => goal.as_ref().map(|g| g.1),
+                _ => None,
+            };
+            publisher.publish(&markers(frame, stamp, &chooser.shown(), under_way))?;
+        }
         match choice {
             Choice::Keep => {}
             Choice::GiveUp => {

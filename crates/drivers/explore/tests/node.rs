@@ -6,9 +6,12 @@ use madenet_explore::node;
 use madenet_explore::params::ExploreParams;
 use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
 use madenet_ros2::loopback_router;
+use madenet_ros2::msgs::{Bool, Marker, MarkerArray};
 use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimThread};
+use madenet_ros2::QosProfile;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
+use std::time::Duration;
 
 #[test]
 fn one_node_explores_a_floor_plan_through_its_nav2() {
@@ -38,7 +41,7 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
     );
     let stop = sim.stop_flag();
     let params = ExploreParams::from_yaml(
-        "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n",
+        "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n    visualize: true\n",
         "/robot0/explore_node",
     )
     .unwrap();
@@ -56,7 +59,47 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
             stop.store(true, Ordering::Relaxed);
         })
     };
+    // A viewer of explore/frontiers and a user pausing and resuming the node.
+    let viewer = {
+        let opts = opts.clone();
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            let ctx = opts.context().unwrap();
+            let node = ctx.create_node("viewer").unwrap();
+            let shown = node
+                .create_sub::<MarkerArray>("/robot0/explore/frontiers", QosProfile::default())
+                .unwrap();
+            let resume = node
+                .create_pub::<Bool>("/robot0/explore/resume", QosProfile::default())
+                .unwrap();
+            let next = |wait: u64| shown.recv_timeout(Duration::from_secs(wait)).unwrap();
+            let first = next(60).expect("markers on explore/frontiers");
+            let options = &first.markers[1];
+            assert_eq!(first.markers[0].action, Marker::DELETEALL);
+            assert_eq!(
+                (options.ns.as_str(), options.kind),
+                ("frontiers", Marker::SPHERE_LIST)
+            );
+            assert!(!options.points.is_empty(), "{first:?}");
+            assert_eq!(options.header.frame_id, "map");
+            resume.publish(&Bool { data: false }).unwrap();
+            // Paused: it plans no more (a second for a turn in flight), so shows nothing.
+            std::thread::sleep(Duration::from_secs(1));
+            while shown.recv_timeout(Duration::ZERO).unwrap().is_some() {}
+            let during = next(2);
+            resume.publish(&Bool { data: true }).unwrap();
+            let after = next(30);
+            if stop.load(Ordering::Relaxed) {
+                return (false, true);
+            }
+            (during.is_none(), after.is_some())
+        })
+    };
     let run = node::run(&opts, "/robot0", &params, &|| stop.load(Ordering::Relaxed)).unwrap();
+    let (quiet_when_paused, shown_after) = viewer.join().unwrap();
+    assert!(quiet_when_paused, "markers while paused");
+    assert!(shown_after, "no markers after resuming");
+    assert!(run.paused <= 1, "{run:?}");
     let truth = sim.stop().unwrap();
     watchdog.join().unwrap();
     drop(router);
@@ -71,6 +114,6 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
     // How many goals end reached rather than preempted by a nearer frontier depends on timing
     // (1 of 45 in one CI run): the node drove the robot by several goals, each accounted for.
     assert!(run.sent >= 3, "{run:?}");
-    let ended = run.succeeded + run.aborted + run.given_up + run.preempted;
+    let ended = run.succeeded + run.aborted + run.given_up + run.preempted + run.paused;
     assert!(ended + 1 >= run.sent && ended <= run.sent, "{run:?}");
 }
