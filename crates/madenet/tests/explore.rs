@@ -61,7 +61,7 @@ fn bad_input_gets_one_clear_error() {
     let other = other.to_str().unwrap();
     let typo = typo.to_str().unwrap();
     let unknown_policy = unknown_policy.to_str().unwrap();
-    let cases: [(&str, Vec<&str>, &[&str]); 5] = [
+    let cases: [(&str, Vec<&str>, &[&str]); 6] = [
         (
             "another node's file",
             vec!["--params-file", other, "--check"],
@@ -81,6 +81,11 @@ fn bad_input_gets_one_clear_error() {
             "a missing file",
             vec!["--params-file", "/nonexistent.yaml", "--check"],
             &["--params-file", "/nonexistent.yaml"],
+        ),
+        (
+            "a remapping without :=",
+            vec!["--params-file", FIXTURE, "-r", "map", "--check"],
+            &["--remap", "from:=to"],
         ),
         (
             "an unknown policy",

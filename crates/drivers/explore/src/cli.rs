@@ -20,9 +20,45 @@ pub struct ExploreArgs {
     /// The zenoh endpoint of the ROS 2 graph (rmw_zenoh's router by default).
     #[arg(long, value_name = "ENDPOINT", default_value = "tcp/127.0.0.1:7447")]
     pub ros2: String,
+    /// Remap a topic, service or action name as ROS nodes' `-r from:=to` (`map:=/slam/map`,
+    /// `navigate_to_pose:=/robot0/nav/navigate_to_pose`). Repeatable.
+    #[arg(short = 'r', long = "remap", value_name = "FROM:=TO", value_parser = remap_arg)]
+    pub remap: Vec<(String, String)>,
     /// Check the parameter file, print the parameters that apply, and exit.
     #[arg(long)]
     pub check: bool,
+}
+
+/// `-r from:=to`: two ROS names (`__ns`, `__node` and other special rules are not taken: use
+/// `--namespace`).
+fn remap_arg(s: &str) -> Result<(String, String), String> {
+    let Some((from, to)) = s.split_once(":=") else {
+        return Err(format!("{s:?} is not a remapping `from:=to`"));
+    };
+    let name_ok = |n: &str| {
+        let body = n
+            .strip_prefix('/')
+            .unwrap_or(n)
+            .strip_prefix("~/")
+            .unwrap_or(n);
+        !n.is_empty()
+            && !n.starts_with("__")
+            && !n.contains("//")
+            && !n.ends_with('/')
+            && body.split('/').all(|seg| {
+                !seg.is_empty()
+                    && !seg.starts_with(|c: char| c.is_ascii_digit())
+                    && seg.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            })
+    };
+    for (what, n) in [("from", from), ("to", to)] {
+        if !name_ok(n) {
+            return Err(format!(
+                "{s:?}: {what} {n:?} is not a topic, service or action name (special rules such as __ns: use --namespace)"
+            ));
+        }
+    }
+    Ok((from.to_string(), to.to_string()))
 }
 
 /// Whether `ns` is a ROS namespace: `/`, or `/` and names of letters, digits and `_` (not
@@ -54,6 +90,9 @@ pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> 
     let p =
         ExploreParams::from_files(&files, &node_name).map_err(|e| format!("--params-file: {e}"))?;
     if a.check {
+        for (from, to) in &a.remap {
+            tracing::info!("remapped {from} → {to}");
+        }
         let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
         return Ok(vec![format!(
             "{} for {node_name}: {p:?}",
@@ -65,12 +104,12 @@ pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> 
         ..Default::default()
     };
     let stop = madenet_runtime::signals::Stop::watch(true)?;
-    let run =
-        node::run(&opts, &a.namespace, &p, &|| stop.requested().is_some()).map_err(
-            |e| match e {
-                node::ExploreError::Ros2(e) => format!("--ros2: {e}"),
-                e => format!("--params-file: {e}"),
-            },
-        )?;
+    let run = node::run(&opts, &a.namespace, &p, &a.remap, &|| {
+        stop.requested().is_some()
+    })
+    .map_err(|e| match e {
+        node::ExploreError::Ros2(e) => format!("--ros2: {e}"),
+        e => format!("--params-file: {e}"),
+    })?;
     Ok(run.summary())
 }

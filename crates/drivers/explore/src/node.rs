@@ -25,7 +25,7 @@
 //! `explore/resume` (`std_msgs/Bool`) pauses it (false: the goal under way is canceled) and
 //! resumes it (true).
 //!
-//! Still to come (issue 58): remapping (`-r from:=to`).
+//! Its topic, service and action names are remapped as a ROS node's (`-r from:=to`).
 
 use crate::params::ExploreParams;
 use crate::team::Team;
@@ -286,11 +286,13 @@ impl NodeClock {
 }
 
 /// Runs the node for the robot in namespace `ns` until exploration is complete (and it is back
-/// at its start, with `return_to_init`) or `stop` says so.
+/// at its start, with `return_to_init`) or `stop` says so; its topic, service and action names
+/// remapped by `remaps` (`from`, `to`), as a ROS node's `-r from:=to`.
 pub fn run(
     opts: &Ros2Options,
     ns: &str,
     p: &ExploreParams,
+    remaps: &[(String, String)],
     stop: &dyn Fn() -> bool,
 ) -> Result<ExploreRun, ExploreError> {
     let mut chooser: Box<dyn Chooser> = match p.policy.as_str() {
@@ -298,7 +300,7 @@ pub fn run(
         name => Box::new(crate::choice::AgentChoice::new(name, p, ns)?),
     };
     let ctx = opts.context()?;
-    let node = ctx.create_node_in(ns, "explore_node")?;
+    let node = ctx.create_node_in(ns, "explore_node")?.with_remaps(remaps);
     let mut maps = MapSubscriber::with_updates(&node, &p.costmap_topic, &p.costmap_updates_topic)?;
     let mut tf = TfListener::new(&node, ns, TfNaming::NamespacedTopics)?;
     let nav = ActionClient::<NavigateToPose>::new(&node, "navigate_to_pose")?;

@@ -95,7 +95,10 @@ fn one_node_explores_a_floor_plan_through_its_nav2() {
             (during.is_none(), after.is_some())
         })
     };
-    let run = node::run(&opts, "/robot0", &params, &|| stop.load(Ordering::Relaxed)).unwrap();
+    let run = node::run(&opts, "/robot0", &params, &[], &|| {
+        stop.load(Ordering::Relaxed)
+    })
+    .unwrap();
     let (quiet_when_paused, shown_after) = viewer.join().unwrap();
     assert!(quiet_when_paused, "markers while paused");
     assert!(shown_after, "no markers after resuming");

@@ -58,7 +58,7 @@ fn explore_team(
             let stop_all = stop_all.clone();
             std::thread::spawn(move || {
                 let stop = || stop_all.load(Ordering::Relaxed);
-                node::run(&opts, &ns, &p, &stop).unwrap()
+                node::run(&opts, &ns, &p, &[], &stop).unwrap()
             })
         })
         .collect();

@@ -57,8 +57,10 @@ def visible(occ, x, y):
     return seen
 
 
-@pytest.mark.parametrize("policy", ["explore-lite", "spread"])
-def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, tmp_path, policy):
+@pytest.mark.parametrize("policy,remapped", [("explore-lite", False), ("spread", False), ("explore-lite", True)])
+def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, tmp_path, policy, remapped):
+    """Remapped: the stand-in publishes its map on `slam/map` and serves `nav/navigate_to_pose`;
+    the node finds them only through `-r map:=slam/map -r navigate_to_pose:=nav/navigate_to_pose`."""
     port = free_port()
     conf = zenoh.Config()
     conf.insert_json5("mode", '"peer"')
@@ -81,7 +83,9 @@ def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, 
         seen = visible(occ, *pose)
         known[seen] = np.where(occ[seen], 100, 0).astype(np.int8)
 
-    map_pub = session.declare_publisher(key(ts, "robot0/map", "nav_msgs/msg/OccupancyGrid"))
+    map_name = "robot0/slam/map" if remapped else "robot0/map"
+    action = "robot0/nav/navigate_to_pose" if remapped else "robot0/navigate_to_pose"
+    map_pub = session.declare_publisher(key(ts, map_name, "nav_msgs/msg/OccupancyGrid"))
     tf_pub = session.declare_publisher(key(ts, "robot0/tf", "tf2_msgs/msg/TFMessage"))
     clock_pub = session.declare_publisher(key(ts, "clock", "rosgraph_msgs/msg/Clock"))
     queryables = {}
@@ -93,11 +97,11 @@ def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, 
     ]:
         tokens.append(
             session.liveliness().declare_token(
-                f"@ros2_lv/0/{session.zid()}/0/{len(tokens) + 1}/SS/%/%robot0/bt_navigator/%robot0%navigate_to_pose%_action%{part}/{dds(typ)}/{ts.hash_rihs01(typ)}/::,10:,:,:,,"
+                f"@ros2_lv/0/{session.zid()}/0/{len(tokens) + 1}/SS/%/%robot0/bt_navigator/%{action.replace('/', '%')}%_action%{part}/{dds(typ)}/{ts.hash_rihs01(typ)}/::,10:,:,:,,"
             )
         )
         queryables[part] = session.declare_queryable(
-            key(ts, f"robot0/navigate_to_pose/_action/{part}", typ), complete=True
+            key(ts, f"{action}/_action/{part}", typ), complete=True
         )
 
     def publish(sim, seq):
@@ -130,8 +134,9 @@ def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, 
         "    planner_frequency: 1.0\n    progress_timeout: 30.0\n    potential_scale: 3.0\n"
         f"    min_frontier_size: 0.3\n    use_sim_time: true\n    policy: {policy}\n"
     )
+    remaps = ["-r", "map:=slam/map", "-r", "navigate_to_pose:=nav/navigate_to_pose"] if remapped else []
     node = subprocess.Popen(
-        [CLI, "explore", "--params-file", str(params), "--namespace", "/robot0", "--ros2", f"tcp/127.0.0.1:{port}"],
+        [CLI, "explore", "--params-file", str(params), "--namespace", "/robot0", "--ros2", f"tcp/127.0.0.1:{port}", *remaps],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

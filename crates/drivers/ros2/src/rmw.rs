@@ -220,6 +220,7 @@ impl Ros2Context {
             name: name.to_string(),
             namespace,
             ns_field,
+            remaps: Vec::new(),
             _token: token,
         })
     }
@@ -237,6 +238,8 @@ pub struct Node {
     namespace: String,
     /// The namespace as liveliness tokens write it (`%` for the root).
     ns_field: String,
+    /// Remapping rules (`-r from:=to`), both names fully qualified.
+    remaps: Vec<(String, String)>,
     _token: LivelinessToken,
 }
 
@@ -245,11 +248,31 @@ impl Node {
     /// absolute; any other is relative to the node's namespace (`map` in `/robot0` is
     /// `/robot0/map`).
     pub fn resolve(&self, name: &str) -> String {
+        let full = self.qualify(name);
+        match self.remaps.iter().find(|(from, _)| *from == full) {
+            Some((_, to)) => to.clone(),
+            None => full,
+        }
+    }
+
+    /// `name` fully qualified in the node's namespace, before remapping.
+    fn qualify(&self, name: &str) -> String {
         if name.starts_with('/') {
             format!("/{}", name.trim_matches('/'))
         } else {
             format!("{}/{}", self.namespace, name.trim_matches('/'))
         }
+    }
+
+    /// This node with remapping rules, as a ROS node takes `--ros-args -r from:=to`: a topic,
+    /// service or action name that resolves to `from` (resolved in the node's namespace)
+    /// resolves to `to` instead; the first matching rule applies.
+    pub fn with_remaps(mut self, rules: &[(String, String)]) -> Self {
+        self.remaps = rules
+            .iter()
+            .map(|(from, to)| (self.qualify(from), self.qualify(to)))
+            .collect();
+        self
     }
 
     /// The node's namespace: `""` (root) or e.g. `/robot0`.
