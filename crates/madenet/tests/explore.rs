@@ -306,3 +306,117 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
         .unwrap_or_else(|| panic!("{sim_text}"));
     assert!(explored >= 99.0, "{sim_text}");
 }
+
+/// A robot for the node made by hand: its map (in `map_frame`) on `/robot0/map` and its pose
+/// as TF (`map → base_link`) every 50 ms, and no navigation server; and, on `/robot1`'s
+/// `explore/pose`, a teammate flooding messages. Runs until `stop`.
+fn fake_robot(
+    endpoint: &str,
+    map_frame: &str,
+    flood: bool,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> std::thread::JoinHandle<()> {
+    use madenet_ros2::map_updates::MapPublisher;
+    use madenet_ros2::msgs::{Header, OccupancyGrid, PoseStamped, Time};
+    use madenet_ros2::tf::{planar, TfNaming, TfPublisher};
+    let opts = madenet_ros2::Ros2Options {
+        connect: vec![endpoint.to_string()],
+        ..Default::default()
+    };
+    let map_frame = map_frame.to_string();
+    std::thread::spawn(move || {
+        let ctx = opts.context().unwrap();
+        let node = ctx.create_node_in("/robot0", "fake_nav2").unwrap();
+        let mut map = MapPublisher::new(&node, "map").unwrap();
+        let tf = TfPublisher::new(&node, TfNaming::NamespacedTopics).unwrap();
+        let mate = ctx.create_node_in("/robot1", "flood").unwrap();
+        let pose = mate
+            .create_pub::<PoseStamped>("explore/pose", madenet_ros2::QosProfile::default())
+            .unwrap();
+        let mut grid = OccupancyGrid {
+            header: Header {
+                stamp: Time::default(),
+                frame_id: map_frame,
+            },
+            data: vec![-1; 100 * 100],
+            ..Default::default()
+        };
+        (grid.info.width, grid.info.height, grid.info.resolution) = (100, 100, 0.1);
+        // A seen 3 m square around the robot at (5, 5): frontiers all round.
+        for r in 35..65 {
+            for c in 35..65 {
+                grid.data[r * 100 + c] = 0;
+            }
+        }
+        let mut k = 0u32;
+        while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+            k += 1;
+            let stamp = Time {
+                sec: (k / 20) as i32,
+                nanosec: (k % 20) * 50_000_000,
+            };
+            grid.header.stamp = stamp;
+            map.publish(&grid).unwrap();
+            tf.send(vec![planar("map", "base_link", stamp, 5.0, 5.0, 0.0)])
+                .unwrap();
+            if flood {
+                for _ in 0..500 {
+                    let mut p = PoseStamped::default();
+                    p.header.frame_id = "map".into();
+                    pose.publish(&p).unwrap();
+                }
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    })
+}
+
+/// Bad input while running, each named in the log, never a panic: a map in another frame
+/// than TF's; a goal server that never answers; a teammate flooding messages.
+#[test]
+fn a_node_names_what_is_wrong_with_its_robot() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let (_router, opts) = madenet_ros2::loopback_router().unwrap();
+    let endpoint = opts.connect[0].clone();
+    let dir = Scratch::new("explore-wrong");
+    let params = dir.join("p.yaml");
+    std::fs::write(
+        &params,
+        "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    teammates: [/robot1]\n    policy: spread\n",
+    )
+    .unwrap();
+    for (frame, flood, secs, needles) in [
+        (
+            "world",
+            false,
+            8,
+            &["still no pose", "\"world\"", "/robot0/map"][..],
+        ),
+        (
+            "map",
+            true,
+            14,
+            &["navigate_to_pose did not answer", "/robot1 floods"][..],
+        ),
+    ] {
+        let stop = Arc::new(AtomicBool::new(false));
+        let robot = fake_robot(&endpoint, frame, flood, stop.clone());
+        let node = spawn_piped(
+            Command::new(env!("CARGO_BIN_EXE_madenet"))
+                .args(["explore", "--params-file", params.to_str().unwrap()])
+                .args(["--namespace", "/robot0", "--ros2", &endpoint]),
+        );
+        std::thread::sleep(std::time::Duration::from_secs(secs));
+        signal(&node, "-INT");
+        let out = node.wait_with_output().unwrap();
+        stop.store(true, Ordering::Relaxed);
+        robot.join().unwrap();
+        let log = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{frame}: {log}");
+        assert!(!log.contains("panicked"), "{log}");
+        for n in needles {
+            assert!(log.contains(n), "{frame}: no {n:?} in\n{log}");
+        }
+    }
+}

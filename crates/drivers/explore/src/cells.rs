@@ -124,13 +124,20 @@ impl CellReader {
         Some(Pos::new(self.row_cell[r] as i32, self.col_cell[c] as i32))
     }
 
-    /// The centre of cell `p` in the map's frame.
+    /// The centre of cell `p` in the map's frame — of its part on the map, for a cell the
+    /// map's edge cuts (so no goal lies off the map).
     pub fn centre(&self, p: Pos) -> (f64, f64) {
         let g = &self.geometry;
-        (
-            g.origin.0 + (p.col as f64 + 0.5) * self.cell_size,
-            g.origin.1 + (p.row as f64 + 0.5) * self.cell_size,
-        )
+        let (w, h) = (
+            g.width as f64 * g.resolution,
+            g.height as f64 * g.resolution,
+        );
+        let mid = |k: i32, extent: f64| {
+            let lo = (k as f64 * self.cell_size).clamp(0.0, extent);
+            let hi = ((k + 1) as f64 * self.cell_size).clamp(0.0, extent);
+            0.5 * (lo + hi)
+        };
+        (g.origin.0 + mid(p.col, w), g.origin.1 + mid(p.row, h))
     }
 
     /// Reads `grid` (of this reader's geometry: checked by the caller) and appends each cell
@@ -254,5 +261,11 @@ mod tests {
         assert_eq!(reader.cell_at(0.5, 2.5), Some(Pos::new(0, 1)));
         assert_eq!(reader.cell_at(1.5, 2.5), None);
         assert_eq!(reader.centre(Pos::new(0, 1)), (0.5, 2.5));
+        // A cell the map's edge cuts: the centre of its part on the map.
+        let g3 = grid(25, 10, 0.1, vec![-1; 250]);
+        let cut = CellReader::new(Geometry::of(&g3), 1.0, &DiscretizeParams::default(), 0.5);
+        assert_eq!(cut.size(), (1, 3));
+        let (x, y) = cut.centre(Pos::new(0, 2));
+        assert!((x - 1.25).abs() < 1e-6 && (y - 2.5).abs() < 1e-6, "{x} {y}");
     }
 }

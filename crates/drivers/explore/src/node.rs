@@ -38,6 +38,9 @@ use madenet_ros2::tf::{TfListener, TfNaming};
 use madenet_ros2::{QosProfile, Ros2Error, Ros2Options, Subscription};
 use std::time::{Duration, Instant};
 
+/// Wall time without a pose after which the node says why it still waits.
+pub const WAIT_WARNING: Duration = Duration::from_secs(5);
+
 /// Seconds a blacklisted frontier waits before it is tried again.
 pub const BLACKLIST_EXPIRY: f64 = 120.0;
 
@@ -54,6 +57,8 @@ pub struct ExploreRun {
     pub rejected: usize,
     /// Goals canceled because `explore/resume` said false.
     pub paused: usize,
+    /// Goals no navigation server answered (not sent).
+    pub unanswered: usize,
     /// Goals it gave up for lack of progress (canceled).
     pub given_up: usize,
     /// Goals replaced by a goal to a new frontier before they ended (nav2 aborts them).
@@ -314,6 +319,8 @@ pub fn run(
     };
     let resume = node.create_sub::<Bool>("explore/resume", QosProfile::default())?;
     let mut paused = false;
+    // Whether the last goal found no navigation server.
+    let mut unanswered = false;
     let mut clock = NodeClock {
         started: Instant::now(),
         sim: match p.use_sim_time {
@@ -325,7 +332,8 @@ pub fn run(
     let mut goal: Option<(SentGoal<NavigateToPose>, (f64, f64))> = None;
     let mut next_plan = 0.0;
     let mut start: Option<(f64, f64)> = None;
-    let mut waiting_logged = (false, false);
+    let mut waiting_logged = (false, false, false);
+    let mut waiting_since: Option<Instant> = None;
     let period = 1.0 / p.planner_frequency;
     let wait = Duration::from_millis(20);
     while !stop() {
@@ -347,16 +355,31 @@ pub fn run(
         };
         let frame = frame.as_str();
         let tol = Duration::from_secs_f64(p.transform_tolerance.max(0.05) + 1.0);
-        let Ok(pose) = tf
+        let pose = match tf
             .buffer
             .lookup(frame, &p.robot_base_frame, Time::default(), tol)
-        else {
-            if !waiting_logged.1 {
-                tracing::info!("{ns}: waiting for TF {frame} → {}", p.robot_base_frame);
-                waiting_logged.1 = true;
+        {
+            Ok(pose) => pose,
+            Err(e) => {
+                // Said at once, and why after WAIT_WARNING: a map in another frame than TF's,
+                // or a pose that never arrives, is named rather than waited on in silence.
+                let waited = waiting_since.get_or_insert_with(Instant::now).elapsed();
+                if !waiting_logged.1 {
+                    tracing::info!("{ns}: waiting for TF {frame} → {}", p.robot_base_frame);
+                    waiting_logged.1 = true;
+                } else if waited > WAIT_WARNING && !waiting_logged.2 {
+                    tracing::warn!(
+                        "{ns}: still no pose after {:.0} s: {e} (the map {} is in frame {frame:?}; TF on {})",
+                        waited.as_secs_f64(),
+                        maps.topic(),
+                        TfNaming::NamespacedTopics.tf_topic(ns),
+                    );
+                    waiting_logged.2 = true;
+                }
+                continue;
             }
-            continue;
         };
+        waiting_since = None;
         let here = (pose.translation.x, pose.translation.y);
         start.get_or_insert(here);
         // explore/resume: false stops (the goal under way canceled), true goes on.
@@ -466,6 +489,9 @@ pub fn run(
                 let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
                 match nav.send_goal(msg, Duration::from_secs(10)) {
                     Ok(Some(sent)) => {
+                        if std::mem::replace(&mut unanswered, false) {
+                            tracing::info!("{ns}: navigate_to_pose answers again");
+                        }
                         run.sent += 1;
                         goal = Some((sent, target));
                         if let Some(team) = &mut team {
@@ -477,7 +503,11 @@ pub fn run(
                         chooser.ended(status::ABORTED, now);
                     }
                     Err(e) => {
-                        tracing::warn!("{ns}: navigate_to_pose did not answer: {e}");
+                        // Said when it stops answering, not at every plan after.
+                        if !std::mem::replace(&mut unanswered, true) {
+                            tracing::warn!("{ns}: navigate_to_pose did not answer: {e} (trying again at each plan)");
+                        }
+                        run.unanswered += 1;
                         chooser.ended(status::UNKNOWN, now);
                     }
                 }

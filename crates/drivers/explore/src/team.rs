@@ -16,17 +16,24 @@
 //! given the others' namespaces, numbers them alike. Only teammates' topics are subscribed:
 //! a robot that is not on the team is never heard. A pose or goal in another frame than the
 //! map's, or a map of another geometry, is dropped and logged (once per teammate and topic);
-//! samples that do not decode are dropped by the subscription (ROS's keep-last queue bounds
-//! what a flooding teammate can queue).
+//! samples that do not decode are dropped by the subscription; ROS's keep-last queue (10)
+//! bounds what a flooding teammate can queue, and a flood is logged once.
 
 use madenet_ros2::map_updates::{MapPublisher, MapSubscriber};
 use madenet_ros2::msgs::{Header, OccupancyGrid, PoseStamped, Time};
 use madenet_ros2::{Node, Publisher, QosProfile, Ros2Error, Subscription};
 use std::time::Duration;
 
-/// Most poses or goals taken from one teammate per call (the newest count; a teammate that
-/// floods cannot hold the node in its loop).
+/// Most poses or goals taken from one teammate per call (a teammate that floods cannot hold
+/// the node in its loop; its subscriptions keep the newest [`QUEUE`] anyway, as ROS's keep-last).
 const DRAIN_LIMIT: usize = 64;
+
+/// The depth of the pose and goal subscriptions (rclcpp's default, keep last 10).
+const QUEUE: usize = 10;
+
+/// Poses and goals a second from one teammate above which it floods (it sends one of each
+/// per planner period, and a goal on each change): logged once.
+const FLOOD_RATE: usize = 50;
 
 /// What this node knows of one teammate.
 pub struct Teammate {
@@ -49,6 +56,8 @@ pub struct Teammate {
     pub dropped: usize,
     /// Whether its map changed at the last [`Team::poll`].
     pub fresh_map: bool,
+    /// Messages taken since `.1` (wall clock), and whether a flood was logged.
+    flood: (usize, std::time::Instant, bool),
 }
 
 /// This node's side of the team: its publishers and its teammates.
@@ -105,6 +114,7 @@ impl Team {
                 logged: [false; 3],
                 dropped: 0,
                 fresh_map: false,
+                flood: (0, std::time::Instant::now(), false),
             });
         }
         Ok(Team {
@@ -161,10 +171,12 @@ impl Team {
     /// Takes what teammates sent (node time `now`); poses and goals must be in `frame`.
     pub fn poll(&mut self, now: f64, frame: &str, ns: &str) -> Result<(), Ros2Error> {
         for m in &mut self.mates {
+            let mut taken = 0;
             for _ in 0..DRAIN_LIMIT {
                 let Some(p) = m.pose_sub.recv_timeout(Duration::ZERO)? else {
                     break;
                 };
+                taken += 1;
                 match p.header.frame_id == frame && finite(&p) {
                     true => m.pos = Some(((p.pose.position.x, p.pose.position.y), now)),
                     false => drop_logged(m, 0, ns, "pose", &p.header.frame_id, frame),
@@ -174,6 +186,7 @@ impl Team {
                 let Some(g) = m.goal_sub.recv_timeout(Duration::ZERO)? else {
                     break;
                 };
+                taken += 1;
                 let goal = match g.header.frame_id.as_str() {
                     "" => None,
                     f if f == frame && finite(&g) => Some((g.pose.position.x, g.pose.position.y)),
@@ -187,6 +200,17 @@ impl Team {
                     m.prev_goal = m.goal;
                     m.goal = goal;
                 }
+            }
+            m.flood.0 += taken;
+            if m.flood.1.elapsed() >= Duration::from_secs(1) {
+                if m.flood.0 > FLOOD_RATE && !std::mem::replace(&mut m.flood.2, true) {
+                    tracing::warn!(
+                        "{ns}: {} floods explore/pose or explore/goal ({} messages in a second): only the newest {QUEUE} of each are kept between turns, the rest dropped (logged once)",
+                        m.namespace,
+                        m.flood.0
+                    );
+                }
+                m.flood = (0, std::time::Instant::now(), m.flood.2);
             }
             m.fresh_map = m.map.poll()?.is_some();
         }
