@@ -6,8 +6,9 @@
 //! paper's β (Sec. III.C.1: the teammate's shared map read into cells, its position, its goal
 //! and its previous goal, from [`crate::team`]), counts as detected the teammates within d_s
 //! cells heard in the last [`DETECTION_AGE`] seconds, and decides when its macro action ends
-//! (goal reached, no longer a frontier, unreachable, a teammate newly detected). Its goal
-//! cell's centre goes to nav2.
+//! (goal reached, no longer a frontier, unreachable, a teammate newly detected) or when a
+//! teammate's intent changes onto its goal (the teammate's new goal within a cell of its
+//! own). Its goal cell's centre goes to nav2.
 //!
 //! Cells the robot cannot resolve are written off, as in the continuous trial: the unknown
 //! neighbours of a goal it reached, a second after (it cannot see them from there: for good if
@@ -66,6 +67,8 @@ pub(crate) struct AgentChoice {
     last_plan: f64,
     /// Since when the agent has had no goal and no frontier.
     idle_since: Option<f64>,
+    /// Each teammate's goal cell at the last plan (to see its intent change).
+    mate_goals: Vec<Option<Pos>>,
 }
 
 impl AgentChoice {
@@ -99,6 +102,7 @@ impl AgentChoice {
             reached: None,
             last_plan: 0.0,
             idle_since: None,
+            mate_goals: Vec::new(),
         })
     }
 
@@ -247,6 +251,7 @@ impl Chooser for AgentChoice {
         }
         // Teammates: β from what they shared; detected within d_s when heard lately.
         let (mut detected, mut exchanged) = (Vec::new(), Vec::new());
+        let mut clash = false;
         if let Some(team) = team {
             for k in 0..mates {
                 let fresh = team.mates()[k].fresh_map || r.mates[k].is_none();
@@ -272,12 +277,24 @@ impl Chooser for AgentChoice {
                     None => vec![Occupancy::Unknown; r.own.cells().len()],
                 };
                 let explored = map.iter().filter(|&&c| c != Occupancy::Unknown).count();
+                let their_goal = cell(mate.goal);
+                // A teammate's intent changed onto (or next to) this robot's goal.
+                if self.mate_goals.get(k).copied().flatten() != their_goal {
+                    let mine = r.agent.goal();
+                    clash |= their_goal
+                        .zip(mine)
+                        .is_some_and(|(t, g)| t.chebyshev(g) <= 1);
+                }
+                if self.mate_goals.len() <= k {
+                    self.mate_goals.resize(k + 1, None);
+                }
+                self.mate_goals[k] = their_goal;
                 r.agent.receive_beta(&Beta {
                     from: mate.index,
                     t: self.t,
                     prev_goal: cell(mate.prev_goal),
                     pos: their,
-                    goal: cell(mate.goal),
+                    goal: their_goal,
                     map,
                     explored,
                 });
@@ -306,6 +323,12 @@ impl Chooser for AgentChoice {
             a.decide();
             tracing::debug!(
                 "{ns} at {now:.1} s in {pos:?}: {why:?} → goal {:?}",
+                a.goal()
+            );
+        } else if clash {
+            a.decide();
+            tracing::debug!(
+                "{ns} at {now:.1} s: a teammate's goal moved onto its own → {:?}",
                 a.goal()
             );
         }
