@@ -176,18 +176,23 @@ fn the_node_explores_a_simulated_nav2_robots_floor_plan() {
         "{log}"
     );
     let sim_text = String::from_utf8_lossy(&sim_out.stdout);
+    let explored = sim_explored(&sim_text);
+    eprintln!("{text}{sim_text}");
+    assert!(explored >= 95.0, "{sim_text}");
+}
+
+/// The sim's summary (`run --nav2` at Ctrl-C): asserts no collision; the explored percentage.
+fn sim_explored(sim_text: &str) -> f64 {
     assert!(
         sim_text.contains("collisions 0 with obstacles, 0 between robots"),
         "{sim_text}"
     );
-    let explored: f64 = sim_text
+    sim_text
         .split("explored   ")
         .nth(1)
         .and_then(|r| r.split(' ').next())
         .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("{sim_text}"));
-    eprintln!("{text}{sim_text}");
-    assert!(explored >= 95.0, "{sim_text}");
+        .unwrap_or_else(|| panic!("{sim_text}"))
 }
 
 /// A free loopback endpoint (bound and released: another program could take it in between).
@@ -294,17 +299,7 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
     }
     let sim_text = String::from_utf8_lossy(&sim_out.stdout);
     eprintln!("{sim_text}");
-    assert!(
-        sim_text.contains("collisions 0 with obstacles, 0 between robots"),
-        "{sim_text}"
-    );
-    let explored: f64 = sim_text
-        .split("explored   ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("{sim_text}"));
-    assert!(explored >= 99.0, "{sim_text}");
+    assert!(sim_explored(&sim_text) >= 99.0, "{sim_text}");
 }
 
 /// A robot for the node made by hand: its map (in `map_frame`) on `/robot0/map` and its pose

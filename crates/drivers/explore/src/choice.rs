@@ -212,16 +212,7 @@ impl Chooser for AgentChoice {
         if let Some((g, at)) = self.reached {
             if now >= at + 1.0 {
                 self.reached = None;
-                for (dr, dc) in [
-                    (-1, -1),
-                    (-1, 0),
-                    (-1, 1),
-                    (0, -1),
-                    (0, 1),
-                    (1, -1),
-                    (1, 0),
-                    (1, 1),
-                ] {
+                for (dr, dc) in madenet_agent::belief::NEIGHBOURS {
                     let q = Pos::new(g.row + dr, g.col + dc);
                     let (rows, cols) = r.own.size();
                     if q.row >= 0
