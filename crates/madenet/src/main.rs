@@ -89,9 +89,14 @@ fn main() -> ExitCode {
         .without_time()
         .with_target(false)
         .with_ansi(false)
-        .with_env_filter(tracing_subscriber::EnvFilter::new(
-            "error,madenet_runtime=warn,madenet=warn,madenet_learn=warn,madenet_dme=warn,madenet_explore=info",
-        ))
+        // RUST_LOG, when set, replaces the default levels (`RUST_LOG=madenet_explore=debug`).
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                tracing_subscriber::EnvFilter::new(
+                    "error,madenet_runtime=warn,madenet=warn,madenet_learn=warn,madenet_dme=warn,madenet_explore=info",
+                )
+            }),
+        )
         .try_init();
     let result = match cli.command {
         Command::Run(a) => run::run(a),

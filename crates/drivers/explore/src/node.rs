@@ -38,6 +38,9 @@ use madenet_ros2::tf::{TfListener, TfNaming};
 use madenet_ros2::{QosProfile, Ros2Error, Ros2Options, Subscription};
 use std::time::{Duration, Instant};
 
+/// Preempted goals whose results are still awaited, at most.
+const SUPERSEDED: usize = 32;
+
 /// Wall time without a pose after which the node says why it still waits.
 pub const WAIT_WARNING: Duration = Duration::from_secs(5);
 
@@ -330,6 +333,7 @@ pub fn run(
     };
     let mut run = ExploreRun::default();
     let mut goal: Option<(SentGoal<NavigateToPose>, (f64, f64))> = None;
+    let mut superseded: Vec<SentGoal<NavigateToPose>> = Vec::new();
     let mut next_plan = 0.0;
     let mut start: Option<(f64, f64)> = None;
     let mut waiting_logged = (false, false, false);
@@ -394,6 +398,7 @@ pub fn run(
                     if let Some((sent, _)) = goal.take() {
                         let _ = nav.cancel(sent.id, Duration::from_secs(5));
                         run.paused += 1;
+                        superseded.push(sent);
                     }
                     chooser.ended(status::CANCELED, now);
                 }
@@ -405,6 +410,11 @@ pub fn run(
         }
         if let Some(team) = &mut team {
             team.poll(now, frame, ns)?;
+        }
+        // Preempted goals' results, taken as they come (at most SUPERSEDED kept waiting).
+        superseded.retain(|g| matches!(g.result(Duration::ZERO), Ok(None)));
+        if superseded.len() > SUPERSEDED {
+            superseded.remove(0);
         }
         // The goal's end.
         let mut replan = false;
@@ -458,6 +468,7 @@ pub fn run(
                 if let Some((sent, _)) = goal.take() {
                     let _ = nav.cancel(sent.id, Duration::from_secs(5));
                     run.given_up += 1;
+                    superseded.push(sent);
                 }
                 next_plan = now;
             }
@@ -481,9 +492,11 @@ pub fn run(
                 return Ok(run);
             }
             Choice::Send(target) => {
-                if goal.take().is_some() {
-                    // A new goal preempts the one under way (nav2 aborts the old one itself).
+                if let Some((old, _)) = goal.take() {
+                    // A new goal preempts the one under way (nav2 aborts the old one itself);
+                    // its result is still awaited, so that the answer finds its receiver.
                     run.preempted += 1;
+                    superseded.push(old);
                 }
                 // explore_lite's goal: the point, orientation w = 1.
                 let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
