@@ -17,9 +17,11 @@ pub struct ExploreArgs {
     /// TF and `navigate_to_pose` are the robot's in that namespace.
     #[arg(long, default_value = "/", value_name = "NS")]
     pub namespace: String,
-    /// The zenoh endpoint of the ROS 2 graph (rmw_zenoh's router by default).
-    #[arg(long, value_name = "ENDPOINT", default_value = "tcp/127.0.0.1:7447")]
-    pub ros2: String,
+    /// The zenoh endpoint of the ROS 2 graph: a router or a peer, here or on another machine.
+    /// Default: `connect/endpoints` of `ZENOH_CONFIG_OVERRIDE`, as rmw_zenoh reads it, else
+    /// rmw_zenoh's router on this machine (tcp/127.0.0.1:7447).
+    #[arg(long, value_name = "ENDPOINT")]
+    pub ros2: Option<String>,
     /// Remap a topic, service or action name as ROS nodes' `-r from:=to` (`map:=/slam/map`,
     /// `navigate_to_pose:=/robot0/nav/navigate_to_pose`). Repeatable.
     #[arg(short = 'r', long = "remap", value_name = "FROM:=TO", value_parser = remap_arg)]
@@ -99,8 +101,13 @@ pub fn run(a: ExploreArgs) -> Result<Vec<String>, Box<dyn Error + Send + Sync>> 
             names.join(" + ")
         )]);
     }
+    let connect = match (&a.ros2, madenet_ros2::endpoints_from_env()) {
+        (Some(e), _) => vec![e.clone()],
+        (None, Some(from_env)) => from_env?,
+        (None, None) => madenet_ros2::Ros2Options::default().connect,
+    };
     let opts = madenet_ros2::Ros2Options {
-        connect: vec![a.ros2.clone()],
+        connect,
         ..Default::default()
     };
     let stop = madenet_runtime::signals::Stop::watch(true)?;

@@ -155,6 +155,32 @@ impl Default for Ros2Options {
     }
 }
 
+/// The zenoh endpoints to connect to as an rmw_zenoh user gives them: `connect/endpoints` in
+/// `ZENOH_CONFIG_OVERRIDE` (`connect/endpoints=["tcp/192.168.1.5:7447"];mode="peer"`, pairs
+/// separated by `;`), if that variable sets it. `Err` names the variable and what is wrong.
+pub fn endpoints_from_env() -> Option<Result<Vec<String>, String>> {
+    let text = std::env::var("ZENOH_CONFIG_OVERRIDE").ok()?;
+    parse_endpoints_override(&text)
+}
+
+/// [`endpoints_from_env`] on the variable's text.
+pub fn parse_endpoints_override(text: &str) -> Option<Result<Vec<String>, String>> {
+    let value = text.split(';').find_map(|pair| {
+        let (k, v) = pair.split_once('=')?;
+        (k.trim() == "connect/endpoints").then(|| v.trim())
+    })?;
+    Some(
+        serde_json::from_str::<Vec<String>>(value)
+            .map_err(|e| {
+                format!("ZENOH_CONFIG_OVERRIDE: connect/endpoints={value}: not a list of quoted endpoints ({e})")
+            })
+            .and_then(|eps| match eps.is_empty() {
+                true => Err("ZENOH_CONFIG_OVERRIDE: connect/endpoints is empty".to_string()),
+                false => Ok(eps),
+            }),
+    )
+}
+
 impl Ros2Options {
     /// The domain: [`Ros2Options::domain_id`], else `ROS_DOMAIN_ID`, else 0.
     pub fn domain(&self) -> Result<usize, Ros2Error> {
@@ -693,5 +719,33 @@ impl RobotFeed {
             std::thread::sleep(left.min(Duration::from_millis(5)));
         }
         Ok(self.cells.as_deref().zip(self.at))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_endpoints_override;
+
+    #[test]
+    fn endpoints_are_read_from_zenoh_config_override_as_rmw_zenoh_reads_them() {
+        let eps = |t: &str| parse_endpoints_override(t);
+        assert_eq!(
+            eps(r#"mode="peer";connect/endpoints=["tcp/192.168.1.5:7447", "tcp/10.0.0.2:7447"]"#),
+            Some(Ok(vec![
+                "tcp/192.168.1.5:7447".to_string(),
+                "tcp/10.0.0.2:7447".to_string()
+            ]))
+        );
+        assert_eq!(eps(r#"mode="client""#), None);
+        for bad in [
+            "connect/endpoints=[tcp/1.2.3.4:7447]",
+            "connect/endpoints=[]",
+        ] {
+            let e = eps(bad).unwrap().unwrap_err();
+            assert!(
+                e.contains("ZENOH_CONFIG_OVERRIDE") && e.contains("connect/endpoints"),
+                "{e}"
+            );
+        }
     }
 }
