@@ -9,6 +9,15 @@ macro_rules! out {
     };
 }
 
+/// A line to stderr (messages, warnings, errors). Unlike `eprintln!`, a stderr that cannot be
+/// written (`2>/dev/full`, a closed pipe) does not panic: the run goes on, and its exit code
+/// says how it ended.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        crate::write_err(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
 mod batch;
 mod compare;
 mod map_cmd;
@@ -78,7 +87,7 @@ fn main() -> ExitCode {
             let text = e.render().to_string();
             let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
             let first = first.strip_prefix("error: ").unwrap_or(first);
-            eprintln!("error: {first}");
+            say!("error: {first}");
             return ExitCode::from(2);
         }
     };
@@ -136,14 +145,14 @@ fn main() -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) if e.downcast_ref::<Interrupted>().is_some() => {
-            eprintln!("{e}");
+            say!("{e}");
             ExitCode::from(
                 e.downcast_ref::<Interrupted>()
                     .map_or(2, Interrupted::exit_code),
             )
         }
         Err(e) => {
-            eprintln!("error: {}", one_line(&e));
+            say!("error: {}", one_line(&e));
             ExitCode::from(2)
         }
     }
@@ -153,6 +162,12 @@ fn main() -> ExitCode {
 pub fn write_out(args: std::fmt::Arguments<'_>) -> std::io::Result<()> {
     use std::io::Write;
     std::io::stdout().lock().write_fmt(args)
+}
+
+/// Writes to stderr; a failure is ignored (see `say!`).
+pub fn write_err(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_fmt(args);
 }
 
 /// The error and its causes on one line, skipping causes the message already quotes.

@@ -112,7 +112,7 @@ pub fn run(c: MapCommand) -> Result<()> {
             let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
             if let Some(w) = input.erasure_warning(&cfg)? {
-                eprintln!("warning: {w}");
+                say!("warning: {w}");
             }
             crate::write_out(format_args!("{}", to_text(&grid)))?;
             out!(

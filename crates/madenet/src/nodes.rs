@@ -379,7 +379,7 @@ fn serve_world(
     for line in wrote {
         // Launched (`--progress`), launch names the files itself.
         if !a.node.progress {
-            eprintln!("{line}");
+            say!("{line}");
         }
     }
     let r = match served {
@@ -409,9 +409,10 @@ pub fn radio(a: RadioArgs) -> Result<()> {
     let sent = madenet_runtime::run_radio_with(radio, n, &bus, a.node.timeouts(), faults)?;
     bus.close();
     if a.node.progress {
-        eprintln!(
+        say!(
             "progress done: sent {} messages, {} B",
-            sent.messages, sent.bytes
+            sent.messages,
+            sent.bytes
         );
     }
     Ok(())
@@ -434,8 +435,8 @@ pub fn agent(a: AgentArgs) -> Result<()> {
         ros2.publish(agent);
         if progress && !last {
             match agent.goal() {
-                Some(g) => eprintln!("progress step={step} goal={},{}", g.row, g.col),
-                None => eprintln!("progress step={step} goal=none"),
+                Some(g) => say!("progress step={step} goal={},{}", g.row, g.col),
+                None => say!("progress step={step} goal=none"),
             }
         }
     })?;
@@ -496,7 +497,7 @@ pub fn launch(a: LaunchArgs) -> Result<()> {
             world_error,
         }) => {
             if let Some(line) = world_error {
-                eprintln!("world: {line}");
+                say!("world: {line}");
             }
             // The world node ended the run after its timestep and finished everything it
             // writes (it exits with 128 + the signal only then); otherwise nothing asked for

@@ -30,7 +30,7 @@ pub fn start<S: Present + ?Sized>(
         Some(addr) => {
             let live = Live::start(addr).context("--foxglove")?;
             // Printed at once (stderr): a viewer connects while the run goes on.
-            eprintln!(
+            say!(
                 "foxglove   {} (Foxglove: Open connection → Foxglove WebSocket)",
                 live.url()
             );

@@ -257,7 +257,7 @@ fn serve_nav2(
     if let Some(nodes) = nodes.as_mut() {
         sinks.push(nodes);
     }
-    eprintln!(
+    say!(
         "nav2       {n} robots, /robot0 … /robot{}: navigate_to_pose via {endpoint} (Ctrl-C ends){}",
         n - 1,
         match &a.explore {

@@ -161,7 +161,7 @@ impl ScenarioArgs {
     /// its obstacles ([`MapSource::erasure_warning`]).
     pub fn warn_erasure(&self, cfg: &madenet_world::ScenarioConfig) -> Result<()> {
         if let Some(w) = self.source().erasure_warning(cfg)? {
-            eprintln!("warning: {w}");
+            say!("warning: {w}");
         }
         Ok(())
     }

@@ -85,7 +85,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
 /// `--resume DIR --episodes N` on a run past N is not mistaken for training.
 fn finished(a: &TrainArgs, dir: &Path, progressed: bool) -> Result<()> {
     if a.resume.is_some() && !progressed {
-        eprintln!(
+        say!(
             "{}: nothing left to train: the run already reached its length{}; give a larger --episodes or --max-minutes to continue it",
             dir.display(),
             match (a.episodes, a.max_minutes) {

@@ -693,3 +693,26 @@ fn an_output_that_cannot_be_written_is_named_and_leaves_nothing_behind() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A stderr that cannot be written (`2>/dev/full`) is not a panic (exit 101): a run still ends
+/// 0 with its result on stdout, and bad input still ends 2 (issue 59).
+#[test]
+fn a_full_stderr_is_not_a_panic() {
+    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    for (args, code) in [
+        (&["run", "--map", "paper:1", "--policy", "nf"][..], 0),
+        (&["run", "--map", "/nonexistent.txt"][..], 2),
+        (&["run", "--map", "paper:1", "--csp", "7"][..], 2),
+        (&["explore", "--params-file", "/nonexistent.yaml", "--check"][..], 2),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(args)
+            .stderr(full())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(code), "{args:?}");
+        if code == 0 {
+            assert!(String::from_utf8_lossy(&out.stdout).contains("TNS"), "{args:?}");
+        }
+    }
+}

@@ -319,7 +319,10 @@ pub fn run_team(
             LaunchEvent::Said(Node::World, line) if line.starts_with("interrupted") => {}
             LaunchEvent::Said(node, line) if !line.starts_with("error") => {
                 if bars.is_hidden() {
-                    eprintln!("{node}: {line}");
+                    {
+                        use std::io::Write;
+                        let _ = writeln!(std::io::stderr(), "{node}: {line}");
+                    }
                 } else {
                     bars.println(format!("{node}: {line}")).ok();
                 }

@@ -133,7 +133,14 @@ struct Progress;
 impl<G: Ground, T: Transport> Sink<LockstepWorld<G, T>> for Progress {
     fn step(&mut self, w: &LockstepWorld<G, T>) -> Result<ControlFlow<String>, SinkError> {
         let explored = w.ground().explored_fraction();
-        eprintln!("progress step={} explored={explored:.3}", w.ground().t());
+        {
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "progress step={} explored={explored:.3}",
+                w.ground().t()
+            );
+        }
         Ok(ControlFlow::Continue(()))
     }
 }
