@@ -255,8 +255,8 @@ pub struct PictureArgs {
     /// Write a PNG of the final state.
     #[arg(long, value_name = "PNG")]
     pub snapshot: Option<PathBuf>,
-    /// Pixels per cell in pictures.
-    #[arg(long, default_value_t = 16)]
+    /// Pixels per cell in pictures (1–256).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=madenet_render::MAX_CELL_PX as i64))]
     pub cell_px: u32,
     /// GIF frame delay in milliseconds.
     #[arg(long, default_value_t = 150)]

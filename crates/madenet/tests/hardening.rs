@@ -106,7 +106,7 @@ fn bad_values_are_one_clear_error_and_write_nothing() {
     }
     // (case, its command line with `{d}` for the scratch folder and `{model}` for the model
     // folder, what the error names)
-    let flags: [(&str, &str, &[&str]); 15] = [
+    let flags: [(&str, &str, &[&str]); 16] = [
         (
             "batch --seeds 1e12",
             "batch --seeds 1000000000000 --out {d}/keep.csv",
@@ -135,6 +135,11 @@ fn bad_values_are_one_clear_error_and_write_nothing() {
         (
             "run --cell-px 0",
             "run --cell-px 0 --snapshot {d}/keep.png",
+            &["--cell-px"],
+        ),
+        (
+            "run --world continuous --cell-px 0 (issue 59)",
+            "run --world continuous --cell-px 0 --snapshot {d}/keep.png",
             &["--cell-px"],
         ),
         (
@@ -698,12 +703,20 @@ fn an_output_that_cannot_be_written_is_named_and_leaves_nothing_behind() {
 /// 0 with its result on stdout, and bad input still ends 2 (issue 59).
 #[test]
 fn a_full_stderr_is_not_a_panic() {
-    let full = || std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
     for (args, code) in [
         (&["run", "--map", "paper:1", "--policy", "nf"][..], 0),
         (&["run", "--map", "/nonexistent.txt"][..], 2),
         (&["run", "--map", "paper:1", "--csp", "7"][..], 2),
-        (&["explore", "--params-file", "/nonexistent.yaml", "--check"][..], 2),
+        (
+            &["explore", "--params-file", "/nonexistent.yaml", "--check"][..],
+            2,
+        ),
     ] {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
             .args(args)
@@ -712,7 +725,10 @@ fn a_full_stderr_is_not_a_panic() {
             .unwrap();
         assert_eq!(out.status.code(), Some(code), "{args:?}");
         if code == 0 {
-            assert!(String::from_utf8_lossy(&out.stdout).contains("TNS"), "{args:?}");
+            assert!(
+                String::from_utf8_lossy(&out.stdout).contains("TNS"),
+                "{args:?}"
+            );
         }
     }
 }

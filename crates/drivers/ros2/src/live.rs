@@ -37,6 +37,17 @@ pub struct Live {
 /// How often the latched maps are sent again (wall time).
 const RESEND: std::time::Duration = std::time::Duration::from_secs(1);
 
+/// The host of the server's URL for a bind address: a wildcard bind is reached through
+/// loopback on this machine, and an IPv6 address goes in brackets (RFC 3986: ws://[::1]:8765).
+fn url_host(host: &str) -> String {
+    match host {
+        "0.0.0.0" => "127.0.0.1".to_string(),
+        "::" | "[::]" => "[::1]".to_string(),
+        h if h.contains(':') && !h.starts_with('[') => format!("[{h}]"),
+        h => h.to_string(),
+    }
+}
+
 impl Live {
     /// Serves at `addr` (`HOST:PORT`; port 0 picks a free one).
     pub fn start(addr: &str) -> Result<Self, LiveError> {
@@ -57,13 +68,7 @@ impl Live {
             .bind(host, port)
             .start_blocking()
             .map_err(|e| err(e.to_string()))?;
-        // A wildcard bind is reached through loopback on this machine.
-        let shown = match host {
-            "0.0.0.0" => "127.0.0.1",
-            "::" | "[::]" => "[::1]",
-            h => h,
-        };
-        let url = format!("ws://{shown}:{}", server.port());
+        let url = format!("ws://{}:{}", url_host(host), server.port());
         Ok(Live {
             ctx,
             server: Some(server),
@@ -157,6 +162,24 @@ impl Drop for Live {
     fn drop(&mut self) {
         if let Some(server) = self.server.take() {
             server.stop().wait_blocking();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn url_hosts_are_usable_in_a_url() {
+        for (bind, shown) in [
+            ("127.0.0.1", "127.0.0.1"),
+            ("0.0.0.0", "127.0.0.1"),
+            ("::", "[::1]"),
+            ("::1", "[::1]"),
+            ("[::1]", "[::1]"),
+            ("fe80::2", "[fe80::2]"),
+            ("localhost", "localhost"),
+        ] {
+            assert_eq!(super::url_host(bind), shown, "{bind}");
         }
     }
 }
