@@ -732,3 +732,22 @@ fn a_full_stderr_is_not_a_panic() {
         }
     }
 }
+
+/// A `[continuous]` section in a grid scale study is an error naming it, not ignored (issue 59).
+#[test]
+fn a_continuous_section_in_a_grid_study_is_refused() {
+    let dir = Scratch::new("scale-grid-continuous");
+    let cfg = dir.join("grid.toml");
+    std::fs::write(&cfg, "sides = [20]\n[continuous]\ncontrol_period = 0.1\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+        .args(["scale", "--config", cfg.to_str().unwrap()])
+        .args(["--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_clean_error_in(
+        "[continuous] in a grid study",
+        &out,
+        &["continuous", "grid"],
+    );
+    assert!(!dir.join("out").exists());
+}

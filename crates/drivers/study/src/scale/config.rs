@@ -155,6 +155,15 @@ impl ScaleConfig {
 
     /// Checks every field; the message names it.
     pub fn validate(&self, registry: &madenet_sim::PolicyRegistry) -> Result<(), StudyError> {
+        // A [continuous] section in a grid study would be ignored without a word (issue 59).
+        if self.world == ScaleWorld::Grid
+            && self.continuous != madenet_continuous::ContinuousConfig::default()
+        {
+            return Err(field(
+                "continuous",
+                "is set, but world is \"grid\": the section applies to world = \"continuous\" only",
+            ));
+        }
         if self.methods.is_empty() {
             return Err(field("methods", "is empty"));
         }
