@@ -751,3 +751,20 @@ fn a_continuous_section_in_a_grid_study_is_refused() {
     );
     assert!(!dir.join("out").exists());
 }
+
+/// A cell size the scene cannot be read at (a built-in map's 1 m cells read at 0.5 m) is an
+/// error naming `cell_size` in the continuous world as in the grid world, not a panic (issue 59).
+#[test]
+fn a_cell_size_finer_than_the_scene_is_refused_in_the_continuous_world() {
+    let dir = Scratch::new("continuous-cell");
+    let cfg = dir.join("half.toml");
+    std::fs::write(&cfg, "cell_size = 0.5\n").unwrap();
+    for world in ["grid", "continuous"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args(["run", "--world", world, "--map", "paper:1"])
+            .args(["--config", cfg.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_clean_error_in(world, &out, &["cell_size"]);
+    }
+}

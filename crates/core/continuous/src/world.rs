@@ -124,6 +124,23 @@ impl ContinuousWorld {
         }
         let cell = scenario.cell_size;
         let coarse_truth = scene.coarse_truth(cell, &scenario.discretize);
+        // The robots read their maps into cells of `cell` metres as the truth is read: a scene
+        // whose raster is coarser than the cells (a built-in map's 1 m cells, say) cannot be.
+        let map_cells = |px: usize| {
+            let cell_px = (cell / cfg.mapping.resolution).max(1.0);
+            ((px.max(1) as f64 - 0.5) / cell_px).floor() as usize + 1
+        };
+        if (map_cells(px_h), map_cells(px_w)) != (coarse_truth.height(), coarse_truth.width()) {
+            let res = scene.fine.resolution;
+            return Err(ContinuousError::Scenario(format!(
+                "field `cell_size`: {cell} m cells of the scene (its raster has {res} m cells) are {} × {}, but the robots' {} m maps make {} × {}: use a cell_size that is a whole multiple of {res} m",
+                coarse_truth.height(),
+                coarse_truth.width(),
+                cfg.mapping.resolution,
+                map_cells(px_h),
+                map_cells(px_w),
+            )));
+        }
         let sensing_m = scenario.sensing_range as f64 * cell;
         let mut physics = PhysicsWorld::new();
         let obstacle_groups =
@@ -258,7 +275,6 @@ impl ContinuousWorld {
                 2.0 * clearance
             )));
         }
-        let (px_h, px_w) = map_pixels(&scene, &cfg);
         let maps = (0..n)
             .map(|_| {
                 RobotMap::new(px_h, px_w, cell, cfg.mapping, &scenario.discretize)
