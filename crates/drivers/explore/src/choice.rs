@@ -182,6 +182,7 @@ impl Chooser for AgentChoice {
             here,
             now,
             team,
+            nav_progress_at,
         } = at;
         let (me, size, mates) = team
             .as_ref()
@@ -351,7 +352,14 @@ impl Chooser for AgentChoice {
         if self.progress.0 - d > 0.5 * cell_size {
             self.progress = (d, now);
         }
-        if now - self.progress.1 > self.progress_timeout {
+        let progress_at = self.progress.1.max(nav_progress_at.unwrap_or(f64::MIN));
+        if now - progress_at > self.progress_timeout {
+            tracing::info!(
+                "{ns}: gave up the goal {g:?} at ({:.2}, {:.2}), {d:.1} m away: no progress for {:.0} s",
+                target.0,
+                target.1,
+                now - progress_at
+            );
             self.goal = None;
             self.write_off(g, now, false);
             return Ok(Choice::GiveUp);

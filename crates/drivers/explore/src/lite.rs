@@ -89,6 +89,7 @@ impl Chooser for Lite {
             here,
             now,
             team,
+            nav_progress_at,
         } = at;
         let merged;
         let map = match team {
@@ -153,8 +154,15 @@ impl Chooser for Lite {
         if !same || self.progress.0 - f.min_distance > grid.resolution {
             self.progress = (f.min_distance, now);
         }
-        if same && now - self.progress.1 > self.progress_timeout {
+        let progress_at = self.progress.1.max(nav_progress_at.unwrap_or(f64::MIN));
+        if same && now - progress_at > self.progress_timeout {
             // No progress: give it up (cancel), blacklist it, plan again at once.
+            tracing::info!(
+                "{ns}: gave up the frontier at ({:.2}, {:.2}): no progress for {:.0} s",
+                target.0,
+                target.1,
+                now - progress_at
+            );
             self.blacklist.list(target, now, tol, false);
             self.prev_target = None;
             self.goal = None;

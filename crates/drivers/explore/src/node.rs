@@ -195,7 +195,14 @@ pub(crate) struct PlanInput<'a> {
     pub here: (f64, f64),
     pub now: f64,
     pub team: Option<&'a mut Team>,
+    /// When nav2's feedback last showed the goal under way nearer along its path (its
+    /// `distance_remaining` down by [`FEEDBACK_PROGRESS`]): a robot on a detour makes progress
+    /// though it is no nearer in a straight line.
+    pub nav_progress_at: Option<f64>,
 }
+
+/// Metres by which nav2's `distance_remaining` must fall to count as progress.
+pub const FEEDBACK_PROGRESS: f32 = 0.25;
 
 /// Chooses the robot's goals ([`crate::lite`], [`crate::choice`]).
 pub(crate) trait Chooser {
@@ -334,6 +341,8 @@ pub fn run(
     let mut run = ExploreRun::default();
     let mut goal: Option<(SentGoal<NavigateToPose>, (f64, f64))> = None;
     let mut superseded: Vec<SentGoal<NavigateToPose>> = Vec::new();
+    // The goal under way's least distance_remaining in nav2's feedback, and when it fell.
+    let (mut nav_best, mut nav_progress_at) = (f32::INFINITY, None);
     let mut next_plan = 0.0;
     let mut start: Option<(f64, f64)> = None;
     let mut waiting_logged = (false, false, false);
@@ -411,6 +420,16 @@ pub fn run(
         if let Some(team) = &mut team {
             team.poll(now, frame, ns)?;
         }
+        // nav2's feedback on the goal under way: progress along its path.
+        while let Some(fb) = nav.feedback(Duration::ZERO)? {
+            if goal.as_ref().is_some_and(|(g, _)| g.id == fb.goal_id) {
+                let d = fb.feedback.distance_remaining;
+                if d.is_finite() && d < nav_best - FEEDBACK_PROGRESS {
+                    nav_best = d;
+                    nav_progress_at = Some(now);
+                }
+            }
+        }
         // Preempted goals' results, taken as they come (at most SUPERSEDED kept waiting).
         superseded.retain(|g| matches!(g.result(Duration::ZERO), Ok(None)));
         if superseded.len() > SUPERSEDED {
@@ -453,6 +472,7 @@ pub fn run(
             here,
             now,
             team: team.as_mut(),
+            nav_progress_at,
         })?;
         if let Some(publisher) = &frontiers {
             let under_way = match choice {
@@ -502,6 +522,7 @@ pub fn run(
                 let msg = NavigateToPoseGoal::at(frame, target.0, target.1, 0.0);
                 match nav.send_goal(msg, Duration::from_secs(10)) {
                     Ok(Some(sent)) => {
+                        (nav_best, nav_progress_at) = (f32::INFINITY, None);
                         if std::mem::replace(&mut unanswered, false) {
                             tracing::info!("{ns}: navigate_to_pose answers again");
                         }
