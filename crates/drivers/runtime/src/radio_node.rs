@@ -142,7 +142,7 @@ pub fn run_radio_with<T: Transport>(
                     now.sort_unstable();
                     late.sort_unstable();
                     let to = Node::Robot(i);
-                    mb.send(&Envelope::new(e.step, me, to, Body::Links { now, late }))?;
+                    gone_is_fine(mb.send(&Envelope::new(e.step, me, to, Body::Links { now, late })))?;
                 }
                 if links.len() == LINK_MEMORY {
                     links.pop_front();
@@ -155,7 +155,7 @@ pub fn run_radio_with<T: Transport>(
                 // Late β whose time has come.
                 while held.front().is_some_and(|&(at, _, _)| at <= e.step) {
                     let (_, to, bytes) = held.pop_front().expect("checked");
-                    mb.forward(Node::Robot(to), bytes)?;
+                    gone_is_fine(mb.forward(Node::Robot(to), bytes))?;
                 }
             }
             (Node::World, _, Body::Stop) => return Ok(mb.sent),
@@ -166,7 +166,7 @@ pub fn run_radio_with<T: Transport>(
                 let now = at_step().any(|l| l.now.contains(&pair));
                 let late = at_step().any(|l| l.late.contains(&pair));
                 if now {
-                    mb.forward(Node::Robot(j), bytes)?;
+                    gone_is_fine(mb.forward(Node::Robot(j), bytes))?;
                 } else if late && matches!(body, Body::Beta(_)) {
                     let at = e.step + u64::from(faults.delay_steps);
                     held.push_back((at, j, bytes));
@@ -181,5 +181,15 @@ pub fn run_radio_with<T: Transport>(
                 })
             }
         }
+    }
+}
+
+/// A robot that has gone (it ended at the world's stop before a message for it left, or it was
+/// killed) is not the radio's failure: what was sent to it is counted and dropped, as the world
+/// node's heartbeat does; a missing robot is the world's move wait to find.
+fn gone_is_fine(sent: Result<(), RuntimeError>) -> Result<(), RuntimeError> {
+    match sent {
+        Err(RuntimeError::Gone { .. }) => Ok(()),
+        other => other,
     }
 }
