@@ -4,7 +4,8 @@
 //!
 //! At each plan the agent observes the cells its map newly reads, hears each teammate as the
 //! paper's β (Sec. III.C.1: the teammate's shared map read into cells, its position, its goal
-//! and its previous goal, from [`crate::team`]), counts as detected the teammates within d_s
+//! and its previous goal, from [`crate::team`]) while it was heard in the last
+//! [`SILENT_AGE`] seconds, counts as detected the teammates within d_s
 //! cells heard in the last [`DETECTION_AGE`] seconds, and decides when its macro action ends
 //! (goal reached, no longer a frontier, unreachable, a teammate newly detected) or when a
 //! teammate's intent changes onto its goal (the teammate's new goal within a cell of its
@@ -18,7 +19,7 @@
 //! is tried again).
 
 use crate::cells::{CellReader, Geometry};
-use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Shown};
+use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Progress, Shown};
 use crate::params::ExploreParams;
 use madenet_agent::{Agent, AgentConfig, Beta};
 use madenet_map::{Occupancy, Pos};
@@ -28,6 +29,10 @@ use madenet_world::{Observation, ScenarioConfig};
 
 /// Seconds since a teammate's position was heard within which it counts as detected.
 pub const DETECTION_AGE: f64 = 2.0;
+
+/// Seconds since a teammate was last heard after which it is not exchanged with (its β is
+/// not taken again): a teammate whose node has died is not heard as if it were still there.
+pub const SILENT_AGE: f64 = 5.0;
 
 /// Seconds without a goal or a reachable frontier before exploration is complete (the maps
 /// the node reads may lag what the robot saw).
@@ -50,7 +55,6 @@ pub(crate) struct AgentChoice {
     name: String,
     registry: PolicyRegistry,
     scenario: ScenarioConfig,
-    progress_timeout: f64,
     reading: Option<Reading>,
     /// Observations so far (the agent's timestep).
     t: usize,
@@ -60,7 +64,7 @@ pub(crate) struct AgentChoice {
     /// The goal cell sent to nav2, if any.
     goal: Option<Pos>,
     /// The nearest distance to the goal, and when it was reached.
-    progress: (f64, f64),
+    progress: Progress,
     /// A goal cell reached, and when.
     reached: Option<(Pos, f64)>,
     /// The time of the last plan.
@@ -92,13 +96,12 @@ impl AgentChoice {
             name: name.into(),
             registry,
             scenario: ScenarioConfig::default(),
-            progress_timeout: p.progress_timeout,
             reading: None,
             t: 0,
             blacklist: Blacklist::default(),
             written: Vec::new(),
             goal: None,
-            progress: (f64::INFINITY, 0.0),
+            progress: Progress::new(p.progress_timeout),
             reached: None,
             last_plan: 0.0,
             idle_since: None,
@@ -281,6 +284,11 @@ impl Chooser for AgentChoice {
                     self.mate_goals.resize(k + 1, None);
                 }
                 self.mate_goals[k] = their_goal;
+                // A teammate not heard lately (its node gone, or out of reach) is not
+                // exchanged with: what it said last stays with the agent, as in the paper.
+                if now - heard > SILENT_AGE {
+                    continue;
+                }
                 r.agent.receive_beta(&Beta {
                     from: mate.index,
                     t: self.t,
@@ -345,20 +353,16 @@ impl Chooser for AgentChoice {
         let d = (here.0 - target.0).hypot(here.1 - target.1);
         if self.goal != Some(g) {
             self.goal = Some(g);
-            self.progress = (d, now);
+            self.progress.restart(d, now);
             return Ok(Choice::Send(target));
         }
         // Progress: nearer by half a cell.
-        if self.progress.0 - d > 0.5 * cell_size {
-            self.progress = (d, now);
-        }
-        let progress_at = self.progress.1.max(nav_progress_at.unwrap_or(f64::MIN));
-        if now - progress_at > self.progress_timeout {
+        self.progress.update(d, now, 0.5 * cell_size);
+        if let Some(waited) = self.progress.stalled(now, nav_progress_at) {
             tracing::info!(
-                "{ns}: gave up the goal {g:?} at ({:.2}, {:.2}), {d:.1} m away: no progress for {:.0} s",
+                "{ns}: gave up the goal {g:?} at ({:.2}, {:.2}), {d:.1} m away: no progress for {waited:.0} s",
                 target.0,
                 target.1,
-                now - progress_at
             );
             self.goal = None;
             self.write_off(g, now, false);
