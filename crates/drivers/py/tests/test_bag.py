@@ -96,6 +96,25 @@ def test_the_bag_decodes_with_mcap_and_rosbags_and_is_the_trial(cli, tmp_path):
     assert result["metrics"]["completed"] and not (free & near_unknown).any()
 
 
+def test_every_crc_of_the_bag_is_valid(cli, tmp_path):
+    """The `mcap` package's stream reader with CRC validation reads both worlds' bags whole:
+    chunk CRCs and the data section's CRC."""
+    from mcap.stream_reader import StreamReader
+    from mcap.records import Chunk, DataEnd
+
+    record(cli, tmp_path / "grid")
+    subprocess.run([cli, "run", "--world", "continuous", "--map", "paper:3", "--start", "top-right",
+                    "--policy", "nf", "--record", str(tmp_path / "cont")], check=True, capture_output=True)
+    for name in ["grid", "cont"]:
+        (path,) = (tmp_path / name).glob("*.mcap")
+        with open(path, "rb") as f:
+            records = list(StreamReader(f, validate_crcs=True).records)
+        chunks = [r for r in records if isinstance(r, Chunk)]
+        (end,) = [r for r in records if isinstance(r, DataEnd)]
+        assert chunks and all(c.uncompressed_crc != 0 for c in chunks), name
+        assert end.data_section_crc != 0, name
+
+
 def test_the_same_seed_gives_the_same_bytes(cli, tmp_path):
     record(cli, tmp_path / "a")
     record(cli, tmp_path / "b")
@@ -224,6 +243,10 @@ def test_a_continuous_run_is_recorded(cli, tmp_path):
     assert all(b - a >= 10**9 - 10**6 for a, b in zip(times, times[1:]))
     headings = {round(m.pose.orientation.z, 3) for _, m in poses}
     assert len(headings) > 10, "the robot turns"
+    # Every stamp once: the final state is not written again (tf2's TF_REPEATED_DATA).
+    for topic in ["/clock", "/tf", "/robot0/pose", "/metrics/explored"]:
+        stamps = [t for t, _ in topics[topic]]
+        assert all(a < b for a, b in zip(stamps, stamps[1:])), topic
     # The final state is recorded whatever the rates: the last pose and metrics at the end.
     assert topics["/metrics/explored"][-1][0] == poses[-1][0] == topics["/clock"][-1][0]
     assert topics["/metrics/explored"][-1][1].data == 1.0 and result["complete"]

@@ -113,6 +113,25 @@ impl Bag {
         Ok(())
     }
 
+    /// Removes from `dir` the hidden folders of bags that were being written when their
+    /// process died (`.NAME.partial-PID-K`, see [`Bag::create`]); how many. Only for a folder
+    /// whose writers the caller has excluded (a study holding its output folder's lock).
+    pub fn remove_leftovers(dir: &Path) -> std::io::Result<usize> {
+        let mut n = 0;
+        let Ok(list) = std::fs::read_dir(dir) else {
+            return Ok(0);
+        };
+        for entry in list {
+            let entry = entry?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') && name.contains(".partial-") && entry.file_type()?.is_dir() {
+                std::fs::remove_dir_all(entry.path())?;
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
     /// Starts a bag that [`Bag::finish`] puts at `dir`: a new path, or an empty directory.
     pub fn create(dir: &Path) -> Result<Self, BagError> {
         let io = |path: &Path| {
@@ -164,8 +183,9 @@ impl Bag {
             .profile("ros2")
             .library("madenet")
             .compression(Some(mcap::Compression::Lz4))
-            // The LZ4 frame checks the chunk's content itself (XXH32): no CRC32 over it twice.
-            .calculate_chunk_crcs(false);
+            // Chunk CRCs on: with them off, mcap 0.26 still writes a data-section CRC, computed
+            // without the chunks, that every validating reader refuses (issue 59).
+            .calculate_chunk_crcs(true);
         bag.writer = Some(
             opts.create(BufWriter::new(out))
                 .map_err(|e| bag.mcap_error(e))?,
