@@ -63,6 +63,12 @@ pub fn run(c: MapCommand) -> Result<()> {
             output,
             config,
         } => {
+            let outputs: Vec<_> = (madenet_map::io::files_written(&output).into_iter())
+                .map(|f| ("output", f))
+                .collect();
+            let mut inputs = crate::map_inputs("input", &input);
+            inputs.extend(config.iter().map(|c| ("--config", c.clone())));
+            crate::refuse_clashes(&outputs, &inputs)?;
             let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
             save(&grid, &output)?;

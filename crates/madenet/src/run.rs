@@ -108,6 +108,22 @@ impl RunArgs {
 }
 
 pub fn run(a: RunArgs) -> Result<()> {
+    fn named(flag: &'static str, p: &Option<PathBuf>) -> Option<(&'static str, PathBuf)> {
+        p.clone().map(|p| (flag, p))
+    }
+    let outputs: Vec<_> = [
+        named("--render", &a.pictures.render),
+        named("--snapshot", &a.pictures.snapshot),
+        named("--record", &a.record),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let mut inputs = crate::map_inputs("--map", &a.scenario.map);
+    inputs.extend(named("--config", &a.scenario.config));
+    inputs.extend(named("--continuous-config", &a.continuous_config));
+    inputs.extend(a.params_file.iter().map(|p| ("--params-file", p.clone())));
+    crate::refuse_clashes(&outputs, &inputs)?;
     if a.nav2.is_some()
         && (a.world != "continuous" || (a.json && a.explore.is_none()) || a.pictures.any())
     {

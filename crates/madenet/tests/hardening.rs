@@ -768,3 +768,115 @@ fn a_cell_size_finer_than_the_scene_is_refused_in_the_continuous_world() {
         assert_clean_error_in(world, &out, &["cell_size"]);
     }
 }
+
+/// A training config with a duplicate key or an integer too large for TOML is one error naming
+/// the file, the field and the line, as every other config's reader does (issue 59).
+#[test]
+fn a_training_config_error_names_the_field_and_line() {
+    let dir = Scratch::new("train-config-lines");
+    let cases = [
+        (
+            "dup",
+            "method = \"made-net-rollout\"\nseed = 1\nseed = 2\n",
+            "line 3",
+        ),
+        (
+            "big",
+            "method = \"made-net-rollout\"\nseed = 99999999999999999999\n",
+            "line 2",
+        ),
+    ];
+    for (name, text, line) in cases {
+        let cfg = dir.join(format!("{name}.toml"));
+        std::fs::write(&cfg, text).unwrap();
+        let out = train(&cfg, &dir.join(format!("{name}.out")), &[]);
+        assert_clean_error_in(name, &out, &[&format!("{name}.toml"), "field `seed`", line]);
+        assert!(!dir.join(format!("{name}.out")).exists());
+    }
+}
+
+/// An output path that is an input's file — directly, through a symbolic link, or as the image
+/// a map YAML names — or another output's path is refused with exit 2 before any work, and
+/// every file in the folder is left as it was (issue 59). A study's config in its own output
+/// folder would be rewritten by the study: refused too.
+#[test]
+fn an_output_never_replaces_an_input() {
+    let dir = Scratch::new("outputs-over-inputs");
+    let d = dir.path().display().to_string();
+    assert_ok(&madenet(&[
+        "map",
+        "generate",
+        "--height",
+        "10",
+        "--width",
+        "10",
+        &format!("{d}/m.txt"),
+    ]));
+    assert_ok(&madenet(&[
+        "map",
+        "convert",
+        &format!("{d}/m.txt"),
+        &format!("{d}/m.png"),
+    ]));
+    assert_ok(&madenet(&[
+        "map",
+        "convert",
+        &format!("{d}/m.txt"),
+        &format!("{d}/thin.yaml"),
+    ]));
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(dir.join("m.png"), dir.join("link.png")).unwrap();
+    std::fs::create_dir(dir.join("st")).unwrap();
+    std::fs::write(dir.join("st/study.toml"), format!("# mine\n{STUDY}")).unwrap();
+    let before = snapshot(dir.path());
+    const NOT_AN_INPUT: &str = "an output never replaces an input";
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["--out", "--maps", NOT_AN_INPUT],
+            &["oracle", "--maps", "{d}/m.txt", "--out", "{d}/m.txt"],
+        ),
+        (
+            &["--out", "--maps", NOT_AN_INPUT],
+            &["batch", "--maps", "{d}/m.txt", "--out", "{d}/./m.txt"],
+        ),
+        (
+            &["--snapshot", "--map", NOT_AN_INPUT],
+            &["run", "--map", "{d}/m.png", "--snapshot", "{d}/link.png"],
+        ),
+        (
+            &["--record", "--render"],
+            &[
+                "run",
+                "--map",
+                "{d}/m.txt",
+                "--render",
+                "{d}/a.gif",
+                "--record",
+                "{d}/a.gif",
+            ],
+        ),
+        (
+            &["output", "thin.pgm", NOT_AN_INPUT],
+            &["map", "convert", "{d}/thin.yaml", "{d}/thin.pgm"],
+        ),
+        (
+            &["--out", "--config", NOT_AN_INPUT],
+            &[
+                "compare",
+                "--config",
+                "{d}/st/study.toml",
+                "--out",
+                "{d}/st",
+            ],
+        ),
+    ];
+    for (needles, args) in cases {
+        let args: Vec<String> = args.iter().map(|a| a.replace("{d}", &d)).collect();
+        assert_clean_error_in(&args.join(" "), &madenet(&args), needles);
+        assert_eq!(snapshot(dir.path()), before, "{args:?}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("st/study.toml")).unwrap(),
+        format!("# mine\n{STUDY}")
+    );
+}

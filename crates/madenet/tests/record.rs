@@ -303,10 +303,15 @@ fn a_study_records_the_trials_it_is_told_to() {
         "the study's trial, recorded"
     );
     let before = bag(&bags.join(names[0]));
+    // A killed run's half-written bag (issue 59): the resume removes it.
+    let leftover = bags.join(format!(".{}.partial-4000000-0", names[0]));
+    std::fs::create_dir(&leftover).unwrap();
+    std::fs::write(leftover.join("x_0.mcap"), b"cut").unwrap();
     let again = compare(&chosen);
     assert!(again.status.success());
     assert!(String::from_utf8_lossy(&again.stdout).contains("(0 written now)"));
     assert_eq!(bag(&bags.join(names[0])), before);
+    assert_eq!(entries(&bags), names, "the leftover is gone");
     // Afresh: the bags of the new choice replace the folder once they are all written.
     let mut one = chosen.to_vec();
     one[1] = "map=test_3";

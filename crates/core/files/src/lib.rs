@@ -62,6 +62,42 @@ pub fn check_extension(path: Option<&Path>, flag: &str, want: &str) -> Result<()
     Ok(())
 }
 
+/// `path` with its symbolic links resolved, made absolute: the file itself when it exists,
+/// else its folder resolved and its name (a file still to be written); as given when its folder
+/// does not exist either.
+pub fn resolved(path: &Path) -> PathBuf {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return p;
+    }
+    match (path.file_name(), std::fs::canonicalize(parent_dir(path))) {
+        (Some(name), Ok(dir)) => dir.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// Refuses, before any work, an output that would replace an input or another output: each
+/// `(flag, path)` of `outputs` against every input and every other output, symbolic links
+/// resolved. The error names both flags and the path.
+pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<(), String> {
+    let ins: Vec<(&str, PathBuf)> = inputs.iter().map(|&(f, p)| (f, resolved(p))).collect();
+    let outs: Vec<(&str, PathBuf)> = outputs.iter().map(|&(f, p)| (f, resolved(p))).collect();
+    for (k, (flag, out)) in outs.iter().enumerate() {
+        if let Some((in_flag, _)) = ins.iter().find(|(_, i)| i == out) {
+            return Err(format!(
+                "{flag} {}: is {in_flag}'s file: an output never replaces an input; choose another path",
+                outputs[k].1.display()
+            ));
+        }
+        if let Some((other, _)) = outs[..k].iter().find(|(_, o)| o == out) {
+            return Err(format!(
+                "{flag} {}: is also {other}'s path: choose another",
+                outputs[k].1.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` as described in the crate doc.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;

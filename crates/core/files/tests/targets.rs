@@ -173,3 +173,29 @@ fn a_write_in_progress_survives_the_cleanup_of_interrupted_ones() {
         b"a,b\n1,2\n"
     );
 }
+
+/// An output that is an input (directly, through a symbolic link, or by another spelling of its
+/// path) or another output is refused naming both flags; distinct paths pass.
+#[test]
+fn an_output_may_not_be_an_input_or_another_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("m.txt");
+    std::fs::write(&map, "..\n").unwrap();
+    let link = dir.path().join("link.txt");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&map, &link).unwrap();
+    let dotted = dir.path().join(".").join("m.txt");
+    let input = [("--maps", map.as_path())];
+    for out in [&map, &dotted] {
+        let e = madenet_files::check_outputs(&[("--out", out)], &input).unwrap_err();
+        assert!(e.contains("--out") && e.contains("--maps"), "{e}");
+    }
+    #[cfg(unix)]
+    assert!(madenet_files::check_outputs(&[("--out", &link)], &input).is_err());
+    let (a, b) = (dir.path().join("a.png"), dir.path().join("new/../a.png"));
+    assert!(madenet_files::check_outputs(&[("--out", &a)], &input).is_ok());
+    let e = madenet_files::check_outputs(&[("--render", &a), ("--snapshot", &a)], &[]).unwrap_err();
+    assert!(e.contains("--snapshot") && e.contains("--render"), "{e}");
+    // A path through a folder that does not exist is compared as given.
+    assert!(madenet_files::check_outputs(&[("--out", &b)], &input).is_ok());
+}

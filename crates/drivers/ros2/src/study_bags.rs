@@ -128,6 +128,8 @@ pub fn record_study_trials(
     }
     clear(&new)?;
     clear(&old)?;
+    // A killed study's bags half written (a resume would keep them for ever).
+    Bag::remove_leftovers(&bags).map_err(|e| err(flag, format!("{}: {e}", bags.display())))?;
     let n = pool.install(|| record_trials(chosen, registry, if fresh { &new } else { &bags }))?;
     if fresh {
         let swap = || -> std::io::Result<()> {

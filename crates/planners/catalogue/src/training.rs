@@ -72,8 +72,9 @@ impl TrainRequest {
     fn learner(&self, source: &Source) -> Result<LearnerKind, CatalogueError> {
         let from_file = match source {
             Some((path, text)) => {
-                let value: toml::Table = toml::from_str(text)
-                    .map_err(|e| refused(format!("{}: {}", path.display(), e.message())))?;
+                // The shared reader: a syntax error names its field and line (issue 59).
+                let value: toml::Table = madenet_files::parse_toml(text)
+                    .map_err(|e| refused(format!("{}: {e}", path.display())))?;
                 value
                     .get("method")
                     .and_then(|m| m.as_str())

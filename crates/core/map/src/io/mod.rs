@@ -71,7 +71,7 @@ pub use yaml::save_yaml;
 
 use crate::discretize::DiscretizeParams;
 use crate::{MapError, OccGrid, Occupancy};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use yaml::MapMeta;
 
 /// Options for [`load`].
@@ -289,6 +289,33 @@ fn check_savable(grid: &OccGrid, path: &Path) -> Result<(), MapError> {
         return Err(format_err(path, "cannot save an empty grid"));
     }
     Ok(())
+}
+
+/// The files reading the map at `path` reads: the file and, for a `map_server` YAML, its
+/// image (resolved against the YAML's folder; a YAML that does not parse names none).
+pub fn files_read(path: &Path) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    if map_format(path).ok() == Some(MapFormat::Yaml) {
+        let meta = read_input(path).ok().and_then(|b| {
+            let text = String::from_utf8(b).ok()?;
+            yaml::parse_map_yaml(&text, path).ok()
+        });
+        if let Some(meta) = meta {
+            files.push(path.parent().unwrap_or(Path::new("")).join(&meta.image));
+        }
+    }
+    files
+}
+
+/// The files [`save`] writes for `path`: the file and, for a YAML, its PGM image beside it.
+pub fn files_written(path: &Path) -> Vec<PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    if matches!(extension(path).as_str(), "yaml" | "yml") {
+        if let Some(stem) = path.file_stem() {
+            files.push(path.with_file_name(format!("{}.pgm", stem.to_string_lossy())));
+        }
+    }
+    files
 }
 
 /// Writes `grid` in the format given by the extension: `.yaml`/`.yml` ([`save_yaml`]),
