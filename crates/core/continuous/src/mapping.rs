@@ -54,18 +54,13 @@ impl RobotMap {
         cfg: MappingConfig,
         rule: &DiscretizeParams,
     ) -> Self {
-        let cell_px = (cell_size / cfg.resolution).max(1.0);
-        let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as u32;
-        let row_cell: Vec<u32> = (0..height).map(cell_of).collect();
-        let col_cell: Vec<u32> = (0..width).map(cell_of).collect();
-        let coarse_height = row_cell.last().map_or(0, |&c| c as usize + 1);
-        let coarse_width = col_cell.last().map_or(0, |&c| c as usize + 1);
-        let mut pixels = vec![0u32; coarse_height * coarse_width];
-        for &r in &row_cell {
-            for &c in &col_cell {
-                pixels[r as usize * coarse_width + c as usize] += 1;
-            }
-        }
+        let madenet_map::discretize::CellTables {
+            row_cell,
+            col_cell,
+            rows: coarse_height,
+            cols: coarse_width,
+            pixels,
+        } = madenet_map::discretize::CellTables::new(height, width, cfg.resolution, cell_size);
         let p = rule.occupied_prob.clamp(1e-6, 1.0 - 1e-6);
         RobotMap {
             cfg,
@@ -294,11 +289,7 @@ impl RobotMap {
             self.obstacle_fraction,
             self.cfg.known_fraction,
         );
-        let next = match (now, read) {
-            (_, Occupancy::Obstacle) => Occupancy::Obstacle,
-            (Occupancy::Unknown, Occupancy::Free) => Occupancy::Free,
-            _ => now,
-        };
+        let next = madenet_map::discretize::write_once(now, read);
         if next != now {
             self.coarse[cell] = next;
             let p = Pos::new(

@@ -31,6 +31,61 @@ impl Default for DiscretizeParams {
     }
 }
 
+/// Which cell each pixel of a `height` × `width` image of `resolution` metres belongs to, at
+/// cells of `cell_size` metres (a pixel belongs to the cell its centre falls in), and how many
+/// pixels each cell has: the tables a map still being built is read through
+/// ([`read_partial_cell`]), by the continuous world's robots and by a node reading a
+/// published map.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellTables {
+    /// The cell row of each pixel row.
+    pub row_cell: Vec<u32>,
+    /// The cell column of each pixel column.
+    pub col_cell: Vec<u32>,
+    /// Cells: rows and columns.
+    pub rows: usize,
+    /// See `rows`.
+    pub cols: usize,
+    /// Pixels per cell, row-major.
+    pub pixels: Vec<u32>,
+}
+
+impl CellTables {
+    /// The tables of an image of `height` × `width` pixels of `resolution` metres, read in
+    /// cells of `cell_size` metres (at least a pixel).
+    pub fn new(height: usize, width: usize, resolution: f64, cell_size: f64) -> Self {
+        let cell_px = (cell_size / resolution).max(1.0);
+        let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as u32;
+        let row_cell: Vec<u32> = (0..height).map(cell_of).collect();
+        let col_cell: Vec<u32> = (0..width).map(cell_of).collect();
+        let rows = row_cell.last().map_or(0, |&c| c as usize + 1);
+        let cols = col_cell.last().map_or(0, |&c| c as usize + 1);
+        let mut pixels = vec![0u32; rows * cols];
+        for &r in &row_cell {
+            for &c in &col_cell {
+                pixels[r as usize * cols + c as usize] += 1;
+            }
+        }
+        CellTables {
+            row_cell,
+            col_cell,
+            rows,
+            cols,
+            pixels,
+        }
+    }
+}
+
+/// A cell's next value when it was `now` and reads `read`: write-once, but for the upgrade to
+/// an obstacle (a cell known free turns obstacle when more of it is seen occupied; never back).
+pub fn write_once(now: Occupancy, read: Occupancy) -> Occupancy {
+    match (now, read) {
+        (_, Occupancy::Obstacle) => Occupancy::Obstacle,
+        (Occupancy::Unknown, Occupancy::Free) => Occupancy::Free,
+        _ => now,
+    }
+}
+
 /// A cell of a map still being built, read from counts of its pixels by the paper's rule: an
 /// obstacle when its `occupied` pixels are more than `obstacle_fraction` of its `observed`
 /// ones, or of half its `pixels` while fewer are observed (a sensor sees an obstacle's surface,

@@ -8,7 +8,7 @@
 //! agent's belief is; [`CellReader::read`] reports each cell when it first becomes known and
 //! again when it becomes an obstacle.
 
-use madenet_map::discretize::{read_partial_cell, DiscretizeParams};
+use madenet_map::discretize::{read_partial_cell, CellTables, DiscretizeParams};
 use madenet_map::{Occupancy, Pos};
 use madenet_ros2::msgs::OccupancyGrid;
 
@@ -67,18 +67,18 @@ impl CellReader {
         rule: &DiscretizeParams,
         known_fraction: f64,
     ) -> Self {
-        let cell_px = (cell_size / geometry.resolution).max(1.0);
-        let cell_of = |k: usize| ((k as f64 + 0.5) / cell_px).floor() as u32;
-        let row_cell: Vec<u32> = (0..geometry.height).map(cell_of).collect();
-        let col_cell: Vec<u32> = (0..geometry.width).map(cell_of).collect();
-        let rows = row_cell.last().map_or(0, |&c| c as usize + 1);
-        let cols = col_cell.last().map_or(0, |&c| c as usize + 1);
-        let mut pixels = vec![0u32; rows * cols];
-        for &r in &row_cell {
-            for &c in &col_cell {
-                pixels[r as usize * cols + c as usize] += 1;
-            }
-        }
+        let CellTables {
+            row_cell,
+            col_cell,
+            rows,
+            cols,
+            pixels,
+        } = CellTables::new(
+            geometry.height,
+            geometry.width,
+            geometry.resolution,
+            cell_size,
+        );
         CellReader {
             geometry,
             cell_size,
@@ -169,11 +169,7 @@ impl CellReader {
                 self.obstacle_fraction,
                 self.known_fraction,
             );
-            let next = match (now, read) {
-                (_, Occupancy::Obstacle) => Occupancy::Obstacle,
-                (Occupancy::Unknown, Occupancy::Free) => Occupancy::Free,
-                _ => now,
-            };
+            let next = madenet_map::discretize::write_once(now, read);
             if next != now {
                 self.cells[k] = next;
                 changes.push((

@@ -13,7 +13,7 @@
 //!   decrease, so a flickering map resends goals for ever);
 //! - a centroid off the map's cells is never sent.
 
-use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Shown};
+use crate::node::{Blacklist, Choice, Chooser, ExploreError, PlanInput, Progress, Shown};
 use crate::params::ExploreParams;
 use madenet_nav::frontiers::{
     occupancy_to_cost, search_from, Connectivity, CostGrid, FrontierParams,
@@ -23,7 +23,6 @@ use madenet_ros2::actions::status;
 /// explore_lite's chooser.
 pub(crate) struct Lite {
     fp: FrontierParams,
-    progress_timeout: f64,
     blacklist: Blacklist,
     /// The frontier of the goal under way, if any.
     goal: Option<(f64, f64)>,
@@ -34,7 +33,7 @@ pub(crate) struct Lite {
     /// from where it is reached, and is blacklisted at once.
     reached: Option<(f64, f64)>,
     /// The nearest distance to the current frontier, and when it was reached.
-    progress: (f64, f64),
+    progress: Progress,
     /// The blacklist's tolerance (5 map cells), set at each plan.
     tol: f64,
     /// What the last plan weighed.
@@ -49,12 +48,11 @@ impl Lite {
                 gain_scale: p.gain_scale,
                 min_frontier_size: p.min_frontier_size,
             },
-            progress_timeout: p.progress_timeout,
             blacklist: Blacklist::default(),
             goal: None,
             prev_target: None,
             reached: None,
-            progress: (f64::INFINITY, 0.0),
+            progress: Progress::new(p.progress_timeout),
             tol: 0.25,
             shown: Shown::default(),
         }
@@ -83,21 +81,14 @@ impl Chooser for Lite {
     }
 
     fn plan(&mut self, at: PlanInput<'_>) -> Result<Choice, ExploreError> {
-        let PlanInput {
-            ns,
-            map,
-            here,
-            now,
-            team,
-            nav_progress_at,
-        } = at;
+        let (ns, here, now, nav_progress_at) = (at.ns, at.here, at.now, at.nav_progress_at);
         let merged;
-        let map = match team {
+        let map = match at.team {
             Some(team) => {
-                merged = team.merged(map, ns);
+                merged = team.merged(at.map, ns);
                 &merged
             }
-            None => map,
+            None => at.map,
         };
         let cost: Vec<u8> = map.data.iter().map(|&v| occupancy_to_cost(v)).collect();
         let grid = CostGrid {
@@ -151,17 +142,17 @@ impl Chooser for Lite {
         let same = near(self.prev_target);
         self.prev_target = Some(target);
         // Progress: nearer by a map cell or more.
-        if !same || self.progress.0 - f.min_distance > grid.resolution {
-            self.progress = (f.min_distance, now);
+        match same {
+            true => (self.progress).update(f.min_distance, now, grid.resolution),
+            false => self.progress.restart(f.min_distance, now),
         }
-        let progress_at = self.progress.1.max(nav_progress_at.unwrap_or(f64::MIN));
-        if same && now - progress_at > self.progress_timeout {
+        let stalled = (self.progress).stalled(now, nav_progress_at);
+        if let Some(waited) = stalled.filter(|_| same) {
             // No progress: give it up (cancel), blacklist it, plan again at once.
             tracing::info!(
-                "{ns}: gave up the frontier at ({:.2}, {:.2}): no progress for {:.0} s",
+                "{ns}: gave up the frontier at ({:.2}, {:.2}): no progress for {waited:.0} s",
                 target.0,
                 target.1,
-                now - progress_at
             );
             self.blacklist.list(target, now, tol, false);
             self.prev_target = None;

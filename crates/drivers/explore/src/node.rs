@@ -201,6 +201,46 @@ pub(crate) struct PlanInput<'a> {
     pub nav_progress_at: Option<f64>,
 }
 
+/// Progress towards the goal under way, as both choosers judge it: the least distance to it
+/// so far and when it fell; past `progress_timeout` seconds without progress (nav2's feedback
+/// counting too) the goal is given up.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Progress {
+    best: f64,
+    at: f64,
+    timeout: f64,
+}
+
+impl Progress {
+    /// No goal yet; `timeout` is `progress_timeout`.
+    pub fn new(timeout: f64) -> Self {
+        Progress {
+            best: f64::INFINITY,
+            at: 0.0,
+            timeout,
+        }
+    }
+
+    /// A new goal, `d` metres away at `now`.
+    pub fn restart(&mut self, d: f64, now: f64) {
+        (self.best, self.at) = (d, now);
+    }
+
+    /// The robot is `d` metres away at `now`: nearer by more than `step` is progress.
+    pub fn update(&mut self, d: f64, now: f64, step: f64) {
+        if self.best - d > step {
+            self.restart(d, now);
+        }
+    }
+
+    /// Seconds without progress, once they pass the timeout (`nav_progress_at`: nav2's
+    /// feedback last showed progress then).
+    pub fn stalled(&self, now: f64, nav_progress_at: Option<f64>) -> Option<f64> {
+        let since = self.at.max(nav_progress_at.unwrap_or(f64::MIN));
+        (now - since > self.timeout).then_some(now - since)
+    }
+}
+
 /// Metres by which nav2's `distance_remaining` must fall to count as progress.
 pub const FEEDBACK_PROGRESS: f32 = 0.25;
 

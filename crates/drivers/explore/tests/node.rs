@@ -1,44 +1,18 @@
 //! The exploration node against a simulated nav2 robot (the continuous world serving
 //! `navigate_to_pose`), through ROS 2 alone: it explores a generated floor plan.
 
-use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+mod common;
+
 use madenet_explore::node;
 use madenet_explore::params::ExploreParams;
-use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
-use madenet_ros2::loopback_router;
 use madenet_ros2::msgs::{Bool, Marker, MarkerArray};
-use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimThread};
 use madenet_ros2::QosProfile;
 use std::sync::atomic::Ordering;
-use std::sync::Arc;
 use std::time::Duration;
 
 #[test]
 fn one_node_explores_a_floor_plan_through_its_nav2() {
-    let cfg = FloorPlanConfig::for_size(14, 14);
-    let grid = floor_plan(&cfg, 3).unwrap();
-    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
-    let scenario = madenet_world::ScenarioConfig {
-        num_robots: 1,
-        ..Default::default()
-    };
-    let world = ContinuousWorld::new(
-        scene,
-        &[cfg.keep_free[0]],
-        scenario,
-        ContinuousConfig::default(),
-        3,
-    )
-    .unwrap();
-    let (router, opts) = loopback_router().unwrap();
-    let sim = Nav2SimThread::spawn(
-        opts.clone(),
-        world,
-        Nav2SimOptions {
-            realtime: 20.0,
-            ..Default::default()
-        },
-    );
+    let (router, opts, sim) = common::plan_sim(14, 3, |cfg| vec![cfg.keep_free[0]]);
     let stop = sim.stop_flag();
     let params = ExploreParams::from_yaml(
         "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n    visualize: true\n",

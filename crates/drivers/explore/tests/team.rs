@@ -2,15 +2,13 @@
 //! world serving `navigate_to_pose`), talking only through a zenoh router: each node shares its
 //! map, position and goal over ROS 2 topics, and the team explores a generated floor plan.
 
-use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+mod common;
+
 use madenet_explore::node::{self, ExploreRun};
 use madenet_explore::params::ExploreParams;
-use madenet_map::floorplan::{floor_plan, FloorPlanConfig};
 use madenet_map::paper::Corner;
-use madenet_ros2::loopback_router;
-use madenet_ros2::nav2_sim::{Nav2SimOptions, Nav2SimRun, Nav2SimThread};
+use madenet_ros2::nav2_sim::Nav2SimRun;
 use std::sync::atomic::Ordering;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Runs `n` nodes of `policy` on a `size` m floor plan of `seed` until every node is done (or
@@ -23,25 +21,9 @@ fn explore_team(
     seed: u64,
     watchdog: u64,
 ) -> (Vec<ExploreRun>, Nav2SimRun) {
-    let cfg = FloorPlanConfig::for_size(size, size);
-    let grid = floor_plan(&cfg, seed).unwrap();
-    let starts = &Corner::TopLeft.start_cells(size, size)[..n];
-    let scene = Arc::new(Scene::from_grid(&grid, "plan"));
-    let scenario = madenet_world::ScenarioConfig {
-        num_robots: n,
-        ..Default::default()
-    };
-    let world =
-        ContinuousWorld::new(scene, starts, scenario, ContinuousConfig::default(), seed).unwrap();
-    let (router, opts) = loopback_router().unwrap();
-    let sim = Nav2SimThread::spawn(
-        opts.clone(),
-        world,
-        Nav2SimOptions {
-            realtime: 20.0,
-            ..Default::default()
-        },
-    );
+    let (router, opts, sim) = common::plan_sim(size, seed, |_| {
+        Corner::TopLeft.start_cells(size, size)[..n].to_vec()
+    });
     let stop_all = sim.stop_flag();
     let names: Vec<String> = (0..n).map(|i| format!("/robot{i}")).collect();
     let t0 = Instant::now();

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import zenoh
 
-from test_ros2_wire import attachment, cdr, dds, free_port, key, read_attachment, ts  # noqa: F401
+from test_ros2_wire import action_server, attachment, cdr, free_port, key, read_attachment, ts  # noqa: F401
 
 CLI = os.environ.get("MADENET_CLI")
 pytestmark = pytest.mark.skipif(not CLI, reason="MADENET_CLI is not set")
@@ -88,21 +88,7 @@ def test_the_node_recovers_from_a_stand_in_s_aborts_and_explores_both_rooms(ts, 
     map_pub = session.declare_publisher(key(ts, map_name, "nav_msgs/msg/OccupancyGrid"))
     tf_pub = session.declare_publisher(key(ts, "robot0/tf", "tf2_msgs/msg/TFMessage"))
     clock_pub = session.declare_publisher(key(ts, "clock", "rosgraph_msgs/msg/Clock"))
-    queryables = {}
-    tokens = []
-    for part, typ in [
-        ("send_goal", f"{act}_SendGoal"),
-        ("get_result", f"{act}_GetResult"),
-        ("cancel_goal", "action_msgs/srv/CancelGoal"),
-    ]:
-        tokens.append(
-            session.liveliness().declare_token(
-                f"@ros2_lv/0/{session.zid()}/0/{len(tokens) + 1}/SS/%/%robot0/bt_navigator/%{action.replace('/', '%')}%_action%{part}/{dds(typ)}/{ts.hash_rihs01(typ)}/::,10:,:,:,,"
-            )
-        )
-        queryables[part] = session.declare_queryable(
-            key(ts, f"{action}/_action/{part}", typ), complete=True
-        )
+    queryables, tokens = action_server(session, ts, "robot0/bt_navigator", action, act)
 
     def publish(sim, seq):
         s = stamp(sim)

@@ -85,6 +85,27 @@ def key(ts, name, typ):
     return f"0/{name.strip('/')}/{dds(typ)}/{ts.hash_rihs01(typ)}"
 
 
+def action_server(session, ts, node, action, act, qos="::,10:,:,:,,"):
+    """An action server as rmw_zenoh declares one: for each of its three services a liveliness
+    token of node `node` ("ns/name", no leading slash) and a queryable on `action` (the action's
+    name); `act` is the action type. Returns the queryables by part and the tokens (keep them)."""
+    ns, name = node.rsplit("/", 1) if "/" in node else ("", node)
+    tokens, queryables = [], {}
+    for part, typ in [
+        ("send_goal", f"{act}_SendGoal"),
+        ("get_result", f"{act}_GetResult"),
+        ("cancel_goal", "action_msgs/srv/CancelGoal"),
+    ]:
+        tokens.append(
+            session.liveliness().declare_token(
+                f"@ros2_lv/0/{session.zid()}/0/{len(tokens) + 1}/SS/%/%{ns}/{name}/"
+                f"%{action.replace('/', '%')}%_action%{part}/{dds(typ)}/{ts.hash_rihs01(typ)}/{qos}"
+            )
+        )
+        queryables[part] = session.declare_queryable(key(ts, f"{action}/_action/{part}", typ), complete=True)
+    return queryables, tokens
+
+
 def attachment(seq, gid):
     """rmw_zenoh's attachment: i64 sequence number, i64 ns, then the 16-byte GID with its length."""
     return struct.pack("<qq", seq, time.time_ns()) + bytes([16]) + gid
@@ -262,20 +283,7 @@ def test_a_python_action_client_drives_a_madenet_action_server(ts, peer):
 def test_a_python_action_server_answers_madenet_s_action_client(ts, peer):
     session, endpoint = peer
     act = "example_interfaces/action/Fibonacci"
-    qos = "::,10:,:,:,,"
-    tokens = []
-    queryables = {}
-    for part, typ in [
-        ("send_goal", f"{act}_SendGoal"),
-        ("get_result", f"{act}_GetResult"),
-        ("cancel_goal", "action_msgs/srv/CancelGoal"),
-    ]:
-        tokens.append(
-            session.liveliness().declare_token(
-                f"@ros2_lv/0/{session.zid()}/0/{len(tokens) + 1}/SS/%/%/py_fib/%fibonacci%_action%{part}/{dds(typ)}/{ts.hash_rihs01(typ)}/{qos}"
-            )
-        )
-        queryables[part] = session.declare_queryable(key(ts, f"fibonacci/_action/{part}", typ), complete=True)
+    queryables, tokens = action_server(session, ts, "py_fib", "fibonacci", act)
     feedback = session.declare_publisher(key(ts, "fibonacci/_action/feedback", f"{act}_FeedbackMessage"))
     p = spawn("send-fib", endpoint, "4")
     try:
