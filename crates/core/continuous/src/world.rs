@@ -565,6 +565,14 @@ impl ContinuousWorld {
             }
             let now = obstacle || robot;
             if now && !self.touching[i] {
+                tracing::debug!(
+                    "robot {i} touched {} at ({:.2}, {:.2}), heading {:.2}, {:.1} s",
+                    if obstacle { "an obstacle" } else { "a robot" },
+                    p.x,
+                    p.y,
+                    p.theta,
+                    self.time()
+                );
                 if obstacle {
                     self.collisions.obstacle += 1;
                 } else {
