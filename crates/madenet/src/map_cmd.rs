@@ -71,6 +71,10 @@ pub fn run(c: MapCommand) -> Result<()> {
             crate::refuse_clashes(&outputs, &inputs)?;
             let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
+            // Read into cells of `cell_size`, thin walls may vanish: say so, as `run` does.
+            if let Some(w) = input.erasure_warning(&cfg)? {
+                say!("warning: {w}");
+            }
             save(&grid, &output)?;
             out!(
                 "wrote {} ({}×{})",

@@ -105,8 +105,10 @@ impl ScenarioArgs {
         }
         let source = self.source();
         let scene = source.scene(side)?;
-        let coarse = scene.coarse_truth(cfg.cell_size, &cfg.discretize);
-        let starts = self.starts_on(&coarse, &cfg)?;
+        let starts = self
+            .start
+            .continuous_cells(&scene, &cfg, continuous.robot.radius);
+        self.check_drawn(&starts, &cfg)?;
         let registry = madenet_catalogue::with_model(&Default::default(), self.model.as_deref())?;
         let spec = ContinuousSpec {
             scene: std::sync::Arc::new(scene),
@@ -147,6 +149,16 @@ impl ScenarioArgs {
         cfg: &madenet_world::ScenarioConfig,
     ) -> Result<Vec<madenet_map::Pos>> {
         let starts = self.start.cells(map, cfg.num_robots, cfg.movement);
+        self.check_drawn(&starts, cfg)?;
+        Ok(starts)
+    }
+
+    /// Refuses an empty draw of `--start random`.
+    fn check_drawn(
+        &self,
+        starts: &[madenet_map::Pos],
+        cfg: &madenet_world::ScenarioConfig,
+    ) -> Result<()> {
         if starts.is_empty() {
             anyhow::bail!(
                 "--start random: map {} has no {} connected free cells around the cell drawn from it",
@@ -154,7 +166,7 @@ impl ScenarioArgs {
                 cfg.num_robots
             );
         }
-        Ok(starts)
+        Ok(())
     }
 
     /// Prints a warning when the map file's discretization into `cfg`'s cells erased most of

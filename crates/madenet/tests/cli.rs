@@ -115,16 +115,29 @@ fn map_show_warns_of_passages_through_thin_walls() {
         "image: rooms.pgm\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
     )
     .unwrap();
-    let out = madenet(&["map", "show", yaml.to_str().unwrap()]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
-    assert!(
-        err.contains("warning: ")
-            && err.contains("rooms.yaml")
-            && err.contains("opens passages the map does not have at 3 free cells")
-            && err.contains("discretize.obstacle_fraction"),
-        "{err}"
-    );
+    // `map show` and `map convert` (issue 59: a conversion erased walls without a word).
+    let converted = dir.join("rooms.txt");
+    for args in [
+        vec!["map", "show", yaml.to_str().unwrap()],
+        vec![
+            "map",
+            "convert",
+            yaml.to_str().unwrap(),
+            converted.to_str().unwrap(),
+        ],
+    ] {
+        let out = madenet(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        assert!(
+            err.contains("warning: ")
+                && err.contains("rooms.yaml")
+                && err.contains("opens passages the map does not have at 3 free cells")
+                && err.contains("discretize.obstacle_fraction"),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(converted.exists());
     // With the setting the warning names, the wall stays and nothing is said.
     let keep = dir.join("keep.toml");
     std::fs::write(&keep, "[discretize]\nobstacle_fraction = 0.05\n").unwrap();

@@ -752,6 +752,34 @@ fn a_continuous_section_in_a_grid_study_is_refused() {
     assert!(!dir.join("out").exists());
 }
 
+/// What the study derives from accepted values (the cap of a 500-cell side, the maps of the
+/// largest team on the largest side) is checked with the values, before any work, naming
+/// them, not a field the user never set mid-study (issue 59).
+#[test]
+fn a_study_refuses_what_its_own_values_imply_before_it_starts() {
+    let dir = Scratch::new("scale-derived");
+    for (args, names) in [
+        (
+            &["--sides", "500"][..],
+            &["sides", "steps_per_cell", "500"][..],
+        ),
+        (
+            &["--world", "continuous", "--sides", "300", "--teams", "256"][..],
+            &["sides/teams", "GB", "256"][..],
+        ),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .arg("scale")
+            .args(args)
+            .args(["--seeds", "1", "--methods", "nf"])
+            .args(["--out", dir.join("out").to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_clean_error_in(&format!("{args:?}"), &out, names);
+        assert!(!dir.join("out").exists());
+    }
+}
+
 /// A cell size the scene cannot be read at (a built-in map's 1 m cells read at 0.5 m) is an
 /// error naming `cell_size` in the continuous world as in the grid world, not a panic (issue 59).
 #[test]

@@ -14,6 +14,9 @@ pub struct ConfigError {
     pub message: String,
 }
 
+/// The longest trial, simulated seconds (`time_cap`'s upper bound).
+pub const MAX_TIME_CAP: f64 = 1.0e7;
+
 /// The robot: a differential-drive base with a round footprint. Defaults mimic a TurtleBot 2
 /// (Kobuki base: 354 mm diameter, 0.7 m/s and 180°/s at most by its datasheet), cruising below
 /// its limits as navigation stacks configure it.
@@ -284,7 +287,7 @@ impl ContinuousConfig {
         positive("planner.stuck_time", p.stuck_time, 1.0e6)?;
         positive("control_period", self.control_period, 1.0)?;
         positive("radio_rate_hz", self.radio_rate_hz, 1000.0)?;
-        positive("time_cap", self.time_cap, 1.0e7)?;
+        positive("time_cap", self.time_cap, MAX_TIME_CAP)?;
         positive("no_frontier_time", self.no_frontier_time, 1.0e7)?;
         // A team ends only after it could have heard each other and tried staying once more.
         let least = (1.0 / self.radio_rate_hz).max(p.stay_period);

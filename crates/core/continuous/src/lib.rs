@@ -43,9 +43,11 @@ pub mod navigate;
 pub mod scene;
 pub mod world;
 
-pub use config::{ConfigError, ContinuousConfig};
+pub use config::{ConfigError, ContinuousConfig, MAX_TIME_CAP};
 pub use local::{Command, LocalPlanner, Neighbour};
 pub use mapping::RobotMap;
 pub use navigate::{NavError, NavParams, NavStatus, Navigator};
 pub use scene::Scene;
-pub use world::{normalize_angle, Collisions, ContinuousError, ContinuousWorld, Pose};
+pub use world::{
+    check_map_memory, normalize_angle, Collisions, ContinuousError, ContinuousWorld, Pose,
+};

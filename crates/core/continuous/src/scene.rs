@@ -57,6 +57,25 @@ impl Shape {
         }
     }
 
+    /// Metres from the point (`px`, `py`) to the shape (0 inside).
+    pub fn distance(&self, px: f64, py: f64) -> f64 {
+        match *self {
+            Shape::Rect {
+                x,
+                y,
+                hx,
+                hy,
+                angle,
+            } => {
+                let (s, c) = angle.sin_cos();
+                let (dx, dy) = (px - x, py - y);
+                let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
+                (lx.abs() - hx).max(0.0).hypot((ly.abs() - hy).max(0.0))
+            }
+            Shape::Circle { x, y, r } => ((px - x).hypot(py - y) - r).max(0.0),
+        }
+    }
+
     /// Axis-aligned bounds `(x0, y0, x1, y1)`.
     pub fn bounds(&self) -> (f64, f64, f64, f64) {
         match *self {
@@ -95,6 +114,9 @@ fn edge_walls(width_m: f64, height_m: f64) -> [Shape; 4] {
         angle: 0.0,
     })
 }
+
+/// Metres a picked start keeps beyond the footprint (the world's own check runs in `f32`).
+pub const START_MARGIN: f64 = 0.02;
 
 /// A world's true geometry.
 #[derive(Clone, Debug)]
@@ -240,8 +262,8 @@ impl Scene {
 
     /// Which pixels of [`Scene::fine`] the centre of a disc of `radius` metres can reach from
     /// the points `from` (metres) without the disc touching an obstacle pixel: where a robot
-    /// of that footprint can drive (8-connected; a start is a seed even where the raster's
-    /// rounding blocks it).
+    /// of that footprint can drive (8-connected without cutting corners; a start is a seed even
+    /// where the raster's rounding blocks it).
     pub fn drivable(&self, from: &[(f64, f64)], radius: f64) -> Vec<bool> {
         let (h, w, res) = (self.fine.height(), self.fine.width(), self.fine.resolution);
         let cells = self.fine.cells();
@@ -291,13 +313,45 @@ impl Scene {
                     continue;
                 }
                 let j = nr as usize * w + nc as usize;
-                if !seen[j] && !blocked[j] {
+                // No corner cutting: a diagonal step needs both side pixels open (two walls
+                // that meet at a corner leave no gap).
+                let diagonal_open = dr == 0
+                    || dc == 0
+                    || (!blocked[r as usize * w + nc as usize]
+                        && !blocked[nr as usize * w + c as usize]);
+                if !seen[j] && !blocked[j] && diagonal_open {
                     seen[j] = true;
                     queue.push_back(j);
                 }
             }
         }
         seen
+    }
+
+    /// Whether a disc of `radius` metres centred at (`x`, `y`) keeps [`START_MARGIN`] clear of
+    /// every shape (the map's edge included): a robot's footprint fits there.
+    pub fn footprint_fits(&self, x: f64, y: f64, radius: f64) -> bool {
+        self.shapes
+            .iter()
+            .all(|s| s.distance(x, y) > radius + START_MARGIN)
+    }
+
+    /// The cells where a robot may start: [`Scene::coarse_truth`] with every free cell at whose
+    /// centre a footprint of `radius` metres does not fit ([`Scene::footprint_fits`]) marked
+    /// occupied. The program's own start pickers (`--start random`, the scalability study's
+    /// start areas) draw from it, so the world never refuses what they pick.
+    pub fn start_cells(&self, cell_size: f64, params: &DiscretizeParams, radius: f64) -> OccGrid {
+        let mut g = self.coarse_truth(cell_size, params);
+        for k in 0..g.len() {
+            let p = g.pos(k);
+            if g.get(p) == Occupancy::Free {
+                let (x, y) = Scene::cell_centre(p, cell_size);
+                if !self.footprint_fits(x, y, radius) {
+                    g.set(p, Occupancy::Obstacle);
+                }
+            }
+        }
+        g
     }
 
     /// The centre of cell `p` of `cell_size` metres, in metres.
@@ -427,6 +481,73 @@ mod tests {
         // Nothing within the footprint of a wall or the edge is drivable.
         let w = wide.fine.width();
         assert!((0..d.len()).all(|k| !d[k] || (k % w >= 2 && k / w >= 2)));
+    }
+
+    #[test]
+    fn walls_that_meet_at_a_corner_leave_no_way_through() {
+        // The right half is joined to the left only diagonally, between the walls at (1, 2) and
+        // (2, 1), whose squares touch at one point (issue 59: a floor plan counted 114 such
+        // cells as explorable).
+        let text = "..#..\n..#..\n.#...\n.#...\n.#...\n";
+        let g = madenet_map::io::parse_text(text, std::path::Path::new("t.txt")).unwrap();
+        let s = Scene::from_grid(&g, "t");
+        let d = s.drivable(&[(0.5, 4.5)], 0.227);
+        let w = s.fine.width();
+        assert!(d[w + 1], "the left side is drivable");
+        assert!(
+            !d[2 * w + 2] && !d[4 * w + 4],
+            "nothing right of the corner"
+        );
+        // With the corner open (one wall gone), the diagonal step is taken.
+        let open = "..#..\n.....\n.#...\n.#...\n.#...\n";
+        let g = madenet_map::io::parse_text(open, std::path::Path::new("t.txt")).unwrap();
+        let s = Scene::from_grid(&g, "t");
+        assert!(s.drivable(&[(0.5, 4.5)], 0.227)[4 * w + 4]);
+    }
+
+    #[test]
+    fn a_start_cell_is_one_where_the_footprint_fits() {
+        // A pole of radius 0.1 m at (1.5, 0.75) m: cell (0, 1)'s centre is 0.15 m from its
+        // edge, free on the cells (it covers too little of the cell) but no place for a robot.
+        let pole = Shape::Circle {
+            x: 1.5,
+            y: 0.75,
+            r: 0.1,
+        };
+        let s = Scene::from_shapes(vec![pole], 4.0, 2.0, 0.1, "pole");
+        let params = DiscretizeParams::default();
+        let coarse = s.coarse_truth(1.0, &params);
+        let starts = s.start_cells(1.0, &params, 0.177);
+        assert_eq!(coarse.get(Pos::new(0, 1)), Occupancy::Free);
+        assert_eq!(starts.get(Pos::new(0, 1)), Occupancy::Obstacle);
+        assert!(!s.footprint_fits(1.5, 0.5, 0.177) && s.footprint_fits(2.5, 0.5, 0.177));
+        // Every other free cell stays a start (the edge is 0.5 m from each centre).
+        for k in 0..coarse.len() {
+            let p = coarse.pos(k);
+            if p != Pos::new(0, 1) {
+                assert_eq!(starts.get(p), coarse.get(p), "cell {p}");
+            }
+        }
+        assert!(
+            (Shape::Circle {
+                x: 0.0,
+                y: 0.0,
+                r: 1.0
+            }
+            .distance(3.0, 4.0)
+                - 4.0)
+                .abs()
+                < 1e-12
+        );
+        let rect = Shape::Rect {
+            x: 0.0,
+            y: 0.0,
+            hx: 1.0,
+            hy: 2.0,
+            angle: std::f64::consts::FRAC_PI_2,
+        };
+        // Turned a quarter: 2 m half extent along x.
+        assert!((rect.distance(3.0, 0.0) - 1.0).abs() < 1e-9 && rect.distance(1.5, 0.0) == 0.0);
     }
 
     #[test]

@@ -111,17 +111,8 @@ impl ContinuousWorld {
             )));
         }
         let (px_h, px_w) = map_pixels(&scene, &cfg);
-        let bytes = n as f64 * px_h as f64 * px_w as f64 * MAP_BYTES_PER_PIXEL;
-        if bytes > MAX_MAP_BYTES {
-            return Err(ContinuousError::Scenario(format!(
-                "the maps of {n} robots at {} m per pixel on a {:.0} × {:.0} m world would take {:.1} GB, more than the {:.0} GB allowed: raise `mapping.resolution`, lower `num_robots`, or use a smaller world",
-                cfg.mapping.resolution,
-                scene.width_m(),
-                scene.height_m(),
-                bytes / 1e9,
-                MAX_MAP_BYTES / 1e9
-            )));
-        }
+        check_map_memory(&cfg, n, scene.width_m(), scene.height_m())
+            .map_err(ContinuousError::Scenario)?;
         let cell = scenario.cell_size;
         let coarse_truth = scene.coarse_truth(cell, &scenario.discretize);
         // The robots read their maps into cells of `cell` metres as the truth is read: a scene
@@ -752,6 +743,27 @@ fn cast_beam(
 const MAP_BYTES_PER_PIXEL: f64 = 10.0;
 /// The most memory the robots' maps of one trial may take (4 GB).
 const MAX_MAP_BYTES: f64 = 4.0e9;
+
+/// Refuses a trial whose `robots` maps of a `width_m` × `height_m` world at `cfg`'s
+/// resolution would take more than 4 GB, naming the fields to change.
+pub fn check_map_memory(
+    cfg: &ContinuousConfig,
+    robots: usize,
+    width_m: f64,
+    height_m: f64,
+) -> Result<(), String> {
+    let res = cfg.mapping.resolution;
+    let bytes =
+        robots as f64 * (height_m / res).round() * (width_m / res).round() * MAP_BYTES_PER_PIXEL;
+    if bytes > MAX_MAP_BYTES {
+        return Err(format!(
+            "the maps of {robots} robots at {res} m per pixel on a {width_m:.0} × {height_m:.0} m world would take {:.1} GB, more than the {:.0} GB allowed: raise `mapping.resolution`, lower `num_robots`, or use a smaller world",
+            bytes / 1e9,
+            MAX_MAP_BYTES / 1e9
+        ));
+    }
+    Ok(())
+}
 
 /// A robot map's rows and columns on `scene`.
 fn map_pixels(scene: &Scene, cfg: &ContinuousConfig) -> (usize, usize) {

@@ -242,6 +242,19 @@ impl StartSpec {
         }
     }
 
+    /// [`StartSpec::cells`] in a continuous world of `scene`, read as `scenario`'s cells, for
+    /// robots of `robot_radius` metres: a picked start (`random`) is a cell where the footprint
+    /// fits ([`madenet_continuous::Scene::start_cells`]), so the world never refuses it.
+    pub fn continuous_cells(
+        &self,
+        scene: &madenet_continuous::Scene,
+        scenario: &madenet_world::ScenarioConfig,
+        robot_radius: f64,
+    ) -> Vec<Pos> {
+        let startable = scene.start_cells(scenario.cell_size, &scenario.discretize, robot_radius);
+        self.cells(&startable, scenario.num_robots, scenario.movement)
+    }
+
     /// Refuses explicit cells whose count is not the team size (`team` robots); corners and
     /// `random` always fit. The message names the start as written and both counts.
     pub fn check_team(&self, team: usize) -> Result<(), String> {
@@ -320,6 +333,45 @@ pub fn check_trial_set_size(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+        /// The program's own start pickers in the continuous world (`--start random`, the
+        /// scalability study's start areas) only pick starts the world accepts, over the
+        /// accepted team sizes, on cluttered scenes and floor plans (issue 59).
+        #[test]
+        fn picked_continuous_starts_are_accepted(
+            side in 12usize..=40,
+            seed in any::<u64>(),
+            team in 1usize..=48,
+            plan in any::<bool>(),
+            anchor in 0usize..3,
+        ) {
+            use madenet_continuous::{ContinuousConfig, ContinuousWorld, Scene};
+            let continuous = ContinuousConfig::default();
+            let mut scenario = ScenarioConfig { num_robots: team, ..ScenarioConfig::default() };
+            let scene = if plan {
+                let cfg = madenet_map::floorplan::FloorPlanConfig::for_size(side, side);
+                let grid = madenet_map::floorplan::floor_plan(&cfg, seed).unwrap();
+                Scene::from_grid(&grid, "plan")
+            } else {
+                madenet_continuous::scene::generate_cluttered(side as f64, 0.1, seed)
+            };
+            let radius = continuous.robot.radius;
+            let startable = scene.start_cells(scenario.cell_size, &scenario.discretize, radius);
+            let near = [Pos::new(side as i32 - 2, 1), Pos::new(1, side as i32 - 2), Pos::new(side as i32 / 2, side as i32 / 2)][anchor];
+            let picks = [
+                StartSpec::Random.continuous_cells(&scene, &scenario, radius),
+                madenet_map::generate::starts_near(&startable, near, team, scenario.movement).unwrap_or_default(),
+            ];
+            for starts in picks.into_iter().filter(|s| !s.is_empty()) {
+                scenario.num_robots = starts.len();
+                let world = ContinuousWorld::new(std::sync::Arc::new(scene.clone()), &starts, scenario.clone(), continuous, 1);
+                prop_assert!(world.is_ok(), "{starts:?}: {}", world.err().unwrap());
+            }
+        }
+    }
 
     #[test]
     fn built_in_maps_are_read_at_the_robot_cell_size() {

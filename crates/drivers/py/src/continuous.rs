@@ -50,13 +50,12 @@ env_pymethods! {
             let scene = source
                 .scene(side)
                 .map_err(|e| value_error(format!("map: {e}")))?;
-            let coarse = scene.coarse_truth(scenario.cell_size, &scenario.discretize);
             let starts =
                 StartSpec::from_str(start).map_err(|e| value_error(format!("start: {e}")))?;
             starts
                 .check_team(scenario.num_robots)
                 .map_err(|e| value_error(format!("start: {e}")))?;
-            let starts = starts.cells(&coarse, scenario.num_robots, scenario.movement);
+            let starts = starts.continuous_cells(&scene, &scenario, continuous.robot.radius);
             if starts.is_empty() {
                 return Err(value_error(format!(
                     "start: map {} has no {} connected free cells there",

@@ -236,6 +236,43 @@ impl ScaleConfig {
         if !(self.steps_per_cell > 0.0 && self.steps_per_cell <= 100.0) {
             return Err(field("steps_per_cell", "must be in (0, 100]"));
         }
+        // The caps the program derives from sides × steps_per_cell must be ones it accepts.
+        let max_side = self.sides.iter().copied().max().unwrap_or(0);
+        let mut caps = vec![(
+            "scenario.step_cap",
+            madenet_world::MAX_STEP_CAP as f64,
+            ScaleConfig {
+                world: ScaleWorld::Grid,
+                ..self.clone()
+            }
+            .step_cap(max_side),
+            "steps",
+        )];
+        if self.world == ScaleWorld::Continuous {
+            caps.push((
+                "continuous.time_cap",
+                madenet_continuous::MAX_TIME_CAP,
+                self.step_cap(max_side),
+                "s",
+            ));
+        }
+        for (what, limit, cap, unit) in caps {
+            if cap as f64 > limit {
+                return Err(field(
+                    "sides/steps_per_cell",
+                    format!(
+                        "a side of {max_side} cells gives its trials a cap of {cap} {unit} ({} per cell × {max_side}², or the floor), above the largest {what}, {limit}: use smaller sides or a lower steps_per_cell",
+                        self.steps_per_cell
+                    ),
+                ));
+            }
+        }
+        if self.world == ScaleWorld::Continuous {
+            let side_m = max_side as f64 * self.scenario.cell_size;
+            let team = self.teams.iter().copied().max().unwrap_or(0);
+            madenet_continuous::check_map_memory(&self.continuous, team, side_m, side_m)
+                .map_err(|e| field("sides/teams", format!("on the largest side and team: {e}")))?;
+        }
         let cells: Vec<u64> = self
             .sides
             .iter()

@@ -49,6 +49,12 @@ impl ScaleConfig {
                         seed,
                     );
                     let grid = scene.coarse_truth(cell, &self.scenario.discretize);
+                    // Starts only where a robot's footprint fits (the world refuses others).
+                    let startable = scene.start_cells(
+                        cell,
+                        &self.scenario.discretize,
+                        self.continuous.robot.radius,
+                    );
                     let planned = PlannedContinuous {
                         scene: Arc::new(scene),
                         config: madenet_continuous::ContinuousConfig {
@@ -56,7 +62,13 @@ impl ScaleConfig {
                             ..self.continuous
                         },
                     };
-                    maps.push((side, format!("side{side}-map{k}"), grid, Some(planned)));
+                    maps.push((
+                        side,
+                        format!("side{side}-map{k}"),
+                        grid,
+                        Some(startable),
+                        Some(planned),
+                    ));
                     continue;
                 }
                 // The start areas (3 × 3 around each anchor) stay free.
@@ -86,7 +98,7 @@ impl ScaleConfig {
                 let seed = derive_seed(self.map_seed, "scale-map", (side * 1000 + k) as u64);
                 let grid = generate_with_movement(&gen, seed, movement)
                     .map_err(|e| StudyError::Other(format!("map side {side} #{k}: {e}")))?;
-                maps.push((side, format!("side{side}-map{k}"), grid, None));
+                maps.push((side, format!("side{side}-map{k}"), grid, None, None));
             }
         }
         let mut v = Vec::new();
@@ -103,18 +115,25 @@ impl ScaleConfig {
             } else {
                 method
             };
-            for (side, name, grid, continuous) in &maps {
+            for (side, name, grid, startable, continuous) in &maps {
                 for start in &self.starts {
                     for &team in &self.teams {
-                        let cells =
-                            starts_near(grid, start.anchor(*side), team, movement).ok_or_else(
-                                || {
-                                    StudyError::Other(format!(
-                                        "map {name}: fewer than {team} free cells connected to the {} start",
-                                        start.name()
-                                    ))
-                                },
-                            )?;
+                        let cells = starts_near(
+                            startable.as_ref().unwrap_or(grid),
+                            start.anchor(*side),
+                            team,
+                            movement,
+                        )
+                        .ok_or_else(|| {
+                            StudyError::Other(format!(
+                                "map {name}: fewer than {team} free cells connected to the {} start{}",
+                                start.name(),
+                                match startable {
+                                    Some(_) => " where a robot's footprint fits",
+                                    None => "",
+                                }
+                            ))
+                        })?;
                         for s in 0..self.seeds {
                             let seed = self.seed_base + s;
                             let config = ScenarioConfig {
