@@ -153,3 +153,104 @@ def test_a_late_viewer_gets_the_last_message_of_a_topic_sent_on_change(cli, tmp_
     assert len(poses) > 20
     for t, pose in poses:
         assert pose.header.stamp.sec * 10**9 + pose.header.stamp.nanosec == t, "a pose sent again"
+
+
+def start_live(cli, *extra):
+    """A paced grid run on paper:4 (spread, seed 1) with a live view; returns the process,
+    its URL and the wall time it started."""
+    import time
+    proc = subprocess.Popen(
+        [cli, "run", "--map", "paper:4", "--policy", "spread", "--seed", "1",
+         "--foxglove", "127.0.0.1:0", *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    url = re.search(r"ws://\S+", proc.stderr.readline())
+    assert url
+    return proc, url.group(0), time.monotonic()
+
+
+def test_the_older_subprotocol_name_is_served(cli):
+    """`foxglove.websocket.v1`, what `@foxglove/ws-protocol` and Lichtblick before late 2025
+    offer, is served as `foxglove.sdk.v1` is (issue 59: it got HTTP 400)."""
+    proc, url, _ = start_live(cli, "--pace-ms", "100")
+    try:
+        async def hello():
+            async with websockets.connect(url, subprotocols=["foxglove.websocket.v1"]) as ws:
+                assert ws.subprotocol == "foxglove.websocket.v1"
+                info = json.loads(await asyncio.wait_for(ws.recv(), timeout=10))
+                assert info["op"] == "serverInfo" and info["name"] == "madenet"
+                ops = set()
+                while "advertise" not in ops:
+                    ops.add(json.loads(await asyncio.wait_for(ws.recv(), timeout=10))["op"])
+                # An operation the server does not have is answered with a status message.
+                await ws.send(json.dumps({"op": "subscribeParameterUpdates", "parameterNames": []}))
+                while True:
+                    frame = await asyncio.wait_for(ws.recv(), timeout=10)
+                    if isinstance(frame, str) and json.loads(frame)["op"] == "status":
+                        break
+                await ws.close()
+                # The server answered the Close (1000), not a dropped connection (1006).
+                assert ws.close_code == 1000, ws.close_code
+        asyncio.run(hello())
+        # A client offering no Foxglove subprotocol is refused at the handshake.
+        async def stranger():
+            try:
+                async with websockets.connect(url, subprotocols=["chat"]):
+                    return "served"
+            except websockets.InvalidStatus as e:
+                return e.response.status_code
+            except websockets.InvalidHandshake:
+                return "refused"
+        assert asyncio.run(stranger()) in (400, "refused")
+    finally:
+        proc.kill()
+
+
+def test_no_client_holds_a_run(cli):
+    """A TCP client that never completes the handshake, and a subscribed client that stops
+    reading, do not keep a paced run from ending on time (issue 59: a silent client held a
+    1 s paced run for 101 s). paper:4 with spread takes about 60 timesteps: 2–4 s at 50 ms."""
+    import socket
+    import time
+    # The run alone, for its duration on this machine.
+    proc, url, t0 = start_live(cli, "--pace-ms", "50")
+    proc.communicate(timeout=120)
+    alone = time.monotonic() - t0
+    assert proc.returncode == 0
+    proc, url, t0 = start_live(cli, "--pace-ms", "50")
+    host, port = url[len("ws://"):].rsplit(":", 1)
+    silent = socket.create_connection((host, int(port)))  # never says a word
+    half = socket.create_connection((host, int(port)))
+    half.sendall(b"GET / HTTP/1.1\r\nHost: x\r\n")  # half a handshake, then silence
+
+    async def stalled():
+        # Subscribes to everything, then stops reading (its socket buffer fills).
+        ws = await websockets.connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None)
+        subs = 0
+        end = asyncio.get_running_loop().time() + 1.5
+        while asyncio.get_running_loop().time() < end:
+            try:
+                frame = await asyncio.wait_for(ws.recv(), timeout=0.2)
+            except asyncio.TimeoutError:
+                continue
+            if isinstance(frame, str) and json.loads(frame)["op"] == "advertise":
+                for ch in json.loads(frame)["channels"]:
+                    subs += 1
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                        {"id": subs, "channelId": ch["id"]}]}))
+        ws.transport.pause_reading()
+        return ws, subs
+
+    try:
+        loop = asyncio.new_event_loop()
+        ws, subs = loop.run_until_complete(stalled())
+        assert subs > 5
+        out, err = proc.communicate(timeout=120)
+        took = time.monotonic() - t0
+        assert proc.returncode == 0, err
+        assert "TNS" in out
+        # On time: within a few seconds of the run alone (handshake timeout 5 s, write 2 s).
+        assert took < alone + 8, (took, alone)
+    finally:
+        proc.kill()
+        silent.close()
+        half.close()
