@@ -157,8 +157,10 @@ where
     S::Outcome: serde::Serialize,
 {
     let mut pace = a.pace();
-    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught.
-    let stop = Stop::watch(a.record.is_some() || a.foxglove.is_some() || pace.is_some())?;
+    // Before the live view prints its address: a viewer's Ctrl-C from then on is caught. With
+    // pictures too: Ctrl-C finishes them up to there (no temporary file left behind).
+    let outputs = a.record.is_some() || a.foxglove.is_some() || a.pictures.any();
+    let stop = Stop::watch(outputs || pace.is_some())?;
     // The bag first: a refused --record leaves no picture behind either.
     let mut recorder = crate::record::start(a.record.as_deref(), a.foxglove.as_deref(), &trial)?;
     let mut pictures = a.pictures.sink(frame_s)?;

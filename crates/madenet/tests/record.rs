@@ -57,6 +57,61 @@ fn a_run_is_recorded_the_same_for_the_same_seed() {
     assert_eq!(entries(dir.path()), ["a", "b"], "nothing else left behind");
 }
 
+/// A `--record` path that is a symbolic link to an empty folder records into that folder; a
+/// link to nothing, and a place another run is recording to, are refused at the start, before
+/// the trial, and the other run's bag is whole (issue 59: both failed after the whole trial,
+/// and the bag was lost).
+#[test]
+fn a_linked_or_shared_place_is_settled_before_the_trial() {
+    let dir = Scratch::new("record-place");
+    let real = dir.join("real");
+    std::fs::create_dir(&real).unwrap();
+    let link = dir.join("link");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    assert_ok(&record(&link));
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(entries(&real), ["metadata.yaml", "real_0.mcap"]);
+    let nothing = dir.join("nothing");
+    std::os::unix::fs::symlink(dir.join("gone"), &nothing).unwrap();
+    assert_clean_error(&record(&nothing), &["--record", "nothing"]);
+    // Two runs, one place: the second is refused at once, the first finishes its bag.
+    let shared = dir.join("shared");
+    let mut first = spawn_piped(
+        std::process::Command::new(env!("CARGO_BIN_EXE_madenet")).args([
+            "run",
+            "--map",
+            "paper:2",
+            "--policy",
+            "nf",
+            "--pace-ms",
+            "100",
+            "--record",
+            shared.to_str().unwrap(),
+        ]),
+    );
+    // Its place is taken when its hidden folder appears.
+    let t0 = std::time::Instant::now();
+    while !entries(dir.path())
+        .iter()
+        .any(|e| e.starts_with(".shared.partial"))
+    {
+        assert!(t0.elapsed().as_secs() < 60, "{:?}", entries(dir.path()));
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let second = record(&shared);
+    assert!(
+        first.try_wait().unwrap().is_none(),
+        "the first run is still going"
+    );
+    assert_clean_error(&second, &["--record", "another madenet run"]);
+    assert!(first.wait().unwrap().success());
+    assert_bag_finished(dir.path(), &shared);
+    assert_eq!(entries(dir.path()), ["link", "nothing", "real", "shared"]);
+}
+
 #[test]
 fn a_taken_or_unwritable_place_is_refused_and_nothing_is_left_behind() {
     let dir = Scratch::new("record-bad");
@@ -376,6 +431,42 @@ fn ctrl_c_finishes_the_bag_of_the_run_so_far() {
         );
         assert_bag_finished(&dir, &bag);
     }
+}
+
+/// Ctrl-C during an unpaced run that draws pictures: the GIF and PNG hold the run up to there,
+/// and no temporary file is left behind (issue 59: the default signal handler killed the run
+/// mid-write).
+#[test]
+fn ctrl_c_finishes_the_pictures_of_an_unpaced_run() {
+    let dir = Scratch::new("render-ctrl-c");
+    let child = spawn_piped(
+        std::process::Command::new(env!("CARGO_BIN_EXE_madenet"))
+            .args([
+                "run",
+                "--world",
+                "continuous",
+                "--generate",
+                "3",
+                "--side",
+                "40",
+            ])
+            .args(["--policy", "spread", "--render"])
+            .arg(dir.join("run.gif"))
+            .arg("--snapshot")
+            .arg(dir.join("end.png")),
+    );
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    signal(&child, "-INT");
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted at"), "{err}");
+    assert_eq!(entries(dir.path()), ["end.png", "run.gif"]);
+    let gif = std::fs::read(dir.join("run.gif")).unwrap();
+    assert!(
+        gif.starts_with(b"GIF89a") && gif.ends_with(&[0x3b]),
+        "a whole GIF"
+    );
 }
 
 /// Ctrl-C to `launch` (its nodes in a process group of their own): the world node ends the run

@@ -95,9 +95,61 @@ pub struct Bag {
     first_ns: Option<u64>,
     last_ns: u64,
     finished: bool,
+    /// The place's lock ([`Bag::take_place`]): its file, held while the bag is written.
+    lock: Option<(File, PathBuf)>,
 }
 
 impl Bag {
+    /// Where a bag named `dir` goes: `dir` itself, or where it links to (a symbolic link to a
+    /// folder, or to a path still to be made). A link to nothing is refused.
+    fn place(dir: &Path) -> Result<PathBuf, BagError> {
+        match std::fs::symlink_metadata(dir) {
+            Ok(m) if m.file_type().is_symlink() => {
+                std::fs::canonicalize(dir).map_err(|_| BagError::Io {
+                    path: dir.to_path_buf(),
+                    source: std::io::Error::new(
+                        std::io::ErrorKind::NotFound,
+                        "a symbolic link to nothing",
+                    ),
+                })
+            }
+            _ => Ok(dir.to_path_buf()),
+        }
+    }
+
+    /// Holds the place `dir` for this process (the kernel's lock on a hidden file beside it,
+    /// released however the process ends): a second run recording to the same place is refused
+    /// at its start, not after its trial.
+    fn take_place(dir: &Path, parent: &Path, name: &str) -> Result<(File, PathBuf), BagError> {
+        let path = parent.join(format!(".{name}.madenet-bag.lock"));
+        let io = |source| BagError::Io {
+            path: dir.to_path_buf(),
+            source,
+        };
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(io)?;
+        match file.try_lock() {
+            Ok(()) => Ok((file, path)),
+            Err(std::fs::TryLockError::WouldBlock) => Err(io(std::io::Error::new(
+                std::io::ErrorKind::WouldBlock,
+                "another madenet run is recording a bag to this place",
+            ))),
+            Err(std::fs::TryLockError::Error(e)) => Err(io(e)),
+        }
+    }
+
+    /// Gives the place up (its lock file removed, then the lock released).
+    fn release_place(&mut self) {
+        if let Some((file, path)) = self.lock.take() {
+            let _ = std::fs::remove_file(path);
+            drop(file);
+        }
+    }
+
     /// Refuses a place for a bag that is taken: a file, or a directory that is not empty.
     pub fn check_place(dir: &Path) -> Result<(), BagError> {
         let taken = |source| BagError::Io {
@@ -138,7 +190,7 @@ impl Bag {
             let path = path.to_path_buf();
             move |source| BagError::Io { path, source }
         };
-        Self::check_place(dir)?;
+        let dir = &Self::place(dir)?;
         let name = dir
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -151,6 +203,12 @@ impl Bag {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
+        let lock = Self::take_place(dir, &parent, &name)?;
+        let give_up = |e: BagError| {
+            let _ = std::fs::remove_file(&lock.1);
+            e
+        };
+        Self::check_place(dir).map_err(give_up)?;
         // A hidden sibling of our own (never one another bag is writing): the first free name.
         let mut k = 0u32;
         let tmp = loop {
@@ -159,10 +217,10 @@ impl Bag {
                 Ok(()) => break tmp,
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && k < 1000 => k += 1,
                 Err(source) => {
-                    return Err(BagError::Io {
+                    return Err(give_up(BagError::Io {
                         path: dir.to_path_buf(),
                         source,
-                    })
+                    }))
                 }
             }
         };
@@ -177,6 +235,7 @@ impl Bag {
             first_ns: None,
             last_ns: 0,
             finished: false,
+            lock: Some(lock),
         };
         let out = File::create(&path).map_err(io(dir))?;
         let opts = mcap::WriteOptions::new()
@@ -311,6 +370,7 @@ impl Bag {
             source,
         })?;
         self.finished = true;
+        self.release_place();
         Ok(self.dir.clone())
     }
 
@@ -372,5 +432,6 @@ impl Drop for Bag {
             self.writer.take();
             let _ = std::fs::remove_dir_all(&self.tmp);
         }
+        self.release_place();
     }
 }
