@@ -336,6 +336,7 @@ fn choose_subprotocol(offered: &str) -> Option<&'static str> {
 }
 
 /// The WebSocket handshake within [`HANDSHAKE_TIMEOUT`], answering a served subprotocol.
+#[allow(clippy::result_large_err)] // the callback's type is tungstenite's
 fn handshake(stream: TcpStream, hub: &Hub) -> Option<WebSocket<TcpStream>> {
     let until = Instant::now() + HANDSHAKE_TIMEOUT;
     stream.set_nonblocking(false).ok()?;
@@ -525,9 +526,7 @@ fn operation(hub: &Hub, id: u64, text: &str) -> Option<Message> {
     };
     let mut state = hub.lock();
     let known: Vec<u32> = state.channels.keys().copied().collect();
-    let Some(client) = state.clients.get_mut(&id) else {
-        return None;
-    };
+    let client = state.clients.get_mut(&id)?;
     match v["op"].as_str() {
         Some("subscribe") => {
             let mut refused = Vec::new();
