@@ -257,6 +257,8 @@ impl Scene {
             params,
         );
         g.resolution = cell_size;
+        // The same place in the map frame as the scene (a map file's origin and yaw).
+        g.origin = self.fine.origin;
         g
     }
 

@@ -384,3 +384,42 @@ def test_a_learned_policy_labels_its_candidates_with_its_scores(cli, tmp_path):
             assert scores[chosen] >= max(scores) - 0.2 - 0.011, (labels, chosen)
             decisions += 1
     assert decisions >= 10
+
+
+def test_a_map_with_an_origin_puts_every_topic_in_its_frame(cli, tmp_path):
+    """A map whose origin is not (0, 0) (almost every real ROS map): the true maps at both
+    resolutions, every robot's map and its poses are in that frame — the grids share the
+    origin (and yaw), and every pose lies on the true map (issue 59: only /fine_truth_map had
+    it, so viewers drew the scene away from the robots)."""
+    import math
+    w = h = 120  # 12 m at 0.1 m per pixel, a wall down the middle with a door
+    px = bytearray([254]) * (w * h)
+    for r in range(h):
+        if not 50 <= r < 70:
+            px[r * w + 60] = 0
+    (tmp_path / "m.pgm").write_bytes(b"P5\n%d %d\n255\n" % (w, h) + bytes(px))
+    origin = [-7.5, 3.25, 0.3]
+    (tmp_path / "m.yaml").write_text(
+        f"image: m.pgm\nresolution: 0.1\norigin: {origin}\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    bag = tmp_path / "o"
+    subprocess.run([cli, "run", "--world", "continuous", "--map", str(tmp_path / "m.yaml"),
+                    "--start", "0,0;0,1;1,0", "--seed", "1", "--json", "--record", str(bag)],
+                   check=True, capture_output=True, text=True)
+    topics = decoded(bag)
+    grids = [topics["/truth_map"][0][1], topics["/fine_truth_map"][0][1]]
+    grids += [m for t in topics if t.startswith("/robot") and t.endswith("/map")
+              for _, m in topics[t][:1]]
+    assert len(grids) >= 3
+    for g in grids:
+        o = g.info.origin
+        yaw = 2 * math.atan2(o.orientation.z, o.orientation.w)
+        assert abs(o.position.x - origin[0]) < 1e-6 and abs(o.position.y - origin[1]) < 1e-6, o
+        assert abs(yaw - origin[2]) < 1e-6
+    # Every pose, taken back into the grid's own axes, lies on the 12 m map.
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    for t in [t for t in topics if t.endswith("/pose")]:
+        for _, m in topics[t]:
+            dx, dy = m.pose.position.x - origin[0], m.pose.position.y - origin[1]
+            lx, ly = c * dx + s * dy, -s * dx + c * dy
+            assert 0 <= lx <= 12 and 0 <= ly <= 12, (t, lx, ly)
