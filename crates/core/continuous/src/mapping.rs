@@ -178,6 +178,22 @@ impl RobotMap {
             .collect()
     }
 
+    /// Pixel (`r`, `c`)'s occupancy in percent, `round(100 p)` of its probability, as ROS maps
+    /// carry it. No `exp`: the percent is how many of the 100 log-odds bounds between two
+    /// percents the pixel's log-odds reach (computed once).
+    pub fn percent(&self, r: usize, c: usize) -> i8 {
+        static BOUNDS: std::sync::OnceLock<[f64; 100]> = std::sync::OnceLock::new();
+        // Percent k+1 from p = (k + ½)/100 up (round half away from zero), as log-odds.
+        let bounds = BOUNDS.get_or_init(|| {
+            std::array::from_fn(|k| {
+                let p = (k as f64 + 0.5) / 100.0;
+                (p / (1.0 - p)).ln()
+            })
+        });
+        let l = self.log_odds[r * self.width + c] as f64;
+        bounds.partition_point(|&b| b <= l) as i8
+    }
+
     /// The coarse cells that changed since the last call, in the order they changed.
     pub fn take_changes(&mut self, out: &mut Vec<(Pos, Occupancy)>) {
         out.append(&mut self.changes);
@@ -402,6 +418,26 @@ fn traverse(gx0: f64, gy0: f64, gx1: f64, gy1: f64, mut visit: impl FnMut(i64, i
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn percents_are_the_rounded_probabilities() {
+        let mut m = RobotMap::new(1, 2001, 1.0, MappingConfig::default(), &Default::default());
+        for (k, l) in m.log_odds.iter_mut().enumerate() {
+            *l = (k as f32 - 1000.0) / 100.0; // −10 … 10
+        }
+        for (k, p) in m.probabilities().iter().enumerate() {
+            assert_eq!(
+                m.percent(0, k),
+                (p * 100.0).round() as i8,
+                "log-odds {}",
+                m.log_odds[k]
+            );
+        }
+        assert_eq!(
+            (m.percent(0, 0), m.percent(0, 1000), m.percent(0, 2000)),
+            (0, 50, 100)
+        );
+    }
 
     fn map() -> RobotMap {
         // 4 m × 4 m at 0.1 m, 1 m cells.

@@ -121,6 +121,49 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
+    continuous(c, &dir);
+}
+
+/// `continuous_trial/plain` and `continuous_trial/recorded`: a 20 m cluttered continuous trial
+/// (3 robots bottom-left, `spread`, seed 1) alone and recorded with every topic (scans, fine
+/// maps, poses, TF, clock, metrics); issue 59 asks ≤ 25 % more.
+fn continuous(c: &mut Criterion, dir: &std::path::Path) {
+    use madenet_sim::continuous::{ContinuousSpec, ContinuousTrial};
+    let scene = madenet_continuous::scene::generate_cluttered(20.0, 0.1, 1);
+    let spec = ContinuousSpec {
+        scene: std::sync::Arc::new(scene),
+        starts: Corner::BottomLeft.start_cells(20, 20).to_vec(),
+        config: Default::default(),
+        continuous: Default::default(),
+        policy: "spread".into(),
+        seed: 1,
+    };
+    let registry = madenet_sim::PolicyRegistry::builtin();
+    let trial = || ContinuousTrial::new(spec.clone(), &registry).expect("trial");
+    let mut g = c.benchmark_group("continuous_trial");
+    g.sample_size(10);
+    g.bench_function("plain", |b| {
+        b.iter(|| {
+            let mut t = trial();
+            while t.step() {}
+            t.finish()
+        })
+    });
+    g.bench_function("recorded", |b| {
+        b.iter_custom(|iters| {
+            timed_bags(iters, dir, |dir| {
+                let mut t = trial();
+                let mut bag = Recorder::start(dir, &t).expect("bag");
+                while t.step() {
+                    bag.step(&t).expect("recorded");
+                }
+                let (at, _) = bag.finish(&t).expect("finished").expect("a bag");
+                std::hint::black_box(t.finish());
+                at
+            })
+        })
+    });
+    g.finish();
 }
 
 /// A bag's file operations alone: `files` (name, bytes) into a hidden folder beside `dir`, the

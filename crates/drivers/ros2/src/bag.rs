@@ -342,17 +342,13 @@ impl Bag {
     pub fn finish(mut self) -> Result<PathBuf, BagError> {
         let mut writer = self.writer.take().expect("open until finished");
         writer.finish().map_err(|e| self.mcap_error(e))?;
+        // Flushed, not synced: rosbag2 does not `fsync` its bags either (issue 59); the bag
+        // still appears whole or not at all (the rename below).
         let out = writer.into_inner();
-        out.into_inner()
-            .map_err(|e| BagError::Io {
-                path: self.dir.clone(),
-                source: e.into_error(),
-            })?
-            .sync_all()
-            .map_err(|source| BagError::Io {
-                path: self.dir.clone(),
-                source,
-            })?;
+        out.into_inner().map_err(|e| BagError::Io {
+            path: self.dir.clone(),
+            source: e.into_error(),
+        })?;
         let meta = self.tmp.join("metadata.yaml");
         std::fs::write(&meta, self.metadata()).map_err(|source| BagError::Io {
             path: self.dir.clone(),

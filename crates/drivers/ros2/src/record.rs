@@ -10,7 +10,7 @@
 //! | `/truth_map` | `nav_msgs/msg/OccupancyGrid` | once, at the start: the true map in the agents' cells |
 //! | `/fine_truth_map` | `nav_msgs/msg/OccupancyGrid` | continuous world, once: the scene at its fine resolution (0.1 m pixels by default) |
 //! | `/team_map` | `nav_msgs/msg/OccupancyGrid` | when it changes (at most once a simulated second): the team's merged map 𝓜 (everything any robot read) |
-//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the grid robot's belief with the timestep's own observation; the continuous robot's fine map (occupancy %), after a scan, at most once a second (a world node's robots keep theirs in their own processes) |
+//! | `/robot<i>/map` | `nav_msgs/msg/OccupancyGrid` | when it changes: the grid robot's belief with the timestep's own observation; the continuous robot's fine map (occupancy %), after a scan, at most every 5 s (slam_toolbox's `map_update_interval`; a world node's robots keep theirs in their own processes) |
 //! | `/robot<i>/scan` | `sensor_msgs/msg/LaserScan` | continuous world: each of robot i's scans (all at the start, then staggered), in `robot<i>/base_link` |
 //! | `/robot<i>/pose` | `geometry_msgs/msg/PoseStamped` | every timestep (continuous: 10 Hz), the start and the end included |
 //! | `/robot<i>/goal_pose` | `geometry_msgs/msg/PoseStamped` | when robot i's goal changes (to none: its own cell) |
@@ -138,6 +138,10 @@ fn robot_color(i: usize) -> ColorRGBA {
     ColorRGBA { r, g, b, a: 1.0 }
 }
 
+/// Seconds between two fine maps of a continuous robot: slam_toolbox's default
+/// `map_update_interval` (5 s), as a SLAM node publishes its `map`.
+pub const FINE_MAP_PERIOD: f64 = 5.0;
+
 /// How often, in steps, each group of topics is written (a grid timestep is one second: every
 /// step for all of them).
 #[derive(Clone, Copy, Debug)]
@@ -146,8 +150,10 @@ struct Every {
     pose: u64,
     /// Metrics: once a second.
     metrics: u64,
-    /// The team map and the continuous robots' fine maps: at most once a second.
+    /// The team map: at most once a second.
     map: u64,
+    /// The continuous robots' fine maps: at most every [`FINE_MAP_PERIOD`].
+    fine_map: u64,
     /// The continuous robots' scans (the lidar's period).
     scan: u64,
 }
@@ -215,6 +221,7 @@ impl Recorder {
                 pose: every(0.1),
                 metrics: every(1.0),
                 map: every(1.0),
+                fine_map: every(FINE_MAP_PERIOD),
                 scan,
             },
             ticks: 0,
@@ -366,7 +373,7 @@ impl Recorder {
         }
         self.out
             .put(&self.names[i].scan, &laser_scan(world, i, stamp), ns)?;
-        if self.maps[i].is_none() || k - self.map_ticks[i] >= self.every.map {
+        if self.maps[i].is_none() || k - self.map_ticks[i] >= self.every.fine_map {
             let grid = fine_grid(world, i, &self.frame, stamp);
             if self.maps[i].as_ref() != Some(&grid.data) {
                 self.out.put(&self.names[i].map, &grid, ns)?;

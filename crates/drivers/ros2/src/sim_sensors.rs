@@ -94,12 +94,11 @@ pub(crate) fn fine_grid(
 ) -> OccupancyGrid {
     let map = world.map(i);
     let (h, w, res) = (map.height(), map.width(), map.resolution());
-    let probs = map.probabilities();
     let mut data = Vec::with_capacity(h * w);
     for r in (0..h).rev() {
         for c in 0..w {
             data.push(if map.observed(r, c) {
-                (probs[r * w + c] * 100.0).round() as i8
+                map.percent(r, c)
             } else {
                 -1
             });
