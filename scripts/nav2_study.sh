@@ -5,6 +5,7 @@
 #
 #   scripts/nav2_study.sh OUT_DIR [MADENET_BIN]
 #
+# Nodes: explore_lite's shipped parameters (configs/explore_lite.yaml below), every method.
 # Methods: (a) explore-lite-alone (explore_lite per robot on its own map, what users run),
 # (b) explore-lite (teammates' maps merged), (c) spread, (d) made-net-any. Each trial appends
 # one JSON line to OUT_DIR/results.jsonl (or OUT_DIR/inprocess.jsonl) when it ends; a trial
@@ -25,6 +26,20 @@ cap_per_cell=${CAP_PER_CELL:-6}
 starts=(0,0 0,1 1,0 1,1 0,2 1,2)
 mkdir -p "$out/maps" "$out/configs" "$out/logs"
 touch "$out/results.jsonl" "$out/inprocess.jsonl"
+# Every node runs with the parameters explore_lite ships (m-explore-ros2's
+# explore/config/params.yaml, which its launch file loads): what its users run.
+params="$out/configs/explore_lite.yaml"
+cat > "$params" <<'YAML'
+/**:
+  ros__parameters:
+    planner_frequency: 0.25
+    progress_timeout: 30.0
+    potential_scale: 3.0
+    orientation_scale: 0.0
+    gain_scale: 1.0
+    transform_tolerance: 0.3
+    min_frontier_size: 0.75
+YAML
 
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 
@@ -55,7 +70,7 @@ for size in $sizes; do
         echo "$(date -u +%FT%TZ) $key (cap ${cap} s wall)" >> "$out/logs/progress.log"
         if res=$(timeout --preserve-status -s INT "$cap" "$bin" run --world continuous --map "$map" --start "$start" \
             --config "$cfg" --seed "$seed" --realtime "$realtime" --json \
-            --nav2 "tcp/127.0.0.1:$(free_port)" --explore "$policy" "${alone[@]}" \
+            --nav2 "tcp/127.0.0.1:$(free_port)" --explore "$policy" "${alone[@]}" --params-file "$params" \
             2>"$out/logs/${key//\//_}.log"); then
           printf '{"key":"%s","size":%d,"team":%d,"seed":%d,"method":"%s","result":%s}\n' \
             "$key" "$size" "$team" "$seed" "$method" "$(tr -d '\n' <<<"$res")" >> "$out/results.jsonl"

@@ -351,24 +351,33 @@ impl Chooser for AgentChoice {
         self.idle_since = None;
         let target = r.own.centre(g);
         let d = (here.0 - target.0).hypot(here.1 - target.1);
-        if self.goal != Some(g) {
+        let Some(old) = self.goal else {
             self.goal = Some(g);
             self.progress.restart(d, now);
             return Ok(Choice::Send(target));
+        };
+        // Progress: nearer by half a cell; another goal keeps the clock running (a choice
+        // flipping between two goals the robot cannot reach must not stall for ever).
+        match old == g {
+            true => self.progress.update(d, now, 0.5 * cell_size),
+            false => self.progress.retarget(d),
         }
-        // Progress: nearer by half a cell.
-        self.progress.update(d, now, 0.5 * cell_size);
         if let Some(waited) = self.progress.stalled(now, nav_progress_at) {
+            let at = r.own.centre(old);
             tracing::info!(
-                "{ns}: gave up the goal {g:?} at ({:.2}, {:.2}), {d:.1} m away: no progress for {waited:.0} s",
-                target.0,
-                target.1,
+                "{ns}: gave up the goal {old:?} at ({:.2}, {:.2}): no progress for {waited:.0} s",
+                at.0,
+                at.1,
             );
             self.goal = None;
-            self.write_off(g, now, false);
+            self.write_off(old, now, false);
             return Ok(Choice::GiveUp);
         }
-        Ok(Choice::Keep)
+        if old == g {
+            return Ok(Choice::Keep);
+        }
+        self.goal = Some(g);
+        Ok(Choice::Send(target))
     }
 }
 
