@@ -38,8 +38,9 @@ pub enum Shape {
 }
 
 impl Shape {
-    /// Whether the point (`px`, `py`) lies inside.
-    pub fn contains(&self, px: f64, py: f64) -> bool {
+    /// How far outside the point (`px`, `py`) lies along each of the shape's own axes
+    /// (rectangle: beyond each half extent; disc: beyond the radius, and 0); ≤ 0 both: inside.
+    fn outside(&self, px: f64, py: f64) -> (f64, f64) {
         match *self {
             Shape::Rect {
                 x,
@@ -51,29 +52,22 @@ impl Shape {
                 let (s, c) = angle.sin_cos();
                 let (dx, dy) = (px - x, py - y);
                 let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
-                lx.abs() <= hx && ly.abs() <= hy
+                (lx.abs() - hx, ly.abs() - hy)
             }
-            Shape::Circle { x, y, r } => (px - x).powi(2) + (py - y).powi(2) <= r * r,
+            Shape::Circle { x, y, r } => ((px - x).hypot(py - y) - r, 0.0),
         }
+    }
+
+    /// Whether the point (`px`, `py`) lies inside.
+    pub fn contains(&self, px: f64, py: f64) -> bool {
+        let (a, b) = self.outside(px, py);
+        a <= 0.0 && b <= 0.0
     }
 
     /// Metres from the point (`px`, `py`) to the shape (0 inside).
     pub fn distance(&self, px: f64, py: f64) -> f64 {
-        match *self {
-            Shape::Rect {
-                x,
-                y,
-                hx,
-                hy,
-                angle,
-            } => {
-                let (s, c) = angle.sin_cos();
-                let (dx, dy) = (px - x, py - y);
-                let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
-                (lx.abs() - hx).max(0.0).hypot((ly.abs() - hy).max(0.0))
-            }
-            Shape::Circle { x, y, r } => ((px - x).hypot(py - y) - r).max(0.0),
-        }
+        let (a, b) = self.outside(px, py);
+        a.max(0.0).hypot(b.max(0.0))
     }
 
     /// Axis-aligned bounds `(x0, y0, x1, y1)`.
