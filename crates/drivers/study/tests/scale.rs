@@ -426,3 +426,47 @@ fn heldout_large_config_is_the_default_study_on_maps_of_its_own() {
         }
     );
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 24, ..Default::default() })]
+    /// Whatever a grid study's validation accepts (sides up to the step cap's limit, any
+    /// density range, any team size), its plan makes maps and starts the world accepts — or,
+    /// before any trial runs, says the start area is too small for the team (issue 59: an
+    /// accepted design failed mid-study).
+    #[test]
+    fn an_accepted_grid_study_plans_only_trials_the_world_accepts(
+        side in 12usize..=316,
+        team in 1usize..=madenet_world::MAX_ROBOTS,
+        density in (0.0f64..=0.6, 0.0f64..=1.0),
+        start in 0usize..3,
+        map_seed in proptest::prelude::any::<u64>(),
+    ) {
+        let (density_min, density_max) = (density.0, density.0 + density.1 * (0.6 - density.0));
+        let cfg = ScaleConfig {
+            methods: vec!["nf".into()],
+            sides: vec![side],
+            teams: vec![team],
+            starts: vec![[ScaleStart::BottomLeft, ScaleStart::TopRight, ScaleStart::Middle][start]],
+            maps_per_side: 1,
+            seeds: 1,
+            map_seed,
+            density_min,
+            density_max,
+            known_map: false,
+            ..ScaleConfig::default()
+        };
+        cfg.validate(&registry()).unwrap();
+        match cfg.plan() {
+            Ok(plan) => {
+                for p in &plan {
+                    let trial = madenet_sim::Trial::new(p.planned.spec.clone());
+                    proptest::prop_assert!(trial.is_ok(), "{:?}", trial.err());
+                }
+            }
+            Err(e) => proptest::prop_assert!(
+                e.to_string().contains("free cells connected"),
+                "side {side}, team {team}: {e}"
+            ),
+        }
+    }
+}
