@@ -38,9 +38,9 @@ pub fn run(a: BatchArgs) -> Result<()> {
             a.policy
         );
     }
-    let mut inputs = crate::map_list_inputs("--maps", &a.maps);
-    inputs.extend(a.set.config.iter().map(|c| ("--config", c.clone())));
-    crate::refuse_clashes(&[("--out", a.out.clone())], &inputs)?;
+    let mut inputs = crate::clashes::map_list_inputs("--maps", &a.maps);
+    inputs.extend(crate::clashes::given("--config", a.set.config.as_ref()));
+    crate::clashes::refuse_clashes(&[("--out", a.out.clone())], &inputs)?;
     let registry = madenet_catalogue::with_model(&Default::default(), a.model.as_deref())?;
     let scenario =
         madenet_world::ScenarioConfig::from_toml_file_or_default(a.set.config.as_deref())?;

@@ -46,8 +46,8 @@ fn name_source(e: StudyError, a: &CompareArgs) -> StudyError {
 pub fn run(a: CompareArgs) -> Result<()> {
     // The study saves its config in --out: never over the user's own file.
     let saved = a.out.join("study.toml");
-    let config: Vec<_> = a.config.iter().map(|c| ("--config", c.clone())).collect();
-    crate::refuse_clashes(&[("--out", saved)], &config)?;
+    let config: Vec<_> = crate::clashes::given("--config", a.config.as_ref());
+    crate::clashes::refuse_clashes(&[("--out", saved)], &config)?;
     let mut cfg = match &a.config {
         Some(p) => StudyConfig::from_toml_file(p)?,
         None => StudyConfig::default(),

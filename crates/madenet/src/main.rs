@@ -19,6 +19,7 @@ macro_rules! say {
 }
 
 mod batch;
+mod clashes;
 mod compare;
 mod map_cmd;
 mod nodes;
@@ -33,8 +34,7 @@ mod train_cmd;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use madenet_runtime::signals::Interrupted;
-use madenet_sim::MapSource;
-use std::path::{Path, PathBuf};
+
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -203,32 +203,4 @@ pub fn threads_arg(s: &str) -> Result<usize, String> {
         ));
     }
     Ok(n)
-}
-
-/// Refuses, before any work, an output path that is an input's file or another output's
-/// ([`madenet_files::check_outputs`], symbolic links resolved).
-pub fn refuse_clashes(outputs: &[(&str, PathBuf)], inputs: &[(&str, PathBuf)]) -> Result<()> {
-    fn refs<'a>(v: &'a [(&'a str, PathBuf)]) -> Vec<(&'a str, &'a Path)> {
-        v.iter().map(|(f, p)| (*f, p.as_path())).collect()
-    }
-    madenet_files::check_outputs(&refs(outputs), &refs(inputs)).map_err(anyhow::Error::msg)
-}
-
-/// The files map `source` is read from (none for a built-in map), as `flag`'s inputs.
-pub fn map_inputs<'a>(flag: &'a str, source: &MapSource) -> Vec<(&'a str, PathBuf)> {
-    match source {
-        MapSource::File(p) => madenet_map::io::files_read(p)
-            .into_iter()
-            .map(|f| (flag, f))
-            .collect(),
-        _ => Vec::new(),
-    }
-}
-
-/// [`map_inputs`] of every map of a list (`--maps`; names that do not parse name no file).
-pub fn map_list_inputs<'a>(flag: &'a str, maps: &[String]) -> Vec<(&'a str, PathBuf)> {
-    (maps.iter())
-        .filter_map(|m| m.parse::<MapSource>().ok())
-        .flat_map(|m| map_inputs(flag, &m))
-        .collect()
 }

@@ -66,9 +66,9 @@ pub fn run(c: MapCommand) -> Result<()> {
             let outputs: Vec<_> = (madenet_map::io::files_written(&output).into_iter())
                 .map(|f| ("output", f))
                 .collect();
-            let mut inputs = crate::map_inputs("input", &input);
-            inputs.extend(config.iter().map(|c| ("--config", c.clone())));
-            crate::refuse_clashes(&outputs, &inputs)?;
+            let mut inputs = crate::clashes::map_inputs("input", &input);
+            inputs.extend(crate::clashes::given("--config", config.as_ref()));
+            crate::clashes::refuse_clashes(&outputs, &inputs)?;
             let cfg = madenet_world::ScenarioConfig::from_toml_file_or_default(config.as_deref())?;
             let grid = input.load(&cfg)?;
             // Read into cells of `cell_size`, thin walls may vanish: say so, as `run` does.

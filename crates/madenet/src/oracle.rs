@@ -78,9 +78,9 @@ pub fn run(a: OracleArgs) -> Result<()> {
         madenet_world::ScenarioConfig::from_toml_file_or_default(a.set.config.as_deref())?;
     let seeds = (a.set.seeds, a.set.seed_base);
     if let Some(out) = &a.out {
-        let mut inputs = crate::map_list_inputs("--maps", &a.maps);
-        inputs.extend(a.set.config.iter().map(|c| ("--config", c.clone())));
-        crate::refuse_clashes(&[("--out", out.clone())], &inputs)?;
+        let mut inputs = crate::clashes::map_list_inputs("--maps", &a.maps);
+        inputs.extend(crate::clashes::given("--config", a.set.config.as_ref()));
+        crate::clashes::refuse_clashes(&[("--out", out.clone())], &inputs)?;
     }
     let mut cfg = StudyConfig::trial_set(&a.maps, &a.starts, &a.csp, seeds, scenario);
     cfg.methods = vec![a.base.clone()];

@@ -119,11 +119,11 @@ pub fn run(a: RunArgs) -> Result<()> {
     .into_iter()
     .flatten()
     .collect();
-    let mut inputs = crate::map_inputs("--map", &a.scenario.map);
+    let mut inputs = crate::clashes::map_inputs("--map", &a.scenario.map);
     inputs.extend(named("--config", &a.scenario.config));
     inputs.extend(named("--continuous-config", &a.continuous_config));
     inputs.extend(a.params_file.iter().map(|p| ("--params-file", p.clone())));
-    crate::refuse_clashes(&outputs, &inputs)?;
+    crate::clashes::refuse_clashes(&outputs, &inputs)?;
     if a.nav2.is_some()
         && (a.world != "continuous" || (a.json && a.explore.is_none()) || a.pictures.any())
     {

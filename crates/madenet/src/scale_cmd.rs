@@ -62,8 +62,8 @@ fn name_source(e: StudyError, a: &ScaleArgs) -> StudyError {
 pub fn run(a: ScaleArgs) -> Result<()> {
     // The study saves its config in --out: never over the user's own file.
     let saved = a.out.join("scale.toml");
-    let config: Vec<_> = a.config.iter().map(|c| ("--config", c.clone())).collect();
-    crate::refuse_clashes(&[("--out", saved)], &config)?;
+    let config: Vec<_> = crate::clashes::given("--config", a.config.as_ref());
+    crate::clashes::refuse_clashes(&[("--out", saved)], &config)?;
     let mut cfg = match (&a.config, a.world.as_deref()) {
         (Some(p), _) => ScaleConfig::from_toml_file(p)?,
         (None, Some("continuous")) => ScaleConfig::continuous_default(),

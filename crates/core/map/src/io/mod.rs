@@ -311,9 +311,7 @@ pub fn files_read(path: &Path) -> Vec<PathBuf> {
 pub fn files_written(path: &Path) -> Vec<PathBuf> {
     let mut files = vec![path.to_path_buf()];
     if matches!(extension(path).as_str(), "yaml" | "yml") {
-        if let Some(stem) = path.file_stem() {
-            files.push(path.with_file_name(format!("{}.pgm", stem.to_string_lossy())));
-        }
+        files.extend(yaml::image_beside(path));
     }
     files
 }

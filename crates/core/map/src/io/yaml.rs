@@ -328,6 +328,15 @@ fn yaml_string(s: &str) -> String {
     }
 }
 
+/// The PGM image [`save_yaml`] writes beside `yaml_path`: its stem with `.pgm` (none without a
+/// UTF-8 file name).
+pub(super) fn image_beside(yaml_path: &Path) -> Option<std::path::PathBuf> {
+    let stem = (yaml_path.file_stem())
+        .and_then(|s| s.to_str())
+        .filter(|s| !s.is_empty())?;
+    Some(yaml_path.with_file_name(format!("{stem}.pgm")))
+}
+
 /// Writes `grid` as a ROS `map_server` map: `<stem>.pgm` next to `yaml_path` (binary P5, free
 /// 254, obstacle 0, unknown 205) and the YAML itself (`image` relative, `mode: trinary`,
 /// the grid's `resolution` and `origin`, `negate: 0`, `occupied_thresh: 0.65`,
@@ -349,13 +358,12 @@ pub fn save_yaml(grid: &OccGrid, yaml_path: &Path) -> Result<(), MapError> {
             format!("must be finite, got {:?}", grid.origin),
         ));
     }
-    let stem = yaml_path
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .filter(|s| !s.is_empty())
+    let image_path = image_beside(yaml_path)
         .ok_or_else(|| format_err(yaml_path, "YAML path needs a UTF-8 file name"))?;
-    let image_name = format!("{stem}.pgm");
-    let image_path = yaml_path.with_file_name(&image_name);
+    let image_name = image_path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let [x, y, yaw] = grid.origin;
     let yaml = format!(
         "image: {}\nmode: trinary\nresolution: {:?}\norigin: [{x:?}, {y:?}, {yaw:?}]\nnegate: 0\noccupied_thresh: {SAVE_OCCUPIED_THRESH:?}\nfree_thresh: {SAVE_FREE_THRESH:?}\n",
