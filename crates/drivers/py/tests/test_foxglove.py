@@ -4,6 +4,7 @@ subprotocol), its CDR payloads decoded by `rosbags`' Jazzy typestore."""
 
 import asyncio
 import json
+import pathlib
 import re
 import struct
 import subprocess
@@ -254,3 +255,32 @@ def test_no_client_holds_a_run(cli):
         proc.kill()
         silent.close()
         half.close()
+
+
+def test_foxgloves_own_npm_client_watches_a_run(cli, tmp_path):
+    """`@foxglove/ws-protocol` (npm, Foxglove's own client; it offers only the older
+    `foxglove.websocket.v1`) connects, subscribes and receives a pose and the true map (issue
+    59: it got HTTP 400). Needs node and npm (installed by .ci/run); the package is fetched
+    into a temporary folder."""
+    import shutil
+    npm, node = shutil.which("npm"), shutil.which("node")
+    if not (npm and node):
+        import pytest
+        pytest.skip("node and npm are not installed")
+    here = pathlib.Path(__file__).parent / "npm"
+    work = tmp_path / "npm"
+    shutil.copytree(here, work)
+    subprocess.run([npm, "install", "--silent", "--no-audit", "--no-fund"], cwd=work,
+                   check=True, capture_output=True, timeout=300)
+    proc, url, _ = start_live(cli, "--pace-ms", "100")
+    try:
+        out = subprocess.run([node, str(work / "watch.js"), url, "/robot0/pose", "/truth_map"],
+                             cwd=work, capture_output=True, text=True, timeout=60)
+        assert out.returncode == 0, out.stderr
+        seen = json.loads(out.stdout.strip().splitlines()[-1])
+        assert seen["subprotocol"] == "foxglove.websocket.v1" and seen["server"] == "madenet"
+        assert set(seen["got"]) == {"/robot0/pose", "/truth_map"}
+        assert all(int(v["timestamp"]) % 10**9 == 0 and v["bytes"] > 0
+                   for v in seen["got"].values())
+    finally:
+        proc.kill()
