@@ -137,3 +137,32 @@ fn the_configs_baseline_parameters_are_the_ones_played() {
     assert_eq!(one.len(), fifty.len());
     assert_ne!(one, fifty, "[baselines.pb] iterations had no effect");
 }
+
+/// Off a terminal (stderr to a file or pipe, as `2>log`) a study prints a progress line at
+/// least every 10 s — done/total, rate, time so far, ETA — where the bar would be (issue 60:
+/// `compare 2>log` was silent for 12 minutes).
+#[test]
+fn a_study_off_a_terminal_prints_progress_lines() {
+    let dir = Scratch::new("scale-progress");
+    let out = dir.join("s");
+    let start = std::time::Instant::now();
+    let r = madenet_with(
+        "scale --world continuous --out {} --sides 40 --teams 4,6 --seeds 1 --methods nf,spread",
+        &[out.to_str().unwrap()],
+    );
+    let took = start.elapsed().as_secs();
+    assert_ok(&r);
+    let err = String::from_utf8_lossy(&r.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("progress")).collect();
+    assert!(
+        took < 10 || lines.len() as u64 >= took / 10,
+        "{took} s: {err}"
+    );
+    assert!(took < 6 || !lines.is_empty(), "{took} s: {err}");
+    for l in &lines {
+        assert!(
+            l.contains("/24 trials") && l.contains("trials/s") && l.contains("so far"),
+            "{l}"
+        );
+    }
+}
