@@ -379,10 +379,7 @@ fn local_astar(
     let tc0 = (target.col as f64 * cell_px).floor() as i64;
     let tr1 = ((target.row + 1) as f64 * cell_px).ceil() as i64;
     let tc1 = ((target.col + 1) as f64 * cell_px).ceil() as i64;
-    // Two cells around, and room to go round a teammate that stands in the way (a target
-    // one pixel wide, as the navigator's carrot is, left no detour: two robots stood 0.46 m
-    // apart for ever, each waiting for the other).
-    let margin = (2.0 * cell_px).max(2.0 * (keep + clearance) / res).ceil() as i64;
+    let margin = (2.0 * cell_px).ceil() as i64;
     let r0 = (fr.min(tr0) - margin).max(0);
     let c0 = (fc.min(tc0) - margin).max(0);
     let r1 = (fr.max(tr1) + margin).min(map.height() as i64);

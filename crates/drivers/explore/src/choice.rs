@@ -219,19 +219,11 @@ impl Chooser for AgentChoice {
                 for (dr, dc) in madenet_agent::belief::NEIGHBOURS {
                     let q = Pos::new(g.row + dr, g.col + dc);
                     let (rows, cols) = r.own.size();
-                    let inside = q.row >= 0
+                    if q.row >= 0
                         && q.col >= 0
                         && (q.row as usize) < rows
-                        && (q.col as usize) < cols;
-                    // Unknown in the reading just made, and in every teammate's: the agent's
-                    // belief is the last plan's, seconds old, and a door read open since
-                    // was written off for good (the nav2 study's stop at 68 %).
-                    let unknown = |cells: &[Occupancy]| {
-                        cells[q.row as usize * cols + q.col as usize] == Occupancy::Unknown
-                    };
-                    if inside
-                        && unknown(r.own.cells())
-                        && r.mates.iter().flatten().all(|m| unknown(m.cells()))
+                        && (q.col as usize) < cols
+                        && r.agent.belief().get(q) == Occupancy::Unknown
                     {
                         // Seen in part (a wall's face): for good; not seen at all (round a
                         // corner, behind a teammate): until the blacklist expires.
@@ -359,33 +351,24 @@ impl Chooser for AgentChoice {
         self.idle_since = None;
         let target = r.own.centre(g);
         let d = (here.0 - target.0).hypot(here.1 - target.1);
-        let Some(old) = self.goal else {
+        if self.goal != Some(g) {
             self.goal = Some(g);
             self.progress.restart(d, now);
             return Ok(Choice::Send(target));
-        };
-        // Progress: nearer by half a cell; another goal keeps the clock running (a choice
-        // flipping between two goals the robot cannot reach must not stall for ever).
-        match old == g {
-            true => self.progress.update(d, now, 0.5 * cell_size),
-            false => self.progress.retarget(d),
         }
+        // Progress: nearer by half a cell.
+        self.progress.update(d, now, 0.5 * cell_size);
         if let Some(waited) = self.progress.stalled(now, nav_progress_at) {
-            let at = r.own.centre(old);
             tracing::info!(
-                "{ns}: gave up the goal {old:?} at ({:.2}, {:.2}): no progress for {waited:.0} s",
-                at.0,
-                at.1,
+                "{ns}: gave up the goal {g:?} at ({:.2}, {:.2}), {d:.1} m away: no progress for {waited:.0} s",
+                target.0,
+                target.1,
             );
             self.goal = None;
-            self.write_off(old, now, false);
+            self.write_off(g, now, false);
             return Ok(Choice::GiveUp);
         }
-        if old == g {
-            return Ok(Choice::Keep);
-        }
-        self.goal = Some(g);
-        Ok(Choice::Send(target))
+        Ok(Choice::Keep)
     }
 }
 

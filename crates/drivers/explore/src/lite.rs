@@ -26,7 +26,8 @@ pub(crate) struct Lite {
     blacklist: Blacklist,
     /// The frontier of the goal under way, if any.
     goal: Option<(f64, f64)>,
-    /// The frontier last chosen while a goal is under way (explore_lite's `prev_goal_`).
+    /// The frontier last chosen (explore_lite's `prev_goal_`): kept after its goal ends, so a
+    /// frontier still there after its goal succeeded is not sent again but timed out.
     prev_target: Option<(f64, f64)>,
     /// The frontier of the last goal reached: still there at the next plan, it cannot be seen
     /// from where it is reached, and is blacklisted at once.
@@ -63,9 +64,6 @@ impl Chooser for Lite {
         let Some(at) = self.goal.take() else {
             return;
         };
-        // The next plan sends a goal (a frontier still there where the goal succeeded is
-        // blacklisted by `reached`).
-        self.prev_target = None;
         match st {
             status::SUCCEEDED => self.reached = Some(at),
             // Canceled, or never answered: not a failure of the frontier.
@@ -141,30 +139,25 @@ impl Chooser for Lite {
             self.prev_target = None;
             return Ok(Choice::GiveUp);
         }
-        // The same frontier as the goal under way (none under way: a goal is sent).
-        let under_way = self.goal;
-        let same = under_way.is_some() && near(self.prev_target);
+        let same = near(self.prev_target);
         self.prev_target = Some(target);
-        // Progress: nearer by a map cell or more. Another frontier while a goal is under way
-        // keeps the clock running, so flipping between two frontiers cannot stall for ever.
-        match (same, under_way.is_some()) {
-            (true, _) => (self.progress).update(f.min_distance, now, grid.resolution),
-            (false, true) => self.progress.retarget(f.min_distance),
-            (false, false) => self.progress.restart(f.min_distance, now),
+        // Progress: nearer by a map cell or more.
+        match same {
+            true => (self.progress).update(f.min_distance, now, grid.resolution),
+            false => self.progress.restart(f.min_distance, now),
         }
-        if let Some(g) = under_way {
-            if let Some(waited) = (self.progress).stalled(now, nav_progress_at) {
-                // No progress: give it up (cancel), blacklist it, plan again at once.
-                tracing::info!(
-                    "{ns}: gave up the frontier at ({:.2}, {:.2}): no progress for {waited:.0} s",
-                    g.0,
-                    g.1,
-                );
-                self.blacklist.list(g, now, tol, false);
-                self.prev_target = None;
-                self.goal = None;
-                return Ok(Choice::GiveUp);
-            }
+        let stalled = (self.progress).stalled(now, nav_progress_at);
+        if let Some(waited) = stalled.filter(|_| same) {
+            // No progress: give it up (cancel), blacklist it, plan again at once.
+            tracing::info!(
+                "{ns}: gave up the frontier at ({:.2}, {:.2}): no progress for {waited:.0} s",
+                target.0,
+                target.1,
+            );
+            self.blacklist.list(target, now, tol, false);
+            self.prev_target = None;
+            self.goal = None;
+            return Ok(Choice::GiveUp);
         }
         if same {
             return Ok(Choice::Keep);

@@ -226,13 +226,6 @@ impl Progress {
         (self.best, self.at) = (d, now);
     }
 
-    /// The goal under way is replaced by one `d` metres away: progress is measured against it
-    /// from now on, but the clock runs on (a robot whose choice flips between two goals it
-    /// cannot reach is not given a new timeout at every flip).
-    pub fn retarget(&mut self, d: f64) {
-        self.best = d;
-    }
-
     /// The robot is `d` metres away at `now`: nearer by more than `step` is progress.
     pub fn update(&mut self, d: f64, now: f64, step: f64) {
         if self.best - d > step {
@@ -471,10 +464,7 @@ pub fn run(
         while let Some(fb) = nav.feedback(Duration::ZERO)? {
             if goal.as_ref().is_some_and(|(g, _)| g.id == fb.goal_id) {
                 let d = fb.feedback.distance_remaining;
-                // A goal's first feedback is its baseline, not progress.
-                if d.is_finite() && nav_best.is_infinite() {
-                    nav_best = d;
-                } else if d.is_finite() && d < nav_best - FEEDBACK_PROGRESS {
+                if d.is_finite() && d < nav_best - FEEDBACK_PROGRESS {
                     nav_best = d;
                     nav_progress_at = Some(now);
                 }
@@ -618,29 +608,4 @@ fn go_to(
         }
     }
     Ok(false)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Progress;
-
-    /// A choice that flips between two goals the robot cannot reach is given up after
-    /// `progress_timeout`, not given a new timeout at every flip (the 2-robot stall of the
-    /// nav2 study: 128 flips in 490 s, never given up).
-    #[test]
-    fn flipping_goals_do_not_restart_the_clock() {
-        let mut p = Progress::new(30.0);
-        p.restart(10.0, 0.0);
-        for t in (4..=28).step_by(4) {
-            p.retarget(if t % 8 == 0 { 10.0 } else { 11.0 });
-            assert_eq!(p.stalled(t as f64, None), None);
-        }
-        assert!(p.stalled(31.0, None).is_some());
-        // Progress toward the goal now held does restart it.
-        p.update(9.0, 32.0, 0.5);
-        assert_eq!(p.stalled(40.0, None), None);
-        // nav2's feedback showing progress counts too.
-        assert_eq!(p.stalled(70.0, Some(50.0)), None);
-        assert!(p.stalled(81.0, Some(50.0)).is_some());
-    }
 }
