@@ -78,15 +78,20 @@ pub fn loopback_endpoints(base_port: u16, robots: usize, node: Node) -> Result<E
 
 /// A base port with `count` free loopback ports from it on, as the OS hands them out now (another
 /// program may still take one before the run binds it; the run then fails to listen, naming it).
+/// Blocks handed out earlier in this process are never handed out again, in part or whole: two
+/// runs started side by side (parallel tests) cannot be given overlapping ports.
 pub fn free_port_block(count: u16) -> Result<u16, String> {
+    static GIVEN: std::sync::Mutex<Vec<(u16, u16)>> = std::sync::Mutex::new(Vec::new());
+    let mut given = GIVEN.lock().unwrap_or_else(|e| e.into_inner());
     for _ in 0..100 {
         let first = std::net::TcpListener::bind("127.0.0.1:0").map_err(|e| e.to_string())?;
         let base = first.local_addr().map_err(|e| e.to_string())?.port();
-        if base > u16::MAX - count {
+        if base > u16::MAX - count || given.iter().any(|&(b, n)| base < b + n && b < base + count) {
             continue;
         }
         drop(first);
         if (0..count).all(|k| std::net::TcpListener::bind(("127.0.0.1", base + k)).is_ok()) {
+            given.push((base, count));
             return Ok(base);
         }
     }
@@ -253,5 +258,25 @@ impl Transport for ZenohBus {
 
     fn connect(&self, peers: &[Node], timeout: Duration) -> Result<(), String> {
         self.wait_for(peers, timeout)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Blocks asked for side by side (parallel tests, each starting a run) never overlap: two
+    /// runs' nodes once listened on the same ports ("Address already in use").
+    #[test]
+    fn port_blocks_handed_out_in_one_process_never_overlap() {
+        let blocks: Vec<u16> = std::thread::scope(|s| {
+            let asks: Vec<_> = (0..16)
+                .map(|_| s.spawn(|| super::free_port_block(5).unwrap()))
+                .collect();
+            asks.into_iter().map(|a| a.join().unwrap()).collect()
+        });
+        for (i, &a) in blocks.iter().enumerate() {
+            for &b in &blocks[i + 1..] {
+                assert!(a + 5 <= b || b + 5 <= a, "{a} and {b} overlap");
+            }
+        }
     }
 }
