@@ -14,6 +14,8 @@
 #
 # Environment: SIZES ("20 40"), TEAMS ("2 3 4 6"), SEEDS (10), METHODS, REALTIME (10),
 # CAP_PER_CELL (6: the simulated-second cap is CAP_PER_CELL × size², ended by Ctrl-C).
+# While OUT_DIR/PAUSE exists, no new trial starts (the one under way finishes): for a build or
+# a test run that needs the machine.
 set -euo pipefail
 out=${1:?usage: scripts/nav2_study.sh OUT_DIR [MADENET_BIN]}
 bin=${2:-target/release/madenet}
@@ -56,6 +58,7 @@ for size in $sizes; do
         key="$size/$team/$seed/$method"
         policy=${method%-alone}
         # In-process: the same map, starts, team and seed (the paper's contact rule, CSP 1).
+        while [ -e "$out/PAUSE" ]; do sleep 10; done
         if ! grep -qF "\"key\":\"$key\"" "$out/inprocess.jsonl" && [ "$method" != explore-lite-alone ]; then
           if res=$("$bin" run --world continuous --map "$map" --start "$start" --config "$cfg" \
               --seed "$seed" --policy "$policy" --json 2>>"$out/logs/inprocess.log"); then
@@ -64,6 +67,7 @@ for size in $sizes; do
           fi
         fi
         grep -qF "\"key\":\"$key\"" "$out/results.jsonl" && continue
+        while [ -e "$out/PAUSE" ]; do sleep 10; done
         alone=()
         [ "$method" = explore-lite-alone ] && alone=(--alone)
         cap=$(( cap_per_cell * size * size * 10 / realtime / 10 + 60 ))

@@ -110,6 +110,15 @@ impl CellReader {
         &self.cells
     }
 
+    /// Cell `p` as read so far (`None` off the map).
+    pub fn get(&self, p: Pos) -> Option<Occupancy> {
+        let inside = p.row >= 0
+            && p.col >= 0
+            && (p.row as usize) < self.rows
+            && (p.col as usize) < self.cols;
+        inside.then(|| self.cells[p.row as usize * self.cols + p.col as usize])
+    }
+
     /// The cell a point of the map's frame lies in, if on the map.
     pub fn cell_at(&self, x: f64, y: f64) -> Option<Pos> {
         let g = &self.geometry;

@@ -248,6 +248,8 @@ pub const FEEDBACK_PROGRESS: f32 = 0.25;
 pub(crate) trait Chooser {
     /// A plan is due.
     fn plan(&mut self, at: PlanInput<'_>) -> Result<Choice, ExploreError>;
+    /// The robot is at `here` (every turn of the node's loop: cells it stood in).
+    fn passed(&mut self, _here: (f64, f64)) {}
     /// The goal sent last ended with `status` (`action_msgs/msg/GoalStatus`), or was rejected.
     fn ended(&mut self, status: i8, now: f64);
     /// How many goals are blacklisted (for the log).
@@ -435,6 +437,7 @@ pub fn run(
         waiting_since = None;
         let here = (pose.translation.x, pose.translation.y);
         start.get_or_insert(here);
+        chooser.passed(here);
         // explore/resume: false stops (the goal under way canceled), true goes on.
         while let Some(b) = resume.recv_timeout(Duration::ZERO)? {
             if paused == b.data {

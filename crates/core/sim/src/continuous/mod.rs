@@ -29,6 +29,7 @@ use madenet_continuous::{
 use madenet_map::{Occupancy, Pos};
 use madenet_world::{Observation, Radio, ScenarioConfig};
 use serde::{Deserialize, Serialize};
+use spare::Spare;
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -146,43 +147,6 @@ impl ContinuousResult {
 enum Ask {
     No,
     Yes,
-}
-
-/// A cell spared from a robot's write-off ([`ContinuousTrial::write_off_around`]): since when
-/// it has been spared without a break, when it was spared last, and whether it has started
-/// afresh once already.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Spare {
-    first: f64,
-    last: f64,
-    restarted: bool,
-}
-
-impl Spare {
-    fn at(now: f64) -> Self {
-        Spare {
-            first: now,
-            last: now,
-            restarted: false,
-        }
-    }
-
-    /// Spares the cell again at `now`; whether it stays spared. Sparing lasts `stuck_time`
-    /// from its first time, unless it lapsed: a spare not renewed within `stuck_time` (the
-    /// robot went elsewhere) is over, and sparing the cell later starts afresh — once: a
-    /// robot that keeps coming back to a cell it cannot read, less often than every
-    /// `stuck_time`, would otherwise spare it for ever (an unread cell stays a frontier, so
-    /// the idle team's write-off never comes).
-    fn renew(&mut self, now: f64, stuck_time: f64) -> bool {
-        if now - self.last > stuck_time && !self.restarted {
-            *self = Spare {
-                restarted: true,
-                ..Spare::at(now)
-            };
-        }
-        self.last = now;
-        now - self.first < stuck_time
-    }
 }
 
 /// The stuck rule's clock of one robot: since when its current target has been named, and
@@ -681,7 +645,7 @@ impl ContinuousTrial {
         let now = self.world.time();
         let cell_size = self.world.scenario().cell_size;
         let here = self.world.pose(i);
-        let reach = self.world.config().robot.radius + 0.5 * std::f64::consts::SQRT_2 * cell_size;
+        let reach = spare::hide_reach(self.world.config().robot.radius, cell_size);
         let mates: Vec<(f64, f64)> = (0..self.agents.len())
             .filter(|&j| j != i)
             .map(|j| {
@@ -694,9 +658,7 @@ impl ContinuousTrial {
                 (q.col as f64 + 0.5) * cell_size,
                 (q.row as f64 + 0.5) * cell_size,
             );
-            mates
-                .iter()
-                .any(|&m| segment_distance(m, (here.x, here.y), c) < reach)
+            spare::hidden_by_teammate((here.x, here.y), c, &mates, reach)
         };
         let (h, w) = self.world.map(i).coarse_size();
         // Searched only when a corner cell needs it (most reached goals have none unknown).
@@ -704,12 +666,9 @@ impl ContinuousTrial {
         let agent = &self.agents[i];
         let belief = agent.belief();
         let visited = &self.visited[i];
-        let unvisited_side = |q: Pos| {
+        let open_unvisited = |s: Pos| {
             let reachable = reachable.get_or_init(|| agent.reachable());
-            [(-1, 0), (1, 0), (0, -1), (0, 1)].iter().any(|&(dr, dc)| {
-                let s = Pos::new(q.row + dr, q.col + dc);
-                belief.is_free(s) && reachable[belief.index(s)] && !visited[belief.index(s)]
-            })
+            belief.is_free(s) && reachable[belief.index(s)] && !visited[belief.index(s)]
         };
         let mut write_off = Vec::new();
         for dr in -1..=1 {
@@ -731,11 +690,11 @@ impl ContinuousTrial {
                 // A corner cell seen past a side cell not yet stood in, or a cell a teammate
                 // may hide: spared, but not for longer than the stuck rule's time (two robots
                 // hiding each other's cells, or one going back and forth, would wait for ever).
-                let corner = dr != 0 && dc != 0 && unvisited_side(q);
+                let corner = spare::corner_with_open_side(cell, q, open_unvisited);
                 if corner || hidden(q) {
                     let stuck_time = self.world.config().planner.stuck_time;
-                    let spare = self.spared.entry((i, q)).or_insert(Spare::at(now));
-                    if spare.renew(now, stuck_time) {
+                    let spared = self.spared.entry((i, q)).or_insert(Spare::at(now));
+                    if spared.renew(now, stuck_time) {
                         continue;
                     }
                 }
@@ -763,8 +722,8 @@ impl ContinuousTrial {
             let (_, w) = world.map(i).coarse_size();
             world.map(i).coarse()[q.row as usize * w + q.col as usize] == Occupancy::Unknown
         });
-        for (&(i, q), spare) in &self.spared {
-            if now - spare.first >= wait {
+        for (&(i, q), s) in &self.spared {
+            if s.expired(now, wait) {
                 expired.push((i, q));
             } else {
                 pending = true;
@@ -874,17 +833,6 @@ impl Stepping for ContinuousTrial {
     }
 }
 
-/// The distance from `p` to the segment `a`–`b`.
-fn segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
-    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 > 0.0 {
-        (((p.0 - a.0) * dx + (p.1 - a.1) * dy) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p.0 - a.0 - t * dx).hypot(p.1 - a.1 - t * dy)
-}
-
+pub mod spare;
 #[cfg(test)]
 mod tests;
