@@ -227,10 +227,15 @@ impl StudyRunArgs {
         study: impl FnOnce(bool, &(dyn Fn(usize, usize) + Sync)) -> T + Send,
     ) -> Result<(T, rayon::ThreadPool)> {
         let (bar, pool) = madenet_study::progress::trials_bar_and_pool(0, self.threads)?;
+        let counted = std::sync::atomic::AtomicBool::new(false);
         let result = pool.install(|| {
             study(self.fresh, &|done, total| {
                 bar.set_length(total as u64);
                 bar.set_position(done as u64);
+                // A resumed study's earlier trials are not this run's rate.
+                if !counted.swap(true, std::sync::atomic::Ordering::Relaxed) {
+                    bar.reset_eta();
+                }
             })
         });
         bar.finish_and_clear();

@@ -37,35 +37,59 @@ fn lines_off_terminal(bar: &indicatif::ProgressBar) {
         return;
     }
     let bar = bar.clone();
-    let start = std::time::Instant::now();
     // Hand-written rather than indicatif's hidden bar: it draws nothing off a terminal.
     std::thread::spawn(move || {
-        let mut last = std::time::Instant::now();
+        let start = std::time::Instant::now();
+        let mut last = start;
+        // Trials done when the count was first known, and then: a resumed study's earlier
+        // trials are not this run's rate (its ETA once read "5 s" with 780 trials left).
+        let mut base: Option<(u64, std::time::Instant)> = None;
         while !bar.is_finished() {
             std::thread::sleep(std::time::Duration::from_millis(200));
+            let (done, total) = (bar.position(), bar.length().unwrap_or(0));
+            if total > 0 && base.is_none() {
+                base = Some((done, std::time::Instant::now()));
+            }
             if last.elapsed().as_secs() < PROGRESS_LINE_S || bar.is_finished() {
                 continue;
             }
             last = std::time::Instant::now();
-            let (done, total) = (bar.position(), bar.length().unwrap_or(0));
-            let secs = start.elapsed().as_secs_f64();
-            let eta = match done {
-                0 => "eta unknown".to_string(),
-                _ if total > done => {
-                    let left = (total - done) as f64 * secs / done as f64;
-                    format!("eta {}", hms(left))
-                }
-                _ => "finishing".to_string(),
-            };
-            // A full stderr loses the line, never the run.
             let _ = writeln!(
                 std::io::stderr(),
-                "progress   {done}/{total} trials, {:.2} trials/s, {} so far, {eta}",
-                done as f64 / secs.max(1e-9),
-                hms(secs)
+                "{}",
+                line(
+                    done,
+                    total,
+                    base.map(|(d, t)| (d, t.elapsed().as_secs_f64())),
+                    start.elapsed().as_secs_f64()
+                )
             );
         }
     });
+}
+
+/// A progress line: `done` of `total` trials, `secs` so far; `base`: trials done when the
+/// count became known (earlier runs' trials, on a resume) and seconds since.
+fn line(done: u64, total: u64, base: Option<(u64, f64)>, secs: f64) -> String {
+    let (before, since) = base.unwrap_or((0, secs));
+    let new = done.saturating_sub(before);
+    let eta = match new {
+        _ if total > 0 && done >= total => "finishing".to_string(),
+        0 => "eta unknown".to_string(),
+        _ => {
+            let left = total.saturating_sub(done) as f64 * since / new as f64;
+            format!("eta {}", hms(left))
+        }
+    };
+    let resumed = match before {
+        0 => String::new(),
+        b => format!(" ({b} from an earlier run)"),
+    };
+    format!(
+        "progress   {done}/{total} trials{resumed}, {:.2} trials/s, {} so far, {eta}",
+        new as f64 / since.max(1e-9),
+        hms(secs)
+    )
 }
 
 /// Seconds as `1h02m03s`, `2m03s` or `3s`.
@@ -105,5 +129,21 @@ mod tests {
         assert_eq!(super::hms(3.4), "3s");
         assert_eq!(super::hms(123.0), "2m03s");
         assert_eq!(super::hms(3723.0), "1h02m03s");
+    }
+
+    /// A resumed study's earlier trials do not count in this run's rate: 20 of 800 left done
+    /// in 10 s is 2 trials/s and 6m20s to go, not "5 s" (issue 60).
+    #[test]
+    fn a_resumed_study_counts_only_its_own_trials_in_the_rate() {
+        let l = super::line(40, 800, Some((20, 10.0)), 12.0);
+        assert!(l.contains("40/800 trials (20 from an earlier run)"), "{l}");
+        assert!(
+            l.contains("2.00 trials/s") && l.contains("eta 6m20s"),
+            "{l}"
+        );
+        let l = super::line(20, 800, Some((20, 3.0)), 3.0);
+        assert!(l.contains("eta unknown"), "{l}");
+        let l = super::line(5, 10, None, 10.0);
+        assert!(l.contains("0.50 trials/s") && l.contains("eta 10s"), "{l}");
     }
 }
