@@ -6,7 +6,8 @@ mod common;
 
 use common::{signal, spawn_piped};
 use madenet_testkit::{assert_clean_error_in, assert_ok, Scratch};
-use std::process::Command;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
 
 const FIXTURE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -142,16 +143,20 @@ fn the_node_explores_a_simulated_nav2_robots_floor_plan() {
     let mut line = String::new();
     stderr.read_line(&mut line).unwrap();
     assert!(line.contains("navigate_to_pose"), "{line}");
+    // The rest is drained: a full pipe would block the sim.
+    std::thread::spawn(move || std::io::copy(&mut stderr, &mut std::io::sink()));
     let params = dir.join("explore.yaml");
     std::fs::write(
         &params,
         "/**:\n  ros__parameters:\n    costmap_topic: map\n    costmap_updates_topic: map_updates\n    planner_frequency: 1.0\n    potential_scale: 3.0\n    use_sim_time: true\n",
     )
     .unwrap();
-    let node = spawn_piped(
+    let node_log = dir.join("node.log");
+    let node = spawn_logged(
         Command::new(env!("CARGO_BIN_EXE_madenet"))
             .args(["explore", "--params-file", params.to_str().unwrap()])
             .args(["--namespace", "/robot0", "--ros2", &endpoint]),
+        &node_log,
     );
     // It ends on its own; a watchdog stops it (and fails the test) after 120 s.
     let started = std::time::Instant::now();
@@ -170,7 +175,7 @@ fn the_node_explores_a_simulated_nav2_robots_floor_plan() {
     assert_ok(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("complete: no frontier left"), "{text}");
-    let log = String::from_utf8_lossy(&out.stderr);
+    let log = read_log(&node_log);
     assert!(
         log.contains("waiting for") || text.contains("succeeded"),
         "{log}"
@@ -205,16 +210,42 @@ fn free_endpoint() -> String {
     format!("tcp/127.0.0.1:{port}")
 }
 
+/// Spawns `cmd` with stdout piped and stderr written to `log`: a file, not a pipe, which a
+/// chatty process fills (64 KB) while the test waits, and then blocks on for ever (the kill
+/// test's nodes once did, at 900 s).
+fn spawn_logged(cmd: &mut Command, log: &Path) -> Child {
+    cmd.stdout(Stdio::piped())
+        .stderr(std::fs::File::create(log).unwrap())
+        .spawn()
+        .unwrap()
+}
+
+/// What a process wrote to `log` ([`spawn_logged`]).
+fn read_log(log: &Path) -> String {
+    String::from_utf8_lossy(&std::fs::read(log).unwrap_or_default()).into_owned()
+}
+
 /// Waits for `child` to exit on its own; after `secs` seconds, interrupts it and `all` and
-/// fails.
-fn wait_for(child: &mut std::process::Child, secs: u64, what: &str, all: &[&std::process::Child]) {
+/// fails, with the end of each of `logs`.
+fn wait_for(child: &mut Child, secs: u64, what: &str, all: &[&Child], logs: &[&Path]) {
     let started = std::time::Instant::now();
     while child.try_wait().unwrap().is_none() {
         if started.elapsed().as_secs() > secs {
             for c in all.iter().copied().chain([&*child]) {
                 signal(c, "-INT");
             }
-            panic!("{what} did not finish within {secs} s");
+            let tails: Vec<String> = (logs.iter())
+                .map(|l| {
+                    let text = read_log(l);
+                    let lines: Vec<&str> = text.lines().collect();
+                    let tail = lines[lines.len().saturating_sub(40)..].join("\n");
+                    format!("{}:\n{tail}", l.display())
+                })
+                .collect();
+            panic!(
+                "{what} did not finish within {secs} s\n{}",
+                tails.join("\n")
+            );
         }
         std::thread::sleep(std::time::Duration::from_millis(200));
     }
@@ -228,7 +259,8 @@ fn wait_for(child: &mut std::process::Child, secs: u64, what: &str, all: &[&std:
 fn three_explore_processes_and_the_nav2_sim_explore_a_20_m_plan() {
     let dir = Scratch::new("explore-team");
     let bag = dir.join("bag");
-    let mut run = spawn_piped(
+    let log = dir.join("run.log");
+    let mut run = spawn_logged(
         Command::new(env!("CARGO_BIN_EXE_madenet"))
             .args(["run", "--world", "continuous", "--map", "floorplan:4"])
             .args([
@@ -239,11 +271,12 @@ fn three_explore_processes_and_the_nav2_sim_explore_a_20_m_plan() {
                 bag.to_str().unwrap(),
             ])
             .args(["--nav2", &free_endpoint(), "--explore", "spread"]),
+        &log,
     );
     // The wall-clock bound is generous: the run goes at 10 × real time only while the machine
     // keeps up (3.6 × was seen on a loaded one), and the nodes' tail after the map is covered
     // (blacklisted frontiers waiting out 120 s) can take 1 000 s simulated.
-    wait_for(&mut run, 900, "the team", &[]);
+    wait_for(&mut run, 900, "the team", &[], &[&log]);
     let out = run.wait_with_output().unwrap();
     assert_ok(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout)
@@ -251,7 +284,9 @@ fn three_explore_processes_and_the_nav2_sim_explore_a_20_m_plan() {
     eprintln!("{v:#}");
     assert_eq!(v["robots"], 3);
     assert_eq!(v["nodes_complete"], true, "{v:#}");
-    assert!(v["explored"].as_f64().unwrap() >= 0.99, "{v:#}");
+    // On failure, what the sim and the nodes said.
+    let explored = v["explored"].as_f64().unwrap();
+    assert!(explored >= 0.99, "{v:#}\n{}", read_log(&log));
     assert!(v["covered_99_s"].as_f64().is_some(), "{v:#}");
     assert_eq!(v["obstacle_collisions"], 0, "{v:#}");
     assert_eq!(v["robot_collisions"], 0, "{v:#}");
@@ -265,10 +300,11 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
     let (_router, opts) = madenet_ros2::loopback_router().unwrap();
     let endpoint = opts.connect[0].clone();
     let dir = Scratch::new("explore-kill");
-    let sim = spawn_piped(
+    let sim = spawn_logged(
         Command::new(env!("CARGO_BIN_EXE_madenet"))
             .args(["run", "--world", "continuous", "--map", "floorplan:4"])
             .args(["--realtime", "10", "--nav2", &endpoint]),
+        &dir.join("sim.log"),
     );
     let params = dir.join("team.yaml");
     std::fs::write(
@@ -276,12 +312,14 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
         madenet_explore::launch::team_params(3, "spread", true),
     )
     .unwrap();
+    let logs: Vec<_> = (0..3).map(|i| dir.join(format!("node{i}.log"))).collect();
     let mut nodes: Vec<_> = (0..3)
         .map(|i| {
-            spawn_piped(
+            spawn_logged(
                 Command::new(env!("CARGO_BIN_EXE_madenet"))
                     .args(["explore", "--params-file", params.to_str().unwrap()])
                     .args(["--namespace", &format!("/robot{i}"), "--ros2", &endpoint]),
+                &logs[i],
             )
         })
         .collect();
@@ -311,7 +349,8 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
     killed.kill().unwrap();
     killed.wait().unwrap();
     for (k, node) in nodes.iter_mut().enumerate() {
-        wait_for(node, 900, &format!("node {k}"), &[&sim]);
+        let log = &logs[if k == 0 { 0 } else { 2 }];
+        wait_for(node, 900, &format!("node {k}"), &[&sim], &[log]);
     }
     signal(&sim, "-INT");
     let sim_out = sim.wait_with_output().unwrap();
@@ -323,7 +362,9 @@ fn with_one_explore_process_killed_the_other_two_finish_the_map() {
     }
     let sim_text = String::from_utf8_lossy(&sim_out.stdout);
     eprintln!("{sim_text}");
-    assert!(sim_explored(&sim_text) >= 99.0, "{sim_text}");
+    // On failure, what the two nodes said (their goals, give-ups and blacklists).
+    let said = format!("{}\n{}", read_log(&logs[0]), read_log(&logs[2]));
+    assert!(sim_explored(&sim_text) >= 99.0, "{sim_text}\n{said}");
 }
 
 /// A robot for the node made by hand: its map (in `map_frame`) on `/robot0/map` and its pose
