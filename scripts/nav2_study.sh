@@ -7,12 +7,13 @@
 #
 # Nodes: explore_lite's shipped parameters (configs/explore_lite.yaml below), every method.
 # Methods: (a) explore-lite-alone (explore_lite per robot on its own map, what users run),
-# (b) explore-lite (teammates' maps merged), (c) spread, (d) made-net-any. Each trial appends
+# (b) explore-lite (teammates' maps merged), (c) spread, (d) made-net-any, (e) made-net. Each trial appends
 # one JSON line to OUT_DIR/results.jsonl (or OUT_DIR/inprocess.jsonl) when it ends; a trial
 # already there is skipped, so a killed study resumes where it stopped. Maps are generated
 # into OUT_DIR/maps (floor plans, map seed 1000 + seed; never the paper's maps).
 #
-# Environment: SIZES ("20 40"), TEAMS ("2 3 4 6"), SEEDS (10), METHODS, REALTIME (10),
+# Environment: SIZES ("20 40"), TEAMS ("2 3 4 6"), SEEDS (10), FIRST_SEED (1: two instances on
+# seeds 1–5 and 6–10 share OUT_DIR, each line appended whole), METHODS, REALTIME (10),
 # CAP_PER_CELL (6: the simulated-second cap is CAP_PER_CELL × size², ended by Ctrl-C).
 # While OUT_DIR/PAUSE exists, no new trial starts (the one under way finishes): for a build or
 # a test run that needs the machine.
@@ -22,7 +23,8 @@ bin=${2:-target/release/madenet}
 sizes=${SIZES:-"20 40"}
 teams=${TEAMS:-"2 3 4 6"}
 seeds=${SEEDS:-10}
-methods=${METHODS:-"explore-lite-alone explore-lite spread made-net-any"}
+first_seed=${FIRST_SEED:-1}
+methods=${METHODS:-"explore-lite-alone explore-lite spread made-net-any made-net"}
 realtime=${REALTIME:-10}
 cap_per_cell=${CAP_PER_CELL:-6}
 starts=(0,0 0,1 1,0 1,1 0,2 1,2)
@@ -46,7 +48,7 @@ YAML
 free_port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 
 for size in $sizes; do
-  for seed in $(seq 1 "$seeds"); do
+  for seed in $(seq "$first_seed" "$seeds"); do
     map="$out/maps/plan-$size-$seed.txt"
     [ -f "$map" ] || "$bin" map generate --floorplan --height "$size" --width "$size" \
       --seed $((1000 + seed)) --keep-free "$(IFS=';'; echo "${starts[*]}")" "$map" >/dev/null

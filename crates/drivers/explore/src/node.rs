@@ -5,8 +5,11 @@
 //!
 //! The loop is the same whatever chooses the goals: it waits for the map and the pose (with a
 //! log line, not silently), follows `/clock` with `use_sim_time`, takes each goal's end
-//! (succeeded, aborted with nav2's codes, canceled), and plans on a timer of
-//! `planner_frequency` and at once when a goal ends. What plans is one of two choosers:
+//! (succeeded, aborted with nav2's codes, canceled), and plans on a timer and at once when a
+//! goal ends. The timer is `planner_frequency` for explore-lite and `decision_frequency` for a
+//! madenet policy, whose agent decides when its macro action ends (its goal reached or no
+//! longer a frontier), which a plan every few seconds would see late. What plans is one of
+//! two choosers:
 //! - `policy: explore-lite` ([`crate::lite`]): explore_lite's frontiers on the robot's map —
 //!   merged with its teammates' maps when it has teammates;
 //! - any other madenet policy (`spread`, `made-net-any`, `nf`, …: [`crate::choice`]): the
@@ -389,7 +392,12 @@ pub fn run(
     let mut start: Option<(f64, f64)> = None;
     let mut waiting_logged = (false, false, false);
     let mut waiting_since: Option<Instant> = None;
-    let period = 1.0 / p.planner_frequency;
+    // explore_lite plans on its clock; a madenet policy's agent checks whether its macro
+    // action ended (it decides then, as the paper's agents do) at decision_frequency.
+    let period = match p.policy.as_str() {
+        "explore-lite" => 1.0 / p.planner_frequency,
+        _ => 1.0 / p.decision_frequency,
+    };
     let wait = Duration::from_millis(20);
     while !stop() {
         tf.spin(Duration::ZERO)?;

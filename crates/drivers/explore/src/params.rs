@@ -25,7 +25,8 @@
 //! | `transform_tolerance` | double | 0.3 | seconds a TF lookup may be old |
 //! | `min_frontier_size` | double | 0.5 | metres; smaller frontiers are ignored |
 //! | `return_to_init` | bool | false | go back to the start when done |
-//! | `policy` | string | `explore-lite` | madenet: the policy choosing goals (so far the node runs `explore-lite` only) |
+//! | `policy` | string | `explore-lite` | madenet: the policy choosing goals (`explore-lite`, or one of madenet's: `spread`, `made-net-any`, …) |
+//! | `decision_frequency` | double | 2.0 | madenet: checks per second whether a madenet policy's macro action ended (the paper's agents decide when it ends, not on a clock); `explore-lite` plans at `planner_frequency` |
 //! | `teammates` | string array | `[]` | madenet: the teammates' namespaces (`/robot1`, …) |
 //! | `use_sim_time` | bool | false | ROS's own: follow `/clock` |
 //!
@@ -110,6 +111,9 @@ pub struct ExploreParams {
     pub policy: String,
     /// madenet: the teammates' namespaces.
     pub teammates: Vec<String>,
+    /// madenet: checks per second whether a madenet policy's macro action ended
+    /// (`explore-lite` plans at `planner_frequency`).
+    pub decision_frequency: f64,
     /// ROS's own: follow `/clock` (simulated time) instead of the wall clock.
     pub use_sim_time: bool,
 }
@@ -133,6 +137,7 @@ impl Default for ExploreParams {
             return_to_init: false,
             policy: "explore-lite".into(),
             teammates: Vec::new(),
+            decision_frequency: 2.0,
             use_sim_time: false,
         }
     }
@@ -428,6 +433,7 @@ impl ExploreParams {
             "return_to_init" => flag(&mut self.return_to_init),
             "use_sim_time" => flag(&mut self.use_sim_time),
             "policy" => text(&mut self.policy),
+            "decision_frequency" => double(&mut self.decision_frequency),
             "teammates" => match value {
                 Value::List(items) => {
                     let mut names = Vec::with_capacity(items.len());
@@ -448,7 +454,7 @@ impl ExploreParams {
                 _ => wrong("a string array"),
             },
             _ => Err(format!(
-                "unknown (explore_lite's parameters: {}; madenet's: policy, teammates; ROS's: use_sim_time)",
+                "unknown (explore_lite's parameters: {}; madenet's: policy, teammates, decision_frequency; ROS's: use_sim_time)",
                 EXPLORE_LITE.join(", ")
             )),
         }
@@ -478,6 +484,7 @@ impl ExploreParams {
             }
         };
         positive("planner_frequency", self.planner_frequency, 1000.0)?;
+        positive("decision_frequency", self.decision_frequency, 1000.0)?;
         positive("progress_timeout", self.progress_timeout, 86_400.0)?;
         non_negative("transform_tolerance", self.transform_tolerance, 3600.0)?;
         non_negative("min_frontier_size", self.min_frontier_size, 1000.0)?;

@@ -68,13 +68,14 @@ fn defaults_are_explore_lites() {
     assert_eq!(p.planner_frequency, 1.0);
     assert_eq!(p.potential_scale, 1e-3);
     assert_eq!(p.costmap_topic, "costmap");
+    assert_eq!(p.decision_frequency, 2.0);
 }
 
 /// Each bad file: its error, with what it must name.
 #[test]
 fn bad_files_get_one_clear_error_naming_the_parameter() {
     let node = "/robot0/explore_node";
-    let cases: [(&str, &[&str]); 10] = [
+    let cases: [(&str, &[&str]); 11] = [
         (
             "/**:\n  ros__parameters:\n    planner_frequncy: 0.5\n",
             &["planner_frequncy", "unknown", "planner_frequency"],
@@ -90,6 +91,10 @@ fn bad_files_get_one_clear_error_naming_the_parameter() {
         (
             "/**:\n  ros__parameters:\n    planner_frequency: 0.0\n",
             &["planner_frequency", "(0, 1000]"],
+        ),
+        (
+            "/**:\n  ros__parameters:\n    decision_frequency: -2.0\n",
+            &["decision_frequency", "(0, 1000]"],
         ),
         (
             "/**:\n  ros__parameters:\n    progress_timeout: .nan\n",
