@@ -8,8 +8,9 @@
 //!
 //! Exploration time is when the robots' maps together first covered 99 % of the explorable
 //! cells (ground truth); a trial that never did counts at its end (censored, and counted). The
-//! best madenet method is compared with each explore-lite variant by a paired two-sided
-//! Wilcoxon signed-rank test over the seeds both completed as trials.
+//! best madenet method (the lowest mean over all cells, chosen once) is compared with each
+//! explore-lite variant by a paired two-sided Wilcoxon signed-rank test over the seeds both
+//! completed as trials.
 
 use madenet_plots::{bar_panels, BarPanel, BarSeries};
 use serde_json::Value;
@@ -17,13 +18,14 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::Path;
 
-const METHODS: [&str; 4] = [
+const METHODS: [&str; 5] = [
     "explore-lite-alone",
     "explore-lite",
     "spread",
     "made-net-any",
+    "made-net",
 ];
-const MADENET: [&str; 2] = ["spread", "made-net-any"];
+const MADENET: [&str; 3] = ["spread", "made-net-any", "made-net"];
 
 /// One trial: (size, team, seed, method) → its record.
 type Trials = BTreeMap<(u64, u64, u64, String), Value>;
@@ -96,6 +98,19 @@ fn main() {
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     let mut panels = Bars::new();
     let mut tests = String::new();
+    // The best madenet method, chosen once over every cell (lowest mean exploration time over
+    // all its trials), not per cell: picking the luckier one cell by cell would flatter it.
+    let best_overall = MADENET
+        .iter()
+        .filter_map(|m| {
+            let t: Vec<f64> = (ros2.iter())
+                .filter(|(k, _)| k.3 == *m)
+                .map(|(_, v)| ros2_time(v).0)
+                .collect();
+            (!t.is_empty()).then(|| (*m, t.iter().sum::<f64>() / t.len() as f64))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(m, _)| m);
     for &(size, team) in &cells {
         let mut bars = Vec::new();
         for m in METHODS {
@@ -158,14 +173,7 @@ fn main() {
                 .map(|(k, v)| (k.2, ros2_time(v).0))
                 .collect()
         };
-        let best = MADENET
-            .iter()
-            .filter_map(|m| {
-                let t = by(m);
-                (!t.is_empty()).then(|| (m, t.values().sum::<f64>() / t.len() as f64))
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((best, _)) = best else { continue };
+        let Some(best) = best_overall else { continue };
         let b = by(best);
         for base in ["explore-lite-alone", "explore-lite"] {
             let o = by(base);
@@ -189,8 +197,8 @@ fn main() {
     }
     let _ = writeln!(
         md,
-        "\n## Paired tests\n\nThe madenet method with the lower mean against each explore-lite \
-         variant, over the seeds both ran (two-sided Wilcoxon signed-rank); `faster` is how much \
+        "\n## Paired tests\n\nThe madenet method with the lowest mean over all cells against each \
+         explore-lite variant, over the seeds both ran (two-sided Wilcoxon signed-rank); `faster` is how much \
          less time the madenet method took.\n\n| size | team | comparison | pairs | means (s) | faster | p |\n|---|---|---|---|---|---|---|\n{tests}"
     );
     // One panel per map size: groups are team sizes, one bar per method.

@@ -17,6 +17,8 @@ pub struct CoreStudy {
     config: StudyConfig,
     registry: PolicyRegistry,
     planned: Vec<runner::Planned>,
+    /// The TOML file it was read from, if any: `run_to` never writes over it.
+    source: Option<std::path::PathBuf>,
 }
 
 /// `config` (a study TOML file, optional) with `overrides` (a JSON object of top-level fields)
@@ -186,6 +188,7 @@ study_pymethods! {
     #[new]
     #[pyo3(signature = (config = None, overrides = "{}"))]
     fn new(config: Option<&str>, overrides: &str) -> PyResult<Self> {
+        let config_path = config;
         let mut config = study_config(config, overrides)?;
         // Map files by absolute path, so that the study means the same in a worker elsewhere.
         for m in config
@@ -197,7 +200,9 @@ study_pymethods! {
                 *m = abs.display().to_string();
             }
         }
-        Self::build(config)
+        let mut study = Self::build(config)?;
+        study.source = config_path.map(std::path::PathBuf::from);
+        Ok(study)
     }
 
     /// The columns of `trials.csv`, in order.
@@ -217,6 +222,13 @@ study_pymethods! {
         fresh: bool,
     ) -> PyResult<(String, Vec<Bound<'py, PyDict>>)> {
         let cfg = &self.config;
+        // As `madenet compare`: the folder's saved configuration never replaces the file the
+        // study was read from.
+        if let Some(source) = &self.source {
+            let saved = out.join("study.toml");
+            madenet_files::check_outputs(&[("out", &saved)], &[("config", source)])
+                .map_err(value_error)?;
+        }
         let (report, outcomes) = py
             .detach(|| madenet_study::run_study(cfg, &out, fresh, &|_, _| {}))
             .map_err(value_error)?;
@@ -249,6 +261,7 @@ impl CoreStudy {
             config,
             registry,
             planned,
+            source: None,
         })
     }
 }

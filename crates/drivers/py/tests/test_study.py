@@ -38,6 +38,19 @@ def test_compare_matches_the_command_line(cli, tmp_path):
     assert (tmp_path / "py" / "report.md").is_file()
 
 
+def test_compare_never_writes_over_its_own_config(tmp_path):
+    # As `madenet compare --config out/study.toml --out out`: refused before any trial.
+    out = tmp_path / "out"
+    out.mkdir()
+    config = out / "study.toml"
+    text = 'methods = ["nf"]\nmaps = ["paper:3"]\nstarts = ["top-left"]\ncsp = [1.0]\nseeds = 1\noracles = []\n'
+    config.write_text(text)
+    with pytest.raises(ValueError, match="is config's file"):
+        madenet.compare(config, out=out, seeds=2)
+    assert config.read_text() == text
+    assert not (out / "trials.csv").exists()
+
+
 def test_compare_as_a_dataframe():
     import pandas as pd  # in the [test] extra
     frame = madenet.compare(**SMALL, threads=1, as_dataframe=True)
