@@ -251,8 +251,11 @@ fn draw_line_panel<DB: DrawingBackend>(
         }
     }
     // Markers on top of all lines, at staggered positions per series so
-    // coinciding lines stay distinguishable.
+    // coinciding lines stay distinguishable; a marker that would cover one
+    // already drawn is moved aside ([`dodge`]: series of a few points, such as
+    // Fig. 7's team sizes, share every position).
     let n_ser = p.series.len();
+    let mut placed: Vec<(i32, i32)> = Vec::new();
     for (i, ser) in p.series.iter().enumerate() {
         if looks[i].faint {
             continue;
@@ -262,16 +265,52 @@ fn draw_line_panel<DB: DrawingBackend>(
         for m in 0..k {
             let frac = (m as f64 + (i as f64 + 1.0) / (n_ser as f64 + 1.0)) / k as f64;
             let idx = ((frac * n as f64) as usize).min(n - 1);
-            let c = plot.map_coordinate(&ser.points[idx]);
+            let c = dodge(plot.map_coordinate(&ser.points[idx]), &placed);
+            placed.push(c);
             draw_marker(&screen, looks[i].colour, c)?;
         }
     }
     Ok(())
 }
 
+/// Pixels between two markers' centres below which one would hide the other.
+const MARKER_SPACING: i32 = 12;
+
+/// Where to draw a marker meant for pixel `c` so that it covers none of `placed`:
+/// `c` itself if free, else the nearest free spot sideways (right, left, further
+/// right, …), its height kept so the value it marks still reads off the y axis.
+fn dodge(c: (i32, i32), placed: &[(i32, i32)]) -> (i32, i32) {
+    let free = |q: (i32, i32)| {
+        placed
+            .iter()
+            .all(|p| (p.0 - q.0).abs() >= MARKER_SPACING || (p.1 - q.1).abs() >= MARKER_SPACING)
+    };
+    (0..16)
+        .map(|k| {
+            let step = (k + 1) / 2 * MARKER_SPACING;
+            (c.0 + if k % 2 == 1 { step } else { -step }, c.1)
+        })
+        .find(|&q| free(q))
+        .unwrap_or(c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Fig. 7's complaint: one line exactly under another could not be seen. Markers of
+    /// coinciding series are moved aside, so each series shows its own.
+    #[test]
+    fn markers_of_coinciding_series_are_moved_aside() {
+        let mut placed = Vec::new();
+        for _ in 0..3 {
+            let c = dodge((100, 50), &placed);
+            placed.push(c);
+        }
+        assert_eq!(placed, vec![(100, 50), (112, 50), (88, 50)]);
+        // Far enough apart already: kept where they are.
+        assert_eq!(dodge((100, 80), &placed), (100, 80));
+    }
     use crate::{ewma, LineSeries};
 
     #[test]
