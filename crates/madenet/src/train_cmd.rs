@@ -68,6 +68,9 @@ pub fn run(a: TrainArgs) -> Result<()> {
             );
             let style = ProgressStyle::with_template(&template).expect("valid template");
             bar.set_style(style.progress_chars("=> "));
+            if !a.quiet {
+                madenet_study::progress::lines_off_terminal(&bar, p.unit);
+            }
         }
         bar.set_length(p.total);
         bar.set_position(p.done);
@@ -76,7 +79,9 @@ pub fn run(a: TrainArgs) -> Result<()> {
             bar.println(format!("iteration {}: {}", p.done, p.summary()));
         }
     })?;
-    bar.finish();
+    // Left where the run stopped (`finish` would fill it: 20000/20000 after 232 episodes
+    // stopped by --max-minutes).
+    bar.abandon();
     finished(&a, &dir, progressed)
 }
 
@@ -93,6 +98,14 @@ fn finished(a: &TrainArgs, dir: &Path, progressed: bool) -> Result<()> {
                 (None, Some(m)) => format!(" (it is past --max-minutes {m})"),
                 (None, None) => String::new(),
             }
+        );
+    }
+    // A run stopped before its first validation has no `best/`: say where its model is.
+    if !dir.join("best").is_dir() && dir.join("last").is_dir() {
+        say!(
+            "{}: no best/ yet (no validation has run); the model so far is {} (--model {0}/last)",
+            dir.display(),
+            dir.join("last").display()
         );
     }
     out!("{}", dir.display())?;

@@ -198,3 +198,31 @@ fn dme_drl_tiny_run_resume_model_and_bad_input() {
     assert!(e.contains("bad-dme.toml") && e.contains("trace_len"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A run stopped before its first validation has no `best/`: it says so and names the model
+/// it does have (`last/`), which plays (the README's next command used to fail on `best/`).
+#[test]
+fn a_run_without_validation_names_its_model() {
+    let dir = Scratch::new("train-no-best");
+    let cfg = dir.write(
+        "short.toml",
+        &TINY.replace("validate_every = 3", "validate_every = 50"),
+    );
+    let run = dir.join("run");
+    let (c, r) = (cfg.to_str().unwrap(), run.to_str().unwrap());
+    let o = madenet(&[
+        "train",
+        "--config",
+        c,
+        "--out",
+        r,
+        "--method",
+        "made-net-dt",
+        "-q",
+    ]);
+    assert_ok(&o);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!run.join("best").exists());
+    assert!(e.contains("no best/ yet") && e.contains("--model"), "{e}");
+    assert_model_plays(&run.join("last"));
+}

@@ -21,7 +21,7 @@ pub fn trials_bar_and_pool(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()?;
-    lines_off_terminal(&bar);
+    lines_off_terminal(&bar, "trials");
     Ok((bar, pool))
 }
 
@@ -29,9 +29,10 @@ pub fn trials_bar_and_pool(
 pub const PROGRESS_LINE_S: u64 = 5;
 
 /// Off a terminal (a log file, a pipe) the bar is not drawn: a line to stderr every
-/// [`PROGRESS_LINE_S`] seconds instead — trials done of all, rate, time so far, ETA — until the
-/// bar finishes (issue 60: `compare 2>log` was silent for 12 minutes).
-fn lines_off_terminal(bar: &indicatif::ProgressBar) {
+/// [`PROGRESS_LINE_S`] seconds instead — `unit`s done of all (trials, episodes, iterations),
+/// rate, time so far, ETA — until the bar finishes or is abandoned (issue 60: `compare 2>log`
+/// was silent for 12 minutes). The one home of progress off a terminal: studies and training.
+pub fn lines_off_terminal(bar: &indicatif::ProgressBar, unit: &'static str) {
     use std::io::{IsTerminal, Write};
     if std::io::stderr().is_terminal() {
         return;
@@ -58,6 +59,7 @@ fn lines_off_terminal(bar: &indicatif::ProgressBar) {
                 std::io::stderr(),
                 "{}",
                 line(
+                    unit,
                     done,
                     total,
                     base.map(|(d, t)| (d, t.elapsed().as_secs_f64())),
@@ -68,9 +70,9 @@ fn lines_off_terminal(bar: &indicatif::ProgressBar) {
     });
 }
 
-/// A progress line: `done` of `total` trials, `secs` so far; `base`: trials done when the
+/// A progress line: `done` of `total` `unit`s, `secs` so far; `base`: trials done when the
 /// count became known (earlier runs' trials, on a resume) and seconds since.
-fn line(done: u64, total: u64, base: Option<(u64, f64)>, secs: f64) -> String {
+fn line(unit: &str, done: u64, total: u64, base: Option<(u64, f64)>, secs: f64) -> String {
     let (before, since) = base.unwrap_or((0, secs));
     let new = done.saturating_sub(before);
     let eta = match new {
@@ -86,7 +88,7 @@ fn line(done: u64, total: u64, base: Option<(u64, f64)>, secs: f64) -> String {
         b => format!(" ({b} from an earlier run)"),
     };
     format!(
-        "progress   {done}/{total} trials{resumed}, {:.2} trials/s, {} so far, {eta}",
+        "progress   {done}/{total} {unit}{resumed}, {:.2} {unit}/s, {} so far, {eta}",
         new as f64 / since.max(1e-9),
         hms(secs)
     )
@@ -135,15 +137,18 @@ mod tests {
     /// in 10 s is 2 trials/s and 6m20s to go, not "5 s" (issue 60).
     #[test]
     fn a_resumed_study_counts_only_its_own_trials_in_the_rate() {
-        let l = super::line(40, 800, Some((20, 10.0)), 12.0);
+        let l = super::line("trials", 40, 800, Some((20, 10.0)), 12.0);
         assert!(l.contains("40/800 trials (20 from an earlier run)"), "{l}");
         assert!(
             l.contains("2.00 trials/s") && l.contains("eta 6m20s"),
             "{l}"
         );
-        let l = super::line(20, 800, Some((20, 3.0)), 3.0);
+        let l = super::line("trials", 20, 800, Some((20, 3.0)), 3.0);
         assert!(l.contains("eta unknown"), "{l}");
-        let l = super::line(5, 10, None, 10.0);
-        assert!(l.contains("0.50 trials/s") && l.contains("eta 10s"), "{l}");
+        let l = super::line("episodes", 5, 10, None, 10.0);
+        assert!(
+            l.contains("5/10 episodes, 0.50 episodes/s") && l.contains("eta 10s"),
+            "{l}"
+        );
     }
 }
