@@ -234,6 +234,17 @@ impl Chooser for AgentChoice {
         if stale || self.blacklist.expired_since(self.last_plan, now) {
             self.reading = self.read_afresh(geometry, me, size, here, mates)?;
         }
+        if stale {
+            // A map that grew or moved (SLAM) shifts every cell: the cells written off are
+            // found again from their points in the map's frame, and the spares start afresh.
+            if let Some(r) = &self.reading {
+                self.written = (self.blacklist.points(now).into_iter())
+                    .filter_map(|(x, y)| r.own.cell_at(x, y))
+                    .collect();
+                self.written.dedup();
+            }
+            self.spared.clear();
+        }
         self.last_plan = now;
         let cell_size = self.scenario.cell_size;
         let d_s = self.scenario.sensing_range;
@@ -559,6 +570,34 @@ mod tests {
         };
         let out = around.unreadable(&r, spared, at);
         out.into_iter().map(|(q, _)| q).collect()
+    }
+
+    /// A map that grows (SLAM moves its origin) keeps what was written off where it is in
+    /// the map's frame, not at the old cell indices.
+    #[test]
+    fn cells_written_off_follow_a_map_that_grows() {
+        let mut choice = AgentChoice::new("spread", &ExploreParams::default(), "/t").unwrap();
+        let plan = |c: &mut AgentChoice, map: &OccupancyGrid, now: f64| {
+            c.plan(PlanInput {
+                ns: "/t",
+                map,
+                here: (0.5, 0.5),
+                now,
+                team: None,
+                nav_progress_at: None,
+            })
+            .unwrap()
+        };
+        let small = grid(|_, _| true);
+        plan(&mut choice, &small, 0.0);
+        choice.write_off(Pos::new(2, 2), 0.0, true);
+        // One metre more to the left and below: 6 × 6 cells from (−1, −1).
+        let mut grown = OccupancyGrid::default();
+        (grown.info.width, grown.info.height, grown.info.resolution) = (60, 60, 0.1);
+        (grown.info.origin.position.x, grown.info.origin.position.y) = (-1.0, -1.0);
+        grown.data = vec![0; 3600];
+        plan(&mut choice, &grown, 1.0);
+        assert_eq!(choice.written, vec![Pos::new(3, 3)]);
     }
 
     /// A neighbour read open since the agent's belief was made (a plan ago, seconds old) is
