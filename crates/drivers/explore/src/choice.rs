@@ -343,10 +343,13 @@ impl Chooser for AgentChoice {
                 }
             }
         }
-        // Spares whose time is up are written off all the same; spares of cells read since
-        // are done with.
-        self.spared
-            .retain(|(q, _)| r.own.get(*q) == Some(Occupancy::Unknown));
+        // Spares whose time is up are written off all the same; spares of cells read since,
+        // by the robot or a teammate, are done with (a cell a teammate saw free is never
+        // written off).
+        self.spared.retain(|(q, _)| {
+            r.own.get(*q) == Some(Occupancy::Unknown)
+                && r.agent.belief().get(*q) == Occupancy::Unknown
+        });
         let expired: Vec<Pos> = (self.spared.iter())
             .filter(|(_, s)| s.expired(now, self.stuck_time))
             .map(|&(q, _)| q)
