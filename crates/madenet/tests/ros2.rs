@@ -159,7 +159,7 @@ fn launch_on_continuous_robots_explores_through_their_lidar_maps() {
     std::fs::write(&map, &room).unwrap();
     // A block's face seen from one side fills a tenth of its cell's pixels: read as an
     // obstacle from one side at 15 % (at the paper's 25 % it takes two sides, and the world
-    // node has no write-off rule: README).
+    // node has no write-off rule: docs/guide/ros2.md).
     let config = dir.join("scenario.toml");
     std::fs::write(&config, "[discretize]\nobstacle_fraction = 0.15\n").unwrap();
     let truth = madenet_map::io::load(&map, &Default::default()).unwrap();

@@ -119,7 +119,7 @@ fn nf_agents_explore_a_continuous_world_through_ros2_alone() {
     }
     // A block's face seen from one side fills a tenth of its cell's pixels: read as an
     // obstacle from one side at 15 % (at the paper's 25 % it takes two sides, and the world
-    // node has no write-off rule: README).
+    // node has no write-off rule: docs/guide/ros2.md).
     let mut config = madenet_world::ScenarioConfig::default();
     config.discretize.obstacle_fraction = 0.15;
     let spec = TrialSpec {

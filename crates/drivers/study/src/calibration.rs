@@ -27,7 +27,7 @@ const REFERENCE: [(u32, &str); 4] = [
 /// Their algorithm names for ours.
 pub const METHODS: [(&str, &str); 3] = [("nf", "greedy"), ("ub", "utility"), ("pb", "mdp")];
 
-/// A convention in which the authors' simulator differs from ours (see the README).
+/// A convention in which the authors' simulator differs from ours (docs/guide/configuration.md, "Conventions").
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Convention {
     /// Their robots act one after another within a timestep; ours act simultaneously.

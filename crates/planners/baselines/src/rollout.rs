@@ -53,7 +53,7 @@ pub enum Value {
     /// instead explodes when a continuation happens to learn little. On large maps a long
     /// continuation's finishing time hinges on a few far cells and ranks candidates almost by
     /// chance: the noiseless oracle over `spread` valued so is worse than `spread` itself
-    /// (README, "On large maps").
+    /// (docs/research/oracles-and-teachers.md, "On large maps").
     #[default]
     StepsLeft,
     /// The mean over the map's explorable cells of the steps from now until each is known,
