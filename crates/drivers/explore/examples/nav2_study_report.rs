@@ -7,7 +7,8 @@
 //! ```
 //!
 //! Exploration time is when the robots' maps together first covered 99 % of the explorable
-//! cells (ground truth); a trial that never did counts at its end (censored, and counted). The
+//! cells (ground truth); a trial that never did counts at the time cap (6 s per m², the
+//! script's default; a failure, not a fast trial) and is counted. The
 //! best madenet method (the lowest mean over all cells, chosen once) is compared with each
 //! explore-lite variant by a paired two-sided Wilcoxon signed-rank test over the seeds both
 //! completed as trials.
@@ -53,12 +54,17 @@ fn load(path: &Path) -> Trials {
     out
 }
 
-/// The ROS 2 path's exploration time (99 % covered, else the trial's end) and whether it
+/// Simulated seconds per m² after which the study's script ends a trial (its `CAP_PER_CELL`).
+const CAP_PER_CELL: f64 = 6.0;
+
+/// The ROS 2 path's exploration time on a `size` m map (99 % covered, else the time cap — a
+/// trial whose nodes stopped short of 99 % is a failure, not a fast trial) and whether it
 /// reached 99 %.
-fn ros2_time(r: &Value) -> (f64, bool) {
+fn ros2_time(r: &Value, size: u64) -> (f64, bool) {
+    let cap = CAP_PER_CELL * (size * size) as f64;
     match r["covered_99_s"].as_f64() {
         Some(t) => (t, true),
-        None => (r["simulated_s"].as_f64().unwrap_or(f64::NAN), false),
+        None => (r["simulated_s"].as_f64().unwrap_or(cap).max(cap), false),
     }
 }
 
@@ -88,8 +94,8 @@ fn main() {
         md,
         "# nav2 study: exploration nodes through ROS 2 on the simulated nav2 team\n\n\
          Exploration time: simulated seconds until the robots' maps together covered 99 % of the \
-         explorable cells (ground truth); in brackets, trials that never did (counted at their \
-         end). Mean ± sd over seeds; `stop` is when every node had exited.\n"
+         explorable cells (ground truth); in brackets, trials that never did (counted at the time cap, \
+         6 s per m²: a failure). Mean ± sd over seeds; `stop` is when every node had exited.\n"
     );
     let _ = writeln!(
         md,
@@ -105,7 +111,7 @@ fn main() {
         .filter_map(|m| {
             let t: Vec<f64> = (ros2.iter())
                 .filter(|(k, _)| k.3 == *m)
-                .map(|(_, v)| ros2_time(v).0)
+                .map(|(k, v)| ros2_time(v, k.0).0)
                 .collect();
             (!t.is_empty()).then(|| (*m, t.iter().sum::<f64>() / t.len() as f64))
         })
@@ -123,8 +129,8 @@ fn main() {
                 bars.push((f64::NAN, 0.0));
                 continue;
             }
-            let times: Vec<f64> = rs.iter().map(|(_, r)| ros2_time(r).0).collect();
-            let never = rs.iter().filter(|(_, r)| !ros2_time(r).1).count();
+            let times: Vec<f64> = rs.iter().map(|(_, r)| ros2_time(r, size).0).collect();
+            let never = rs.iter().filter(|(_, r)| !ros2_time(r, size).1).count();
             let stops: Vec<f64> = rs
                 .iter()
                 .filter_map(|(_, r)| r["nodes_stopped_s"].as_f64())
@@ -170,7 +176,7 @@ fn main() {
         let by = |m: &str| -> BTreeMap<u64, f64> {
             ros2.iter()
                 .filter(|(k, _)| k.0 == size && k.1 == team && k.3 == m)
-                .map(|(k, v)| (k.2, ros2_time(v).0))
+                .map(|(k, v)| (k.2, ros2_time(v, k.0).0))
                 .collect()
         };
         let Some(best) = best_overall else { continue };
