@@ -337,10 +337,8 @@ impl Chooser for AgentChoice {
             };
             for (q, seen_part) in around.unreadable(r, &mut self.spared, now) {
                 tracing::debug!("{ns} at {now:.1} s: wrote off {q:?} (seen in part: {seen_part})");
-                self.blacklist.list(r.own.centre(q), now, tol, seen_part);
-                if !self.written.contains(&q) {
-                    self.written.push(q);
-                }
+                let written = &mut self.written;
+                write_off(&mut self.blacklist, written, &r.own, q, now, tol, seen_part);
             }
         }
         // Spares whose time is up are written off all the same; spares of cells read since,
@@ -358,10 +356,8 @@ impl Chooser for AgentChoice {
             self.spared.retain(|&(p, _)| p != q);
             let seen_part = r.own.observed(q) > 0;
             tracing::debug!("{ns} at {now:.1} s: wrote off {q:?} (spared until now)");
-            self.blacklist.list(r.own.centre(q), now, tol, seen_part);
-            if !self.written.contains(&q) {
-                self.written.push(q);
-            }
+            let written = &mut self.written;
+            write_off(&mut self.blacklist, written, &r.own, q, now, tol, seen_part);
         }
         for &q in &self.written {
             if self.blacklist.listed(r.own.centre(q), now, tol) {
@@ -444,10 +440,32 @@ impl AgentChoice {
             return;
         };
         let tol = 0.5 * self.scenario.cell_size;
-        self.blacklist.list(r.own.centre(g), now, tol, for_good);
-        if !self.written.contains(&g) {
-            self.written.push(g);
-        }
+        write_off(
+            &mut self.blacklist,
+            &mut self.written,
+            &r.own,
+            g,
+            now,
+            tol,
+            for_good,
+        );
+    }
+}
+
+/// Writes cell `g` off: its centre on `own`'s cells on `blacklist` (for good, or until it
+/// expires), and `g` in `written`, an obstacle to the agent from the next plan while listed.
+fn write_off(
+    blacklist: &mut Blacklist,
+    written: &mut Vec<Pos>,
+    own: &CellReader,
+    g: Pos,
+    now: f64,
+    tol: f64,
+    for_good: bool,
+) {
+    blacklist.list(own.centre(g), now, tol, for_good);
+    if !written.contains(&g) {
+        written.push(g);
     }
 }
 
